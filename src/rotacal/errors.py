@@ -1,0 +1,20 @@
+"""Errors a user can cause.
+
+Every fault that comes from the user's input — a bad file, a missing column, NaNs, too little data,
+an impossible setting — raises one of these with a message that names what to fix. The CLI turns
+them into one line on stderr and exit code 2; the API lets them propagate as typed exceptions.
+"""
+
+from __future__ import annotations
+
+
+class RotacalError(Exception):
+    """Base class of every error rotacal raises on purpose."""
+
+
+class CaptureError(RotacalError, ValueError):
+    """The capture (file or arrays) cannot give a trustworthy result: say what is wrong with it."""
+
+
+class ConfigError(RotacalError, ValueError):
+    """A setting, option or configuration file is invalid."""
