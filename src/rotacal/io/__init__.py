@@ -1,1 +1,25 @@
-"""rotacal.io"""
+"""rotacal.io — captures in and out: CSV, NPZ, HDF5 and TDMS readers and writers.
+
+See the "Captures (input files)" section of INTERFACE.md for the contract.
+"""
+
+from ._common import FORMATS, check_time
+from .capture import (
+    Capture,
+    capture_length,
+    iter_capture_chunks,
+    parse_column_mapping,
+    read_capture,
+)
+from .write import write_capture
+
+__all__ = [
+    "FORMATS",
+    "Capture",
+    "capture_length",
+    "check_time",
+    "iter_capture_chunks",
+    "parse_column_mapping",
+    "read_capture",
+    "write_capture",
+]

@@ -1,1 +1,37 @@
-"""rotacal.sim"""
+"""rotacal.sim — the digital twin: table motion and sensor models that make every capture type.
+
+Its truth is independent of rotacal's methods: it imports only numpy, scipy, rotacal.errors and
+rotacal.results (``SimCapture.write`` imports ``rotacal.io`` lazily).
+"""
+
+from rotacal.sim.motion import SineMotion
+from rotacal.sim.scenarios import (
+    FOG_NOISE_DENSITY_DEG_S_RT_HZ,
+    HARMONIC_SHAPE,
+    table1_scenarios,
+)
+from rotacal.sim.sensors import (
+    SimCapture,
+    default_duration_s,
+    known_kinds,
+    register_kind,
+    simulate,
+    simulate_encoder,
+    simulate_fog,
+    simulate_lts,
+)
+
+__all__ = [
+    "FOG_NOISE_DENSITY_DEG_S_RT_HZ",
+    "HARMONIC_SHAPE",
+    "SimCapture",
+    "SineMotion",
+    "default_duration_s",
+    "known_kinds",
+    "register_kind",
+    "simulate",
+    "simulate_encoder",
+    "simulate_fog",
+    "simulate_lts",
+    "table1_scenarios",
+]

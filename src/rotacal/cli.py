@@ -1,0 +1,379 @@
+"""The ``rotacal`` command: thin shells over the public functions.
+
+A user's mistake (bad file, missing column, impossible option) ends with ONE line on stderr and exit
+code 2. Unexpected internal errors end with one line and exit code 1; set ROTACAL_DEBUG=1 to see the
+traceback.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import Any, TypeVar
+
+import click
+
+from rotacal.errors import CaptureError, ConfigError, RotacalError
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+class _Group(click.Group):
+    """Turns every error into one line: exit 2 for the user's, 1 for ours."""
+
+    def main(self, *args: Any, **kwargs: Any) -> Any:
+        try:
+            return super().main(*args, **{**kwargs, "standalone_mode": False})
+        except click.exceptions.Exit as e:
+            sys.exit(e.exit_code)
+        except click.Abort:
+            click.echo("rotacal: aborted", err=True)
+            sys.exit(130)
+        except click.UsageError as e:
+            hint = f" (see '{e.ctx.command_path} --help')" if e.ctx else ""
+            click.echo(f"rotacal: error: {e.format_message()}{hint}", err=True)
+            sys.exit(2)
+        except click.ClickException as e:
+            click.echo(f"rotacal: error: {e.format_message()}", err=True)
+            sys.exit(2)
+        except RotacalError as e:
+            click.echo(f"rotacal: error: {_one_line(e)}", err=True)
+            sys.exit(2)
+        except (FileNotFoundError, IsADirectoryError, PermissionError) as e:
+            click.echo(f"rotacal: error: {e.strerror}: {e.filename}", err=True)
+            sys.exit(2)
+        except MemoryError:
+            click.echo(
+                "rotacal: error: out of memory — analyse a shorter span (--periods)", err=True
+            )
+            sys.exit(2)
+        except Exception as e:  # pragma: no cover - a bug, not a user error
+            if os.environ.get("ROTACAL_DEBUG"):
+                raise
+            click.echo(
+                f"rotacal: internal error: {type(e).__name__}: {_one_line(e)} "
+                "(a bug: please report it; ROTACAL_DEBUG=1 shows the traceback)",
+                err=True,
+            )
+            sys.exit(1)
+
+
+def _one_line(e: BaseException) -> str:
+    return " ".join(str(e).split()) or type(e).__name__
+
+
+@contextlib.contextmanager
+def _progress(total: int, description: str) -> Iterator[Callable[[str], None]]:
+    """A progress bar on a terminal (stderr), silent otherwise. Yields ``advance(label)``."""
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    console = Console(stderr=True)
+    with Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TimeElapsedColumn(),
+        console=console,
+        disable=not console.is_terminal,
+        transient=True,
+    ) as bar:
+        task = bar.add_task(description, total=total)
+
+        def advance(label: str) -> None:
+            bar.update(task, advance=1, description=f"{description}: {label}")
+
+        yield advance
+
+
+def _write_json(data: Any, target: str | None, protect: Sequence[Path] = ()) -> None:
+    if target is None:
+        return
+    from rotacal.results import to_jsonable
+
+    text = json.dumps(to_jsonable(data), indent=2, allow_nan=False)
+    if target == "-":
+        click.echo(text)
+        return
+    path = Path(target)
+    _refuse_overwrite(path, protect, "--json")
+    if not path.parent.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text + "\n", encoding="utf-8")
+
+
+def _refuse_overwrite(path: Path, protect: Sequence[Path], option: str) -> None:
+    for p in protect:
+        if path.exists() and p.exists() and path.resolve() == p.resolve():
+            raise ConfigError(
+                f"{option} {path} would overwrite the input file {p}; choose another name"
+            )
+
+
+def _analysis_options(func: F) -> F:
+    """Options every analysis command takes."""
+    options = [
+        click.option(
+            "--json", "json_path", metavar="PATH", help="Write the results as JSON ('-' = stdout)."
+        ),
+        click.option(
+            "--report",
+            "report_path",
+            metavar="PATH.html",
+            help="Write a self-contained HTML report.",
+        ),
+        click.option(
+            "--column",
+            "columns",
+            multiple=True,
+            metavar="OLD=NEW",
+            help="Map a column of the file onto a canonical name (repeatable).",
+        ),
+        click.option("--group", default=None, help="HDF5 group or TDMS group holding the columns."),
+    ]
+    for option in reversed(options):
+        func = option(func)
+    return func
+
+
+def _read(path: str, needed: list[str], columns: Sequence[str], group: str | None) -> Any:
+    from rotacal.io import parse_column_mapping, read_capture
+
+    return read_capture(path, columns=needed, mapping=parse_column_mapping(columns), group=group)
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="rotacal")
+def cli() -> None:
+    """rotacal — calibration of rotary tables and the gyroscopes tested on them.
+
+    Start with `rotacal demo`, then point an analysis command at your own capture.
+    """
+
+
+# ---------------------------------------------------------------------------------------------- motion
+@cli.group()
+def motion() -> None:
+    """Sinusoidal-motion calibration of a rotary table (Feng et al. 2023)."""
+
+
+def _motion_common(func: F) -> F:
+    options = [
+        click.option(
+            "--harmonics",
+            default=10,
+            show_default=True,
+            help="N_H: highest harmonic in fit and THD.",
+        ),
+        click.option(
+            "--periods", type=int, default=None, help="Whole periods to analyse [default: all]."
+        ),
+        click.option(
+            "--set-amplitude-deg",
+            type=float,
+            default=None,
+            help="Set amplitude of the table (deg).",
+        ),
+        click.option(
+            "--set-frequency-hz", type=float, default=None, help="Set frequency of the table (Hz)."
+        ),
+    ]
+    for option in reversed(options):
+        func = option(func)
+    return _analysis_options(func)
+
+
+def _finish_motion(
+    result: Any, capture_path: str, json_path: str | None, report_path: str | None
+) -> None:
+    protect = (Path(capture_path),)
+    _write_json(result.to_dict(), json_path, protect)
+    if report_path:
+        from rotacal.report.html import Report, write_html
+        from rotacal.report.motion import motion_section
+
+        report = Report(
+            title="Sinusoidal-motion calibration",
+            subtitle="Feng et al. (2023), Sensors 23:4876 — IEEE Std 1057 sine fitting",
+            sections=[motion_section(result)],
+            inputs={"capture": str(capture_path)},
+        )
+        _refuse_overwrite(Path(report_path), protect, "--report")
+        write_html(report, report_path)
+    if json_path is None and report_path is None:
+        _print_motion(result)
+
+
+def _print_motion(r: Any) -> None:
+    click.echo(f"scheme            {r.scheme}")
+    click.echo(f"amplitude         {r.amplitude_deg:.7g} deg")
+    click.echo(f"frequency         {r.frequency_hz:.9g} Hz")
+    click.echo(f"ang. acceleration {r.angular_acceleration_amplitude_deg_s2:.6g} deg/s^2")
+    click.echo(f"THD               {r.thd_percent:.4f} %  (h = 2..{r.harmonics})")
+    click.echo(
+        f"periods used      {r.periods_used}  ({r.reversal_times_s.size} reversing moments found)"
+    )
+    if r.snr_db is not None:
+        click.echo(f"SNR               {r.snr_db:.2f} dB")
+    if r.set_amplitude_deg is not None:
+        click.echo(f"amplitude error   {r.amplitude_error_percent:+.4f} %")
+        click.echo(f"frequency error   {r.frequency_error_percent:+.5f} %")
+        click.echo(
+            f"position error    max {r.position_error_max_deg:.4g} deg, rms {r.position_error_rms_deg:.4g} deg"
+        )
+
+
+@motion.command("encoder")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option("--lines", type=int, required=True, help="Encoder lines per revolution (e.g. 36000).")
+@_motion_common
+def motion_encoder(
+    capture: str, lines: int, columns: Sequence[str], group: str | None, **kw: Any
+) -> None:
+    """OSE scheme: capture with columns time_s, a, b (quadrature signals)."""
+    from rotacal.table import calibrate_encoder_motion
+
+    cap = _read(capture, ["time_s", "a", "b"], columns, group)
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
+    _finish_motion(result, capture, json_path, report_path)
+
+
+@motion.command("lts")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option("--radius-mm", type=float, required=True, help="R: laser spot to table axis (mm).")
+@_motion_common
+def motion_lts(
+    capture: str, radius_mm: float, columns: Sequence[str], group: str | None, **kw: Any
+) -> None:
+    """LTS scheme: capture with columns time_s, displacement_mm; θ = arctan(D/R)."""
+    from rotacal.table import calibrate_lts_motion
+
+    cap = _read(capture, ["time_s", "displacement_mm"], columns, group)
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    result = calibrate_lts_motion(cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw)
+    _finish_motion(result, capture, json_path, report_path)
+
+
+@motion.command("fog")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@_motion_common
+def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: Any) -> None:
+    """FOG scheme: capture with columns time_s, rate_deg_s; THD of displacement from the rate fit."""
+    from rotacal.table import calibrate_fog_motion
+
+    cap = _read(capture, ["time_s", "rate_deg_s"], columns, group)
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    result = calibrate_fog_motion(cap["time_s"], cap["rate_deg_s"], **kw)
+    _finish_motion(result, capture, json_path, report_path)
+
+
+# -------------------------------------------------------------------------------------------- simulate
+_SIM_KINDS = ["encoder", "lts", "fog"]
+
+
+@cli.command()
+@click.argument("kind", type=click.Choice(_SIM_KINDS))
+@click.option(
+    "--out", "out", required=True, type=click.Path(dir_okay=False), help="Capture file to write."
+)
+@click.option("--amplitude-deg", type=float, default=0.5, show_default=True)
+@click.option("--frequency-hz", type=float, default=2.0, show_default=True)
+@click.option(
+    "--harmonic",
+    "harmonic_items",
+    multiple=True,
+    metavar="H:REL[:PHASE]",
+    help="Add harmonic H with amplitude REL×fundamental (and phase, rad). Repeatable.",
+)
+@click.option("--stagnation-s", type=float, default=0.0, show_default=True)
+@click.option("--backlash-deg", type=float, default=0.0, show_default=True)
+@click.option("--vibration-deg", type=float, default=0.0, show_default=True)
+@click.option("--vibration-hz", type=float, default=0.0, show_default=True)
+@click.option(
+    "--duration-s", type=float, default=None, help="Length of the capture [default: ~6 periods]."
+)
+@click.option("--fs-hz", type=float, default=None, help="Sample rate [default: per sensor].")
+@click.option(
+    "--lines", type=int, default=36000, show_default=True, help="encoder: lines per revolution."
+)
+@click.option(
+    "--noise",
+    type=float,
+    default=None,
+    help="Sensor noise (encoder: signal units; lts: mm; fog: deg/s).",
+)
+@click.option(
+    "--snr-db", type=float, default=None, help="fog: noise set by this SNR instead of --noise."
+)
+@click.option("--radius-mm", type=float, default=100.0, show_default=True, help="lts: R.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--force", is_flag=True, help="Overwrite FILE if it exists.")
+def simulate(kind: str, out: str, harmonic_items: Sequence[str], force: bool, **kw: Any) -> None:
+    """Write a synthetic capture of KIND with its truth beside it (FILE.truth.json)."""
+    from rotacal import sim
+
+    harmonics: dict[int, tuple[float, float]] = {}
+    for item in harmonic_items:
+        parts = item.split(":")
+        try:
+            h, rel = int(parts[0]), float(parts[1])
+            phase = float(parts[2]) if len(parts) > 2 else 0.0
+        except (ValueError, IndexError):
+            raise ConfigError(f"--harmonic {item!r} is not H:REL[:PHASE], e.g. 3:0.02") from None
+        harmonics[h] = (rel, phase)
+    motion_ = sim.SineMotion(
+        amplitude_deg=kw.pop("amplitude_deg"),
+        frequency_hz=kw.pop("frequency_hz"),
+        harmonics=harmonics,
+        stagnation_s=kw.pop("stagnation_s"),
+        backlash_deg=kw.pop("backlash_deg"),
+        vibration_deg=kw.pop("vibration_deg"),
+        vibration_hz=kw.pop("vibration_hz"),
+    )
+    options: dict[str, Any] = {"duration_s": kw["duration_s"], "seed": kw["seed"]}
+    if kw["fs_hz"] is not None:
+        options["fs_hz"] = kw["fs_hz"]
+    noise = kw["noise"]
+    if kind == "encoder":
+        options["lines"] = kw["lines"]
+        if noise is not None:
+            options["noise_rms"] = noise
+    elif kind == "lts":
+        options["radius_mm"] = kw["radius_mm"]
+        if noise is not None:
+            options["noise_mm"] = noise
+    else:
+        if kw["snr_db"] is not None:
+            options["snr_db"] = kw["snr_db"]
+        elif noise is not None:
+            options["noise_deg_s"] = noise
+    capture = sim.simulate(kind, motion_, **options)
+    path = capture.write(out, overwrite=force)
+    click.echo(f"wrote {path} and {path}.truth.json", err=True)
+
+
+# ------------------------------------------------------------------------------------------------ demo
+@cli.command()
+@click.option(
+    "--out", "out", default="rotacal-demo", show_default=True, type=click.Path(file_okay=False)
+)
+def demo(out: str) -> None:
+    """Simulate a calibration campaign on the digital twin, analyse it, write DIR/report.html."""
+    from rotacal.demo import demo_steps, run_demo
+
+    with _progress(demo_steps(), "demo") as advance:
+        report = run_demo(Path(out), progress=advance)
+    click.echo(f"wrote {report}")
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """Entry point of the console script."""
+    cli.main(args=list(argv) if argv is not None else None, prog_name="rotacal")
+
+
+__all__ = ["CaptureError", "cli", "main"]

@@ -1,0 +1,303 @@
+"""Shared pieces of the capture readers: formats, file checks, column validation.
+
+Nothing here is public; :mod:`rotacal.io` re-exports what users need.
+"""
+
+from __future__ import annotations
+
+import codecs
+import os
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rotacal.errors import CaptureError, ConfigError
+
+#: file extension (lower case) -> format name
+FORMATS: dict[str, str] = {
+    ".csv": "csv",
+    ".txt": "csv",
+    ".npz": "npz",
+    ".h5": "hdf5",
+    ".hdf5": "hdf5",
+    ".tdms": "tdms",
+}
+_FORMAT_LABEL = {"csv": "CSV", "npz": "NPZ", "hdf5": "HDF5", "tdms": "TDMS"}
+_SNIFF_LABEL = {
+    "csv": "CSV text",
+    "npz": "a ZIP archive such as NPZ or Excel .xlsx",
+    "hdf5": "an HDF5 file",
+    "tdms": "a TDMS file",
+    "npy": "a single NumPy .npy array",
+    "utf16": "UTF-16 text",
+    "text8": "text that is not UTF-8, e.g. Latin-1",
+    "binary": "binary data of an unknown format",
+}
+_SNIFF_EXT = {"csv": ".csv", "npz": ".npz", "hdf5": ".h5", "tdms": ".tdms"}
+_HDF5_MAGIC = b"\x89HDF\r\n\x1a\n"
+#: elements per block when scanning (possibly memory-mapped) columns, to keep memory flat
+BLOCK = 1 << 20
+#: the name under which NPZ captures keep their metadata (JSON text)
+NPZ_METADATA_KEY = "__metadata__"
+
+
+def known_extensions() -> str:
+    """The recognised capture extensions, as text for messages."""
+    return ", ".join(FORMATS)
+
+
+def format_of(path: Path) -> str:
+    """Format name from the file extension; unknown extension -> CaptureError."""
+    fmt = FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        raise CaptureError(
+            f"{path.name} has an unknown capture extension {path.suffix or '(none)'!r}; "
+            f"rotacal reads {known_extensions()} — rename or convert the file"
+        )
+    return fmt
+
+
+def sniff(head: bytes) -> str:
+    """Guess a format from the first bytes of a file (see ``_SNIFF_LABEL``)."""
+    if head.startswith(b"PK\x03\x04") or head.startswith(b"PK\x05\x06"):
+        return "npz"
+    if head.startswith(_HDF5_MAGIC):
+        return "hdf5"
+    if head.startswith(b"TDSm"):
+        return "tdms"
+    if head.startswith(b"\x93NUMPY"):
+        return "npy"
+    if head.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return "utf16"
+    if b"\x00" in head:
+        return "binary"
+    try:
+        codecs.getincrementaldecoder("utf-8")().decode(head, final=False)
+    except UnicodeDecodeError:
+        printable = sum(1 for b in head if b >= 32 or b in (9, 10, 13))
+        return "text8" if printable >= 0.95 * len(head) else "binary"
+    return "csv"
+
+
+def _hdf5_with_userblock(path: Path) -> bool:
+    with open(path, "rb") as fh:
+        for off in (512, 1024, 2048, 4096):
+            fh.seek(off)
+            if fh.read(8) == _HDF5_MAGIC:
+                return True
+    return False
+
+
+def open_checked(path: str | os.PathLike[str]) -> tuple[Path, str]:
+    """Check that ``path`` is a readable, non-empty file whose content matches its extension.
+
+    Returns the path and the format name. Every failure is a one-line CaptureError.
+    """
+    p = Path(path)
+    fmt = format_of(p)
+    if not p.exists():
+        raise CaptureError(f"capture file {str(path)!r} does not exist; check the path")
+    if p.is_dir():
+        raise CaptureError(f"{p.name} is a directory, not a capture file; give a file inside it")
+    try:
+        with open(p, "rb") as fh:
+            head = fh.read(4096)
+    except PermissionError:
+        raise CaptureError(
+            f"{p.name} cannot be read (permission denied); fix its permissions"
+        ) from None
+    except OSError as exc:
+        reason = exc.strerror or exc
+        raise CaptureError(f"{p.name} cannot be read ({reason}); check the file") from None
+    if not head:
+        raise CaptureError(f"{p.name} is empty; give a capture that holds data")
+    kind = sniff(head)
+    if kind == "binary" and fmt == "hdf5" and _hdf5_with_userblock(p):
+        kind = "hdf5"
+    if kind != fmt:
+        label = _FORMAT_LABEL[fmt]
+        art = "an" if label[0] in "AEFHILMNORSX" else "a"
+        fix = (
+            f"rename it to {_SNIFF_EXT[kind]}"
+            if kind in _SNIFF_EXT
+            else ("save it as UTF-8 CSV" if kind in ("utf16", "text8") else "convert it")
+        )
+        raise CaptureError(
+            f"{p.name} is not {art} {label} file (it looks like {_SNIFF_LABEL[kind]}); {fix}"
+        )
+    return p, fmt
+
+
+def check_group_unused(p: Path, group: str | None) -> None:
+    if group is not None:
+        raise ConfigError(
+            f"--group {group!r} applies to HDF5 and TDMS captures, not to {p.name}; leave it out"
+        )
+
+
+def label(name: str, file_name: str) -> str:
+    """How a column is named in a message: canonical name, and the file's name if mapped."""
+    if name == file_name:
+        return f"column {name!r}"
+    return f"column {name!r} (file column {file_name!r})"
+
+
+def plain(value: Any) -> Any:
+    """NumPy scalars/arrays in metadata -> plain Python values."""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _first_true(mask: np.ndarray) -> int:
+    return int(np.argmax(mask))
+
+
+def first_nonfinite(x: np.ndarray, start: int = 0) -> int:
+    """Index of the first NaN/inf in ``x`` at or after ``start`` (blockwise), or -1."""
+    n = x.shape[0]
+    for i in range(start, n, BLOCK):
+        block = x[i : i + BLOCK]
+        ok = np.isfinite(block)
+        if not ok.all():
+            return i + _first_true(~ok)
+    return -1
+
+
+def trailing_nan_start(x: np.ndarray) -> int:
+    """Length of ``x`` without its trailing NaNs (padding), scanning blockwise from the end."""
+    end = x.shape[0]
+    while end > 0:
+        lo = max(0, end - BLOCK)
+        block = x[lo:end]
+        nn = ~np.isnan(block)
+        if nn.any():
+            return lo + int(block.shape[0] - 1 - np.argmax(nn[::-1])) + 1
+        end = lo
+    return 0
+
+
+_MAX_EXACT_INT = 2**53
+
+
+def to_float_column(
+    raw: Any,
+    *,
+    fname: str,
+    what: str,
+    locate: Callable[[int], str],
+    ragged: bool = False,
+    offset: int = 0,
+) -> np.ndarray:
+    """Validate one raw column and return it as 1-D float64 (memory-mapped data stays mapped).
+
+    ``what`` names the column in messages; ``locate(i)`` describes absolute row ``i``;
+    ``offset`` is the absolute row of ``raw[0]`` (chunked reading).
+    """
+    arr = raw if isinstance(raw, np.ndarray) else np.asarray(raw)
+    if arr.ndim != 1:
+        raise CaptureError(
+            f"{fname} {what} has shape {arr.shape}; each column must be one 1-D array, "
+            "so split it into one column per channel"
+        )
+    kind = arr.dtype.kind
+    if kind not in "iuf":
+        raise CaptureError(
+            f"{fname} {what} holds {arr.dtype} values, not real numbers; store it as numbers"
+        )
+    if kind in "iu":
+        if arr.size and max(abs(int(arr.min())), abs(int(arr.max()))) > _MAX_EXACT_INT:
+            raise CaptureError(
+                f"{fname} {what} holds integers beyond 2**53 that float64 cannot represent "
+                "exactly; scale them (e.g. ticks to seconds) before saving"
+            )
+        out = arr.astype(np.float64)
+    elif arr.dtype != np.float64 or not arr.dtype.isnative:
+        out = arr.astype(np.float64)
+    else:
+        out = np.asarray(arr)  # a memmap becomes a plain ndarray view of the same mapping
+    if ragged:
+        out = out[: trailing_nan_start(out)]
+    if out.shape[0] == 0:
+        raise CaptureError(f"{fname} {what} is empty; give a capture with data in it")
+    bad = first_nonfinite(out)
+    if bad >= 0:
+        where = locate(offset + bad)
+        hint = (
+            "; only trailing cells may be empty (padding) in a ragged capture"
+            if ragged
+            else "; remove or fix that row"
+        )
+        value = float(out[bad])
+        raise CaptureError(f"{fname} {what} holds {value} at {where}, not a finite number{hint}")
+    return out
+
+
+def row_locator(index: int) -> str:
+    return f"row {index} (0-based)"
+
+
+def check_time(
+    t: np.ndarray | Sequence[float], name: str = "time_s", *, source: str | None = None
+) -> None:
+    """Check that a time column is finite and strictly increasing.
+
+    Parameters
+    ----------
+    t : array_like
+        Times in s, 1-D.
+    name : str
+        Column name used in the message.
+    source : str, optional
+        File the column came from, named in the message.
+
+    Raises
+    ------
+    CaptureError
+        Naming the first bad row (0-based) when ``t`` is not 1-D, holds NaN/inf, or does not
+        strictly increase.
+    """
+    arr = t if isinstance(t, np.ndarray) else np.asarray(t, dtype=np.float64)
+    who = f"{Path(source).name} column {name!r}" if source else f"column {name!r}"
+    if arr.ndim != 1:
+        raise CaptureError(f"{who} has shape {arr.shape}; a time column must be 1-D")
+    if arr.dtype.kind not in "iuf":
+        raise CaptureError(f"{who} holds {arr.dtype} values; a time column must hold numbers (s)")
+    if arr.dtype.kind == "f":
+        bad = first_nonfinite(arr)
+        if bad >= 0:
+            raise CaptureError(
+                f"{who} holds {float(arr[bad])} at row {bad} (0-based); "
+                "times must be finite numbers"
+            )
+    n = arr.shape[0]
+    for i in range(0, max(n - 1, 0), BLOCK):
+        block = arr[i : i + BLOCK + 1]
+        step_ok = np.diff(block) > 0
+        if not step_ok.all():
+            j = i + _first_true(~step_ok) + 1
+            raise CaptureError(
+                f"{who} is not strictly increasing at row {j} (0-based): {float(arr[j])!r} s "
+                f"follows {float(arr[j - 1])!r} s; sort the capture or drop repeated samples"
+            )
+
+
+def equal_lengths(fname: str, lengths: dict[str, int]) -> None:
+    """Without ragged=True every loaded column must have the same length."""
+    if len(set(lengths.values())) > 1:
+        shown = ", ".join(f"{k}: {v}" for k, v in lengths.items())
+        raise CaptureError(
+            f"{fname} columns have different lengths ({shown}); trim them to one length, "
+            "or read multi-head pulse files with ragged=True"
+        )
+
+
+def chunk_slices(n: int, chunk_rows: int) -> Iterator[tuple[int, int]]:
+    for i in range(0, n, chunk_rows):
+        yield i, min(n, i + chunk_rows)

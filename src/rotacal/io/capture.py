@@ -1,0 +1,341 @@
+"""Reading captures: :class:`Capture`, :func:`read_capture`, chunked reading, column mapping.
+
+A capture is a table of named 1-D columns in a CSV, NPZ, HDF5 or TDMS file (see the "Captures"
+section of INTERFACE.md). Readers check the file's content against its extension, map the file's
+own column names onto canonical ones (``--column OLD=NEW``), load only the columns asked for and
+refuse anything that would give a silently wrong number: missing columns, non-numeric cells,
+NaN/inf, empty columns, columns of unequal length.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from rotacal.errors import CaptureError, ConfigError
+
+from ._common import check_group_unused, equal_lengths, label, open_checked, to_float_column
+from ._csv import CsvReader
+from ._hdf5 import Hdf5Reader
+from ._npz import NpzReader
+from ._tdms import TdmsReader
+
+PathLike = str | os.PathLike[str]
+MappingArg = Mapping[str, str] | Iterable[str] | None
+
+
+class _Reader(Protocol):
+    fname: str
+    names: list[str]
+    metadata: dict[str, Any]
+
+    def length(self, name: str) -> int: ...
+    def read(self, names: list[str], ragged: bool) -> dict[str, np.ndarray]: ...
+    def chunks(self, names: list[str], chunk_rows: int) -> Iterator[dict[str, np.ndarray]]: ...
+    def locate(self, index: int) -> str: ...
+    def close(self) -> None: ...
+
+
+@dataclass
+class Capture:
+    """Columns of one capture file, under their canonical names.
+
+    Attributes
+    ----------
+    columns : dict of str to ndarray
+        Canonical name -> 1-D float64 column (memory-mapped, read-only, for uncompressed NPZ
+        members and contiguous HDF5 datasets stored as float64).
+    source : str
+        The path as given.
+    metadata : dict
+        Metadata stored with the capture: CSV ``# key: value`` comments, HDF5 attributes of the
+        group, TDMS file and group properties, the NPZ ``__metadata__`` member.
+    file_columns : list of str
+        Every column the file offers (after mapping), loaded or not; used in messages.
+    """
+
+    columns: dict[str, np.ndarray]
+    source: str
+    metadata: dict[str, Any] = field(default_factory=dict)
+    file_columns: list[str] = field(default_factory=list, repr=False)
+
+    @property
+    def names(self) -> list[str]:
+        """Names of the loaded columns."""
+        return list(self.columns)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        try:
+            return self.columns[name]
+        except KeyError:
+            pass
+        fname = Path(self.source).name
+        if name in self.file_columns:
+            raise CaptureError(
+                f"{fname} column {name!r} was not loaded; include it in columns= when reading"
+            )
+        have = ", ".join(self.file_columns or self.names) or "none"
+        raise CaptureError(
+            f"{fname} has no column {name!r} (it has: {have}); map one with --column OLD={name}"
+        )
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.columns
+
+    def __len__(self) -> int:
+        return max((c.shape[0] for c in self.columns.values()), default=0)
+
+
+def parse_column_mapping(items: Iterable[str] | None) -> dict[str, str]:
+    """Parse ``--column OLD=NEW`` items into ``{OLD: NEW}``.
+
+    Raises
+    ------
+    ConfigError
+        For an item that is not ``OLD=NEW`` with two non-empty names, the same OLD twice, or
+        two OLD names mapped onto the same NEW.
+    """
+    out: dict[str, str] = {}
+    if items is None:
+        return out
+    if isinstance(items, str):
+        items = [items]
+    for item in items:
+        parts = str(item).split("=")
+        if len(parts) != 2 or not parts[0].strip() or not parts[1].strip():
+            raise ConfigError(
+                f"--column {item!r} must be OLD=NEW with two names, e.g. --column ch1=a"
+            )
+        old, new = parts[0].strip(), parts[1].strip()
+        if old in out:
+            raise ConfigError(f"--column maps {old!r} twice ({out[old]!r} and {new!r}); keep one")
+        out[old] = new
+    _check_targets(out)
+    return out
+
+
+def _check_targets(mapping: Mapping[str, str]) -> None:
+    seen: dict[str, str] = {}
+    for old, new in mapping.items():
+        if new in seen:
+            raise ConfigError(
+                f"--column maps both {seen[new]!r} and {old!r} onto {new!r}; map only one of them"
+            )
+        seen[new] = old
+
+
+def _normalise_mapping(mapping: MappingArg) -> dict[str, str]:
+    if mapping is None:
+        return {}
+    if isinstance(mapping, Mapping):
+        out = {str(k): str(v) for k, v in mapping.items()}
+        for k, v in out.items():
+            if not k or not v:
+                raise ConfigError(f"column mapping {k!r}->{v!r} needs two non-empty names")
+        _check_targets(out)
+        return out
+    return parse_column_mapping(mapping)
+
+
+def _open_reader(path: PathLike, group: str | None) -> tuple[Path, _Reader]:
+    p, fmt = open_checked(path)
+    if fmt == "csv":
+        check_group_unused(p, group)
+        return p, CsvReader(p)
+    if fmt == "npz":
+        check_group_unused(p, group)
+        return p, NpzReader(p)
+    if fmt == "hdf5":
+        return p, Hdf5Reader(p, group)
+    return p, TdmsReader(p, group)
+
+
+def _resolve(
+    reader: _Reader, mapping: dict[str, str], columns: Iterable[str] | None
+) -> tuple[list[str], dict[str, str]]:
+    """Apply the mapping; return the canonical names of the file and canonical -> file name."""
+    fname = reader.fname
+    have = reader.names
+    for old in mapping:
+        if old not in have:
+            raise CaptureError(
+                f"{fname} has no column {old!r} to map (it has: {', '.join(have)}); "
+                f"fix --column {old}={mapping[old]}"
+            )
+    canon: dict[str, str] = {}
+    for name in have:
+        new = mapping.get(name, name)
+        if new in canon:
+            other = canon[new]
+            own = other if other == new else name
+            raise CaptureError(
+                f"{fname}: mapping onto {new!r} clashes with the file's own column {own!r}; "
+                f"map that one to another name too (--column {own}={own}_raw)"
+            )
+        canon[new] = name
+    available = list(canon)
+    if columns is None:
+        return available, canon
+    wanted = [columns] if isinstance(columns, str) else list(columns)
+    if not wanted:
+        raise ConfigError("columns= is empty; name the columns to read, or pass None for all")
+    missing = [c for c in dict.fromkeys(wanted) if c not in canon]
+    if missing:
+        names = ", ".join(repr(m) for m in missing)
+        one = missing[0]
+        raise CaptureError(
+            f"{fname} has no column {names} (it has: {', '.join(available)}); "
+            f"map one with --column OLD={one}"
+        )
+    return available, {c: canon[c] for c in dict.fromkeys(wanted)}
+
+
+def read_capture(
+    path: PathLike,
+    *,
+    columns: Iterable[str] | None = None,
+    mapping: MappingArg = None,
+    group: str | None = None,
+    ragged: bool = False,
+) -> Capture:
+    """Read a capture file into a :class:`Capture` of validated float64 columns.
+
+    Parameters
+    ----------
+    path : str or path-like
+        ``.csv``/``.txt``, ``.npz``, ``.h5``/``.hdf5`` or ``.tdms``; the content must match.
+    columns : iterable of str, optional
+        Canonical names (after mapping) the caller needs; all must exist and only they are
+        loaded. Default: every column.
+    mapping : mapping or iterable of "OLD=NEW", optional
+        Renames file columns onto canonical names before ``columns`` is checked.
+    group : str, optional
+        HDF5 group (``grp/sub`` allowed) or TDMS group holding the columns.
+    ragged : bool
+        Allow columns of different lengths (multi-head pulse files); trailing empty CSV cells
+        and trailing NaNs are padding and dropped per column.
+
+    Returns
+    -------
+    Capture
+        Columns in the units of the file (the canonical names carry them).
+
+    Raises
+    ------
+    CaptureError
+        One line naming the file and the column/row at fault.
+    """
+    mapped = _normalise_mapping(mapping)
+    p, reader = _open_reader(path, group)
+    try:
+        available, wanted = _resolve(reader, mapped, columns)
+        raw = reader.read(list(wanted.values()), ragged)
+        cols: dict[str, np.ndarray] = {}
+        for canon, fcol in wanted.items():
+            cols[canon] = to_float_column(
+                raw.pop(fcol),
+                fname=p.name,
+                what=label(canon, fcol),
+                locate=reader.locate,
+                ragged=ragged,
+            )
+        if not ragged:
+            equal_lengths(p.name, {k: v.shape[0] for k, v in cols.items()})
+        return Capture(
+            columns=cols,
+            source=str(path),
+            metadata=dict(reader.metadata),
+            file_columns=available,
+        )
+    finally:
+        reader.close()
+
+
+def _check_chunk_rows(chunk_rows: int) -> int:
+    if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int | np.integer):
+        raise ConfigError(f"chunk_rows must be a whole number of rows, not {chunk_rows!r}")
+    if chunk_rows < 1:
+        raise ConfigError(f"chunk_rows must be at least 1, not {chunk_rows}")
+    return int(chunk_rows)
+
+
+def iter_capture_chunks(
+    path: PathLike,
+    columns: Iterable[str],
+    *,
+    chunk_rows: int = 1_000_000,
+    mapping: MappingArg = None,
+    group: str | None = None,
+) -> Iterator[dict[str, np.ndarray]]:
+    """Stream a capture in chunks of at most ``chunk_rows`` rows with bounded memory.
+
+    Yields dicts canonical name -> 1-D float64 chunk (all of one length; possibly read-only
+    views of a memory map). Concatenating the chunks gives what :func:`read_capture` returns.
+    Columns must have equal lengths. Each chunk is validated like :func:`read_capture` (row
+    numbers in messages count from the start of the file). The file is checked and opened on the
+    first ``next()``.
+
+    Raises
+    ------
+    CaptureError, ConfigError
+    """
+    rows = _check_chunk_rows(chunk_rows)
+    mapped = _normalise_mapping(mapping)
+    p, reader = _open_reader(path, group)
+    try:
+        _available, wanted = _resolve(reader, mapped, columns)
+        fcols = list(wanted.values())
+        if not isinstance(reader, CsvReader):  # CSV: unequal lengths show up as empty cells
+            lengths = {c: reader.length(f) for c, f in wanted.items()}
+            if all(n >= 0 for n in lengths.values()):
+                equal_lengths(p.name, lengths)
+        start = 0
+        for raw in reader.chunks(fcols, rows):
+            out = {
+                canon: to_float_column(
+                    raw[fcol],
+                    fname=p.name,
+                    what=label(canon, fcol),
+                    locate=reader.locate,
+                    offset=start,
+                )
+                for canon, fcol in wanted.items()
+            }
+            start += next(iter(out.values())).shape[0]
+            yield out
+        if start == 0:
+            raise CaptureError(f"{p.name} has no data rows; give a capture with data in it")
+    finally:
+        reader.close()
+
+
+def capture_length(
+    path: PathLike,
+    column: str,
+    *,
+    mapping: MappingArg = None,
+    group: str | None = None,
+) -> int:
+    """Number of rows of ``column`` (canonical name), without reading the data where possible.
+
+    NPZ, HDF5 and TDMS read it from the metadata; CSV counts the data rows (one pass over the
+    bytes, no parsing), which for padded (ragged) CSV files is the longest column's length.
+    """
+    mapped = _normalise_mapping(mapping)
+    _p, reader = _open_reader(path, group)
+    try:
+        _available, wanted = _resolve(reader, mapped, [column])
+        n = reader.length(wanted[column])
+        if n < 0:
+            raise CaptureError(
+                f"{reader.fname} {label(column, wanted[column])} is not 1-D; each column must be "
+                "one 1-D array"
+            )
+        return n
+    finally:
+        reader.close()

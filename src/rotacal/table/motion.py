@@ -1,0 +1,603 @@
+"""Sinusoidal-motion calibration of a low-frequency angular-acceleration rotary table (seed 000).
+
+Three measurement schemes of Feng et al. (2023) give the table's angular displacement θ(t):
+
+- OSE: an optical shaft encoder's quadrature signals, demodulated into angle (§3, eqs. (3)–(8));
+- LTS: a laser triangulation sensor on a reflector at radius R, θ = arctan(D/R) (§5, eq. (15));
+- FOG: a rate gyro whose output is fitted directly and integrated analytically (§4, eqs. (9)–(14)).
+
+Each cuts n whole motion periods bounded by 2n+1 reversing moments (§3.3), fits the fundamental and
+its harmonics by the IEEE 1057 multi-harmonic sine fit with the frequency refined, and reports the
+amplitude, frequency, angular-acceleration amplitude, THD (eq. (1)) and, given the set values, their
+errors and the angular position error (eq. (2)).
+
+References
+----------
+Feng R., Yan J., Wu Y., Yu N., Yin X. (2023). Methods for Comprehensive Calibration of a
+Low-Frequency Angular Acceleration Rotary Table. Sensors 23, 4876. doi:10.3390/s23104876
+IEEE Std 1057-2017, IEEE Standard for Digitizing Waveform Recorders, §4.1.3 (sine fitting).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from rotacal.encoder import QuadratureCorrection, correct_quadrature, demodulate
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.results import Result
+from rotacal.signal import (
+    SineFit,
+    displacement_amplitudes_from_rate,
+    estimate_frequency,
+    fit_harmonics,
+    fit_sine_3p,
+    snr_db,
+    thd_percent,
+)
+
+__all__ = [
+    "MotionResult",
+    "SchemeComparison",
+    "calibrate_encoder_motion",
+    "calibrate_fog_motion",
+    "calibrate_lts_motion",
+    "compare_schemes",
+    "extreme_reversals",
+    "position_error",
+]
+
+#: Keys that appear in the JSON only when they apply (set values given, or the FOG scheme).
+_OPTIONAL_KEYS = (
+    "set_amplitude_deg",
+    "set_frequency_hz",
+    "amplitude_error_percent",
+    "frequency_error_percent",
+    "angular_acceleration_error_percent",
+    "position_error_max_deg",
+    "position_error_rms_deg",
+    "snr_db",
+)
+_PLOT_POINTS = 20_000
+
+
+@dataclasses.dataclass(frozen=True)
+class MotionResult(Result):
+    """Result of a sinusoidal-motion calibration (JSON keys of INTERFACE.md, ``motion``)."""
+
+    scheme: str
+    amplitude_deg: float
+    frequency_hz: float
+    angular_acceleration_amplitude_deg_s2: float
+    thd_percent: float
+    harmonic_amplitudes_deg: np.ndarray
+    reversal_times_s: np.ndarray
+    periods_used: int
+    analysis_start_s: float
+    analysis_stop_s: float
+    harmonics: int
+    offset_deg: float
+    residual_rms_deg: float
+    amplitude_u_deg: float
+    frequency_u_hz: float
+    samples_used: int
+    notes: tuple[str, ...] = ()
+    set_amplitude_deg: float | None = None
+    set_frequency_hz: float | None = None
+    amplitude_error_percent: float | None = None
+    frequency_error_percent: float | None = None
+    angular_acceleration_error_percent: float | None = None
+    position_error_max_deg: float | None = None
+    position_error_rms_deg: float | None = None
+    snr_db: float | None = None
+    # For figures and reports only (not in JSON): the fit, decimated samples, scheme details.
+    _fit: SineFit | None = dataclasses.field(default=None, repr=False, compare=False)
+    _plot: dict[str, Any] = dataclasses.field(default_factory=dict, repr=False, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        out = super().to_dict()
+        for key in _OPTIONAL_KEYS:
+            if out.get(key) is None:
+                out.pop(key, None)
+        return out
+
+
+@dataclasses.dataclass(frozen=True)
+class SchemeComparison(Result):
+    """Two schemes on the same run, as one row of Feng et al. (2023) Table 1."""
+
+    reference_scheme: str
+    other_scheme: str
+    thd_reference_percent: float
+    thd_other_percent: float
+    thd_difference_percent: float
+    amplitude_difference_percent: float
+    frequency_difference_percent: float
+    snr_db: float | None
+
+
+def _plot_stride(n: int) -> int:
+    return max(1, n // _PLOT_POINTS)
+
+
+def _check_settings(harmonics: int, periods: int | None) -> None:
+    if harmonics < 1:
+        raise ConfigError(f"--harmonics must be at least 1, got {harmonics}")
+    if periods is not None and periods < 1:
+        raise ConfigError(f"--periods must be at least 1, got {periods}")
+
+
+def _check_samples(t: np.ndarray, name: str, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if t.ndim != 1 or y.ndim != 1:
+        raise CaptureError(f"time_s and {name} must be 1-D arrays")
+    if t.size != y.size:
+        raise CaptureError(f"time_s has {t.size} samples but {name} has {y.size}")
+    if t.size < 16:
+        raise CaptureError(f"the capture has only {t.size} samples: too few for a sine fit")
+    for label, arr in (("time_s", t), (name, y)):
+        bad = np.flatnonzero(~np.isfinite(arr))
+        if bad.size:
+            raise CaptureError(
+                f"column {label} has a non-finite value (NaN or inf) at row {bad[0]}"
+            )
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        row = int(np.flatnonzero(steps <= 0)[0]) + 1
+        raise CaptureError(f"time_s does not increase at row {row} ({t[row - 1]!r} → {t[row]!r})")
+    return t, y
+
+
+def position_error(
+    t: np.ndarray,
+    angle_deg: np.ndarray,
+    set_amplitude_deg: float,
+    set_frequency_hz: float,
+) -> np.ndarray:
+    """Angular position error against the ideal sinusoid of set amplitude and frequency.
+
+    ``ap_err(t_i) = ap_meas(t_i) − ap_ideal(t_i)`` (Feng et al. 2023, eq. (2)). The ideal motion has the
+    set amplitude and frequency; its phase and mean are not set by the table's settings (the DAQ's
+    time origin is arbitrary), so rotacal takes them from an IEEE 1057 three-parameter fit at the set
+    frequency — the ideal sinusoid that lies closest to the measurement.
+
+    Parameters
+    ----------
+    t : array, s
+    angle_deg : array, deg — the measured angular displacement ap_meas.
+    set_amplitude_deg : float, deg
+    set_frequency_hz : float, Hz
+
+    Returns
+    -------
+    array, deg — ap_err at every sample.
+
+    References
+    ----------
+    Feng et al. (2023), Sensors 23:4876, eq. (2); IEEE Std 1057-2017, §4.1.3.1 (three-parameter fit).
+    """
+    if not set_amplitude_deg > 0 or not set_frequency_hz > 0:
+        raise ConfigError("set amplitude and set frequency must both be positive")
+    fit3 = fit_sine_3p(t, angle_deg, set_frequency_hz)
+    phase = float(fit3.phases_rad[0])
+    ideal = fit3.offset + set_amplitude_deg * np.sin(
+        2 * np.pi * set_frequency_hz * (t - fit3.t_ref_s) + phase
+    )
+    return np.asarray(angle_deg - ideal)
+
+
+def _finish(
+    *,
+    scheme: str,
+    fit: SineFit,
+    displacement_amplitudes: np.ndarray,
+    displacement_amplitudes_u: np.ndarray,
+    offset_deg: float,
+    residual_rms_deg: float,
+    reversal_times: np.ndarray,
+    periods: int,
+    t_used: np.ndarray,
+    angle_used: np.ndarray | None,
+    set_amplitude_deg: float | None,
+    set_frequency_hz: float | None,
+    notes: list[str],
+    snr: float | None,
+    plot: dict[str, Any],
+) -> MotionResult:
+    amp = float(displacement_amplitudes[0])
+    freq = float(fit.frequency_hz)
+    accel = amp * (2 * math.pi * freq) ** 2
+    extra: dict[str, Any] = {}
+    if set_amplitude_deg is not None or set_frequency_hz is not None:
+        if set_amplitude_deg is None or set_frequency_hz is None:
+            raise ConfigError("give both --set-amplitude-deg and --set-frequency-hz, or neither")
+        if not set_amplitude_deg > 0 or not set_frequency_hz > 0:
+            raise ConfigError("set amplitude and set frequency must both be positive")
+        set_accel = set_amplitude_deg * (2 * math.pi * set_frequency_hz) ** 2
+        extra.update(
+            set_amplitude_deg=float(set_amplitude_deg),
+            set_frequency_hz=float(set_frequency_hz),
+            amplitude_error_percent=100 * (amp - set_amplitude_deg) / set_amplitude_deg,
+            frequency_error_percent=100 * (freq - set_frequency_hz) / set_frequency_hz,
+            angular_acceleration_error_percent=100 * (accel - set_accel) / set_accel,
+        )
+        if angle_used is not None:
+            err = position_error(t_used, angle_used, set_amplitude_deg, set_frequency_hz)
+            extra.update(
+                position_error_max_deg=float(np.max(np.abs(err))),
+                position_error_rms_deg=float(np.sqrt(np.mean(err**2))),
+            )
+            step = _plot_stride(err.size)
+            plot["position_error_deg"] = err[::step]
+    return MotionResult(
+        scheme=scheme,
+        amplitude_deg=amp,
+        frequency_hz=freq,
+        angular_acceleration_amplitude_deg_s2=accel,
+        thd_percent=thd_percent(displacement_amplitudes),
+        harmonic_amplitudes_deg=np.asarray(displacement_amplitudes, dtype=float),
+        reversal_times_s=np.asarray(reversal_times, dtype=float),
+        periods_used=int(periods),
+        analysis_start_s=float(t_used[0]),
+        analysis_stop_s=float(t_used[-1]),
+        harmonics=int(displacement_amplitudes.size),
+        offset_deg=float(offset_deg),
+        residual_rms_deg=float(residual_rms_deg),
+        amplitude_u_deg=float(displacement_amplitudes_u[0]),
+        frequency_u_hz=float(fit.frequency_u_hz),
+        samples_used=int(t_used.size),
+        notes=tuple(notes),
+        snr_db=snr,
+        _fit=fit,
+        _plot=plot,
+        **extra,
+    )
+
+
+def _cut(reversal_idx: np.ndarray, periods: int | None, what: str) -> tuple[int, int, int]:
+    """First and last sample of n whole periods bounded by 2n+1 reversals (seed 000, §3.3)."""
+    available = (reversal_idx.size - 1) // 2
+    if available < 1:
+        raise CaptureError(
+            f"found {reversal_idx.size} reversing moment(s) in the {what}: at least 3 are needed "
+            "for one whole motion period — record longer"
+        )
+    n = available if periods is None else periods
+    if n > available:
+        raise CaptureError(
+            f"--periods {periods} asks for more than the {available} whole period(s) the {what} holds"
+        )
+    return int(reversal_idx[0]), int(reversal_idx[2 * n]), n
+
+
+def calibrate_encoder_motion(
+    t: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    *,
+    lines: int,
+    harmonics: int = 10,
+    periods: int | None = None,
+    set_amplitude_deg: float | None = None,
+    set_frequency_hz: float | None = None,
+    correction: QuadratureCorrection | None = None,
+) -> MotionResult:
+    """Sinusoidal-motion calibration from an optical shaft encoder (the OSE scheme).
+
+    Heydemann-corrected quadrature demodulation, 12 subintervals per signal period, reversing moments by
+    the odd/even trend-change rule and their precise point (eqs. (3)–(8)), n whole periods cut between
+    2n+1 reversals, then the IEEE 1057 multi-harmonic fit of the angular displacement and THD (eq. (1)).
+
+    Parameters
+    ----------
+    t : array, s — sample times, increasing.
+    a, b : array — quadrature signals, a ≈ cos φ, b ≈ sin φ, φ = 2π·lines·θ/360 (any unit, e.g. V).
+    lines : int — encoder lines (signal periods) per revolution.
+    harmonics : int — N_H, highest harmonic in the fit and the THD (default 10).
+    periods : int, optional — whole motion periods to analyse (default: all the capture holds).
+    set_amplitude_deg, set_frequency_hz : float, optional — the table's set values (deg, Hz).
+    correction : QuadratureCorrection, optional — a known correction instead of fitting one.
+
+    Returns
+    -------
+    MotionResult
+
+    References
+    ----------
+    Feng et al. (2023), Sensors 23:4876, §3 and eqs. (1)–(8); IEEE Std 1057-2017, §4.1.3.
+    """
+    _check_settings(harmonics, periods)
+    if int(lines) != lines or lines < 1:
+        raise ConfigError(f"--lines must be a positive whole number, got {lines}")
+    t, a = _check_samples(t, "a", a)
+    _, b = _check_samples(t, "b", b)
+    demod = demodulate(t, a, b, int(lines), correction=correction)
+    first, last, n = _cut(demod.reversals.indices, periods, "encoder capture")
+    angle = demod.angle_deg
+    seg = slice(first, last + 1)
+    f0 = n / (t[last] - t[first])
+    fit = fit_harmonics(t[seg], angle[seg], frequency_hz=f0, harmonics=harmonics)
+    notes = [f"quadrature correction: {demod.correction.method}"]
+    step = _plot_stride(t.size)
+    seg_step = _plot_stride(last + 1 - first)
+    plot: dict[str, Any] = {
+        "t": t[::step],
+        "angle_deg": angle[::step],
+        "t_used": t[seg][::seg_step],
+        "residual_deg": (angle[seg] - fit.evaluate(t[seg]))[::seg_step],
+        "reversal_kinds": demod.reversals.kinds,
+        "lissajous_raw": (a[::step], b[::step]),
+        "lissajous_corrected": correct_quadrature(a[::step], b[::step], demod.correction),
+        "correction": demod.correction,
+        "unit": "deg",
+    }
+    return _finish(
+        scheme="encoder",
+        fit=fit,
+        displacement_amplitudes=fit.amplitudes,
+        displacement_amplitudes_u=fit.amplitudes_u,
+        offset_deg=fit.offset,
+        residual_rms_deg=fit.residual_rms,
+        reversal_times=demod.reversals.times_s,
+        periods=n,
+        t_used=t[seg],
+        angle_used=angle[seg],
+        set_amplitude_deg=set_amplitude_deg,
+        set_frequency_hz=set_frequency_hz,
+        notes=notes,
+        snr=None,
+        plot=plot,
+    )
+
+
+def extreme_reversals(
+    t: np.ndarray, x: np.ndarray, *, hysteresis: float | None = None
+) -> np.ndarray:
+    """Reversing moments of a displacement signal by its extreme values.
+
+    The LTS signal is proportional to the displacement, so its reversing moments are its extremes
+    (Feng et al. 2023, §5). Each swing of the signal above or below its mid level is found with a
+    Schmitt trigger (hysteresis ``hysteresis``, default 10 % of the 2–98 % range, so noise cannot
+    start a swing); the extreme of each complete swing is then refined by a least-squares parabola
+    through the samples within ±1/20 of a period, which averages the noise down.
+
+    Parameters
+    ----------
+    t : array, s
+    x : array — displacement in any unit.
+    hysteresis : float, optional — in the unit of x.
+
+    Returns
+    -------
+    array of float, s — the reversing moments, in time order, alternately maxima and minima.
+
+    References
+    ----------
+    Feng et al. (2023), Sensors 23:4876, §5 (reversals of the LTS signal by extreme values).
+    """
+    lo, hi = np.percentile(x, [2.0, 98.0])
+    mid = 0.5 * (lo + hi)
+    h = 0.1 * (hi - lo) if hysteresis is None else float(hysteresis)
+    if not hi - lo > 0:
+        raise CaptureError("the signal does not move: no reversing moments can be found")
+    state = np.where(x > mid + h, 1, np.where(x < mid - h, -1, 0)).astype(np.int8)
+    set_at = np.flatnonzero(state)
+    if set_at.size == 0:
+        return np.empty(0)
+    # Forward-fill the Schmitt trigger's state; samples before the first decision take that one.
+    filled = state[
+        set_at[np.maximum(np.searchsorted(set_at, np.arange(x.size), side="right") - 1, 0)]
+    ]
+    edges = np.flatnonzero(np.diff(filled)) + 1
+    # Complete swings lie between two state changes; the first and last segments are partial.
+    if edges.size < 2:
+        return np.empty(0)
+    starts, stops = edges[:-1], edges[1:]
+    signs = filled[starts]
+    signed = x * filled  # maxima of a "+" swing and minima of a "−" swing both become maxima
+    seg_max = np.maximum.reduceat(signed, starts)[: starts.size]
+    seg_id = np.repeat(np.arange(starts.size), stops - starts)
+    region = signed[starts[0] : stops[-1]]
+    hit = np.flatnonzero(region == seg_max[seg_id]) + starts[0]
+    first_hit = hit[np.unique(seg_id[hit - starts[0]], return_index=True)[1]]
+    period = 2 * float(np.median(np.diff(t[first_hit]))) if first_hit.size > 1 else t[-1] - t[0]
+    half_window = period / 20
+    times = np.empty(first_hit.size)
+    for j, (i, s) in enumerate(zip(first_hit, signs, strict=True)):
+        lo_i = np.searchsorted(t, t[i] - half_window)
+        hi_i = np.searchsorted(t, t[i] + half_window, side="right")
+        tt = t[lo_i:hi_i] - t[i]
+        if tt.size < 5:
+            times[j] = t[i]
+            continue
+        c2, c1, _ = np.polyfit(tt, x[lo_i:hi_i], 2)
+        vertex = -c1 / (2 * c2) if c2 * s < 0 else 0.0
+        times[j] = t[i] + (vertex if abs(vertex) < half_window else 0.0)
+    return times
+
+
+def calibrate_lts_motion(
+    t: np.ndarray,
+    displacement_mm: np.ndarray,
+    *,
+    radius_mm: float,
+    harmonics: int = 10,
+    periods: int | None = None,
+    set_amplitude_deg: float | None = None,
+    set_frequency_hz: float | None = None,
+) -> MotionResult:
+    """Sinusoidal-motion calibration from a laser triangulation sensor (the LTS scheme).
+
+    θ_i = arctan(D_i / R) (eq. (15)); reversing moments by extreme values; n whole periods between
+    2n+1 reversals; IEEE 1057 multi-harmonic fit of θ and THD (eq. (1)).
+
+    Parameters
+    ----------
+    t : array, s.
+    displacement_mm : array, mm — the LTS reading D of the reflector at radius R.
+    radius_mm : float, mm — R, distance from the laser spot to the table's axis.
+    harmonics, periods, set_amplitude_deg, set_frequency_hz : as `calibrate_encoder_motion`.
+
+    References
+    ----------
+    Feng et al. (2023), Sensors 23:4876, §5, eqs. (1), (2), (15); IEEE Std 1057-2017, §4.1.3.
+    """
+    _check_settings(harmonics, periods)
+    if not radius_mm > 0:
+        raise ConfigError(f"--radius-mm must be positive, got {radius_mm}")
+    t, d = _check_samples(t, "displacement_mm", displacement_mm)
+    angle = np.degrees(np.arctan(d / radius_mm))
+    rev_times = extreme_reversals(t, angle)
+    rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
+    first, last, n = _cut(rev_idx, periods, "LTS capture")
+    seg = slice(first, last + 1)
+    f0 = n / (rev_times[2 * n] - rev_times[0])
+    fit = fit_harmonics(t[seg], angle[seg], frequency_hz=f0, harmonics=harmonics)
+    step = _plot_stride(t.size)
+    seg_step = _plot_stride(last + 1 - first)
+    plot = {
+        "t": t[::step],
+        "angle_deg": angle[::step],
+        "t_used": t[seg][::seg_step],
+        "residual_deg": (angle[seg] - fit.evaluate(t[seg]))[::seg_step],
+        "unit": "deg",
+    }
+    return _finish(
+        scheme="lts",
+        fit=fit,
+        displacement_amplitudes=fit.amplitudes,
+        displacement_amplitudes_u=fit.amplitudes_u,
+        offset_deg=fit.offset,
+        residual_rms_deg=fit.residual_rms,
+        reversal_times=rev_times,
+        periods=n,
+        t_used=t[seg],
+        angle_used=angle[seg],
+        set_amplitude_deg=set_amplitude_deg,
+        set_frequency_hz=set_frequency_hz,
+        notes=[f"θ = arctan(D/R), R = {radius_mm:g} mm"],
+        snr=None,
+        plot=plot,
+    )
+
+
+def _model_zero_crossings(fit: SineFit, t: np.ndarray) -> np.ndarray:
+    """Times where the fitted rate model crosses zero: the reversing moments of the motion."""
+    rate = fit.evaluate(t)
+    i = np.flatnonzero(np.signbit(rate[:-1]) != np.signbit(rate[1:]))
+    r0, r1 = rate[i], rate[i + 1]
+    return np.asarray(t[i] + (t[i + 1] - t[i]) * r0 / (r0 - r1))
+
+
+def calibrate_fog_motion(
+    t: np.ndarray,
+    rate_deg_s: np.ndarray,
+    *,
+    harmonics: int = 10,
+    periods: int | None = None,
+    set_amplitude_deg: float | None = None,
+    set_frequency_hz: float | None = None,
+) -> MotionResult:
+    """Sinusoidal-motion calibration from a fibre-optic gyro's rate (the FOG scheme).
+
+    The rate is sine-fitted directly, θ̇(t) = D0 + Σ A'_h sin(2π h f t + φ_h) (eqs. (9)–(10)), and
+    integrated analytically: the displacement harmonics are A'_h/(2π h f) (eqs. (11)–(13)), which
+    give THD_θ (eq. (14)). No noise filter and no numerical integration: the fit's robustness does
+    both jobs, as the seed intends. The reversing moments are the zero crossings of the fitted rate;
+    n whole periods are cut between 2n+1 of them and the fit is repeated on that span. The SNR is the
+    fitted signal without its constant term over the residual, in dB (seed §5). The position error
+    (eq. (2)) uses the measured rate minus the fitted D0, integrated by the trapezoid rule.
+
+    Parameters
+    ----------
+    t : array, s.
+    rate_deg_s : array, deg/s.
+    harmonics, periods, set_amplitude_deg, set_frequency_hz : as `calibrate_encoder_motion`.
+
+    References
+    ----------
+    Feng et al. (2023), Sensors 23:4876, §4, eqs. (9)–(14), §5 (SNR); IEEE Std 1057-2017, §4.1.3.
+    """
+    _check_settings(harmonics, periods)
+    t, w = _check_samples(t, "rate_deg_s", rate_deg_s)
+    f_start = estimate_frequency(t, w)
+    first_fit = fit_harmonics(t, w, frequency_hz=f_start, harmonics=harmonics)
+    rev_times = _model_zero_crossings(first_fit, t)
+    rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
+    first, last, n = _cut(rev_idx, periods, "FOG capture")
+    seg = slice(first, last + 1)
+    fit = fit_harmonics(t[seg], w[seg], frequency_hz=first_fit.frequency_hz, harmonics=harmonics)
+    disp = displacement_amplitudes_from_rate(fit.amplitudes, fit.frequency_hz)
+    disp_u = displacement_amplitudes_from_rate(fit.amplitudes_u, fit.frequency_hz)
+    tt, ww = t[seg], w[seg]
+    angle = np.concatenate(
+        ([0.0], np.cumsum(0.5 * (ww[1:] + ww[:-1] - 2 * fit.offset) * np.diff(tt)))
+    )
+    angle -= angle.mean()
+    snr = snr_db(ww, fit, tt)
+    step = _plot_stride(t.size)
+    seg_step = _plot_stride(tt.size)
+    plot = {
+        "t": t[::step],
+        "rate_deg_s": w[::step],
+        "t_used": tt[::seg_step],
+        "residual_deg_s": (ww - fit.evaluate(tt))[::seg_step],
+        "angle_deg_integrated": angle[::seg_step],
+        "unit": "deg/s",
+    }
+    return _finish(
+        scheme="fog",
+        fit=fit,
+        displacement_amplitudes=disp,
+        displacement_amplitudes_u=disp_u,
+        offset_deg=float(np.mean(angle)),
+        residual_rms_deg=float(fit.residual_rms / (2 * math.pi * fit.frequency_hz)),
+        reversal_times=rev_times,
+        periods=n,
+        t_used=tt,
+        angle_used=angle,
+        set_amplitude_deg=set_amplitude_deg,
+        set_frequency_hz=set_frequency_hz,
+        notes=[
+            f"rate bias D0 = {fit.offset:.6g} deg/s (fitted, removed by the analytic integration)"
+        ],
+        snr=float(snr),
+        plot=plot,
+    )
+
+
+def compare_schemes(reference: MotionResult, other: MotionResult) -> SchemeComparison:
+    """Compare two schemes that measured the same run, as a row of Feng et al. (2023) Table 1.
+
+    The THD difference is ``reference − other`` in percentage points (the seed's "Difference Value
+    of THD": the combined OSE/LTS scheme minus the FOG). Amplitude and frequency differences are
+    relative to the reference, in %.
+
+    References
+    ----------
+    Feng et al. (2023), Sensors 23:4876, §5, Table 1.
+    """
+    return SchemeComparison(
+        reference_scheme=reference.scheme,
+        other_scheme=other.scheme,
+        thd_reference_percent=reference.thd_percent,
+        thd_other_percent=other.thd_percent,
+        thd_difference_percent=reference.thd_percent - other.thd_percent,
+        amplitude_difference_percent=100
+        * (other.amplitude_deg - reference.amplitude_deg)
+        / reference.amplitude_deg,
+        frequency_difference_percent=100
+        * (other.frequency_hz - reference.frequency_hz)
+        / reference.frequency_hz,
+        snr_db=other.snr_db if other.snr_db is not None else reference.snr_db,
+    )
+
+
+def summarise(results: Sequence[MotionResult]) -> list[dict[str, Any]]:
+    """One JSON-ready dictionary per result (helper for batch output)."""
+    return [r.to_dict() for r in results]
