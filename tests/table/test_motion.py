@@ -72,9 +72,9 @@ def test_encoder_reversals_survive_a_vibration_near_the_reversals():
     t = c["time_s"]
     # the vibration really makes the velocity cross zero several times near each reversal
     v = shaky.rate_deg_s(t)
-    assert np.count_nonzero(np.diff(np.signbit(v))) > 3 * len(
-        shaky.truth(t[0], t[-1])["reversal_times_s"]
-    )
+    crossings = np.count_nonzero(np.diff(np.signbit(v)))
+    n_true = len(shaky.truth(t[0], t[-1])["reversal_times_s"])
+    assert crossings >= n_true + 6
     r = calibrate_encoder_motion(t, c["a"], c["b"], lines=36000)
     truth = np.asarray(shaky.truth(t[0], t[-1])["reversal_times_s"])
     assert r.reversal_times_s.size == truth.size
