@@ -1,1 +1,25 @@
-"""rotacal.signal"""
+"""rotacal.signal — instrument-independent signal maths: IEEE 1057 sine fits, THD, SNR."""
+
+from rotacal.signal.sinefit import (
+    HarmonicFitAccumulator,
+    SineFit,
+    displacement_amplitudes_from_rate,
+    estimate_frequency,
+    fit_harmonics,
+    fit_sine_3p,
+    fit_sine_4p,
+    snr_db,
+    thd_percent,
+)
+
+__all__ = [
+    "HarmonicFitAccumulator",
+    "SineFit",
+    "displacement_amplitudes_from_rate",
+    "estimate_frequency",
+    "fit_harmonics",
+    "fit_sine_3p",
+    "fit_sine_4p",
+    "snr_db",
+    "thd_percent",
+]

@@ -1,0 +1,484 @@
+"""Block-moment compression of a capture for fast multi-harmonic fitting (private).
+
+The time axis is cut into blocks of equal duration ``T_b`` on a grid fixed at the first sample.
+For block ``b`` with centre ``c_b`` and the in-block coordinate ``u = (t − c_b)/(T_b/2) ∈ [−1, 1)``
+the moments ``P_bk = Σ u^k`` and ``Q_bk = Σ (y − y0)·u^k`` (k = 0..K+1) are kept. For any
+frequency, ``exp(j·m·ω·τ) = exp(j·m·ω·d_b)·Σ_l (j·m·ω·T_b/2)^l/l!·u^l`` (``d_b = c_b − t_ref``)
+turns every exponential sum of the normal equations into a sum over blocks; the series is cut
+where its terms fall below 1e-17, and the block length is chosen so that the highest phase
+``2H·ω·T_b/2`` stays near 0.25 rad. Moments add, so chunks can be fed one after another and a block
+cut by a chunk boundary is simply summed twice. For uniformly sampled chunks the moments of all
+full blocks are one BLAS product of the (blocks × M) sample matrix with a fixed (M × K+2)
+Vandermonde matrix.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.signal._checks import (
+    as_pair,
+    check_finite,
+    check_frequency,
+    check_harmonics,
+    check_increasing,
+    check_record,
+    grid_tolerance,
+    max_grid_deviation,
+)
+from rotacal.signal._freq import estimate_frequency_unchecked
+from rotacal.signal._normal import solve_normal
+from rotacal.signal._result import SineFit, build_sine_fit
+
+_X_PLAN = 0.25  # planned largest in-block phase (rad) of harmonic 2H at 1.25·f
+_F_MARGIN = 1.25
+_MAX_BLOCK = 4096
+_MIN_BLOCK = 8
+_TRUNC = 1e-17
+_SUB_BLOCKS = 256
+_SUB_SAMPLES = 1 << 16
+_SUM_ROWS = 8192
+
+
+def taylor_terms(x: float, limit: int) -> int:
+    """Smallest L with x^L/L! ≤ 1e-17 (the exponential series cut after L terms), or limit+1."""
+    term = 1.0
+    for ell in range(1, limit + 1):
+        term *= x / ell
+        if term <= _TRUNC:
+            return ell
+    return limit + 1
+
+
+def _unit_powers(e1: np.ndarray, kmax: int) -> np.ndarray:
+    """``e1**k`` for k = 0..kmax as columns, by repeated multiplication (error ~k·eps)."""
+    out = np.empty((e1.size, kmax + 1), dtype=np.complex128)
+    out[:, 0] = 1.0
+    if kmax >= 1:
+        out[:, 1] = e1
+    for k in range(2, kmax + 1):
+        np.multiply(out[:, k - 1], e1, out=out[:, k])
+    return out
+
+
+class HarmonicFitAccumulator:
+    """Accumulate a long capture chunk by chunk, then fit a sine with harmonics to all of it.
+
+    Memory stays flat: each chunk is reduced to block moments (about 1/100 of its size for
+    well-sampled signals) as it is added. ``fit()`` gives the same least-squares solution as an
+    explicit multi-harmonic fit of all samples (IEEE Std 1057-2017, §4.1.3; Feng et al. 2023,
+    Sensors 23:4876, eq. (9)).
+
+    Parameters
+    ----------
+    frequency_hz : float, optional
+        Approximate fundamental frequency (Hz) used to size the blocks. If omitted it is
+        estimated from the first chunk, which must then hold at least ~1 period.
+    harmonics : int
+        Largest number of harmonics that ``fit`` will be asked for (sizes the blocks).
+    block_samples : int, optional
+        Force the block length in samples (1 = no compression; mainly for tests).
+    n_moments : int
+        Moments kept per block (Taylor terms available at fit time).
+
+    Examples
+    --------
+    >>> acc = HarmonicFitAccumulator(frequency_hz=0.5)          # doctest: +SKIP
+    >>> for t, y in reader:                                     # doctest: +SKIP
+    ...     acc.add(t, y)
+    >>> fit = acc.fit(harmonics=10)                             # doctest: +SKIP
+    """
+
+    def __init__(
+        self,
+        frequency_hz: float | None = None,
+        *,
+        harmonics: int = 10,
+        block_samples: int | None = None,
+        n_moments: int = 16,
+    ) -> None:
+        self._f_hint = None if frequency_hz is None else check_frequency(frequency_hz)
+        self._h_plan = check_harmonics(harmonics)
+        if block_samples is not None and (
+            isinstance(block_samples, bool)
+            or not isinstance(block_samples, (int, np.integer))
+            or block_samples < 1
+        ):
+            raise ConfigError(f"block_samples must be an integer ≥ 1; got {block_samples!r}.")
+        self._block_req = None if block_samples is None else int(block_samples)
+        if isinstance(n_moments, bool) or not isinstance(n_moments, (int, np.integer)):
+            raise ConfigError(f"n_moments must be an integer in 4..40; got {n_moments!r}.")
+        if not 4 <= n_moments <= 40:
+            raise ConfigError(f"n_moments must be an integer in 4..40; got {n_moments}.")
+        self._k = int(n_moments)
+        self._ready = False
+        self._explicit = False
+        self._n = 0
+        self._sum_y2 = 0.0
+        self._t_first = math.nan
+        self._t_last: float | None = None
+        self._records: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        self._merged: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        # grid (set by _plan)
+        self._t0 = 0.0
+        self._dt = 0.0
+        self._m = 1
+        self._tb = 0.0
+        self._tg = 0.0
+        self._y0 = 0.0
+        self._tol = 0.0
+        self._v = np.zeros((1, 1))
+        self._cumv = np.zeros((2, 1))
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def n_samples(self) -> int:
+        """Number of samples added so far."""
+        return self._n
+
+    @property
+    def block_samples(self) -> int:
+        """Block length in samples (1 = samples kept individually); 0 before the first chunk."""
+        return self._m if self._ready else 0
+
+    # ------------------------------------------------------------------ adding data
+    def add(self, t: Any, y: Any) -> None:
+        """Add one chunk of samples: ``t`` in seconds (increasing, also across chunks), ``y``."""
+        ta, ya = as_pair(t, y)
+        self._add(ta, ya, uniform_dt=None)
+
+    def _add(
+        self, t: np.ndarray, y: np.ndarray, *, uniform_dt: float | None, y_checked: bool = False
+    ) -> None:
+        n = t.size
+        if n == 0:
+            return
+        if self._t_last is not None and not t[0] > self._t_last:
+            check_increasing(t[:1], previous=self._t_last)
+        if not self._ready:
+            self._plan(t, y, uniform_dt, y_checked)
+        self._merged = None
+        if self._explicit:
+            check_increasing(t, previous=self._t_last)
+            check_finite("y", y)
+            yc = y - self._y0
+            self._records.append((t.copy(), yc, np.empty(0)))
+            self._sum_y2 += float(yc @ yc)
+        else:
+            g0f = (float(t[0]) - self._t0) / self._dt
+            g0 = round(g0f)
+            on_grid = False
+            if g0 >= 0 and abs(g0f - g0) * self._dt <= self._tol:
+                if uniform_dt is not None and g0 == 0 and n > 1:
+                    on_grid = abs(uniform_dt - self._dt) * (n - 1) <= self._tol
+                if not on_grid:
+                    dev = max_grid_deviation(t, self._t0, self._dt, g0)
+                    on_grid = dev <= self._tol
+            if on_grid:
+                s2 = self._add_uniform(y, g0)
+            else:
+                check_increasing(t, previous=self._t_last)
+                s2 = self._add_generic(t, y)
+            if not math.isfinite(s2):
+                check_finite("y", y)
+                raise CaptureError(
+                    "y holds values too large to square in float64; rescale the signal."
+                )
+            self._sum_y2 += s2
+        if self._n == 0:
+            self._t_first = float(t[0])
+        self._n += n
+        self._t_last = float(t[-1])
+
+    def _plan(
+        self, t: np.ndarray, y: np.ndarray, uniform_dt: float | None, y_checked: bool
+    ) -> None:
+        n = t.size
+        if n < 2:
+            raise CaptureError(
+                "the first chunk must hold at least 2 samples to set the time grid; "
+                "merge it with the next chunk."
+            )
+        if uniform_dt is not None:
+            dt = uniform_dt
+        else:
+            check_increasing(t)
+            dt = (float(t[-1]) - float(t[0])) / (n - 1)
+        if not y_checked:
+            check_finite("y", y)
+        if self._block_req is not None:
+            m = self._block_req
+        else:
+            f = self._f_hint
+            if f is None:
+                try:
+                    f = estimate_frequency_unchecked(t, y)
+                except CaptureError as exc:
+                    reason = str(exc).split(":")[0].rstrip(".")
+                    raise CaptureError(
+                        f"could not estimate the frequency from the first chunk ({reason}); "
+                        "pass frequency_hz= to HarmonicFitAccumulator."
+                    ) from None
+            w = 2.0 * math.pi * f * _F_MARGIN
+            m = int(min(_MAX_BLOCK, 2.0 * _X_PLAN / (2 * self._h_plan * w * dt)))
+            if m < _MIN_BLOCK:
+                m = 1
+        self._ready = True
+        self._t0 = float(t[0])
+        self._dt = dt
+        self._y0 = float(np.mean(y[: min(n, 1 << 16)]))
+        self._tol = min(0.01 * dt, grid_tolerance(dt, float(t[0]), float(t[-1])))
+        self._explicit = m == 1
+        self._m = m
+        self._tb = m * dt
+        self._tg = self._t0 - 0.5 * dt
+        if not self._explicit:
+            u = (2.0 * np.arange(m) + 1.0) / m - 1.0
+            self._v = np.vander(u, self._k + 2, increasing=True)
+            self._cumv = np.vstack([np.zeros(self._k + 2), np.cumsum(self._v, axis=0)])
+
+    def _add_uniform(self, y: np.ndarray, g0: int) -> float:
+        m, v, y0 = self._m, self._v, self._y0
+        n = y.size
+        js: list[np.ndarray] = []
+        ps: list[np.ndarray] = []
+        qs: list[np.ndarray] = []
+        s2 = 0.0
+        i = 0
+        r0 = g0 % m
+        if r0:
+            i1 = min(n, m - r0)
+            seg = y[:i1] - y0
+            js.append(np.array([g0 // m], dtype=np.int64))
+            ps.append((self._cumv[r0 + i1] - self._cumv[r0])[None, :])
+            qs.append((seg @ v[r0 : r0 + i1])[None, :])
+            s2 += float(seg @ seg)
+            i = i1
+        nfull = (n - i) // m
+        if nfull:
+            jstart = (g0 + i) // m
+            q = np.empty((nfull, v.shape[1]))
+            for b in range(0, nfull, _SUB_BLOCKS):
+                e = min(nfull, b + _SUB_BLOCKS)
+                blk = y[i + b * m : i + e * m].reshape(e - b, m) - y0
+                q[b:e] = blk @ v
+                flat = blk.reshape(-1)
+                s2 += float(flat @ flat)
+            js.append(np.arange(jstart, jstart + nfull, dtype=np.int64))
+            ps.append(np.broadcast_to(self._cumv[m], (nfull, v.shape[1])))
+            qs.append(q)
+            i += nfull * m
+        if i < n:
+            rest = n - i
+            seg = y[i:] - y0
+            js.append(np.array([(g0 + i) // m], dtype=np.int64))
+            ps.append(self._cumv[rest][None, :])
+            qs.append((seg @ v[:rest])[None, :])
+            s2 += float(seg @ seg)
+        jj = np.concatenate(js)
+        qq = np.concatenate(qs, axis=0)
+        if not np.isfinite(qq).all():
+            return math.nan
+        self._records.append((jj, np.concatenate(ps, axis=0), qq))
+        return s2
+
+    def _add_generic(self, t: np.ndarray, y: np.ndarray) -> float:
+        kk = self._k + 2
+        s2 = 0.0
+        for s in range(0, t.size, _SUB_SAMPLES):
+            e = min(t.size, s + _SUB_SAMPLES)
+            x = (t[s:e] - self._tg) / self._tb
+            j = np.floor(x)
+            u = 2.0 * (x - j) - 1.0
+            yc = y[s:e] - self._y0
+            starts = np.concatenate([[0], np.flatnonzero(j[1:] != j[:-1]) + 1])
+            p = np.empty((starts.size, kk))
+            q = np.empty((starts.size, kk))
+            pw = np.ones_like(u)
+            for k in range(kk):
+                p[:, k] = np.add.reduceat(pw, starts)
+                q[:, k] = np.add.reduceat(yc * pw, starts)
+                if k + 1 < kk:
+                    pw *= u
+            if not np.isfinite(q).all():
+                return math.nan
+            s2 += float(yc @ yc)
+            self._records.append((j[starts].astype(np.int64), p, q))
+        return s2
+
+    def _merge(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if self._merged is None:
+            if self._explicit:
+                tt = np.concatenate([r[0] for r in self._records])
+                yy = np.concatenate([r[1] for r in self._records])
+                self._merged = (tt, yy, np.empty(0))
+            else:
+                j = np.concatenate([r[0] for r in self._records])
+                p = np.concatenate([r[1] for r in self._records], axis=0)
+                q = np.concatenate([r[2] for r in self._records], axis=0)
+                starts = np.concatenate([[0], np.flatnonzero(j[1:] != j[:-1]) + 1])
+                if starts.size < j.size:
+                    j = j[starts]
+                    p = np.add.reduceat(p, starts, axis=0)
+                    q = np.add.reduceat(q, starts, axis=0)
+                self._merged = (j, p, q)
+        return self._merged
+
+    # ------------------------------------------------------------------ fitting
+    def estimate_frequency(self) -> float:
+        """Fundamental frequency (Hz) estimated from the block means (FFT + single-sine LS)."""
+        if self._n == 0:
+            raise CaptureError("no samples were added to the HarmonicFitAccumulator.")
+        a, b, c = self._merge()
+        if self._explicit:
+            return estimate_frequency_unchecked(a, b)
+        half = 0.5 * self._tb
+        tm = self._tg + (a + 0.5) * self._tb + half * b[:, 1] / b[:, 0]
+        ym = c[:, 0] / b[:, 0]
+        return estimate_frequency_unchecked(tm, ym)
+
+    def _sums_fn(self, nh: int, t_ref: float) -> Any:
+        a, b, c = self._merge()
+        kmax_s = 2 * nh
+
+        if self._explicit:
+            tt, yy = a, b
+
+            def sums_explicit(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
+                np_ = 3 if deriv else 1
+                s = np.zeros((np_, kmax_s + 1), dtype=np.complex128)
+                yv = np.zeros((2 if deriv else 1, nh + 1), dtype=np.complex128)
+                for r in range(0, tt.size, _SUM_ROWS):
+                    d = tt[r : r + _SUM_ROWS] - t_ref
+                    ycs = yy[r : r + _SUM_ROWS]
+                    e = _unit_powers(np.exp(1j * omega * d), kmax_s)
+                    s[0] += e.sum(axis=0)
+                    yv[0] += ycs @ e[:, : nh + 1]
+                    if deriv:
+                        de = d @ e
+                        s[1] += de
+                        s[2] += (d * d) @ e
+                        yv[1] += (ycs * d) @ e[:, : nh + 1]
+                return s, yv
+
+            return sums_explicit
+
+        j, p, q = a, b, c
+        half = 0.5 * self._tb
+        dvec = (self._tg - t_ref) + (j + 0.5) * self._tb
+        kmax_y = nh
+
+        def sums_blocks(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
+            x = kmax_s * abs(omega) * half
+            nterm = taylor_terms(x, self._k)
+            if nterm > self._k:
+                f = abs(omega) / (2.0 * math.pi)
+                raise CaptureError(
+                    f"harmonic {kmax_s} of {f:.6g} Hz turns by {x:.3g} rad within one block of "
+                    f"{self._m} samples, too much for the {self._k} stored moments; create the "
+                    f"HarmonicFitAccumulator with frequency_hz≈{f:.6g} and harmonics={nh}."
+                )
+            ks = np.arange(kmax_s + 1)
+            ell = np.arange(nterm)
+            fact = np.array([math.factorial(int(i)) for i in ell], dtype=np.float64)
+            cm = (1j * omega * half * ks[:, None]) ** ell[None, :] / fact[None, :]
+            np_ = 3 if deriv else 1
+            ny = 2 if deriv else 1
+            s = np.zeros((np_, kmax_s + 1), dtype=np.complex128)
+            yv = np.zeros((ny, kmax_y + 1), dtype=np.complex128)
+            cmt = cm.T
+            cmy = cm[: kmax_y + 1].T
+            for r in range(0, j.size, _SUM_ROWS):
+                d = dvec[r : r + _SUM_ROWS]
+                e = np.exp(1j * np.outer(omega * d, ks))
+                pr = p[r : r + _SUM_ROWS]
+                qr = q[r : r + _SUM_ROWS]
+                f0 = e * (pr[:, :nterm] @ cmt)
+                s[0] += f0.sum(axis=0)
+                g0 = e[:, : kmax_y + 1] * (qr[:, :nterm] @ cmy)
+                yv[0] += g0.sum(axis=0)
+                if deriv:
+                    f1 = e * (pr[:, 1 : 1 + nterm] @ cmt)
+                    f2 = e * (pr[:, 2 : 2 + nterm] @ cmt)
+                    s[1] += d @ f0 + half * f1.sum(axis=0)
+                    s[2] += (d * d) @ f0 + 2.0 * half * (d @ f1) + half * half * f2.sum(axis=0)
+                    g1 = e[:, : kmax_y + 1] * (qr[:, 1 : 1 + nterm] @ cmy)
+                    yv[1] += d @ g0 + half * g1.sum(axis=0)
+            return s, yv
+
+        return sums_blocks
+
+    def fit(
+        self,
+        frequency_hz: float | None = None,
+        harmonics: int | None = None,
+        refine_frequency: bool = True,
+        *,
+        max_iter: int = 50,
+        rtol: float = 1e-12,
+    ) -> SineFit:
+        """Fit ``C + Σ_h a_h cos(2πhf(t−t_ref)) + b_h sin(...)`` to every sample added.
+
+        Parameters
+        ----------
+        frequency_hz : float, optional
+            Fundamental (Hz): the start value when ``refine_frequency``, else the fixed value.
+            Estimated from the block means when omitted.
+        harmonics : int, optional
+            Number of harmonics H (default: the value given to the constructor).
+        refine_frequency : bool
+            Fit f as well (variable-projection Gauss–Newton).
+        max_iter, rtol : iteration limit and relative step size (of f) that ends it.
+
+        Returns
+        -------
+        SineFit
+            Amplitudes and offset in the unit of y, frequency in Hz.
+
+        References
+        ----------
+        IEEE Std 1057-2017, §4.1.3 (three-, four-parameter and multi-harmonic sine fits);
+        Feng et al. 2023, Sensors 23:4876, eq. (9).
+        """
+        nh = self._h_plan if harmonics is None else check_harmonics(harmonics)
+        if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)):
+            raise ConfigError(f"max_iter must be an integer ≥ 1; got {max_iter!r}.")
+        if max_iter < 1:
+            raise ConfigError(f"max_iter must be an integer ≥ 1; got {max_iter}.")
+        if not (isinstance(rtol, (int, float)) and math.isfinite(rtol) and rtol > 0):
+            raise ConfigError(f"rtol must be a positive number; got {rtol!r}.")
+        if self._n == 0 or self._t_last is None:
+            raise CaptureError("no samples were added to the HarmonicFitAccumulator.")
+        n_par = 2 * nh + 1 + (1 if refine_frequency else 0)
+        span = self._t_last - self._t_first
+        if self._n < n_par + 1 or not span > 0:
+            check_record(self._n, max(span, 1e-300), 1.0 / max(span, 1e-300), 1, n_par)
+        f0 = self.estimate_frequency() if frequency_hz is None else check_frequency(frequency_hz)
+        check_record(self._n, span, f0, nh, n_par)
+        t_ref = 0.5 * (self._t_first + self._t_last)
+        sol = solve_normal(
+            self._sums_fn(nh, t_ref),
+            self._sum_y2,
+            self._n,
+            f0,
+            nh,
+            refine=refine_frequency,
+            max_iter=int(max_iter),
+            rtol=float(rtol),
+        )
+        return build_sine_fit(
+            frequency_hz=sol.frequency_hz,
+            offset=self._y0 + float(sol.params[0]),
+            cos_coefs=sol.params[1 : nh + 1],
+            sin_coefs=sol.params[nh + 1 :],
+            t_ref_s=t_ref,
+            rss=sol.rss,
+            n_samples=self._n,
+            iterations=sol.iterations,
+            cov_unit=sol.cov_unit,
+            refined=refine_frequency,
+        )

@@ -1,0 +1,152 @@
+"""Input checks shared by the sine fits (private)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from rotacal.errors import CaptureError, ConfigError
+
+_EPS = float(np.finfo(np.float64).eps)
+_GRID_CHUNK = 1 << 16
+
+
+def as_samples(name: str, values: Any) -> np.ndarray:
+    """Return ``values`` as a 1-D float64 array (no copy when it already is one)."""
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.ndim != 1:
+        raise CaptureError(
+            f"{name} must be a one-dimensional array of samples; got an array of shape {arr.shape}."
+        )
+    return arr
+
+
+def as_pair(t: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Return ``t`` and ``y`` as 1-D float64 arrays of the same length."""
+    ta = as_samples("t", t)
+    ya = as_samples("y", y)
+    if ta.shape != ya.shape:
+        raise CaptureError(
+            f"t and y must have the same length; got {ta.size} time stamps and {ya.size} samples."
+        )
+    return ta, ya
+
+
+def check_finite(name: str, values: np.ndarray) -> None:
+    """Raise CaptureError naming the first NaN/inf sample of ``values``."""
+    if not np.isfinite(values).all():
+        i = int(np.flatnonzero(~np.isfinite(values))[0])
+        raise CaptureError(
+            f"{name} contains NaN or inf (first at index {i}: {values[i]!r}); remove or "
+            "interpolate those samples before fitting."
+        )
+
+
+def check_increasing(t: np.ndarray, *, previous: float | None = None) -> None:
+    """Raise CaptureError unless ``t`` is finite and strictly increasing (after ``previous``)."""
+    check_finite("t", t)
+    if previous is not None and t.size and not t[0] > previous:
+        raise CaptureError(
+            f"time t must increase across chunks: this chunk starts at t = {t[0]!r} s, not after "
+            f"the previous chunk's last time {previous!r} s; feed the chunks in time order."
+        )
+    if t.size > 1:
+        bad = np.flatnonzero(~(np.diff(t) > 0))
+        if bad.size:
+            i = int(bad[0])
+            raise CaptureError(
+                f"time t must increase strictly: t[{i + 1}] = {t[i + 1]!r} s is not after "
+                f"t[{i}] = {t[i]!r} s; sort the samples and drop duplicated time stamps."
+            )
+
+
+def grid_tolerance(dt: float, t_first: float, t_last: float) -> float:
+    """How far (s) a time stamp may sit from the ideal uniform grid and still count as on it."""
+    return max(1e-10 * abs(dt), 64.0 * _EPS * max(abs(t_first), abs(t_last)))
+
+
+def max_grid_deviation(t: np.ndarray, t0: float, dt: float, g0: int) -> float:
+    """Largest |t_i − (t0 + (g0 + i)·dt)| in seconds (NaN if ``t`` holds NaN).
+
+    Works chunk-wise in cache-sized pieces without full-size temporaries.
+    """
+    n = t.size
+    if n == 0:
+        return 0.0
+    step = min(n, _GRID_CHUNK)
+    base = np.arange(step, dtype=np.float64) * dt
+    buf = np.empty(step)
+    worst = 0.0
+    for s in range(0, n, step):
+        e = min(n, s + step)
+        d = np.subtract(t[s:e], base[: e - s], out=buf[: e - s])
+        off = t0 + (g0 + s) * dt
+        hi = float(d.max()) - off
+        lo = float(d.min()) - off
+        dev = max(hi, -lo)
+        if not math.isfinite(dev):
+            return math.nan
+        worst = max(worst, dev)
+    return worst
+
+
+def uniform_step(t: np.ndarray) -> float | None:
+    """Return the sampling interval (s) if ``t`` lies on a uniform increasing grid, else None."""
+    n = t.size
+    if n < 2:
+        return None
+    dt = (float(t[-1]) - float(t[0])) / (n - 1)
+    if not (math.isfinite(dt) and dt > 0):
+        return None
+    dev = max_grid_deviation(t, float(t[0]), dt, 0)
+    if math.isfinite(dev) and dev <= grid_tolerance(dt, float(t[0]), float(t[-1])):
+        return dt
+    return None
+
+
+def check_harmonics(harmonics: Any) -> int:
+    """Validate the number of harmonics (an integer ≥ 1)."""
+    if isinstance(harmonics, bool) or not isinstance(harmonics, (int, np.integer)):
+        raise ConfigError(f"harmonics must be an integer ≥ 1; got {harmonics!r}.")
+    if harmonics < 1:
+        raise ConfigError(f"harmonics must be ≥ 1 (1 = the fundamental only); got {harmonics}.")
+    return int(harmonics)
+
+
+def check_frequency(frequency_hz: Any) -> float:
+    """Validate a frequency in Hz (finite, > 0)."""
+    try:
+        f = float(frequency_hz)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"frequency_hz must be a positive number; got {frequency_hz!r}."
+        ) from None
+    if not (math.isfinite(f) and f > 0):
+        raise ConfigError(f"frequency_hz must be a finite positive number in Hz; got {f!r}.")
+    return f
+
+
+def check_record(n: int, span_s: float, frequency_hz: float, harmonics: int, n_params: int) -> None:
+    """Raise if the record is too short or too coarsely sampled for the requested fit."""
+    if n < n_params + 1:
+        raise CaptureError(
+            f"the record holds {n} samples, fewer than the {n_params + 1} needed to fit "
+            f"{n_params} parameters and estimate the residual; supply a longer record."
+        )
+    periods = frequency_hz * span_s * n / (n - 1)
+    if periods < MIN_PERIODS:
+        raise CaptureError(
+            f"the record spans only {periods:.3g} periods of {frequency_hz:.6g} Hz; a sine fit "
+            f"needs at least ~1 full period ({MIN_PERIODS} accepted): supply a longer record."
+        )
+    fs_mean = (n - 1) / span_s
+    if harmonics * frequency_hz >= 0.5 * fs_mean:
+        raise ConfigError(
+            f"harmonic {harmonics} of {frequency_hz:.6g} Hz lies at or above the Nyquist "
+            f"frequency {0.5 * fs_mean:.6g} Hz of the mean sampling rate; lower harmonics."
+        )
+
+
+MIN_PERIODS = 0.9

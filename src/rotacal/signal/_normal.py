@@ -1,0 +1,190 @@
+"""Multi-harmonic least squares from exponential sums (private).
+
+Every quantity of the Gauss–Newton normal equations of the multi-harmonic model is a linear
+combination of the sums
+
+    S_p(k) = Σ_i τ_i^p · exp(j·k·ω·τ_i),     p = 0, 1, 2;  k = 0..2H
+    Y_p(k) = Σ_i y_i · τ_i^p · exp(j·k·ω·τ_i), p = 0, 1;     k = 0..H
+
+(τ = t − t_ref, ω = 2πf). A column of the Jacobian is written ``Re(τ^p Σ_m c_m e^{jmωτ})``:
+the constant (c_0 = 1), cos(hωτ) (c_h = 1), sin(hωτ) (c_h = −j) and ∂model/∂f
+(p = 1, c_h = 2πh·(b_h + j·a_h)). With ``Re z·Re w = ½ Re(z·w + z·w̄)`` the inner product of
+two columns is ``½ Re(cᵢᵀ·Hankel(S_p)·cⱼ + cᵢᵀ·Toeplitz(S_p)·c̄ⱼ)``. So a sums provider (block
+moments or explicit samples) is all the solver needs; its cost does not depend on N.
+
+The frequency is refined by variable projection: at each f the linear parameters are solved
+exactly, then one Gauss–Newton step on the full Jacobian ``[Φ, ∂model/∂f]`` updates f (Golub &
+Pereyra 1973; Kaufman 1975), with step halving if the residual grows. Its fixed point is the
+least-squares minimiser of IEEE Std 1057-2017 §4.1.3 (four-parameter / multi-harmonic fit).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from rotacal.errors import CaptureError
+
+# sums(omega, with_derivative) -> (S: (1 or 3, 2H+1) complex, Y: (1 or 2, H+1) complex)
+SumsFn = Callable[[float, bool], tuple[np.ndarray, np.ndarray]]
+
+MAX_COND = 1e12
+_EPS = float(np.finfo(np.float64).eps)
+
+
+@dataclass
+class NormalFit:
+    """Solution of the normal equations at the final frequency."""
+
+    frequency_hz: float
+    params: np.ndarray  # [C', a_1..a_H, b_1..b_H] (C' relative to the centring constant)
+    rss: float
+    iterations: int
+    cov_unit: np.ndarray  # (JᵀJ)⁻¹, parameter order [C', a, b(, f)]
+
+
+def solve_spd(a: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """Solve a symmetric positive (semi)definite system with Jacobi scaling and ``eigh``.
+
+    Returns the solution, the inverse matrix and the condition number of the scaled matrix.
+    """
+    d = np.sqrt(np.diag(a).copy())
+    if not np.all(np.isfinite(d)) or np.any(d <= 0):
+        return np.full(rhs.shape, np.nan), np.full(a.shape, np.nan), math.inf
+    scaled = a / np.outer(d, d)
+    w, v = np.linalg.eigh(scaled)
+    if not np.all(np.isfinite(w)) or w[0] <= 0:
+        return np.full(rhs.shape, np.nan), np.full(a.shape, np.nan), math.inf
+    cond = float(w[-1] / w[0])
+    inv_scaled = (v / w) @ v.T
+    inv = inv_scaled / np.outer(d, d)
+    x = inv_scaled @ (rhs / d) / d
+    return x, inv, cond
+
+
+def _hankel_toeplitz(s: np.ndarray, nh: int) -> tuple[np.ndarray, np.ndarray]:
+    m = np.arange(nh + 1)
+    hank = s[m[:, None] + m[None, :]]
+    k = m[:, None] - m[None, :]
+    toep = np.where(k >= 0, s[np.abs(k)], np.conj(s[np.abs(k)]))
+    return hank, toep
+
+
+def _column_coefs(nh: int) -> np.ndarray:
+    c = np.zeros((2 * nh + 1, nh + 1), dtype=np.complex128)
+    c[0, 0] = 1.0
+    idx = np.arange(1, nh + 1)
+    c[idx, idx] = 1.0
+    c[nh + idx, idx] = -1j
+    return c
+
+
+def _inner(ci: np.ndarray, cj: np.ndarray, hank: np.ndarray, toep: np.ndarray) -> np.ndarray:
+    return 0.5 * np.real(ci @ hank @ cj.T + ci @ toep @ np.conj(cj).T)
+
+
+@dataclass
+class _Linear:
+    f: float
+    p: np.ndarray
+    rss: float
+    gram: np.ndarray
+    s: np.ndarray
+    y: np.ndarray
+
+
+def solve_normal(
+    sums: SumsFn,
+    yy: float,
+    n: int,
+    f0: float,
+    nh: int,
+    *,
+    refine: bool,
+    max_iter: int,
+    rtol: float,
+) -> NormalFit:
+    """Fit ``C + Σ a_h cos + b_h sin`` (and f when ``refine``) from exponential sums."""
+    cmat = _column_coefs(nh)
+
+    def linear(f: float) -> _Linear:
+        s, y = sums(2.0 * math.pi * f, refine)
+        hank, toep = _hankel_toeplitz(s[0], nh)
+        gram = _inner(cmat, cmat, hank, toep)
+        rhs = np.real(cmat @ y[0])
+        p, _, cond = solve_spd(gram, rhs)
+        if not cond < MAX_COND:
+            raise CaptureError(
+                f"the {2 * nh + 1}-parameter sine fit at {f:.6g} Hz is ill-conditioned "
+                f"(condition number {cond:.3g}); supply a longer record (≥ ~1.5 periods) or "
+                "fewer harmonics."
+            )
+        rss = yy - float(rhs @ p)
+        return _Linear(f, p, rss, gram, s, y)
+
+    def full_system(lin: _Linear) -> tuple[np.ndarray, np.ndarray]:
+        a = lin.p[1 : nh + 1]
+        b = lin.p[nh + 1 :]
+        cd = np.zeros(nh + 1, dtype=np.complex128)
+        h = np.arange(1, nh + 1)
+        cd[1:] = 2.0 * math.pi * h * (b + 1j * a)
+        hank1, toep1 = _hankel_toeplitz(lin.s[1], nh)
+        hank2, toep2 = _hankel_toeplitz(lin.s[2], nh)
+        g_pd = _inner(cmat, cd[None, :], hank1, toep1)[:, 0]
+        g_dd = float(_inner(cd[None, :], cd[None, :], hank2, toep2)[0, 0])
+        dty = float(np.real(cd @ lin.y[1]))
+        jtj = np.empty((2 * nh + 2, 2 * nh + 2))
+        jtj[:-1, :-1] = lin.gram
+        jtj[:-1, -1] = g_pd
+        jtj[-1, :-1] = g_pd
+        jtj[-1, -1] = g_dd
+        phi_r = np.real(cmat @ lin.y[0]) - lin.gram @ lin.p
+        jtr = np.append(phi_r, dty - float(g_pd @ lin.p))
+        return jtj, jtr
+
+    lin = linear(f0)
+    iterations = 0
+    if refine:
+        rss_tol = 64.0 * _EPS * max(yy, 0.0) + 1e-300
+        converged = False
+        for _ in range(max_iter):
+            iterations += 1
+            jtj, jtr = full_system(lin)
+            step, _, cond = solve_spd(jtj, jtr)
+            df = float(step[-1])
+            if not (math.isfinite(df) and cond < MAX_COND):
+                raise CaptureError(
+                    f"the frequency refinement at {lin.f:.6g} Hz is ill-conditioned; supply a "
+                    "longer record or give frequency_hz and fit without refinement."
+                )
+            lam = 1.0
+            new = None
+            for _half in range(40):
+                f_try = lin.f + lam * df
+                if f_try > 0:
+                    cand = linear(f_try)
+                    if cand.rss <= lin.rss + rss_tol:
+                        new = cand
+                        break
+                lam *= 0.5
+            if new is None:  # no step lowers the residual: at the minimum within rounding
+                converged = True
+                break
+            lin = new
+            if abs(lam * df) <= rtol * abs(lin.f):
+                converged = True
+                break
+        if not converged:
+            raise CaptureError(
+                f"the frequency refinement did not converge in {max_iter} iterations (last "
+                f"f = {lin.f:.9g} Hz); check that the record holds one dominant sine, or raise "
+                "max_iter."
+            )
+        jtj, _ = full_system(lin)
+        _, cov_unit, _ = solve_spd(jtj, np.zeros(jtj.shape[0]))
+    else:
+        _, cov_unit, _ = solve_spd(lin.gram, np.zeros(lin.gram.shape[0]))
+    return NormalFit(lin.f, lin.p, lin.rss, iterations, cov_unit)

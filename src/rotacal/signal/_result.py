@@ -1,0 +1,157 @@
+"""The result of a sine / multi-harmonic fit (re-exported from :mod:`rotacal.signal.sinefit`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rotacal.results import Result
+
+_EVAL_CHUNK = 1 << 16
+
+
+@dataclass(frozen=True, eq=False)
+class SineFit(Result):
+    """A fitted sine with harmonics, ``y ≈ C + Σ_h A_h·sin(2π·h·f·(t − t_ref) + φ_h)``.
+
+    Equivalently ``y ≈ C + Σ_h a_h·cos(2π·h·f·(t − t_ref)) + b_h·sin(2π·h·f·(t − t_ref))`` with
+    ``a_h = A_h·sin φ_h`` and ``b_h = A_h·cos φ_h`` (Feng et al. 2023, Sensors 23:4876,
+    eqs. (9)–(10); IEEE Std 1057-2017, §4.1.3).
+
+    Attributes
+    ----------
+    frequency_hz : fundamental frequency f (Hz).
+    offset : constant term C (unit of y).
+    amplitudes : A_h for h = 1..H (unit of y).
+    phases_rad : φ_h for h = 1..H (rad), relative to ``t_ref_s``.
+    cos_coefs, sin_coefs : a_h and b_h (unit of y).
+    t_ref_s : time origin of the phases (s); the middle of the record.
+    residual_rms : rms of y − model (unit of y). With the block-moment method it comes from the
+        normal equations (yᵀy − bᵀp), so values below ~1e-7·rms(y) are rounding (clamped at 0).
+    n_samples : number of samples fitted.
+    iterations : Gauss–Newton iterations of the frequency refinement (0 when f was fixed).
+    amplitudes_u : standard uncertainty of A_h (unit of y) from the residual variance, assuming
+        white noise; includes the correlation with f when f was fitted.
+    frequency_u_hz : standard uncertainty of f (Hz), idem; 0 when f was fixed.
+    """
+
+    frequency_hz: float
+    offset: float
+    amplitudes: np.ndarray
+    phases_rad: np.ndarray
+    cos_coefs: np.ndarray
+    sin_coefs: np.ndarray
+    t_ref_s: float
+    residual_rms: float
+    n_samples: int
+    iterations: int
+    amplitudes_u: np.ndarray
+    frequency_u_hz: float
+
+    @property
+    def harmonics(self) -> int:
+        """Number of harmonics H in the model (1 = the fundamental only)."""
+        return int(self.amplitudes.size)
+
+    def evaluate(self, t: Any) -> np.ndarray:
+        """The fitted model at times ``t`` (s), in the unit of y; same shape as ``t``."""
+        return self._series(t, derivative=False)
+
+    def evaluate_derivative(self, t: Any) -> np.ndarray:
+        """The time derivative of the fitted model at ``t`` (s), in unit of y per second."""
+        return self._series(t, derivative=True)
+
+    def _series(self, t: Any, *, derivative: bool) -> np.ndarray:
+        ta = np.asarray(t, dtype=np.float64)
+        flat = ta.ravel()
+        out = np.empty(flat.size)
+        w = 2.0 * math.pi * self.frequency_hz
+        h = np.arange(1, self.harmonics + 1, dtype=np.float64)
+        if derivative:  # d/dt [a cos(hwτ) + b sin(hwτ)] = hw·(b cos − a sin)
+            ca = h * w * self.sin_coefs
+            cb = -h * w * self.cos_coefs
+            const = 0.0
+        else:
+            ca = np.asarray(self.cos_coefs, dtype=np.float64)
+            cb = np.asarray(self.sin_coefs, dtype=np.float64)
+            const = self.offset
+        for s in range(0, flat.size, _EVAL_CHUNK):
+            e = min(flat.size, s + _EVAL_CHUNK)
+            out[s:e] = harmonic_series(w * (flat[s:e] - self.t_ref_s), ca, cb, const)
+        return out.reshape(ta.shape)
+
+
+def harmonic_series(theta: np.ndarray, ca: np.ndarray, cb: np.ndarray, const: float) -> np.ndarray:
+    """``const + Σ_h ca[h-1]·cos(hθ) + cb[h-1]·sin(hθ)`` by the angle-addition recurrence.
+
+    The exact cos/sin are recomputed every 8 harmonics so rounding cannot build up.
+    """
+    c1 = np.cos(theta)
+    s1 = np.sin(theta)
+    out = np.full(theta.shape, const, dtype=np.float64)
+    ch, sh = c1, s1
+    for k in range(ca.size):
+        hk = k + 1
+        if hk > 1:
+            if hk % 8 == 0:
+                ch, sh = np.cos(hk * theta), np.sin(hk * theta)
+            else:
+                ch, sh = ch * c1 - sh * s1, sh * c1 + ch * s1
+        out += ca[k] * ch
+        out += cb[k] * sh
+    return out
+
+
+def build_sine_fit(
+    *,
+    frequency_hz: float,
+    offset: float,
+    cos_coefs: np.ndarray,
+    sin_coefs: np.ndarray,
+    t_ref_s: float,
+    rss: float,
+    n_samples: int,
+    iterations: int,
+    cov_unit: np.ndarray,
+    refined: bool,
+) -> SineFit:
+    """Assemble a :class:`SineFit` from the fitted coefficients.
+
+    ``cov_unit`` is ``(JᵀJ)⁻¹`` in the parameter order ``[C, a_1..a_H, b_1..b_H(, f)]``; it is
+    scaled by the residual variance ``s² = RSS/(N − p)`` (IEEE Std 1057-2017, §4.1.3).
+    """
+    a = np.asarray(cos_coefs, dtype=np.float64)
+    b = np.asarray(sin_coefs, dtype=np.float64)
+    nh = a.size
+    n_par = 2 * nh + 1 + (1 if refined else 0)
+    rss = max(float(rss), 0.0)
+    s2 = rss / (n_samples - n_par)
+    cov = s2 * cov_unit
+    amp = np.hypot(a, b)
+    ia = np.arange(1, nh + 1)
+    ib = ia + nh
+    vaa = cov[ia, ia]
+    vbb = cov[ib, ib]
+    vab = cov[ia, ib]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        var_amp = (a * a * vaa + b * b * vbb + 2.0 * a * b * vab) / (amp * amp)
+    var_amp = np.where(amp > 0, var_amp, 0.5 * (vaa + vbb))
+    amp_u = np.sqrt(np.maximum(var_amp, 0.0))
+    f_u = math.sqrt(max(float(cov[-1, -1]), 0.0)) if refined else 0.0
+    return SineFit(
+        frequency_hz=float(frequency_hz),
+        offset=float(offset),
+        amplitudes=amp,
+        phases_rad=np.arctan2(a, b),
+        cos_coefs=a.copy(),
+        sin_coefs=b.copy(),
+        t_ref_s=float(t_ref_s),
+        residual_rms=math.sqrt(rss / n_samples),
+        n_samples=int(n_samples),
+        iterations=int(iterations),
+        amplitudes_u=amp_u,
+        frequency_u_hz=f_u,
+    )
