@@ -352,7 +352,7 @@ def simulate(kind: str, out: str, harmonic_items: Sequence[str], force: bool, **
             options["snr_db"] = kw["snr_db"]
         elif noise is not None:
             options["noise_deg_s"] = noise
-    capture = sim.simulate(kind, motion_, **options)
+    capture = sim.simulate(kind, motion=motion_, **options)
     path = capture.write(out, overwrite=force)
     click.echo(f"wrote {path} and {path}.truth.json", err=True)
 

@@ -412,3 +412,15 @@ def test_bad_settings_raise_config_error():
         thd_percent([1.0, 0.1], harmonics=0)
     with pytest.raises(CaptureError, match="A_1"):
         thd_percent([0.0, 0.1])
+
+
+def test_thd_uncertainty_matches_monte_carlo_of_the_formula():
+    """First-order u(THD) against the spread of eq. (1) over sampled amplitudes (independent)."""
+    from rotacal.signal import thd_standard_uncertainty_percent
+
+    a = np.array([1.0, 0.02, 0.04, 0.01])
+    u = np.array([1e-3, 1e-3, 2e-3, 1e-3])
+    rng = np.random.default_rng(0)
+    draws = a + u * rng.standard_normal((200_000, a.size))
+    thd = 100 * np.sqrt(np.sum(draws[:, 1:] ** 2, axis=1)) / draws[:, 0]
+    assert thd_standard_uncertainty_percent(a, u) == pytest.approx(np.std(thd), rel=0.03)

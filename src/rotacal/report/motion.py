@@ -60,9 +60,22 @@ def _motion_figure(r: MotionResult) -> Figure:
             )
         ax.set_ylabel("angular displacement (°)")
         rev_y = np.interp(r.reversal_times_s, t, p["angle_deg"])
-    ax.plot(
-        r.reversal_times_s, rev_y, "v", color=_COLORS["rev_max"], ms=6, label="reversing moments"
-    )
+    if r.scheme == "fog":  # zero crossings of the rate: a falling one is a maximum of θ
+        is_max = fit.evaluate_derivative(r.reversal_times_s) < 0 if fit is not None else rev_y >= 0
+    else:
+        is_max = rev_y >= float(np.mean(p["angle_deg"]))
+    for sel, marker, color, what in (
+        (is_max, "v", "rev_max", "max"),
+        (~is_max, "^", "rev_min", "min"),
+    ):
+        ax.plot(
+            r.reversal_times_s[sel],
+            rev_y[sel],
+            marker,
+            color=_COLORS[color],
+            ms=6,
+            label=f"reversing moments ({what} θ)",
+        )
     ax.axvspan(
         r.analysis_start_s,
         r.analysis_stop_s,
@@ -71,7 +84,7 @@ def _motion_figure(r: MotionResult) -> Figure:
         label=f"{r.periods_used} whole periods analysed",
     )
     ax.set_xlabel("time (s)")
-    ax.legend(loc="upper right", fontsize=8, ncols=2, framealpha=0.9)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), fontsize=8, ncols=5, frameon=False)
     _style(ax)
     return figure_from_matplotlib(
         fig,
@@ -92,10 +105,10 @@ def _zoom_figure(r: MotionResult) -> Figure | None:
     m = (t > tr - half) & (t < tr + half)
     if m.sum() < 5:
         return None
-    fig, ax = plt.subplots(figsize=(4.6, 3.2))
-    ax.plot(t[m], y[m], ".-", ms=2, lw=0.6, color=_COLORS["meas"])
-    ax.axvline(tr, color=_COLORS["rev_max"], lw=1, label=f"reversing moment {tr:.5f} s")
-    ax.set_xlabel("time (s)")
+    fig, ax = plt.subplots(figsize=(5.2, 3.2))
+    ax.plot((t[m] - tr) * 1e3, y[m], ".-", ms=2, lw=0.6, color=_COLORS["meas"], label="measured θ")
+    ax.axvline(0.0, color=_COLORS["rev_max"], lw=1, label="reversing moment")
+    ax.set_xlabel(f"time from the reversing moment at {tr:.5f} s (ms)")
     ax.set_ylabel("θ (°)")
     ax.legend(fontsize=8)
     _style(ax)
@@ -152,20 +165,34 @@ def _lissajous_figure(r: MotionResult) -> Figure | None:
         return None
     a, b = p["lissajous_raw"]
     u, v = p["lissajous_corrected"]
-    fig, axes = plt.subplots(1, 2, figsize=(8.0, 3.9))
-    for ax, (x, y, title) in zip(
-        axes,
-        ((a, b, "before correction (a, b)"), (u, v, "after Heydemann correction (u, v)")),
-        strict=True,
-    ):
+    fig, axes = plt.subplots(1, 3, figsize=(12.5, 3.7), gridspec_kw={"width_ratios": [1, 1, 1.6]})
+    th = np.linspace(0, 2 * np.pi, 400)
+    pairs = ((a, b, "before correction (a, b)"), (u, v, "after correction (u, v)"))
+    for ax, (x, y, title) in zip(axes[:2], pairs, strict=True):
         ax.plot(x, y, ".", ms=0.8, alpha=0.4, color=_COLORS["meas"])
-        th = np.linspace(0, 2 * np.pi, 400)
-        if ax is axes[1]:
-            ax.plot(np.cos(th), np.sin(th), color=_COLORS["fit"], lw=0.8, label="unit circle")
-            ax.legend(fontsize=8, loc="lower right")
+        ax.plot(np.cos(th), np.sin(th), color=_COLORS["fit"], lw=0.6)
         ax.set_aspect("equal")
         ax.set_title(title, fontsize=10)
         _style(ax)
+    # The errors Heydemann removes are small on a circle plot: show the radius against phase.
+    ax = axes[2]
+    # Raw signals as recorded (their mean is not their offset: the motion dwells at its reversals).
+    for x, y, color, label in ((a, b, "#9a9a9a", "before"), (u, v, _COLORS["meas"], "after")):
+        radius = np.hypot(x, y)
+        ax.plot(
+            np.degrees(np.arctan2(y, x)),
+            100 * (radius / np.median(radius) - 1),
+            ".",
+            ms=0.8,
+            color=color,
+            label=label,
+        )
+    ax.set_xlabel("signal phase (°)")
+    ax.set_ylabel("radius deviation (%)")
+    ax.set_xticks(np.arange(-180, 181, 90))
+    ax.legend(fontsize=8, markerscale=8)
+    ax.set_title("radius against phase: what the correction removed", fontsize=10)
+    _style(ax)
     c = p["correction"]
     return figure_from_matplotlib(
         fig,
@@ -211,14 +238,14 @@ def motion_section(r: MotionResult, title: str | None = None, *, figures: bool =
     """A report section for one motion calibration: results, errors against set values, figures."""
     name = _SCHEME_NAMES.get(r.scheme, r.scheme)
     rows = [
-        ["amplitude (fundamental)", f"{r.amplitude_deg:.7g} °", f"{r.amplitude_u_deg:.2g} °"],
-        ["frequency", f"{r.frequency_hz:.9g} Hz", f"{r.frequency_u_hz:.2g} Hz"],
+        ["amplitude (fundamental)", f"{r.amplitude_deg:.7g} °", f"{r.amplitude_deg_u:.2g} °"],
+        ["frequency", f"{r.frequency_hz:.9g} Hz", f"{r.frequency_hz_u:.2g} Hz"],
         [
             "angular-acceleration amplitude",
             f"{r.angular_acceleration_amplitude_deg_s2:.6g} °/s²",
             "",
         ],
-        [f"THD (h = 2…{r.harmonics})", f"{r.thd_percent:.4f} %", ""],
+        [f"THD (h = 2…{r.harmonics})", f"{r.thd_percent:.4f} %", f"{r.thd_percent_u:.2g} %"],
         ["periods analysed", str(r.periods_used), ""],
         ["reversing moments found", str(r.reversal_times_s.size), ""],
         ["fit residual (rms)", f"{r.residual_rms_deg * 3600:.3g} arcsec", ""],
@@ -293,7 +320,7 @@ def comparison_section(
             ose,
             lts,
             f"{c.thd_other_percent:.3f}",
-            f"{c.thd_difference_percent:+.3f}",
+            f"{c.thd_difference_percent:+.3f} ± {c.thd_difference_percent_u:.2g}",
             _fmt(c.snr_db, 3),
         ]
         if has_truth:
@@ -306,7 +333,8 @@ def comparison_section(
         paragraphs=[
             "Each run is measured by the combined scheme (OSE for large amplitudes, LTS for the "
             "smallest) and by the FOG at the same time. The difference is combined minus FOG, in "
-            "percentage points. The paper's own values are shown for comparison; the twin's motion was "
+            "percentage points, ± its first-order standard uncertainty from the two fits' residuals "
+            "(a difference beyond about three of them is not explained by noise). The paper's own values are shown for comparison; the twin's motion was "
             "chosen to resemble them, so agreement with the twin's truth, not with the paper's digits, "
             "is what validates the methods."
         ],

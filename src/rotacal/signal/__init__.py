@@ -10,6 +10,7 @@ from rotacal.signal.sinefit import (
     fit_sine_4p,
     snr_db,
     thd_percent,
+    thd_standard_uncertainty_percent,
 )
 
 __all__ = [
@@ -22,4 +23,5 @@ __all__ = [
     "fit_sine_4p",
     "snr_db",
     "thd_percent",
+    "thd_standard_uncertainty_percent",
 ]

@@ -394,6 +394,40 @@ def thd_percent(amplitudes: Any, harmonics: int | None = None) -> float:
     return float(100.0 * math.sqrt(float(a[1:] @ a[1:])) / a[0])
 
 
+def thd_standard_uncertainty_percent(amplitudes: Any, amplitudes_u: Any) -> float:
+    """First-order standard uncertainty of THD from the amplitudes' standard uncertainties (%).
+
+    The law of propagation of uncertainty applied to eq. (1) with uncorrelated amplitudes:
+    ``∂THD/∂A_1 = −THD/A_1`` and ``∂THD/∂A_h = 100·A_h/(A_1·sqrt(Σ_{k≥2} A_k²))`` for h ≥ 2.
+    It is sound while THD is well above its own uncertainty; near zero THD is biased upwards by
+    noise and first-order propagation understates the spread (JCGM 101/102): treat it as an
+    indication there.
+
+    Parameters
+    ----------
+    amplitudes : array_like — A_1, A_2, … (h = 1 first; any common unit).
+    amplitudes_u : array_like — their standard uncertainties (same unit).
+
+    Returns
+    -------
+    float — u(THD) in percentage points.
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, eq. (1); JCGM 100:2008 (GUM), eq. (10).
+    """
+    a = np.asarray(amplitudes, dtype=np.float64)
+    u = np.asarray(amplitudes_u, dtype=np.float64)
+    if a.shape != u.shape or a.ndim != 1 or a.size < 1:
+        raise ConfigError("amplitudes and amplitudes_u must be 1-D arrays of the same length.")
+    thd = thd_percent(a)
+    root = math.sqrt(float(a[1:] @ a[1:]))
+    grad = np.empty_like(a)
+    grad[0] = -thd / a[0]
+    grad[1:] = 100.0 * a[1:] / (a[0] * root) if root > 0 else 100.0 / a[0]
+    return float(math.sqrt(float(np.sum((grad * u) ** 2))))
+
+
 def displacement_amplitudes_from_rate(rate_amplitudes: Any, frequency_hz: float) -> np.ndarray:
     """Displacement amplitudes ``A_h = A'_h/(2π·h·f)`` from the amplitudes of a rate fit.
 

@@ -38,6 +38,7 @@ from rotacal.signal import (
     fit_sine_3p,
     snr_db,
     thd_percent,
+    thd_standard_uncertainty_percent,
 )
 
 __all__ = [
@@ -82,8 +83,10 @@ class MotionResult(Result):
     harmonics: int
     offset_deg: float
     residual_rms_deg: float
-    amplitude_u_deg: float
-    frequency_u_hz: float
+    # Standard uncertainties from the fit's residuals (white-noise model; full budgets: issue 6).
+    amplitude_deg_u: float
+    frequency_hz_u: float
+    thd_percent_u: float
     samples_used: int
     notes: tuple[str, ...] = ()
     set_amplitude_deg: float | None = None
@@ -115,6 +118,7 @@ class SchemeComparison(Result):
     thd_reference_percent: float
     thd_other_percent: float
     thd_difference_percent: float
+    thd_difference_percent_u: float
     amplitude_difference_percent: float
     frequency_difference_percent: float
     snr_db: float | None
@@ -248,8 +252,11 @@ def _finish(
         harmonics=int(displacement_amplitudes.size),
         offset_deg=float(offset_deg),
         residual_rms_deg=float(residual_rms_deg),
-        amplitude_u_deg=float(displacement_amplitudes_u[0]),
-        frequency_u_hz=float(fit.frequency_u_hz),
+        amplitude_deg_u=float(displacement_amplitudes_u[0]),
+        frequency_hz_u=float(fit.frequency_u_hz),
+        thd_percent_u=thd_standard_uncertainty_percent(
+            displacement_amplitudes, displacement_amplitudes_u
+        ),
         samples_used=int(t_used.size),
         notes=tuple(notes),
         snr_db=snr,
@@ -394,30 +401,41 @@ def extreme_reversals(
         set_at[np.maximum(np.searchsorted(set_at, np.arange(x.size), side="right") - 1, 0)]
     ]
     edges = np.flatnonzero(np.diff(filled)) + 1
-    # Complete swings lie between two state changes; the first and last segments are partial.
-    if edges.size < 2:
-        return np.empty(0)
-    starts, stops = edges[:-1], edges[1:]
+    # Swings lie between state changes. The first and last ones are cut by the record's ends: their
+    # extreme counts only if the signal is at least `h` away from it at that end (zigzag rule).
+    starts = np.concatenate(([0], edges))
+    stops = np.concatenate((edges, [x.size]))
     signs = filled[starts]
     signed = x * filled  # maxima of a "+" swing and minima of a "−" swing both become maxima
-    seg_max = np.maximum.reduceat(signed, starts)[: starts.size]
+    seg_max = np.maximum.reduceat(signed, starts)
     seg_id = np.repeat(np.arange(starts.size), stops - starts)
-    region = signed[starts[0] : stops[-1]]
-    hit = np.flatnonzero(region == seg_max[seg_id]) + starts[0]
-    first_hit = hit[np.unique(seg_id[hit - starts[0]], return_index=True)[1]]
-    period = 2 * float(np.median(np.diff(t[first_hit]))) if first_hit.size > 1 else t[-1] - t[0]
+    hit = np.flatnonzero(signed == seg_max[seg_id])
+    extreme = hit[np.unique(seg_id[hit], return_index=True)[1]]
+    keep = np.ones(starts.size, dtype=bool)
+    keep[0] = signed[0] < seg_max[0] - h and extreme[0] > 0
+    keep[-1] = signed[-1] < seg_max[-1] - h and extreme[-1] < x.size - 1
+    extreme, signs = extreme[keep], signs[keep]
+    if extreme.size == 0:
+        return np.empty(0)
+    period = 2 * float(np.median(np.diff(t[extreme]))) if extreme.size > 1 else t[-1] - t[0]
     half_window = period / 20
-    times = np.empty(first_hit.size)
-    for j, (i, s) in enumerate(zip(first_hit, signs, strict=True)):
-        lo_i = np.searchsorted(t, t[i] - half_window)
-        hi_i = np.searchsorted(t, t[i] + half_window, side="right")
-        tt = t[lo_i:hi_i] - t[i]
-        if tt.size < 5:
-            times[j] = t[i]
-            continue
-        c2, c1, _ = np.polyfit(tt, x[lo_i:hi_i], 2)
-        vertex = -c1 / (2 * c2) if c2 * s < 0 else 0.0
-        times[j] = t[i] + (vertex if abs(vertex) < half_window else 0.0)
+    times = t[extreme].astype(float)
+    for j, s in enumerate(signs):
+        centre = times[j]
+        for _ in range(2):  # fit, then re-centre the window on the vertex and fit again
+            lo_i = np.searchsorted(t, centre - half_window)
+            hi_i = np.searchsorted(t, centre + half_window, side="right")
+            if hi_i - lo_i < 5:
+                break
+            tt = t[lo_i:hi_i] - centre
+            c2, c1, _ = np.polyfit(tt, x[lo_i:hi_i], 2)
+            if c2 * s >= 0:  # not a maximum (or minimum) of the expected kind: keep the sample
+                break
+            vertex = -c1 / (2 * c2)
+            if abs(vertex) > half_window:
+                break
+            centre += vertex
+        times[j] = centre
     return times
 
 
@@ -588,6 +606,7 @@ def compare_schemes(reference: MotionResult, other: MotionResult) -> SchemeCompa
         thd_reference_percent=reference.thd_percent,
         thd_other_percent=other.thd_percent,
         thd_difference_percent=reference.thd_percent - other.thd_percent,
+        thd_difference_percent_u=math.hypot(reference.thd_percent_u, other.thd_percent_u),
         amplitude_difference_percent=100
         * (other.amplitude_deg - reference.amplitude_deg)
         / reference.amplitude_deg,

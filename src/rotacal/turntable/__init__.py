@@ -1,1 +1,0 @@
-"""rotacal.turntable"""
