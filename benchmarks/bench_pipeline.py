@@ -60,7 +60,7 @@ def main() -> None:
     n = t.size
     # warm up both (page faults, caches)
     np.unwrap(np.arctan2(b[:100_000], a[:100_000]))
-    calibrate_encoder_motion(t[: n // 10], a[: n // 10], b[: n // 10], lines=36000)
+    calibrate_encoder_motion(t[: n // 3], a[: n // 3], b[: n // 3], lines=36000)
 
     t_base, _ = best_of(args.repeat, lambda: np.unwrap(np.arctan2(b, a)))
     t_pipe, r = best_of(args.repeat, lambda: calibrate_encoder_motion(t, a, b, lines=36000))

@@ -169,8 +169,8 @@ def test_compare_schemes_is_reference_minus_other():
 @pytest.mark.parametrize(
     ("mutate", "message"),
     [
-        (lambda t, a, b: (t, np.where(np.arange(a.size) == 100, np.nan, a), b), "row 100"),
-        (lambda t, a, b: (t[::-1].copy(), a, b), "does not increase"),
+        (lambda t, a, b: (t, np.where(np.arange(a.size) == 100, np.nan, a), b), "sample 100"),
+        (lambda t, a, b: (t[::-1].copy(), a, b), "not strictly increasing"),
         (lambda t, a, b: (t[:4000], a[:4000], b[:4000]), "reversing moment"),
     ],
 )

@@ -995,9 +995,11 @@ def _check_time(t: ArrayLike, n: int) -> FloatArray:
             "they must be sampled together."
         )
     _check_finite(tt, "time_s")
-    if np.any(np.diff(tt) <= 0):
+    bad = np.flatnonzero(np.diff(tt) <= 0)
+    if bad.size:
         raise CaptureError(
-            "column 'time_s' is not strictly increasing; sort or fix the time stamps."
+            f"column 'time_s' is not strictly increasing at sample {int(bad[0]) + 1} "
+            f"({tt[bad[0]]!r} then {tt[bad[0] + 1]!r}); sort or fix the time stamps."
         )
     return tt
 
