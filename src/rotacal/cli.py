@@ -90,6 +90,19 @@ def _progress(total: int, description: str) -> Iterator[Callable[[str], None]]:
         yield advance
 
 
+@contextlib.contextmanager
+def _status(message: str) -> Iterator[None]:
+    """A spinner with a message on a terminal (stderr) while a long step runs; silent otherwise."""
+    from rich.console import Console
+
+    console = Console(stderr=True)
+    if not console.is_terminal:
+        yield
+        return
+    with console.status(message):
+        yield
+
+
 def _write_json(data: Any, target: str | None, protect: Sequence[Path] = ()) -> None:
     if target is None:
         return
@@ -143,7 +156,10 @@ def _analysis_options(func: F) -> F:
 def _read(path: str, needed: list[str], columns: Sequence[str], group: str | None) -> Any:
     from rotacal.io import parse_column_mapping, read_capture
 
-    return read_capture(path, columns=needed, mapping=parse_column_mapping(columns), group=group)
+    with _status(f"reading {path}"):
+        return read_capture(
+            path, columns=needed, mapping=parse_column_mapping(columns), group=group
+        )
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
@@ -203,7 +219,8 @@ def _finish_motion(
             inputs={"capture": str(capture_path)},
         )
         _refuse_overwrite(Path(report_path), protect, "--report")
-        write_html(report, report_path)
+        with _status("drawing the report"):
+            write_html(report, report_path)
     if json_path is None and report_path is None:
         _print_motion(result)
 
@@ -213,7 +230,9 @@ def _print_motion(r: Any) -> None:
     click.echo(f"amplitude         {r.amplitude_deg:.7g} deg")
     click.echo(f"frequency         {r.frequency_hz:.9g} Hz")
     click.echo(f"ang. acceleration {r.angular_acceleration_amplitude_deg_s2:.6g} deg/s^2")
-    click.echo(f"THD               {r.thd_percent:.4f} %  (h = 2..{r.harmonics})")
+    click.echo(
+        f"THD               {r.thd_percent:.4f} % ± {r.thd_percent_u:.2g} (u, h = 2..{r.harmonics})"
+    )
     click.echo(
         f"periods used      {r.periods_used}  ({r.reversal_times_s.size} reversing moments found)"
     )
@@ -239,7 +258,8 @@ def motion_encoder(
 
     cap = _read(capture, ["time_s", "a", "b"], columns, group)
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
-    result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
+    with _status("demodulating and fitting"):
+        result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
     _finish_motion(result, capture, json_path, report_path)
 
 
@@ -255,7 +275,10 @@ def motion_lts(
 
     cap = _read(capture, ["time_s", "displacement_mm"], columns, group)
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
-    result = calibrate_lts_motion(cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw)
+    with _status("fitting"):
+        result = calibrate_lts_motion(
+            cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw
+        )
     _finish_motion(result, capture, json_path, report_path)
 
 
@@ -268,7 +291,8 @@ def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: An
 
     cap = _read(capture, ["time_s", "rate_deg_s"], columns, group)
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
-    result = calibrate_fog_motion(cap["time_s"], cap["rate_deg_s"], **kw)
+    with _status("fitting"):
+        result = calibrate_fog_motion(cap["time_s"], cap["rate_deg_s"], **kw)
     _finish_motion(result, capture, json_path, report_path)
 
 
@@ -312,8 +336,10 @@ _SIM_KINDS = ["encoder", "lts", "fog"]
 )
 @click.option("--radius-mm", type=float, default=100.0, show_default=True, help="lts: R.")
 @click.option("--seed", type=int, default=0, show_default=True)
-@click.option("--force", is_flag=True, help="Overwrite FILE if it exists.")
-def simulate(kind: str, out: str, harmonic_items: Sequence[str], force: bool, **kw: Any) -> None:
+@click.option("--overwrite", is_flag=True, help="Replace FILE if it exists.")
+def simulate(
+    kind: str, out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any
+) -> None:
     """Write a synthetic capture of KIND with its truth beside it (FILE.truth.json)."""
     from rotacal import sim
 
@@ -353,7 +379,7 @@ def simulate(kind: str, out: str, harmonic_items: Sequence[str], force: bool, **
         elif noise is not None:
             options["noise_deg_s"] = noise
     capture = sim.simulate(kind, motion=motion_, **options)
-    path = capture.write(out, overwrite=force)
+    path = capture.write(out, overwrite=overwrite)
     click.echo(f"wrote {path} and {path}.truth.json", err=True)
 
 

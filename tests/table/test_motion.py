@@ -187,3 +187,28 @@ def test_asking_for_more_periods_than_recorded_is_an_error():
         calibrate_encoder_motion(c["time_s"], c["a"], c["b"], lines=36000, periods=99)
     with pytest.raises(ConfigError):
         calibrate_encoder_motion(c["time_s"], c["a"], c["b"], lines=36000, harmonics=0)
+
+
+@pytest.mark.parametrize("index", range(5))
+def test_table1_scenarios_of_the_twin_meet_the_bars(index):
+    """The five runs of the seed's Table 1 on the twin (harmonics, stagnation, creep, sensor errors)."""
+    sc = sim.table1_scenarios()[index]
+    kind = sc["paper_sensors"][0]
+    c = sim.simulate(kind, motion=sc["motion"], **sc["sensors"][kind]).columns
+    if kind == "encoder":
+        r = calibrate_encoder_motion(c["time_s"], c["a"], c["b"], lines=36000)
+        thd_bar = 0.02
+    else:
+        r = calibrate_lts_motion(c["time_s"], c["displacement_mm"], radius_mm=100.0)
+        thd_bar = 0.05
+    truth = sc["motion"].truth(r.analysis_start_s, r.analysis_stop_s)
+    _check_against_truth(r, truth, thd_pp=thd_bar)
+    true_rev = np.asarray(sc["motion"].truth(c["time_s"][0], c["time_s"][-1])["reversal_times_s"])
+    assert r.reversal_times_s.size == true_rev.size
+    assert np.max(np.abs(r.reversal_times_s - true_rev)) < 3e-3
+    # the FOG on the same run, where its SNR is at least 10 dB (the bar's condition)
+    f = sim.simulate("fog", motion=sc["motion"], **sc["sensors"]["fog"]).columns
+    rf = calibrate_fog_motion(f["time_s"], f["rate_deg_s"])
+    if rf.snr_db >= 10.0:
+        truth_f = sc["motion"].truth(rf.analysis_start_s, rf.analysis_stop_s)
+        assert rf.thd_percent == pytest.approx(truth_f["thd_percent"], abs=0.15)
