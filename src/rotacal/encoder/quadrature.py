@@ -32,6 +32,7 @@ __all__ = [
     "Demodulation",
     "PhaseState",
     "QuadratureCorrection",
+    "ReversalPlan",
     "Reversals",
     "SubdivisionWarning",
     "angle_deg",
@@ -40,8 +41,12 @@ __all__ = [
     "find_reversals",
     "fit_quadrature_correction",
     "intercept_periods",
+    "plan_reversals",
+    "reversal_point_in_window",
+    "reversal_window",
     "reversing_subintervals",
     "rotation_direction",
+    "subinterval_transitions",
     "subintervals",
     "unwrapped_phase",
 ]
@@ -773,21 +778,282 @@ def _reversal_point(u: FloatArray, v: FloatArray, first: int, last: int) -> int:
     """Chp of eqs. (7)–(8): the extreme sample of the faster-changing signal in [Sub⁻, Sub⁺]."""
     if last <= first:
         return first
-    # rotacal: the sums of eqs. (7)-(8) are taken with the samples just outside [Sub⁻, Sub⁺] as
-    # endpoints (both lie in the subinterval the motion came from and returned to), so that the
-    # sign of q stays right when [Sub⁻, Sub⁺] spans several visits of the extreme subinterval.
-    first = max(first - 1, 0)
-    last = min(last + 1, u.size - 1)
-    us = u[first : last + 1]
-    vs = v[first : last + 1]
+    lo, hi = reversal_window(first, last, u.size)
+    return lo + reversal_point_in_window(u[lo : hi + 1], v[lo : hi + 1])
+
+
+def reversal_window(first: int, last: int, n_samples: int) -> tuple[int, int]:
+    """Samples that eqs. (7)–(8) read for the reversing subinterval visit ``[first, last]``.
+
+    rotacal takes the sums of eqs. (7)–(8) with the samples just outside [Sub⁻, Sub⁺] as
+    endpoints (both lie in the subinterval the motion came from and returned to), so that the
+    sign of q stays right when [Sub⁻, Sub⁺] spans several visits of the extreme subinterval.
+
+    Parameters
+    ----------
+    first, last : int
+        Sub⁻ and Sub⁺, first and last sample index (inclusive) of the visit.
+    n_samples : int
+        Samples in the capture.
+
+    Returns
+    -------
+    lo, hi : int
+        First and last sample index (inclusive) to read; ``lo == hi == first`` when the visit is
+        a single sample (its Chp is that sample, nothing needs reading).
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.2, eqs. (7)–(8).
+    """
+    if last <= first:
+        return first, first
+    return max(first - 1, 0), min(last + 1, n_samples - 1)
+
+
+def reversal_point_in_window(u_window: ArrayLike, v_window: ArrayLike) -> int:
+    """Chp of eqs. (7)–(8) within the samples of :func:`reversal_window`, as an offset.
+
+    ``qu = Σ u − n·(u_first + u_last)/2`` and likewise ``qv``; the signal with the larger |q|
+    changes most; Chp is its maximum if q > 0, its minimum if q < 0 (the middle sample if q = 0).
+
+    Parameters
+    ----------
+    u_window, v_window : array_like
+        Corrected signals (dimensionless) at samples ``lo .. hi`` of :func:`reversal_window`.
+
+    Returns
+    -------
+    int
+        Chp − lo (samples).
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.2, eqs. (7)–(8).
+    """
+    us = np.asarray(u_window, dtype=np.float64)
+    vs = np.asarray(v_window, dtype=np.float64)
+    if us.size < 2:
+        return 0
     qu = float(np.sum(us)) - us.size * 0.5 * (us[0] + us[-1])
     qv = float(np.sum(vs)) - vs.size * 0.5 * (vs[0] + vs[-1])
     seg, q = (us, qu) if abs(qu) >= abs(qv) else (vs, qv)
     if q > 0:
-        return first + int(np.argmax(seg))
+        return int(np.argmax(seg))
     if q < 0:
-        return first + int(np.argmin(seg))
-    return first + (last - first) // 2
+        return int(np.argmin(seg))
+    return (us.size - 1) // 2
+
+
+@dataclasses.dataclass(frozen=True)
+class ReversalPlan:
+    """Reversing moments found from the subinterval transitions, before their precise point.
+
+    Everything of :func:`find_reversals` except eqs. (7)–(8), which need the signals: a chunked
+    caller reads the samples of each window in a later pass over the capture.
+
+    Attributes
+    ----------
+    windows : ndarray of int, shape (m, 2)
+        ``[Sub⁻, Sub⁺]`` (sample indices, inclusive) of each reversing subinterval visit whose
+        Chp is needed; see :func:`reversal_window` for the samples to read.
+    pairs : ndarray of int, shape (r, 2)
+        Rows of ``windows`` for each reversal: its index is ``(chp[p0] + chp[p1]) // 2``
+        (``p0 == p1`` for a reversal that is a single candidate).
+    kinds : ndarray of int8
+        +1 for a maximum of θ, −1 for a minimum.
+    candidates, hysteresis_subintervals, transitions, skipped_transitions, max_step_subintervals
+        As in :class:`Reversals`.
+    """
+
+    windows: np.ndarray
+    pairs: np.ndarray
+    kinds: np.ndarray
+    candidates: int
+    hysteresis_subintervals: int
+    transitions: int
+    skipped_transitions: int
+    max_step_subintervals: int
+
+    def indices(self, chp: ArrayLike) -> NDArray[np.intp]:
+        """Sample index of each reversal from the Chp (sample index) of every window."""
+        c = np.asarray(chp, dtype=np.intp)
+        if self.pairs.shape[0] == 0:
+            return np.empty(0, dtype=np.intp)
+        return (c[self.pairs[:, 0]] + c[self.pairs[:, 1]]) // 2
+
+
+def subinterval_transitions(
+    phase_rad: ArrayLike, *, previous_k: float | None = None, offset: int = 0
+) -> tuple[NDArray[np.intp], FloatArray, float, float]:
+    """Subinterval transitions of one chunk of the phase, chunk-exact.
+
+    ``k = ⌊φ/(π/6)⌋``; a transition is a sample whose k differs from the previous sample's.
+
+    Parameters
+    ----------
+    phase_rad : array_like
+        Unwrapped phase φ (rad) of the chunk (from :func:`unwrapped_phase` with carried state).
+    previous_k : float, optional
+        k of the sample before the chunk (None for the first chunk).
+    offset : int
+        Global sample index of the chunk's first sample.
+
+    Returns
+    -------
+    indices : ndarray of int
+        Global sample index of each transition (first sample in the new subinterval).
+    k_after : ndarray of float
+        k after each transition (whole numbers stored as float, as :func:`find_reversals` uses).
+    k_first, k_last : float
+        k of the chunk's first and last sample (pass ``k_last`` as ``previous_k`` with the next
+        chunk); NaN for an empty chunk.
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.1, eqs. (3)–(4).
+    """
+    k = np.floor(np.asarray(phase_rad, dtype=np.float64) * (1.0 / _SUB_RAD))
+    idx = np.flatnonzero(k[1:] != k[:-1])
+    idx += 1
+    if previous_k is not None and k.size and k[0] != previous_k:
+        idx = np.concatenate(([0], idx))
+    k_after = k[idx]
+    idx += offset
+    if k.size == 0:
+        return idx, k_after, math.nan, math.nan
+    return idx, k_after, float(k[0]), float(k[-1])
+
+
+def plan_reversals(
+    transition_indices: ArrayLike,
+    k_after: ArrayLike,
+    k_start: float,
+    *,
+    hysteresis_subintervals: int | None = None,
+    stacklevel: int = 2,
+) -> ReversalPlan:
+    """Reversing moments from the list of subinterval transitions (steps 1–3 of find_reversals).
+
+    Parameters
+    ----------
+    transition_indices : array_like of int
+        Sample index of every transition of the capture, increasing.
+    k_after : array_like
+        Subinterval count k after each transition.
+    k_start : float
+        k of the capture's first sample.
+    hysteresis_subintervals : int, optional
+        See :func:`find_reversals`.
+    stacklevel : int
+        Passed to :func:`warnings.warn` for the :class:`SubdivisionWarning`.
+
+    Returns
+    -------
+    ReversalPlan
+        Windows whose Chp (eqs. (7)–(8)) is still to be found, and how they make reversals.
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.1 eqs. (3)–(6).
+    """
+    idx = np.asarray(transition_indices, dtype=np.intp)
+    ka = np.asarray(k_after, dtype=np.float64)
+    k0 = float(k_start)
+    if hysteresis_subintervals is not None and (
+        isinstance(hysteresis_subintervals, bool)
+        or int(hysteresis_subintervals) != hysteresis_subintervals
+        or hysteresis_subintervals < 1
+    ):
+        raise ConfigError(
+            f"hysteresis_subintervals={hysteresis_subintervals!r} must be a whole number ≥ 1."
+        )
+    n_trans = int(idx.size)
+    dk = np.diff(ka, prepend=k0) if n_trans else np.empty(0)
+    step = np.abs(dk)
+    skipped = int(np.count_nonzero(step > 1.0))
+    max_step = int(step.max()) if n_trans else 0
+    if skipped:
+        warnings.warn(
+            f"{skipped} of {n_trans} subinterval transitions skipped subintervals (largest jump "
+            f"{max_step} of 12 per signal period): the sampling is too slow for the subdivision"
+            + ("; above 5 the phase unwrapping itself is ambiguous." if max_step > 5 else "."),
+            SubdivisionWarning,
+            stacklevel=stacklevel + 1,
+        )
+    if n_trans:
+        k_lo = min(k0, float(ka.min()))
+        k_hi = max(k0, float(ka.max()))
+    else:
+        k_lo = k_hi = k0
+    if hysteresis_subintervals is None:
+        hyst = max(2, round(0.1 * (k_hi - k_lo)))
+    else:
+        hyst = int(hysteresis_subintervals)
+
+    no_windows = np.empty((0, 2), dtype=np.intp)
+    if n_trans < 2:
+        return ReversalPlan(
+            no_windows,
+            no_windows.copy(),
+            np.empty(0, dtype=np.int8),
+            0,
+            hyst,
+            n_trans,
+            skipped,
+            max_step,
+        )
+
+    first_change, run_len, kinds, level = _candidates(ka, dk)
+    n_cand = int(first_change.size)
+    if n_cand == 0:
+        return ReversalPlan(
+            no_windows,
+            no_windows.copy(),
+            np.empty(0, dtype=np.int8),
+            0,
+            hyst,
+            n_trans,
+            skipped,
+            max_step,
+        )
+
+    # rotacal's extension: clusters of candidates closer than the hysteresis.
+    linked = np.abs(np.diff(level)) < hyst
+    cluster_start = np.flatnonzero(np.concatenate(([True], ~linked)))
+    cluster_size = np.diff(np.append(cluster_start, n_cand))
+    keep = cluster_size % 2 == 1
+    rev_kinds = kinds[cluster_start[keep]].astype(np.int8)
+
+    def window(c: int) -> tuple[int, int]:
+        j0 = int(first_change[c])
+        levels = ka[j0 - 1 : j0 - 1 + int(run_len[c])]
+        at_extreme = np.flatnonzero(levels == level[c])
+        return int(idx[j0 - 1 + int(at_extreme[0])]), int(idx[j0 + int(at_extreme[-1])]) - 1
+
+    windows: list[tuple[int, int]] = []
+    pairs = np.empty((int(np.count_nonzero(keep)), 2), dtype=np.intp)
+    for i, (start, size) in enumerate(
+        zip(cluster_start[keep].tolist(), cluster_size[keep].tolist(), strict=True)
+    ):
+        windows.append(window(start))
+        if size == 1:
+            pairs[i] = len(windows) - 1
+        else:
+            # A cluster straddles the reversal symmetrically: take the middle of its
+            # outermost extremes (both of the cluster's kind).
+            windows.append(window(start + size - 1))
+            pairs[i] = (len(windows) - 2, len(windows) - 1)
+    return ReversalPlan(
+        windows=np.asarray(windows, dtype=np.intp).reshape(-1, 2),
+        pairs=pairs,
+        kinds=rev_kinds,
+        candidates=n_cand,
+        hysteresis_subintervals=hyst,
+        transitions=n_trans,
+        skipped_transitions=skipped,
+        max_step_subintervals=max_step,
+    )
 
 
 def find_reversals(
@@ -852,87 +1118,21 @@ def find_reversals(
             "t, u, v and phase_rad must be one-dimensional and of equal length, got "
             f"{tt.shape}, {uu.shape}, {vv.shape} and {phase.shape}."
         )
-    if hysteresis_subintervals is not None and (
-        isinstance(hysteresis_subintervals, bool)
-        or int(hysteresis_subintervals) != hysteresis_subintervals
-        or hysteresis_subintervals < 1
-    ):
-        raise ConfigError(
-            f"hysteresis_subintervals={hysteresis_subintervals!r} must be a whole number ≥ 1."
-        )
-
-    idx, k_after, dk, k0 = _transitions(phase)
-    n_trans = int(idx.size)
-    step = np.abs(dk)
-    skipped = int(np.count_nonzero(step > 1.0))
-    max_step = int(step.max()) if n_trans else 0
-    if skipped:
-        warnings.warn(
-            f"{skipped} of {n_trans} subinterval transitions skipped subintervals (largest jump "
-            f"{max_step} of 12 per signal period): the sampling is too slow for the subdivision"
-            + ("; above 5 the phase unwrapping itself is ambiguous." if max_step > 5 else "."),
-            SubdivisionWarning,
-            stacklevel=2,
-        )
-    if n_trans:
-        k_lo = min(k0, float(k_after.min()))
-        k_hi = max(k0, float(k_after.max()))
-    else:
-        k_lo = k_hi = k0
-    if hysteresis_subintervals is None:
-        hyst = max(2, round(0.1 * (k_hi - k_lo)))
-    else:
-        hyst = int(hysteresis_subintervals)
-
-    empty = np.empty(0, dtype=np.intp)
-    if n_trans < 2:
-        return Reversals(
-            empty, np.empty(0), np.empty(0, dtype=np.int8), 0, hyst, n_trans, skipped, max_step
-        )
-
-    first_change, run_len, kinds, level = _candidates(k_after, dk)
-    n_cand = int(first_change.size)
-
-    # rotacal's extension: clusters of candidates closer than the hysteresis.
-    if n_cand:
-        linked = np.abs(np.diff(level)) < hyst
-        cluster_start = np.flatnonzero(np.concatenate(([True], ~linked)))
-        cluster_size = np.diff(np.append(cluster_start, n_cand))
-        keep = cluster_size % 2 == 1
-        chosen = cluster_start[keep] + (cluster_size[keep] - 1) // 2
-        rev_kinds = kinds[cluster_start[keep]].astype(np.int8)
-    else:
-        chosen = empty
-        rev_kinds = np.empty(0, dtype=np.int8)
-
-    def chp(c: int) -> int:
-        j0 = int(first_change[c])
-        levels = k_after[j0 - 1 : j0 - 1 + int(run_len[c])]
-        at_extreme = np.flatnonzero(levels == level[c])
-        first = int(idx[j0 - 1 + int(at_extreme[0])])
-        last = int(idx[j0 + int(at_extreme[-1])]) - 1
-        return _reversal_point(uu, vv, first, last)
-
-    indices = np.empty(chosen.size, dtype=np.intp)
-    if n_cand:
-        for i, (start, size) in enumerate(
-            zip(cluster_start[keep].tolist(), cluster_size[keep].tolist(), strict=True)
-        ):
-            if size == 1:
-                indices[i] = chp(start)
-            else:
-                # A cluster straddles the reversal symmetrically: take the middle of its
-                # outermost extremes (both of the cluster's kind).
-                indices[i] = (chp(start) + chp(start + size - 1)) // 2
+    idx, k_after, _, k0 = _transitions(phase)
+    plan = plan_reversals(
+        idx, k_after, k0, hysteresis_subintervals=hysteresis_subintervals, stacklevel=3
+    )
+    chp = [_reversal_point(uu, vv, int(f), int(last)) for f, last in plan.windows.tolist()]
+    indices = plan.indices(chp)
     return Reversals(
         indices=indices,
         times_s=tt[indices],
-        kinds=rev_kinds,
-        candidates=n_cand,
-        hysteresis_subintervals=hyst,
-        transitions=n_trans,
-        skipped_transitions=skipped,
-        max_step_subintervals=max_step,
+        kinds=plan.kinds,
+        candidates=plan.candidates,
+        hysteresis_subintervals=plan.hysteresis_subintervals,
+        transitions=plan.transitions,
+        skipped_transitions=plan.skipped_transitions,
+        max_step_subintervals=plan.max_step_subintervals,
     )
 
 
