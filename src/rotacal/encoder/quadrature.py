@@ -979,7 +979,7 @@ def plan_reversals(
             f"{max_step} of 12 per signal period): the sampling is too slow for the subdivision"
             + ("; above 5 the phase unwrapping itself is ambiguous." if max_step > 5 else "."),
             SubdivisionWarning,
-            stacklevel=stacklevel + 1,
+            stacklevel=stacklevel,
         )
     if n_trans:
         k_lo = min(k0, float(ka.min()))

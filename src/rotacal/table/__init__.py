@@ -10,14 +10,17 @@ from rotacal.table.motion import (
     extreme_reversals,
     position_error,
 )
+from rotacal.table.streaming import calibrate_encoder_motion_chunked, encoder_chunks_from_file
 
 __all__ = [
     "MotionResult",
     "SchemeComparison",
     "calibrate_encoder_motion",
+    "calibrate_encoder_motion_chunked",
     "calibrate_fog_motion",
     "calibrate_lts_motion",
     "compare_schemes",
+    "encoder_chunks_from_file",
     "extreme_reversals",
     "position_error",
 ]
