@@ -11,11 +11,13 @@ import contextlib
 import json
 import os
 import sys
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
 import click
+import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError, RotacalError
 
@@ -27,7 +29,11 @@ class _Group(click.Group):
 
     def main(self, *args: Any, **kwargs: Any) -> Any:
         try:
-            return super().main(*args, **{**kwargs, "standalone_mode": False})
+            # Warnings become one line each; NumPy's floating-point chatter is silenced because
+            # the checks name the fault (a NaN, an overflowing value) themselves.
+            with warnings.catch_warnings(), np.errstate(all="ignore"):
+                warnings.showwarning = _one_line_warning
+                return super().main(*args, **{**kwargs, "standalone_mode": False})
         except click.exceptions.Exit as e:
             sys.exit(e.exit_code)
         except click.Abort:
@@ -60,6 +66,10 @@ class _Group(click.Group):
                 err=True,
             )
             sys.exit(1)
+
+
+def _one_line_warning(message: Any, *args: Any, **kwargs: Any) -> None:
+    click.echo(f"rotacal: warning: {' '.join(str(message).split())}", err=True)
 
 
 def _one_line(e: BaseException) -> str:
@@ -101,6 +111,22 @@ def _status(message: str) -> Iterator[None]:
         return
     with console.status(message):
         yield
+
+
+def _check_outputs(json_path: str | None, report_path: str | None, overwrite: bool) -> None:
+    """Refuse outputs that would replace an existing file (unless --overwrite) or each other."""
+    if report_path == "-":
+        raise ConfigError("--report needs a file name (the report is HTML, not for stdout)")
+    if json_path and report_path and json_path != "-":
+        if Path(json_path).resolve() == Path(report_path).resolve():
+            raise ConfigError("--json and --report name the same file; give them different names")
+    for option, target in (("--json", json_path), ("--report", report_path)):
+        if not target or target == "-":
+            continue
+        if Path(target).is_dir():
+            raise ConfigError(f"{option} {target} is a folder; give a file name")
+        if not overwrite and Path(target).exists():
+            raise ConfigError(f"{option} {target} exists; choose another name or pass --overwrite")
 
 
 def _write_json(data: Any, target: str | None, protect: Sequence[Path] = ()) -> None:
@@ -147,6 +173,7 @@ def _analysis_options(func: F) -> F:
             help="Map a column of the file onto a canonical name (repeatable).",
         ),
         click.option("--group", default=None, help="HDF5 group or TDMS group holding the columns."),
+        click.option("--overwrite", is_flag=True, help="Replace existing --json/--report files."),
     ]
     for option in reversed(options):
         func = option(func)
@@ -207,6 +234,13 @@ def _finish_motion(
     result: Any, capture_path: str, json_path: str | None, report_path: str | None
 ) -> None:
     protect = (Path(capture_path),)
+    for note in result.notes:
+        if "partial" in note:
+            click.echo(
+                f"rotacal: warning: {note}: amplitude and THD may be biased by the signals' "
+                "gain and phase errors; prefer the LTS scheme for motions this small",
+                err=True,
+            )
     _write_json(result.to_dict(), json_path, protect)
     if report_path:
         from rotacal.report.html import Report, write_html
@@ -231,13 +265,15 @@ def _print_motion(r: Any) -> None:
     click.echo(f"frequency         {r.frequency_hz:.9g} Hz")
     click.echo(f"ang. acceleration {r.angular_acceleration_amplitude_deg_s2:.6g} deg/s^2")
     click.echo(
-        f"THD               {r.thd_percent:.4f} % ± {r.thd_percent_u:.2g} (u, h = 2..{r.harmonics})"
+        f"THD               {r.thd_percent:.4f} %  (u = {r.thd_percent_u:.2g} %, h = 2..{r.harmonics})"
     )
     click.echo(
         f"periods used      {r.periods_used}  ({r.reversal_times_s.size} reversing moments found)"
     )
     if r.snr_db is not None:
         click.echo(f"SNR               {r.snr_db:.2f} dB")
+    for note in r.notes:
+        click.echo(f"note              {note}")
     if r.set_amplitude_deg is not None:
         click.echo(f"amplitude error   {r.amplitude_error_percent:+.4f} %")
         click.echo(f"frequency error   {r.frequency_error_percent:+.5f} %")
@@ -258,6 +294,7 @@ def motion_encoder(
 
     cap = _read(capture, ["time_s", "a", "b"], columns, group)
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
     with _status("demodulating and fitting"):
         result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
     _finish_motion(result, capture, json_path, report_path)
@@ -275,6 +312,7 @@ def motion_lts(
 
     cap = _read(capture, ["time_s", "displacement_mm"], columns, group)
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
     with _status("fitting"):
         result = calibrate_lts_motion(
             cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw
@@ -291,6 +329,7 @@ def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: An
 
     cap = _read(capture, ["time_s", "rate_deg_s"], columns, group)
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
     with _status("fitting"):
         result = calibrate_fog_motion(cap["time_s"], cap["rate_deg_s"], **kw)
     _finish_motion(result, capture, json_path, report_path)
@@ -343,6 +382,10 @@ def simulate(
     """Write a synthetic capture of KIND with its truth beside it (FILE.truth.json)."""
     from rotacal import sim
 
+    if kind != "fog" and kw["snr_db"] is not None:
+        raise ConfigError(f"--snr-db applies to the fog kind only; use --noise for {kind}")
+    if kw["snr_db"] is not None and kw["noise"] is not None:
+        raise ConfigError("give --noise or --snr-db, not both")
     harmonics: dict[int, tuple[float, float]] = {}
     for item in harmonic_items:
         parts = item.split(":")
@@ -351,6 +394,8 @@ def simulate(
             phase = float(parts[2]) if len(parts) > 2 else 0.0
         except (ValueError, IndexError):
             raise ConfigError(f"--harmonic {item!r} is not H:REL[:PHASE], e.g. 3:0.02") from None
+        if h in harmonics:
+            raise ConfigError(f"--harmonic {h} is given twice")
         harmonics[h] = (rel, phase)
     motion_ = sim.SineMotion(
         amplitude_deg=kw.pop("amplitude_deg"),

@@ -252,3 +252,59 @@ def test_console_script_runs_as_a_process(encoder_capture):
     )
     assert p.returncode == 2
     assert "--lines" in p.stderr and "Traceback" not in p.stderr
+
+
+def test_existing_outputs_are_not_replaced_without_overwrite(encoder_capture, tmp_path):
+    out = tmp_path / "r.json"
+    out.write_text("keep me")
+    args = ["motion", "encoder", str(encoder_capture), "--lines", "36000", "--json", str(out)]
+    assert_one_line_error(run(*args), "exists", "--overwrite")
+    assert out.read_text() == "keep me"
+    assert run(*args, "--overwrite").exit_code == 0
+    assert "thd_percent" in out.read_text()
+
+
+def test_json_and_report_cannot_share_a_file(encoder_capture, tmp_path):
+    same = tmp_path / "x.html"
+    r = run(
+        "motion",
+        "encoder",
+        str(encoder_capture),
+        "--lines",
+        "36000",
+        "--json",
+        str(same),
+        "--report",
+        str(same),
+    )
+    assert_one_line_error(r, "same file")
+    assert_one_line_error(
+        run("motion", "encoder", str(encoder_capture), "--lines", "36000", "--report", "-"),
+        "--report",
+    )
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["lts", "--snr-db", "10"], "--snr-db"),
+        (["fog", "--snr-db", "10", "--noise", "0.1"], "not both"),
+        (["fog", "--harmonic", "3:0.1", "--harmonic", "3:0.2"], "twice"),
+    ],
+)
+def test_simulate_refuses_options_it_would_ignore(tmp_path, args, needle):
+    r = run("simulate", args[0], "--out", str(tmp_path / "x.npz"), *args[1:])
+    assert_one_line_error(r, needle)
+
+
+def test_warnings_reach_the_user_as_one_line(tmp_path):
+    """A capture whose phase skips subintervals: a one-line warning, and a correct result."""
+    t = np.arange(0, 3.0, 1 / 6000)
+    phi = 2 * np.pi * 36000 * 0.5 * np.sin(2 * np.pi * 2.0 * t) / 360
+    p = tmp_path / "slow.npz"
+    np.savez(p, time_s=t, a=np.cos(phi), b=np.sin(phi))
+    r = run("motion", "encoder", str(p), "--lines", "36000", "--json", "-")
+    assert r.exit_code == 0, r.stderr
+    warn = [ln for ln in r.stderr.splitlines() if ln]
+    assert warn and all(ln.startswith("rotacal: warning:") for ln in warn)
+    assert json.loads(r.stdout)["amplitude_deg"] == pytest.approx(0.5, rel=2e-4)

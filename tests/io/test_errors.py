@@ -441,3 +441,19 @@ def test_check_time_across_blocks(monkeypatch):
     check_time(t)
     t[8] = t[7]  # the repeat sits exactly on a block boundary
     _raises(["row 8 (0-based)"], check_time, t)
+
+
+def test_csv_row_with_an_extra_cell_is_refused(tmp_path):
+    """np.loadtxt(usecols=…) ignores extra cells; a shifted row must not be read silently."""
+    from rotacal.errors import CaptureError
+    from rotacal.io import iter_capture_chunks, read_capture
+
+    p = tmp_path / "shifted.csv"
+    p.write_text("time_s,rate_deg_s\n0,1\n1,2\n2,3,999\n3,4\n")
+    with pytest.raises(CaptureError, match="line 4 has 3 cells"):
+        read_capture(p, columns=["time_s"])
+    with pytest.raises(CaptureError, match="line 4 has 3 cells"):
+        list(iter_capture_chunks(p, ["time_s"], chunk_rows=2))
+    ok = tmp_path / "ok.csv"
+    ok.write_text("# a comment, with a comma\ntime_s,rate_deg_s\n0,1\n1,2\n\n")
+    assert read_capture(ok)["rate_deg_s"].tolist() == [1.0, 2.0]

@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
+from rotacal.signal import check_sampling
 
 __all__ = [
     "Demodulation",
@@ -72,6 +73,10 @@ MAX_AMPLITUDE_RATIO = 5.0
 _MIN_SAMPLES = 16
 _CHUNK = 1 << 18
 _COVERAGE_BINS = 720
+
+
+#: Largest phase step (in 30° subintervals) between samples that is still demodulated.
+_MAX_SAFE_STEP = 5
 
 
 class SubdivisionWarning(UserWarning):
@@ -973,6 +978,15 @@ def plan_reversals(
     step = np.abs(dk)
     skipped = int(np.count_nonzero(step > 1.0))
     max_step = int(step.max()) if n_trans else 0
+    if max_step >= _MAX_SAFE_STEP:
+        # A jump of 5 subintervals is 150° of the signal period: one more and the unwrapping
+        # cannot tell forward from backward, so the angle would be silently wrong.
+        raise CaptureError(
+            f"the encoder phase jumps by up to {30 * max_step}° of a signal period between two "
+            "samples: the capture is sampled too slowly for the motion (or too noisy) to be "
+            "demodulated — sample faster (at least 12 samples per signal period at the highest "
+            "rate)."
+        )
     if skipped:
         warnings.warn(
             f"{skipped} of {n_trans} subinterval transitions skipped subintervals (largest jump "
@@ -1194,13 +1208,7 @@ def _check_time(t: ArrayLike, n: int) -> FloatArray:
             f"column 'time_s' has shape {tt.shape} but 'a' and 'b' have {n} samples; "
             "they must be sampled together."
         )
-    _check_finite(tt, "time_s")
-    bad = np.flatnonzero(np.diff(tt) <= 0)
-    if bad.size:
-        raise CaptureError(
-            f"column 'time_s' is not strictly increasing at sample {int(bad[0]) + 1} "
-            f"({tt[bad[0]]!r} then {tt[bad[0] + 1]!r}); sort or fix the time stamps."
-        )
+    check_sampling(tt, "time_s")
     return tt
 
 

@@ -147,6 +147,7 @@ class CsvReader:
         if self.first_row_cells is None:
             raise self._no_data()
         idx = [self.names.index(n) for n in names]
+        self._check_cell_counts(idx, ragged)
         kw: dict[str, Any] = {"converters": _empty_to_nan} if ragged else {}
         try:
             with warnings.catch_warnings():
@@ -193,6 +194,10 @@ class CsvReader:
                     have += len(piece) - sum(1 for s in piece if s[0] in _NOT_DATA)
                 if have == 0:
                     return
+                # np.loadtxt with usecols ignores extra cells: a shifted row would pass silently
+                commas = len(self.names) - 1
+                if any(x.count(",") != commas for x in pending if x[0] not in _NOT_DATA):
+                    self._diagnose(pending, lineno, idx, ragged=False)
                 try:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore", UserWarning)
@@ -213,6 +218,28 @@ class CsvReader:
                 lineno += len(pending)
                 cols = np.ascontiguousarray(data.T)
                 yield {n: cols[k] for k, n in enumerate(names)}
+
+    def _check_cell_counts(self, idx: list[int], ragged: bool) -> None:
+        """Every data row must have as many cells as the header: np.loadtxt with usecols ignores
+        extra cells, so a shifted or spliced row would otherwise be read silently. One cheap count
+        of commas and newlines over the raw bytes; the slow line-by-line diagnosis runs only when
+        the counts disagree (it also forgives blank and comment lines)."""
+        with open(self.path, "rb") as fh:
+            for _ in range(self.header_lines):
+                fh.readline()
+            offset = fh.tell()
+            fh.seek(0, 2)
+            size = fh.tell()
+        if size <= offset:
+            return
+        raw = np.memmap(self.path, dtype=np.uint8, mode="r", offset=offset)
+        commas = int(np.count_nonzero(raw == ord(",")))
+        rows = int(np.count_nonzero(raw == ord("\n"))) + int(raw[-1] != ord("\n"))
+        del raw
+        if commas != (len(self.names) - 1) * rows:
+            with open(self.path, encoding=ENCODING) as fh:
+                lines = itertools.islice(fh, self.header_lines, None)
+                self._diagnose(lines, self.header_lines + 1, idx, ragged)
 
     # --- messages ------------------------------------------------------------------------------
 

@@ -1,5 +1,6 @@
 """rotacal.signal — instrument-independent signal maths: IEEE 1057 sine fits, THD, SNR."""
 
+from rotacal.signal._checks import check_sampling
 from rotacal.signal.sinefit import (
     HarmonicFitAccumulator,
     SineFit,
@@ -16,6 +17,7 @@ from rotacal.signal.sinefit import (
 __all__ = [
     "HarmonicFitAccumulator",
     "SineFit",
+    "check_sampling",
     "displacement_amplitudes_from_rate",
     "estimate_frequency",
     "fit_harmonics",

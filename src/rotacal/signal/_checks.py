@@ -62,6 +62,53 @@ def check_increasing(t: np.ndarray, *, previous: float | None = None) -> None:
             )
 
 
+#: A time step longer than this many median steps is a gap (lost samples).
+MAX_GAP = 3.0
+
+
+def check_sampling(t: np.ndarray, name: str = "time_s", *, max_gap: float = MAX_GAP) -> None:
+    """Raise CaptureError unless ``t`` is finite, strictly increasing and free of gaps.
+
+    A gap — a step longer than ``max_gap`` times the median step — means lost samples (a DAQ
+    dropout, a spliced file): phase unwrapping, reversal counting and the FFT start of the fits
+    all assume the record is continuous, so a gap would give a silently wrong result. Jitter of
+    the time stamps is fine.
+
+    Parameters
+    ----------
+    t : array, s — sample times.
+    name : str — the column's name, for the message.
+    max_gap : float — the largest accepted step, in median steps.
+    """
+    t = np.asarray(t, dtype=np.float64)
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        raise CaptureError(f"column '{name}' has a NaN or inf at sample {int(bad[0])}.")
+    if t.size < 2:
+        return
+    steps = np.diff(t)
+    bad = np.flatnonzero(~(steps > 0))
+    if bad.size:
+        i = int(bad[0])
+        raise CaptureError(
+            f"column '{name}' is not strictly increasing at sample {i + 1} "
+            f"({float(t[i]):.9g} s then {float(t[i + 1]):.9g} s); sort or fix the time stamps."
+        )
+    typical = float(np.median(steps))
+    gaps = np.flatnonzero(steps > max_gap * typical)
+    if gaps.size:
+        i = int(gaps[0])
+        raise gap_error(name, i + 1, float(steps[i]), typical)
+
+
+def gap_error(name: str, sample: int, step: float, typical: float) -> CaptureError:
+    """The one message for a gap in the time stamps (shared by the in-memory and chunked paths)."""
+    return CaptureError(
+        f"column '{name}' has a gap of {step:.6g} s before sample {sample} (the usual step is "
+        f"{typical:.3g} s): samples are missing; analyse the parts on either side separately."
+    )
+
+
 def grid_tolerance(dt: float, t_first: float, t_last: float) -> float:
     """How far (s) a time stamp may sit from the ideal uniform grid and still count as on it."""
     return max(1e-10 * abs(dt), 64.0 * _EPS * max(abs(t_first), abs(t_last)))

@@ -100,6 +100,10 @@ class SimCapture:
 
 
 # ---------------------------------------------------------------------- helpers
+#: Default FOG record: 40⅛ periods, because its THD is limited by the gyro's noise.
+FOG_DEFAULT_PERIODS = 40.125
+
+
 def default_duration_s(motion: SineMotion) -> float:
     """Default capture length: 6⅛ motion periods (s), so a capture starts and ends mid-stroke."""
     return 6.125 / motion.frequency_hz
@@ -364,7 +368,9 @@ def simulate_fog(
         White noise σ (deg/s rms per sample) when ``snr_db`` is None.
     bias_deg_s : float
         Constant rate bias (deg/s).
-    fs_hz, duration_s, seed, start_s, harmonics
+    duration_s : float or None
+        Record length (s); default 40⅛ motion periods (the FOG's THD is noise-limited).
+    fs_hz, seed, start_s, harmonics
         As in :func:`simulate_encoder`.
 
     Returns
@@ -380,6 +386,8 @@ def simulate_fog(
     motion = _check_motion(motion)
     bias = _finite("bias_deg_s", bias_deg_s)
     sigma = _nonneg("noise_deg_s", noise_deg_s)
+    if duration_s is None:  # the FOG's THD is noise-limited: record it longer (seed §5)
+        duration_s = FOG_DEFAULT_PERIODS / motion.frequency_hz
     t, fs, dur, t0 = _time_axis(motion, fs_hz, duration_s, start_s)
     clean = motion.rate_deg_s(t)
     p_sig = float(np.mean((clean - np.mean(clean)) ** 2))

@@ -31,6 +31,7 @@ from rotacal.encoder import QuadratureCorrection, correct_quadrature, demodulate
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 from rotacal.signal import (
+    check_sampling,
     SineFit,
     displacement_amplitudes_from_rate,
     estimate_frequency,
@@ -146,16 +147,10 @@ def _check_samples(t: np.ndarray, name: str, y: np.ndarray) -> tuple[np.ndarray,
         raise CaptureError(f"time_s has {t.size} samples but {name} has {y.size}")
     if t.size < 16:
         raise CaptureError(f"the capture has only {t.size} samples: too few for a sine fit")
-    for label, arr in (("time_s", t), (name, y)):
-        bad = np.flatnonzero(~np.isfinite(arr))
-        if bad.size:
-            raise CaptureError(
-                f"column {label} has a non-finite value (NaN or inf) at row {bad[0]}"
-            )
-    steps = np.diff(t)
-    if np.any(steps <= 0):
-        row = int(np.flatnonzero(steps <= 0)[0]) + 1
-        raise CaptureError(f"time_s does not increase at row {row} ({t[row - 1]!r} → {t[row]!r})")
+    bad = np.flatnonzero(~np.isfinite(y))
+    if bad.size:
+        raise CaptureError(f"column {name} has a non-finite value (NaN or inf) at sample {bad[0]}")
+    check_sampling(t, "time_s")
     return t, y
 
 
@@ -471,6 +466,13 @@ def calibrate_lts_motion(
     if not radius_mm > 0:
         raise ConfigError(f"--radius-mm must be positive, got {radius_mm}")
     t, d = _check_samples(t, "displacement_mm", displacement_mm)
+    reach = float(np.max(np.abs(d)))
+    if reach > radius_mm:
+        # beyond 45° eq. (15) is no longer a small-angle sensor reading: a wrong R or unit
+        raise CaptureError(
+            f"displacement_mm reaches {reach:.6g} mm, more than R = {radius_mm:g} mm: check "
+            "--radius-mm and that D is in mm, measured from the table's zero position"
+        )
     angle = np.degrees(np.arctan(d / radius_mm))
     rev_times = extreme_reversals(t, angle)
     rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
@@ -508,7 +510,7 @@ def calibrate_lts_motion(
 
 def _model_zero_crossings(fit: SineFit, t: np.ndarray) -> np.ndarray:
     """Times where the fitted rate model crosses zero: the reversing moments of the motion."""
-    rate = fit.evaluate(t)
+    rate = fit.evaluate(t) - fit.offset  # D0 is the gyro's bias (eq. 9), not motion
     i = np.flatnonzero(np.signbit(rate[:-1]) != np.signbit(rate[1:]))
     r0, r1 = rate[i], rate[i + 1]
     return np.asarray(t[i] + (t[i + 1] - t[i]) * r0 / (r0 - r1))
@@ -594,9 +596,9 @@ def calibrate_fog_motion(
 def compare_schemes(reference: MotionResult, other: MotionResult) -> SchemeComparison:
     """Compare two schemes that measured the same run, as a row of Feng et al. (2023) Table 1.
 
-    The THD difference is ``reference − other`` in percentage points (the seed's "Difference Value
-    of THD": the combined OSE/LTS scheme minus the FOG). Amplitude and frequency differences are
-    relative to the reference, in %.
+    Every difference is ``reference − other``: THD in percentage points (the seed's "Difference
+    Value of THD": the combined OSE/LTS scheme minus the FOG), amplitude and frequency in % of the
+    reference's value.
 
     References
     ----------
@@ -610,10 +612,10 @@ def compare_schemes(reference: MotionResult, other: MotionResult) -> SchemeCompa
         thd_difference_percent=reference.thd_percent - other.thd_percent,
         thd_difference_percent_u=math.hypot(reference.thd_percent_u, other.thd_percent_u),
         amplitude_difference_percent=100
-        * (other.amplitude_deg - reference.amplitude_deg)
+        * (reference.amplitude_deg - other.amplitude_deg)
         / reference.amplitude_deg,
         frequency_difference_percent=100
-        * (other.frequency_hz - reference.frequency_hz)
+        * (reference.frequency_hz - other.frequency_hz)
         / reference.frequency_hz,
         snr_db=other.snr_db if other.snr_db is not None else reference.snr_db,
     )

@@ -55,6 +55,7 @@ from rotacal.encoder import (
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.io import iter_capture_chunks
 from rotacal.signal import HarmonicFitAccumulator, SineFit, fit_harmonics
+from rotacal.signal._checks import MAX_GAP, gap_error
 from rotacal.table.motion import (
     _ELLIPSE_POINTS,
     MotionResult,
@@ -182,6 +183,8 @@ def _pass_check(passes: _Passes) -> int:
     first_bad = dict.fromkeys(_COLUMNS, -1)
     order: tuple[int, Any, Any] | None = None
     last_t: Any = None
+    typical: float | None = None  # the median time step of the first chunk
+    gap: tuple[int, float, float] | None = None
     lengths: list[int] = []
     n = 0
     for _, off, cols in passes.run():
@@ -205,6 +208,14 @@ def _pass_check(passes: _Passes) -> int:
                 if steps.size:
                     i = int(steps[0])
                     order = (off + i + 1, t[i], t[i + 1])
+        if typical is None and t.size > 1:
+            typical = float(np.median(np.diff(t)))
+        if gap is None and typical is not None:
+            joined = t if last_t is None else np.concatenate(([last_t], t))
+            steps = np.diff(joined)
+            g = np.flatnonzero(steps > MAX_GAP * typical)
+            if g.size:
+                gap = (off + int(g[0]) + (1 if last_t is None else 0), float(steps[g[0]]), typical)
         last_t = t[-1]
         n += cols["a"].size
     passes.lengths = lengths
@@ -220,8 +231,10 @@ def _pass_check(passes: _Passes) -> int:
         row, before, after = order
         raise CaptureError(
             f"column 'time_s' is not strictly increasing at sample {row} "
-            f"({before!r} then {after!r}); sort or fix the time stamps."
+            f"({float(before):.9g} s then {float(after):.9g} s); sort or fix the time stamps."
         )
+    if gap is not None:
+        raise gap_error("time_s", *gap)
     return n
 
 
