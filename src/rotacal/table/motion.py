@@ -31,8 +31,8 @@ from rotacal.encoder import QuadratureCorrection, correct_quadrature, demodulate
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 from rotacal.signal import (
-    check_sampling,
     SineFit,
+    check_sampling,
     displacement_amplitudes_from_rate,
     estimate_frequency,
     fit_harmonics,
