@@ -100,6 +100,31 @@ def _progress(total: int, description: str) -> Iterator[Callable[[str], None]]:
         yield advance
 
 
+#: Above this many samples the encoder capture is streamed in chunks (its memory then stays flat;
+#: in memory the pipeline holds ~8 float64 copies of the capture).
+_IN_MEMORY_MAX_SAMPLES = 30_000_000
+
+
+@contextlib.contextmanager
+def _sample_progress(total: int, description: str) -> Iterator[Callable[[int], None]]:
+    """A progress bar over samples processed, on a terminal (stderr); silent otherwise."""
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    console = Console(stderr=True)
+    with Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f} %"),
+        TimeRemainingColumn(),
+        console=console,
+        disable=not console.is_terminal,
+        transient=True,
+    ) as bar:
+        task = bar.add_task(description, total=total)
+        yield lambda done: bar.update(task, completed=done)
+
+
 @contextlib.contextmanager
 def _status(message: str) -> Iterator[None]:
     """A spinner with a message on a terminal (stderr) while a long step runs; silent otherwise."""
@@ -285,18 +310,46 @@ def _print_motion(r: Any) -> None:
 @motion.command("encoder")
 @click.argument("capture", type=click.Path(dir_okay=False))
 @click.option("--lines", type=int, required=True, help="Encoder lines per revolution (e.g. 36000).")
+@click.option(
+    "--chunked/--in-memory",
+    default=None,
+    help="Stream the capture in chunks (flat memory) or load it whole "
+    f"[default: chunked above {_IN_MEMORY_MAX_SAMPLES:.0e} samples].",
+)
 @_motion_common
 def motion_encoder(
-    capture: str, lines: int, columns: Sequence[str], group: str | None, **kw: Any
+    capture: str,
+    lines: int,
+    chunked: bool | None,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
 ) -> None:
     """OSE scheme: capture with columns time_s, a, b (quadrature signals)."""
-    from rotacal.table import calibrate_encoder_motion
+    from rotacal.io import capture_length, parse_column_mapping
+    from rotacal.table import (
+        calibrate_encoder_motion,
+        calibrate_encoder_motion_chunked,
+        encoder_chunks_from_file,
+    )
 
-    cap = _read(capture, ["time_s", "a", "b"], columns, group)
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    with _status("demodulating and fitting"):
-        result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
+    mapping = parse_column_mapping(columns)
+    if chunked is None:
+        chunked = (
+            capture_length(capture, "a", mapping=mapping, group=group) > _IN_MEMORY_MAX_SAMPLES
+        )
+    if chunked:
+        n = capture_length(capture, "a", mapping=mapping, group=group)
+        source = encoder_chunks_from_file(capture, mapping=mapping, group=group)
+        # the chunked calibration reads the capture in up to six passes
+        with _sample_progress(6 * n, "calibrating (chunked)") as progress:
+            result = calibrate_encoder_motion_chunked(source, lines=lines, progress=progress, **kw)
+    else:
+        cap = _read(capture, ["time_s", "a", "b"], columns, group)
+        with _status("demodulating and fitting"):
+            result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
     _finish_motion(result, capture, json_path, report_path)
 
 
@@ -310,9 +363,9 @@ def motion_lts(
     """LTS scheme: capture with columns time_s, displacement_mm; θ = arctan(D/R)."""
     from rotacal.table import calibrate_lts_motion
 
-    cap = _read(capture, ["time_s", "displacement_mm"], columns, group)
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    cap = _read(capture, ["time_s", "displacement_mm"], columns, group)
     with _status("fitting"):
         result = calibrate_lts_motion(
             cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw
@@ -327,9 +380,9 @@ def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: An
     """FOG scheme: capture with columns time_s, rate_deg_s; THD of displacement from the rate fit."""
     from rotacal.table import calibrate_fog_motion
 
-    cap = _read(capture, ["time_s", "rate_deg_s"], columns, group)
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    cap = _read(capture, ["time_s", "rate_deg_s"], columns, group)
     with _status("fitting"):
         result = calibrate_fog_motion(cap["time_s"], cap["rate_deg_s"], **kw)
     _finish_motion(result, capture, json_path, report_path)

@@ -308,3 +308,13 @@ def test_warnings_reach_the_user_as_one_line(tmp_path):
     warn = [ln for ln in r.stderr.splitlines() if ln]
     assert warn and all(ln.startswith("rotacal: warning:") for ln in warn)
     assert json.loads(r.stdout)["amplitude_deg"] == pytest.approx(0.5, rel=2e-4)
+
+
+def test_chunked_path_gives_the_in_memory_answer(encoder_capture):
+    args = ["motion", "encoder", str(encoder_capture), "--lines", "36000", "--json", "-"]
+    whole = json.loads(run(*args, "--in-memory").stdout)
+    streamed = run(*args, "--chunked")
+    assert streamed.exit_code == 0, streamed.stderr
+    chunked = json.loads(streamed.stdout)
+    assert chunked["reversal_times_s"] == whole["reversal_times_s"]
+    assert chunked["thd_percent"] == pytest.approx(whole["thd_percent"], rel=1e-9)

@@ -139,6 +139,7 @@ def _check_settings(harmonics: int, periods: int | None) -> None:
 
 
 def _check_samples(t: np.ndarray, name: str, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Shapes, NaN, time order and gaps of a one-signal capture; a constant signal is refused."""
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
     if t.ndim != 1 or y.ndim != 1:
@@ -151,6 +152,8 @@ def _check_samples(t: np.ndarray, name: str, y: np.ndarray) -> tuple[np.ndarray,
     if bad.size:
         raise CaptureError(f"column {name} has a non-finite value (NaN or inf) at sample {bad[0]}")
     check_sampling(t, "time_s")
+    if np.ptp(y) == 0:
+        raise CaptureError(f"column {name} is constant: the table does not move in this capture")
     return t, y
 
 
@@ -263,13 +266,16 @@ def _finish(
     )
 
 
-def _cut(reversal_idx: np.ndarray, periods: int | None, what: str) -> tuple[int, int, int]:
+def _cut(
+    reversal_idx: np.ndarray, periods: int | None, what: str, span_deg: float | None = None
+) -> tuple[int, int, int]:
     """First and last sample of n whole periods bounded by 2n+1 reversals (seed 000, §3.3)."""
     available = (reversal_idx.size - 1) // 2
     if available < 1:
+        moved = f" (the angle spans {span_deg:.3g}°)" if span_deg is not None else ""
         raise CaptureError(
-            f"found {reversal_idx.size} reversing moment(s) in the {what}: at least 3 are needed "
-            "for one whole motion period — record longer"
+            f"found {reversal_idx.size} reversing moment(s) in the {what}{moved}: at least 3 are "
+            "needed for one whole motion period — record longer, or check that the table moves"
         )
     n = available if periods is None else periods
     if n > available:
@@ -321,7 +327,8 @@ def calibrate_encoder_motion(
     # demodulate checks the samples (lengths, NaN, time order, clipping, quadrature).
     demod = demodulate(t, a, b, int(lines), correction=correction, max_points=_ELLIPSE_POINTS)
     t, a, b = demod.time_s, np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    first, last, n = _cut(demod.reversals.indices, periods, "encoder capture")
+    span = demod.angle_max_deg - demod.angle_min_deg
+    first, last, n = _cut(demod.reversals.indices, periods, "encoder capture", span)
     angle = demod.angle_deg
     seg = slice(first, last + 1)
     f0 = n / (t[last] - t[first])
@@ -476,7 +483,7 @@ def calibrate_lts_motion(
     angle = np.degrees(np.arctan(d / radius_mm))
     rev_times = extreme_reversals(t, angle)
     rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
-    first, last, n = _cut(rev_idx, periods, "LTS capture")
+    first, last, n = _cut(rev_idx, periods, "LTS capture", float(np.ptp(angle)))
     seg = slice(first, last + 1)
     f0 = n / (rev_times[2 * n] - rev_times[0])
     fit = fit_harmonics(t[seg], angle[seg], frequency_hz=f0, harmonics=harmonics)

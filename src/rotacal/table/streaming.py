@@ -260,6 +260,7 @@ class _Demod:
     plot_angle: np.ndarray
     plot_a: np.ndarray
     plot_b: np.ndarray
+    span_deg: float  # max θ − min θ over the capture
 
 
 def _pass_phase(passes: _Passes, n: int, corr: QuadratureCorrection, scale: float) -> _Demod:
@@ -272,6 +273,7 @@ def _pass_phase(passes: _Passes, n: int, corr: QuadratureCorrection, scale: floa
     trans_k: list[np.ndarray] = []
     states: list[PhaseState | None] = []
     dec: dict[str, list[np.ndarray]] = {"t": [], "angle": [], "a": [], "b": []}
+    lo, hi = math.inf, -math.inf
     for _, off, cols in passes.run():
         states.append(state)
         u, v = correct_quadrature(cols["a"], cols["b"], corr)
@@ -290,6 +292,7 @@ def _pass_phase(passes: _Passes, n: int, corr: QuadratureCorrection, scale: floa
         dec["angle"].append(phase[s0::step] * scale)
         dec["a"].append(np.array(cols["a"][s0::step]))
         dec["b"].append(np.array(cols["b"][s0::step]))
+        lo, hi = min(lo, float(phase.min())), max(hi, float(phase.max()))
         del phase
     all_idx = np.concatenate(trans_idx)
     del trans_idx
@@ -303,6 +306,7 @@ def _pass_phase(passes: _Passes, n: int, corr: QuadratureCorrection, scale: floa
         plot_angle=np.concatenate(dec["angle"]),
         plot_a=np.concatenate(dec["a"]),
         plot_b=np.concatenate(dec["b"]),
+        span_deg=(hi - lo) * scale,
     )
 
 
@@ -475,7 +479,7 @@ def calibrate_encoder_motion_chunked(
     corr = _pass_correction(passes, n)
     demod = _pass_phase(passes, n, corr, scale)
     rev_idx, rev_times = _pass_reversals(passes, n, corr, demod.plan)
-    first, last, n_periods = _cut(rev_idx, periods, "encoder capture")
+    first, last, n_periods = _cut(rev_idx, periods, "encoder capture", demod.span_deg)
     t_first, t_last = rev_times[0], rev_times[2 * n_periods]
     f0 = n_periods / (t_last - t_first)
     n_seg = last + 1 - first
