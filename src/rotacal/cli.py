@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import sys
 import warnings
@@ -390,6 +391,20 @@ def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: An
 
 # -------------------------------------------------------------------------------------------- simulate
 _SIM_KINDS = ["encoder", "lts", "fog"]
+#: Sensor options of `rotacal simulate` and the kinds they apply to.
+_SIM_SENSOR_OPTIONS = {
+    "lines": ("encoder",),
+    "offset_a": ("encoder",),
+    "offset_b": ("encoder",),
+    "gain_ratio": ("encoder",),
+    "phase_error_deg": ("encoder",),
+    "adc_bits": ("encoder",),
+    "radius_mm": ("lts",),
+    "zero_offset_mm": ("lts",),
+    "bias_deg_s": ("fog",),
+    "snr_db": ("fog",),
+}
+_SIM_RENAME = {"gain_ratio": "amplitude_b"}
 
 
 @cli.command()
@@ -407,6 +422,7 @@ _SIM_KINDS = ["encoder", "lts", "fog"]
     help="Add harmonic H with amplitude REL×fundamental (and phase, rad). Repeatable.",
 )
 @click.option("--stagnation-s", type=float, default=0.0, show_default=True)
+@click.option("--creep-deg", type=float, default=0.0, show_default=True)
 @click.option("--backlash-deg", type=float, default=0.0, show_default=True)
 @click.option("--vibration-deg", type=float, default=0.0, show_default=True)
 @click.option("--vibration-hz", type=float, default=0.0, show_default=True)
@@ -414,9 +430,14 @@ _SIM_KINDS = ["encoder", "lts", "fog"]
     "--duration-s", type=float, default=None, help="Length of the capture [default: ~6 periods]."
 )
 @click.option("--fs-hz", type=float, default=None, help="Sample rate [default: per sensor].")
-@click.option(
-    "--lines", type=int, default=36000, show_default=True, help="encoder: lines per revolution."
-)
+@click.option("--lines", type=int, default=None, help="encoder: lines per revolution [36000].")
+@click.option("--offset-a", type=float, default=None, help="encoder: offset of a (signal units).")
+@click.option("--offset-b", type=float, default=None, help="encoder: offset of b (signal units).")
+@click.option("--gain-ratio", type=float, default=None, help="encoder: amplitude of b over a.")
+@click.option("--phase-error-deg", type=float, default=None, help="encoder: quadrature error.")
+@click.option("--adc-bits", type=int, default=None, help="encoder: quantise to this many bits.")
+@click.option("--zero-offset-mm", type=float, default=None, help="lts: reading at θ = 0 (mm).")
+@click.option("--bias-deg-s", type=float, default=None, help="fog: constant rate bias.")
 @click.option(
     "--noise",
     type=float,
@@ -426,7 +447,7 @@ _SIM_KINDS = ["encoder", "lts", "fog"]
 @click.option(
     "--snr-db", type=float, default=None, help="fog: noise set by this SNR instead of --noise."
 )
-@click.option("--radius-mm", type=float, default=100.0, show_default=True, help="lts: R.")
+@click.option("--radius-mm", type=float, default=None, help="lts: R [100 mm].")
 @click.option("--seed", type=int, default=0, show_default=True)
 @click.option("--overwrite", is_flag=True, help="Replace FILE if it exists.")
 def simulate(
@@ -435,8 +456,10 @@ def simulate(
     """Write a synthetic capture of KIND with its truth beside it (FILE.truth.json)."""
     from rotacal import sim
 
-    if kind != "fog" and kw["snr_db"] is not None:
-        raise ConfigError(f"--snr-db applies to the fog kind only; use --noise for {kind}")
+    for option, kinds in _SIM_SENSOR_OPTIONS.items():
+        if kw[option] is not None and kind not in kinds:
+            flag = "--" + option.replace("_", "-")
+            raise ConfigError(f"{flag} applies to the {'/'.join(kinds)} kind only, not {kind}")
     if kw["snr_db"] is not None and kw["noise"] is not None:
         raise ConfigError("give --noise or --snr-db, not both")
     harmonics: dict[int, tuple[float, float]] = {}
@@ -455,6 +478,7 @@ def simulate(
         frequency_hz=kw.pop("frequency_hz"),
         harmonics=harmonics,
         stagnation_s=kw.pop("stagnation_s"),
+        creep_deg=kw.pop("creep_deg"),
         backlash_deg=kw.pop("backlash_deg"),
         vibration_deg=kw.pop("vibration_deg"),
         vibration_hz=kw.pop("vibration_hz"),
@@ -462,20 +486,13 @@ def simulate(
     options: dict[str, Any] = {"duration_s": kw["duration_s"], "seed": kw["seed"]}
     if kw["fs_hz"] is not None:
         options["fs_hz"] = kw["fs_hz"]
-    noise = kw["noise"]
-    if kind == "encoder":
-        options["lines"] = kw["lines"]
-        if noise is not None:
-            options["noise_rms"] = noise
-    elif kind == "lts":
-        options["radius_mm"] = kw["radius_mm"]
-        if noise is not None:
-            options["noise_mm"] = noise
-    else:
-        if kw["snr_db"] is not None:
-            options["snr_db"] = kw["snr_db"]
-        elif noise is not None:
-            options["noise_deg_s"] = noise
+    noise_name = {"encoder": "noise_rms", "lts": "noise_mm", "fog": "noise_deg_s"}[kind]
+    given = {_SIM_RENAME.get(k, k): v for k, v in kw.items() if k in _SIM_SENSOR_OPTIONS}
+    options.update({k: v for k, v in given.items() if v is not None})
+    if kw["noise"] is not None:
+        options[noise_name] = kw["noise"]
+    if "phase_error_deg" in options:
+        options["phase_error_rad"] = math.radians(options.pop("phase_error_deg"))
     capture = sim.simulate(kind, motion=motion_, **options)
     path = capture.write(out, overwrite=overwrite)
     click.echo(f"wrote {path} and {path}.truth.json", err=True)
