@@ -131,6 +131,22 @@ def _plot_stride(n: int) -> int:
     return max(1, n // _PLOT_POINTS)
 
 
+def _displacement_plot(
+    t: np.ndarray, angle: np.ndarray, seg: slice, fit: SineFit
+) -> dict[str, Any]:
+    """Decimated copies for the figures: the whole record, and the fit's residual over ``seg``."""
+    step = _plot_stride(t.size)
+    t_seg = t[seg][:: _plot_stride(angle[seg].size)]
+    a_seg = angle[seg][:: _plot_stride(angle[seg].size)]
+    return {
+        "t": t[::step],
+        "angle_deg": angle[::step],
+        "t_used": t_seg,
+        "residual_deg": a_seg - fit.evaluate(t_seg),  # the model only where it is plotted: fast
+        "unit": "deg",
+    }
+
+
 def _check_settings(harmonics: int, periods: int | None) -> None:
     if harmonics < 1:
         raise ConfigError(f"--harmonics must be at least 1, got {harmonics}")
@@ -335,17 +351,12 @@ def calibrate_encoder_motion(
     fit = fit_harmonics(t[seg], angle[seg], frequency_hz=f0, harmonics=harmonics)
     notes = [f"quadrature correction: {demod.correction.method}"]
     step = _plot_stride(t.size)
-    seg_step = _plot_stride(last + 1 - first)
-    plot: dict[str, Any] = {
-        "t": t[::step],
-        "angle_deg": angle[::step],
-        "t_used": t[seg][::seg_step],
-        "residual_deg": angle[seg][::seg_step] - fit.evaluate(t[seg][::seg_step]),
+    plot = {
+        **_displacement_plot(t, angle, seg, fit),
         "reversal_kinds": demod.reversals.kinds,
         "lissajous_raw": (a[::step], b[::step]),
         "lissajous_corrected": correct_quadrature(a[::step], b[::step], demod.correction),
         "correction": demod.correction,
-        "unit": "deg",
     }
     return _finish(
         scheme="encoder",
@@ -487,15 +498,7 @@ def calibrate_lts_motion(
     seg = slice(first, last + 1)
     f0 = n / (rev_times[2 * n] - rev_times[0])
     fit = fit_harmonics(t[seg], angle[seg], frequency_hz=f0, harmonics=harmonics)
-    step = _plot_stride(t.size)
-    seg_step = _plot_stride(last + 1 - first)
-    plot = {
-        "t": t[::step],
-        "angle_deg": angle[::step],
-        "t_used": t[seg][::seg_step],
-        "residual_deg": angle[seg][::seg_step] - fit.evaluate(t[seg][::seg_step]),
-        "unit": "deg",
-    }
+    plot = _displacement_plot(t, angle, seg, fit)
     return _finish(
         scheme="lts",
         fit=fit,
