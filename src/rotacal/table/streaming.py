@@ -55,7 +55,7 @@ from rotacal.encoder import (
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.io import iter_capture_chunks
 from rotacal.signal import HarmonicFitAccumulator, SineFit, fit_harmonics
-from rotacal.signal._checks import MAX_GAP, gap_error
+from rotacal.signal._checks import MAX_GAP, TYPICAL_STEPS, gap_error
 from rotacal.table.motion import (
     _ELLIPSE_POINTS,
     MotionResult,
@@ -209,7 +209,7 @@ def _pass_check(passes: _Passes) -> int:
                     i = int(steps[0])
                     order = (off + i + 1, t[i], t[i + 1])
         if typical is None and t.size > 1:
-            typical = float(np.median(np.diff(t)))
+            typical = float(np.median(np.diff(t[: TYPICAL_STEPS + 1])))
         if gap is None and typical is not None:
             joined = t if last_t is None else np.concatenate(([last_t], t))
             steps = np.diff(joined)
