@@ -312,6 +312,13 @@ def _print_motion(r: Any) -> None:
 @click.argument("capture", type=click.Path(dir_okay=False))
 @click.option("--lines", type=int, required=True, help="Encoder lines per revolution (e.g. 36000).")
 @click.option(
+    "--correction-from",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Fit the Heydemann correction on this capture (time_s, a, b with more motion, same "
+    "encoder and electronics) instead of on CAPTURE: for motions shorter than a signal period.",
+)
+@click.option(
     "--chunked/--in-memory",
     default=None,
     help="Stream the capture in chunks (flat memory) or load it whole "
@@ -321,6 +328,7 @@ def _print_motion(r: Any) -> None:
 def motion_encoder(
     capture: str,
     lines: int,
+    correction_from: str | None,
     chunked: bool | None,
     columns: Sequence[str],
     group: str | None,
@@ -337,6 +345,16 @@ def motion_encoder(
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     mapping = parse_column_mapping(columns)
+    if correction_from is not None:
+        from rotacal.encoder import fit_quadrature_correction
+
+        ref = _read(correction_from, ["a", "b"], columns, group)
+        kw["correction"] = fit_quadrature_correction(ref["a"], ref["b"])
+        if kw["correction"].method != "heydemann":
+            raise CaptureError(
+                f"--correction-from {correction_from} covers only part of a signal period too; "
+                "record the reference with the table turning through several signal periods"
+            )
     if chunked is None:
         chunked = (
             capture_length(capture, "a", mapping=mapping, group=group) > _IN_MEMORY_MAX_SAMPLES

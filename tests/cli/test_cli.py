@@ -320,3 +320,65 @@ def test_chunked_path_gives_the_in_memory_answer(encoder_capture):
     chunked = json.loads(streamed.stdout)
     assert chunked["reversal_times_s"] == whole["reversal_times_s"]
     assert chunked["thd_percent"] == pytest.approx(whole["thd_percent"], rel=1e-9)
+
+
+def test_correction_from_another_capture_serves_a_motion_shorter_than_a_signal_period(tmp_path):
+    """0.002° with 36 000 lines is 144° of the signal period: too short an arc for Heydemann."""
+    small, big = tmp_path / "small.npz", tmp_path / "big.npz"
+    errors = ["--offset-a", "0.03", "--gain-ratio", "0.97", "--phase-error-deg", "1.5"]
+    assert (
+        run(
+            "simulate",
+            "encoder",
+            "--amplitude-deg",
+            "0.002",
+            "--frequency-hz",
+            "5",
+            "--harmonic",
+            "3:0.02",
+            *errors,
+            "--out",
+            str(small),
+        ).exit_code
+        == 0
+    )
+    assert (
+        run(
+            "simulate",
+            "encoder",
+            "--amplitude-deg",
+            "0.05",
+            "--frequency-hz",
+            "1",
+            *errors,
+            "--out",
+            str(big),
+        ).exit_code
+        == 0
+    )
+    truth = json.loads(Path(str(small) + ".truth.json").read_text())
+    alone = run("motion", "encoder", str(small), "--lines", "36000", "--json", "-")
+    assert alone.exit_code == 0 and "partial period" in alone.stderr
+    assert alone.stderr.startswith("rotacal: warning:") and alone.stderr.count("\n") == 1
+    for mode in ("--in-memory", "--chunked"):
+        r = run(
+            "motion",
+            "encoder",
+            str(small),
+            "--lines",
+            "36000",
+            "--correction-from",
+            str(big),
+            "--json",
+            "-",
+            mode,
+        )
+        assert r.exit_code == 0, r.stderr
+        d = json.loads(r.stdout)
+        assert d["amplitude_deg"] == pytest.approx(truth["amplitude_deg"], rel=2e-4)
+        assert d["thd_percent"] == pytest.approx(truth["thd_percent"], abs=0.02)
+    # the reference must itself cover whole signal periods
+    assert_one_line_error(
+        run("motion", "encoder", str(big), "--lines", "36000", "--correction-from", str(small)),
+        "--correction-from",
+    )

@@ -467,7 +467,8 @@ def _fit(aa: FloatArray, bb: FloatArray, max_points: int) -> QuadratureCorrectio
     raise CaptureError(
         "columns 'a' and 'b' do not trace an arc of an ellipse: either they are not in quadrature "
         "(a ≈ ±b) or the motion covers less than 1/8 of a signal period; check the columns, or "
-        "fit the correction on a capture with more motion and pass it as correction=."
+        "fit the correction on a capture with more motion (--correction-from in the CLI, "
+        "correction= in Python)."
     )
 
 

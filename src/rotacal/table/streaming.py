@@ -413,6 +413,7 @@ def calibrate_encoder_motion_chunked(
     periods: int | None = None,
     set_amplitude_deg: float | None = None,
     set_frequency_hz: float | None = None,
+    correction: QuadratureCorrection | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from an encoder capture read in chunks (flat memory).
@@ -440,6 +441,8 @@ def calibrate_encoder_motion_chunked(
         Whole motion periods to analyse (default: all the capture holds).
     set_amplitude_deg, set_frequency_hz : float, optional
         The table's set values (deg, Hz).
+    correction : QuadratureCorrection, optional
+        A known correction instead of fitting one (skips that pass).
     progress : callable, optional
         Called after each chunk with the number of samples processed so far, summed over the
         passes (at most 6·N for a capture of N samples; passes 4–6 read only what they need).
@@ -476,7 +479,7 @@ def calibrate_encoder_motion_chunked(
     scale = 360.0 / (_TWO_PI * float(lines))
 
     n = _pass_check(passes)
-    corr = _pass_correction(passes, n)
+    corr = correction if correction is not None else _pass_correction(passes, n)
     demod = _pass_phase(passes, n, corr, scale)
     rev_idx, rev_times = _pass_reversals(passes, n, corr, demod.plan)
     first, last, n_periods = _cut(rev_idx, periods, "encoder capture", demod.span_deg)
