@@ -292,6 +292,7 @@ def test_json_and_report_cannot_share_a_file(encoder_capture, tmp_path):
         (["fog", "--harmonic", "3:0.1", "--harmonic", "3:0.2"], "twice"),
         (["lts", "--bias-deg-s", "1"], "fog kind only"),
         (["fog", "--adc-bits", "12"], "encoder kind only"),
+        (["fog", "--harmonic", "3000:0.1"], "nyquist"),
     ],
 )
 def test_simulate_refuses_options_it_would_ignore(tmp_path, args, needle):

@@ -121,6 +121,15 @@ def _time_axis(
     fs = _finite("fs_hz", fs_hz)
     if fs <= 0:
         raise ConfigError(f"fs_hz must be > 0 Hz, got {fs_hz!r}.")
+    # A line at or above Nyquist would alias into a different motion than the truth describes.
+    lines_hz = [h * motion.frequency_hz for h in (1, *motion.harmonics)]
+    if motion.vibration_deg > 0:
+        lines_hz.append(motion.vibration_hz)
+    if max(lines_hz) >= fs / 2:
+        raise ConfigError(
+            f"the motion has a line at {max(lines_hz):.6g} Hz, at or above the Nyquist frequency "
+            f"{fs / 2:.6g} Hz of fs_hz={fs:.6g}: raise fs_hz or drop that harmonic."
+        )
     dur = default_duration_s(motion) if duration_s is None else _finite("duration_s", duration_s)
     if dur <= 0:
         raise ConfigError(f"duration_s must be > 0 s, got {duration_s!r}.")
