@@ -355,12 +355,10 @@ def motion_encoder(
                 f"--correction-from {correction_from} covers only part of a signal period too; "
                 "record the reference with the table turning through several signal periods"
             )
+    n = capture_length(capture, "a", mapping=mapping, group=group)
     if chunked is None:
-        chunked = (
-            capture_length(capture, "a", mapping=mapping, group=group) > _IN_MEMORY_MAX_SAMPLES
-        )
+        chunked = n > _IN_MEMORY_MAX_SAMPLES
     if chunked:
-        n = capture_length(capture, "a", mapping=mapping, group=group)
         source = encoder_chunks_from_file(capture, mapping=mapping, group=group)
         # the chunked calibration reads the capture in up to six passes
         with _sample_progress(6 * n, "calibrating (chunked)") as progress:

@@ -720,6 +720,21 @@ def _odd_runs(direction: NDArray[np.int8]) -> tuple[NDArray[np.intp], NDArray[np
     return starts[odd] + 1, lengths[odd]
 
 
+def _no_reversals(hyst: int, n_trans: int, skipped: int, max_step: int) -> ReversalPlan:
+    """The plan of a capture in which no reversing moment was found."""
+    no_windows = np.empty((0, 2), dtype=np.intp)
+    return ReversalPlan(
+        no_windows,
+        no_windows.copy(),
+        np.empty(0, dtype=np.int8),
+        0,
+        hyst,
+        n_trans,
+        skipped,
+        max_step,
+    )
+
+
 def _candidates(
     k_after: FloatArray, dk: FloatArray
 ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.int8], FloatArray]:
@@ -1006,32 +1021,12 @@ def plan_reversals(
     else:
         hyst = int(hysteresis_subintervals)
 
-    no_windows = np.empty((0, 2), dtype=np.intp)
     if n_trans < 2:
-        return ReversalPlan(
-            no_windows,
-            no_windows.copy(),
-            np.empty(0, dtype=np.int8),
-            0,
-            hyst,
-            n_trans,
-            skipped,
-            max_step,
-        )
-
+        return _no_reversals(hyst, n_trans, skipped, max_step)
     first_change, run_len, kinds, level = _candidates(ka, dk)
     n_cand = int(first_change.size)
     if n_cand == 0:
-        return ReversalPlan(
-            no_windows,
-            no_windows.copy(),
-            np.empty(0, dtype=np.int8),
-            0,
-            hyst,
-            n_trans,
-            skipped,
-            max_step,
-        )
+        return _no_reversals(hyst, n_trans, skipped, max_step)
 
     # rotacal's extension: clusters of candidates closer than the hysteresis.
     linked = np.abs(np.diff(level)) < hyst

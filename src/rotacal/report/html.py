@@ -13,7 +13,6 @@ from typing import Any
 import jinja2
 
 import rotacal
-from rotacal.errors import ConfigError
 
 __all__ = [
     "Figure",
@@ -124,14 +123,9 @@ def render_html(report: Report) -> str:
     return _TEMPLATE.render(report=report, version=rotacal.__version__, made=made, machine=machine)
 
 
-def write_html(report: Report, path: str | Path, *, protect: tuple[Path, ...] = ()) -> Path:
-    """Write the report; refuses to write over any of the ``protect`` paths (the user's inputs)."""
+def write_html(report: Report, path: str | Path) -> Path:
+    """Write the report (the CLI decides beforehand whether the path may be written)."""
     path = Path(path)
-    for p in protect:
-        if p.exists() and path.exists() and path.resolve() == p.resolve():
-            raise ConfigError(
-                f"--report {path} would overwrite the input file {p}; choose another name"
-            )
     if path.parent and not path.parent.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(render_html(report), encoding="utf-8")

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -629,8 +628,3 @@ def compare_schemes(reference: MotionResult, other: MotionResult) -> SchemeCompa
         / reference.frequency_hz,
         snr_db=other.snr_db if other.snr_db is not None else reference.snr_db,
     )
-
-
-def summarise(results: Sequence[MotionResult]) -> list[dict[str, Any]]:
-    """One JSON-ready dictionary per result (helper for batch output)."""
-    return [r.to_dict() for r in results]
