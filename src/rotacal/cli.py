@@ -405,79 +405,239 @@ def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: An
     _finish_motion(result, capture, json_path, report_path)
 
 
-# -------------------------------------------------------------------------------------------- simulate
-_SIM_KINDS = ["encoder", "lts", "fog"]
-#: Sensor options of `rotacal simulate` and the kinds they apply to.
-_SIM_SENSOR_OPTIONS = {
-    "lines": ("encoder",),
-    "offset_a": ("encoder",),
-    "offset_b": ("encoder",),
-    "gain_ratio": ("encoder",),
-    "phase_error_deg": ("encoder",),
-    "adc_bits": ("encoder",),
-    "radius_mm": ("lts",),
-    "zero_offset_mm": ("lts",),
-    "bias_deg_s": ("fog",),
-    "snr_db": ("fog",),
-}
-_SIM_RENAME = {"gain_ratio": "amplitude_b"}
+# ------------------------------------------------------------------------------ multi-head encoder
+def _read_heads(path: str, columns: Sequence[str], group: str | None) -> Any:
+    from rotacal.encoder.pulses import head_columns
+    from rotacal.io import parse_column_mapping, read_capture
+
+    with _status(f"reading {path}"):
+        cap = read_capture(path, mapping=parse_column_mapping(columns), group=group, ragged=True)
+    try:
+        return head_columns(cap.columns)
+    except CaptureError as e:
+        raise CaptureError(f"{Path(path).name}: {e}") from None
 
 
-@cli.command()
-@click.argument("kind", type=click.Choice(_SIM_KINDS))
-@click.option(
-    "--out", "out", required=True, type=click.Path(dir_okay=False), help="Capture file to write."
-)
-@click.option("--amplitude-deg", type=float, default=0.5, show_default=True)
-@click.option("--frequency-hz", type=float, default=2.0, show_default=True)
-@click.option(
-    "--harmonic",
-    "harmonic_items",
-    multiple=True,
-    metavar="H:REL[:PHASE]",
-    help="Add harmonic H with amplitude REL×fundamental (and phase, rad). Repeatable.",
-)
-@click.option("--stagnation-s", type=float, default=0.0, show_default=True)
-@click.option("--creep-deg", type=float, default=0.0, show_default=True)
-@click.option("--backlash-deg", type=float, default=0.0, show_default=True)
-@click.option("--vibration-deg", type=float, default=0.0, show_default=True)
-@click.option("--vibration-hz", type=float, default=0.0, show_default=True)
-@click.option(
-    "--duration-s", type=float, default=None, help="Length of the capture [default: ~6 periods]."
-)
-@click.option("--fs-hz", type=float, default=None, help="Sample rate [default: per sensor].")
-@click.option("--lines", type=int, default=None, help="encoder: lines per revolution [36000].")
-@click.option("--offset-a", type=float, default=None, help="encoder: offset of a (signal units).")
-@click.option("--offset-b", type=float, default=None, help="encoder: offset of b (signal units).")
-@click.option("--gain-ratio", type=float, default=None, help="encoder: amplitude of b over a.")
-@click.option("--phase-error-deg", type=float, default=None, help="encoder: quadrature error.")
-@click.option("--adc-bits", type=int, default=None, help="encoder: quantise to this many bits.")
-@click.option("--zero-offset-mm", type=float, default=None, help="lts: reading at θ = 0 (mm).")
-@click.option("--bias-deg-s", type=float, default=None, help="fog: constant rate bias.")
-@click.option(
-    "--noise",
-    type=float,
-    default=None,
-    help="Sensor noise (encoder: signal units; lts: mm; fog: deg/s).",
-)
-@click.option(
-    "--snr-db", type=float, default=None, help="fog: noise set by this SNR instead of --noise."
-)
-@click.option("--radius-mm", type=float, default=None, help="lts: R [100 mm].")
-@click.option("--seed", type=int, default=0, show_default=True)
-@click.option("--overwrite", is_flag=True, help="Replace FILE if it exists.")
-def simulate(
-    kind: str, out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any
+def _write_report(
+    title: str, subtitle: str, sections: list[Any], capture: str, report_path: str | None
 ) -> None:
-    """Write a synthetic capture of KIND with its truth beside it (FILE.truth.json)."""
+    if not report_path:
+        return
+    from rotacal.report.html import Report, write_html
+
+    report = Report(title=title, subtitle=subtitle, sections=sections, inputs={"capture": capture})
+    _refuse_overwrite(Path(report_path), (Path(capture),), "--report")
+    with _status("drawing the report"):
+        write_html(report, report_path)
+
+
+_PULSES_PER_REV = click.option(
+    "--pulses-per-rev", type=int, required=True, help="m: pulses per revolution of one head."
+)
+_SEED004 = "Kokuyama et al., angular velocity standard with a self-calibratable encoder (seed 004)"
+
+
+@cli.command("selfcal")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@_PULSES_PER_REV
+@click.option(
+    "--rotation",
+    type=click.Choice(["auto", "forward", "reverse"]),
+    default="auto",
+    show_default=True,
+    help="Whether head i lies i·360/n ahead of head 0 in the sense of rotation (forward).",
+)
+@_analysis_options
+def selfcal_cmd(
+    capture: str,
+    pulses_per_rev: int,
+    rotation: str,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Scale deviation of a multi-head encoder (columns head_0 … head_{n-1}: pulse times, s)."""
+    from rotacal.encoder.selfcal import self_calibrate
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    heads = _read_heads(capture, columns, group)
+    with _status("self-calibrating"):
+        result = self_calibrate(heads, pulses_per_rev=pulses_per_rev, rotation=rotation)  # type: ignore[arg-type]
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.pulses import selfcal_section
+
+        _write_report(
+            "Self-calibration of a multi-head encoder",
+            _SEED004 + " — equal-division-averaged method",
+            [selfcal_section(result)],
+            capture,
+            report_path,
+        )
+    if json_path is None and report_path is None:
+        click.echo(f"heads x pulses/rev    {result.heads} x {result.pulses_per_rev}")
+        click.echo(f"revolutions averaged  {result.revolutions_used}")
+        click.echo(f"deviation p-p         {result.deviation_pp_arcsec:.4g} arcsec")
+        click.echo(f"deviation rms         {result.deviation_rms_arcsec:.4g} arcsec")
+        if result.repeatability_rms_arcsec is not None:
+            click.echo(f"repeatability rms     {result.repeatability_rms_arcsec:.3g} arcsec")
+        click.echo(f"closure residual rms  {result.closure_residual_rms_arcsec:.3g} arcsec")
+        click.echo(f"note                  {result.undetectable_harmonics_note}")
+        for note in result.notes:
+            click.echo(f"note                  {note}")
+
+
+@cli.command("rate")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@_PULSES_PER_REV
+@click.option(
+    "--selfcal",
+    "selfcal_path",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="A `rotacal selfcal --json` result to compensate with [default: self-calibrate CAPTURE "
+    "when it has several heads].",
+)
+@click.option(
+    "--head", default="0", show_default=True, help="Head whose pulses give the rate, or 'all'."
+)
+@click.option(
+    "--average", type=int, default=10, show_default=True, help="Pulse intervals per rate point."
+)
+@click.option("--set-rate-deg-s", type=float, default=None, help="Commanded rate, for the bias.")
+@click.option("--no-compensation", is_flag=True, help="Use the nominal pitch only.")
+@_analysis_options
+def rate_cmd(
+    capture: str,
+    pulses_per_rev: int,
+    selfcal_path: str | None,
+    head: str,
+    average: int,
+    set_rate_deg_s: float | None,
+    no_compensation: bool,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Angular velocity from pulse timing: mean, bias, stability, root Allan variance vs angle."""
+    from rotacal.table.rate import calibrate_rate
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    selfcal: Any = None
+    if selfcal_path is not None:
+        try:
+            selfcal = json.loads(Path(selfcal_path).read_text(encoding="utf-8"))
+        except OSError as e:
+            raise ConfigError(f"--selfcal {selfcal_path}: cannot read it ({e.strerror})") from None
+        except json.JSONDecodeError as e:
+            raise ConfigError(
+                f"--selfcal {selfcal_path} is not JSON ({e.msg}, line {e.lineno})"
+            ) from None
+        if not isinstance(selfcal, dict):
+            raise ConfigError(f"--selfcal {selfcal_path} is not a `rotacal selfcal --json` result")
+    heads = _read_heads(capture, columns, group)
+    with _status("timing the pulses"):
+        result = calibrate_rate(
+            heads,
+            pulses_per_rev=pulses_per_rev,
+            selfcal=selfcal,
+            head=head,
+            average=average,
+            set_rate_deg_s=set_rate_deg_s,
+            compensate=not no_compensation,
+        )
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.pulses import rate_section, selfcal_section
+
+        sections = [rate_section(result)]
+        if result.selfcal is not None:
+            sections.append(selfcal_section(result.selfcal))
+        _write_report(
+            "Angular-velocity stability of a rate table", _SEED004, sections, capture, report_path
+        )
+    if json_path is None and report_path is None:
+        click.echo(f"mean rate          {result.mean_rate_deg_s:.7f} deg/s ({result.head})")
+        if result.rate_bias_percent is not None:
+            click.echo(
+                f"bias               {result.rate_bias_deg_s:+.3g} deg/s "
+                f"({result.rate_bias_percent:+.3g} %)"
+            )
+        click.echo(
+            f"rate deviation     rms {result.rate_deviation_rms_percent:.3g} %, "
+            f"peak {result.rate_deviation_peak_percent:.3g} %"
+            + (" (compensated)" if result.compensated else "")
+        )
+        for phi, s in zip(result.allan_angle_deg, result.allan_relative, strict=True):
+            if (
+                abs(math.log10(phi)) < 0.04
+                or abs(math.log10(phi / 10)) < 0.04
+                or abs(math.log10(phi / 360)) < 0.01
+            ):
+                click.echo(f"s({phi:.4g} deg)".ljust(19) + f"{100 * s:.3g} %")
+        for note in result.notes:
+            click.echo(f"note               {note}")
+
+
+# -------------------------------------------------------------------------------------------- simulate
+@cli.group()
+def simulate() -> None:
+    """Write a synthetic capture of a kind, with its truth beside it (FILE.truth.json)."""
+
+
+def _sim_common(func: F) -> F:
+    options = [
+        click.option(
+            "--out",
+            "out",
+            required=True,
+            type=click.Path(dir_okay=False),
+            help="Capture file to write (.csv, .npz, .h5, .tdms).",
+        ),
+        click.option("--seed", type=int, default=0, show_default=True),
+        click.option("--overwrite", is_flag=True, help="Replace FILE if it exists."),
+    ]
+    for option in reversed(options):
+        func = option(func)
+    return func
+
+
+def _motion_sim_options(func: F) -> F:
+    options = [
+        click.option("--amplitude-deg", type=float, default=0.5, show_default=True),
+        click.option("--frequency-hz", type=float, default=2.0, show_default=True),
+        click.option(
+            "--harmonic",
+            "harmonic_items",
+            multiple=True,
+            metavar="H:REL[:PHASE]",
+            help="Add harmonic H with amplitude REL×fundamental (and phase, rad). Repeatable.",
+        ),
+        click.option("--stagnation-s", type=float, default=0.0, show_default=True),
+        click.option("--creep-deg", type=float, default=0.0, show_default=True),
+        click.option("--backlash-deg", type=float, default=0.0, show_default=True),
+        click.option("--vibration-deg", type=float, default=0.0, show_default=True),
+        click.option("--vibration-hz", type=float, default=0.0, show_default=True),
+        click.option(
+            "--duration-s",
+            type=float,
+            default=None,
+            help="Length of the capture [default: ~6 periods].",
+        ),
+        click.option(
+            "--fs-hz", type=float, default=None, help="Sample rate [default: per sensor]."
+        ),
+    ]
+    for option in reversed(options):
+        func = option(func)
+    return _sim_common(func)
+
+
+def _sim_motion(kind: str, harmonic_items: Sequence[str], kw: dict[str, Any]) -> Any:
     from rotacal import sim
 
-    for option, kinds in _SIM_SENSOR_OPTIONS.items():
-        if kw[option] is not None and kind not in kinds:
-            flag = "--" + option.replace("_", "-")
-            raise ConfigError(f"{flag} applies to the {'/'.join(kinds)} kind only, not {kind}")
-    if kw["snr_db"] is not None and kw["noise"] is not None:
-        raise ConfigError("give --noise or --snr-db, not both")
     harmonics: dict[int, tuple[float, float]] = {}
     for item in harmonic_items:
         parts = item.split(":")
@@ -499,19 +659,95 @@ def simulate(
         vibration_deg=kw.pop("vibration_deg"),
         vibration_hz=kw.pop("vibration_hz"),
     )
-    options: dict[str, Any] = {"duration_s": kw["duration_s"], "seed": kw["seed"]}
-    if kw["fs_hz"] is not None:
-        options["fs_hz"] = kw["fs_hz"]
-    noise_name = {"encoder": "noise_rms", "lts": "noise_mm", "fog": "noise_deg_s"}[kind]
-    given = {_SIM_RENAME.get(k, k): v for k, v in kw.items() if k in _SIM_SENSOR_OPTIONS}
-    options.update({k: v for k, v in given.items() if v is not None})
-    if kw["noise"] is not None:
-        options[noise_name] = kw["noise"]
-    if "phase_error_deg" in options:
-        options["phase_error_rad"] = math.radians(options.pop("phase_error_deg"))
-    capture = sim.simulate(kind, motion=motion_, **options)
+    options = {k: v for k, v in kw.items() if v is not None}
+    return sim.simulate(kind, motion=motion_, **options)
+
+
+def _sim_write(capture: Any, out: str, overwrite: bool) -> None:
     path = capture.write(out, overwrite=overwrite)
     click.echo(f"wrote {path} and {path}.truth.json", err=True)
+
+
+@simulate.command("encoder")
+@_motion_sim_options
+@click.option("--lines", type=int, default=None, help="Lines per revolution [36000].")
+@click.option("--offset-a", type=float, default=None, help="Offset of a (signal units).")
+@click.option("--offset-b", type=float, default=None, help="Offset of b (signal units).")
+@click.option("--gain-ratio", type=float, default=None, help="Amplitude of b over a.")
+@click.option("--phase-error-deg", type=float, default=None, help="Quadrature error (deg).")
+@click.option("--adc-bits", type=int, default=None, help="Quantise to this many bits.")
+@click.option("--noise", type=float, default=None, help="Signal noise, rms (signal units).")
+def simulate_encoder(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any) -> None:
+    """Quadrature encoder capture: time_s, a, b."""
+    kw["amplitude_b"] = kw.pop("gain_ratio")
+    kw["noise_rms"] = kw.pop("noise")
+    phase = kw.pop("phase_error_deg")
+    kw["phase_error_rad"] = None if phase is None else math.radians(phase)
+    _sim_write(_sim_motion("encoder", harmonic_items, kw), out, overwrite)
+
+
+@simulate.command("lts")
+@_motion_sim_options
+@click.option("--radius-mm", type=float, default=None, help="R [100 mm].")
+@click.option("--zero-offset-mm", type=float, default=None, help="Reading at θ = 0 (mm).")
+@click.option("--noise", type=float, default=None, help="Displacement noise, rms (mm).")
+def simulate_lts(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any) -> None:
+    """Laser triangulation capture: time_s, displacement_mm."""
+    kw["noise_mm"] = kw.pop("noise")
+    _sim_write(_sim_motion("lts", harmonic_items, kw), out, overwrite)
+
+
+@simulate.command("fog")
+@_motion_sim_options
+@click.option("--bias-deg-s", type=float, default=None, help="Constant rate bias.")
+@click.option("--noise", type=float, default=None, help="Rate noise, rms (deg/s).")
+@click.option("--snr-db", type=float, default=None, help="Noise set by this SNR instead.")
+def simulate_fog(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any) -> None:
+    """FOG capture: time_s, rate_deg_s."""
+    if kw["snr_db"] is not None and kw["noise"] is not None:
+        raise ConfigError("give --noise or --snr-db, not both")
+    kw["noise_deg_s"] = kw.pop("noise")
+    _sim_write(_sim_motion("fog", harmonic_items, kw), out, overwrite)
+
+
+@simulate.command("pulses")
+@_sim_common
+@click.option("--heads", type=int, default=12, show_default=True, help="n read heads.")
+@click.option("--pulses-per-rev", type=int, default=18000, show_default=True, help="m lines.")
+@click.option("--rate-deg-s", type=float, default=300.0, show_default=True, help="Set rate.")
+@click.option("--revolutions", type=float, default=3.0, show_default=True)
+@click.option(
+    "--harmonic",
+    "harmonic_items",
+    multiple=True,
+    metavar="ORDER:ARCSEC[:PHASE]",
+    help="Scale deviation harmonic (order 1 = eccentricity) [default: the twin's set]. Repeatable.",
+)
+@click.option("--graduation-noise-arcsec", type=float, default=0.03, show_default=True)
+@click.option("--head-placement-arcsec", type=float, default=5.0, show_default=True)
+@click.option("--rate-bias-percent", type=float, default=0.0, show_default=True)
+@click.option("--rate-fluctuation-percent", type=float, default=0.01, show_default=True)
+@click.option("--jitter-s", type=float, default=1e-9, show_default=True)
+def simulate_pulses_cmd(
+    out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any
+) -> None:
+    """Multi-head encoder: pulse times head_0 … head_{n-1} (seed 004)."""
+    from rotacal.sim.pulses import simulate_pulses
+
+    if harmonic_items:
+        harmonics = []
+        for item in harmonic_items:
+            parts = item.split(":")
+            try:
+                order, amp = int(parts[0]), float(parts[1])
+                phase = float(parts[2]) if len(parts) > 2 else 0.0
+            except (ValueError, IndexError):
+                raise ConfigError(
+                    f"--harmonic {item!r} is not ORDER:ARCSEC[:PHASE], e.g. 1:3.0"
+                ) from None
+            harmonics.append((order, amp, phase))
+        kw["harmonics"] = tuple(harmonics)
+    _sim_write(simulate_pulses(**kw), out, overwrite)
 
 
 # ------------------------------------------------------------------------------------------------ demo

@@ -290,8 +290,9 @@ def test_json_and_report_cannot_share_a_file(encoder_capture, tmp_path):
         (["lts", "--snr-db", "10"], "--snr-db"),
         (["fog", "--snr-db", "10", "--noise", "0.1"], "not both"),
         (["fog", "--harmonic", "3:0.1", "--harmonic", "3:0.2"], "twice"),
-        (["lts", "--bias-deg-s", "1"], "fog kind only"),
-        (["fog", "--adc-bits", "12"], "encoder kind only"),
+        (["lts", "--bias-deg-s", "1"], "no such option '--bias-deg-s'"),
+        (["fog", "--adc-bits", "12"], "rotacal simulate fog --help"),
+        (["pulses", "--amplitude-deg", "1"], "no such option"),
         (["fog", "--harmonic", "3000:0.1"], "nyquist"),
     ],
 )

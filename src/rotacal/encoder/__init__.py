@@ -1,5 +1,15 @@
-"""rotacal.encoder — angle from sensors: quadrature demodulation and reversals (seed 000)."""
+"""rotacal.encoder — angle from sensors: quadrature demodulation and reversals (seed 000), pulse
+timing and the self-calibration of a multi-head encoder (seed 004)."""
 
+from rotacal.encoder.pulses import (
+    HeadPairing,
+    check_pulse_times,
+    head_columns,
+    pair_heads,
+    pulse_angle_deg,
+    pulse_rate,
+    whole_revolution_rate,
+)
 from rotacal.encoder.quadrature import (
     Demodulation,
     PhaseState,
@@ -22,26 +32,43 @@ from rotacal.encoder.quadrature import (
     subintervals,
     unwrapped_phase,
 )
+from rotacal.encoder.selfcal import (
+    SelfCalibration,
+    head_shifts,
+    self_calibrate,
+    undetectable_orders,
+)
 
 __all__ = [
     "Demodulation",
+    "HeadPairing",
     "PhaseState",
     "QuadratureCorrection",
     "ReversalPlan",
     "Reversals",
+    "SelfCalibration",
     "SubdivisionWarning",
     "angle_deg",
+    "check_pulse_times",
     "correct_quadrature",
     "demodulate",
     "find_reversals",
     "fit_quadrature_correction",
+    "head_columns",
+    "head_shifts",
     "intercept_periods",
+    "pair_heads",
     "plan_reversals",
+    "pulse_angle_deg",
+    "pulse_rate",
     "reversal_point_in_window",
     "reversal_window",
     "reversing_subintervals",
     "rotation_direction",
+    "self_calibrate",
     "subinterval_transitions",
     "subintervals",
+    "undetectable_orders",
     "unwrapped_phase",
+    "whole_revolution_rate",
 ]

@@ -5,6 +5,7 @@ rotacal.results (``SimCapture.write`` imports ``rotacal.io`` lazily).
 """
 
 from rotacal.sim.motion import SineMotion
+from rotacal.sim.pulses import simulate_pulses, table_angle_deg, table_rate_deg_s
 from rotacal.sim.scenarios import (
     FOG_NOISE_DENSITY_DEG_S_RT_HZ,
     HARMONIC_SHAPE,
@@ -33,5 +34,8 @@ __all__ = [
     "simulate_encoder",
     "simulate_fog",
     "simulate_lts",
+    "simulate_pulses",
     "table1_scenarios",
+    "table_angle_deg",
+    "table_rate_deg_s",
 ]

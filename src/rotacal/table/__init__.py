@@ -1,4 +1,4 @@
-"""Rotary-table calibrations: sinusoidal motion (seed 000)."""
+"""Rotary-table calibrations: sinusoidal motion (seed 000), constant rate (seed 004)."""
 
 from rotacal.table.motion import (
     MotionResult,
@@ -10,15 +10,20 @@ from rotacal.table.motion import (
     extreme_reversals,
     position_error,
 )
+from rotacal.table.rate import RateResult, align_deviation, allan_versus_angle, calibrate_rate
 from rotacal.table.streaming import calibrate_encoder_motion_chunked, encoder_chunks_from_file
 
 __all__ = [
     "MotionResult",
+    "RateResult",
     "SchemeComparison",
+    "align_deviation",
+    "allan_versus_angle",
     "calibrate_encoder_motion",
     "calibrate_encoder_motion_chunked",
     "calibrate_fog_motion",
     "calibrate_lts_motion",
+    "calibrate_rate",
     "compare_schemes",
     "encoder_chunks_from_file",
     "extreme_reversals",

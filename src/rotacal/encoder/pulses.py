@@ -1,0 +1,407 @@
+"""Angle and angular velocity from the time stamps of encoder pulse edges (Kokuyama et al., seed 004).
+
+A multi-head encoder capture holds, per read head, the time (s) of every successive pulse edge
+(INTERFACE.md: columns ``head_0`` … ``head_{n-1}``, head 0 the reference). Between two pulses the
+scale has turned by one pitch Δθ = 360/m (plus the scale's deviation), so the angle is a count and
+the angular velocity a pitch over a time difference — the seed's time-difference method (§5).
+
+This module checks pulse trains (finite, strictly increasing, no missing or extra pulse), pairs
+the heads at the same instant (never by pulse index: heads start at different times), builds the
+head-averaged time axis, and turns pulse times into angle and rate. The self-calibration itself is
+in :mod:`rotacal.encoder.selfcal`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rotacal.errors import CaptureError, ConfigError
+
+__all__ = [
+    "HeadPairing",
+    "check_pulse_times",
+    "check_pulses_per_rev",
+    "head_columns",
+    "pair_heads",
+    "pulse_angle_deg",
+    "pulse_rate",
+    "whole_revolution_rate",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: An interval this many local pulse periods long (or longer) means missing pulses.
+MISSING_PULSE_RATIO = 1.5
+#: An interval this short (in local pulse periods) means a spurious extra edge.
+EXTRA_PULSE_RATIO = 0.5
+#: Intervals per block when estimating the local pulse period (robust to slow rate changes).
+_PERIOD_BLOCK = 64
+_HEAD_NAME = re.compile(r"^head_(\d+)$")
+
+
+def check_pulses_per_rev(pulses_per_rev: Any) -> int:
+    """Return ``pulses_per_rev`` as an int ≥ 2 or raise ConfigError."""
+    if isinstance(pulses_per_rev, bool) or not isinstance(pulses_per_rev, int | np.integer):
+        if isinstance(pulses_per_rev, float) and pulses_per_rev.is_integer():
+            pulses_per_rev = int(pulses_per_rev)
+        else:
+            raise ConfigError(
+                f"pulses_per_rev must be a whole number of pulses per revolution, "
+                f"got {pulses_per_rev!r}."
+            )
+    m = int(pulses_per_rev)
+    if m < 2:
+        raise ConfigError(f"pulses_per_rev must be at least 2, got {m}.")
+    return m
+
+
+def head_columns(columns: Mapping[str, ArrayLike]) -> list[FloatArray]:
+    """The pulse trains ``head_0`` … ``head_{n-1}`` of a capture, in head order.
+
+    Parameters
+    ----------
+    columns : mapping of str to array
+        Capture columns; those named ``head_<k>`` are taken, others ignored.
+
+    Returns
+    -------
+    list of ndarray
+        One float64 array of pulse times (s) per head, head 0 first.
+
+    Raises
+    ------
+    CaptureError
+        No ``head_*`` column, or the heads are not numbered 0 … n−1 without a hole.
+    """
+    found: dict[int, ArrayLike] = {}
+    for name, values in columns.items():
+        match = _HEAD_NAME.match(name)
+        if match:
+            found[int(match.group(1))] = values
+    if not found:
+        raise CaptureError(
+            "the capture has no head_0 … head_{n-1} columns of pulse times; name them so or map "
+            "them with --column OLD=head_0."
+        )
+    missing = [k for k in range(max(found) + 1) if k not in found]
+    if missing:
+        raise CaptureError(
+            f"the heads must be numbered head_0 … head_{max(found)} without a hole; "
+            f"head_{missing[0]} is missing."
+        )
+    return [np.asarray(found[k], dtype=np.float64) for k in range(len(found))]
+
+
+def _local_period(dt: FloatArray) -> FloatArray:
+    """Robust local pulse period at every interval: block medians, linearly interpolated."""
+    n = dt.size
+    if n <= 2 * _PERIOD_BLOCK:
+        return np.full(n, float(np.median(dt)))
+    nb = n // _PERIOD_BLOCK
+    medians = np.median(dt[: nb * _PERIOD_BLOCK].reshape(nb, _PERIOD_BLOCK), axis=1)
+    centres = (np.arange(nb) + 0.5) * _PERIOD_BLOCK
+    return np.interp(np.arange(n), centres, medians)
+
+
+def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
+    """Check one head's pulse times and return them as float64.
+
+    A pulse train must be finite and strictly increasing, and every interval must be one pulse
+    period: an interval ≥ 1.5 local periods means missing pulses (a dropout, a dirty scale), one
+    ≤ 0.5 periods a spurious edge (noise, a bouncing comparator). Either would shift the line
+    count of every later pulse, so they are refused rather than repaired silently.
+
+    Parameters
+    ----------
+    t : array_like, s
+        Pulse edge times of one head.
+    name : str
+        The column name, for messages.
+
+    Returns
+    -------
+    ndarray, s
+
+    Raises
+    ------
+    CaptureError
+        NaN/inf, fewer than 3 pulses, non-increasing times, missing or extra pulses.
+    """
+    t = np.asarray(t, dtype=np.float64)
+    if t.ndim != 1:
+        raise CaptureError(f"column '{name}' must be 1-D pulse times, got shape {t.shape}.")
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        raise CaptureError(f"column '{name}' has a NaN or inf at pulse {int(bad[0])}.")
+    if t.size < 3:
+        raise CaptureError(f"column '{name}' has {t.size} pulse(s); a pulse train needs more.")
+    dt = np.diff(t)
+    bad = np.flatnonzero(~(dt > 0))
+    if bad.size:
+        i = int(bad[0])
+        raise CaptureError(
+            f"column '{name}' is not strictly increasing at pulse {i + 1} "
+            f"({t[i]:.9g} s then {t[i + 1]:.9g} s); pulse times must be sorted and distinct."
+        )
+    ratio = dt / _local_period(dt)
+    long_ = np.flatnonzero(ratio >= MISSING_PULSE_RATIO)
+    if long_.size:
+        i = int(long_[0])
+        lost = max(1, round(float(ratio[i])) - 1)
+        more = f" (and {long_.size - 1} more gaps)" if long_.size > 1 else ""
+        raise CaptureError(
+            f"column '{name}': about {lost} pulse(s) missing after pulse {i} at t = {t[i]:.9g} s "
+            f"(an interval of {ratio[i]:.2f} pulse periods){more}; every pulse is needed to count "
+            "the lines — cut the capture before the gap or re-record."
+        )
+    short = np.flatnonzero(ratio <= EXTRA_PULSE_RATIO)
+    if short.size:
+        i = int(short[0])
+        raise CaptureError(
+            f"column '{name}': an extra pulse edge at t = {t[i + 1]:.9g} s (an interval of "
+            f"{ratio[i]:.2f} pulse periods); check the comparator or remove spurious edges."
+        )
+    return t
+
+
+@dataclasses.dataclass(frozen=True)
+class HeadPairing:
+    """Every head paired with head 0 at the same instant.
+
+    For head-0 pulse ``j`` (``first ≤ j < stop``, indices into head 0's pulse train) the pulse of
+    head i that occurs nearest in time is ``j + index_offsets[i]``. The offsets are fixed over the
+    capture (a head never "slips" a line), so the pairing does not flip when a head sits half a
+    pitch away from a line.
+
+    Attributes
+    ----------
+    index_offsets : ndarray of int, shape (n,)
+        Pulse-index offset of each head against head 0 (0 for head 0).
+    first, stop : int
+        Head-0 pulse range covered by every head.
+    delays_s : ndarray, shape (n, stop − first), s
+        ``t_i[j + offset_i] − t_0[j]`` for the covered range (row 0 is zero).
+    mean_times_s : ndarray, shape (stop − first,), s
+        The head-averaged time of each paired set of pulses.
+    notes : tuple of str
+        What had to be left out (heads that start late or stop early).
+    """
+
+    index_offsets: NDArray[np.int64]
+    first: int
+    stop: int
+    delays_s: FloatArray
+    mean_times_s: FloatArray
+    notes: tuple[str, ...] = ()
+
+    @property
+    def heads(self) -> int:
+        return int(self.index_offsets.size)
+
+    @property
+    def pulses(self) -> int:
+        return self.stop - self.first
+
+
+def pair_heads(heads: Sequence[FloatArray], names: Sequence[str] | None = None) -> HeadPairing:
+    """Pair every head's pulses with head 0's by time (seed 004 §3: heads output simultaneously).
+
+    Parameters
+    ----------
+    heads : sequence of ndarray, s
+        Checked pulse trains (see :func:`check_pulse_times`), head 0 first.
+    names : sequence of str, optional
+        Column names for messages (default ``head_<i>``).
+
+    Returns
+    -------
+    HeadPairing
+
+    Raises
+    ------
+    CaptureError
+        A head that never overlaps head 0 in time, or whose pulses cannot be paired with head 0's
+        one to one (a different pulse rate: a different scale, or a miscounted head).
+    """
+    names = list(names) if names is not None else [f"head_{i}" for i in range(len(heads))]
+    t0 = heads[0]
+    period = float(np.median(np.diff(t0)))
+    offsets = np.zeros(len(heads), dtype=np.int64)
+    lo, hi = 0, t0.size
+    for i in range(1, len(heads)):
+        ti = heads[i]
+        if ti[-1] < t0[0] or ti[0] > t0[-1]:
+            raise CaptureError(
+                f"column '{names[i]}' ({ti[0]:.6g}–{ti[-1]:.6g} s) does not overlap head_0 "
+                f"({t0[0]:.6g}–{t0[-1]:.6g} s) in time; the heads must be recorded together."
+            )
+        # nearest pulse of head i for every head-0 pulse inside head i's record
+        inside = np.flatnonzero((t0 >= ti[0]) & (t0 <= ti[-1]))
+        k = np.searchsorted(ti, t0[inside])
+        k = np.clip(k, 1, ti.size - 1)
+        nearer_left = (t0[inside] - ti[k - 1]) < (ti[k] - t0[inside])
+        k = k - nearer_left.astype(np.int64)
+        diff = k - inside
+        values, counts = np.unique(diff, return_counts=True)
+        offsets[i] = int(values[np.argmax(counts)])
+        lo = max(lo, -int(offsets[i]))
+        hi = min(hi, ti.size - int(offsets[i]))
+    if hi - lo < 2:
+        raise CaptureError(
+            "the heads overlap for fewer than 2 pulses of head_0; record all heads together."
+        )
+    j = np.arange(lo, hi)
+    delays = np.empty((len(heads), j.size))
+    for i, ti in enumerate(heads):
+        delays[i] = ti[j + offsets[i]] - t0[j]
+    worst = np.abs(delays).max(axis=1)
+    bad = np.flatnonzero(worst > 0.75 * period)
+    if bad.size:
+        i = int(bad[0])
+        jj = int(j[np.argmax(np.abs(delays[i]))])
+        raise CaptureError(
+            f"column '{names[i]}' drifts against head_0: near t = {t0[jj]:.9g} s its paired pulse is "
+            f"{worst[i] / period:.2f} pulse periods away, so it has a different number of pulses "
+            "per revolution or lost/extra pulses; every head must read the same scale."
+        )
+    notes: list[str] = []
+    for i, ti in enumerate(heads):
+        if i and (-int(offsets[i]) == lo and lo > 0):
+            notes.append(
+                f"{names[i]} starts {lo} pulses after head_0 (at {ti[0]:.6g} s); the pulses of "
+                "head_0 before it are not used for comparing heads."
+            )
+        if ti.size - int(offsets[i]) == hi and hi < t0.size:
+            notes.append(
+                f"{names[i]} stops {t0.size - hi} pulses before head_0 (at {ti[-1]:.6g} s); the "
+                "pulses of head_0 after it are not used for comparing heads."
+            )
+    mean_times = t0[j] + delays.mean(axis=0)
+    return HeadPairing(
+        index_offsets=offsets,
+        first=lo,
+        stop=hi,
+        delays_s=delays,
+        mean_times_s=mean_times,
+        notes=tuple(notes),
+    )
+
+
+def pulse_angle_deg(
+    count: ArrayLike,
+    pulses_per_rev: int,
+    deviation_arcsec: ArrayLike | None = None,
+    *,
+    line_offset: int = 0,
+) -> FloatArray:
+    """Angle (deg) at pulse numbers ``count`` of one head, optionally compensated.
+
+    Uncompensated, pulse ``k`` is at ``k·360/m``. With the scale's deviation (INTERFACE.md
+    ``selfcal`` convention: index 0 is the line head 0 saw at its first pulse) the true rotation
+    from the head's pulse 0 is ``k·360/m + (d[(k + L) mod m] − d[L mod m])/3600``, where
+    ``L = line_offset`` is the deviation index of the head's pulse 0.
+
+    Parameters
+    ----------
+    count : array_like of int
+        Pulse numbers from the head's first pulse.
+    pulses_per_rev : int
+        m, pulses per revolution.
+    deviation_arcsec : array_like, shape (m,), arcsec, optional
+        Self-calibrated deviation of the scale.
+    line_offset : int
+        Deviation index of the head's first pulse.
+
+    Returns
+    -------
+    ndarray, deg
+
+    References
+    ----------
+    Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity calibration
+    facility using self-calibratable rotary encoder" (seed 004), §3, s_i(k) = kΔθ + 360i/n + a_i(k).
+    """
+    k = np.asarray(count, dtype=np.int64)
+    angle = np.asarray(k * (360.0 / pulses_per_rev), dtype=np.float64)
+    if deviation_arcsec is None:
+        return angle
+    d = np.asarray(deviation_arcsec, dtype=np.float64)
+    if d.shape != (pulses_per_rev,):
+        raise ConfigError(
+            f"the deviation has {d.size} values but pulses_per_rev is {pulses_per_rev}; they must "
+            "match (was the self-calibration made with another --pulses-per-rev?)."
+        )
+    idx = (k + line_offset) % pulses_per_rev
+    return np.asarray(angle + (d[idx] - d[line_offset % pulses_per_rev]) / 3600.0)
+
+
+def pulse_rate(
+    times_s: ArrayLike,
+    angle_deg: ArrayLike,
+    *,
+    average: int = 1,
+) -> tuple[FloatArray, FloatArray]:
+    """Angular velocity by the time-difference method, averaged over ``average`` intervals.
+
+    The rate between two successive pulses is their angle difference over their time difference;
+    ``average`` consecutive rates are then averaged (the seed averages 10 to suppress electric
+    noise), in non-overlapping blocks.
+
+    Parameters
+    ----------
+    times_s : array_like, s
+        Pulse times of one head (or the head-averaged times).
+    angle_deg : array_like, deg
+        Angle at each pulse (from :func:`pulse_angle_deg`).
+    average : int
+        Intervals per averaged rate point (≥ 1).
+
+    Returns
+    -------
+    time_s : ndarray, s
+        Mean time of each block of intervals (the centre of each interval, averaged).
+    rate_deg_s : ndarray, deg/s
+
+    References
+    ----------
+    Kokuyama et al. (seed 004), §5: "Taking time difference between adjacent two pulses, angular
+    velocity between the two pulses is obtained. Then … 10 straight points of data are averaged."
+    """
+    t = np.asarray(times_s, dtype=np.float64)
+    a = np.asarray(angle_deg, dtype=np.float64)
+    if isinstance(average, bool) or not isinstance(average, int | np.integer) or average < 1:
+        raise ConfigError(f"average must be a whole number of intervals ≥ 1, got {average!r}.")
+    dt = np.diff(t)
+    rate = np.diff(a) / dt
+    mid = t[:-1] + 0.5 * dt
+    blocks = rate.size // int(average)
+    if blocks < 1:
+        raise CaptureError(
+            f"{rate.size} pulse intervals cannot make one average of {average}; lower --average."
+        )
+    n = blocks * int(average)
+    return (
+        mid[:n].reshape(blocks, -1).mean(axis=1),
+        rate[:n].reshape(blocks, -1).mean(axis=1),
+    )
+
+
+def whole_revolution_rate(
+    times_s: FloatArray, pulses_per_rev: int
+) -> tuple[float, int] | tuple[None, int]:
+    """Mean rate (deg/s) over the whole revolutions of a pulse train, and their number.
+
+    Over a whole revolution the scale's deviation cancels exactly (m pitches are 360°), so the
+    mean rate needs no calibration: 360·R over the time of R revolutions.
+    """
+    revs = (times_s.size - 1) // pulses_per_rev
+    if revs < 1:
+        return None, 0
+    span = float(times_s[revs * pulses_per_rev] - times_s[0])
+    return 360.0 * revs / span, revs

@@ -1,0 +1,403 @@
+"""Self-calibration of a multi-head rotary encoder by the equal-division-averaged method (seed 004).
+
+n read heads sit at equal intervals around one scale of m lines. Head i reads the same scale
+deviation a(k) as head 0, shifted by m·i/n lines: a_i(k) = a(k + m·i/n) (Kokuyama et al., §3;
+Masuda & Kajitani 1993; Watanabe et al. 2005). Comparing every head with head 0 at the same
+instant gives, for each head-0 pulse j, the angle difference
+
+    D_i(j) = a(j + s_i) − a(j) + c_i,        s_i = round(i·m/n),
+
+with c_i the head's small placement error (a constant). Averaging the n shifted copies cancels every
+Fourier order of a(k) except the multiples of n, which no arrangement of n equally spaced heads can
+see — the equal-division-averaged (EDA) method.
+
+rotacal solves the same equations per Fourier order as a generalised least-squares fit that takes
+into account that every difference shares head 0's noise: for equally spaced heads it reduces
+exactly to the EDA average of the shifted copies ("each head's difference curve, shifted back by its
+head's offset, averaged over all heads"), and it also honours shifts s_i that are not exactly i·m/n
+(m not divisible by n). Orders where the heads give no information (the multiples of n for equal
+spacing) are set to zero and listed.
+
+Heads are compared in time, not by pulse index: the angle between head 0's pulse j and the nearest
+pulse of head i is their time difference times the local rate (estimated from the head-averaged
+pulse times, in which the deviation cancels), so late-starting heads and rate fluctuations do not
+bias the curve. The deviation is the average over every whole revolution the heads share, and the
+repeatability is each revolution's curve minus that average (the seed's Figure 5).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.signal import find_peaks
+
+from rotacal.encoder.pulses import (
+    check_pulse_times,
+    check_pulses_per_rev,
+    head_columns,
+    pair_heads,
+)
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.results import Result
+
+__all__ = ["SelfCalibration", "head_shifts", "self_calibrate", "undetectable_orders"]
+
+FloatArray = NDArray[np.float64]
+
+#: Half-width (pulses) of the window that gives the local rate used to turn delays into angles.
+RATE_WINDOW = 32
+#: Relative information below which a Fourier order counts as undetectable.
+_UNDETECTABLE_TOL = 1e-9
+#: Correlation thresholds of the pulses-per-revolution check (see _check_period).
+_PERIODIC = 0.8
+
+
+@dataclasses.dataclass(frozen=True)
+class SelfCalibration(Result):
+    """Scale deviation of a multi-head encoder by self-calibration (INTERFACE.md ``selfcal``).
+
+    Attributes
+    ----------
+    deviation_arcsec : ndarray, shape (m,), arcsec
+        The scale's deviation; the true rotation from head-0 pulse 0 to head-0 pulse j
+        (0 ≤ j < m, counted from the first head-0 pulse in the capture) is
+        ``j·360/m + (deviation[j] − deviation[0])/3600`` deg. Zero mean; orders that are
+        multiples of n are zero (undetectable).
+    heads, pulses_per_rev : int
+    deviation_pp_arcsec, deviation_rms_arcsec : float, arcsec
+    undetectable_harmonics_note : str
+    undetectable_orders : list of int
+        Fourier orders (per revolution, 1 … m/2) the heads cannot see.
+    revolutions_used : int
+        Whole revolutions averaged.
+    repeatability_rms_arcsec, repeatability_pp_arcsec : float or None, arcsec
+        Spread of the single-revolution curves about their mean (None with one revolution).
+    deviation_u_arcsec : float or None, arcsec
+        Standard uncertainty of the mean curve from its repeatability (rms over the lines of
+        std/√R), None with one revolution.
+    closure_residual_rms_arcsec : float, arcsec
+        rms of what the fitted curve leaves unexplained in the head differences (noise, rate
+        changes within a pitch, head misnumbering).
+    head_offsets_arcsec : list of float, arcsec
+        Each head's placement against its nominal i·360/n, modulo one pitch.
+    harmonic_amplitudes_arcsec : list of float, arcsec
+        Amplitude of orders 1 … min(m/2, 100) of the deviation.
+    rotation : str
+        ``"forward"`` (head i is i·360/n ahead in the sense of rotation) or ``"reverse"``.
+    first_pulse_time_s : float, s
+        Time of head 0's first pulse (index 0 of ``deviation_arcsec``).
+    notes : list of str
+    """
+
+    deviation_arcsec: FloatArray
+    heads: int
+    pulses_per_rev: int
+    deviation_pp_arcsec: float
+    deviation_rms_arcsec: float
+    undetectable_harmonics_note: str
+    undetectable_orders: list[int]
+    revolutions_used: int
+    repeatability_rms_arcsec: float | None
+    repeatability_pp_arcsec: float | None
+    deviation_u_arcsec: float | None
+    closure_residual_rms_arcsec: float
+    head_offsets_arcsec: list[float]
+    harmonic_amplitudes_arcsec: list[float]
+    rotation: str
+    first_pulse_time_s: float
+    notes: list[str]
+    _per_revolution_arcsec: FloatArray = dataclasses.field(repr=False)
+    _head_differences_arcsec: FloatArray = dataclasses.field(repr=False)
+    _spectrum_arcsec: FloatArray = dataclasses.field(repr=False)
+
+    @property
+    def per_revolution_arcsec(self) -> FloatArray:
+        """Each whole revolution's curve, shape (R, m), indexed like ``deviation_arcsec``."""
+        return self._per_revolution_arcsec
+
+    @property
+    def repeatability_arcsec(self) -> FloatArray:
+        """Each revolution minus the mean of all (the seed's Figure 5), shape (R, m)."""
+        return self._per_revolution_arcsec - self.deviation_arcsec
+
+    @property
+    def spectrum_arcsec(self) -> FloatArray:
+        """Amplitude (arcsec) of every order 0 … m/2 of the deviation."""
+        return self._spectrum_arcsec
+
+
+def head_shifts(heads: int, pulses_per_rev: int, rotation: str = "forward") -> NDArray[np.int64]:
+    """Line shift of each head against head 0: s_i = round(i·m/n) (negated for reverse rotation).
+
+    Heads must sit within half a pitch of their nominal i·360/n positions.
+    """
+    i = np.arange(heads)
+    s = np.rint(i * pulses_per_rev / heads).astype(np.int64)
+    return s if rotation == "forward" else (-s) % pulses_per_rev
+
+
+def _information(shifts: NDArray[np.int64], m: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per-order GLS weights g_i = exp(2πi q s_i/m) − 1 (heads 1 … n−1) and the information."""
+    q = np.arange(m // 2 + 1)
+    g = np.exp(2j * np.pi * np.outer(shifts[1:], q) / m) - 1.0
+    n = shifts.size
+    info = np.sum(np.abs(g) ** 2, axis=0) - np.abs(np.sum(g, axis=0)) ** 2 / n
+    return g, info
+
+
+def undetectable_orders(heads: int, pulses_per_rev: int) -> list[int]:
+    """Fourier orders 1 … m/2 of the deviation that n equally spaced heads cannot detect.
+
+    For m divisible by n these are the multiples of n (seed 004, §3: "the n-th and its multiple
+    Fourier components … cannot be extracted in principle").
+    """
+    _, info = _information(head_shifts(heads, pulses_per_rev), pulses_per_rev)
+    bad = info <= _UNDETECTABLE_TOL * heads
+    bad[0] = False
+    return [int(q) for q in np.flatnonzero(bad)]
+
+
+def _gls(diff_spec: np.ndarray, shifts: NDArray[np.int64], m: int) -> tuple[np.ndarray, np.ndarray]:
+    """Solve D̂_i(q) = a(q)·g_i(q) for a(q) per order, noise shared through head 0.
+
+    The head differences D_i = e_i − e_0 have covariance σ²(I + 11ᵀ); its inverse is
+    (I − 11ᵀ/n)/σ², which gives a(q) = [Σ g_i* D_i − (Σ g_i*)(Σ D_i)/n] / [Σ|g_i|² − |Σ g_i|²/n].
+    """
+    g, info = _information(shifts, m)
+    n = shifts.size
+    gc = np.conj(g)
+    num = (
+        np.einsum("iq,...iq->...q", gc, diff_spec)
+        - np.sum(gc, axis=0) * np.sum(diff_spec, axis=-2) / n
+    )
+    ok = info > _UNDETECTABLE_TOL * n
+    a = np.zeros((*diff_spec.shape[:-2], g.shape[1]), dtype=complex)
+    a[..., ok] = num[..., ok] / info[ok]
+    resid = diff_spec - a[..., None, :] * g
+    return a, resid
+
+
+def _local_rate_deg_s(mean_times: FloatArray, pitch_deg: float) -> FloatArray:
+    """Rate at every paired pulse from the head-averaged times over ±RATE_WINDOW pulses."""
+    n = mean_times.size
+    w = min(RATE_WINDOW, max(1, (n - 1) // 2))
+    rate = np.empty(n)
+    inner = slice(w, n - w)
+    rate[inner] = 2 * w * pitch_deg / (mean_times[2 * w :] - mean_times[: n - 2 * w])
+    rate[:w] = rate[w]
+    rate[n - w :] = rate[n - w - 1]
+    return rate
+
+
+def _periodicity_check(signal: FloatArray, m: int) -> None:
+    """Refuse a pulses-per-revolution that does not match the period of the deviation.
+
+    ``signal`` is the head-averaged difference (≈ −a(j)), free of the table's rate fluctuation.
+    When it is strongly periodic, its period (in head-0 pulses) must be m: a scale deviation
+    repeats once per revolution and not at a fraction of it.
+    """
+    x = signal - signal.mean()
+    n = x.size
+    # lags from m/8 up to what leaves a quarter of the record (or of m) overlapping
+    lo, hi = max(2, m // 8), n - max(m // 4, n // 4)
+    if hi <= lo:
+        return
+    size = 1 << int(np.ceil(np.log2(2 * n)))
+    f = np.fft.rfft(x, size)
+    acf = np.fft.irfft(f * np.conj(f), size)[: hi + 1]
+    c2 = np.cumsum(x**2)
+    lags = np.arange(lo, hi + 1)
+    # normalise by the energy of both overlapping parts
+    head_energy = c2[n - 1 - lags]
+    tail_energy = c2[-1] - np.concatenate(([0.0], c2))[lags]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = acf[lags] / np.sqrt(head_energy * tail_energy)
+    corr = np.nan_to_num(corr)
+    best = float(corr.max())
+    if best < _PERIODIC:
+        return
+    # the shortest lag at a local peak (nearly) as high as the best one: a smooth deviation
+    # gives broad peaks, so the flank of a peak must not count
+    peaks, _ = find_peaks(corr, height=best - 0.05, prominence=0.1)
+    if peaks.size == 0:  # smooth at every searched lag: the data cannot tell the period
+        return
+    first = int(peaks[0])
+    # the top of that peak (ripples of the random graduation errors sit on its flanks)
+    near = slice(max(0, first - m // 20), first + m // 20 + 1)
+    period = int(lags[near][np.argmax(corr[near])])
+    if abs(period - m) <= max(2, m // 1000):
+        return
+    raise CaptureError(
+        f"the scale's deviation repeats every {period} pulses of head_0, not every {m}: check "
+        f"--pulses-per-rev (the data suggest {period})."
+    )
+
+
+def self_calibrate(
+    heads: Sequence[ArrayLike] | Mapping[str, ArrayLike],
+    *,
+    pulses_per_rev: int,
+    rotation: Literal["auto", "forward", "reverse"] = "auto",
+) -> SelfCalibration:
+    """Scale deviation of an n-head encoder by the equal-division-averaged method.
+
+    Parameters
+    ----------
+    heads : sequence of array_like, or mapping with ``head_0`` … ``head_{n-1}``, s
+        Pulse edge times of each head; head 0 is the reference, the heads equally spaced
+        (within half a pitch) and numbered in one sense around the scale. Heads may start and
+        stop at different times; only the span all of them cover is compared.
+    pulses_per_rev : int
+        m, pulses per revolution of one head.
+    rotation : {"auto", "forward", "reverse"}
+        Whether head i lies i·360/n ahead of head 0 in the sense of rotation ("forward") or
+        behind ("reverse"); "auto" takes the one whose model explains the head differences
+        better (undecidable with 2 heads: forward).
+
+    Returns
+    -------
+    SelfCalibration
+
+    Raises
+    ------
+    CaptureError
+        Fewer than 2 heads, bad pulse trains (see :func:`check_pulse_times`), heads that cannot be
+        paired, less than one whole revolution covered by all heads, a pulses_per_rev that does
+        not match the period of the data.
+
+    References
+    ----------
+    Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity calibration
+    facility using self-calibratable rotary encoder" (seed 004), §3: s_i(k) = kΔθ + 360i/n + a_i(k),
+    m = 360/Δθ, a_i(k) = a(k + m·i/n); Figures 4–5.
+    Masuda T., Kajitani M., "High accuracy calibration system for angular encoders", J. Robotics
+    and Mechatronics 5 (1993) — the equal-division-averaged method.
+    """
+    m = check_pulses_per_rev(pulses_per_rev)
+    if rotation not in ("auto", "forward", "reverse"):
+        raise ConfigError(f"rotation must be 'auto', 'forward' or 'reverse', got {rotation!r}.")
+    if isinstance(heads, Mapping):
+        trains = head_columns(heads)
+    else:
+        trains = [np.asarray(h, dtype=np.float64) for h in heads]
+    n = len(trains)
+    if n < 2:
+        raise CaptureError(
+            f"self-calibration needs at least 2 heads, the capture has {n}; give head_0 … head_{{n-1}}."
+        )
+    if m < n:
+        raise ConfigError(f"pulses_per_rev ({m}) must be at least the number of heads ({n}).")
+    names = [f"head_{i}" for i in range(n)]
+    trains = [check_pulse_times(t, name) for t, name in zip(trains, names, strict=True)]
+    if trains[0].size - 1 < m:
+        raise CaptureError(
+            f"head_0 has {trains[0].size} pulses, less than one revolution of {m}: record at least "
+            "one whole revolution (or check --pulses-per-rev)."
+        )
+    pairing = pair_heads(trains, names)
+    revs = pairing.pulses // m
+    if revs < 1:
+        raise CaptureError(
+            f"all heads together cover only {pairing.pulses} pulses of head_0, less than one "
+            f"revolution of {m} ({'; '.join(pairing.notes) or 'the heads overlap too little'})."
+        )
+    pitch = 360.0 / m
+    rate = _local_rate_deg_s(pairing.mean_times_s, pitch)
+    angle_diff = pairing.delays_s[1:] * rate * 3600.0  # arcsec, shape (n−1, J)
+    _periodicity_check(angle_diff.mean(axis=0), m)
+
+    used = angle_diff[:, : revs * m].reshape(n - 1, revs, m).transpose(1, 0, 2)  # (R, n−1, m)
+    offsets_mean = used.mean(axis=(0, 2))
+    spec = np.fft.rfft(used - used.mean(axis=2, keepdims=True), axis=-1)
+
+    notes = list(pairing.notes)
+    candidates = ["forward", "reverse"] if rotation == "auto" else [rotation]
+    fits = {}
+    for sense in candidates:
+        shifts = head_shifts(n, m, sense)
+        a, resid = _gls(spec, shifts, m)
+        # Parseval on the rfft half-spectrum: every order but 0 and m/2 counts twice
+        w = np.full(a.shape[-1], 2.0)
+        w[0] = 1.0
+        if m % 2 == 0:
+            w[-1] = 1.0
+        ss = float(np.sum(w * np.abs(resid) ** 2)) / m
+        fits[sense] = (a, ss, shifts)
+    sense = min(fits, key=lambda k: fits[k][1])
+    if rotation == "auto" and n == 2:
+        sense = "forward"
+    if rotation == "auto" and n > 2:
+        other = "reverse" if sense == "forward" else "forward"
+        if fits[other][1] < 2.0 * fits[sense][1]:
+            notes.append(
+                "the sense of rotation against the head numbering is unclear from the data (both "
+                f"fit about as well); took '{sense}'. Give rotation= (--rotation) if you know it."
+            )
+    a, ss, shifts = fits[sense]
+    closure_rms = float(np.sqrt(ss / (revs * (n - 1) * m)))
+
+    per_rev = np.fft.irfft(a, m, axis=-1)  # (R, m), index j' = head-0 pulse first + r·m + j'
+    mean_curve = per_rev.mean(axis=0)
+    roll = pairing.first % m
+    deviation = np.roll(mean_curve, roll)
+    per_rev = np.roll(per_rev, roll, axis=1)
+
+    if revs >= 2:
+        rep = per_rev - deviation
+        rep_rms: float | None = float(np.sqrt(np.mean(rep**2)))
+        rep_pp: float | None = float(np.max(rep.max(axis=1) - rep.min(axis=1)))
+        dev_u: float | None = float(np.sqrt(np.mean(per_rev.var(axis=0, ddof=1) / revs)))
+    else:
+        rep_rms = rep_pp = dev_u = None
+        notes.append(
+            "one whole revolution only: no repeatability and no uncertainty from the data; "
+            "record several revolutions."
+        )
+    amp = np.abs(np.fft.rfft(deviation)) * 2.0 / m
+    amp[0] = 0.0
+    if m % 2 == 0:
+        amp[-1] /= 2.0
+    undetect = undetectable_orders(n, m)
+    if undetect:
+        listed = ", ".join(str(q) for q in undetect[:5])
+        more = ", …" if len(undetect) > 5 else ""
+        note = (
+            f"Fourier orders that are multiples of {n} (the number of heads: {listed}{more}) are "
+            "undetectable by equal-division averaging and are set to zero; the scale's true "
+            "deviation may hold them."
+        )
+    else:
+        note = "every Fourier order 1 … m/2 is detectable with these head shifts."
+    pitch_arcsec = pitch * 3600.0
+    nominal = np.arange(n) * 360.0 / n * 3600.0
+    placed = shifts * pitch_arcsec - np.concatenate(([0.0], offsets_mean))
+    if sense == "reverse":
+        placed = -placed
+    head_off = (placed - nominal + pitch_arcsec / 2) % pitch_arcsec - pitch_arcsec / 2
+    head_off[0] = 0.0
+    return SelfCalibration(
+        deviation_arcsec=deviation,
+        heads=n,
+        pulses_per_rev=m,
+        deviation_pp_arcsec=float(np.ptp(deviation)),
+        deviation_rms_arcsec=float(np.sqrt(np.mean(deviation**2))),
+        undetectable_harmonics_note=note,
+        undetectable_orders=undetect,
+        revolutions_used=int(revs),
+        repeatability_rms_arcsec=rep_rms,
+        repeatability_pp_arcsec=rep_pp,
+        deviation_u_arcsec=dev_u,
+        closure_residual_rms_arcsec=closure_rms,
+        head_offsets_arcsec=[float(x) for x in head_off],
+        harmonic_amplitudes_arcsec=[float(x) for x in amp[1 : min(m // 2, 100) + 1]],
+        rotation=sense,
+        first_pulse_time_s=float(trains[0][0]),
+        notes=notes,
+        _per_revolution_arcsec=per_rev,
+        _head_differences_arcsec=angle_diff,
+        _spectrum_arcsec=amp,
+    )
