@@ -581,6 +581,151 @@ def rate_cmd(
             click.echo(f"note               {note}")
 
 
+# ------------------------------------------------------------------------------------------------ gyro
+@cli.group()
+def gyro() -> None:
+    """Gyroscope calibrations on the table (seeds 004, 003, 001)."""
+
+
+@gyro.command("scale-factor")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option(
+    "--full-scale-deg-s",
+    type=float,
+    default=None,
+    help="FS for the nonlinearity in %FS [default: the largest |set rate|].",
+)
+@click.option(
+    "--requirement",
+    default=None,
+    help="Check against a named requirement (fmvss126) and say pass/fail with the margin.",
+)
+@click.option("--output-unit", default="", help="Unit of the output column, for the report.")
+@_analysis_options
+def gyro_scale_factor(
+    capture: str,
+    full_scale_deg_s: float | None,
+    requirement: str | None,
+    output_unit: str,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Scale factor, bias, nonlinearity %FS: capture with rate_deg_s (set rate), output."""
+    from rotacal.gyro import calibrate_scale_factor
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    cap = _read(capture, ["rate_deg_s", "output"], columns, group)
+    with _status("fitting"):
+        result = calibrate_scale_factor(
+            cap["rate_deg_s"],
+            cap["output"],
+            full_scale_deg_s=full_scale_deg_s,
+            requirement=requirement,
+            output_unit=output_unit,
+        )
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.gyro_scale import scale_factor_section
+
+        _write_report(
+            "Gyro scale factor and nonlinearity",
+            "Kokuyama et al. (seed 004), §4: V(Ω) = S·Ω + V0 + δ(Ω), NL = max|δ|/FS",
+            [scale_factor_section(result)],
+            capture,
+            report_path,
+        )
+    if json_path is None and report_path is None:
+        for line in result.summary_lines():
+            click.echo(line)
+
+
+@gyro.command("triad")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option(
+    "--reject-k",
+    type=float,
+    default=None,
+    help="Reject residuals beyond k robust sigmas [default: 5 % family-wise for Gaussian noise].",
+)
+@_analysis_options
+def gyro_triad(
+    capture: str, reject_k: float | None, columns: Sequence[str], group: str | None, **kw: Any
+) -> None:
+    """3-axis K and bias with outlier rejection: wx_deg_s, wy_deg_s, wz_deg_s, ux, uy, uz."""
+    from rotacal.gyro import RATE_COLUMNS, TRIAD_OUTPUT_COLUMNS, calibrate_triad_columns
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    cap = _read(capture, [*RATE_COLUMNS, *TRIAD_OUTPUT_COLUMNS], columns, group)
+    with _status("fitting"):
+        result = calibrate_triad_columns(cap.columns, reject_k=reject_k)
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.triad import triad_section
+
+        _write_report(
+            "3-axis gyro calibration",
+            "Modified six-position method (seed 003): u = K·ω + b by least squares",
+            [triad_section(result)],
+            capture,
+            report_path,
+        )
+    if json_path is None and report_path is None:
+        k = np.asarray(result.scale_misalignment)
+        click.echo("K (output per deg/s):")
+        for row in k:
+            click.echo("   " + "  ".join(f"{x:+.6f}" for x in row))
+        click.echo("bias              " + "  ".join(f"{x:+.5g}" for x in result.bias))
+        click.echo(f"outliers rejected {result.outliers_rejected}")
+        click.echo("residual rms      " + "  ".join(f"{x:.3g}" for x in result.residual_rms))
+
+
+@gyro.command("multiposition")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option("--axis", type=click.Choice(["x", "y"]), required=True, help="Gyro axis.")
+@click.option("--latitude-deg", type=float, required=True, help="Latitude of the laboratory.")
+@_analysis_options
+def gyro_multiposition(
+    capture: str,
+    axis: str,
+    latitude_deg: float,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Drift coefficients: phi1_deg, phi2_deg, output_deg_h (seed 001, eqs. 1–6)."""
+    from rotacal.gyro import calibrate_multiposition
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    cap = _read(capture, ["phi1_deg", "phi2_deg", "output_deg_h"], columns, group)
+    with _status("fitting"):
+        result = calibrate_multiposition(
+            cap["phi1_deg"],
+            cap["phi2_deg"],
+            cap["output_deg_h"],
+            axis=axis,
+            latitude_deg=latitude_deg,
+        )
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.multiposition import multiposition_section
+
+        _write_report(
+            "Multiposition calibration of drift coefficients",
+            "Seed 001, eqs. (1)–(6): Earth rate and gravity at each turntable position",
+            [multiposition_section(result)],
+            capture,
+            report_path,
+        )
+    if json_path is None and report_path is None:
+        for name, value in result.drift_coefficients.items():
+            u = result.drift_coefficients_u[name]
+            click.echo(f"{name:<5} {value:+.6f} ± {u:.2g}")
+
+
 # -------------------------------------------------------------------------------------------- simulate
 @cli.group()
 def simulate() -> None:
@@ -748,6 +893,48 @@ def simulate_pulses_cmd(
             harmonics.append((order, amp, phase))
         kw["harmonics"] = tuple(harmonics)
     _sim_write(simulate_pulses(**kw), out, overwrite)
+
+
+@simulate.command("gyro-rates")
+@_sim_common
+@click.option("--scale-factor", type=float, default=None, help="S, output per deg/s [0.0125].")
+@click.option("--bias", type=float, default=None, help="V0, output at rest [2.5].")
+@click.option("--noise-std", type=float, default=None, help="Output noise, rms.")
+@click.option("--samples-per-point", type=int, default=None, help="Samples at each set rate.")
+@click.option("--quantum", type=float, default=None, help="Output quantisation step.")
+def simulate_gyro_rates_cmd(out: str, overwrite: bool, **kw: Any) -> None:
+    """Single-axis gyro on a rate table: rate_deg_s, output (seed 004 §4)."""
+    from rotacal.sim import simulate_gyro_rates
+
+    options = {k: v for k, v in kw.items() if v is not None}
+    _sim_write(simulate_gyro_rates(**options), out, overwrite)
+
+
+@simulate.command("gyro-triad")
+@_sim_common
+@click.option("--noise-std", type=float, default=None, help="Output noise, rms (deg/s).")
+@click.option("--samples-per-point", type=int, default=None, help="Samples at each rate.")
+@click.option("--outlier-fraction", type=float, default=None, help="Share of gross outliers (0…1).")
+def simulate_gyro_triad_cmd(out: str, overwrite: bool, **kw: Any) -> None:
+    """3-axis gyro, rotations about each axis at several rates: wx/wy/wz_deg_s, ux/uy/uz."""
+    from rotacal.sim import simulate_gyro_triad
+
+    options = {k: v for k, v in kw.items() if v is not None}
+    _sim_write(simulate_gyro_triad(**options), out, overwrite)
+
+
+@simulate.command("multiposition")
+@_sim_common
+@click.option("--axis", type=click.Choice(["x", "y"]), default="x", show_default=True)
+@click.option("--latitude-deg", type=float, default=None, help="Latitude [45.75].")
+@click.option("--noise-deg-h", type=float, default=None, help="Output noise, rms (deg/h).")
+@click.option("--repeats", type=int, default=None, help="Readings per position.")
+def simulate_multiposition_cmd(out: str, overwrite: bool, **kw: Any) -> None:
+    """Gyro torquer output at turntable positions: phi1_deg, phi2_deg, output_deg_h (seed 001)."""
+    from rotacal.sim import simulate_multiposition
+
+    options = {k: v for k, v in kw.items() if v is not None}
+    _sim_write(simulate_multiposition(**options), out, overwrite)
 
 
 # ------------------------------------------------------------------------------------------------ demo

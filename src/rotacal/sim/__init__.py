@@ -4,7 +4,10 @@ Its truth is independent of rotacal's methods: it imports only numpy, scipy, rot
 rotacal.results (``SimCapture.write`` imports ``rotacal.io`` lazily).
 """
 
+from rotacal.sim.gyro_rates import simulate_gyro_rates
+from rotacal.sim.gyro_triad import simulate_gyro_rotations, simulate_gyro_triad
 from rotacal.sim.motion import SineMotion
+from rotacal.sim.multiposition import simulate_multiposition
 from rotacal.sim.pulses import simulate_pulses, table_angle_deg, table_rate_deg_s
 from rotacal.sim.scenarios import (
     FOG_NOISE_DENSITY_DEG_S_RT_HZ,
@@ -33,7 +36,11 @@ __all__ = [
     "simulate",
     "simulate_encoder",
     "simulate_fog",
+    "simulate_gyro_rates",
+    "simulate_gyro_rotations",
+    "simulate_gyro_triad",
     "simulate_lts",
+    "simulate_multiposition",
     "simulate_pulses",
     "table1_scenarios",
     "table_angle_deg",

@@ -1,0 +1,69 @@
+"""rotacal.gyro — gyroscope calibrations on the table: scale factor and nonlinearity (seed 004),
+3-axis calibration (seed 003) and calibration from rotations through a known angle (Ferraris),
+multiposition drift coefficients (seed 001)."""
+
+from rotacal.gyro.multiposition import (
+    EARTH_RATE_DEG_H,
+    MultipositionPlan,
+    MultipositionResult,
+    calibrate_multiposition,
+    check_multiposition_plan,
+    coefficient_names,
+    drift_design_matrix,
+    earth_rate_and_gravity,
+    multiposition_plan,
+)
+from rotacal.gyro.rotations import (
+    RotationCalibration,
+    calibrate_triad_rotations,
+    ferraris_sections,
+)
+from rotacal.gyro.scale_factor import (
+    REQUIREMENTS,
+    ScaleFactorResult,
+    calibrate_scale_factor,
+    evaluate_requirement,
+    resolve_requirement,
+)
+from rotacal.gyro.triad import (
+    RATE_COLUMNS,
+    TRIAD_OUTPUT_COLUMNS,
+    TriadPlanCheck,
+    TriadResult,
+    apply_triad_calibration,
+    calibrate_triad,
+    calibrate_triad_columns,
+    decompose_scale_misalignment,
+    triad_plan,
+    triad_plan_check,
+)
+
+__all__ = [
+    "EARTH_RATE_DEG_H",
+    "RATE_COLUMNS",
+    "REQUIREMENTS",
+    "TRIAD_OUTPUT_COLUMNS",
+    "MultipositionPlan",
+    "MultipositionResult",
+    "RotationCalibration",
+    "ScaleFactorResult",
+    "TriadPlanCheck",
+    "TriadResult",
+    "apply_triad_calibration",
+    "calibrate_multiposition",
+    "calibrate_scale_factor",
+    "calibrate_triad",
+    "calibrate_triad_columns",
+    "calibrate_triad_rotations",
+    "check_multiposition_plan",
+    "coefficient_names",
+    "decompose_scale_misalignment",
+    "drift_design_matrix",
+    "earth_rate_and_gravity",
+    "evaluate_requirement",
+    "ferraris_sections",
+    "multiposition_plan",
+    "resolve_requirement",
+    "triad_plan",
+    "triad_plan_check",
+]

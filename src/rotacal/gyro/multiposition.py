@@ -1,0 +1,555 @@
+"""Multiposition calibration of a gyro's drift coefficients with Earth rate and gravity (seed 001).
+
+The gyro sits on a two-axis turntable (outer angle φ1, inner angle φ2; initial orientation of its
+axes north-west-up). At each position the Earth rate and gravity components in the gyro frame are
+known from eq. (3) at the latitude λ. The rate-sensing model (eq. (1)) of the x axis,
+
+    ω_x = k_y·i_y − DF − Dx·ax − Dy·ay − Dz·az − Dxx·ax² − Dzz·az² − Dxy·ax·ay,
+
+gives one linear equation per position in the seven drift coefficients; stacked (eqs. (2), (4),
+(5)) it is ``b1 − b2 = A·β`` with ``b1`` the torquer outputs k·i in rate units, ``b2`` the Earth
+rate components and A the gravity terms, solved by least squares (eq. (6)). The y axis uses
+``DF, Dx, Dy, Dz, Dyy, Dzz, Dyx`` with the columns 1, ax, ay, az, ay², az², ax·ay. Units: deg/h,
+deg/h/g, deg/h/g² (gravity components in g).
+
+Not every set of positions identifies the seven coefficients: with φ1 and φ2 both multiples of 90°
+the column ax·ay is zero everywhere, and with inner angles only at odd multiples of 45° ax² = ay²
+makes 1, ax² and az² collinear. :func:`check_multiposition_plan` says which coefficients a plan
+leaves unidentifiable; :func:`multiposition_plan` makes plans that identify all of them.
+
+References
+----------
+Seed 001 (GyroWheel calibration tests: error analysis and turntable error allocation), §2.1,
+eqs. (1)–(6) and Table 1.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+from scipy.linalg import solve_triangular
+
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.results import Result
+
+__all__ = [
+    "EARTH_RATE_DEG_H",
+    "MultipositionPlan",
+    "MultipositionResult",
+    "calibrate_multiposition",
+    "check_multiposition_plan",
+    "coefficient_names",
+    "coefficient_units",
+    "drift_design_matrix",
+    "earth_rate_and_gravity",
+    "multiposition_plan",
+]
+
+#: Sidereal rotation rate of the Earth, 7.292115·10⁻⁵ rad/s, in °/h.
+EARTH_RATE_DEG_H = 15.041067
+
+_NAMES = {
+    "x": ("DF", "Dx", "Dy", "Dz", "Dxx", "Dzz", "Dxy"),
+    "y": ("DF", "Dx", "Dy", "Dz", "Dyy", "Dzz", "Dyx"),
+}
+_COLUMNS = {
+    "x": ("1", "ax", "ay", "az", "ax²", "az²", "ax·ay"),
+    "y": ("1", "ax", "ay", "az", "ay²", "az²", "ax·ay"),
+}
+_UNITS = ("deg/h", "deg/h/g", "deg/h/g", "deg/h/g", "deg/h/g^2", "deg/h/g^2", "deg/h/g^2")
+#: Relative singular-value threshold below which a direction of β is not identified.
+_RANK_RTOL = 1e-9
+#: Angles equal to this (deg, modulo 360) are the same position (for per-position residuals).
+_POSITION_DECIMALS = 6
+
+
+def _axis(axis: Any) -> str:
+    if axis not in _NAMES:
+        raise ConfigError(f"axis must be 'x' or 'y', got {axis!r}.")
+    return str(axis)
+
+
+def coefficient_names(axis: str = "x") -> tuple[str, ...]:
+    """Names of the seven drift coefficients of ``axis`` in the order of β (seed 001, eq. (4))."""
+    return _NAMES[_axis(axis)]
+
+
+def coefficient_units(axis: str = "x") -> dict[str, str]:
+    """Unit of each drift coefficient of ``axis``: deg/h, deg/h/g or deg/h/g^2."""
+    return dict(zip(_NAMES[_axis(axis)], _UNITS, strict=True))
+
+
+def _latitude(latitude_deg: Any) -> float:
+    try:
+        lat = float(latitude_deg)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"latitude_deg must be a number in degrees, got {latitude_deg!r}."
+        ) from None
+    if not math.isfinite(lat) or abs(lat) > 90.0:
+        raise ConfigError(f"latitude_deg must be between −90 and +90°, got {latitude_deg!r}.")
+    return lat
+
+
+def _angles(phi1_deg: Any, phi2_deg: Any, error: type[Exception]) -> tuple[np.ndarray, np.ndarray]:
+    p1 = np.asarray(phi1_deg, dtype=float).reshape(-1)
+    p2 = np.asarray(phi2_deg, dtype=float).reshape(-1)
+    if p1.size != p2.size:
+        raise error(
+            f"column phi1_deg has {p1.size} rows but phi2_deg has {p2.size}: give one pair of "
+            "angles per row."
+        )
+    for name, v in (("phi1_deg", p1), ("phi2_deg", p2)):
+        bad = np.flatnonzero(~np.isfinite(v))
+        if bad.size:
+            raise error(
+                f"column {name} has {bad.size} non-finite value(s) (NaN or inf) at rows "
+                f"{_rows(bad)} (counted from 0): every row needs both turntable angles."
+            )
+    return p1, p2
+
+
+def _rows(idx: np.ndarray) -> str:
+    shown = ", ".join(str(int(i)) for i in idx[:8])
+    return shown + (f" and {idx.size - 8} more" if idx.size > 8 else "")
+
+
+def earth_rate_and_gravity(
+    phi1_deg: np.ndarray,
+    phi2_deg: np.ndarray,
+    latitude_deg: float,
+    *,
+    earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Earth-rate and gravity components in the gyro frame at each turntable position.
+
+    Seed 001, eq. (3), with the gyro's axes north-west-up at φ1 = φ2 = 0:
+    ``ax = −sin φ1·cos φ2``, ``ay = sin φ1·sin φ2``, ``az = cos φ1``,
+    ``ωx = Ωe·cos φ2·(cos φ1·cos λ − sin φ1·sin λ)``,
+    ``ωy = Ωe·sin φ2·(−cos φ1·cos λ + sin φ1·sin λ)``,
+    ``ωz = Ωe·(sin φ1·cos λ + cos φ1·sin λ)``.
+
+    Parameters
+    ----------
+    phi1_deg, phi2_deg : array
+        Outer and inner turntable angles (deg).
+    latitude_deg : float
+        Latitude λ (deg, −90…90).
+    earth_rate_deg_h : float
+        Ωe (°/h); default the sidereal rate 15.041067 °/h.
+
+    Returns
+    -------
+    (omega_deg_h, gravity_g) : (ndarray, ndarray)
+        Each of shape (n, 3): (ωx, ωy, ωz) in °/h and (ax, ay, az) in g.
+
+    References
+    ----------
+    Seed 001, §2.1, eq. (3).
+    """
+    p1, p2 = _angles(phi1_deg, phi2_deg, ConfigError)
+    lam = math.radians(_latitude(latitude_deg))
+    we = float(earth_rate_deg_h)
+    r1, r2 = np.radians(p1), np.radians(p2)
+    s1, c1, s2, c2 = np.sin(r1), np.cos(r1), np.sin(r2), np.cos(r2)
+    sl, cl = math.sin(lam), math.cos(lam)
+    a = np.column_stack([-s1 * c2, s1 * s2, c1])
+    w = we * np.column_stack(
+        [c2 * (c1 * cl - s1 * sl), s2 * (-c1 * cl + s1 * sl), s1 * cl + c1 * sl]
+    )
+    return w, a
+
+
+def drift_design_matrix(
+    phi1_deg: np.ndarray, phi2_deg: np.ndarray, *, axis: str = "x"
+) -> np.ndarray:
+    """The regression matrix A of seed 001, eq. (4): rows (1, ax, ay, az, a₁², az², ax·ay).
+
+    Parameters
+    ----------
+    phi1_deg, phi2_deg : array
+        Outer and inner turntable angles (deg).
+    axis : {"x", "y"}
+        a₁ = ax for the x axis, ay for the y axis.
+
+    Returns
+    -------
+    ndarray, shape (n, 7)
+        Columns in g⁰, g¹ (three), g² (three).
+
+    References
+    ----------
+    Seed 001, eqs. (2)–(4).
+    """
+    ax_ = _axis(axis)
+    _, a = earth_rate_and_gravity(phi1_deg, phi2_deg, 0.0)
+    gx, gy, gz = a[:, 0], a[:, 1], a[:, 2]
+    sq = gx * gx if ax_ == "x" else gy * gy
+    return np.column_stack([np.ones_like(gx), gx, gy, gz, sq, gz * gz, gx * gy])
+
+
+@dataclasses.dataclass(frozen=True)
+class MultipositionPlan(Result):
+    """A set of turntable positions and how well it identifies the drift coefficients.
+
+    ``condition_number`` is that of A (its columns are dimensionless gravity terms);
+    ``u_factors`` are √diag((AᵀA)⁻¹): a coefficient's standard uncertainty per unit noise of one
+    reading (deg/h per deg/h), for one reading per position.
+    """
+
+    axis: str
+    phi1_deg: np.ndarray
+    phi2_deg: np.ndarray
+    positions: int
+    rank: int
+    condition_number: float
+    u_factors: dict[str, float]
+    identifiable: bool
+    unidentifiable: tuple[str, ...]
+
+
+def _distinct_positions(p1: np.ndarray, p2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index of the first row of each distinct position (angles mod 360°, to 10⁻⁶°) and the
+    position of each row, numbered in the order the positions first appear."""
+    scale = 10.0**_POSITION_DECIMALS
+    full = round(360.0 * scale)
+    k1 = np.round(np.mod(p1, 360.0) * scale).astype(np.int64) % full
+    k2 = np.round(np.mod(p2, 360.0) * scale).astype(np.int64) % full
+    _, first, inverse = np.unique(k1 * full + k2, return_index=True, return_inverse=True)
+    order = np.argsort(first)  # positions in the order they first appear
+    rank_of = np.empty_like(order)
+    rank_of[order] = np.arange(order.size)
+    return first[order], rank_of[np.asarray(inverse).reshape(-1)]
+
+
+def _analyse(
+    a: np.ndarray, names: tuple[str, ...]
+) -> tuple[int, float, tuple[str, ...], list[str]]:
+    """Rank, condition number, unidentifiable coefficients and a reason for each fault."""
+    # A = QR: R (7 × 7) has A's singular values and right singular vectors, at a fraction of
+    # the cost of an SVD of the tall A.
+    sv, vt = np.linalg.svd(np.linalg.qr(a, mode="r"), full_matrices=False)[1:]
+    tol = _RANK_RTOL * sv[0] if sv.size else 0.0
+    rank = int(np.count_nonzero(sv > tol))
+    cond = float(sv[0] / sv[-1]) if sv[-1] > tol else math.inf
+    if rank == len(names):
+        return rank, cond, (), []
+    null = vt[rank:]  # rows spanning the null space of A
+    weight = np.sqrt(np.sum(null * null, axis=0))
+    bad = tuple(n for n, wgt in zip(names, weight, strict=True) if wgt > 1e-6)
+    reasons = []
+    col_norm = np.sqrt(np.sum(a * a, axis=0))
+    zero = [names[j] for j in range(len(names)) if col_norm[j] <= 1e-9 * max(col_norm.max(), 1.0)]
+    if zero:
+        reasons.append(
+            f"the column{'s' if len(zero) > 1 else ''} of {', '.join(zero)} "
+            f"{'are' if len(zero) > 1 else 'is'} zero at every position"
+        )
+    rest = [n for n in bad if n not in zero]
+    if rest:
+        reasons.append(f"only a combination of {', '.join(rest)} is determined")
+    return rank, cond, bad, reasons
+
+
+def check_multiposition_plan(
+    phi1_deg: np.ndarray, phi2_deg: np.ndarray, *, axis: str = "x"
+) -> MultipositionPlan:
+    """Check that a plan of turntable positions identifies every drift coefficient.
+
+    Parameters
+    ----------
+    phi1_deg, phi2_deg : array
+        Outer and inner angles of the planned positions (deg).
+    axis : {"x", "y"}
+        The gyro axis the plan is for.
+
+    Returns
+    -------
+    MultipositionPlan
+        Rank 7, the condition number of A and the uncertainty factors.
+
+    Raises
+    ------
+    ConfigError
+        Fewer than 7 distinct positions, non-finite angles, or a plan that leaves coefficients
+        unidentifiable (named in the message, with the reason).
+
+    References
+    ----------
+    Seed 001, eqs. (4)–(6): β is unique only when AᵀA is invertible (rank A = 7).
+    """
+    return _plan(phi1_deg, phi2_deg, axis, ConfigError, "the plan")
+
+
+def _plan(
+    phi1_deg: Any, phi2_deg: Any, axis: str, error: type[Exception], what: str
+) -> MultipositionPlan:
+    return _plan_core(phi1_deg, phi2_deg, axis, error, what)[0]
+
+
+def _plan_core(
+    phi1_deg: Any, phi2_deg: Any, axis: str, error: type[Exception], what: str
+) -> tuple[MultipositionPlan, np.ndarray, np.ndarray, np.ndarray]:
+    """The plan's checks; also A, the first row of each position and each row's position."""
+    ax_ = _axis(axis)
+    names = _NAMES[ax_]
+    p1, p2 = _angles(phi1_deg, phi2_deg, error)
+    first, pos_of_row = _distinct_positions(p1, p2)
+    if first.size < len(names):
+        raise error(
+            f"{what} has {first.size} distinct turntable position(s): the {len(names)} drift "
+            f"coefficients of the {ax_} axis need at least {len(names)} (use multiposition_plan())."
+        )
+    a = drift_design_matrix(p1, p2, axis=ax_)
+    rank, cond, bad, reasons = _analyse(a, names)
+    if bad:
+        raise error(
+            f"{what} leaves {', '.join(bad)} of the {ax_} axis unidentifiable ({'; '.join(reasons)}; "
+            f"rank {rank} of {len(names)}): add or change positions; multiposition_plan() gives a "
+            "plan that identifies all seven."
+        )
+    a1 = a[first]
+    u = np.sqrt(np.diag(np.linalg.inv(a1.T @ a1)))
+    plan = MultipositionPlan(
+        axis=ax_,
+        phi1_deg=p1,
+        phi2_deg=p2,
+        positions=int(first.size),
+        rank=rank,
+        condition_number=cond,
+        u_factors=dict(zip(names, (float(v) for v in u), strict=True)),
+        identifiable=True,
+        unidentifiable=(),
+    )
+    return plan, a, first, pos_of_row
+
+
+def multiposition_plan(
+    *,
+    outer_steps: int = 8,
+    inner_steps: int = 8,
+    outer_offset_deg: float = 0.0,
+    inner_offset_deg: float = 0.0,
+    axis: str = "x",
+) -> MultipositionPlan:
+    """A full-factorial plan: φ1 every 360°/outer_steps, φ2 every 360°/inner_steps.
+
+    The default, both axes every 45° (64 positions), identifies all seven coefficients of either
+    axis with a condition number of A of 6.9 (the smallest a uniform grid gives: the columns 1,
+    a₁² and az² are correlated by geometry). Coarser grids can fail: 90° steps make ax·ay vanish;
+    four inner angles at 45° + k·90° make a₁² and az² collinear with 1. Those raise ConfigError.
+
+    Parameters
+    ----------
+    outer_steps, inner_steps : int
+        Number of equally spaced outer and inner angles (≥ 1).
+    outer_offset_deg, inner_offset_deg : float
+        Angle of the first position on each axis (deg).
+    axis : {"x", "y"}
+        The gyro axis to check the plan for.
+
+    Returns
+    -------
+    MultipositionPlan
+        Angles in the order outer-major (the inner axis steps fastest), rank and conditioning.
+
+    References
+    ----------
+    Seed 001, §2.1 (multiposition tests on a two-axis turntable, eqs. (2)–(6)).
+    """
+    steps = []
+    for name, v in (("outer_steps", outer_steps), ("inner_steps", inner_steps)):
+        if isinstance(v, bool) or not float(v).is_integer() or not 1 <= int(v) <= 360:
+            raise ConfigError(f"{name} must be an integer from 1 to 360, got {v!r}.")
+        steps.append(int(v))
+    offs = []
+    for name, off in (
+        ("outer_offset_deg", outer_offset_deg),
+        ("inner_offset_deg", inner_offset_deg),
+    ):
+        try:
+            f = float(off)
+        except (TypeError, ValueError):
+            raise ConfigError(f"{name} must be a number of degrees, got {off!r}.") from None
+        if not math.isfinite(f):
+            raise ConfigError(f"{name} must be finite, got {off!r}.")
+        offs.append(f)
+    outer = offs[0] + np.arange(steps[0]) * (360.0 / steps[0])
+    inner = offs[1] + np.arange(steps[1]) * (360.0 / steps[1])
+    p1, p2 = np.meshgrid(outer, inner, indexing="ij")
+    return _plan(
+        p1.ravel(),
+        p2.ravel(),
+        axis,
+        ConfigError,
+        f"the plan of {steps[0]} outer × {steps[1]} inner angles",
+    )
+
+
+@dataclasses.dataclass(frozen=True)
+class MultipositionResult(Result):
+    """Drift coefficients by multiposition least squares (JSON keys of INTERFACE.md,
+    ``gyro multiposition``).
+
+    ``drift_coefficients`` and ``drift_coefficients_u`` map the seven names of the axis to values
+    and standard uncertainties in deg/h, deg/h/g and deg/h/g² (see ``drift_coefficient_units``).
+    ``residuals_deg_h`` holds one residual per row of the capture.
+    """
+
+    axis: str
+    drift_coefficients: dict[str, float]
+    drift_coefficients_u: dict[str, float]
+    drift_coefficient_units: dict[str, str]
+    latitude_deg: float
+    earth_rate_deg_h: float
+    rows: int
+    positions: int
+    dof: int
+    rank: int
+    condition_number: float
+    residual_rms_deg_h: float
+    residual_std_deg_h: float
+    residuals_deg_h: np.ndarray
+    notes: tuple[str, ...] = ()
+    _covariance: np.ndarray | None = dataclasses.field(default=None, repr=False, compare=False)
+    _plot: dict[str, Any] = dataclasses.field(default_factory=dict, repr=False, compare=False)
+
+
+def calibrate_multiposition(
+    phi1_deg: np.ndarray,
+    phi2_deg: np.ndarray,
+    output_deg_h: np.ndarray,
+    *,
+    axis: str = "x",
+    latitude_deg: float,
+    earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+) -> MultipositionResult:
+    """Drift coefficients of one gyro axis from its outputs at several turntable positions.
+
+    Forms ``b1 − b2 = A·β`` (eq. (5)) with b1 the outputs k·i (deg/h), b2 the Earth-rate component
+    of the axis at each row's position (eq. (3)) and A the gravity terms (eq. (4)), and solves it by
+    least squares (eq. (6), here through a QR factorisation of A rather than the normal equations). The
+    standard uncertainties are √diag(s²·(AᵀA)⁻¹) with s² = Σr²/(N − 7), the residual variance: they
+    assume white, equal noise on every reading. Repeated readings of a position are rows of their
+    own.
+
+    Parameters
+    ----------
+    phi1_deg, phi2_deg : array
+        Outer and inner turntable angles of each row (deg).
+    output_deg_h : array
+        The axis's torquer output in rate units, k·i (deg/h).
+    axis : {"x", "y"}
+        x: ``DF, Dx, Dy, Dz, Dxx, Dzz, Dxy``; y: ``DF, Dx, Dy, Dz, Dyy, Dzz, Dyx``.
+    latitude_deg : float
+        Latitude of the laboratory (deg, −90…90).
+    earth_rate_deg_h : float
+        Earth rate Ωe (°/h); default the sidereal 15.041067 °/h.
+
+    Returns
+    -------
+    MultipositionResult
+        Coefficients (deg/h, deg/h/g, deg/h/g²) with standard uncertainties, the condition number
+        and rank of A, residuals (deg/h).
+
+    Raises
+    ------
+    CaptureError
+        Non-finite values (naming the rows), fewer than 7 distinct positions, or positions that
+        leave coefficients unidentifiable (naming them).
+    ConfigError
+        Latitude outside ±90°, an unknown axis.
+
+    References
+    ----------
+    Seed 001, §2.1, eqs. (1)–(6).
+    """
+    ax_ = _axis(axis)
+    lat = _latitude(latitude_deg)
+    try:
+        we = float(earth_rate_deg_h)
+    except (TypeError, ValueError):
+        raise ConfigError(f"earth_rate_deg_h must be a number, got {earth_rate_deg_h!r}.") from None
+    if not math.isfinite(we) or we < 0:
+        raise ConfigError(
+            f"earth_rate_deg_h must be a finite number ≥ 0, got {earth_rate_deg_h!r}."
+        )
+    y = np.asarray(output_deg_h, dtype=float).reshape(-1)
+    p1, p2 = _angles(phi1_deg, phi2_deg, CaptureError)
+    if y.size != p1.size:
+        raise CaptureError(
+            f"column output_deg_h has {y.size} rows but phi1_deg has {p1.size}: give one output per "
+            "pair of angles."
+        )
+    bad = np.flatnonzero(~np.isfinite(y))
+    if bad.size:
+        raise CaptureError(
+            f"column output_deg_h has {bad.size} non-finite value(s) (NaN or inf) at rows "
+            f"{_rows(bad)} (counted from 0): remove those rows or re-measure those positions."
+        )
+    plan, a, first, pos_of_row = _plan_core(p1, p2, ax_, CaptureError, "the capture")
+    names = _NAMES[ax_]
+    w, _ = earth_rate_and_gravity(p1, p2, lat, earth_rate_deg_h=we)
+    omega = w[:, 0] if ax_ == "x" else w[:, 1]
+    b = y - omega
+    # Eq. (6) through A = QR (no normal equations): β = R⁻¹·Qᵀ(b1 − b2), (AᵀA)⁻¹ = R⁻¹R⁻ᵀ.
+    q, r = np.linalg.qr(a)
+    beta = solve_triangular(r, q.T @ b)
+    resid = b - a @ beta
+    n, p = a.shape
+    dof = n - p
+    notes: list[str] = [
+        f"Earth rate {we:.8g} °/h (sidereal), latitude {lat:g}°; gravity components in g, "
+        "positions by seed 001 eq. (3) (gyro axes north-west-up at φ1 = φ2 = 0)."
+    ]
+    r_inv = solve_triangular(r, np.eye(r.shape[0]))
+    cov_unit = r_inv @ r_inv.T
+    if dof > 0:
+        s2 = float(resid @ resid) / dof
+        cov = s2 * cov_unit
+        u = np.sqrt(np.diag(cov))
+        s_std = math.sqrt(s2)
+    else:
+        cov = np.full_like(cov_unit, np.nan)
+        u = np.full(p, np.nan)
+        s_std = math.nan
+        notes.append(
+            "as many readings as coefficients: the fit is exact and gives no uncertainty; repeat "
+            "positions or add more."
+        )
+    if plan.condition_number > 100:
+        notes.append(
+            f"the design is poorly conditioned (condition number {plan.condition_number:.3g}): "
+            "small errors in the outputs are strongly amplified; prefer multiposition_plan()."
+        )
+    cnt = np.bincount(pos_of_row, minlength=first.size)
+    pos_mean = np.bincount(pos_of_row, weights=resid, minlength=first.size) / cnt
+    plot = {
+        "phi1_deg": p1[first],
+        "phi2_deg": p2[first],
+        "readings": cnt,
+        "mean_residual_deg_h": pos_mean,
+        "row_position": pos_of_row,
+    }
+    return MultipositionResult(
+        axis=ax_,
+        drift_coefficients=dict(zip(names, (float(v) for v in beta), strict=True)),
+        drift_coefficients_u=dict(zip(names, (float(v) for v in u), strict=True)),
+        drift_coefficient_units=coefficient_units(ax_),
+        latitude_deg=lat,
+        earth_rate_deg_h=we,
+        rows=int(n),
+        positions=int(first.size),
+        dof=int(dof),
+        rank=plan.rank,
+        condition_number=plan.condition_number,
+        residual_rms_deg_h=float(np.sqrt(np.mean(resid * resid))),
+        residual_std_deg_h=s_std,
+        residuals_deg_h=resid,
+        notes=tuple(notes),
+        _covariance=cov,
+        _plot=plot,
+    )

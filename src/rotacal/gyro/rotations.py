@@ -1,0 +1,532 @@
+"""Gyro-triad calibration from rotations through known angles (Ferraris et al. 1994/1995).
+
+The DUT is turned through a known angle φ_l (typically 360°, by hand or on a table) about each of
+its axes; the rate is integrated over each rotation section. With the bias b taken from static
+sections, the integrated output of rotation l is::
+
+    Θ_l = Σ (u_k − b) / fs  =  K · φ_l·e_l       (output unit · s)
+
+so the 3×3 matrix K of u = K·ω + b follows from the angle vectors: K = Θ·Φᵀ(Φ·Φᵀ)⁻¹ (Θ: 3×m
+integrated outputs, Φ: 3×m true angle vectors in deg). With three rotations about x, y and z this
+is Θ·Φ⁻¹, the Ferraris/imucal solution; more rotations (both directions, repeats) are combined by
+least squares.
+
+Conventions (and how they map onto imucal's): angles follow the right-hand rule about the named
+axis of the DUT, so a rotation that makes a correctly signed gyro read negative (imucal's
+"clockwise", its default ``expected_angle=-360``) has ``angle_deg=-360``. K here equals imucal's
+``K_g @ R_g``; :attr:`RotationCalibration.scale_factors` and ``sensitive_axes`` are its ``K_g``
+diagonal and ``R_g``. imucal also removes a g-sensitivity term ``K_ga·a`` (accelerometer-derived)
+from the rate before integrating; pass that per-sample offset as ``bias`` (n, 3) to do the same.
+
+References
+----------
+Ferraris F., Gorini I., Grimaldi U., Parvis M. (1994), Calibration of three-axial rate gyros
+without angular velocity standards, Sensors and Actuators A 42:446–449.
+Ferraris F., Grimaldi U., Parvis M. (1995), Procedure for effortless in-field calibration of
+three-axial rate gyro and accelerometers, Sensors and Materials 7(5):311–330, eqs. (12)–(15).
+Küderle A. et al. (2022), imucal — a Python library to calibrate 6 DOF IMUs, JOSS 7(73):4338.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.gyro.triad import (
+    TRIAD_OUTPUT_COLUMNS,
+    apply_triad_calibration,
+    decompose_scale_misalignment,
+)
+from rotacal.results import Result
+
+__all__ = [
+    "FERRARIS_ROTATIONS",
+    "FERRARIS_STATIC",
+    "RotationCalibration",
+    "calibrate_triad_rotations",
+    "ferraris_sections",
+]
+
+#: Section names of a Ferraris recording (imucal's): six static positions and three rotations.
+FERRARIS_STATIC = ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a")
+FERRARIS_ROTATIONS = {"x_rot": "x", "y_rot": "y", "z_rot": "z"}
+
+_AXES = "xyz"
+_MIN_SECTION = 2
+#: Consecutive samples at a section's extreme value that count as a saturated output.
+_SATURATION_RUN = 5
+
+
+@dataclasses.dataclass(frozen=True)
+class RotationCalibration(Result):
+    """Gyro-triad calibration from rotations through known angles.
+
+    Output quantities are in the output unit of the rate ("u", e.g. °/s or counts).
+
+    Attributes
+    ----------
+    scale_misalignment : ndarray (3, 3)
+        K in u = K·ω + b (u per °/s); equals imucal's K_g·R_g.
+    bias : ndarray (3,)
+        b (u): the mean of the static sections (or the ``bias`` given; its mean if per-sample).
+    scale_factors, sensitive_axes, misalignment_deg
+        :func:`~rotacal.gyro.triad.decompose_scale_misalignment` of K (imucal's K_g diagonal,
+        R_g; deg).
+    scale_misalignment_u, bias_u : ndarray
+        Standard uncertainties (u per °/s, u) from: white noise of the static sections integrated
+        over each rotation, the uncertainty of the offset during the rotations (the noise of the
+        bias plus the spread of the static-section means beyond what their noise explains: it
+        holds g-sensitivity and Earth rate), and ``angle_u_deg`` of the realised angles.
+    noise_std : ndarray (3,)
+        Per-sample noise of the static sections about their own means (u), pooled.
+    static_mean_spread : ndarray (3,)
+        Standard deviation of the static-section means (u); 0 with fewer than two sections.
+    rotations : tuple of dict
+        Per rotation: ``axis``, ``start``, ``stop`` (half-open sample range), ``samples``,
+        ``duration_s``, ``angle_deg`` (set), ``integrated_output`` (u·s, bias removed),
+        ``angle_measured_deg`` (K⁻¹·Θ: what the calibrated gyro integrates) and
+        ``angle_residual_deg`` (its difference from the set angle vector; 0 for three rotations).
+    residual_rms : float
+        rms of all components of ``angle_residual_deg`` (deg).
+    fs_hz : float
+        Sampling rate (Hz).
+    static_samples : int
+        Samples in the static sections.
+    angle_u_deg : float
+        Standard uncertainty of each realised rotation angle (deg) used in the uncertainties.
+    """
+
+    scale_misalignment: np.ndarray
+    bias: np.ndarray
+    scale_factors: np.ndarray
+    sensitive_axes: np.ndarray
+    misalignment_deg: np.ndarray
+    scale_misalignment_u: np.ndarray
+    bias_u: np.ndarray
+    noise_std: np.ndarray
+    static_mean_spread: np.ndarray
+    rotations: tuple[dict[str, Any], ...]
+    residual_rms: float
+    fs_hz: float
+    static_samples: int
+    angle_u_deg: float
+    notes: tuple[str, ...] = ()
+    _plot: dict[str, Any] = dataclasses.field(default_factory=dict, repr=False, compare=False)
+
+    def calibrate(self, u: Any) -> np.ndarray:
+        """ω̂ = K⁻¹(u − b) (°/s) for raw outputs ``u`` (n, 3)."""
+        return apply_triad_calibration(u, self.scale_misalignment, self.bias)
+
+
+# ------------------------------------------------------------------------------------ sections
+def _range(name: str, value: Any, n: int) -> tuple[int, int]:
+    """(start, stop) from a pair or an imucal-style {"start": …, "end": …} mapping."""
+    if isinstance(value, Mapping):
+        if "start" not in value or not ("end" in value or "stop" in value):
+            raise ConfigError(f"section {name} must give 'start' and 'end' sample indices.")
+        pair: Any = (value["start"], value.get("end", value.get("stop")))
+    else:
+        pair = value
+    try:
+        start, stop = pair
+        fs_, fe_ = float(start), float(stop)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"section {name} must be a (start, stop) pair of sample indices, got {value!r}."
+        ) from None
+    if not (fs_.is_integer() and fe_.is_integer()):
+        raise ConfigError(f"section {name} must use integer sample indices, got {value!r}.")
+    s, e = int(fs_), int(fe_)
+    if not 0 <= s < e <= n:
+        raise ConfigError(
+            f"section {name} = [{s}, {e}) must satisfy 0 ≤ start < stop ≤ {n} (the recording's "
+            "length); fix the section list."
+        )
+    if e - s < _MIN_SECTION:
+        raise ConfigError(f"section {name} = [{s}, {e}) has fewer than {_MIN_SECTION} samples.")
+    return s, e
+
+
+def _axis_vector(name: str, axis: Any) -> tuple[str, np.ndarray]:
+    if isinstance(axis, str):
+        a = axis.strip().lower()
+        sign = -1.0 if a.startswith("-") else 1.0
+        a = a.lstrip("+-")
+        if a not in ("x", "y", "z"):
+            raise ConfigError(
+                f"rotation {name}: axis must be 'x', 'y', 'z' (optionally signed) or a 3-vector, "
+                f"got {axis!r}."
+            )
+        v = np.zeros(3)
+        v[_AXES.index(a)] = sign
+        return axis.strip(), v
+    v = np.asarray(axis, dtype=float).ravel()
+    if v.size != 3 or not np.isfinite(v).all() or not np.linalg.norm(v) > 0:
+        raise ConfigError(f"rotation {name}: axis must be a non-zero 3-vector, got {axis!r}.")
+    v = v / np.linalg.norm(v)
+    return "(" + ", ".join(f"{c:.6g}" for c in v) + ")", v
+
+
+def _parse_rotations(
+    rotations: Any, angle_deg: float, n: int
+) -> list[tuple[str, str, np.ndarray, int, int, float]]:
+    """[(name, axis label, unit axis, start, stop, angle_deg)]."""
+    out = []
+    if isinstance(rotations, Mapping):
+        items: list[Any] = [(str(ax), ax, rng, angle_deg) for ax, rng in rotations.items()]
+    elif isinstance(rotations, Sequence) and not isinstance(rotations, str):
+        items = []
+        for i, rot in enumerate(rotations):
+            if not isinstance(rot, Sequence) or isinstance(rot, str) or len(rot) not in (3, 4):
+                raise ConfigError(
+                    f"rotation {i} must be (axis, start, stop) or (axis, start, stop, angle_deg), "
+                    f"got {rot!r}."
+                )
+            ang = rot[3] if len(rot) == 4 else angle_deg
+            items.append((f"{i} ({rot[0]})", rot[0], (rot[1], rot[2]), ang))
+    else:
+        raise ConfigError(
+            "rotations must map axes to (start, stop) sample ranges, e.g. {'x': (700, 1000), …}, "
+            "or be a list of (axis, start, stop[, angle_deg])."
+        )
+    for name, ax, rng, ang in items:
+        label, vec = _axis_vector(name, ax)
+        s, e = _range(f"rotation {name}", rng, n)
+        try:
+            a = float(ang)
+        except (TypeError, ValueError):
+            raise ConfigError(
+                f"rotation {name}: angle_deg must be a number, got {ang!r}."
+            ) from None
+        if not math.isfinite(a) or a == 0:
+            raise ConfigError(
+                f"rotation {name}: angle_deg must be finite and non-zero, got {ang!r}."
+            )
+        out.append((name, label, vec, s, e, a))
+    if not out:
+        raise ConfigError("give at least three rotation sections (about x, y and z).")
+    return out
+
+
+def _parse_static(static: Any, n: int) -> list[tuple[str, int, int]]:
+    if static is None:
+        return []
+    if isinstance(static, Mapping):
+        return [(str(k), *_range(f"static {k}", v, n)) for k, v in static.items()]
+    if isinstance(static, Sequence) and not isinstance(static, str):
+        return [(str(i), *_range(f"static {i}", v, n)) for i, v in enumerate(static)]
+    raise ConfigError(
+        "static must map names to (start, stop) sample ranges or be a list of (start, stop)."
+    )
+
+
+def ferraris_sections(
+    section_list: Mapping[str, Any],
+) -> tuple[dict[str, tuple[int, int]], dict[str, tuple[int, int]]]:
+    """Rotation and static sections from a Ferraris section list (imucal's names).
+
+    Parameters
+    ----------
+    section_list : mapping
+        ``x_p, x_a, y_p, y_a, z_p, z_a`` (static) and ``x_rot, y_rot, z_rot`` (rotations) to
+        ``{"start": i, "end": j}`` or ``(i, j)``: half-open sample ranges [i, j), as imucal
+        stores them (``example_ferraris_session_list.json``).
+
+    Returns
+    -------
+    rotations : dict
+        ``{"x": (start, stop), "y": …, "z": …}`` for :func:`calibrate_triad_rotations`.
+    static : dict
+        ``{"x_p": (start, stop), …}``.
+
+    References
+    ----------
+    Ferraris F., Grimaldi U., Parvis M. (1995), Sensors and Materials 7(5):311–330 (the six
+    static positions and three rotations).
+    """
+    if not isinstance(section_list, Mapping):
+        raise ConfigError("section_list must map section names (x_p, …, z_rot) to ranges.")
+    missing = [k for k in (*FERRARIS_STATIC, *FERRARIS_ROTATIONS) if k not in section_list]
+    if missing:
+        raise ConfigError(
+            f"the section list lacks {', '.join(missing)}; a Ferraris recording needs "
+            f"{', '.join((*FERRARIS_STATIC, *FERRARIS_ROTATIONS))}."
+        )
+
+    def pair(k: str) -> tuple[int, int]:
+        v = section_list[k]
+        if isinstance(v, Mapping):
+            return int(v["start"]), int(v.get("end", v.get("stop")))
+        return int(v[0]), int(v[1])
+
+    rotations = {ax: pair(k) for k, ax in FERRARIS_ROTATIONS.items()}
+    static = {k: pair(k) for k in FERRARIS_STATIC}
+    return rotations, static
+
+
+# ------------------------------------------------------------------------------------ checks
+def _check_saturated(rate: np.ndarray, s: int, e: int, name: str, columns: Sequence[str]) -> None:
+    """A run of ≥ 5 identical samples at a rotation's extreme value, far from rest: clipped."""
+    seg = rate[s:e]
+    rest = np.median(seg, axis=0)
+    swing = float(np.max(np.abs(seg - rest)))
+    for c in range(3):
+        y = seg[:, c]
+        for ext in (float(y.max()), float(y.min())):
+            if swing == 0 or abs(ext - rest[c]) < 0.5 * swing:
+                continue  # only the outputs that carry the rotation can saturate in it
+            hit = np.concatenate([[0], (y == ext).astype(np.int8), [0]])
+            d = np.diff(hit)
+            runs = np.flatnonzero(d == -1) - np.flatnonzero(d == 1)
+            if runs.size and runs.max() >= _SATURATION_RUN:
+                first = s + int(np.flatnonzero(d == 1)[int(runs.argmax())])
+                raise CaptureError(
+                    f"column {columns[c]} stays at {ext:.6g} for {int(runs.max())} samples from "
+                    f"row {first} during rotation {name}: the gyro output is saturated; rotate "
+                    "more slowly or widen the gyro's range."
+                )
+
+
+def _check_finite(
+    rate: np.ndarray, ranges: Sequence[tuple[int, int]], columns: Sequence[str]
+) -> None:
+    for s, e in ranges:
+        seg = rate[s:e]
+        bad = ~np.isfinite(seg)
+        if bad.any():
+            row, col = (int(i) for i in np.argwhere(bad)[0])
+            raise CaptureError(
+                f"column {columns[col]} has a non-finite value at row {s + row} (in section "
+                f"[{s}, {e})); remove or repair that sample."
+            )
+
+
+# ------------------------------------------------------------------------------------ method
+def calibrate_triad_rotations(
+    rate: Any,
+    fs_hz: float,
+    rotations: Any,
+    *,
+    static: Any = None,
+    bias: Any = None,
+    angle_deg: float = 360.0,
+    angle_u_deg: float = 0.0,
+    columns: Sequence[str] = TRIAD_OUTPUT_COLUMNS,
+) -> RotationCalibration:
+    """K and b of a gyro triad from rotations through known angles (Ferraris-style).
+
+    The bias is the mean of all static samples (pooled, as imucal does) unless ``bias`` is given;
+    each rotation section's rate minus the bias is summed and divided by fs (the rectangle rule:
+    exact for sections that start and end at rest, whose rate and its slope vanish at the ends);
+    K solves Θ = K·Φ by least squares over the rotations.
+
+    Parameters
+    ----------
+    rate : array_like, (n, 3)
+        Raw gyro outputs ``ux, uy, uz`` (output unit, e.g. °/s or counts), uniformly sampled.
+    fs_hz : float
+        Sampling rate (Hz).
+    rotations : mapping or sequence
+        ``{"x": (start, stop), "y": …, "z": …}`` — one rotation about each DUT axis, half-open
+        sample ranges [start, stop) that begin and end at rest (``{"start": …, "end": …}``
+        values accepted, as in imucal's section lists) — or a list of ``(axis, start, stop)`` /
+        ``(axis, start, stop, angle_deg)`` with axis ``"x"``, ``"-y"``, … or a 3-vector, for more
+        than three rotations (both directions, repeats). Together they must span all three axes.
+    static : mapping or sequence, optional
+        Sample ranges at rest (name → (start, stop), or a list of pairs): the bias and the noise.
+    bias : array_like, (3,) or (n, 3), optional
+        The offset to remove instead of the static mean (output unit): a constant, or one row per
+        sample (for example b + K_ga·a with the g-sensitivity and the calibrated acceleration).
+    angle_deg : float
+        Set angle of each rotation given without its own (deg, right-hand rule about the named
+        axis; −360 for imucal's "clockwise" recordings).
+    angle_u_deg : float
+        Standard uncertainty of each realised rotation angle (deg), for the uncertainties.
+    columns : sequence of 3 str
+        Names of the rate columns, for messages.
+
+    Returns
+    -------
+    RotationCalibration
+        K (output unit per °/s), b (output unit), uncertainties, per-rotation angles.
+
+    Raises
+    ------
+    ConfigError
+        Bad sections (out of range, overlapping a static with a rotation, axes that do not span
+        3-D), neither ``static`` nor ``bias``, a bad setting.
+    CaptureError
+        NaN/inf in a section used, a saturated output during a rotation.
+
+    References
+    ----------
+    Ferraris F., Gorini I., Grimaldi U., Parvis M. (1994), Sensors and Actuators A 42:446–449;
+    Ferraris F., Grimaldi U., Parvis M. (1995), Sensors and Materials 7(5):311–330, eqs. (12)–(15)
+    (integrated rotations, K = W·Φ⁻¹; numbering as in imucal's implementation).
+    """
+    cols = tuple(columns)
+    if len(cols) != 3:
+        raise ConfigError(f"columns must name the 3 rate columns, got {columns!r}.")
+    u = np.asarray(rate, dtype=float)
+    if u.ndim != 2 or u.shape[1] != 3:
+        raise CaptureError(
+            f"rate must be an (n, 3) array ({', '.join(cols)}); got shape {u.shape}."
+        )
+    n = u.shape[0]
+    try:
+        fs = float(fs_hz)
+    except (TypeError, ValueError):
+        raise ConfigError(f"fs_hz must be a number, got {fs_hz!r}.") from None
+    if not math.isfinite(fs) or fs <= 0:
+        raise ConfigError(f"fs_hz must be a positive sampling rate (Hz), got {fs_hz!r}.")
+    try:
+        ang_u = float(angle_u_deg)
+    except (TypeError, ValueError):
+        raise ConfigError(f"angle_u_deg must be a number, got {angle_u_deg!r}.") from None
+    if not math.isfinite(ang_u) or ang_u < 0:
+        raise ConfigError(f"angle_u_deg must be ≥ 0 deg, got {angle_u_deg!r}.")
+    rots = _parse_rotations(rotations, angle_deg, n)
+    stats_ = _parse_static(static, n)
+    if not stats_ and bias is None:
+        raise ConfigError(
+            "give static sections (static=) or the bias (bias=): the bias must be removed before "
+            "the rotations are integrated."
+        )
+    for name, _, _, s, e, _ in rots:
+        for sname, ss, se in stats_:
+            if s < se and ss < e:
+                raise ConfigError(
+                    f"static section {sname} [{ss}, {se}) overlaps rotation {name} [{s}, {e}); "
+                    "fix the section list."
+                )
+    phi = np.column_stack([v * a for _, _, v, _, _, a in rots])  # 3×m, deg
+    if np.linalg.matrix_rank(phi, tol=1e-9 * np.abs(phi).max()) < 3:
+        have = ", ".join(label for _, label, _, _, _, _ in rots)
+        raise ConfigError(
+            f"the rotations (about {have}) do not span three axes: add a rotation about each of "
+            "x, y and z."
+        )
+    _check_finite(u, [(s, e) for *_, s, e, _ in rots] + [(s, e) for _, s, e in stats_], cols)
+    for name, _, _, s, e, _ in rots:
+        _check_saturated(u, s, e, name, cols)
+
+    # --- static sections: bias, noise, spread of the section means
+    if stats_:
+        idx = np.concatenate([np.arange(s, e) for _, s, e in stats_])
+        static_samples = int(idx.size)
+        b_static = u[idx].mean(axis=0)
+        means = np.array([u[s:e].mean(axis=0) for _, s, e in stats_])
+        dev = np.concatenate([u[s:e] - means[i] for i, (_, s, e) in enumerate(stats_)])
+        dof = max(static_samples - len(stats_), 1)
+        noise = np.sqrt(np.sum(dev**2, axis=0) / dof)
+        spread = means.std(axis=0, ddof=1) if len(stats_) > 1 else np.zeros(3)
+        # the part of the spread the white noise does not explain (each mean scatters by σ²/N_i)
+        inv_n = float(np.mean([1.0 / (e - s) for _, s, e in stats_]))
+        excess = np.sqrt(np.maximum(spread**2 - noise**2 * inv_n, 0.0))
+        u_b_white = noise / math.sqrt(static_samples)
+    else:
+        static_samples = 0
+        b_static = None
+        noise = np.zeros(3)
+        spread = np.zeros(3)
+        excess = np.zeros(3)
+        u_b_white = np.zeros(3)
+
+    notes: list[str] = []
+    if bias is None:
+        assert b_static is not None
+        offset: np.ndarray = np.broadcast_to(b_static, u.shape)
+        b_out = b_static
+        u_b = u_b_white
+    else:
+        bb = np.asarray(bias, dtype=float)
+        if bb.shape == (3,):
+            offset = np.broadcast_to(bb, u.shape)
+            b_out = bb.copy()
+        elif bb.shape == u.shape:
+            offset = bb
+            b_out = bb.mean(axis=0)
+            notes.append("per-sample offsets given (bias of shape (n, 3)); bias is their mean")
+        else:
+            raise ConfigError(
+                f"bias must have shape (3,) or ({n}, 3) like the rate; got {bb.shape}."
+            )
+        if not np.isfinite(bb).all():
+            raise ConfigError("bias has a non-finite value (NaN or inf); give finite offsets.")
+        u_b = np.zeros(3)
+        notes.append("bias given by the caller: its uncertainty is not included")
+
+    # --- integrate each rotation: Θ_l = Σ (u − offset)/fs
+    theta = np.column_stack([np.sum(u[s:e] - offset[s:e], axis=0) / fs for *_, s, e, _ in rots])
+    pinv = phi.T @ np.linalg.inv(phi @ phi.T)  # m×3: K = Θ·pinv
+    kmat = theta @ pinv
+    if not np.isfinite(kmat).all() or abs(np.linalg.det(kmat)) <= 1e-12 * np.abs(kmat).max() ** 3:
+        raise CaptureError(
+            "the integrated rotations give a singular scale/misalignment matrix: check that the "
+            "rotation sections hold the rotations about x, y and z."
+        )
+    durations = np.array([(e - s) / fs for *_, s, e, _ in rots])
+    samples = np.array([e - s for *_, s, e, _ in rots], dtype=float)
+    # u(Θ_cl)²: white noise integrated over the section + offset uncertainty × duration
+    u_off = np.sqrt(u_b**2 + (excess**2 if bias is None else 0.0))
+    var_theta = (noise[:, None] ** 2) * samples[None, :] / fs**2 + (u_off[:, None] * durations) ** 2
+    var_k = var_theta @ (pinv**2)
+    # the realised angles: dΘ_cl = (K·e_l)_c·dφ_l
+    if ang_u > 0:
+        ke = kmat @ np.column_stack([v for _, _, v, _, _, _ in rots])  # 3×m
+        var_k = var_k + (ke**2 * ang_u**2) @ (pinv**2)
+    u_k = np.sqrt(var_k)
+
+    measured = apply_triad_calibration(theta.T, kmat, np.zeros(3))  # m×3, deg
+    resid = measured - phi.T
+    scale, axes_r, mis = decompose_scale_misalignment(kmat)
+    diag_dom = np.all(np.abs(np.diag(kmat)) > np.sum(np.abs(kmat), axis=1) - np.abs(np.diag(kmat)))
+    if not diag_dom:
+        notes.append(
+            "K is not diagonally dominant: check that each rotation section is labelled with the "
+            "axis it turns about"
+        )
+    rot_rows = tuple(
+        {
+            "name": name,
+            "axis": label,
+            "start": s,
+            "stop": e,
+            "samples": e - s,
+            "duration_s": (e - s) / fs,
+            "angle_deg": a,
+            "integrated_output": theta[:, i],
+            "angle_measured_deg": measured[i],
+            "angle_residual_deg": resid[i],
+        }
+        for i, (name, label, _, s, e, a) in enumerate(rots)
+    )
+    plot = {
+        "rate": u,
+        "offset": b_out,
+        "rotations": [(label, s, e) for _, label, _, s, e, _ in rots],
+        "static": [(name, s, e) for name, s, e in stats_],
+    }
+    return RotationCalibration(
+        scale_misalignment=kmat,
+        bias=np.asarray(b_out, dtype=float),
+        scale_factors=scale,
+        sensitive_axes=axes_r,
+        misalignment_deg=mis,
+        scale_misalignment_u=u_k,
+        bias_u=u_b,
+        noise_std=noise,
+        static_mean_spread=spread,
+        rotations=rot_rows,
+        residual_rms=float(np.sqrt(np.mean(resid**2))),
+        fs_hz=fs,
+        static_samples=static_samples,
+        angle_u_deg=ang_u,
+        notes=tuple(notes),
+        _plot=plot,
+    )

@@ -1,0 +1,789 @@
+"""Single-axis gyro scale factor and nonlinearity from a rate-table test (seed 004, §4).
+
+The table holds a set rate Ω while the DUT's output is recorded, for several rates. Rows with the
+same set rate form one *rate point*; its samples are averaged (keeping n, standard deviation and
+standard error). A straight line is fitted to the point means by least squares,
+
+    V(Ω) = S·Ω + V0 + δ(Ω),
+
+S is the scale factor (output unit per °/s), V0 the bias (output unit), δ the residuals, and the
+nonlinearity is ``NL = 100·max|δ| / (|S|·FS)`` in %FS (seed 004: NL = max|δ|/FS with δ and FS in
+the same unit; rotacal converts δ to °/s by S). Seed 004 recommends at least 11 points.
+
+Choices (documented in :func:`calibrate_scale_factor`):
+
+- **Same set rate.** Rates within ``rate_tolerance_deg_s`` (default 0.001 °/s) of their sorted
+  neighbour are one point (single linkage): a commanded rate is written identically on every row,
+  and no test resolves points closer than a millidegree per second.
+- **Unweighted fit.** Every point has equal weight, as in seed 004 and IEEE Std 952-1997 /
+  IEEE Std 1431-2004 (least-squares straight line through the averaged points). The residuals of a
+  real gyro are dominated by its systematic nonlinearity, not by noise: weighting by the points'
+  standard errors would let the quietest points define the line and make NL depend on how long
+  each point was recorded. On the xinli_turntable recording the unweighted fit reproduces the
+  published S = 1.000199, NL = 0.082 %FS; a 1/SE² fit gives 1.000489 and 0.122 %FS.
+- **Uncertainties** of S and V0 are the least-squares ones, s²·(AᵀA)⁻¹ with s² = Σδ²/(N − 2)
+  (GUM, JCGM 100:2008, H.3): the scatter of the points about the line, so they include the
+  nonlinearity. They do not include the table's rate uncertainty.
+
+References
+----------
+Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity calibration facility
+using self-calibratable rotary encoder" (seed 004), §4 and Table 1.
+IEEE Std 952-1997, Annex C (scale factor and nonlinearity from a least-squares line).
+NHTSA, FMVSS 126 Laboratory Test Procedure for Electronic Stability Control Systems (2008).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.results import Result
+
+__all__ = [
+    "DEFAULT_RATE_TOLERANCE_DEG_S",
+    "MIN_POINTS_RECOMMENDED",
+    "REQUIREMENTS",
+    "RatePoint",
+    "RequirementCheck",
+    "RequirementVerdict",
+    "ScaleFactorResult",
+    "calibrate_scale_factor",
+    "evaluate_requirement",
+    "output_quantum",
+    "resolve_requirement",
+]
+
+#: Set rates closer than this (°/s) to their sorted neighbour are one rate point.
+DEFAULT_RATE_TOLERANCE_DEG_S = 1e-3
+#: Seed 004, §4: "the number of measurement points should be greater than or equal 11".
+MIN_POINTS_RECOMMENDED = 11
+
+#: Named requirements, FMVSS 126 first. Limits: ``range_deg_s`` (the tested rates must reach ±it),
+#: ``resolution_deg_s`` (must be below), ``accuracy_percent_fs`` (the nonlinearity must be below).
+REQUIREMENTS: dict[str, dict[str, Any]] = {
+    "fmvss126": {
+        "title": "FMVSS 126",
+        "source": "seed 004 Table 1 (NHTSA FMVSS 126 laboratory test procedure, 2008)",
+        "range_deg_s": 100.0,
+        "resolution_deg_s": 0.004,
+        "accuracy_percent_fs": 0.05,
+    },
+}
+_LIMIT_KEYS = ("range_deg_s", "resolution_deg_s", "accuracy_percent_fs")
+_TEXT_KEYS = ("name", "title", "source")
+_SHOW_ROWS = 8
+#: Samples per rate point examined for an output quantum (see :func:`output_quantum`).
+_QUANTUM_SAMPLES = 50_000
+# Saturation: a segment between neighbouring outer points whose slope is below this fraction of
+# the median slope, by more than _SAT_SIGMAS standard errors, is a saturated output.
+_SAT_SLOPE_FRACTION = 0.5
+_SAT_SIGMAS = 5.0
+# A rail: the column's extreme value held by ≥ 1 % (and ≥ 3) of a point's samples and by more than
+# twice as many samples as the point's next value below it (a noise tail decreases, a rail piles).
+_RAIL_FRACTION = 0.01
+_RAIL_MIN_COUNT = 3
+# …or every sample of the point (≥ 10) equals it while ≥ 75 % of the other points vary.
+_RAIL_FLAT_MIN = 10
+_RAIL_NOISY_FRACTION = 0.75
+
+
+@dataclasses.dataclass(frozen=True)
+class RatePoint(Result):
+    """One set rate: the statistics of its samples and its residual from the fitted line.
+
+    ``mean``, ``std`` (ddof = 1), ``standard_error`` (std/√n) and ``residual`` (mean − S·Ω − V0) are
+    in output units; ``residual_percent_fs`` = 100·residual/(|S|·FS).
+    """
+
+    rate_deg_s: float
+    n: int
+    mean: float
+    std: float
+    standard_error: float
+    residual: float
+    residual_percent_fs: float
+
+
+@dataclasses.dataclass(frozen=True)
+class RequirementCheck(Result):
+    """One line of a requirement: the limit, the measured value, pass/fail and the margin.
+
+    ``margin`` is in ``unit`` and positive when the requirement is met (limit − value for an upper
+    limit; tested reach − range for the range). ``passed`` is None when the value could not be
+    assessed from the capture.
+    """
+
+    quantity: str
+    limit: float
+    value: float | None
+    unit: str
+    passed: bool | None
+    margin: float | None
+    basis: str
+    line: str
+
+
+@dataclasses.dataclass(frozen=True)
+class RequirementVerdict(Result):
+    """A named requirement applied to a scale-factor result (``passed``: every check passed)."""
+
+    name: str
+    title: str
+    source: str
+    passed: bool | None
+    checks: tuple[RequirementCheck, ...]
+    note: str
+
+    def lines(self) -> list[str]:
+        """One pass/fail line per check, headed by the requirement's title."""
+        head = {True: "PASS", False: "FAIL", None: "NOT ASSESSED"}[self.passed]
+        return [f"{self.title}: {head}"] + [f"  {c.line}" for c in self.checks]
+
+
+@dataclasses.dataclass(frozen=True)
+class ScaleFactorResult(Result):
+    """Scale factor, bias and nonlinearity (JSON keys of INTERFACE.md, ``gyro scale-factor``).
+
+    Units: ``scale_factor`` output unit per °/s; ``bias``, ``residuals`` output unit;
+    ``full_scale_deg_s``, ``rates_deg_s``, ``resolution_deg_s`` °/s; ``nonlinearity_percent_fs``,
+    ``residuals_percent_fs`` % of full scale.
+    """
+
+    scale_factor: float
+    bias: float
+    full_scale_deg_s: float
+    nonlinearity_percent_fs: float
+    residuals: np.ndarray
+    scale_factor_u: float
+    bias_u: float
+    residuals_percent_fs: np.ndarray
+    rates_deg_s: np.ndarray
+    points: tuple[RatePoint, ...]
+    n_points: int
+    samples_used: int
+    residual_std: float
+    dof: int
+    output_unit: str
+    rate_tolerance_deg_s: float
+    resolution_deg_s: float | None
+    resolution_basis: str
+    output_quantum: float | None
+    requirement: RequirementVerdict | None = None
+    notes: tuple[str, ...] = ()
+
+    def summary_lines(self) -> list[str]:
+        """Human-readable result lines (for the CLI and logs)."""
+        unit = f" {self.output_unit}" if self.output_unit else ""
+        out = [
+            f"scale factor  {self.scale_factor:.8g} ± {self.scale_factor_u:.2g}{unit}/(°/s)",
+            f"bias          {self.bias:.6g} ± {self.bias_u:.2g}{unit}",
+            f"nonlinearity  {self.nonlinearity_percent_fs:.4g} %FS "
+            f"(FS {self.full_scale_deg_s:g} °/s, {self.n_points} rate points)",
+        ]
+        if self.requirement is not None:
+            out += self.requirement.lines()
+        return out
+
+
+# ------------------------------------------------------------------------------- helpers
+def _rows(idx: np.ndarray) -> str:
+    shown = ", ".join(str(int(i)) for i in idx[:_SHOW_ROWS])
+    more = f" and {idx.size - _SHOW_ROWS} more" if idx.size > _SHOW_ROWS else ""
+    return f"{shown}{more}"
+
+
+def _fmt_rate(r: float) -> str:
+    return f"{r:+.6g} °/s"
+
+
+def _positive(name: str, value: Any, what: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{name} must be a number ({what}), got {value!r}.") from None
+    if not math.isfinite(v) or v <= 0:
+        raise ConfigError(f"{name} must be a finite number > 0 ({what}), got {value!r}.")
+    return v
+
+
+def resolve_requirement(requirement: str | Mapping[str, Any]) -> dict[str, Any]:
+    """The limits of a named requirement, or a user's own, checked.
+
+    Parameters
+    ----------
+    requirement : str or mapping
+        A name from :data:`REQUIREMENTS` (case, spaces, ``-`` and ``_`` ignored: ``"FMVSS 126"``)
+        or a mapping with any of ``range_deg_s`` (°/s), ``resolution_deg_s`` (°/s),
+        ``accuracy_percent_fs`` (%FS) and optionally ``name``, ``title``, ``source``.
+
+    Returns
+    -------
+    dict
+        ``name``, ``title``, ``source`` and the limits given.
+    """
+    if isinstance(requirement, str):
+        key = "".join(ch for ch in requirement.lower() if ch not in " -_")
+        if key not in REQUIREMENTS:
+            raise ConfigError(
+                f"unknown requirement {requirement!r}; known: {', '.join(REQUIREMENTS)} (or pass a "
+                "dict of range_deg_s, resolution_deg_s, accuracy_percent_fs)."
+            )
+        return {"name": key, **REQUIREMENTS[key]}
+    if not isinstance(requirement, Mapping):
+        raise ConfigError(
+            f"requirement must be a name ({', '.join(REQUIREMENTS)}) or a dict of limits, got "
+            f"{requirement!r}."
+        )
+    bad = [k for k in requirement if k not in _LIMIT_KEYS + _TEXT_KEYS]
+    if bad:
+        raise ConfigError(
+            f"unknown requirement key {bad[0]!r}; use {', '.join(_LIMIT_KEYS + _TEXT_KEYS)}."
+        )
+    out: dict[str, Any] = {
+        "name": str(requirement.get("name", "custom")),
+        "title": str(requirement.get("title", requirement.get("name", "custom requirement"))),
+        "source": str(requirement.get("source", "user")),
+    }
+    for k in _LIMIT_KEYS:
+        if k in requirement:
+            out[k] = _positive(f"requirement {k}", requirement[k], "a limit")
+    if not any(k in out for k in _LIMIT_KEYS):
+        raise ConfigError(
+            f"the requirement gives no limit: add at least one of {', '.join(_LIMIT_KEYS)}."
+        )
+    return out
+
+
+def evaluate_requirement(
+    requirement: str | Mapping[str, Any],
+    *,
+    rate_min_deg_s: float,
+    rate_max_deg_s: float,
+    nonlinearity_percent_fs: float,
+    full_scale_deg_s: float,
+    resolution_deg_s: float | None,
+    resolution_basis: str = "",
+) -> RequirementVerdict:
+    """Pass/fail, with margins, of measured gyro figures against a requirement.
+
+    Parameters
+    ----------
+    requirement : str or mapping
+        See :func:`resolve_requirement`.
+    rate_min_deg_s, rate_max_deg_s : float
+        The lowest and highest set rates tested (°/s); the range passes when they reach −R and +R.
+    nonlinearity_percent_fs : float
+        NL (%FS) of the fit; the accuracy passes when it is below the limit.
+    full_scale_deg_s : float
+        FS (°/s) NL refers to (stated on the line).
+    resolution_deg_s : float or None
+        Estimated resolution (°/s); None leaves the resolution not assessed.
+    resolution_basis : str
+        How the resolution was estimated (stated on the line).
+
+    Returns
+    -------
+    RequirementVerdict
+
+    References
+    ----------
+    Seed 004, Table 1 (FMVSS 126: range ±100 °/s, resolution < 0.004 °/s, accuracy < 0.05 %FS).
+    """
+    req = resolve_requirement(requirement)
+    checks: list[RequirementCheck] = []
+    if "range_deg_s" in req:
+        lim = req["range_deg_s"]
+        reach = min(rate_max_deg_s, -rate_min_deg_s)
+        ok = bool(reach >= lim)
+        margin = reach - lim
+        line = (
+            f"{'PASS' if ok else 'FAIL'} range: tested {rate_min_deg_s:+.6g} … "
+            f"{rate_max_deg_s:+.6g} °/s {'covers' if ok else 'does not cover'} ±{lim:g} °/s "
+            f"(margin {margin:+.4g} °/s)"
+        )
+        checks.append(
+            RequirementCheck(
+                "range", lim, reach, "deg/s", ok, margin, "smallest |extreme set rate|", line
+            )
+        )
+    if "resolution_deg_s" in req:
+        lim = req["resolution_deg_s"]
+        if resolution_deg_s is None or not math.isfinite(resolution_deg_s):
+            line = (
+                f"NOT ASSESSED resolution: neither an output quantum nor the noise of a point is "
+                f"visible in the capture (limit < {lim:g} °/s)"
+            )
+            checks.append(
+                RequirementCheck("resolution", lim, None, "deg/s", None, None, "none", line)
+            )
+        else:
+            ok = bool(resolution_deg_s < lim)
+            margin = lim - resolution_deg_s
+            line = (
+                f"{'PASS' if ok else 'FAIL'} resolution: {resolution_deg_s:.3g} °/s "
+                f"{'<' if ok else '≥'} {lim:g} °/s (margin {margin:+.3g} °/s; {resolution_basis})"
+            )
+            checks.append(
+                RequirementCheck(
+                    "resolution", lim, resolution_deg_s, "deg/s", ok, margin, resolution_basis, line
+                )
+            )
+    if "accuracy_percent_fs" in req:
+        lim = req["accuracy_percent_fs"]
+        ok = bool(nonlinearity_percent_fs < lim)
+        margin = lim - nonlinearity_percent_fs
+        line = (
+            f"{'PASS' if ok else 'FAIL'} accuracy: nonlinearity {nonlinearity_percent_fs:.4g} %FS "
+            f"{'<' if ok else '≥'} {lim:g} %FS (margin {margin:+.3g} %FS; FS = "
+            f"{full_scale_deg_s:g} °/s)"
+        )
+        checks.append(
+            RequirementCheck(
+                "accuracy",
+                lim,
+                nonlinearity_percent_fs,
+                "percent_fs",
+                ok,
+                margin,
+                "nonlinearity of the least-squares line",
+                line,
+            )
+        )
+    states = [c.passed for c in checks]
+    passed: bool | None = (
+        False if any(s is False for s in states) else (None if None in states else True)
+    )
+    note = (
+        "Accuracy is judged by the nonlinearity alone. A full accuracy statement would also count "
+        "the uncertainty of the scale factor (including the table's rate traceability), the bias "
+        "and its repeatability, temperature sensitivity and cross-axis sensitivity."
+    )
+    return RequirementVerdict(req["name"], req["title"], req["source"], passed, tuple(checks), note)
+
+
+def output_quantum(
+    output: np.ndarray, groups: np.ndarray | None = None, *, max_median_steps: float = 4.0
+) -> float | None:
+    """The output quantum, when the recorded values visibly lie on a grid; else None.
+
+    Within each group (rate point; at most 50 000 evenly strided samples of it), the gaps between
+    consecutive distinct values are taken. The
+    smallest gap q is the quantum when every gap is an integer multiple of q (to 10⁻³ of q) and the
+    median gap is at most ``max_median_steps``·q (the grid is densely used, so q is not a
+    coincidence of sparse printed digits). A quantum below the float resolution of the values is
+    not one.
+
+    Parameters
+    ----------
+    output : array
+        Output samples (output units); non-finite values are ignored.
+    groups : array of int or None
+        Group label of each sample (None: one group).
+    max_median_steps : float
+        Largest median gap, in quanta, for the grid to count as visible.
+
+    Returns
+    -------
+    float or None
+        q in output units.
+    """
+    y = np.asarray(output, dtype=float).reshape(-1)
+    g = np.zeros(y.size, dtype=np.int64) if groups is None else np.asarray(groups).reshape(-1)
+    ok = np.isfinite(y)
+    y, g = y[ok], g[ok]
+    if y.size < 2:
+        return None
+    # At most _QUANTUM_SAMPLES evenly strided samples of each group: plenty to see a grid, and
+    # the sort stays cheap on long records.
+    by_g = np.argsort(g, kind="stable")
+    gs0 = g[by_g]
+    starts = np.flatnonzero(np.r_[True, gs0[1:] != gs0[:-1]])
+    sizes = np.diff(np.r_[starts, gs0.size])
+    if sizes.max() > _QUANTUM_SAMPLES:
+        within = np.arange(gs0.size) - np.repeat(starts, sizes)
+        stride = np.repeat(-(-sizes // _QUANTUM_SAMPLES), sizes)
+        keep = by_g[within % stride == 0]
+        y, g = y[keep], g[keep]
+    order = np.lexsort((y, g))
+    ys, gs = y[order], g[order]
+    d = np.diff(ys)
+    gaps = d[(gs[1:] == gs[:-1]) & (d > 0)]
+    if gaps.size == 0:
+        return None
+    q = float(gaps.min())
+    if q <= 64.0 * np.finfo(float).eps * float(np.max(np.abs(ys))):
+        return None
+    k = gaps / q
+    if float(np.max(np.abs(k - np.round(k)))) > 1e-3:
+        return None
+    if float(np.median(k)) > max_median_steps:
+        return None
+    return q
+
+
+def _group(rate: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Group ids (0 = lowest rate), each group's mean set rate and its spread (max − min)."""
+    order = np.argsort(rate, kind="stable")
+    rs = rate[order]
+    new = np.empty(rs.size, dtype=bool)
+    new[0] = True
+    new[1:] = np.diff(rs) > tol
+    gid_sorted = np.cumsum(new) - 1
+    gid = np.empty(rs.size, dtype=np.int64)
+    gid[order] = gid_sorted
+    starts = np.flatnonzero(new)
+    ng = starts.size
+    counts = np.diff(np.append(starts, rs.size))
+    rate_mean = np.add.reduceat(rs, starts) / counts
+    spread = np.maximum.reduceat(rs, starts) - np.minimum.reduceat(rs, starts)
+    assert rate_mean.size == ng
+    return gid, rate_mean, spread
+
+
+def _check_rail(
+    y: np.ndarray, gid: np.ndarray, ok: np.ndarray, rates: np.ndarray, std: np.ndarray, unit: str
+) -> None:
+    """Refuse a point clipped at a rail: its samples pile up at the column's extreme value, or
+    they all equal it while the other points show noise (a rail has none)."""
+    yf, gf = y[ok], gid[ok]
+    noisy = np.isfinite(std) & (std > 0)
+    for extreme, word in ((float(yf.max()), "maximum"), (float(yf.min()), "minimum")):
+        at = yf == extreme
+        for g in np.unique(gf[at]):
+            vals = yf[gf == g]
+            k_ext = int(np.count_nonzero(vals == extreme))
+            others_noisy = np.delete(noisy, g)
+            others_n = np.delete(np.isfinite(std), g)
+            if (
+                k_ext == vals.size >= _RAIL_FLAT_MIN
+                and others_n.any()
+                and np.count_nonzero(others_noisy)
+                >= _RAIL_NOISY_FRACTION * np.count_nonzero(others_n)
+            ):
+                raise CaptureError(
+                    f"column output clips at a rail at the rate point {_fmt_rate(rates[g])}: all "
+                    f"{vals.size} of its samples equal the column's {word} {extreme:.6g}{unit} while "
+                    "the other points show noise; drop that rate point or widen the DUT's output "
+                    "range."
+                )
+            if k_ext < max(_RAIL_MIN_COUNT, math.ceil(_RAIL_FRACTION * vals.size)):
+                continue
+            others = vals[vals != extreme]
+            if np.unique(vals).size < 3 or others.size == 0:
+                continue
+            nearest = others.max() if word == "maximum" else others.min()
+            k_next = int(np.count_nonzero(others == nearest))
+            if k_ext > 2 * k_next:
+                raise CaptureError(
+                    f"column output clips at a rail at the rate point {_fmt_rate(rates[g])}: "
+                    f"{k_ext} of its {vals.size} samples sit exactly at the column's {word} "
+                    f"{extreme:.6g}{unit}; drop that rate point or widen the DUT's output range."
+                )
+
+
+def _check_saturation(
+    rates: np.ndarray, means: np.ndarray, std: np.ndarray, counts: np.ndarray, unit: str
+) -> None:
+    """Refuse outer rate points where the output stops following the rate (saturation)."""
+    if rates.size < 3:
+        return
+    dr = np.diff(rates)
+    dm = np.diff(means)
+    slopes = dm / dr
+    s_ref = float(np.median(slopes))
+    if s_ref == 0:
+        return
+    deficit = np.abs(s_ref * dr - dm)
+    # Noise of each segment's change: from the points' standard errors (a pooled standard
+    # deviation for single-sample points); when no point has two samples, from the robust scatter
+    # (MAD) of the point means about the line of median slope.
+    multi = counts > 1
+    if multi.any():
+        pooled = float(np.sum((counts[multi] - 1) * std[multi] ** 2) / np.sum(counts[multi] - 1))
+        sd = np.where(multi, std, math.sqrt(pooled))
+        se = sd / np.sqrt(counts)
+        noise = np.hypot(se[1:], se[:-1])
+    else:
+        res = means - s_ref * rates  # about the robust line (median slope, median offset)
+        sigma = 1.4826 * float(np.median(np.abs(res - np.median(res))))
+        noise = np.full(dr.size, math.sqrt(2.0) * sigma)
+    bad = (slopes / s_ref < _SAT_SLOPE_FRACTION) & (deficit > _SAT_SIGMAS * noise)
+    # Walk inward from each end: saturation affects the outermost points only. Segment k joins
+    # points k and k + 1; a bad outer segment saturates its outer point.
+    last = bad.size - 1
+    for side in ("high", "low"):
+        seg = last if side == "high" else 0
+        if not bad[seg]:
+            continue
+        if side == "high":
+            k = seg
+            while k - 1 >= 0 and bad[k - 1]:
+                k -= 1
+            sat = rates[k + 1 :]
+            outer, inner = rates.size - 1, rates.size - 2
+        else:
+            k = seg
+            while k + 1 <= last and bad[k + 1]:
+                k += 1
+            sat = rates[: k + 1][::-1]
+            outer, inner = 0, 1
+        pts = ", ".join(_fmt_rate(r) for r in sat)
+        raise CaptureError(
+            f"the output saturates at the rate point {_fmt_rate(rates[outer])}: its mean "
+            f"{means[outer]:.6g}{unit} differs by only {dm[seg] * (1 if side == 'high' else -1):+.4g}"
+            f"{unit} from that of the {_fmt_rate(rates[inner])} point where the slope of the other "
+            f"points predicts {s_ref * dr[seg] * (1 if side == 'high' else -1):+.4g}{unit} "
+            f"(saturated points: {pts}); drop them or widen the DUT's output range."
+        )
+
+
+# ------------------------------------------------------------------------------- method
+def calibrate_scale_factor(
+    rate_deg_s: np.ndarray,
+    output: np.ndarray,
+    *,
+    full_scale_deg_s: float | None = None,
+    requirement: str | Mapping[str, Any] | None = None,
+    rate_tolerance_deg_s: float = DEFAULT_RATE_TOLERANCE_DEG_S,
+    nan_policy: str = "raise",
+    output_unit: str = "",
+) -> ScaleFactorResult:
+    """Scale factor, bias and nonlinearity of a gyro from a rate-table test.
+
+    Rows whose set rates lie within ``rate_tolerance_deg_s`` of each other are one rate point; its
+    samples are averaged. An unweighted least-squares line V = S·Ω + V0 through the N point means
+    gives S and V0; δ are the point residuals and NL = 100·max|δ|/(|S|·FS) %FS.
+
+    The capture is refused (:class:`~rotacal.errors.CaptureError`) when a set rate is missing, a
+    rate point has no finite output, outputs are NaN (unless ``nan_policy="omit"``), there is only
+    one rate, the output does not change with the rate, or the output saturates: at the outer
+    points their mean stops following the rate (local slope below half the median slope by more
+    than 5 standard errors), or a point's samples pile up at the column's extreme value (a rail).
+
+    The resolution used by a requirement is the output quantum divided by |S| when the outputs lie
+    visibly on a grid (:func:`output_quantum`), otherwise the largest standard error of a point
+    mean divided by |S| (the smallest rate change this test resolves). Neither replaces the
+    IEEE Std 1431 resolution test with small rate increments.
+
+    Parameters
+    ----------
+    rate_deg_s : array
+        Set rate of the table on each row (°/s).
+    output : array
+        DUT output on each row (output units: V, LSB, °/s …).
+    full_scale_deg_s : float or None
+        FS (°/s) for NL; None takes the largest |set rate|.
+    requirement : str or mapping or None
+        A named requirement (``"fmvss126"``) or a dict of limits (see :func:`resolve_requirement`).
+    rate_tolerance_deg_s : float
+        Set rates closer than this (°/s, ≥ 0) to their sorted neighbour are one point.
+    nan_policy : {"raise", "omit"}
+        Non-finite outputs raise, or are left out (with a note).
+    output_unit : str
+        Name of the output unit, for messages and reports.
+
+    Returns
+    -------
+    ScaleFactorResult
+        ``scale_factor`` (output unit per °/s), ``bias`` (output unit), their standard
+        uncertainties, ``nonlinearity_percent_fs`` (%FS), ``residuals`` (output unit, one per point),
+        the per-point table and the requirement's verdict.
+
+    References
+    ----------
+    Kokuyama et al. (seed 004), §4: V(Ω) = S·Ω + V0 + δ(Ω), NL = max|δ|/FS, ≥ 11 points; Table 1
+    (FMVSS 126). IEEE Std 952-1997, Annex C. JCGM 100:2008 (GUM), H.3 (straight-line fit and its
+    uncertainties).
+    """
+    unit = f" {output_unit}" if output_unit else ""
+    rate = np.asarray(rate_deg_s, dtype=float).reshape(-1)
+    y = np.asarray(output, dtype=float).reshape(-1)
+    if rate.size != y.size:
+        raise CaptureError(
+            f"column rate_deg_s has {rate.size} rows but column output has {y.size}: they must "
+            "have one row per sample."
+        )
+    if rate.size == 0:
+        raise CaptureError("the capture has no rows: it needs rate_deg_s and output samples.")
+    if nan_policy not in ("raise", "omit"):
+        raise ConfigError(f"nan_policy must be 'raise' or 'omit', got {nan_policy!r}.")
+    try:
+        tol = float(rate_tolerance_deg_s)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"rate_tolerance_deg_s must be a number ≥ 0 °/s, got {rate_tolerance_deg_s!r}."
+        ) from None
+    if not math.isfinite(tol) or tol < 0:
+        raise ConfigError(
+            f"rate_tolerance_deg_s must be a number ≥ 0 °/s, got {rate_tolerance_deg_s!r}."
+        )
+    req = None if requirement is None else resolve_requirement(requirement)
+    fs_user = (
+        None
+        if full_scale_deg_s is None
+        else _positive("full_scale_deg_s", full_scale_deg_s, "the full scale in °/s")
+    )
+
+    bad_rate = np.flatnonzero(~np.isfinite(rate))
+    if bad_rate.size:
+        raise CaptureError(
+            f"column rate_deg_s has {bad_rate.size} non-finite value(s) (NaN or inf) at rows "
+            f"{_rows(bad_rate)} (counted from 0): every row needs the table's set rate."
+        )
+    gid, rates, spread = _group(rate, tol)
+    ng = rates.size
+    if ng == 1:
+        raise CaptureError(
+            f"every row of column rate_deg_s has the same set rate ({_fmt_rate(rates[0])}): a "
+            f"scale factor needs at least two rates (seed 004 recommends ≥ {MIN_POINTS_RECOMMENDED})."
+        )
+    ok = np.isfinite(y)
+    counts = np.bincount(gid, weights=ok, minlength=ng).astype(np.int64)
+    empty = np.flatnonzero(counts == 0)
+    if empty.size:
+        rows = np.flatnonzero(gid == empty[0])
+        raise CaptureError(
+            f"the rate point {_fmt_rate(rates[empty[0]])} has no samples: all {rows.size} of its "
+            f"outputs are NaN or empty (rows {_rows(rows)}, counted from 0); fix column output or "
+            "remove that rate."
+        )
+    notes: list[str] = []
+    bad_out = np.flatnonzero(~ok)
+    if bad_out.size:
+        if nan_policy == "raise":
+            raise CaptureError(
+                f"column output has {bad_out.size} non-finite value(s) (NaN or inf) at rows "
+                f"{_rows(bad_out)} (counted from 0): remove those rows or pass nan_policy='omit'."
+            )
+        notes.append(
+            f"{bad_out.size} non-finite output value(s) left out (rows {_rows(bad_out)}, counted "
+            "from 0)."
+        )
+
+    yz = np.where(ok, y, 0.0)
+    means = np.bincount(gid, weights=yz, minlength=ng) / counts
+    dev = np.where(ok, y - means[gid], 0.0)
+    ss = np.bincount(gid, weights=dev * dev, minlength=ng)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        std = np.where(counts > 1, np.sqrt(ss / np.maximum(counts - 1, 1)), np.nan)
+        se = std / np.sqrt(counts)
+
+    if np.ptp(means) == 0:
+        raise CaptureError(
+            "column output does not change with the set rate (every rate point has the same mean "
+            f"{means[0]:.6g}{unit}): check that the right output column is mapped."
+        )
+    _check_rail(y, gid, ok, rates, std, unit)
+    _check_saturation(rates, means, std, counts, unit)
+
+    # Unweighted least-squares line through the point means (centred for accuracy).
+    xbar = float(rates.mean())
+    ybar = float(means.mean())
+    xc = rates - xbar
+    sxx = float(xc @ xc)
+    s = float(xc @ (means - ybar)) / sxx
+    v0 = ybar - s * xbar
+    resid = means - (s * rates + v0)
+    dof = ng - 2
+    if dof > 0:
+        s2 = float(resid @ resid) / dof
+        s_u = math.sqrt(s2 / sxx)
+        v0_u = math.sqrt(s2 * (1.0 / ng + xbar * xbar / sxx))
+        res_std = math.sqrt(s2)
+    else:
+        s_u = v0_u = res_std = math.nan
+        notes.append(
+            "two rate points fit the line exactly: the residuals, the nonlinearity and the "
+            "uncertainties mean nothing."
+        )
+    fs = fs_user if fs_user is not None else float(np.max(np.abs(rates)))
+    scale = abs(s) * fs
+    res_pct = 100.0 * resid / scale
+    nl = float(np.max(np.abs(res_pct)))
+
+    if ng < MIN_POINTS_RECOMMENDED:
+        notes.append(
+            f"only {ng} rate points: seed 004 (§4) recommends at least {MIN_POINTS_RECOMMENDED}."
+        )
+    if fs_user is not None and fs_user < float(np.max(np.abs(rates))):
+        notes.append(
+            f"the tested rates reach {float(np.max(np.abs(rates))):g} °/s, beyond the full scale "
+            f"{fs_user:g} °/s that NL refers to."
+        )
+    if float(spread.max()) > 0:
+        notes.append(
+            f"set rates within {tol:g} °/s were merged into one point; the largest spread within "
+            f"a point is {float(spread.max()):.3g} °/s."
+        )
+
+    q = output_quantum(y, gid)
+    if q is not None:
+        resolution: float | None = q / abs(s)
+        basis = f"output quantum {q:.4g}{unit} / |S|"
+    else:
+        finite_se = se[np.isfinite(se)]
+        if finite_se.size and float(finite_se.max()) > 0:
+            resolution = float(finite_se.max()) / abs(s)
+            basis = "largest standard error of a point mean / |S|"
+        else:
+            resolution = None
+            basis = "not visible"
+    notes.append(
+        "Unweighted least squares through the point means (seed 004 §4, IEEE Std 952 Annex C); "
+        "scale_factor_u and bias_u are the fit's standard uncertainties from the scatter of the "
+        "points about the line (nonlinearity included, table rate uncertainty not)."
+    )
+    if req is not None:
+        verdict: RequirementVerdict | None = evaluate_requirement(
+            req,
+            rate_min_deg_s=float(rates.min()),
+            rate_max_deg_s=float(rates.max()),
+            nonlinearity_percent_fs=nl,
+            full_scale_deg_s=fs,
+            resolution_deg_s=resolution,
+            resolution_basis=basis,
+        )
+    else:
+        verdict = None
+
+    points = tuple(
+        RatePoint(
+            float(rates[i]),
+            int(counts[i]),
+            float(means[i]),
+            float(std[i]),
+            float(se[i]),
+            float(resid[i]),
+            float(res_pct[i]),
+        )
+        for i in range(ng)
+    )
+    return ScaleFactorResult(
+        scale_factor=s,
+        bias=v0,
+        full_scale_deg_s=fs,
+        nonlinearity_percent_fs=nl,
+        residuals=resid,
+        scale_factor_u=s_u,
+        bias_u=v0_u,
+        residuals_percent_fs=res_pct,
+        rates_deg_s=rates,
+        points=points,
+        n_points=ng,
+        samples_used=int(counts.sum()),
+        residual_std=res_std,
+        dof=dof,
+        output_unit=output_unit,
+        rate_tolerance_deg_s=tol,
+        resolution_deg_s=resolution,
+        resolution_basis=basis,
+        output_quantum=q,
+        requirement=verdict,
+        notes=tuple(notes),
+    )

@@ -1,0 +1,883 @@
+"""3-axis gyro calibration from rotations at several rates (seed 003, modified six-position method).
+
+Model of the gyro triad (output ``u`` in its own unit, reference rate ``ω`` in °/s in the DUT's
+nominal axes)::
+
+    u = K·ω + b                                   (K: 3×3 scale/misalignment, b: bias)
+
+The test rotates the DUT at rates such as 6, 18, 30, 60, 90 °/s about each of its three axes, in
+both directions (seed 003, Table 2 and Fig. 5). The outputs fill U (3×N), the reference rates
+augmented by a row of ones fill A (4×N, eq. (5)); the coefficient matrix C = [K | b] solves
+U = C·A by least squares (eq. (4)); the calibrated output is ω̂ = K⁻¹(u − b) (eq. (7)).
+
+Anomalous measurements (seed 003, processing step 2) are rejected by a robust, documented rule
+(:func:`calibrate_triad`): a Huber M-estimate of each output's row of C gives residuals whose
+scale σ = 1.4826·MAD is insensitive to the outliers; measurements with |r| > k·σ are rejected
+and C is refitted by ordinary least squares on the rest, until the rejected set no longer
+changes. By default k is the Bonferroni bound that a good Gaussian measurement of the channel is
+rejected with a total probability of 5 %: k = Φ⁻¹(1 − 0.025/n), at least 3 (k ≈ 4.65 for
+n = 15 000 rows, 3.9 for 600).
+
+References
+----------
+Calibration Method of MEMS Gyroscopes Using a Robot Manipulator. IEEE Aerospace and Electronic
+Systems Magazine, March 2023 (seed 003): eqs. (4), (5), (7), Table 2.
+Huber P. J. (1981), Robust Statistics, Wiley, §7 (M-estimates of regression).
+Rousseeuw P. J., Croux C. (1993), Alternatives to the median absolute deviation, JASA 88:1273
+(MAD consistency factor 1.4826).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.results import Result
+
+__all__ = [
+    "RATE_COLUMNS",
+    "SEED_RATES_DEG_S",
+    "TRIAD_OUTPUT_COLUMNS",
+    "TriadPlanCheck",
+    "TriadResult",
+    "apply_triad_calibration",
+    "calibrate_triad",
+    "calibrate_triad_columns",
+    "decompose_scale_misalignment",
+    "triad_plan",
+    "triad_plan_check",
+]
+
+#: Canonical columns of the "3-axis gyro test" capture (INTERFACE.md).
+RATE_COLUMNS = ("wx_deg_s", "wy_deg_s", "wz_deg_s")
+TRIAD_OUTPUT_COLUMNS = ("ux", "uy", "uz")
+#: The rates of seed 003, Table 2 (°/s).
+SEED_RATES_DEG_S = (6.0, 18.0, 30.0, 60.0, 90.0)
+
+_AXES = "xyz"
+_COEF_NAMES = ("wx", "wy", "wz", "bias")
+_MAD_TO_SIGMA = 1.4826
+_HUBER_C = 1.345  # 95 % efficiency at the normal distribution (Huber 1981)
+_EPS = float(np.finfo(np.float64).eps)
+#: Relative tolerance of the numerical rank of the column-equilibrated design.
+_RANK_RTOL = 1e-9
+#: A plan whose equilibrated condition number exceeds this is reported as poorly conditioned.
+_COND_WARN = 1e3
+_MIN_ROWS = 8
+
+
+# ------------------------------------------------------------------------------------ helpers
+def _as_triplet(name: str, columns: Sequence[str], values: Any) -> np.ndarray:
+    """(n, 3) float64 array; CaptureError on a wrong shape or a non-finite value."""
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise CaptureError(
+            f"{name} must be an (n, 3) array (columns {', '.join(columns)}); got shape {arr.shape}."
+        )
+    finite = np.isfinite(arr)
+    if not finite.all():
+        row, col = (int(i) for i in np.argwhere(~finite)[0])
+        raise CaptureError(
+            f"column {columns[col]} has a non-finite value ({arr[row, col]!r}) at row {row}; "
+            "remove or repair that row."
+        )
+    return arr
+
+
+def _design(omega: np.ndarray) -> np.ndarray:
+    """Aᵀ of seed 003 eq. (5): rows [ωx, ωy, ωz, 1] (°/s, °/s, °/s, 1)."""
+    return np.column_stack([omega, np.ones(omega.shape[0])])
+
+
+def _mad_sigma(r: np.ndarray) -> float:
+    return _MAD_TO_SIGMA * float(np.median(np.abs(r - np.median(r))))
+
+
+def decompose_scale_misalignment(k: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Split K into scale factors and unit sensitive axes: K = diag(s)·R.
+
+    Row i of K is the sensitivity vector of gyro i (output unit per °/s, in the reference axes);
+    its length is that gyro's scale factor and its direction the gyro's sensitive axis. This is
+    the K_g·R_g split of imucal (Ferraris et al. 1995).
+
+    Parameters
+    ----------
+    k : array_like, (3, 3)
+        Scale/misalignment matrix (output unit per °/s).
+
+    Returns
+    -------
+    scale_factors : ndarray, (3,)
+        Row norms of K (output unit per °/s).
+    sensitive_axes : ndarray, (3, 3)
+        Unit rows R (dimensionless).
+    misalignment_deg : ndarray, (3,)
+        Angle between each sensitive axis and the line of its nominal axis (deg), from
+        arccos(|R_ii|) (so an inverted axis counts as aligned).
+
+    References
+    ----------
+    Ferraris F., Grimaldi U., Parvis M. (1995), Procedure for effortless in-field calibration of
+    three-axial rate gyro and accelerometers, Sensors and Materials 7(5):311–330, eq. (12).
+    """
+    k = np.asarray(k, dtype=float)
+    s = np.linalg.norm(k, axis=1)
+    r = k / s[:, None]
+    mis = np.degrees(np.arccos(np.clip(np.abs(np.diag(r)), 0.0, 1.0)))
+    return s, r, mis
+
+
+def apply_triad_calibration(u: Any, scale_misalignment: Any, bias: Any) -> np.ndarray:
+    """Calibrated rate ω̂ = K⁻¹(u − b) (seed 003, eq. (7)).
+
+    Parameters
+    ----------
+    u : array_like, (n, 3) or (3,)
+        Raw outputs (output unit).
+    scale_misalignment : array_like, (3, 3)
+        K (output unit per °/s).
+    bias : array_like, (3,)
+        b (output unit).
+
+    Returns
+    -------
+    ndarray, same shape as ``u``
+        Angular rate in the DUT's nominal axes (°/s).
+
+    References
+    ----------
+    Calibration Method of MEMS Gyroscopes Using a Robot Manipulator, IEEE A&E Systems Magazine,
+    March 2023 (seed 003), eq. (7).
+    """
+    k = np.asarray(scale_misalignment, dtype=float)
+    b = np.asarray(bias, dtype=float)
+    if k.shape != (3, 3) or b.shape != (3,):
+        raise ConfigError(
+            f"scale_misalignment must be 3×3 and bias of length 3; got {k.shape} and {b.shape}."
+        )
+    if not np.isfinite(k).all() or abs(np.linalg.det(k)) < _EPS * np.abs(k).max() ** 3:
+        raise ConfigError("scale_misalignment must be finite and invertible.")
+    uu = np.asarray(u, dtype=float)
+    flat = np.atleast_2d(uu)
+    if flat.shape[-1] != 3:
+        raise CaptureError(f"u must have 3 columns (ux, uy, uz); got shape {uu.shape}.")
+    out = np.linalg.solve(k, (flat - b).T).T
+    return out.reshape(uu.shape)
+
+
+# ------------------------------------------------------------------------------------ the plan
+def triad_plan(
+    rates_deg_s: Sequence[float] = SEED_RATES_DEG_S,
+    *,
+    axes: str = "xyz",
+    both_directions: bool = True,
+    samples_per_point: int = 1,
+    include_static: bool = False,
+) -> np.ndarray:
+    """Reference rates of the modified six-position test: rates × axes × both directions.
+
+    Parameters
+    ----------
+    rates_deg_s : sequence of float
+        Rate magnitudes (°/s); the seed's Table 2 uses 6, 18, 30, 60, 90.
+    axes : str
+        Rotation axes in order, any of ``"xyz"`` (seed 003 Fig. 5: all three).
+    both_directions : bool
+        Add each rate with a negative sign too (the seed's six positions: ± each axis).
+    samples_per_point : int
+        Rows per rate point (repeat each point, as a capture of that many samples would).
+    include_static : bool
+        Add one point at rest (0 °/s) at the start.
+
+    Returns
+    -------
+    ndarray, (n, 3)
+        Reference rate ω in the DUT's nominal axes (°/s), one row per sample, in test order: for
+        each axis, each rate, +rate then −rate.
+
+    References
+    ----------
+    Calibration Method of MEMS Gyroscopes Using a Robot Manipulator, IEEE A&E Systems Magazine,
+    March 2023 (seed 003), Table 2, Fig. 5.
+    """
+    rates = np.asarray(rates_deg_s, dtype=float).ravel()
+    if rates.size == 0 or not np.isfinite(rates).all() or np.any(rates <= 0):
+        raise ConfigError(
+            f"rates_deg_s must be positive, finite rate magnitudes (°/s); got {rates_deg_s!r}."
+        )
+    if not axes or any(a not in _AXES for a in axes) or len(set(axes)) != len(axes):
+        raise ConfigError(f"axes must be distinct letters from 'xyz', got {axes!r}.")
+    if isinstance(samples_per_point, bool) or int(samples_per_point) != samples_per_point:
+        raise ConfigError(
+            f"samples_per_point must be a positive integer, got {samples_per_point!r}."
+        )
+    if samples_per_point < 1:
+        raise ConfigError(
+            f"samples_per_point must be a positive integer, got {samples_per_point!r}."
+        )
+    signs = np.array([1.0, -1.0]) if both_directions else np.array([1.0])
+    mags = (rates[:, None] * signs[None, :]).ravel()  # +r1, −r1, +r2, …
+    blocks = []
+    if include_static:
+        blocks.append(np.zeros((1, 3)))
+    for a in axes:
+        pts = np.zeros((mags.size, 3))
+        pts[:, _AXES.index(a)] = mags
+        blocks.append(pts)
+    points = np.vstack(blocks)
+    return np.repeat(points, int(samples_per_point), axis=0)
+
+
+@dataclasses.dataclass(frozen=True)
+class TriadPlanCheck(Result):
+    """Whether a plan of reference rates makes every coefficient of u = K·ω + b identifiable.
+
+    Attributes
+    ----------
+    rows : int
+        Rows of the plan (samples).
+    points : int
+        Distinct reference-rate vectors.
+    rank : int
+        Numerical rank of A (seed 003 eq. (5), 4×n); 4 is full.
+    condition_number : float
+        σ_max/σ_min of A as the seed builds it (rates in °/s, a row of ones); inf when rank < 4.
+    condition_number_scaled : float
+        The same after scaling each row of A to unit rms: what limits the precision, independent
+        of units; inf when rank < 4.
+    identifiable : bool
+        All 12 coefficients (9 of K, 3 of b) are determined by the plan.
+    unidentifiable : tuple of str
+        Coefficients the plan leaves undetermined (``K_xy``: output x per rate about y; ``b_x``).
+    noise_gain : dict of str to float
+        u(coefficient) per unit noise of one row: u(K_iy) = σ_i·noise_gain["wy"] (1/(°/s)),
+        u(b_i) = σ_i·noise_gain["bias"] (1), for white noise σ_i of output i; None when not
+        identifiable.
+    advice : str
+        What to add to the plan when it is not identifiable; empty otherwise.
+    """
+
+    rows: int
+    points: int
+    rank: int
+    condition_number: float
+    condition_number_scaled: float
+    identifiable: bool
+    unidentifiable: tuple[str, ...]
+    noise_gain: dict[str, float] | None
+    advice: str = ""
+
+
+def _plan_advice(omega: np.ndarray, bias_lost: bool) -> str:
+    tips = []
+    for j, a in enumerate(_AXES):
+        col = omega[:, j]
+        if not np.any(col):
+            tips.append(f"there is no rotation about {a}")
+        elif np.ptp(col) == 0:
+            tips.append(f"every row has the same rate about {a} ({col[0]:g} °/s)")
+    if tips:
+        return (
+            "; ".join(tips) + ": add rotations about every axis at two or more rates (both signs)"
+        )
+    if bias_lost:
+        return (
+            "the rates and the constant term are linearly dependent, so the biases cannot be "
+            "told from the scale factors: add each rate in both directions, or a point at rest"
+        )
+    return (
+        "the reference rates are linearly dependent (for example rotations about one oblique "
+        "axis only): rotate about each of x, y and z separately"
+    )
+
+
+def _small_r(x: np.ndarray) -> np.ndarray:
+    """The 4×4 triangular factor of x (n×4; zero rows added when n < 4)."""
+    if x.shape[0] < x.shape[1]:
+        x = np.vstack([x, np.zeros((x.shape[1] - x.shape[0], x.shape[1]))])
+    return np.asarray(np.linalg.qr(x, mode="r"))
+
+
+def _check_plan(omega: np.ndarray) -> TriadPlanCheck:
+    x = _design(omega)
+    n = x.shape[0]
+    points = int(np.unique(omega, axis=0).shape[0]) if n else 0
+    scale = np.sqrt(np.mean(x**2, axis=0))
+    scale[scale == 0] = 1.0
+    xs = x / scale
+    # The SVD of the 4×4 R of a QR has the singular values and right vectors of the n×4 matrix.
+    _, pad, vt = np.linalg.svd(_small_r(xs))
+    sv = np.linalg.svd(_small_r(x), compute_uv=False)
+    tol = _RANK_RTOL * max(float(pad[0]), 1.0)
+    rank = int(np.count_nonzero(pad > tol))
+    if rank < 4:
+        null = vt[rank:]
+        dead = np.linalg.norm(null, axis=0) > 1e-6  # coefficient j touches the null space
+        names = []
+        for j in np.flatnonzero(dead):
+            if j < 3:
+                names += [f"K_{i}{_AXES[j]}" for i in _AXES]
+            else:
+                names += [f"b_{i}" for i in _AXES]
+        names_sorted = tuple(sorted(names, key=lambda s: (s[0] == "b", s[-1], s)))
+        return TriadPlanCheck(
+            rows=n,
+            points=points,
+            rank=rank,
+            condition_number=math.inf,
+            condition_number_scaled=math.inf,
+            identifiable=False,
+            unidentifiable=names_sorted,
+            noise_gain=None,
+            advice=_plan_advice(omega, bool(dead[3])),
+        )
+    gain = np.sqrt(np.diag(np.linalg.inv(x.T @ x)))
+    return TriadPlanCheck(
+        rows=n,
+        points=points,
+        rank=rank,
+        condition_number=float(sv[0] / sv[-1]),
+        condition_number_scaled=float(pad[0] / pad[-1]),
+        identifiable=True,
+        unidentifiable=(),
+        noise_gain={name: float(g) for name, g in zip(_COEF_NAMES, gain, strict=True)},
+    )
+
+
+def triad_plan_check(omega_deg_s: Any, *, strict: bool = True) -> TriadPlanCheck:
+    """Rank and condition number of A for a plan; are all 9 + 3 coefficients identifiable?
+
+    The model's design matrix A (seed 003, eq. (5)) has the reference rates and a row of ones. A
+    coefficient is identifiable when its unit vector lies in the row space of Aᵀ (orthogonal to
+    the null space): rotations about x only, for instance, leave every K_iy and K_iz undetermined,
+    and a single rate about an axis (without the opposite sign or a second rate) confounds that
+    axis's scale factors with the biases.
+
+    Parameters
+    ----------
+    omega_deg_s : array_like, (n, 3)
+        Reference rates (°/s) of the planned rows, columns ωx, ωy, ωz in the DUT's nominal axes.
+    strict : bool
+        Raise :class:`ConfigError` naming the unidentifiable coefficients (default); with False
+        return the check with ``identifiable=False`` instead.
+
+    Returns
+    -------
+    TriadPlanCheck
+        Rank, condition numbers (dimensionless), identifiability, noise gains (see the class).
+
+    Raises
+    ------
+    ConfigError
+        The plan leaves coefficients undetermined (``strict``), or it is not an (n, 3) array of
+        finite rates.
+
+    References
+    ----------
+    Calibration Method of MEMS Gyroscopes Using a Robot Manipulator, IEEE A&E Systems Magazine,
+    March 2023 (seed 003), eqs. (4)–(5).
+    """
+    try:
+        omega = _as_triplet("omega_deg_s", RATE_COLUMNS, omega_deg_s)
+    except CaptureError as e:
+        raise ConfigError(str(e)) from None
+    if omega.shape[0] == 0:
+        raise ConfigError("the plan is empty: give at least one row of reference rates.")
+    check = _check_plan(omega)
+    if strict and not check.identifiable:
+        raise ConfigError(
+            f"the plan leaves {', '.join(check.unidentifiable)} unidentifiable (rank "
+            f"{check.rank} of 4): {check.advice}."
+        )
+    return check
+
+
+# ------------------------------------------------------------------------------------ result
+@dataclasses.dataclass(frozen=True)
+class TriadResult(Result):
+    """3-axis gyro calibration (JSON keys of INTERFACE.md, ``gyro triad``).
+
+    Output quantities are in the output unit of ``u`` ("u"); rates in °/s.
+
+    Attributes
+    ----------
+    scale_misalignment : ndarray (3, 3)
+        K in u = K·ω + b (u per °/s); row i: output i, column j: rate about axis j.
+    bias : ndarray (3,)
+        b (u).
+    outliers_rejected : int
+        Rows with at least one output rejected as anomalous (details in ``rejected``).
+    residual_rms : ndarray (3,)
+        rms of ω̂ − ω per axis after calibration (°/s), over the rows kept in all outputs.
+    residual_rms_before : ndarray (3,)
+        rms of u/nominal_scale − ω per axis (°/s): the raw outputs taken at face value.
+    fit_residual_rms : ndarray (3,)
+        rms of u − (K·ω + b) per output over its kept rows (u).
+    scale_misalignment_u, bias_u : ndarray
+        Standard uncertainties of K (u per °/s) and b (u) from the least squares: white,
+        uncorrelated noise per row, exact reference rates, the linear model. Correlated noise
+        (MEMS flicker, drift during the test) makes them optimistic.
+    scale_factors, sensitive_axes, misalignment_deg
+        :func:`decompose_scale_misalignment` of K (u per °/s; unit rows; deg).
+    robust_sigma : ndarray (3,)
+        1.4826·MAD of the residuals per output at the final fit (u).
+    reject_k : float
+        Rejection threshold in units of ``robust_sigma`` (inf: rejection off).
+    rejected : tuple of dict
+        One entry per rejected measurement: ``row``, ``column``, ``residual`` (u),
+        ``threshold`` (u), ``reason``.
+    rows, rows_used, points : int
+        Rows given; rows kept in all three outputs; distinct reference-rate vectors.
+    plan : TriadPlanCheck
+        Rank and conditioning of the plan in the capture.
+    """
+
+    scale_misalignment: np.ndarray
+    bias: np.ndarray
+    outliers_rejected: int
+    residual_rms: np.ndarray
+    residual_rms_before: np.ndarray
+    fit_residual_rms: np.ndarray
+    scale_misalignment_u: np.ndarray
+    bias_u: np.ndarray
+    scale_factors: np.ndarray
+    sensitive_axes: np.ndarray
+    misalignment_deg: np.ndarray
+    robust_sigma: np.ndarray
+    reject_k: float
+    rejected: tuple[dict[str, Any], ...]
+    rows: int
+    rows_used: int
+    points: int
+    nominal_scale: float
+    plan: TriadPlanCheck
+    notes: tuple[str, ...] = ()
+    _plot: dict[str, Any] = dataclasses.field(default_factory=dict, repr=False, compare=False)
+
+    def calibrate(self, u: Any) -> np.ndarray:
+        """ω̂ = K⁻¹(u − b) (°/s) for raw outputs ``u`` (n, 3) — seed 003, eq. (7)."""
+        return apply_triad_calibration(u, self.scale_misalignment, self.bias)
+
+
+# ------------------------------------------------------------------------------------ fitting
+def _huber_fit(x: np.ndarray, y: np.ndarray, floor: float) -> np.ndarray:
+    """Huber M-estimate of y ≈ x·β by IRLS, scale re-estimated by the MAD at each step."""
+    beta = np.linalg.lstsq(x, y, rcond=None)[0]
+    for _ in range(100):
+        r = y - x @ beta
+        s = max(_mad_sigma(r), floor)
+        w = np.minimum(1.0, _HUBER_C * s / np.maximum(np.abs(r), _HUBER_C * s * 1e-12))
+        sw = np.sqrt(w)
+        new = np.linalg.lstsq(x * sw[:, None], y * sw, rcond=None)[0]
+        step = np.abs(new - beta)
+        beta = new
+        if np.all(step <= 1e-12 * (np.abs(beta) + s)):
+            break
+    return np.asarray(beta)
+
+
+def _robust_channel(
+    x: np.ndarray, y: np.ndarray, k: float, floor: float
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """(β, keep mask, σ) of one output: Huber start, then reject |r| > k·σ and refit, to a fixed point."""
+    if not math.isfinite(k):
+        beta = np.linalg.lstsq(x, y, rcond=None)[0]
+        return beta, np.ones(y.size, bool), max(_mad_sigma(y - x @ beta), floor)
+    beta = _huber_fit(x, y, floor)
+    r = y - x @ beta
+    s = max(_mad_sigma(r), floor)
+    keep = np.abs(r) <= k * s
+    for _ in range(30):
+        if np.count_nonzero(keep) < x.shape[1]:
+            break
+        beta = np.linalg.lstsq(x[keep], y[keep], rcond=None)[0]
+        r = y - x @ beta
+        s = max(_mad_sigma(r), floor)
+        new = np.abs(r) <= k * s
+        if np.array_equal(new, keep):
+            break
+        keep = new
+    return np.asarray(beta), keep, s
+
+
+def _quantum(y: np.ndarray) -> float:
+    """The output's step when its values lie on a grid (an ADC or digital output), else 0."""
+    vals = np.unique(y)
+    if vals.size < 3 or vals.size > y.size // 2:
+        return 0.0
+    d = np.diff(vals)
+    q = float(d.min())
+    if q <= 0:
+        return 0.0
+    ratio = d / q
+    return q if float(np.max(np.abs(ratio - np.round(ratio)))) < 1e-6 else 0.0
+
+
+def _default_k(n: int) -> float:
+    """Bonferroni threshold: P(any of n good Gaussian measurements rejected) = 5 %; at least 3."""
+    return max(3.0, float(stats.norm.isf(0.025 / max(n, 1))))
+
+
+def _groups(omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distinct reference vectors and each row's group index."""
+    pts, inv = np.unique(omega, axis=0, return_inverse=True)
+    return pts, inv.ravel()
+
+
+def _check_saturation(
+    omega: np.ndarray, u: np.ndarray, inv: np.ndarray, n_groups: int, columns: Sequence[str]
+) -> None:
+    """Refuse an output pinned at its extreme value (a clipped ADC or a saturated gyro).
+
+    An output is saturated when its extreme value (maximum or minimum) occurs in 3 or more rows
+    and either those rows have different reference rates (more than 5 % of the largest rate
+    apart: a linear gyro cannot give one value for both), or, within one rate point, the values
+    pile up at the extreme: more rows sit at it than at the next value inward, or the whole point
+    sits at it while the other points show their noise.
+    """
+    span_ref = max(float(np.max(np.abs(omega))), 1e-300)
+    for c, name in enumerate(columns):
+        y = u[:, c]
+        order = np.lexsort((y, inv))
+        gs, ys = inv[order], y[order]
+        # does the noise show? the interquartile range of most points is > 0 (gross outliers,
+        # a few per point, do not count: they leave the quartiles alone)
+        start = np.searchsorted(gs, np.arange(n_groups))
+        size = np.bincount(gs, minlength=n_groups)
+        ok = size > 0
+        iqr = ys[(start + (3 * size) // 4)[ok]] - ys[(start + size // 4)[ok]]
+        noisy = float(np.mean(iqr > 0)) >= 0.5
+        for ext, word in ((float(y.max()), "maximum"), (float(y.min()), "minimum")):
+            at = np.flatnonzero(y == ext)
+            if at.size < 3:
+                continue
+            spread = float(np.max(np.ptp(omega[at], axis=0)))
+            if spread > 0.05 * span_ref:
+                pinned = True  # different rates give one and the same value: clipped
+            else:
+                g = int(np.bincount(inv[at]).argmax())
+                vals, counts = np.unique(y[inv == g], return_counts=True)
+                if vals.size == 1:
+                    pinned = noisy  # the others show noise, this one does not
+                else:
+                    i = 0 if word == "minimum" else vals.size - 1
+                    j = 1 if word == "minimum" else vals.size - 2
+                    pinned = noisy and vals.size >= 3 and counts[i] > counts[j]
+            if pinned:
+                rates = np.unique(omega[at], axis=0)
+                shown = ", ".join("(" + ", ".join(f"{v:g}" for v in p) + ")" for p in rates[:3])
+                raise CaptureError(
+                    f"column {name} sits at its {word} {ext:.6g} in {at.size} rows (reference "
+                    f"rates {shown} °/s): the output is saturated; lower the test rates or "
+                    "drop those rows."
+                )
+
+
+def calibrate_triad(
+    omega_deg_s: Any,
+    u: Any,
+    *,
+    reject_k: float | None = None,
+    nominal_scale: float = 1.0,
+    output_limits: tuple[float, float] | None = None,
+    max_reject_fraction: float = 0.2,
+    columns: Sequence[str] = RATE_COLUMNS + TRIAD_OUTPUT_COLUMNS,
+) -> TriadResult:
+    """Scale/misalignment matrix K and bias b of a gyro triad by least squares (seed 003).
+
+    Builds U (outputs) and A (reference rates with a row of ones, eq. (5)), rejects anomalous
+    measurements by the robust rule of this module's docstring (per output: Huber M-estimate,
+    σ = 1.4826·MAD of its residuals, reject |r| > k·σ, refit by least squares until the rejected
+    set is stable), solves U = [K | b]·A by least squares (eq. (4)) and applies ω̂ = K⁻¹(u − b)
+    (eq. (7)) to give the residuals after calibration.
+
+    Parameters
+    ----------
+    omega_deg_s : array_like, (n, 3)
+        Reference rate of each row in the DUT's nominal axes (°/s): columns ``wx_deg_s``,
+        ``wy_deg_s``, ``wz_deg_s``. Rows may be single samples or per-point means.
+    u : array_like, (n, 3)
+        Raw outputs ``ux``, ``uy``, ``uz`` (output unit, e.g. °/s, V or counts).
+    reject_k : float or None
+        Rejection threshold in robust standard deviations; None: Φ⁻¹(1 − 0.025/n), at least 3
+        (5 % family-wise chance of rejecting a good Gaussian measurement); ``math.inf``: no
+        rejection (plain least squares).
+    nominal_scale : float
+        Nominal output per °/s (output unit per °/s), only to state the residuals before
+        calibration, u/nominal_scale − ω (°/s).
+    output_limits : (float, float) or None
+        The output's range (output unit); a row at or beyond either limit is a saturated output
+        and an error. Without it, an output pinned at its extreme value is detected from the data.
+    max_reject_fraction : float
+        Largest fraction of an output's rows the rule may reject before the capture is refused
+        as not following u = K·ω + b (default 0.2).
+    columns : sequence of 6 str
+        Names used in messages for the rate and output columns.
+
+    Returns
+    -------
+    TriadResult
+        K (output unit per °/s), b (output unit), their standard uncertainties, rejected rows,
+        residual rms before and after (°/s).
+
+    Raises
+    ------
+    CaptureError
+        NaN/inf, fewer than 8 rows, a saturated output, a plan in the capture that leaves
+        coefficients unidentifiable, or more rejected rows than ``max_reject_fraction``.
+    ConfigError
+        An invalid setting.
+
+    References
+    ----------
+    Calibration Method of MEMS Gyroscopes Using a Robot Manipulator, IEEE A&E Systems Magazine,
+    March 2023 (seed 003): U and A, eq. (5); least squares, eq. (4); calibrated output, eq. (7);
+    rejection of anomalous measurements (processing step 2).
+    Huber P. J. (1981), Robust Statistics, Wiley, §7; Rousseeuw P. J., Croux C. (1993), JASA
+    88:1273 (1.4826·MAD).
+    """
+    cols = tuple(columns)
+    if len(cols) != 6:
+        raise ConfigError(f"columns must name 3 rate and 3 output columns, got {columns!r}.")
+    rate_cols, out_cols = cols[:3], cols[3:]
+    omega = _as_triplet("omega_deg_s", rate_cols, omega_deg_s)
+    uu = _as_triplet("u", out_cols, u)
+    if omega.shape[0] != uu.shape[0]:
+        raise CaptureError(
+            f"the reference rates have {omega.shape[0]} rows but the outputs {uu.shape[0]}; "
+            "give one reference rate per output row."
+        )
+    n = omega.shape[0]
+    if n < _MIN_ROWS:
+        raise CaptureError(
+            f"the capture has only {n} rows; the 4 coefficients per output need at least "
+            f"{_MIN_ROWS} rows (rotations about x, y and z at two or more rates)."
+        )
+    try:
+        ns = float(nominal_scale)
+    except (TypeError, ValueError):
+        ns = math.nan
+    if not math.isfinite(ns) or ns == 0:
+        raise ConfigError(
+            f"nominal_scale must be a finite, non-zero number, got {nominal_scale!r}."
+        )
+    if reject_k is None:
+        k = _default_k(n)
+    else:
+        try:
+            k = float(reject_k)
+        except (TypeError, ValueError):
+            k = math.nan
+        if math.isnan(k) or k < 2.0:
+            raise ConfigError(
+                f"reject_k must be at least 2 (or inf for no rejection), got {reject_k!r}."
+            )
+    if not 0.0 < float(max_reject_fraction) < 1.0:
+        raise ConfigError(
+            f"max_reject_fraction must lie between 0 and 1, got {max_reject_fraction!r}."
+        )
+    if output_limits is not None:
+        lo, hi = (float(v) for v in output_limits)
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise ConfigError(
+                f"output_limits must be (low, high) with low < high, got {output_limits!r}."
+            )
+        hit = (uu <= lo) | (uu >= hi)
+        if hit.any():
+            row, c = (int(i) for i in np.argwhere(hit)[0])
+            raise CaptureError(
+                f"column {out_cols[c]} reaches its limit ({uu[row, c]:.6g}, range {lo:g}…{hi:g}) "
+                f"in {int(hit[:, c].sum())} rows, first at row {row}: the output is saturated; "
+                "lower the test rates or drop those rows."
+            )
+
+    plan = _check_plan(omega)
+    if not plan.identifiable:
+        raise CaptureError(
+            f"the reference rates in {', '.join(rate_cols)} leave {', '.join(plan.unidentifiable)} "
+            f"unidentifiable (rank {plan.rank} of 4): {plan.advice}."
+        )
+    pts, inv = _groups(omega)
+    _check_saturation(omega, uu, inv, pts.shape[0], out_cols)
+
+    x = _design(omega)
+    coef = np.zeros((4, 3))
+    keep = np.zeros((n, 3), bool)
+    sigma = np.zeros(3)
+    cov = np.zeros((3, 4, 4))
+    for c in range(3):
+        y = uu[:, c]
+        # σ is at least the rounding noise of a quantised output (q/√12): residuals of a few
+        # codes are not outliers, even when the analog noise is much smaller than a code.
+        floor = max(
+            64.0 * _EPS * max(float(np.max(np.abs(y))), 1e-300), _quantum(y) / math.sqrt(12)
+        )
+        beta, kc, s = _robust_channel(x, y, k, floor)
+        frac = 1.0 - np.count_nonzero(kc) / n
+        if frac > max_reject_fraction:
+            raise CaptureError(
+                f"the robust rule rejects {100 * frac:.0f} % of the rows of column {out_cols[c]}: "
+                "that output does not follow u = K·ω + b (wrong or swapped columns, a saturated "
+                "or nonlinear gyro?); check the capture."
+            )
+        xk = x[kc]
+        sub = _check_plan(omega[kc])
+        if not sub.identifiable:
+            raise CaptureError(
+                f"after rejecting anomalous rows of column {out_cols[c]}, "
+                f"{', '.join(sub.unidentifiable)} are no longer identifiable; check the rows "
+                "of that rate point."
+            )
+        beta = np.linalg.lstsq(xk, y[kc], rcond=None)[0]
+        rk = y[kc] - xk @ beta
+        dof = xk.shape[0] - 4
+        s2 = float(rk @ rk) / dof if dof > 0 else math.nan
+        cov[c] = s2 * np.linalg.inv(xk.T @ xk)
+        coef[:, c] = beta
+        keep[:, c] = kc
+        sigma[c] = s
+    kmat = coef[:3].T.copy()
+    bias = coef[3].copy()
+    u_k = np.sqrt(np.array([np.diag(cov[c])[:3] for c in range(3)]))
+    u_b = np.sqrt(np.array([cov[c][3, 3] for c in range(3)]))
+
+    fitted = x @ coef
+    fit_res = uu - fitted
+    all_kept = keep.all(axis=1)
+    fit_rms = np.array([math.sqrt(float(np.mean(fit_res[keep[:, c], c] ** 2))) for c in range(3)])
+    omega_hat = apply_triad_calibration(uu, kmat, bias)
+    after = omega_hat - omega
+    before = uu / ns - omega
+    rms_after = np.sqrt(np.mean(after[all_kept] ** 2, axis=0))
+    rms_before = np.sqrt(np.mean(before[all_kept] ** 2, axis=0))
+
+    rej_r, rej_c = np.nonzero(~keep)
+    order = np.lexsort((rej_c, rej_r))
+    rejected = tuple(
+        {
+            "row": int(rej_r[i]),
+            "column": out_cols[int(rej_c[i])],
+            "residual": float(fit_res[rej_r[i], rej_c[i]]),
+            "threshold": float(k * sigma[rej_c[i]]),
+            "reason": f"|residual| > {k:.3g}·σ_robust",
+        }
+        for i in order
+    )
+    scale, axes_r, mis = decompose_scale_misalignment(kmat)
+    notes = []
+    if plan.condition_number_scaled > _COND_WARN:
+        notes.append(
+            f"the plan is poorly conditioned (scaled condition number "
+            f"{plan.condition_number_scaled:.3g}): the coefficients are imprecise"
+        )
+    if math.isfinite(k) and (~keep).any():
+        notes.append(
+            f"{int((~keep).sum())} measurements in {int((~all_kept).sum())} rows rejected "
+            f"(|r| > {k:.3g}·1.4826·MAD)"
+        )
+
+    # per-point means for the figures
+    counts = np.bincount(inv[all_kept], minlength=pts.shape[0]).astype(float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        pm_before = (
+            np.stack(
+                [np.bincount(inv[all_kept], before[all_kept, j], pts.shape[0]) for j in range(3)], 1
+            )
+            / counts[:, None]
+        )
+        pm_after = (
+            np.stack(
+                [np.bincount(inv[all_kept], after[all_kept, j], pts.shape[0]) for j in range(3)], 1
+            )
+            / counts[:, None]
+        )
+        sq = (
+            np.stack(
+                [
+                    np.bincount(inv[all_kept], after[all_kept, j] ** 2, pts.shape[0])
+                    for j in range(3)
+                ],
+                1,
+            )
+            / counts[:, None]
+        )
+    ps_after = np.sqrt(np.maximum(sq - pm_after**2, 0.0))
+    plot = {
+        "points_deg_s": pts,
+        "point_rows": counts,
+        "point_before_deg_s": pm_before,
+        "point_after_deg_s": pm_after,
+        "point_after_std_deg_s": ps_after,
+        "fit_residual": fit_res,
+        "keep": keep,
+        "columns": cols,
+    }
+    return TriadResult(
+        scale_misalignment=kmat,
+        bias=bias,
+        outliers_rejected=int((~all_kept).sum()),
+        residual_rms=rms_after,
+        residual_rms_before=rms_before,
+        fit_residual_rms=fit_rms,
+        scale_misalignment_u=u_k,
+        bias_u=u_b,
+        scale_factors=scale,
+        sensitive_axes=axes_r,
+        misalignment_deg=mis,
+        robust_sigma=sigma,
+        reject_k=k,
+        rejected=rejected,
+        rows=n,
+        rows_used=int(all_kept.sum()),
+        points=int(pts.shape[0]),
+        nominal_scale=ns,
+        plan=plan,
+        notes=tuple(notes),
+        _plot=plot,
+    )
+
+
+def calibrate_triad_columns(columns: Mapping[str, Any] | Any, **options: Any) -> TriadResult:
+    """:func:`calibrate_triad` on a capture's canonical columns.
+
+    Parameters
+    ----------
+    columns : mapping or rotacal.io.Capture
+        Holds ``wx_deg_s``, ``wy_deg_s``, ``wz_deg_s`` (°/s) and ``ux``, ``uy``, ``uz`` (output
+        unit), equal lengths.
+    **options
+        Passed to :func:`calibrate_triad`.
+
+    Returns
+    -------
+    TriadResult
+
+    References
+    ----------
+    As :func:`calibrate_triad` (seed 003, eqs. (4), (5), (7)).
+    """
+    names = RATE_COLUMNS + TRIAD_OUTPUT_COLUMNS
+    arrays = []
+    for name in names:
+        try:
+            col = columns[name]
+        except (KeyError, IndexError):
+            raise CaptureError(
+                f"the capture has no column {name!r}; a 3-axis gyro test needs "
+                f"{', '.join(names)} (map your own names with --column OLD=NEW)."
+            ) from None
+        arrays.append(np.asarray(col, dtype=float).ravel())
+    lengths = {a.size for a in arrays}
+    if len(lengths) != 1:
+        raise CaptureError(
+            "the columns "
+            + ", ".join(f"{n} ({a.size})" for n, a in zip(names, arrays, strict=True))
+            + " differ in length; give one value per row in each."
+        )
+    return calibrate_triad(np.column_stack(arrays[:3]), np.column_stack(arrays[3:]), **options)
