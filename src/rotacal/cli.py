@@ -873,6 +873,12 @@ def simulate_fog(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw:
 @click.option("--rate-bias-percent", type=float, default=0.0, show_default=True)
 @click.option("--rate-fluctuation-percent", type=float, default=0.01, show_default=True)
 @click.option("--jitter-s", type=float, default=1e-9, show_default=True)
+@click.option(
+    "--start-spread-s",
+    type=float,
+    default=None,
+    help="Heads start late / stop early by up to this (s) [5 % of a revolution].",
+)
 def simulate_pulses_cmd(
     out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any
 ) -> None:

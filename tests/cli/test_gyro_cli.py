@@ -33,8 +33,17 @@ def simulated(tmp_path: Path, kind: str, *args: str) -> tuple[Path, dict]:
 
 def test_scale_factor(tmp_path):
     path, truth = simulated(tmp_path, "gyro-rates")
-    r = run("gyro", "scale-factor", str(path), "--requirement", "fmvss126", "--json", "-",
-            "--report", str(tmp_path / "sf.html"))
+    r = run(
+        "gyro",
+        "scale-factor",
+        str(path),
+        "--requirement",
+        "fmvss126",
+        "--json",
+        "-",
+        "--report",
+        str(tmp_path / "sf.html"),
+    )
     assert r.exit_code == 0, r.output
     d = json.loads(r.stdout)
     for key in ("scale_factor", "bias", "full_scale_deg_s", "nonlinearity_percent_fs", "residuals"):
@@ -57,8 +66,17 @@ def test_triad(tmp_path):
 
 def test_multiposition(tmp_path):
     path, truth = simulated(tmp_path, "multiposition", "--axis", "y")
-    r = run("gyro", "multiposition", str(path), "--axis", "y", "--latitude-deg",
-            str(truth["latitude_deg"]), "--json", "-")
+    r = run(
+        "gyro",
+        "multiposition",
+        str(path),
+        "--axis",
+        "y",
+        "--latitude-deg",
+        str(truth["latitude_deg"]),
+        "--json",
+        "-",
+    )
     assert r.exit_code == 0, r.output
     d = json.loads(r.stdout)
     assert set(d["drift_coefficients"]) == {"DF", "Dx", "Dy", "Dz", "Dyy", "Dzz", "Dyx"}

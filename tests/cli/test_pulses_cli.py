@@ -136,7 +136,7 @@ def test_csv_with_padded_columns(tmp_path):
 
 
 def test_bad_input_is_one_line(pulses, tmp_path):
-    one_line_error(run("selfcal", str(pulses), "--pulses-per-rev", "7200"), "repeats every 3600")
+    one_line_error(run("selfcal", str(pulses), "--pulses-per-rev", "7200"), "3600 pulses")
     no_heads = tmp_path / "x.npz"
     np.savez(no_heads, time_s=np.arange(10.0))
     one_line_error(run("selfcal", str(no_heads), "--pulses-per-rev", "10"), "x.npz", "head_0")

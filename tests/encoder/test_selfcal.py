@@ -165,7 +165,7 @@ def test_nan_is_refused(small):
 
 @pytest.mark.parametrize("wrong", [6000, 1500, 1000])
 def test_pulses_per_rev_not_matching_the_data(small, wrong):
-    with pytest.raises(CaptureError, match="repeats every 3000 pulses"):
+    with pytest.raises(CaptureError, match=r"(repeats every|fit) 3000 pulses"):
         self_calibrate(_heads(small), pulses_per_rev=wrong)
 
 
@@ -202,3 +202,60 @@ def test_one_head_or_bad_settings(small):
             {"head_0": small.columns["head_0"], "head_2": small.columns["head_2"]},
             pulses_per_rev=3000,
         )
+
+
+# ----------------------------------------------------------- the reviewer's cases (issue 3)
+def test_a_scale_dominated_by_order_two_keeps_its_true_count():
+    """Its deviation also repeats every half revolution: no reason to refuse m."""
+    cap = simulate_pulses(
+        heads=12,
+        pulses_per_rev=3600,
+        revolutions=3.2,
+        harmonics=((2, 3.0, 0.3), (1, 0.3, 0.0)),
+        seed=1,
+    )
+    r = self_calibrate(_heads(cap), pulses_per_rev=3600)
+    assert _rms(r.deviation_arcsec - np.asarray(cap.truth["deviation_detectable_arcsec"])) < 0.02
+    with pytest.raises(CaptureError, match="3600 pulses"):
+        self_calibrate(_heads(cap), pulses_per_rev=1800)
+
+
+@pytest.mark.parametrize("wrong", [3601, 3598, 3610, 3585])
+def test_a_count_a_few_pulses_off_is_refused(wrong):
+    cap = simulate_pulses(heads=12, pulses_per_rev=3600, revolutions=3.2, seed=2)
+    with pytest.raises(CaptureError, match="3600 pulses"):
+        self_calibrate(_heads(cap), pulses_per_rev=wrong)
+
+
+def test_head_shifts_come_from_the_data_when_i_m_over_n_ends_in_a_half():
+    """m = 3606, n = 12: i·m/n = 300.5, 901.5 …; the placement decides the line."""
+    for seed in range(3):
+        cap = simulate_pulses(
+            heads=12, pulses_per_rev=3606, revolutions=3.2, seed=seed, graduation_noise_arcsec=0.1
+        )
+        r = self_calibrate(_heads(cap), pulses_per_rev=3606)
+        truth = np.asarray(cap.truth["deviation_arcsec"])
+        ft, fr = np.fft.rfft(truth), np.fft.rfft(r.deviation_arcsec)
+        ok = np.ones(ft.size, bool)
+        ok[[0, *r.undetectable_orders]] = False
+        err = np.fft.irfft(np.where(ok, fr - ft, 0), 3606)
+        assert _rms(err) < 0.005
+        assert r.closure_residual_rms_arcsec < 0.005
+        # the near-blind orders are declared, not passed off as measured
+        assert 12 in r.undetectable_orders and "blind" in r.undetectable_harmonics_note
+
+
+def test_an_extra_edge_in_the_middle_of_an_interval_is_refused(small):
+    heads = _heads(small)
+    t = heads[0]
+    heads[0] = np.insert(t, 700, 0.5 * (t[699] + t[700]))
+    with pytest.raises(CaptureError, match=r"head_0.*extra pulse"):
+        self_calibrate(heads, pulses_per_rev=3000)
+
+
+def test_a_short_record_says_m_was_not_confirmed():
+    cap = simulate_pulses(
+        heads=6, pulses_per_rev=3000, revolutions=1.2, start_spread_s=0.001, seed=3
+    )
+    r = self_calibrate(_heads(cap), pulses_per_rev=3000)
+    assert any("too short" in n for n in r.notes)

@@ -179,3 +179,42 @@ def test_interface_keys_and_bad_settings(biased):
         calibrate_rate(heads, pulses_per_rev=7200, head="left")
     with pytest.raises(ConfigError, match="set_rate_deg_s"):
         calibrate_rate(heads, pulses_per_rev=7200, set_rate_deg_s=float("nan"))
+
+
+def test_a_different_capture_with_the_same_first_time_is_aligned(biased):
+    """DAQs that zero the time at the first edge: the first time alone does not identify a capture."""
+    heads = _heads(biased)
+    sc = self_calibrate(heads, pulses_per_rev=7200).to_dict()
+    later = [h[h.searchsorted(heads[0][2500]) :] for h in heads]
+    t0 = later[0][0]
+    later = [h - t0 + heads[0][0] for h in later]  # same first time as the self-calibrated capture
+    r = calibrate_rate(later, pulses_per_rev=7200, selfcal=sc)
+    assert r.deviation_shift_pulses == 2500 and r.alignment_correlation > 0.9
+
+
+def test_selfcal_json_faults_are_config_errors(biased):
+    heads = _heads(biased)
+    sc = self_calibrate(heads, pulses_per_rev=7200).to_dict()
+    for key, value, needle in [
+        ("first_pulse_time_s", "x", "must be a number"),
+        ("rotation", "left", "'forward' or 'reverse'"),
+        ("pulses_per_rev", 3600.5, "whole number"),
+        ("deviation_arcsec", [[0.0] * 7200], "one list"),
+    ]:
+        bad = {**sc, key: value}
+        with pytest.raises(ConfigError, match=needle):
+            calibrate_rate(heads, pulses_per_rev=7200, selfcal=bad)
+
+
+def test_negative_set_rate_is_compared_by_magnitude(biased):
+    r = calibrate_rate(_heads(biased)[:1], pulses_per_rev=7200, set_rate_deg_s=-60.0)
+    assert abs(r.rate_bias_percent) < 0.05
+    assert any("no sense of rotation" in n for n in r.notes)
+
+
+def test_short_multi_head_record_points_to_no_compensation():
+    cap = simulate_pulses(heads=4, pulses_per_rev=3000, revolutions=0.9, seed=1)
+    with pytest.raises(CaptureError, match="no-compensation"):
+        calibrate_rate(_heads(cap), pulses_per_rev=3000)
+    r = calibrate_rate(_heads(cap), pulses_per_rev=3000, compensate=False)
+    assert r.revolutions == 0 and any("straight-line fit" in n for n in r.notes)

@@ -38,8 +38,9 @@ FloatArray = NDArray[np.float64]
 
 #: An interval this many local pulse periods long (or longer) means missing pulses.
 MISSING_PULSE_RATIO = 1.5
-#: An interval this short (in local pulse periods) means a spurious extra edge.
-EXTRA_PULSE_RATIO = 0.5
+#: An interval this short (in local pulse periods) means a spurious extra edge: an edge anywhere
+#: inside an interval leaves a piece of at most half a period (plus the rate's wander).
+EXTRA_PULSE_RATIO = 0.75
 #: Intervals per block when estimating the local pulse period (robust to slow rate changes).
 _PERIOD_BLOCK = 64
 _HEAD_NAME = re.compile(r"^head_(\d+)$")
@@ -114,7 +115,7 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
 
     A pulse train must be finite and strictly increasing, and every interval must be one pulse
     period: an interval ≥ 1.5 local periods means missing pulses (a dropout, a dirty scale), one
-    ≤ 0.5 periods a spurious edge (noise, a bouncing comparator). Either would shift the line
+    ≤ 0.75 periods a spurious edge (noise, a bouncing comparator). Either would shift the line
     count of every later pulse, so they are refused rather than repaired silently.
 
     Parameters

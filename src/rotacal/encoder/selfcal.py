@@ -50,8 +50,9 @@ FloatArray = NDArray[np.float64]
 
 #: Half-width (pulses) of the window that gives the local rate used to turn delays into angles.
 RATE_WINDOW = 32
-#: Relative information below which a Fourier order counts as undetectable.
-_UNDETECTABLE_TOL = 1e-9
+#: Information (relative to n, what equally spaced heads give every detectable order) below which
+#: a Fourier order counts as undetectable: its noise would be amplified more than tenfold.
+_UNDETECTABLE_TOL = 1e-2
 #: Correlation thresholds of the pulses-per-revolution check (see _check_period).
 _PERIODIC = 0.8
 
@@ -88,8 +89,12 @@ class SelfCalibration(Result):
         Amplitude of orders 1 … min(m/2, 100) of the deviation.
     rotation : str
         ``"forward"`` (head i is i·360/n ahead in the sense of rotation) or ``"reverse"``.
-    first_pulse_time_s : float, s
-        Time of head 0's first pulse (index 0 of ``deviation_arcsec``).
+    head_line_shifts : list of int
+        The scale line each head sees at the moment head 0 sees line 0 (modulo m).
+    first_pulse_time_s, last_pulse_time_s : float, s
+        Times of head 0's first (index 0 of ``deviation_arcsec``) and last pulse.
+    head0_pulses : int
+        Pulses of head 0 in the capture (with the two times: which capture this curve indexes).
     notes : list of str
     """
 
@@ -108,7 +113,10 @@ class SelfCalibration(Result):
     head_offsets_arcsec: list[float]
     harmonic_amplitudes_arcsec: list[float]
     rotation: str
+    head_line_shifts: list[int]
     first_pulse_time_s: float
+    last_pulse_time_s: float
+    head0_pulses: int
     notes: list[str]
     _per_revolution_arcsec: FloatArray = dataclasses.field(repr=False)
     _head_differences_arcsec: FloatArray = dataclasses.field(repr=False)
@@ -149,13 +157,19 @@ def _information(shifts: NDArray[np.int64], m: int) -> tuple[np.ndarray, np.ndar
     return g, info
 
 
-def undetectable_orders(heads: int, pulses_per_rev: int) -> list[int]:
-    """Fourier orders 1 … m/2 of the deviation that n equally spaced heads cannot detect.
+def undetectable_orders(
+    heads: int, pulses_per_rev: int, shifts: NDArray[np.int64] | None = None
+) -> list[int]:
+    """Fourier orders 1 … m/2 of the deviation that the heads cannot measure.
 
-    For m divisible by n these are the multiples of n (seed 004, §3: "the n-th and its multiple
-    Fourier components … cannot be extracted in principle").
+    For n equally spaced heads on m lines, m divisible by n, these are the multiples of n (seed
+    004, §3: "the n-th and its multiple Fourier components … cannot be extracted in principle").
+    With other line shifts (``shifts``, one per head, 0 for head 0) an order counts as undetectable
+    when the heads carry less than 1 % of the usual information on it (noise gain above 10).
     """
-    _, info = _information(head_shifts(heads, pulses_per_rev), pulses_per_rev)
+    if shifts is None:
+        shifts = head_shifts(heads, pulses_per_rev)
+    _, info = _information(shifts, pulses_per_rev)
     bad = info <= _UNDETECTABLE_TOL * heads
     bad[0] = False
     return [int(q) for q in np.flatnonzero(bad)]
@@ -193,19 +207,26 @@ def _local_rate_deg_s(mean_times: FloatArray, pitch_deg: float) -> FloatArray:
     return rate
 
 
-def _periodicity_check(signal: FloatArray, m: int) -> None:
-    """Refuse a pulses-per-revolution that does not match the period of the deviation.
+def check_period(signal: FloatArray, m: int, *, coarse: bool = True) -> bool:
+    """Refuse a pulses-per-revolution that contradicts the period of the deviation.
 
-    ``signal`` is the head-averaged difference (≈ −a(j)), free of the table's rate fluctuation.
-    When it is strongly periodic, its period (in head-0 pulses) must be m: a scale deviation
-    repeats once per revolution and not at a fraction of it.
+    ``signal`` is indexed by head-0 pulse (the head-averaged difference ≈ −a(j), or a single
+    head's angle error). A scale's deviation repeats once per revolution, so when the signal is
+    strongly periodic its correlation at lag m must be about as high as at its best lag. A
+    deviation dominated by order k also repeats at m/k: that alone is no fault, so only a lag m
+    that is clearly worse than the best is refused. Records too short to reach lag m are not
+    judged here (the closure test of :func:`self_calibrate` covers them). ``coarse=False`` keeps
+    only the test of the sharp spike the random graduation errors leave at one revolution: for a
+    single head, whose angle error also holds the table's (smooth) rate fluctuation.
+
+    Returns False when the record is too short to reach lag m (nothing could be judged).
     """
     x = signal - signal.mean()
     n = x.size
     # lags from m/8 up to what leaves a quarter of the record (or of m) overlapping
     lo, hi = max(2, m // 8), n - max(m // 4, n // 4)
-    if hi <= lo:
-        return
+    if not lo <= m <= hi:
+        return False
     size = 1 << int(np.ceil(np.log2(2 * n)))
     f = np.fft.rfft(x, size)
     acf = np.fft.irfft(f * np.conj(f), size)[: hi + 1]
@@ -217,24 +238,106 @@ def _periodicity_check(signal: FloatArray, m: int) -> None:
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = acf[lags] / np.sqrt(head_energy * tail_energy)
     corr = np.nan_to_num(corr)
+    _check_fine_period(corr, lags, m)
     best = float(corr.max())
-    if best < _PERIODIC:
-        return
+    at_m = float(corr[m - lo])
+    if not coarse or best < _PERIODIC or at_m >= best - 0.1:
+        return True
     # the shortest lag at a local peak (nearly) as high as the best one: a smooth deviation
     # gives broad peaks, so the flank of a peak must not count
-    peaks, _ = find_peaks(corr, height=best - 0.05, prominence=0.1)
-    if peaks.size == 0:  # smooth at every searched lag: the data cannot tell the period
-        return
-    first = int(peaks[0])
-    # the top of that peak (ripples of the random graduation errors sit on its flanks)
+    peaks, _ = find_peaks(corr, height=best - 0.02, prominence=0.1)
+    first = int(peaks[0]) if peaks.size else int(np.argmax(corr))
     near = slice(max(0, first - m // 20), first + m // 20 + 1)
     period = int(lags[near][np.argmax(corr[near])])
-    if abs(period - m) <= max(2, m // 1000):
-        return
     raise CaptureError(
-        f"the scale's deviation repeats every {period} pulses of head_0, not every {m}: check "
-        f"--pulses-per-rev (the data suggest {period})."
+        f"the scale's deviation repeats every {period} pulses of head_0, not every {m} "
+        f"(correlation {best:.2f} against {at_m:.2f}): check --pulses-per-rev."
     )
+
+
+def _check_fine_period(corr: FloatArray, lags: NDArray[np.int64], m: int) -> None:
+    """The random graduation errors put a sharp spike on the correlation at exactly one
+    revolution (and its multiples); refuse an m whose lag has none while another lag has one."""
+    idx = np.arange(1, corr.size - 1)
+    spike = corr[idx] - 0.5 * (corr[idx - 1] + corr[idx + 1])
+    spread = 1.4826 * float(np.median(np.abs(spike - np.median(spike))))
+    if spread <= 0:
+        return
+    strong = np.flatnonzero(spike > 10 * spread)
+    if strong.size == 0:
+        return
+    found = int(lags[idx[strong[0]]])  # the shortest lag with a spike: one revolution
+    pos = m - int(lags[0]) - 1
+    at_m = float(max(spike[max(0, pos - 1) : pos + 2], default=0.0))
+    # at m's own lag there must be a spike of the same kind (noise alone reaches ~3 spreads)
+    if abs(found - m) > 1 and at_m < 0.3 * float(spike[strong[0]]):
+        raise CaptureError(
+            f"the scale's graduation pattern repeats every {found} pulses of head_0, not every "
+            f"{m}: check --pulses-per-rev."
+        )
+
+
+def _data_shifts(
+    heads: int, m: int, rotation: str, mean_offsets_arcsec: FloatArray
+) -> NDArray[np.int64]:
+    """Line shift of each head from the data: the nominal position plus the measured offset.
+
+    The mean angle between head 0's pulse j and head i's paired pulse is s_i·Δθ − h_i, so with h_i
+    within half a pitch of its nominal ±i·360/n the line shift is the whole number of pitches in
+    (±i·360/n + mean offset). This decides the line even when i·m/n ends in about one half.
+    """
+    pitch_arcsec = 360.0 / m * 3600.0
+    sign = 1.0 if rotation == "forward" else -1.0
+    nominal = sign * np.arange(1, heads) * 360.0 / heads * 3600.0
+    s = np.rint((nominal + mean_offsets_arcsec) / pitch_arcsec).astype(np.int64) % m
+    return np.concatenate(([0], s)).astype(np.int64)
+
+
+def _parseval_ss(resid: np.ndarray, m: int) -> float:
+    """Sum of squares in the sample domain of residual rfft spectra (last axis: orders)."""
+    w = np.full(resid.shape[-1], 2.0)
+    w[0] = 1.0
+    if m % 2 == 0:
+        w[-1] = 1.0
+    return float(np.sum(w * np.abs(resid) ** 2)) / m
+
+
+def _one_revolution_closure(diff: FloatArray, m: int, rotation: str) -> float:
+    """rms closure residual of the fit on the first m head-0 pulses, taking m as the period."""
+    one = diff[:, :m]
+    shifts = _data_shifts(one.shape[0] + 1, m, rotation, one.mean(axis=1))
+    spec = np.fft.rfft(one - one.mean(axis=1, keepdims=True), axis=-1)
+    _, resid = _gls(spec, shifts, m)
+    return float(np.sqrt(_parseval_ss(resid, m) / one.size))
+
+
+def _check_pulses_per_rev_by_closure(diff: FloatArray, m: int) -> None:
+    """Refuse m when another count per revolution explains the head differences far better.
+
+    With three or more heads the model over-determines the deviation, so a wrong m (a mistyped
+    count, edges counted twice) leaves a closure residual that a right one does not.
+    """
+    n_pulses = diff.shape[1]
+    candidates = {m + d for d in (-3, -2, -1, 1, 2, 3)}
+    candidates |= {round(m * f) for f in (0.25, 1 / 3, 0.5, 2.0, 3.0, 4.0)}
+    heads = diff.shape[0] + 1
+    candidates = {c for c in candidates if heads <= c <= n_pulses}
+    senses = ("forward", "reverse")  # judge m by its best sense, whatever the user forced
+
+    def closure(c: int) -> float:
+        return min(_one_revolution_closure(diff, c, sense) for sense in senses)
+
+    own = closure(m)
+    scores = {c: closure(c) for c in sorted(candidates)}
+    if not scores:
+        return
+    best = min(scores, key=lambda c: scores[c])
+    if scores[best] < 0.5 * own:
+        raise CaptureError(
+            f"the head differences fit {best} pulses per revolution far better than {m} "
+            f"(closure residual {scores[best]:.3g} against {own:.3g} arcsec): check "
+            "--pulses-per-rev."
+        )
 
 
 def self_calibrate(
@@ -308,7 +411,7 @@ def self_calibrate(
     pitch = 360.0 / m
     rate = _local_rate_deg_s(pairing.mean_times_s, pitch)
     angle_diff = pairing.delays_s[1:] * rate * 3600.0  # arcsec, shape (n−1, J)
-    _periodicity_check(angle_diff.mean(axis=0), m)
+    period_checked = check_period(angle_diff.mean(axis=0), m)
 
     used = angle_diff[:, : revs * m].reshape(n - 1, revs, m).transpose(1, 0, 2)  # (R, n−1, m)
     offsets_mean = used.mean(axis=(0, 2))
@@ -318,15 +421,9 @@ def self_calibrate(
     candidates = ["forward", "reverse"] if rotation == "auto" else [rotation]
     fits = {}
     for sense in candidates:
-        shifts = head_shifts(n, m, sense)
+        shifts = _data_shifts(n, m, sense, offsets_mean)
         a, resid = _gls(spec, shifts, m)
-        # Parseval on the rfft half-spectrum: every order but 0 and m/2 counts twice
-        w = np.full(a.shape[-1], 2.0)
-        w[0] = 1.0
-        if m % 2 == 0:
-            w[-1] = 1.0
-        ss = float(np.sum(w * np.abs(resid) ** 2)) / m
-        fits[sense] = (a, ss, shifts)
+        fits[sense] = (a, _parseval_ss(resid, m), shifts)
     sense = min(fits, key=lambda k: fits[k][1])
     if rotation == "auto" and n == 2:
         sense = "forward"
@@ -337,6 +434,19 @@ def self_calibrate(
                 "the sense of rotation against the head numbering is unclear from the data (both "
                 f"fit about as well); took '{sense}'. Give rotation= (--rotation) if you know it."
             )
+    if not period_checked:
+        notes.append(
+            "the record is too short (under 1.25 revolutions shared by all heads) to confirm "
+            f"{m} pulses per revolution from the data's own period; only near and whole-ratio "
+            "mistakes are caught."
+        )
+    if n >= 3:
+        _check_pulses_per_rev_by_closure(angle_diff, m)
+    else:
+        notes.append(
+            "with two heads every curve fits the head differences exactly: neither the pulses per "
+            "revolution nor the fit can be checked from the data."
+        )
     a, ss, shifts = fits[sense]
     closure_rms = float(np.sqrt(ss / (revs * (n - 1) * m)))
 
@@ -361,14 +471,19 @@ def self_calibrate(
     amp[0] = 0.0
     if m % 2 == 0:
         amp[-1] /= 2.0
-    undetect = undetectable_orders(n, m)
+    undetect = undetectable_orders(n, m, shifts)
     if undetect:
         listed = ", ".join(str(q) for q in undetect[:5])
         more = ", …" if len(undetect) > 5 else ""
+        exact = all(q % n == 0 for q in undetect) and m % n == 0
+        why = (
+            f"are multiples of {n} (the number of heads)"
+            if exact
+            else "are (nearly) blind to these heads' line shifts"
+        )
         note = (
-            f"Fourier orders that are multiples of {n} (the number of heads: {listed}{more}) are "
-            "undetectable by equal-division averaging and are set to zero; the scale's true "
-            "deviation may hold them."
+            f"Fourier orders {listed}{more} {why}: they are undetectable by equal-division "
+            "averaging and are set to zero; the scale's true deviation may hold them."
         )
     else:
         note = "every Fourier order 1 … m/2 is detectable with these head shifts."
@@ -395,7 +510,10 @@ def self_calibrate(
         head_offsets_arcsec=[float(x) for x in head_off],
         harmonic_amplitudes_arcsec=[float(x) for x in amp[1 : min(m // 2, 100) + 1]],
         rotation=sense,
+        head_line_shifts=[int(x) for x in shifts],
         first_pulse_time_s=float(trains[0][0]),
+        last_pulse_time_s=float(trains[0][-1]),
+        head0_pulses=int(trains[0].size),
         notes=notes,
         _per_revolution_arcsec=per_rev,
         _head_differences_arcsec=angle_diff,

@@ -26,7 +26,7 @@ from rotacal.encoder.pulses import (
     pulse_rate,
     whole_revolution_rate,
 )
-from rotacal.encoder.selfcal import SelfCalibration, head_shifts, self_calibrate
+from rotacal.encoder.selfcal import SelfCalibration, check_period, head_shifts, self_calibrate
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 
@@ -38,8 +38,9 @@ FloatArray = NDArray[np.float64]
 ALLAN_POINTS_PER_DECADE = 12
 #: Below this correlation a deviation curve is not trusted to match a capture.
 MIN_ALIGNMENT_CORRELATION = 0.7
-#: A single head's phase-correlation peak must stand this many robust spreads above the rest.
-_SINGLE_HEAD_SIGNIFICANCE = 10.0 * MIN_ALIGNMENT_CORRELATION
+#: A single head's phase-correlation peak must stand this many robust spreads above the rest
+#: (the largest of m Gaussian values stands about 4.5 spreads out for m ~ 10⁴).
+_SINGLE_HEAD_SIGNIFICANCE = 10.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -237,8 +238,8 @@ def align_deviation(
         Deviation index of head 0's pulse 0.
     correlation : float
         With several heads, the normalised correlation of the two curves at that shift (1 = the
-        same shape); with one head, the phase-correlation peak's height in robust spreads over
-        7 (so that the same 0.7 threshold means a peak ten spreads out).
+        same shape); with one head, 0.07 × the phase-correlation peak's height in robust spreads
+        (so that the same 0.7 threshold means a peak ten spreads out).
     """
     m = pulses_per_rev
     if len(heads) >= 2:
@@ -266,40 +267,79 @@ def align_deviation(
     shift = int(np.argmax(phat))
     spread = 1.4826 * float(np.median(np.abs(phat - np.median(phat))))
     significance = (float(phat[shift]) - float(np.median(phat))) / spread if spread > 0 else 0.0
-    # report it on the scale of a correlation: ≥ 1 when the peak stands 10 spreads out
-    return shift, significance / _SINGLE_HEAD_SIGNIFICANCE
+    # on the scale of the correlation threshold: 0.7 when the peak stands 10 spreads out
+    return shift, MIN_ALIGNMENT_CORRELATION * significance / _SINGLE_HEAD_SIGNIFICANCE
 
 
-def _as_selfcal_input(selfcal: Any, m: int) -> tuple[FloatArray, float | None, str]:
-    """(deviation, first pulse time, rotation) from a SelfCalibration or its JSON dict."""
+@dataclasses.dataclass(frozen=True)
+class _Deviation:
+    """A deviation curve to compensate with, and what identifies the capture it indexes."""
+
+    values: FloatArray
+    fingerprint: tuple[float, float, int] | None  # head 0's first and last time, pulse count
+    rotation: str
+    shifts: list[int] | None
+
+
+def _json_number(d: Mapping[str, Any], key: str, kind: type) -> Any:
+    value = d.get(key)
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ConfigError(f"the self-calibration's '{key}' must be a number, got {value!r}.")
+    if kind is int and float(value) != int(value):
+        raise ConfigError(f"the self-calibration's '{key}' must be a whole number, got {value!r}.")
+    return kind(value)
+
+
+def _as_deviation(selfcal: Any, m: int) -> _Deviation:
+    """The deviation from a SelfCalibration, its JSON dict, or a bare array of m values."""
+    fingerprint: tuple[float, float, int] | None = None
+    rotation, shifts, pprev = "forward", None, m
     if isinstance(selfcal, SelfCalibration):
-        d = selfcal.deviation_arcsec
-        first: Any = selfcal.first_pulse_time_s
-        rotation: Any = selfcal.rotation
-        pprev: Any = selfcal.pulses_per_rev
+        raw: Any = selfcal.deviation_arcsec
+        fingerprint = (selfcal.first_pulse_time_s, selfcal.last_pulse_time_s, selfcal.head0_pulses)
+        rotation, shifts, pprev = selfcal.rotation, selfcal.head_line_shifts, selfcal.pulses_per_rev
     elif isinstance(selfcal, Mapping):
         if "deviation_arcsec" not in selfcal:
             raise ConfigError("the self-calibration has no 'deviation_arcsec' (a selfcal JSON?).")
-        d = selfcal["deviation_arcsec"]
-        first = selfcal.get("first_pulse_time_s")
+        raw = selfcal["deviation_arcsec"]
+        first = _json_number(selfcal, "first_pulse_time_s", float)
+        last = _json_number(selfcal, "last_pulse_time_s", float)
+        count = _json_number(selfcal, "head0_pulses", int)
+        if first is not None and last is not None and count is not None:
+            fingerprint = (first, last, count)
+        pprev = _json_number(selfcal, "pulses_per_rev", int) or m
         rotation = selfcal.get("rotation", "forward")
-        pprev = selfcal.get("pulses_per_rev", m)
+        if rotation not in ("forward", "reverse"):
+            raise ConfigError(
+                f"the self-calibration's 'rotation' must be 'forward' or 'reverse', got {rotation!r}."
+            )
+        shifts = selfcal.get("head_line_shifts")
     else:
-        d, first, rotation, pprev = selfcal, None, "forward", m
+        raw = selfcal
     try:
-        d = np.asarray(d, dtype=np.float64)
+        values = np.asarray(raw, dtype=np.float64)
     except (TypeError, ValueError):
         raise ConfigError("the deviation must be a list of numbers (arcsec).") from None
-    if pprev != m or d.shape != (m,):
+    if values.ndim != 1:
+        raise ConfigError(f"the deviation must be one list of m values, got shape {values.shape}.")
+    if pprev != m or values.size != m:
+        given = pprev if pprev != m else values.size
         raise ConfigError(
-            f"the self-calibration is for {d.size} pulses per revolution, the capture is analysed "
+            f"the self-calibration is for {given} pulses per revolution, the capture is analysed "
             f"with {m}; use a self-calibration of the same encoder and --pulses-per-rev."
         )
-    if not np.all(np.isfinite(d)):
+    if not np.all(np.isfinite(values)):
         raise ConfigError("the deviation holds a NaN or null; redo the self-calibration.")
-    if rotation not in ("forward", "reverse"):
-        rotation = "forward"
-    return d, (float(first) if first is not None else None), str(rotation)
+    if shifts is not None:
+        try:
+            shifts = [int(x) for x in shifts]
+        except (TypeError, ValueError):
+            raise ConfigError(
+                "the self-calibration's 'head_line_shifts' must be integers."
+            ) from None
+    return _Deviation(values, fingerprint, str(rotation), shifts)
 
 
 def calibrate_rate(
@@ -388,7 +428,13 @@ def calibrate_rate(
     correlation: float | None = None
     if compensate and not use_all:
         if selfcal is None and n >= 2:
-            made = self_calibrate(trains, pulses_per_rev=m)
+            try:
+                made = self_calibrate(trains, pulses_per_rev=m)
+            except CaptureError as e:
+                raise CaptureError(
+                    f"{e} (the rate is compensated with a self-calibration of this capture; "
+                    "give one with --selfcal, or use --no-compensation)"
+                ) from None
             selfcal = made
             notes.append(
                 f"compensated with the deviation self-calibrated from this capture "
@@ -397,8 +443,14 @@ def calibrate_rate(
         if selfcal is None:
             notes.append("one head and no self-calibration given: the rate is not compensated.")
         else:
-            deviation, first, rotation = _as_selfcal_input(selfcal, m)
-            same = first is not None and math.isclose(first, float(trains[0][0]), abs_tol=1e-12)
+            dev = _as_deviation(selfcal, m)
+            deviation = dev.values
+            here = (float(trains[0][0]), float(trains[0][-1]), int(trains[0].size))
+            same = dev.fingerprint is not None and (
+                math.isclose(dev.fingerprint[0], here[0], abs_tol=1e-12)
+                and math.isclose(dev.fingerprint[1], here[1], abs_tol=1e-12)
+                and dev.fingerprint[2] == here[2]
+            )
             shift = 0  # deviation index of head 0's first pulse
             if not same:
                 shift, correlation = align_deviation(trains, deviation, m)
@@ -415,8 +467,12 @@ def calibrate_rate(
             if k != 0:
                 # head k's first pulse sees the line s_k ahead of the head-0 pulse it pairs with
                 pairing = pair_heads(trains, names)
-                s_k = int(head_shifts(n, m, rotation)[k])
-                shift = (shift + s_k - int(pairing.index_offsets[k])) % m
+                shifts = dev.shifts or list(head_shifts(n, m, dev.rotation))
+                if len(shifts) != n:
+                    raise ConfigError(
+                        f"the self-calibration is of {len(shifts)} heads, the capture has {n}."
+                    )
+                shift = (shift + shifts[k] - int(pairing.index_offsets[k])) % m
     elif use_all:
         notes.append(
             "rate from the head-averaged pulse times: the average cancels every detectable order "
@@ -441,6 +497,15 @@ def calibrate_rate(
         else angle_nom
     )
 
+    if n == 1 and times.size > m:
+        # one head: nothing else checks m; its angle error must repeat once per revolution
+        t_rel = times - times[0]
+        err = angle_nom - np.polyval(np.polyfit(t_rel, angle_nom, 1), t_rel)
+        if not check_period(-err, m, coarse=False):
+            notes.append(
+                f"one head and under 1.25 revolutions: {m} pulses per revolution cannot be "
+                "confirmed from the data; a wrong count scales the rate."
+            )
     mean_rate, revs = whole_revolution_rate(times, m)
     window = [float(times[0]), float(times[revs * m] if revs else times[-1])]
     if mean_rate is None:
@@ -466,8 +531,14 @@ def calibrate_rate(
         s_nom = s
     bias = bias_pct = None
     if set_rate_deg_s is not None:
-        bias = mean_rate - float(set_rate_deg_s)
-        bias_pct = 100.0 * bias / float(set_rate_deg_s)
+        set_rate = abs(float(set_rate_deg_s))
+        if float(set_rate_deg_s) < 0:
+            notes.append(
+                "pulse times carry no sense of rotation: the mean rate is a magnitude and is "
+                f"compared with |set rate| = {set_rate:g} °/s."
+            )
+        bias = mean_rate - set_rate
+        bias_pct = 100.0 * bias / set_rate
     return RateResult(
         mean_rate_deg_s=float(mean_rate),
         rate_deviation_rms_percent=float(np.sqrt(np.mean(dev_pct**2))),
