@@ -219,7 +219,8 @@ def check_period(signal: FloatArray, m: int, *, coarse: bool = True) -> bool:
     only the test of the sharp spike the random graduation errors leave at one revolution: for a
     single head, whose angle error also holds the table's (smooth) rate fluctuation.
 
-    Returns False when the record is too short to reach lag m (nothing could be judged).
+    Returns True when the data confirm m (a strong correlation or a graduation spike at lag m),
+    False when they cannot (a record too short to reach lag m, a deviation too weak).
     """
     x = signal - signal.mean()
     n = x.size
@@ -238,11 +239,13 @@ def check_period(signal: FloatArray, m: int, *, coarse: bool = True) -> bool:
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = acf[lags] / np.sqrt(head_energy * tail_energy)
     corr = np.nan_to_num(corr)
-    _check_fine_period(corr, lags, m)
+    spike_at_m = _check_fine_period(corr, lags, m)
     best = float(corr.max())
     at_m = float(corr[m - lo])
-    if not coarse or best < _PERIODIC or at_m >= best - 0.1:
-        return True
+    if not coarse:
+        return spike_at_m
+    if best < _PERIODIC or at_m >= best - 0.1:
+        return spike_at_m or at_m >= _PERIODIC
     # the shortest lag at a local peak (nearly) as high as the best one: a smooth deviation
     # gives broad peaks, so the flank of a peak must not count
     peaks, _ = find_peaks(corr, height=best - 0.02, prominence=0.1)
@@ -255,26 +258,28 @@ def check_period(signal: FloatArray, m: int, *, coarse: bool = True) -> bool:
     )
 
 
-def _check_fine_period(corr: FloatArray, lags: NDArray[np.int64], m: int) -> None:
+def _check_fine_period(corr: FloatArray, lags: NDArray[np.int64], m: int) -> bool:
     """The random graduation errors put a sharp spike on the correlation at exactly one
-    revolution (and its multiples); refuse an m whose lag has none while another lag has one."""
+    revolution (and its multiples); refuse an m whose lag has none while another lag has one.
+    Returns True when lag m carries such a spike (m confirmed)."""
     idx = np.arange(1, corr.size - 1)
     spike = corr[idx] - 0.5 * (corr[idx - 1] + corr[idx + 1])
     spread = 1.4826 * float(np.median(np.abs(spike - np.median(spike))))
     if spread <= 0:
-        return
+        return False
     strong = np.flatnonzero(spike > 10 * spread)
     if strong.size == 0:
-        return
+        return False
     found = int(lags[idx[strong[0]]])  # the shortest lag with a spike: one revolution
     pos = m - int(lags[0]) - 1
-    at_m = float(max(spike[max(0, pos - 1) : pos + 2], default=0.0))
+    at_m = float(spike[pos]) if 0 <= pos < spike.size else 0.0
     # at m's own lag there must be a spike of the same kind (noise alone reaches ~3 spreads)
-    if abs(found - m) > 1 and at_m < 0.3 * float(spike[strong[0]]):
+    if found != m and at_m < 0.3 * float(spike[strong[0]]):
         raise CaptureError(
             f"the scale's graduation pattern repeats every {found} pulses of head_0, not every "
             f"{m}: check --pulses-per-rev."
         )
+    return at_m > 10 * spread
 
 
 def _data_shifts(
@@ -311,26 +316,30 @@ def _one_revolution_closure(diff: FloatArray, m: int, rotation: str) -> float:
     return float(np.sqrt(_parseval_ss(resid, m) / one.size))
 
 
-def _check_pulses_per_rev_by_closure(diff: FloatArray, m: int) -> None:
+def _check_pulses_per_rev_by_closure(diff: FloatArray, m: int, *, near: bool) -> None:
     """Refuse m when another count per revolution explains the head differences far better.
 
     With three or more heads the model over-determines the deviation, so a wrong m (a mistyped
-    count, edges counted twice) leaves a closure residual that a right one does not.
+    count, edges counted twice) leaves a closure residual that a right one does not. Tried: m/4,
+    m/3, m/2 (a multiple of the true count repeats with it, so the period tests cannot see it),
+    and, when ``near``, also m ± 1…3, 2m, 3m and 4m (records too short for the period tests).
     """
     n_pulses = diff.shape[1]
-    candidates = {m + d for d in (-3, -2, -1, 1, 2, 3)}
-    candidates |= {round(m * f) for f in (0.25, 1 / 3, 0.5, 2.0, 3.0, 4.0)}
+    factors = (0.25, 1 / 3, 0.5, 2.0, 3.0, 4.0) if near else (0.25, 1 / 3, 0.5)
+    candidates = {round(m * f) for f in factors}
+    if near:
+        candidates |= {m + d for d in (-3, -2, -1, 1, 2, 3)}
     heads = diff.shape[0] + 1
     candidates = {c for c in candidates if heads <= c <= n_pulses}
-    senses = ("forward", "reverse")  # judge m by its best sense, whatever the user forced
+    if not candidates:
+        return
 
+    # judge every count in the sense that suits it best, whatever the user forced
     def closure(c: int) -> float:
-        return min(_one_revolution_closure(diff, c, sense) for sense in senses)
+        return min(_one_revolution_closure(diff, c, sense) for sense in ("forward", "reverse"))
 
     own = closure(m)
     scores = {c: closure(c) for c in sorted(candidates)}
-    if not scores:
-        return
     best = min(scores, key=lambda c: scores[c])
     if scores[best] < 0.5 * own:
         raise CaptureError(
@@ -436,12 +445,12 @@ def self_calibrate(
             )
     if not period_checked:
         notes.append(
-            "the record is too short (under 1.25 revolutions shared by all heads) to confirm "
-            f"{m} pulses per revolution from the data's own period; only near and whole-ratio "
-            "mistakes are caught."
+            f"the data cannot confirm {m} pulses per revolution from their own period (a record "
+            "under 1.25 revolutions shared by all heads, or a weak deviation); only near and "
+            "whole-ratio mistakes are caught."
         )
     if n >= 3:
-        _check_pulses_per_rev_by_closure(angle_diff, m)
+        _check_pulses_per_rev_by_closure(angle_diff, m, near=not period_checked)
     else:
         notes.append(
             "with two heads every curve fits the head differences exactly: neither the pulses per "

@@ -503,8 +503,9 @@ def calibrate_rate(
         err = angle_nom - np.polyval(np.polyfit(t_rel, angle_nom, 1), t_rel)
         if not check_period(-err, m, coarse=False):
             notes.append(
-                f"one head and under 1.25 revolutions: {m} pulses per revolution cannot be "
-                "confirmed from the data; a wrong count scales the rate."
+                f"one head: {m} pulses per revolution cannot be confirmed from the data's own "
+                "period (too short a record, or too weak a graduation pattern); a wrong count "
+                "scales the rate."
             )
     mean_rate, revs = whole_revolution_rate(times, m)
     window = [float(times[0]), float(times[revs * m] if revs else times[-1])]
