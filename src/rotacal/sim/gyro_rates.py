@@ -16,13 +16,13 @@ This module imports only numpy, rotacal.errors and rotacal.sim.sensors.SimCaptur
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from rotacal.errors import ConfigError
+from rotacal.sim.motion import _finite
 from rotacal.sim.sensors import SimCapture, register_kind
 
 __all__ = ["DEFAULT_RATES_DEG_S", "simulate_gyro_rates"]
@@ -32,16 +32,6 @@ __all__ = ["DEFAULT_RATES_DEG_S", "simulate_gyro_rates"]
 DEFAULT_RATES_DEG_S: tuple[float, ...] = tuple(float(r) for r in range(-100, 101, 20))
 
 _MAX_ROWS = 50_000_000
-
-
-def _num(name: str, value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{name} must be a number, got {value!r}.") from None
-    if not math.isfinite(v):
-        raise ConfigError(f"{name} must be finite, got {value!r}.")
-    return v
 
 
 def _powers(nonlinearity: Any) -> dict[int, float]:
@@ -64,7 +54,7 @@ def _powers(nonlinearity: Any) -> dict[int, float]:
                 f"nonlinearity powers must be integers from 2 to 9, got {p!r}; the linear part "
                 "is scale_factor and the constant is bias."
             )
-        out[int(p)] = out.get(int(p), 0.0) + _num(f"nonlinearity coefficient of Ω^{p}", c)
+        out[int(p)] = out.get(int(p), 0.0) + _finite(f"nonlinearity coefficient of Ω^{p}", c)
     return out
 
 
@@ -132,12 +122,12 @@ def simulate_gyro_rates(
         raise ConfigError("rates_deg_s must hold at least 2 distinct set rates (seed 004: ≥ 11).")
     if not np.all(np.isfinite(rates)):
         raise ConfigError("rates_deg_s must be finite numbers.")
-    s = _num("scale_factor", scale_factor)
+    s = _finite("scale_factor", scale_factor)
     if s == 0:
         raise ConfigError("scale_factor must be nonzero.")
-    v0 = _num("bias", bias)
+    v0 = _finite("bias", bias)
     coeffs = _powers(nonlinearity)
-    sigma = _num("noise_std", noise_std)
+    sigma = _finite("noise_std", noise_std)
     if sigma < 0:
         raise ConfigError(f"noise_std must be ≥ 0, got {noise_std!r}.")
     counts = np.broadcast_to(np.asarray(samples_per_point), rates.shape)
@@ -152,13 +142,16 @@ def simulate_gyro_rates(
             f"the test would have {int(counts.sum())} rows, more than {_MAX_ROWS}; lower "
             "samples_per_point."
         )
-    q = None if quantum is None else _num("quantum", quantum)
+    q = None if quantum is None else _finite("quantum", quantum)
     if q is not None and q <= 0:
         raise ConfigError(f"quantum must be > 0 output units, got {quantum!r}.")
     rails: tuple[float, float] | None = None
     if saturation is not None:
         try:
-            lo, hi = (_num("saturation[0]", saturation[0]), _num("saturation[1]", saturation[1]))
+            lo, hi = (
+                _finite("saturation[0]", saturation[0]),
+                _finite("saturation[1]", saturation[1]),
+            )
         except (TypeError, IndexError):
             raise ConfigError(
                 f"saturation must be (low, high) output rails, got {saturation!r}."
