@@ -1,6 +1,6 @@
 """rotacal.gyro — gyroscope calibrations on the table: scale factor and nonlinearity (seed 004),
 3-axis calibration (seed 003) and calibration from rotations through a known angle (Ferraris),
-multiposition drift coefficients (seed 001)."""
+multiposition drift coefficients (seed 001), noise terms (IEEE Std 952)."""
 
 from rotacal.gyro.multiposition import (
     EARTH_RATE_DEG_H,
@@ -13,6 +13,7 @@ from rotacal.gyro.multiposition import (
     earth_rate_and_gravity,
     multiposition_plan,
 )
+from rotacal.gyro.noise import GyroNoise, gyro_noise
 from rotacal.gyro.rotations import (
     RotationCalibration,
     calibrate_triad_rotations,
@@ -43,6 +44,7 @@ __all__ = [
     "RATE_COLUMNS",
     "REQUIREMENTS",
     "TRIAD_OUTPUT_COLUMNS",
+    "GyroNoise",
     "MultipositionPlan",
     "MultipositionResult",
     "RotationCalibration",
@@ -62,6 +64,7 @@ __all__ = [
     "earth_rate_and_gravity",
     "evaluate_requirement",
     "ferraris_sections",
+    "gyro_noise",
     "multiposition_plan",
     "resolve_requirement",
     "triad_plan",

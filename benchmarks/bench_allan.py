@@ -1,0 +1,118 @@
+"""Speed of the overlapping Allan deviation (rotacal.signal.allan) against allantools, one core.
+
+A gyro-like rate record (white rate noise + a small rate random walk, 100 Hz) of ``--samples``
+points (default 10⁷):
+
+1. octave τ: ``overlapping_adev(y, fs, taus="octave")`` and ``allantools.oadev(..., taus="octave")``
+   on the same data in the same run — times, their ratio and the largest relative difference;
+2. every τ (m = 1 … ⌊N/2⌋): ``overlapping_adev(y, fs, taus="all")`` timed; allantools is not run
+   at that size (O(N²)): its ``taus="all"`` cost is measured at 10⁴ and 10⁵ samples and
+   extrapolated both with the exponent those two give (≈ 1.5: overheads still count there) and
+   with N², its asymptotic cost (N/2 values of τ at O(N) each).
+
+Best of ``--repeat`` (default 1 for the big runs) with ``time.perf_counter``; no asserts.
+
+Run: ``python benchmarks/bench_allan.py [--samples N] [--repeat R]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import math  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from typing import Any  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from rotacal.signal.allan import overlapping_adev  # noqa: E402
+
+FS_HZ = 100.0
+
+
+def best_of(fn: Callable[[], Any], repeat: int) -> tuple[float, Any]:
+    best = math.inf
+    out = None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def gyro_rate(n: int, seed: int = 1) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    white = 0.3 * rng.standard_normal(n)
+    walk = np.cumsum(2e-5 * rng.standard_normal(n))
+    return 0.1 + white + walk
+
+
+def fmt(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:10.3f} s"
+    if seconds < 2 * 3600:
+        return f"{seconds / 60:10.1f} min"
+    return f"{seconds / 3600:10.1f} h"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=10_000_000)
+    ap.add_argument("--repeat", type=int, default=1)
+    args = ap.parse_args()
+    n = args.samples
+    try:
+        import allantools
+    except ImportError:  # pragma: no cover - dev extra
+        raise SystemExit(
+            "allantools is needed for the comparison: pip install allantools"
+        ) from None
+
+    y = gyro_rate(n)
+    print(f"overlapping ADEV, {n:,} rate samples at {FS_HZ:g} Hz, one core")
+    print(f"{'case':44s} {'time':>13s}  {'ratio':>8s}  note")
+
+    t_rc, res = best_of(lambda: overlapping_adev(y, fs=FS_HZ, taus="octave"), args.repeat)
+    t_at, ref = best_of(
+        lambda: allantools.oadev(y, rate=FS_HZ, data_type="freq", taus="octave"), args.repeat
+    )
+    diff = float(np.max(np.abs(res.adev / ref[1] - 1.0)))
+    print(f"{'octave τ: rotacal overlapping_adev':44s} {fmt(t_rc)}  {1.0:8.2f}  {res.tau_s.size} τ")
+    print(
+        f"{'octave τ: allantools.oadev':44s} {fmt(t_at)}  {t_at / t_rc:8.2f}  "
+        f"max |rel diff| {diff:.1e}"
+    )
+
+    t_all, res_all = best_of(lambda: overlapping_adev(y, fs=FS_HZ, taus="all"), args.repeat)
+    print(
+        f"{'every τ: rotacal overlapping_adev(taus=all)':44s} {fmt(t_all)}  {t_all / t_rc:8.2f}  "
+        f"{res_all.tau_s.size:,} τ, {res_all._n_direct} computed directly"
+    )
+    sizes = (10_000, 100_000)
+    times = []
+    for small in sizes:
+        ys = gyro_rate(small, seed=2)
+        t, _ = best_of(
+            lambda ys=ys: allantools.oadev(ys, rate=FS_HZ, data_type="freq", taus="all"), 1
+        )
+        times.append(t)
+        print(f"{f'every τ: allantools.oadev(taus=all), N={small:,}':44s} {fmt(t)}")
+    expo = math.log(times[1] / times[0]) / math.log(sizes[1] / sizes[0])
+    for label, power in ((f"N^{expo:.2f}, measured", expo), ("N², its asymptotic cost", 2.0)):
+        estimate = times[1] * (n / sizes[1]) ** power
+        print(
+            f"{f'every τ: allantools, N={n:,} (extrapolated)':44s} {fmt(estimate)}  "
+            f"{estimate / t_all:8.0f}  cost ∝ {label}"
+        )
+    print(
+        "ratio: time / rotacal octave time (rows 1–3); allantools estimate / rotacal every-τ time"
+    )
+
+
+if __name__ == "__main__":
+    main()

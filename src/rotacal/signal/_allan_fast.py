@@ -1,0 +1,346 @@
+"""Sums of squared second differences at many cluster sizes (private kernel of ``allan``).
+
+For a phase record ``x_0 … x_{N-1}`` the overlapping Allan variance at cluster size ``m`` needs
+
+    S(m) = Σ_{i=0}^{L-1} (x_{i+2m} − 2·x_{i+m} + x_i)²,   L = N − 2m.
+
+:func:`direct_sums` evaluates this literally, O(L) per ``m``. :func:`second_difference_sums`
+returns it for *every* requested ``m`` in O(N log² N) total, exactly up to floating-point
+rounding. The derivation (this module is its reference):
+
+1. **Expansion.** With ``R(ℓ) = Σ_{i<N−ℓ} z_i z_{i+ℓ}`` (full-range lagged products),
+   ``H(m) = Σ_{j<m} z_j z_{j+m}`` (the inner product of the two halves of the first 2m samples)
+   and ``T(m)`` the same for the last 2m samples,
+
+       S(m) = Σ_{i<L} z_i² + 4·Σ_{i<L} z_{i+m}² + Σ_{i<L} z_{i+2m}²
+              − 4·(2R(m) − H(m) − T(m)) + 2·R(2m),
+
+   because ``Σ_{i<L} z_i z_{i+m} = R(m) − T(m)``, ``Σ_{i<L} z_{i+m} z_{i+2m} = R(m) − H(m)`` and
+   ``Σ_{i<L} z_i z_{i+2m} = R(2m)``. Squares come from prefix sums; ``R`` for all lags from one
+   batched FFT correlation over blocks (overlap-add of per-block spectra); ``H`` and ``T`` for all
+   ``m`` from a divide and conquer of FFT correlations (the region ``j < m`` is a triangle in the
+   (j, lag) plane: its lower half is one full block correlation, its two quarter triangles
+   recurse), O(K log² K) for ``m < K``.
+
+2. **Conditioning.** The expansion subtracts large sums; its rounding error is about
+   ``ε·log N·Σz²`` against a result ``S(m)``. A straight line is annihilated by the second
+   difference, so the global best line is removed first (caller). For red noise (flicker or
+   random-walk rate) ``Σz²/S(m)`` still grows like a power of ``N/m``, so cluster sizes are
+   processed in groups ``[M, 2^G·M)``: per group, ``x`` is replaced by ``z = x − g`` where ``g``
+   is the continuous piecewise-linear interpolant of ``x`` at knots spaced ``B = 4·M_hi``. The
+   second difference of ``g`` is a sum of non-overlapping tents ``Δ_k·h_m(i − q_k)`` at the knots
+   (``Δ_k`` the slope change, ``h_m(j) = m − |j + m|`` on ``−2m < j < 0``), so
+
+       S_x(m) = S_z(m) + 2·Σ_k Δ_k·Σ_i d_i(z)·h_m(i − q_k) + Σ_k Δ_k²·(2m³ + m)/3,
+
+   where the middle sum needs only sums of ``z`` and ``t·z`` over windows around each knot
+   (local prefix sums, O(1) per knot and ``m``). Within a group ``Σz²/S(m)`` is bounded by a
+   constant that depends on ``B/m`` only, not on ``N``.
+
+3. **Guards.** Cluster sizes below ``DIRECT_BELOW`` and those with fewer than ``DIRECT_TAIL``
+   terms (``m`` near ``N/2``, where ``S`` is a sum of few terms) are computed directly (cheap
+   there). Every fast value carries a rounding-error estimate; any value whose estimate exceeds
+   ``FAST_RTOL`` is recomputed directly, so a result is never silently imprecise.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.fft as sfft
+
+#: Cluster sizes below this are computed directly (O(N) each).
+DIRECT_BELOW = 8
+#: Cluster sizes with fewer than this many second differences are computed directly (O(L)).
+DIRECT_TAIL = 256
+#: Each group of the fast method spans this many octaves of cluster size.
+GROUP_OCTAVES = 3
+#: Leaf size of the divide and conquer for the head/tail products.
+LEAF = 16
+#: A fast value whose estimated relative rounding error exceeds this is recomputed directly.
+FAST_RTOL = 1e-8
+#: Largest number of complex FFT elements held at once (bounds the working memory).
+_FFT_BATCH = 1 << 22
+#: Chunk (samples) of the direct method: keeps its temporaries in cache.
+_DIRECT_CHUNK = 1 << 14
+_EPS = float(np.finfo(np.float64).eps)
+
+
+# ------------------------------------------------------------------------------ direct method
+def direct_sums(z: np.ndarray, ms: np.ndarray) -> np.ndarray:
+    """``S(m)`` by the definition, O(N − 2m) per cluster size (chunked, whole-array).
+
+    Parameters
+    ----------
+    z : phase samples (any unit u; a straight line may have been removed).
+    ms : cluster sizes (samples), each with ``N − 2m ≥ 1``.
+
+    Returns
+    -------
+    ndarray — ``S(m)`` in u².
+
+    References
+    ----------
+    NIST SP 1065 (Riley 2008), eq. (11): the overlapping Allan variance from phase data.
+    """
+    n = z.size
+    out = np.empty(ms.size)
+    buf = np.empty(min(_DIRECT_CHUNK, n))
+    for k, m in enumerate(ms.tolist()):
+        L = n - 2 * m
+        acc = 0.0
+        for s in range(0, L, _DIRECT_CHUNK):
+            e = min(L, s + _DIRECT_CHUNK)
+            b = buf[: e - s]
+            np.multiply(z[s + m : e + m], -2.0, out=b)
+            b += z[s + 2 * m : e + 2 * m]
+            b += z[s:e]
+            np.multiply(b, b, out=b)
+            acc += float(b.sum())  # pairwise summation; BLAS dot avoided (thread spin-up)
+        out[k] = acc
+    return out
+
+
+# ------------------------------------------------------------------------------ FFT helpers
+def _lagged_products(z: np.ndarray, lag_max: int) -> np.ndarray:
+    """``R(ℓ) = Σ_{i<N−ℓ} z_i z_{i+ℓ}`` for ``ℓ = 0 … lag_max − 1``.
+
+    Blocks of length ``P ≥ lag_max`` are transformed once (length 2P, zero padded); the spectrum
+    of block ``b`` followed by block ``b + 1`` is ``U_b + (−1)^k U_{b+1}``, and the per-block
+    correlation spectra are summed before one inverse transform.
+    """
+    n = z.size
+    p = sfft.next_fast_len(max(lag_max, 4096), real=True)
+    nb = -(-n // p)
+    zp = np.zeros(nb * p)
+    zp[:n] = z
+    blocks = zp.reshape(nb, p)
+    sign = np.ones(p + 1)
+    sign[1::2] = -1.0
+    acc = np.zeros(p + 1, dtype=np.complex128)
+    rows = max(1, _FFT_BATCH // (p + 1))
+    prev: np.ndarray | None = None  # spectrum of the first block of the current batch
+    for s in range(nb - 1, -1, -rows):  # walk backwards so block b + 1 is always known
+        lo = max(0, s - rows + 1)
+        spec = sfft.rfft(blocks[lo : s + 1], n=2 * p, axis=1)
+        nxt = np.empty_like(spec)
+        nxt[:-1] = spec[1:]
+        nxt[-1] = prev if prev is not None else 0.0
+        nxt *= sign
+        nxt += spec
+        prev = spec[0].copy()
+        np.conjugate(spec, out=spec)
+        acc += np.einsum("ij,ij->j", spec, nxt)
+    r: np.ndarray = sfft.irfft(acc, n=2 * p)[:lag_max]
+    return r
+
+
+def _correlate_rows(u: np.ndarray, v: np.ndarray, n: int, nout: int) -> np.ndarray:
+    """``c[t, l] = Σ_r Σ_j u[r, t, j]·v[r, t, j + l]`` for ``l < nout`` by length-``n`` FFTs.
+
+    ``u`` and ``v`` have shape (signals, rows, ·); the signals' spectra are summed.
+    """
+    ns, nr = u.shape[0], u.shape[1]
+    out = np.empty((nr, nout))
+    step = max(1, _FFT_BATCH // (ns * (n // 2 + 1)))
+    for s in range(0, nr, step):
+        e = min(nr, s + step)
+        acc: np.ndarray | None = None
+        for r in range(ns):
+            su = sfft.rfft(u[r, s:e], n=n, axis=1)
+            sv = sfft.rfft(v[r, s:e], n=n, axis=1)
+            np.conjugate(su, out=su)
+            su *= sv
+            if acc is None:
+                acc = su
+            else:
+                acc += su
+        assert acc is not None
+        out[s:e] = sfft.irfft(acc, n=n, axis=1)[:, :nout]
+    return out
+
+
+def _smooth_size(k: int) -> tuple[int, int]:
+    """The smallest ``leaf·2^j ≥ k`` with a smooth ``leaf`` in ``[LEAF, 2·LEAF)`` (fast FFTs)."""
+    best = (0, 0)
+    for leaf in _LEAVES:
+        j = max(0, math.ceil(math.log2(max(k, 1) / leaf)))
+        size = leaf << j
+        if best[0] == 0 or size < best[0]:
+            best = (size, leaf)
+    return best
+
+
+_LEAVES = (16, 18, 20, 24, 25, 27, 30)
+
+
+def _half_products(zs: np.ndarray, k: int, leaf: int) -> np.ndarray:
+    """``H[m] = Σ_rows Σ_{j<m} zs[r, j]·zs[r, j + m]`` for ``m < k`` (``k = leaf·2^j``).
+
+    ``zs`` has one signal per row (the head, and the reversed tail, of the record) and at least
+    ``2k + k/2`` columns (zero padded). Node ``t`` of size ``s`` covers ``m ∈ [t·s, (t + 1)·s)``
+    with ``j`` offset ``t·s`` and partner offset ``2t·s``; the upper half of its ``m`` range takes
+    the full correlation of its first ``s/2`` samples, the rest recurses (two children of size
+    ``s/2``) down to leaves that are summed directly. The rows' correlation spectra are added
+    before the inverse transform.
+    """
+    ns = zs.shape[0]
+    h = np.zeros(k)
+    s = k
+    while s > leaf:
+        half = s // 2
+        nodes = k // s
+        u = zs[:, :k].reshape(ns, nodes, s)[:, :, :half]
+        v = zs[:, half : half + 2 * k].reshape(ns, nodes, 2 * s)[:, :, :s]
+        h.reshape(nodes, s)[:, half:] += _correlate_rows(u, v, s, half)
+        s = half
+    nodes = k // leaf
+    u = zs[:, :k].reshape(ns, nodes, leaf)
+    v = zs[:, : 2 * k].reshape(ns, nodes, 2 * leaf)
+    hl = np.zeros((ns, nodes, leaf))
+    for j in range(leaf - 1):
+        hl[:, :, j + 1 :] += u[:, :, j : j + 1] * v[:, :, 2 * j + 1 : j + leaf]
+    h += hl.sum(axis=0).reshape(k)
+    return h
+
+
+# ------------------------------------------------------------------------------ one group
+def _group_sums(x: np.ndarray, ms: np.ndarray, m_hi: int) -> tuple[np.ndarray, np.ndarray]:
+    """``S(m)`` and a rounding-magnitude estimate for cluster sizes ``ms`` (all ``< m_hi``)."""
+    n = x.size
+    seg = 4 * m_hi
+    last_knot = n - 1 - 2 * m_hi
+    knots = np.arange(seg, last_knot + 1, seg, dtype=np.int64)
+    if knots.size:
+        nodes = np.concatenate(([0], knots, [n - 1]))
+        vals = x[nodes]
+        slopes = np.diff(vals) / np.diff(nodes)
+        delta = np.diff(slopes)
+        g = np.interp(np.arange(n, dtype=np.float64), nodes.astype(np.float64), vals)
+        z = x - g
+    else:
+        delta = np.zeros(0)
+        z = x
+    L = n - 2 * ms
+    # squares
+    c2 = np.zeros(n + 1)
+    np.cumsum(z * z, out=c2[1:])
+    sq = c2[L] + 4.0 * (c2[ms + L] - c2[ms]) + (c2[n] - c2[2 * ms])
+    # full-range lagged products up to lag 2·m_hi
+    r = _lagged_products(z, 2 * m_hi)
+    # head and tail half products (their sum), H(m) + T(m)
+    k, leaf = _smooth_size(m_hi)
+    width = min(2 * k, n)
+    zs = np.zeros((2, 2 * k + k // 2 + leaf))
+    zs[0, :width] = z[:width]
+    zs[1, :width] = z[::-1][:width]
+    ht = _half_products(zs, k, leaf)
+    s = sq - 4.0 * (2.0 * r[ms] - ht[ms]) + 2.0 * r[2 * ms]
+    mag = np.full(ms.size, c2[n])
+    if delta.size:
+        cross, tents = _knot_terms(z, knots, delta, ms, m_hi)
+        s += 2.0 * cross + tents
+        mag += 2.0 * np.abs(cross) + tents + sq
+    return s, mag
+
+
+def _knot_terms(
+    z: np.ndarray, knots: np.ndarray, delta: np.ndarray, ms: np.ndarray, m_hi: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """``Σ_k Δ_k Σ_i d_i(z)·h_m(i − q_k)`` and ``Σ_k Δ_k²·(2m³ + m)/3`` for each ``m``.
+
+    With local coordinates ``t = u + c`` around each knot (``c = 2·m_hi``; the windows
+    ``[q_k − c, q_k + c)`` tile the record because the knots are ``2c`` apart), the knot sum of
+    ``Σ_u (α + β·u)·z_{q_k+u}`` over ``u ∈ [a, b]`` needs only the prefix sums ``D0``, ``D1`` of
+    ``y_t = Σ_k Δ_k·z_{q_k−c+t}`` and ``t·y_t``: O(N) once, then O(1) per ``m``.
+    """
+    c = 2 * m_hi
+    w = 2 * c
+    start = int(knots[0]) - c
+    zw = z[start : start + knots.size * w].reshape(knots.size, w)
+    y = np.einsum("k,kt->t", delta, zw)
+    d0 = np.zeros(w + 1)
+    d1 = np.zeros(w + 1)
+    np.cumsum(y, out=d0[1:])
+    np.cumsum(y * np.arange(w, dtype=np.float64), out=d1[1:])
+    mm = ms.astype(np.int64)
+    cross = np.zeros(ms.size)
+    for mult, sh in ((1.0, 0), (-2.0, 1), (1.0, 2)):
+        sv = sh * mm
+        # W_s = Σ_{u=s−2m}^{s−m} (u − s + 2m)·z_{q+u} + Σ_{u=s−m+1}^{s} (s − u)·z_{q+u}
+        for a, b, alpha, beta in (
+            (sv - 2 * mm, sv - mm, 2 * mm - sv, 1.0),
+            (sv - mm + 1, sv, sv, -1.0),
+        ):
+            lo = a + c
+            hi = b + c + 1
+            cross += mult * ((alpha - beta * c) * (d0[hi] - d0[lo]) + beta * (d1[hi] - d1[lo]))
+    msf = ms.astype(np.float64)
+    tents = float(np.einsum("k,k->", delta, delta)) * (2.0 * msf**3 + msf) / 3.0
+    return cross, tents
+
+
+# ------------------------------------------------------------------------------ public kernel
+def second_difference_sums(z: np.ndarray, ms: np.ndarray) -> tuple[np.ndarray, int]:
+    """``S(m)`` for the sorted unique cluster sizes ``ms`` (``1 ≤ m``, ``N − 2m ≥ 1``).
+
+    Parameters
+    ----------
+    z : phase samples (unit u) with the best straight line already removed.
+    ms : sorted unique cluster sizes (samples).
+
+    Returns
+    -------
+    (sums, n_direct) — ``S(m)`` in u², and how many of them were computed directly.
+
+    References
+    ----------
+    NIST SP 1065 (Riley 2008), eq. (11) (the sum evaluated); the O(N log² N) evaluation is
+    derived in this module's docstring (expansion, divide and conquer, local detrending).
+    Measured against the literal sum: ≤ 5e-10 relative for white/flicker/random-walk FM, white
+    PM and a dominant rate ramp (tests/signal/test_allan.py).
+    """
+    n = z.size
+    out = np.empty(ms.size)
+    direct = (ms < DIRECT_BELOW) | (n - 2 * ms < DIRECT_TAIL)
+    nlog = math.log2(max(n, 2))
+    for lo, hi in _groups(n, int(ms[-1])):
+        sel = np.flatnonzero(~direct & (ms >= lo) & (ms < hi))
+        if not sel.size:
+            continue
+        group = ms[sel]
+        m_hi = int(group[-1]) + 1
+        cost_direct = float(np.sum(n - 2 * group))
+        cost_fast = _FAST_COST * n * (1.0 + math.log2(m_hi) ** 2 * m_hi / n)
+        if cost_direct <= cost_fast:
+            direct[sel] = True
+            continue
+        s, mag = _group_sums(z, group, m_hi)
+        bad = ~(s > 0) | (_ERR_FACTOR * _EPS * nlog * mag > FAST_RTOL * s)
+        out[sel] = s
+        direct[sel[bad]] = True
+    idx = np.flatnonzero(direct)
+    if idx.size:
+        out[idx] = direct_sums(z, ms[idx])
+    return out, int(idx.size)
+
+
+#: Rounding error of a fast value ≈ this × ε × log2(N) × magnitude of its terms (measured ≤ 135).
+_ERR_FACTOR = 64.0
+#: Cost of one fast group in units of one direct pass over N samples (measured, rough).
+_FAST_COST = 25.0
+
+
+def _groups(n: int, m_max: int) -> list[tuple[int, int]]:
+    """Cluster-size groups ``[lo, hi)``; all sizes too large for interior knots form the last."""
+    groups = []
+    lo = DIRECT_BELOW
+    while lo <= m_max:
+        hi = lo << GROUP_OCTAVES
+        if 4 * hi > n - 1 - 2 * hi:  # no interior knot: the global line, one group to the end
+            groups.append((lo, m_max + 1))
+            break
+        groups.append((lo, hi))
+        lo = hi
+    return groups
