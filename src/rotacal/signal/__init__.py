@@ -1,6 +1,16 @@
-"""rotacal.signal — instrument-independent signal maths: IEEE 1057 sine fits, THD, SNR."""
+"""rotacal.signal — instrument-independent signal maths: IEEE 1057 sine fits, THD, SNR, Allan
+deviation and IEEE 952 noise terms."""
 
 from rotacal.signal._checks import check_sampling
+from rotacal.signal.allan import (
+    AllanDeviation,
+    NoiseTerm,
+    NoiseTerms,
+    adev_confidence_interval,
+    edf_overlapping_adev,
+    noise_terms,
+    overlapping_adev,
+)
 from rotacal.signal.sinefit import (
     HarmonicFitAccumulator,
     SineFit,
@@ -15,14 +25,21 @@ from rotacal.signal.sinefit import (
 )
 
 __all__ = [
+    "AllanDeviation",
     "HarmonicFitAccumulator",
+    "NoiseTerm",
+    "NoiseTerms",
     "SineFit",
+    "adev_confidence_interval",
     "check_sampling",
     "displacement_amplitudes_from_rate",
+    "edf_overlapping_adev",
     "estimate_frequency",
     "fit_harmonics",
     "fit_sine_3p",
     "fit_sine_4p",
+    "noise_terms",
+    "overlapping_adev",
     "snr_db",
     "thd_percent",
     "thd_standard_uncertainty_percent",
