@@ -1017,6 +1017,21 @@ def simulate_gyro_triad_cmd(out: str, overwrite: bool, **kw: Any) -> None:
     _sim_write(simulate_gyro_triad(**options), out, overwrite)
 
 
+@simulate.command("gyro-noise")
+@_sim_common
+@click.option("--duration-s", type=float, default=None, help="Record length [3600 s].")
+@click.option("--fs-hz", type=float, default=None, help="Sampling rate [100 Hz].")
+@click.option("--arw-deg-rt-h", type=float, default=None, help="Angle random walk [0.3].")
+@click.option("--bias-instability-deg-h", type=float, default=None, help="Bias instability [3].")
+@click.option("--rrw-deg-h-rt-h", type=float, default=None, help="Rate random walk [0].")
+def simulate_gyro_noise_cmd(out: str, overwrite: bool, **kw: Any) -> None:
+    """A gyro at rest with known IEEE 952 noise terms: time_s, rate_deg_s."""
+    from rotacal.sim import simulate_gyro_noise
+
+    options = {k: v for k, v in kw.items() if v is not None}
+    _sim_write(simulate_gyro_noise(**options), out, overwrite)
+
+
 @simulate.command("multiposition")
 @_sim_common
 @click.option("--axis", type=click.Choice(["x", "y"]), default="x", show_default=True)

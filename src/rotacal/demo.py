@@ -169,10 +169,12 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
         calibrate_multiposition,
         calibrate_scale_factor,
         calibrate_triad_columns,
+        gyro_noise,
     )
     from rotacal.report.gyro_scale import scale_factor_section
     from rotacal.report.html import Section
     from rotacal.report.multiposition import multiposition_section
+    from rotacal.report.noise import noise_section
     from rotacal.report.triad import triad_section
 
     rates = sim.simulate_gyro_rates(seed=126)
@@ -192,10 +194,19 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
         axis="x",
         latitude_deg=multi_cap.truth["latitude_deg"],
     )
+    static = sim.simulate_gyro_noise(
+        duration_s=8 * 3600,
+        arw_deg_rt_h=0.1,
+        bias_instability_deg_h=2.0,
+        bias_band_s=(0.5, 1e6),
+        seed=952,
+    )
+    noise = gyro_noise(static.columns["rate_deg_s"], time_s=static.columns["time_s"])
     for name, result in (
         ("gyro_scale_factor", sf),
         ("gyro_triad", triad),
         ("gyro_multiposition", multi),
+        ("allan", noise),
     ):
         (out / f"{name}.json").write_text(
             json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8"
@@ -212,7 +223,9 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
             "axis at 6…90 °/s in both directions (seed 003), with 2 % gross outliers injected: "
             f"K is {k_err:.1e} and b {b_err:.1e} °/s from the truth. The drift coefficients "
             "of a gyro's x axis from 64 turntable positions with the seed 001 Table 1 values "
-            "as truth.",
+            "as truth. And 8 hours of a gyro at rest (angle random walk 0.1 °/√h, bias "
+            f"instability 2 °/h): rotacal reads {noise.arw_deg_rt_h:.3f} °/√h and "
+            f"{noise.bias_instability_deg_h:.2f} °/h off its Allan deviation.",
         ],
     )
     sections = [
@@ -224,11 +237,14 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
             "Multiposition drift coefficients (x axis)",
             truth=multi_cap.truth["drift_coefficients"],
         ),
+        noise_section(noise, "Noise terms of a gyro at rest (IEEE Std 952)"),
     ]
     summary = {
         "scale_factor_error_relative": sf.scale_factor / rates.truth["ls_scale_factor"] - 1,
         "triad_k_error_max": float(k_err),
         "triad_bias_error_max_deg_s": float(b_err),
+        "arw_deg_rt_h": noise.arw_deg_rt_h,
+        "bias_instability_deg_h": noise.bias_instability_deg_h,
         "drift_error_max_deg_h": max(
             abs(v - multi_cap.truth["drift_coefficients"][k])
             for k, v in multi.drift_coefficients.items()
