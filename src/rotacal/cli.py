@@ -682,6 +682,86 @@ def gyro_triad(
         click.echo("residual rms      " + "  ".join(f"{x:.3g}" for x in result.residual_rms))
 
 
+@gyro.command("rotations")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option(
+    "--sections",
+    "sections_path",
+    type=click.Path(dir_okay=False),
+    required=True,
+    help="JSON of sample ranges: imucal's Ferraris list (x_p … z_a, x_rot, y_rot, z_rot) or "
+    "{'rotations': {'x': [start, stop], …}, 'static': {…}} (a twin's truth file works).",
+)
+@click.option("--fs-hz", type=float, default=None, help="Sampling rate, when there is no time_s.")
+@click.option(
+    "--angle-deg", type=float, default=360.0, show_default=True, help="Angle of each rotation."
+)
+@_analysis_options
+def gyro_rotations(
+    capture: str,
+    sections_path: str,
+    fs_hz: float | None,
+    angle_deg: float,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Triad K and bias from rotations through a known angle (Ferraris): ux, uy, uz."""
+    from rotacal.gyro import TRIAD_OUTPUT_COLUMNS, calibrate_triad_rotations, ferraris_sections
+    from rotacal.io import parse_column_mapping, read_capture
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    try:
+        spec = json.loads(Path(sections_path).read_text(encoding="utf-8"))
+    except OSError as e:
+        raise ConfigError(f"--sections {sections_path}: cannot read it ({e.strerror})") from None
+    except json.JSONDecodeError as e:
+        raise ConfigError(
+            f"--sections {sections_path} is not JSON ({e.msg}, line {e.lineno})"
+        ) from None
+    if not isinstance(spec, dict):
+        raise ConfigError(f"--sections {sections_path} must hold a JSON object of sample ranges")
+    if "rotations" in spec:
+        rotations, static = spec["rotations"], spec.get("static")
+    else:
+        rotations, static = ferraris_sections(spec)
+    with _status(f"reading {capture}"):
+        cap = read_capture(capture, mapping=parse_column_mapping(columns), group=group)
+    missing = [c for c in TRIAD_OUTPUT_COLUMNS if c not in cap.columns]
+    if missing:
+        raise CaptureError(
+            f"{Path(capture).name} has no column {missing[0]!r}; map the gyro outputs with "
+            "--column gyr_x=ux (and uy, uz)"
+        )
+    if "time_s" in cap.columns:
+        step = float(np.median(np.diff(cap["time_s"])))
+        fs_hz = 1.0 / step if fs_hz is None else fs_hz
+    if fs_hz is None:
+        raise ConfigError(f"{Path(capture).name} has no time_s column: give --fs-hz")
+    rate = np.column_stack([cap[c] for c in TRIAD_OUTPUT_COLUMNS])
+    with _status("integrating the rotations"):
+        result = calibrate_triad_rotations(
+            rate, fs_hz, rotations, static=static, angle_deg=angle_deg
+        )
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.triad import rotations_section
+
+        _write_report(
+            "Gyro triad from rotations",
+            "Rotations through a known angle (Ferraris et al.): Θ = K·Φ by least squares",
+            [rotations_section(result)],
+            capture,
+            report_path,
+        )
+    if json_path is None and report_path is None:
+        click.echo("K (output per deg/s):")
+        for row in np.asarray(result.scale_misalignment):
+            click.echo("   " + "  ".join(f"{x:+.6f}" for x in row))
+        click.echo("bias              " + "  ".join(f"{x:+.5g}" for x in result.bias))
+
+
 @gyro.command("multiposition")
 @click.argument("capture", type=click.Path(dir_okay=False))
 @click.option("--axis", type=click.Choice(["x", "y"]), required=True, help="Gyro axis.")
@@ -1030,6 +1110,19 @@ def simulate_gyro_noise_cmd(out: str, overwrite: bool, **kw: Any) -> None:
 
     options = {k: v for k, v in kw.items() if v is not None}
     _sim_write(simulate_gyro_noise(**options), out, overwrite)
+
+
+@simulate.command("gyro-rotations")
+@_sim_common
+@click.option("--angle-deg", type=float, default=None, help="Angle of each rotation [360].")
+@click.option("--noise-std", type=float, default=None, help="Output noise, rms.")
+@click.option("--fs-hz", type=float, default=None, help="Sampling rate [100 Hz].")
+def simulate_gyro_rotations_cmd(out: str, overwrite: bool, **kw: Any) -> None:
+    """Ferraris-style recording: rest, 360° about x, y, z: time_s, ux, uy, uz (sections in truth)."""
+    from rotacal.sim import simulate_gyro_rotations
+
+    options = {k: v for k, v in kw.items() if v is not None}
+    _sim_write(simulate_gyro_rotations(**options), out, overwrite)
 
 
 @simulate.command("multiposition")

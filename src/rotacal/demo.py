@@ -169,13 +169,14 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
         calibrate_multiposition,
         calibrate_scale_factor,
         calibrate_triad_columns,
+        calibrate_triad_rotations,
         gyro_noise,
     )
     from rotacal.report.gyro_scale import scale_factor_section
     from rotacal.report.html import Section
     from rotacal.report.multiposition import multiposition_section
     from rotacal.report.noise import noise_section
-    from rotacal.report.triad import triad_section
+    from rotacal.report.triad import rotations_section, triad_section
 
     rates = sim.simulate_gyro_rates(seed=126)
     sf = calibrate_scale_factor(
@@ -194,6 +195,13 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
         axis="x",
         latitude_deg=multi_cap.truth["latitude_deg"],
     )
+    rot_cap = sim.simulate_gyro_rotations(seed=4)
+    rot = calibrate_triad_rotations(
+        np.column_stack([rot_cap.columns[c] for c in ("ux", "uy", "uz")]),
+        rot_cap.truth["sensor"]["fs_hz"],
+        rot_cap.truth["rotations"],
+        static=rot_cap.truth["static"],
+    )
     static = sim.simulate_gyro_noise(
         duration_s=8 * 3600,
         arw_deg_rt_h=0.1,
@@ -206,6 +214,7 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
         ("gyro_scale_factor", sf),
         ("gyro_triad", triad),
         ("gyro_multiposition", multi),
+        ("gyro_rotations", rot),
         ("allan", noise),
     ):
         (out / f"{name}.json").write_text(
@@ -232,6 +241,15 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
         intro,
         scale_factor_section(sf, "Scale factor and nonlinearity", truth=rates.truth),
         triad_section(triad, "3-axis calibration (2 % outliers)"),
+        rotations_section(
+            rot,
+            "3-axis calibration from rotations through 360° (Ferraris)",
+            reference={
+                "label": "twin's truth",
+                "scale_misalignment": rot_cap.truth["scale_misalignment"],
+                "bias": rot_cap.truth["bias"],
+            },
+        ),
         multiposition_section(
             multi,
             "Multiposition drift coefficients (x axis)",

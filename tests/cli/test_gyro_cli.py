@@ -103,3 +103,41 @@ def test_gyro_bad_input(tmp_path):
     rows = "\n".join(f"{w},0,0,{w},0,0" for w in (6, -6, 18, -18, 30, -30, 60, -60, 90, -90))
     plan.write_text("wx_deg_s,wy_deg_s,wz_deg_s,ux,uy,uz\n" + rows + "\n")
     one_line_error(run("gyro", "triad", str(plan)), "identif")
+
+
+def test_rotations_from_the_twin_and_imucal(tmp_path):
+    path, truth = simulated(tmp_path, "gyro-rotations")
+    r = run("gyro", "rotations", str(path), "--sections", str(path) + ".truth.json", "--json", "-")
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout)
+    assert np.allclose(d["scale_misalignment"], truth["scale_misalignment"], atol=2e-3)
+    assert np.allclose(d["bias"], truth["bias"], atol=5e-3)
+    data = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "imucal"
+    if not data.exists():
+        pytest.skip(f"real data folder {data} is absent")
+    ex = data / "example_data"
+    r = run(
+        "gyro",
+        "rotations",
+        str(ex / "example_ferraris_session.csv"),
+        "--sections",
+        str(ex / "example_ferraris_session_list.json"),
+        "--fs-hz",
+        "102.4",
+        "--column",
+        "gyr_x=ux",
+        "--column",
+        "gyr_y=uy",
+        "--column",
+        "gyr_z=uz",
+        "--angle-deg",
+        "-360",
+        "--json",
+        "-",
+    )
+    assert r.exit_code == 0, r.output
+    ref = json.loads((data / "example_ferraris_session_cal_computed_imucal2.6.0.json").read_text())
+    assert np.allclose(json.loads(r.stdout)["bias"], ref["b_g"], rtol=1e-12, atol=0)
+    bad = tmp_path / "s.json"
+    bad.write_text('{"x_rot": [1, 2]}')
+    one_line_error(run("gyro", "rotations", str(path), "--sections", str(bad)), "lacks")
