@@ -112,9 +112,13 @@ def test_rotations_from_the_twin_and_imucal(tmp_path):
     d = json.loads(r.stdout)
     assert np.allclose(d["scale_misalignment"], truth["scale_misalignment"], atol=2e-3)
     assert np.allclose(d["bias"], truth["bias"], atol=5e-3)
-    data = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "imucal"
-    if not data.exists():
-        pytest.skip(f"real data folder {data} is absent")
+    bad = tmp_path / "s.json"
+    bad.write_text('{"x_rot": [1, 2]}')
+    one_line_error(run("gyro", "rotations", str(path), "--sections", str(bad)), "lacks")
+
+
+def test_rotations_on_imucals_real_recording(tmp_path, shared_data):
+    data = shared_data("imucal")
     ex = data / "example_data"
     r = run(
         "gyro",
@@ -138,6 +142,3 @@ def test_rotations_from_the_twin_and_imucal(tmp_path):
     assert r.exit_code == 0, r.output
     ref = json.loads((data / "example_ferraris_session_cal_computed_imucal2.6.0.json").read_text())
     assert np.allclose(json.loads(r.stdout)["bias"], ref["b_g"], rtol=1e-12, atol=0)
-    bad = tmp_path / "s.json"
-    bad.write_text('{"x_rot": [1, 2]}')
-    one_line_error(run("gyro", "rotations", str(path), "--sections", str(bad)), "lacks")

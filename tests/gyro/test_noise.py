@@ -43,13 +43,12 @@ def test_rate_random_walk_closed_form():
     assert r.rrw_deg_h_rt_h == pytest.approx(k * 3600 * 60, rel=0.25)
 
 
-@pytest.mark.skipif(not SMAC.exists(), reason=f"real data folder {SMAC} is absent")
 @pytest.mark.parametrize("imu", [1, 2, 3, 4, 5, 6])
-def test_real_adis16405_matches_its_published_figures(imu):
+def test_real_adis16405_matches_its_published_figures(imu, shared_data):
     """imudata_smac README: ARW about 2.4–2.7 °/√h, minimum deviation 0.004–0.009 °/s (datasheet
     ARW 2.0 °/√h, bias stability 0.007 °/s). The README's "0.036 °/s at τ ≈ 1 s" is looser than
     its own ARW range (2.4 °/√h is 0.040 °/s at 1 s): checked to 25 %."""
-    data = np.load(SMAC / f"adis_16405_imu{imu}.npz")["data"]
+    data = np.load(shared_data("imudata_smac", "npz") / f"adis_16405_imu{imu}.npz")["data"]
     r = gyro_noise(data[:, 0], fs_hz=100.0)
     tau = np.asarray(r.tau_s)
     at_1s = float(np.exp(np.interp(0.0, np.log(tau), np.log(r.adev_deg_s))))

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 from pathlib import Path
 
 import numpy as np
@@ -14,12 +13,6 @@ from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.rotations import calibrate_triad_rotations, ferraris_sections
 from rotacal.sim.gyro_triad import simulate_gyro_rotations
 
-DATA = Path(
-    os.environ.get(
-        "ROTACAL_SHARED_DATA", Path(__file__).resolve().parents[2].parent / "shared" / "data"
-    )
-)
-IMUCAL = DATA / "imucal"
 G = 9.81  # imucal's default gravity (m/s²), used in its K_ga
 
 K_TRUE = np.array(
@@ -163,12 +156,6 @@ def test_nan_and_saturation_in_a_rotation() -> None:
 
 
 # ------------------------------------------------------------------------------------ real data
-def _need(path: Path) -> Path:
-    if not IMUCAL.is_dir():
-        pytest.skip(f"real-data folder {IMUCAL} is absent")
-    return path
-
-
 def _imucal_reference(path: Path) -> dict[str, np.ndarray]:
     ref = json.loads(path.read_text())
     return {
@@ -194,18 +181,18 @@ def _ga_bound(
     return np.abs(ref["K_ga"]) * G * t[None, :] / 360.0
 
 
-def _load_session_102() -> tuple[np.ndarray, np.ndarray, dict, dict]:
+def _load_session_102(imucal: Path) -> tuple[np.ndarray, np.ndarray, dict, dict]:
     data = np.loadtxt(
-        IMUCAL / "example_data" / "example_ferraris_session.csv", delimiter=",", skiprows=1
+        imucal / "example_data" / "example_ferraris_session.csv", delimiter=",", skiprows=1
     )
     sections = json.loads(
-        (IMUCAL / "example_data" / "example_ferraris_session_list.json").read_text()
+        (imucal / "example_data" / "example_ferraris_session_list.json").read_text()
     )
     return data[:, 1:4], data[:, 4:7], *ferraris_sections(sections)
 
 
-def _load_session_204() -> tuple[np.ndarray, np.ndarray, dict, dict]:
-    with open(IMUCAL / "example_data" / "annotated_session.csv", newline="") as fh:
+def _load_session_204(imucal: Path) -> tuple[np.ndarray, np.ndarray, dict, dict]:
+    with open(imucal / "example_data" / "annotated_session.csv", newline="") as fh:
         rows = list(csv.reader(fh))
     head = rows[0]
     parts = np.array([r[0] for r in rows[1:]])
@@ -233,10 +220,10 @@ SESSIONS = [
 
 
 @pytest.mark.parametrize(("name", "load", "fs", "ref_file"), SESSIONS, ids=[s[0] for s in SESSIONS])
-def test_real_recordings_agree_with_imucal(name, load, fs, ref_file) -> None:
-    _need(IMUCAL)
-    gyr, acc, rotations, static = load()
-    ref = _imucal_reference(IMUCAL / ref_file)
+def test_real_recordings_agree_with_imucal(name, load, fs, ref_file, shared_data) -> None:
+    imucal = shared_data("imucal")
+    gyr, acc, rotations, static = load(imucal)
+    ref = _imucal_reference(imucal / ref_file)
     k_imucal = ref["K_g"] @ ref["R_g"]
 
     r = calibrate_triad_rotations(gyr, fs, rotations, static=static, angle_deg=-360.0)

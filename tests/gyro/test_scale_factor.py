@@ -6,7 +6,6 @@ from __future__ import annotations
 import glob
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,8 +19,6 @@ from rotacal.gyro.scale_factor import (
     resolve_requirement,
 )
 from rotacal.sim.gyro_rates import simulate_gyro_rates
-
-DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "xinli_turntable"
 
 
 def _fit(cap, **kw):
@@ -300,10 +297,9 @@ def test_no_false_saturation_on_noisy_quantised_outputs(seed):
 
 
 # ------------------------------------------------------------------ real recording
-def _xinli():
-    if not DATA.exists():
-        pytest.skip(f"real data folder {DATA} is absent")
-    files = DATA / "data"
+def _xinli(shared_data):
+    data = shared_data("xinli_turntable")
+    files = data / "data"
     rates, outs = [], []
     for r in (10, 30, 60, 90, 120):
         for sign, pre in ((1, "p"), (-1, "m")):
@@ -318,12 +314,12 @@ def _xinli():
         rest = np.concatenate([z[: max(moving[0] - 3, 0)], z[moving[-1] + 4 :]])
         rates.append(np.zeros(rest.size))
         outs.append(rest)
-    ref = np.loadtxt(DATA / "summary_rate_points.csv", delimiter=",", skiprows=1)
+    ref = np.loadtxt(data / "summary_rate_points.csv", delimiter=",", skiprows=1)
     return np.concatenate(rates), np.concatenate(outs), ref
 
 
-def test_real_turntable_point_means_match_the_summary():
-    rate, out, ref = _xinli()
+def test_real_turntable_point_means_match_the_summary(shared_data):
+    rate, out, ref = _xinli(shared_data)
     r = calibrate_scale_factor(rate, out, output_unit="°/s")
     assert r.n_points == 11
     np.testing.assert_array_equal(r.rates_deg_s, ref[:, 0])
@@ -337,8 +333,8 @@ def test_real_turntable_point_means_match_the_summary():
     assert (v[120.0] - v[-120.0]) / 240 == pytest.approx(0.999612448910082, abs=1e-9)
 
 
-def test_real_turntable_fit_matches_the_published_numbers():
-    rate, out, _ = _xinli()
+def test_real_turntable_fit_matches_the_published_numbers(shared_data):
+    rate, out, _ = _xinli(shared_data)
     r = calibrate_scale_factor(rate, out, requirement="fmvss126", output_unit="°/s")
     assert r.scale_factor == pytest.approx(1.000199, abs=5e-7)
     assert r.bias == pytest.approx(0.109, abs=5e-4)

@@ -11,7 +11,6 @@ from __future__ import annotations
 import gzip
 import json
 import math
-import os
 from pathlib import Path
 
 import allantools
@@ -28,12 +27,6 @@ from rotacal.signal.allan import (
     noise_terms,
     overlapping_adev,
 )
-
-DATA = Path(
-    os.environ.get("ROTACAL_SHARED_DATA", Path(__file__).resolve().parents[3] / "shared" / "data")
-)
-ALLAN_DATA = DATA / "allantools" / "tests"
-IMU_DATA = DATA / "imudata_smac" / "npz"
 
 
 def literal_sums(x: np.ndarray, ms: np.ndarray) -> np.ndarray:
@@ -144,7 +137,7 @@ STABLE32_CASES = [
 
 
 @pytest.mark.parametrize(("data_file", "kind", "results"), STABLE32_CASES)
-def test_stable32_reference_deviations(data_file, kind, results):
+def test_stable32_reference_deviations(data_file, kind, results, shared_data):
     """Each printed deviation (5 significant digits) is matched to half a unit in its last digit.
 
     A slack of 2e-6 relative covers the reference program's own last-bit rounding (one OCXO row
@@ -152,10 +145,9 @@ def test_stable32_reference_deviations(data_file, kind, results):
     Stable32 printed confidence limits (with its noise type α) the chi-squared interval from
     Greenhall's edf agrees to 1e-3 (measured ≤ 5e-4).
     """
-    if not ALLAN_DATA.is_dir():
-        pytest.skip(f"reference data folder {ALLAN_DATA} is absent")
-    folder = ALLAN_DATA / data_file.split("/")[0]
-    x = read_column(ALLAN_DATA / data_file)
+    allan_data = shared_data("allantools", "tests")
+    folder = allan_data / data_file.split("/")[0]
+    x = read_column(allan_data / data_file)
     data_type = "phase" if kind == "phase" else "rate"
     if kind == "ocxo":
         x = x / 1e7 - 1.0
@@ -439,14 +431,13 @@ def test_units_rad_s_and_other():
 
 
 # ============================================================================== real gyro data
-def test_adis16405_noise_terms_match_published_figures():
+def test_adis16405_noise_terms_match_published_figures(shared_data):
     """SMAC imudata ADIS16405 static logs: σ(τ ≈ 1 s) ≈ 0.036 °/s (the 1.28 s octave point),
     ARW 2.4–2.7 °/√h, minimum deviation 0.004–0.009 °/s (data README; datasheet 2.0 °/√h and
     0.007 °/s)."""
-    if not IMU_DATA.is_dir():
-        pytest.skip(f"real IMU data folder {IMU_DATA} is absent")
+    imu_data = shared_data("imudata_smac", "npz")
     for i in range(1, 7):
-        gyro_x = np.load(IMU_DATA / f"adis_16405_imu{i}.npz")["data"][:, 0]
+        gyro_x = np.load(imu_data / f"adis_16405_imu{i}.npz")["data"][:, 0]
         res = overlapping_adev(gyro_x, fs=100.0, taus="octave")
         at_1s = res.adev[np.argmin(np.abs(res.tau_s - 1.28))]
         assert at_1s == pytest.approx(0.036, rel=0.10), i
