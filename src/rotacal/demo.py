@@ -4,7 +4,9 @@ It runs the five scenarios of Feng et al. (2023) Table 1 — 0.025°/10 Hz by LT
 0.25°/3 Hz, 0.5°/2 Hz and 5°/0.5 Hz by the optical shaft encoder, each also by the FOG — and the
 angular-velocity standard of Kokuyama et al. (seed 004): a 12-head, 18 000-pulse self-calibratable
 encoder on a table turning at 300 °/s, self-calibrated over 10 revolutions, and the rate's
-stability and s(φ). It writes ``DIR/report.html`` (each result beside the twin's truth and the
+stability and s(φ); gyro calibrations (scale factor, triad, rotations, multiposition drift, noise);
+and the error budget of seed 001's two-axis turntable (allocation and a 10⁶-draw Monte Carlo
+check). It writes ``DIR/report.html`` (each result beside the twin's truth and the
 papers' numbers) plus one JSON per analysis.
 """
 
@@ -34,7 +36,7 @@ _NAMES = {"encoder": "OSE", "lts": "LTS", "fog": "FOG"}
 
 def demo_steps() -> int:
     """How many progress steps `run_demo` reports (for a progress bar)."""
-    return 2 * len(sim.table1_scenarios()) + 3
+    return 2 * len(sim.table1_scenarios()) + 4
 
 
 def _rate_standard(out: Path) -> tuple[list[Any], dict[str, Any]]:
@@ -271,6 +273,23 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
     return sections, summary
 
 
+def _turntable(out: Path) -> tuple[list[Any], dict[str, Any]]:
+    """Seed 001's two-axis turntable: sensitivities, allocation, 10⁶-draw Monte Carlo check."""
+    from rotacal.report.turntable import turntable_section
+    from rotacal.turntable import seed_table, turntable_budget
+
+    budget = turntable_budget(seed_table(), runs=1_000_000)
+    (out / "turntable_budget.json").write_text(
+        json.dumps(budget.to_dict(), indent=2) + "\n", encoding="utf-8"
+    )
+    summary = {
+        "upper_bounds_arcmin": budget.upper_bounds_arcmin,
+        "monte_carlo": budget.monte_carlo,
+        "calibration": budget.calibration,
+    }
+    return [turntable_section(budget)], summary
+
+
 def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> Path:
     """Simulate, analyse and report the Table 1 campaign; returns the path of ``report.html``."""
     from rotacal.report.html import Report, Section, write_html
@@ -319,6 +338,8 @@ def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> Path:
     step("multi-head encoder: self-calibration and rate")
     gyro_sections, summary["gyros"] = _gyros(out)
     step("gyros: scale factor, triad, multiposition")
+    turntable_sections, summary["turntable"] = _turntable(out)
+    step("turntable: error allocation and Monte Carlo")
     (out / "summary.json").write_text(
         json.dumps(to_jsonable(summary), indent=2) + "\n", encoding="utf-8"
     )
@@ -339,13 +360,14 @@ def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> Path:
     report = Report(
         title="rotacal demo — a calibration campaign on the digital twin",
         subtitle="Sinusoidal motion (Feng et al. 2023, Table 1), the angular-velocity standard "
-        "(Kokuyama et al., seed 004) and gyro calibrations",
+        "(Kokuyama et al., seed 004), gyro calibrations and a turntable's error budget (seed 001)",
         sections=[
             intro,
             comparison_section(rows, paper=paper),
             *scenario_sections,
             *rate_sections,
             *gyro_sections,
+            *turntable_sections,
         ],
         inputs={"captures": "simulated (rotacal.sim.table1_scenarios)", "output folder": str(out)},
     )

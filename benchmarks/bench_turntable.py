@@ -1,0 +1,189 @@
+"""Speed of the turntable Monte Carlo check (rotacal.turntable.allocation), one core; allocation vs Table 4.
+
+On the seed's two-axis table (seed 001) with rotacal's allocation:
+
+1. ``monte_carlo_check`` with ``--runs`` draws (default 10⁶): random generator, full model
+   (``Turntable.fast_orientation_error``), maxima and histograms — draws/s;
+2. the same draws (same generator and seed) evaluated three ways, all measured in this run:
+   a. ``table.fast_orientation_error`` alone (the fast path),
+   b. the generic batched chain: ``table.transform`` (4×4 homogeneous transforms, eq. (22)) and
+      ``table.ideal_transform``, ΔR = R_dᵀ·R_t by ``np.matmul`` (eq. (23)), in chunks,
+   c. a per-draw Python loop building the 4×4 matrices of eqs. (17)–(22) with NumPy (on 10⁴
+      draws, time scaled to ``--runs``),
+   with their ratio to (a) and the largest difference from (a);
+3. rotacal's upper bounds next to Table 4 (arcmin) and the worst cases (linear and full model).
+
+Best of ``--repeat`` (default 3) with ``time.perf_counter``; no asserts.
+
+Run: ``python benchmarks/bench_turntable.py [--runs N] [--repeat R]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import math  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from typing import Any  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from rotacal.turntable.allocation import allocate, monte_carlo_check, worst_case  # noqa: E402
+from rotacal.turntable.model import Turntable, seed_table  # noqa: E402
+
+ARCMIN = math.pi / 10_800.0
+CHUNK = 262_144
+LOOP_DRAWS = 10_000
+#: Table 4 of seed 001 (arcmin).
+TABLE4 = {
+    "phi_y1": 0.4235,
+    "phi_z2": 0.7800,
+    "alpha_x1": 0.4234,
+    "alpha_z1": 0.7800,
+    "alpha_x2": 0.2825,
+    "alpha_y2": 0.2824,
+    "eps_x": 0.4234,
+    "eps_y": 0.4233,
+}
+
+
+def best_of(fn: Callable[[], Any], repeat: int) -> tuple[float, Any]:
+    best = math.inf
+    out = None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def draws(table: Turntable, alloc: Any, runs: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The Monte Carlo's draws (random signs), made as monte_carlo_check makes them."""
+    names = table.angular_error_names
+    lb = np.array([alloc.lower_bounds_rad[n] for n in names])
+    ub = np.array([alloc.upper_bounds_rad[n] for n in names])
+    rng = np.random.Generator(np.random.PCG64(seed))
+    u = rng.random((runs, len(names) + len(table.angle_names)))
+    v = 2.0 * u[:, : len(names)] - 1.0
+    chi = np.copysign(lb + (ub - lb) * np.abs(v), v)
+    return 2.0 * math.pi * u[:, len(names) :], chi
+
+
+def via_transform(table: Turntable, angles: np.ndarray, chi: np.ndarray) -> np.ndarray:
+    """(Δψ, Δθ, Δγ) from the batched 4×4 chain of eq. (22) and ΔR = R_dᵀ·R_t (eq. (23))."""
+    out = np.empty((angles.shape[0], 3))
+    names = table.angular_error_names
+    for s in range(0, angles.shape[0], CHUNK):
+        a = [angles[s : s + CHUNK, k] for k in range(angles.shape[1])]
+        errors = {n: chi[s : s + CHUNK, i] for i, n in enumerate(names)}
+        rt = table.transform(a, errors)[..., :3, :3]
+        rd = table.ideal_transform(a)[..., :3, :3]
+        dr = np.matmul(np.swapaxes(rd, -1, -2), rt)
+        out[s : s + CHUNK] = np.stack([dr[:, 0, 2], dr[:, 1, 0], dr[:, 2, 1]], axis=1)
+    return out
+
+
+def per_draw_loop(angles: np.ndarray, chi: np.ndarray) -> np.ndarray:
+    """One draw at a time: the 4×4 matrices of eqs. (17)–(22) built and multiplied in Python."""
+
+    def e4(ex: float, ey: float, ez: float) -> np.ndarray:
+        return np.array(
+            [[1.0, -ez, ey, 0.0], [ez, 1.0, -ex, 0.0], [-ey, ex, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+        )
+
+    out = np.empty((angles.shape[0], 3))
+    for k in range(angles.shape[0]):
+        p1, p2 = angles[k]
+        fy1, fz2, ax1, az1, ax2, ay2, ex, ey = chi[k]
+        c1, s1, c2, s2 = math.cos(p1), math.sin(p1), math.cos(p2), math.sin(p2)
+        ry = np.array([[c1, 0, s1, 0], [0, 1, 0, 0], [-s1, 0, c1, 0], [0, 0, 0, 1.0]])
+        rz = np.array([[c2, -s2, 0, 0], [s2, c2, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+        t01 = ry @ e4(ax1, fy1, az1)  # eq. (17)
+        t12 = e4(ex, ey, 0.0)  # eq. (18), η = 0
+        t23 = rz @ e4(ax2, ay2, fz2)  # eq. (19)
+        tt = t01 @ t12 @ t23 @ np.eye(4)  # eqs. (20), (22)
+        td = ry @ rz  # eq. (21)
+        dr = td[:3, :3].T @ tt[:3, :3]  # eq. (23)
+        out[k] = dr[0, 2], dr[1, 0], dr[2, 1]
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=1_000_000)
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    runs, seed = args.runs, 2026
+
+    table = seed_table()
+    t_alloc, alloc = best_of(lambda: allocate(table), 1)
+    t_mc, mc = best_of(lambda: monte_carlo_check(table, alloc, runs=runs, seed=seed), args.repeat)
+    angles, chi = draws(table, alloc, runs, seed)
+    t_fast, d_fast = best_of(lambda: table.fast_orientation_error(angles, chi), args.repeat)
+    t_htm, d_htm = best_of(lambda: via_transform(table, angles, chi), 1)
+    n_loop = min(LOOP_DRAWS, runs)
+    t_loop_part, d_loop = best_of(lambda: per_draw_loop(angles[:n_loop], chi[:n_loop]), 1)
+    t_loop = t_loop_part * runs / n_loop
+    same = all(
+        float(np.max(np.abs(d_fast[:, j]))) == mc.max_abs_rad[c]
+        for j, c in enumerate(("psi", "theta", "gamma"))
+    )
+
+    print(f"turntable Monte Carlo, seed 001 table, {runs:,} draws, one core")
+    print(f"{'case':62s} {'time':>9s} {'draws/s':>12s} {'ratio':>8s}  max |Δ − fast| (rad)")
+    rows = [
+        ("monte_carlo_check (RNG + full model + histograms)", t_mc, None),
+        ("a. fast_orientation_error alone", t_fast, 0.0),
+        (
+            "b. batched 4×4 HTM chain: transform + matmul",
+            t_htm,
+            float(np.max(np.abs(d_htm - d_fast))),
+        ),
+        (
+            f"c. per-draw Python loop, eqs. (17)–(22) ({n_loop:,} draws, scaled)",
+            t_loop,
+            float(np.max(np.abs(d_loop - d_fast[:n_loop]))),
+        ),
+    ]
+    for label, t, diff in rows:
+        print(
+            f"{label:62s} {t:8.3f}s {runs / t:12,.0f} {t / t_fast:8.1f}  "
+            + ("" if diff is None else f"{diff:.1e}")
+        )
+    print(f"ratio: time / time of (a); same draws as the Monte Carlo (equal maxima): {same}")
+    print()
+    print(f"allocation (SLSQP + exchange, full-model guard) in {t_alloc:.2f} s; arcmin:")
+    print(f"{'error':10s} {'Table 4':>9s} {'rotacal':>9s} {'ratio':>7s}  binding")
+    for name in table.error_names:
+        ub = alloc.upper_bounds_rad[name]
+        if ub is None:
+            print(f"{name:10s} {'—':>9s} {'None':>9s} {'':>7s}  (no effect on the orientation)")
+            continue
+        paper = TABLE4[name]
+        print(
+            f"{name:10s} {paper:9.4f} {ub / ARCMIN:9.4f} {ub / ARCMIN / paper:7.4f}  "
+            f"{alloc.binding[name]}"
+        )
+    wc4 = worst_case(table, {n: v * ARCMIN for n, v in TABLE4.items()}, alloc.requirement_rad)
+    print(f"{'worst case (arcmin)':22s} {'linear T4':>10s} {'full T4':>10s} {'linear':>10s} "
+          f"{'full':>10s} {'MC max':>10s} {'limit':>8s}")  # fmt: skip
+    for c in ("psi", "theta", "gamma"):
+        w = alloc.worst_case[c]
+        print(
+            f"{c:22s} {wc4[c]['linear_rad'] / ARCMIN:10.5f} {wc4[c]['full_rad'] / ARCMIN:10.5f} "
+            f"{w['linear_rad'] / ARCMIN:10.5f} {w['full_rad'] / ARCMIN:10.5f} "
+            f"{mc.max_abs_arcmin[c]:10.5f} {alloc.requirement_rad[c] / ARCMIN:8.3f}"
+        )
+    print(
+        f"Monte Carlo: all within = {mc.all_within}, outside = {mc.outside}; full-model guard "
+        f"scales {alloc.optimiser['full_model_scale']}"
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,780 @@
+"""Report section for a turntable's accuracy budget (seed 001, §§2.2–2.3 and §4).
+
+:func:`turntable_section` renders a :class:`~rotacal.turntable.budget.TurntableBudget`: the
+sensitivities of the orientation error to each error source (the seed's Figure 8), the allocated
+upper bounds (Table 4), the worst case over all angles (Lemma 1), the Monte Carlo check with the
+full model (Figure 9), what an orientation error does to a multiposition gyro calibration
+(Figures 4–5) and, for the seed's own table, a side-by-side of the paper's numbers and rotacal's.
+
+References
+----------
+Seed 001 (``../shared/seeds/001_4a387eb674e238f2.txt``): eqs. (7)–(16), (26), (28)–(34),
+Lemma 1, Tables 2 and 4, Figures 4, 5, 8 and 9.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.lines import Line2D
+from matplotlib.patches import Rectangle
+from matplotlib.ticker import MaxNLocator
+
+from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
+from rotacal.turntable.budget import TurntableBudget
+
+__all__ = [
+    "SEED_EQ16_DEG",
+    "SEED_FIGURE8",
+    "SEED_TABLE4_ARCMIN",
+    "allocation_table",
+    "calibration_draws_figure",
+    "calibration_figure",
+    "monte_carlo_figure",
+    "seed_comparison_table",
+    "sensitivity_figure",
+    "turntable_section",
+    "worst_case_table",
+]
+
+ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi
+COMPONENTS = ("psi", "theta", "gamma")
+
+#: The seed's error vector χ (its order, §3.2 after eq. (25)).
+SEED_CHI = ("phi_y1", "phi_z2", "alpha_x1", "alpha_z1", "alpha_x2", "alpha_y2", "eps_x", "eps_y")
+#: Seed 001, Table 4: the paper's allocated upper bounds (arcmin).
+SEED_TABLE4_ARCMIN = {
+    "phi_y1": 0.4235,
+    "phi_z2": 0.7800,
+    "alpha_x1": 0.4234,
+    "alpha_z1": 0.7800,
+    "alpha_x2": 0.2825,
+    "alpha_y2": 0.2824,
+    "eps_x": 0.4234,
+    "eps_y": 0.4233,
+}
+#: Seed 001, eq. (16): the orientation requirement for a calibration accuracy of 0.01 °/h (deg).
+SEED_EQ16_DEG = 0.027
+#: Seed 001, eq. (16): the calibration accuracy it is derived for (°/h).
+SEED_EQ16_DEG_H = 0.01
+#: Seed 001, Figure 8: the two non-trivial averaged sensitivities (mean |cos|, mean |sin|), and the
+#: slightly larger values it also prints (partials at an unstated non-zero nominal error).
+SEED_FIGURE8 = {"cos": 0.6476, "sin": 0.5365, "cos_alt": 0.6481, "sin_alt": 0.5372}
+
+_GREEK = {
+    "phi": "φ",
+    "alpha": "α",
+    "eps": "ε",
+    "epsilon": "ε",
+    "eta": "η",
+    "theta": "θ",
+    "beta": "β",
+    "delta": "δ",
+    "gamma": "γ",
+    "psi": "ψ",
+}
+_COMP_SYMBOL = {"psi": "Δψ", "theta": "Δθ", "gamma": "Δγ"}
+_COMP_COLOR = {"psi": "#1f5f99", "theta": "#2e8b57", "gamma": "#d2691e"}
+_REQ = "#b22222"
+
+
+def _style(ax: Any) -> None:
+    ax.grid(True, color="#e3e7eb", linewidth=0.7)
+    ax.set_axisbelow(True)  # grid lines behind bars
+    ax.spines[["top", "right"]].set_visible(False)
+
+
+def _symbol(name: str) -> str:
+    """``phi_y1`` → ``Δφy1`` (the seed's Table-2 notation); other names unchanged."""
+    head, _, tail = name.partition("_")
+    greek = _GREEK.get(head.lower())
+    return f"Δ{greek}{tail}" if greek else name
+
+
+def _specs(budget: TurntableBudget) -> dict[str, Any]:
+    return {e.name: e for e in budget._table.errors}
+
+
+def _iso(budget: TurntableBudget, name: str) -> str:
+    iso = getattr(_specs(budget).get(name), "iso", None)
+    return str(iso) if iso else "—"
+
+
+def _is_seed(budget: TurntableBudget) -> bool:
+    """True when the table's angular errors are the seed's χ (then Table 4 applies)."""
+    return tuple(budget._table.angular_error_names) == SEED_CHI
+
+
+def _bar_label(budget: TurntableBudget, name: str) -> str:
+    """``Position error of outer axis (Δφy1, EBB)``: label, then symbol and ISO symbol."""
+    label = budget.labels.get(name) or name
+    tags = [t for t in (_symbol(name), _iso(budget, name)) if t not in ("—", label)]
+    return f"{label} ({', '.join(tags)})" if tags else label
+
+
+def _f4(x: float | None) -> str:
+    return "—" if x is None or not np.isfinite(x) else f"{x:.4f}"
+
+
+# ----------------------------------------------------------------------------------------------
+# 1. Sensitivities (Figure 8)
+# ----------------------------------------------------------------------------------------------
+
+
+def sensitivity_figure(budget: TurntableBudget) -> Figure:
+    """Averaged sensitivities of Δψ, Δθ, Δγ to every angular error (the seed's Figure 8).
+
+    References
+    ----------
+    Seed 001, eq. (28) and Figure 8.
+    """
+    names = list(budget._table.angular_error_names)
+    labels = [_bar_label(budget, n) for n in names]
+    y = np.arange(len(names))[::-1]
+    height = 0.45 * len(names) + 1.3
+    fig, axes = plt.subplots(1, 3, figsize=(12.0, height), sharey=True)
+    vmax = max(
+        [float(budget.sensitivities[c].get(n, 0.0)) for c in COMPONENTS for n in names] + [1e-12]
+    )
+    for ax, comp in zip(axes, COMPONENTS, strict=True):
+        vals = np.array([float(budget.sensitivities[comp].get(n, 0.0)) for n in names])
+        ax.barh(y, vals, color=_COMP_COLOR[comp], height=0.6)
+        for yi, v in zip(y, vals, strict=True):
+            text = "0" if v == 0.0 else f"{v:.4f}"
+            ax.text(v + 0.02 * vmax, yi, text, va="center", ha="left", fontsize=8)
+        ax.set_xlim(0, vmax * 1.32)
+        ax.set_title(f"{_COMP_SYMBOL[comp]} ({comp})", fontsize=10)
+        ax.set_xlabel("mean |∂Δ/∂χ| (rad/rad)")
+        _style(ax)
+        ax.grid(False, axis="y")
+    axes[0].set_yticks(y)
+    axes[0].set_yticklabels(labels, fontsize=8.5)
+    fig.tight_layout()
+    n_angles = len(budget._table.angle_names)
+    return figure_from_matplotlib(
+        fig,
+        "Sensitivity of the orientation error to each error source",
+        "Each bar is |∂Δ/∂χᵢ| of the linearised model at zero error (seed 001, eqs. (26), (28)), "
+        f"averaged over every rotation angle of the table ({', '.join(budget._table.angle_names)})"
+        f" on the grid 0°, 45°, …, 360° (9 points per angle, both ends included"
+        f"{f'; {9**n_angles} combinations' if n_angles > 1 else ''}). "
+        "A larger value means the error source must be held tighter. Translations (offsets) have "
+        "no effect on orientation and are not shown.",
+    )
+
+
+# ----------------------------------------------------------------------------------------------
+# 2. Allocation (Table 4)
+# ----------------------------------------------------------------------------------------------
+
+
+def allocation_table(budget: TurntableBudget) -> Table:
+    """Lower and allocated upper bounds per error source, the binding component, Table 4.
+
+    References
+    ----------
+    Seed 001, eqs. (29)–(34) and Table 4.
+    """
+    seed = _is_seed(budget)
+    cols = ["error", "label", "ISO", "lower bound (′)", "allocated upper bound (′)", "set by"]
+    if seed:
+        cols += ["seed Table 4 (′)", "rotacal / Table 4"]
+    specs = _specs(budget)
+    rows = []
+    for name in budget.error_names:
+        ub = budget.upper_bounds_arcmin.get(name)
+        spec = specs.get(name)
+        if ub is None:
+            lower = spec.lower if spec is not None else 0.0
+            row = [
+                _symbol(name),
+                budget.labels.get(name, ""),
+                _iso(budget, name),
+                f"{lower * 1e3:g} mm",
+                "no effect on orientation",
+                "—",
+            ]
+            if seed:
+                row += ["—", "—"]
+        else:
+            binding = budget.binding.get(name, "")
+            row = [
+                _symbol(name),
+                budget.labels.get(name, ""),
+                _iso(budget, name),
+                _f4(budget.lower_bounds_arcmin.get(name, 0.0)),
+                _f4(ub),
+                f"{_COMP_SYMBOL.get(binding, binding)}" if binding else "—",
+            ]
+            if seed:
+                t4 = SEED_TABLE4_ARCMIN.get(name)
+                row += [_f4(t4), f"{ub / t4:.3f}" if t4 else "—"]
+        rows.append(row)
+    return Table(
+        cols,
+        rows,
+        caption="Allocated upper bounds of the error sources (seed 001, eqs. (29)–(34))",
+    )
+
+
+# ----------------------------------------------------------------------------------------------
+# 3. Worst case (Lemma 1)
+# ----------------------------------------------------------------------------------------------
+
+
+def _angles_text(angles: Any, names: tuple[str, ...]) -> str:
+    if angles is None:
+        return "—"
+    if isinstance(angles, Mapping):
+        return ", ".join(f"{k} = {float(v):.1f}°" for k, v in angles.items())
+    arr = np.atleast_1d(np.asarray(angles, dtype=float))
+    return ", ".join(f"{n} = {v:.1f}°" for n, v in zip(names, arr, strict=False))
+
+
+def worst_case_table(budget: TurntableBudget) -> Table:
+    """Per component: requirement, Lemma-1 linear bound, full model worst case, where, within.
+
+    References
+    ----------
+    Seed 001, Lemma 1 (eqs. (35)–(38)) and eqs. (17)–(25).
+    """
+    names = tuple(budget._table.angle_names)
+    rows = []
+    for comp in COMPONENTS:
+        wc = budget.worst_case.get(comp)
+        req = budget.requirement_arcmin[comp]
+        if not wc:
+            rows.append([_COMP_SYMBOL[comp], _f4(req), "—", "—", "—", "—"])
+            continue
+        lin = wc.get("linear_rad")
+        full = wc.get("full_rad")
+        rows.append(
+            [
+                _COMP_SYMBOL[comp],
+                _f4(req),
+                _f4(None if lin is None else float(lin) * ARCMIN_PER_RAD),
+                _f4(None if full is None else float(full) * ARCMIN_PER_RAD),
+                _angles_text(wc.get("angles_deg"), names),
+                "yes" if wc.get("within") else "NO",
+            ]
+        )
+    return Table(
+        [
+            "component",
+            "requirement (′)",
+            "linear bound (′)",
+            "full model (′)",
+            "worst at",
+            "within",
+        ],
+        rows,
+        caption="Worst case over all angles with every error at its allocated bound (Lemma 1)",
+    )
+
+
+# ----------------------------------------------------------------------------------------------
+# 4. Monte Carlo (Figure 9)
+# ----------------------------------------------------------------------------------------------
+
+
+def monte_carlo_figure(budget: TurntableBudget) -> Figure:
+    """Histograms of Δψ, Δθ, Δγ over the Monte Carlo draws, with ±requirement (Figure 9).
+
+    References
+    ----------
+    Seed 001, §4.3 and Figure 9.
+    """
+    mc = budget._monte_carlo
+    fig, axes = plt.subplots(1, 3, figsize=(12.0, 3.8), constrained_layout=True)
+    for ax, comp in zip(axes, COMPONENTS, strict=True):
+        h = mc.histograms[comp]
+        edges = np.asarray(h["edges_rad"], dtype=float) * ARCMIN_PER_RAD
+        counts = np.asarray(h["counts"], dtype=float)
+        req = budget.requirement_arcmin[comp]
+        ax.stairs(counts, edges, fill=True, color=_COMP_COLOR[comp], alpha=0.8)
+        for sign in (-1.0, 1.0):
+            ax.axvline(sign * req, color=_REQ, ls="--", lw=1.3)
+        ax.set_xlim(-1.2 * req, 1.2 * req)
+        ax.set_title(
+            f"{_COMP_SYMBOL[comp]}: max |Δ| = {mc.max_abs_arcmin[comp]:.4f}′ of {req:.4f}′",
+            fontsize=9.5,
+        )
+        ax.set_xlabel(f"{_COMP_SYMBOL[comp]} (arcmin)")
+        ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4))
+        _style(ax)
+    axes[0].set_ylabel("draws per bin")
+    fig.legend(
+        handles=[Line2D([], [], color=_REQ, ls="--", lw=1.3, label="requirement ±I")],
+        loc="outside lower center",
+        fontsize=8.5,
+        frameon=False,
+    )
+    within = "all within the requirement" if mc.all_within else f"{mc.outside} outside"
+    return figure_from_matplotlib(
+        fig,
+        "Monte Carlo check with the full model",
+        f"{mc.runs:,} tables drawn with every error uniform between its lower and allocated upper "
+        f"bound ({mc.signs} signs) and the angles uniform over a turn; orientation error from the "
+        "full nonlinear model (seed 001, eqs. (17)–(25)). Red dashed: the requirement ±I. "
+        "Max |Δ|: "
+        + ", ".join(f"{_COMP_SYMBOL[c]} {mc.max_abs_arcmin[c]:.4f}′" for c in COMPONENTS)
+        + f" — {within}.",
+    )
+
+
+# ----------------------------------------------------------------------------------------------
+# 5. Effect on the calibration (Figures 4–5)
+# ----------------------------------------------------------------------------------------------
+
+
+def _plan(budget: TurntableBudget) -> tuple[np.ndarray, np.ndarray, float]:
+    """The multiposition plan (φ1, φ2 in deg) and latitude (deg) the budget used."""
+    from rotacal.turntable.budget import _calibration_settings, _plan_angles
+
+    settings = _calibration_settings(budget._table)
+    p1, p2 = _plan_angles(settings)
+    return p1, p2, float(settings["latitude_deg"])
+
+
+def _box(ax: Any, half_x: float, half_y: float, **kw: Any) -> None:
+    ax.add_patch(Rectangle((-half_x, -half_y), 2 * half_x, 2 * half_y, fill=False, **kw))
+
+
+def _label_top(ax: Any, line: Any, text: str) -> None:
+    """Write ``text`` just above the highest point of a contour line (on a white ground)."""
+    paths = [p.vertices for p in line.get_paths() if len(p.vertices)]
+    if not paths:
+        return
+    v = np.concatenate(paths)
+    top = v[np.argmax(v[:, 1])]
+    ax.annotate(
+        text,
+        (0.0, top[1]),
+        xytext=(0, 4),
+        textcoords="offset points",
+        ha="center",
+        va="bottom",
+        fontsize=8.5,
+        color=_REQ,
+        bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.85},
+    )
+
+
+def calibration_figure(budget: TurntableBudget, *, n: int = 101) -> Figure | None:
+    """Rate-sensing errors over orientation errors, with ωm and the requirement box (Figs. 4–5).
+
+    Left: Δωx over (Δψ, Δθ) at Δγ = 0; right: Δωy over (Δθ, Δγ) at Δψ = 0 (°/h, axes in degrees).
+    The contour Δω = ωm, rotacal's requirement box (largest volume, all corners within ωm), the
+    equal limit and (when it differs) the requirement the allocation used are drawn. ``None``
+    when ``budget._requirement`` is None (a table not of the seed's geometry).
+
+    Parameters
+    ----------
+    budget : TurntableBudget
+        The budget (its ``_requirement`` and table's ``[calibration]`` settings are used).
+    n : int
+        Grid points per axis.
+
+    Returns
+    -------
+    Figure or None
+
+    References
+    ----------
+    Seed 001, eqs. (7)–(16), Figures 4 and 5.
+    """
+    from rotacal.turntable.calibration import rate_error_surfaces
+
+    req = budget._requirement
+    if req is None:
+        return None
+    p1, p2, lat = _plan(budget)
+    wm = float(req.required_deg_h)
+    box = {c: math.degrees(float(req.limits_rad[c])) for c in COMPONENTS}
+    eq = float(req.equal_limit_deg)
+    stated = {c: budget.requirement_arcmin[c] / 60.0 for c in COMPONENTS}
+    lim_deg = 1.3 * max(max(box.values()), max(stated.values()), eq)
+    lim_rad = min(math.radians(lim_deg), 0.1)
+    s = rate_error_surfaces(lim_rad, n=n, phi1_deg=p1, phi2_deg=p2, latitude_deg=lat)
+    # widen once if the ωm contour reaches the edge (room for the contour and its label)
+    g = np.asarray(s["grid_rad"])
+    inside = np.concatenate(
+        [
+            np.abs(g[np.any(np.asarray(s[a][k]) <= wm, axis=ax)])
+            for a, k in (("x", "psi_theta"), ("y", "theta_gamma"))
+            for ax in (0, 1)
+        ]
+    )
+    extent = float(np.max(inside)) if inside.size else 0.0
+    if extent > 0.8 * lim_rad and lim_rad < 0.1:
+        lim_rad = min(1.3 * extent, 0.1)
+        s = rate_error_surfaces(lim_rad, n=n, phi1_deg=p1, phi2_deg=p2, latitude_deg=lat)
+    g = np.degrees(np.asarray(s["grid_rad"]))
+    panels = [
+        ("x", "psi_theta", ("psi", "theta")),
+        ("y", "theta_gamma", ("theta", "gamma")),
+    ]
+    zmax = max(float(np.max(s[a][k])) for a, k, _ in panels)
+    levels = MaxNLocator(nbins=12).tick_values(0.0, zmax)
+    fig, axes = plt.subplots(1, 2, figsize=(11.5, 5.0), constrained_layout=True)
+    show_stated = any(abs(stated[c] - box[c]) > 1e-9 * box[c] for c in COMPONENTS)
+    cs = None
+    for ax, (axis, key, (cx, cy)) in zip(axes, panels, strict=True):
+        z = np.asarray(s[axis][key]).T  # first index is the first-named component → x axis
+        cs = ax.contourf(g, g, z, levels=levels, cmap="Blues")
+        line = ax.contour(g, g, z, levels=[wm], colors=_REQ, linewidths=1.6)
+        _label_top(ax, line, f"Δω{axis} = ωm = {wm:g} °/h")
+        _box(ax, box[cx], box[cy], ec="black", lw=1.8)
+        _box(ax, eq, eq, ec="black", lw=1.0, ls=":")
+        if show_stated:
+            _box(ax, stated[cx], stated[cy], ec="#666", lw=1.2, ls="--")
+        ax.set_xlabel(f"{_COMP_SYMBOL[cx]} (°)")
+        ax.set_ylabel(f"{_COMP_SYMBOL[cy]} (°)")
+        other = next(c for c in COMPONENTS if c not in (cx, cy))
+        ax.set_title(
+            f"Δω{axis} over ({_COMP_SYMBOL[cx]}, {_COMP_SYMBOL[cy]}), {_COMP_SYMBOL[other]} = 0",
+            fontsize=10,
+        )
+        ax.set_aspect("equal")
+    assert cs is not None
+    fig.colorbar(cs, ax=axes, shrink=0.85, label="rate-sensing error Δω (°/h)")
+    handles = [
+        Line2D([], [], color=_REQ, lw=1.6, label=f"Δω = ωm = {wm:g} °/h"),
+        Line2D([], [], color="black", lw=1.8, label="rotacal's requirement box"),
+        Line2D([], [], color="black", lw=1.0, ls=":", label="equal limit"),
+    ]
+    if show_stated:
+        handles.append(
+            Line2D([], [], color="#666", lw=1.2, ls="--", label="the requirement allocated to")
+        )
+    fig.legend(
+        handles=handles, loc="outside lower center", ncols=len(handles), fontsize=8.5, frameon=False
+    )
+    return figure_from_matplotlib(
+        fig,
+        "What an orientation error does to the gyro calibration",
+        f"Rate-sensing error of a multiposition drift calibration ({req.positions} positions, "
+        f"latitude {lat:g}°, Table 1 coefficients, method {req.method!r}) when the table tilts the "
+        "gyro by a constant orientation error (seed 001, eqs. (7)–(14), Figure 4). Red: the "
+        f"accuracy ωm = {wm:g} °/h; inside it the calibration is good enough. Solid box: rotacal's "
+        "requirement (the box of largest volume whose every corner (±Iψ, ±Iθ, ±Iγ) stays within "
+        "ωm, Figure 5 and eq. (15)); dotted: equal limits (the form of eq. (16))"
+        + ("; dashed: the requirement the allocation used" if show_stated else "")
+        + ". The boxes' corners are checked with the third component "
+        "at its limit too, so they sit inside the red line drawn at zero third component.",
+    )
+
+
+def calibration_draws_figure(budget: TurntableBudget) -> Figure | None:
+    """Histograms of Δωx, Δωy of calibrations run on tables drawn within the allocation.
+
+    Returns ``None`` when the budget has no such draws (a table not of the seed's geometry).
+
+    References
+    ----------
+    Seed 001, eqs. (7)–(14) with the position-dependent orientation error of eq. (23).
+    """
+    draws = budget._calibration_draws
+    if draws is None:
+        return None
+    req = budget._requirement
+    wm = float(req.required_deg_h) if req is not None else None
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 3.4), sharey=True)
+    hi = max(float(np.max(draws[a])) for a in ("x", "y"))
+    if wm is not None:
+        hi = max(hi, wm)
+    bins = np.linspace(0.0, 1.05 * hi, 61)
+    for ax, axis in zip(axes, ("x", "y"), strict=True):
+        v = np.asarray(draws[axis], dtype=float)
+        ax.hist(v, bins=bins, color="#1f5f99", alpha=0.85)
+        title = f"Δω{axis}: max {np.max(v):.4f} °/h"
+        if wm is not None:
+            ax.axvline(wm, color=_REQ, ls="--", lw=1.4, label=f"ωm = {wm:g} °/h")
+            ax.legend(loc="upper right", fontsize=8, frameon=False)
+            title += f", {np.mean(v > wm) * 100:.1f} % above ωm"
+        ax.set_title(title, fontsize=9.5)
+        ax.set_xlabel(f"Δω{axis} (°/h)")
+        _style(ax)
+    axes[0].set_ylabel("tables drawn")
+    fig.tight_layout()
+    cal = budget.calibration or {}
+    return figure_from_matplotlib(
+        fig,
+        "Calibrations on tables built to the allocation",
+        f"{len(draws['x']):,} tables drawn with every error uniform between its lower and "
+        "allocated upper bound (random signs); on each, the multiposition calibration "
+        f"({cal.get('plan', '?')} positions, latitude {cal.get('latitude_deg', '?')}°) sees the "
+        "orientation error of every position from the full model (eq. (23)), and the rate-sensing "
+        "errors of eqs. (12)–(14) follow."
+        + (f" Red dashed: ωm = {wm:g} °/h." if wm is not None else ""),
+    )
+
+
+# ----------------------------------------------------------------------------------------------
+# 6. Reproducing seed 001
+# ----------------------------------------------------------------------------------------------
+
+
+def _seed_table4_worst(budget: TurntableBudget) -> dict[str, dict[str, Any]]:
+    from rotacal.turntable.allocation import worst_case
+
+    t4 = {n: v / ARCMIN_PER_RAD for n, v in SEED_TABLE4_ARCMIN.items()}
+    req = {c: budget.requirement_arcmin[c] / ARCMIN_PER_RAD for c in COMPONENTS}
+    return worst_case(budget._table, t4, req)
+
+
+def _pct(value_arcmin: float, req_arcmin: float) -> str:
+    return f"{value_arcmin:.4f}′ ({value_arcmin / req_arcmin * 100:.1f} %)"
+
+
+def seed_comparison_table(
+    budget: TurntableBudget, *, table4_worst: Mapping[str, Mapping[str, Any]] | None = None
+) -> Table | None:
+    """The seed's printed numbers beside rotacal's, for the seed's own table (else ``None``).
+
+    Rows: eq. (16) against rotacal's requirement box and equal limit; Figure 8's two averaged
+    sensitivities; Table 4 against rotacal's allocation; Table 4's own worst case under rotacal's
+    Lemma 1 check; the Monte Carlo of Figure 9.
+
+    References
+    ----------
+    Seed 001, eq. (16), Figure 8, Table 4, Lemma 1, Figure 9.
+    """
+    if not _is_seed(budget):
+        return None
+    rows: list[list[str]] = []
+    req = budget._requirement
+    if req is not None:
+        lat = req.latitude_deg
+        box = ", ".join(f"I{_COMP_SYMBOL[c][1:]} = {req.limits_deg[c]:.4f}°" for c in COMPONENTS)
+        rows.append(
+            [
+                f"orientation requirement for {req.required_deg_h:g} °/h (eq. (16))",
+                f"{SEED_EQ16_DEG}° each",
+                f"box {box}; equal limit {req.equal_limit_deg:.4f}° "
+                f"(paper / rotacal = {SEED_EQ16_DEG / req.equal_limit_deg:.2f})",
+                f"rotacal's plan: {budget.calibration['plan'] if budget.calibration else '?'}"
+                f" ({req.positions} positions), latitude {lat:g}°, method {req.method!r}; the "
+                "paper states neither plan nor latitude, so no match is expected",
+            ]
+        )
+    sens = budget.sensitivities
+    c_cos = float(sens["psi"]["phi_y1"])
+    c_sin = float(sens["psi"]["alpha_x1"])
+    rows.append(
+        [
+            "averaged sensitivity, |cos φ2| terms (Figure 8: Cψ1, Cψ8, Cγ3, Cγ7)",
+            f"{SEED_FIGURE8['cos']:.4f} (also {SEED_FIGURE8['cos_alt']:.4f})",
+            f"{c_cos:.4f}",
+            "mean over φ = 0°, 45°, …, 360° at zero error; the second printed value is the same "
+            "partial at an unstated non-zero error",
+        ]
+    )
+    rows.append(
+        [
+            "averaged sensitivity, |sin φ2| terms (Figure 8: Cψ3, Cψ7, Cγ1, Cγ8)",
+            f"{SEED_FIGURE8['sin']:.4f} (also {SEED_FIGURE8['sin_alt']:.4f})",
+            f"{c_sin:.4f}",
+            "as above",
+        ]
+    )
+    ratios = {
+        n: budget.upper_bounds_arcmin[n] / v  # type: ignore[operator]
+        for n, v in SEED_TABLE4_ARCMIN.items()
+    }
+    lo_n = min(ratios, key=ratios.__getitem__)
+    hi_n = max(ratios, key=ratios.__getitem__)
+    rows.append(
+        [
+            "allocated upper bounds (Table 4)",
+            ", ".join(f"{_symbol(n)} {v:.4f}′" for n, v in SEED_TABLE4_ARCMIN.items()),
+            ", ".join(f"{_symbol(n)} {budget.upper_bounds_arcmin[n]:.4f}′" for n in SEED_CHI),
+            f"rotacal / Table 4 from {ratios[lo_n]:.3f} ({_symbol(lo_n)}) to {ratios[hi_n]:.3f} "
+            f"({_symbol(hi_n)}); requirement "
+            + ", ".join(
+                f"{_COMP_SYMBOL[c]} {budget.requirement_arcmin[c]:.4g}′" for c in COMPONENTS
+            )
+            + f" (Table 4: {SEED_EQ16_DEG * 60:.4g}′ each)",
+        ]
+    )
+    t4 = table4_worst if table4_worst is not None else _seed_table4_worst(budget)
+    reqs = budget.requirement_arcmin
+    rows.append(
+        [
+            "worst case over all angles, full model (Lemma 1)",
+            "≤ requirement (proved for the linear model)",
+            "Table 4: "
+            + ", ".join(
+                f"{_COMP_SYMBOL[c]} {_pct(t4[c]['full_rad'] * ARCMIN_PER_RAD, reqs[c])}"
+                for c in COMPONENTS
+            )
+            + "; rotacal: "
+            + ", ".join(
+                f"{_COMP_SYMBOL[c]} "
+                f"{_pct(budget.worst_case[c]['full_rad'] * ARCMIN_PER_RAD, reqs[c])}"
+                for c in COMPONENTS
+            ),
+            "percentages of the requirement used by the worst table; the rest is unused margin",
+        ]
+    )
+    mc = budget.monte_carlo
+    rows.append(
+        [
+            "Monte Carlo with the full model (Figure 9)",
+            "10,000 runs, all within",
+            f"{mc['runs']:,} runs ({mc['signs']} signs), "
+            + ("all within" if mc["all_within"] else f"{mc['outside']} outside")
+            + "; max |Δ| "
+            + ", ".join(f"{_COMP_SYMBOL[c]} {mc['max_abs_arcmin'][c]:.4f}′" for c in COMPONENTS),
+            "",
+        ]
+    )
+    return Table(
+        ["quantity", "seed 001 (printed)", "rotacal", "note"],
+        rows,
+        caption="Reproducing seed 001 (numbers side by side; no agreement is claimed that the "
+        "numbers do not show)",
+    )
+
+
+def _seed_paragraph(budget: TurntableBudget, t4: Mapping[str, Mapping[str, Any]]) -> str:
+    reqs = budget.requirement_arcmin
+
+    def unused(wc: Mapping[str, Mapping[str, Any]], c: str) -> float:
+        return 100.0 * (1.0 - float(wc[c]["full_rad"]) * ARCMIN_PER_RAD / reqs[c])
+
+    return (
+        "Why Table 4 and rotacal's allocation differ: with Table 4's bounds the worst table leaves "
+        f"{unused(t4, 'psi'):.1f} % of the Δψ requirement, {unused(t4, 'gamma'):.1f} % of Δγ "
+        f"and {unused(t4, 'theta'):.1f} % of Δθ unused, so the paper's allocation is feasible "
+        "but not the optimum of its own problem (eqs. (31)–(33)). rotacal's bounds leave "
+        f"{unused(budget.worst_case, 'psi'):.1f} %, {unused(budget.worst_case, 'gamma'):.1f} % "
+        f"and {unused(budget.worst_case, 'theta'):.1f} %. Each component's own optimum (eqs. "
+        "(31)–(33)) uses all of its requirement; a component keeps a margin when, for an error it "
+        "shares with another component, eq. (34) takes the other component's smaller optimum — "
+        "for the seed's table Δψ and Δγ share four errors, Δθ shares none."
+    )
+
+
+# ----------------------------------------------------------------------------------------------
+# The section
+# ----------------------------------------------------------------------------------------------
+
+
+def turntable_section(budget: TurntableBudget, title: str | None = None) -> Section:
+    """The turntable's accuracy budget as one report section (seed 001, §§2.2–2.3 and §4).
+
+    Figures: sensitivities, Monte Carlo histograms and — for a table of the seed's geometry —
+    the calibration maps and the calibration draws. Tables: allocation, worst case and — for the
+    seed's own error names — the side-by-side with the paper.
+
+    Parameters
+    ----------
+    budget : TurntableBudget
+        From :func:`rotacal.turntable.budget.turntable_budget`.
+    title : str, optional
+        Section title (default: "Turntable accuracy budget — <table name>").
+
+    Returns
+    -------
+    Section
+
+    References
+    ----------
+    Seed 001, eqs. (7)–(16), (26), (28)–(34), Lemma 1, Tables 2 and 4, Figures 4, 5, 8, 9.
+    """
+    reqs = budget.requirement_arcmin
+    req_text = ", ".join(f"{_COMP_SYMBOL[c]} ≤ {reqs[c]:.4f}′" for c in COMPONENTS)
+    n_ang = len(budget._table.angular_error_names)
+    n_off = len(budget.error_names) - n_ang
+    mc = budget.monte_carlo
+    paragraphs = [
+        f"{budget.table}: {n_ang} angular error source{'s' if n_ang != 1 else ''}"
+        + (f" and {n_off} offset{'s' if n_off != 1 else ''}" if n_off else "")
+        + f". The instrument's orientation must stay within {req_text} "
+        f"(requirement {budget.requirement_source}) at every angle of the table.",
+        "Sensitivities. How much one arc-minute of each error source moves the instrument's "
+        "orientation, averaged over the table's angles. An error the orientation is more "
+        "sensitive to gets a tighter tolerance; an error that does not appear in a panel does not "
+        "affect that component at all.",
+        "Allocation. Each error source gets the largest tolerance that, together with all the "
+        "others at their tolerances and at the worst angles, still keeps every orientation "
+        "component within its requirement; the weights favour the less sensitive sources (seed "
+        "001, eqs. (29)–(34)). 'Set by' names the component whose budget limits that source. "
+        "The lower bounds are what manufacturing can achieve; a tolerance below them would make "
+        "the table unbuildable.",
+        "Worst case. Every error at its allocated bound with the worst combination of signs, and "
+        "the worst angles: the linear bound is what Lemma 1 of the seed proves, the full model "
+        "multiplies the exact error matrices. Both must stay within the requirement.",
+        f"Monte Carlo. {mc['runs']:,} tables built anywhere within the tolerances, each turned to "
+        "random angles, with the full model: "
+        + (
+            "every one stays within the requirement."
+            if mc["all_within"]
+            else f"{mc['outside']} exceed the requirement — the allocation is not safe."
+        ),
+    ]
+    tables = [allocation_table(budget), worst_case_table(budget)]
+    figures = [sensitivity_figure(budget), monte_carlo_figure(budget)]
+    cal_fig = calibration_figure(budget)
+    if cal_fig is not None and budget._requirement is not None:
+        req = budget._requirement
+        paragraphs.append(
+            "Calibration. A tilted gyro sees slightly wrong Earth rate and gravity at every "
+            "position, so the drift coefficients it is calibrated with come out wrong. For a "
+            f"calibration accurate to {req.required_deg_h:g} °/h the orientation error must stay "
+            f"within Δψ {req.limits_deg['psi']:.4f}°, Δθ {req.limits_deg['theta']:.4f}°, Δγ "
+            f"{req.limits_deg['gamma']:.4f}° (or {req.equal_limit_deg:.4f}° on every component)"
+            f" for rotacal's plan of {req.positions} positions at latitude {req.latitude_deg:g}°."
+        )
+        figures.append(cal_fig)
+        draws_fig = calibration_draws_figure(budget)
+        if draws_fig is not None and budget.calibration is not None:
+            mx = budget.calibration["max_rate_error_deg_h"]
+            p95 = budget.calibration["p95_rate_error_deg_h"]
+            wm = req.required_deg_h
+            within = max(mx.values()) <= wm
+            looser = any(
+                budget.requirement_arcmin[c] > req.limits_deg[c] * 60.0 * (1 + 1e-9)
+                for c in COMPONENTS
+            )
+            verdict = (
+                f"all within {wm:g} °/h."
+                if within
+                else f"more than the {wm:g} °/h the calibration needs"
+                + (
+                    ", because the allocation used a looser orientation requirement than the box "
+                    "above. To calibrate to that accuracy, allocate with the box instead (in the "
+                    f"TOML: [requirement] calibration_deg_h = {wm:g}) and run the check again."
+                    if looser
+                    else "."
+                )
+            )
+            paragraphs.append(
+                "Tables built to the allocated tolerances and used for that calibration give rate "
+                f"errors up to Δωx {mx['x']:.4f} °/h and Δωy {mx['y']:.4f} °/h (95 % of tables "
+                f"below {p95['x']:.4f} and {p95['y']:.4f} °/h): {verdict}"
+            )
+            figures.append(draws_fig)
+    t4 = _seed_table4_worst(budget) if _is_seed(budget) else None
+    seed_tab = seed_comparison_table(budget, table4_worst=t4)
+    if seed_tab is not None and t4 is not None:
+        tables.append(seed_tab)
+        paragraphs.append(
+            "Reproducing seed 001. The paper's printed numbers beside rotacal's. "
+            + _seed_paragraph(budget, t4)
+        )
+    return Section(
+        title=title or f"Turntable accuracy budget — {budget.table}",
+        paragraphs=paragraphs,
+        tables=tables,
+        figures=figures,
+        anchor="turntable-budget",
+    )

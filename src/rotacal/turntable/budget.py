@@ -1,0 +1,299 @@
+"""A turntable's accuracy budget end to end: model, sensitivities, allocation, Monte Carlo check,
+and what the allocated table does to a gyro calibration (seed 001, §§2–4).
+
+:func:`turntable_budget` is what ``rotacal turntable budget CONFIG.toml`` runs. From the table's
+description (a TOML file, see :mod:`rotacal.turntable.config`) it
+
+1. takes the orientation requirement as stated, or derives it from a required calibration accuracy
+   of a multiposition drift test (eqs. (7)–(16); only for a table of the seed's geometry);
+2. averages the sensitivities (eq. (28)) and allocates upper bounds to the error sources
+   (eqs. (29)–(34)), checking the worst case over all angles (Lemma 1);
+3. checks the allocation by Monte Carlo with the full nonlinear model (eqs. (17)–(25));
+4. for a table of the seed's geometry, draws tables within the allocation and computes the
+   rate-sensing error of the multiposition calibration run on them (eqs. (7)–(14) with the
+   orientation error of each test position from eq. (23)).
+
+References
+----------
+Seed 001 (``../shared/seeds/001_4a387eb674e238f2.txt``): GyroWheel calibration tests, error
+analysis and turntable error allocation — eqs. (7)–(16), (17)–(34), Lemma 1, Tables 1–4, Figures 4–9.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rotacal.errors import ConfigError
+from rotacal.results import Result
+from rotacal.turntable.allocation import Allocation, MonteCarloCheck, allocate, monte_carlo_check
+from rotacal.turntable.calibration import (
+    OrientationRequirement,
+    orientation_requirement,
+    rate_sensing_error_from_rotation,
+)
+from rotacal.turntable.model import COMPONENTS, Turntable, load_turntable
+
+__all__ = ["TurntableBudget", "calibration_check", "turntable_budget"]
+
+ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi
+
+
+def _arcmin(values: Mapping[str, float | None]) -> dict[str, float | None]:
+    return {k: (None if v is None else float(v) * ARCMIN_PER_RAD) for k, v in values.items()}
+
+
+@dataclasses.dataclass(frozen=True)
+class TurntableBudget(Result):
+    """The budget of one turntable (JSON keys of INTERFACE.md, ``turntable budget``).
+
+    ``sensitivities`` maps ``psi``/``theta``/``gamma`` to {error: mean |∂Δ/∂χ|} (eq. (28));
+    ``upper_bounds_arcmin`` maps each error to its allocated upper bound (eq. (34); ``None`` for
+    translations, which cannot change the orientation); ``monte_carlo`` holds ``runs``,
+    ``max_abs_arcmin`` (per component), ``all_within`` and the draw settings.
+    """
+
+    table: str
+    error_names: tuple[str, ...]
+    labels: dict[str, str]
+    requirement_arcmin: dict[str, float]
+    requirement_source: str
+    sensitivities: dict[str, dict[str, float]]
+    lower_bounds_arcmin: dict[str, float]
+    upper_bounds_arcmin: dict[str, float | None]
+    binding: dict[str, str]
+    worst_case: dict[str, dict[str, Any]]
+    allocation_within: bool
+    monte_carlo: dict[str, Any]
+    calibration: dict[str, Any] | None
+    _table: Turntable = dataclasses.field(repr=False)
+    _allocation: Allocation = dataclasses.field(repr=False)
+    _monte_carlo: MonteCarloCheck = dataclasses.field(repr=False)
+    _requirement: OrientationRequirement | None = dataclasses.field(repr=False)
+    _calibration_draws: dict[str, np.ndarray] | None = dataclasses.field(repr=False)
+
+
+def _seed_geometry(table: Turntable) -> bool:
+    """True when the chain is the seed's: an outer axis about y, then an inner axis about z."""
+    axes = [link.axis for link in table.links if link.axis is not None]
+    return axes == ["y", "z"]
+
+
+def _calibration_settings(table: Turntable) -> dict[str, Any]:
+    cal = dict(table.settings.get("calibration", {}))
+    return {
+        "latitude_deg": float(cal.get("latitude_deg", 45.75)),
+        "outer_steps": int(cal.get("outer_steps", 8)),
+        "inner_steps": int(cal.get("inner_steps", 8)),
+    }
+
+
+def _plan_angles(settings: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    from rotacal.gyro.multiposition import multiposition_plan
+
+    plan = multiposition_plan(
+        outer_steps=settings["outer_steps"], inner_steps=settings["inner_steps"]
+    )
+    return np.asarray(plan.phi1_deg, dtype=float), np.asarray(plan.phi2_deg, dtype=float)
+
+
+def calibration_check(
+    table: Turntable,
+    upper_bounds_rad: Mapping[str, float | None],
+    *,
+    lower_bounds_rad: Mapping[str, float] | None = None,
+    runs: int = 10_000,
+    seed: int = 2026,
+    latitude_deg: float = 45.75,
+    outer_steps: int = 8,
+    inner_steps: int = 8,
+) -> dict[str, np.ndarray]:
+    """Rate-sensing errors of multiposition calibrations run on tables drawn within the bounds.
+
+    Each draw is a table whose errors have magnitudes uniform between the lower and upper bounds
+    and random signs; at every test position of the plan its orientation error ΔR (eq. (23), full
+    model) perturbs the Earth rate and gravity the gyro sees (eq. (8)), the drift coefficients are
+    fitted with the nominal inputs (eq. (6)) and the rate-sensing errors Δω_x, Δω_y (eqs. (12)–(14))
+    follow. Unlike eqs. (15)–(16), the orientation error here varies from position to position,
+    as eq. (26) says it does.
+
+    Parameters
+    ----------
+    table : Turntable
+        A table of the seed's geometry (outer axis about y, inner about z).
+    upper_bounds_rad, lower_bounds_rad : mapping
+        Bounds of each error (rad; translations are ignored: they cannot change the orientation).
+    runs : int
+        Number of tables drawn.
+    seed : int
+        Seed of the random generator.
+    latitude_deg : float
+        Latitude of the laboratory (deg).
+    outer_steps, inner_steps : int
+        The plan: φ1 every 360°/outer_steps, φ2 every 360°/inner_steps.
+
+    Returns
+    -------
+    dict
+        ``"x"`` and ``"y"``: arrays of Δω (°/h), one per draw.
+
+    References
+    ----------
+    Seed 001, eqs. (7)–(14), (23).
+    """
+    if not _seed_geometry(table):
+        raise ConfigError(
+            "the calibration check needs a table of the seed's geometry (an outer axis about y, "
+            "then an inner axis about z): the multiposition kinematics of eq. (3) assume it."
+        )
+    names = table.angular_error_names
+    lb = dict.fromkeys(names, 0.0) | dict(lower_bounds_rad or {})
+    ub = {n: upper_bounds_rad.get(n) for n in names}
+    lo = np.array([lb[n] for n in names])
+    hi = np.array([0.0 if ub[n] is None else float(ub[n]) for n in names])  # type: ignore[arg-type]
+    rng = np.random.default_rng(seed)
+    mag = rng.uniform(lo, hi, size=(runs, len(names)))
+    chi = np.where(rng.random((runs, len(names))) < 0.5, -mag, mag)
+    p1, p2 = _plan_angles(
+        {"outer_steps": outer_steps, "inner_steps": inner_steps, "latitude_deg": latitude_deg}
+    )
+    errors = {n: chi[:, i, None] for i, n in enumerate(names)}  # (runs, 1) against (positions,)
+    delta_r = table.rotation_error([np.radians(p1), np.radians(p2)], errors)
+    dwx, dwy = rate_sensing_error_from_rotation(
+        delta_r, phi1_deg=p1, phi2_deg=p2, latitude_deg=latitude_deg
+    )
+    return {"x": np.asarray(dwx), "y": np.asarray(dwy)}
+
+
+def turntable_budget(
+    config: Turntable | str | Path,
+    *,
+    runs: int | None = None,
+    seed: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> TurntableBudget:
+    """Model, sensitivities, allocation, Monte Carlo check and calibration effect of a turntable.
+
+    Parameters
+    ----------
+    config : Turntable, str or Path
+        The table, or the path of its TOML description.
+    runs : int, optional
+        Monte Carlo draws (default: the config's ``[monte_carlo] runs``, else 10⁶).
+    seed : int, optional
+        Seed of the Monte Carlo draws (default: the config's, else 2026).
+    progress : callable, optional
+        ``progress(done, total)`` during the Monte Carlo.
+
+    Returns
+    -------
+    TurntableBudget
+
+    References
+    ----------
+    Seed 001, eqs. (7)–(16), (17)–(34), Lemma 1, Figure 9.
+    """
+    table = config if isinstance(config, Turntable) else load_turntable(Path(config))
+    mc_settings = dict(table.settings.get("monte_carlo", {}))
+    runs = int(runs if runs is not None else mc_settings.get("runs", 1_000_000))
+    seed = int(seed if seed is not None else mc_settings.get("seed", 2026))
+    if runs < 1:
+        raise ConfigError(f"the Monte Carlo needs at least one run, got {runs}.")
+    cal_settings = _calibration_settings(table)
+
+    requirement_obj: OrientationRequirement | None = None
+    if table.requirement is not None:
+        requirement = dict(table.requirement)
+        source = "stated in the configuration"
+    elif table.calibration_requirement_deg_h is not None:
+        if not _seed_geometry(table):
+            raise ConfigError(
+                "calibration_deg_h needs a table of the seed's geometry (outer axis about y, inner "
+                "about z); state [requirement] psi, theta, gamma for this table instead."
+            )
+        p1, p2 = _plan_angles(cal_settings)
+        requirement_obj = orientation_requirement(
+            table.calibration_requirement_deg_h,
+            phi1_deg=p1,
+            phi2_deg=p2,
+            latitude_deg=cal_settings["latitude_deg"],
+        )
+        requirement = dict(requirement_obj.limits_rad)
+        source = (
+            f"derived from a calibration accuracy of {table.calibration_requirement_deg_h:g} °/h "
+            "(eqs. 7–16)"
+        )
+    else:
+        raise ConfigError(
+            "the configuration states no requirement: add [requirement] psi, theta, gamma or "
+            "calibration_deg_h."
+        )
+
+    alloc = allocate(table, requirement)
+    mc = monte_carlo_check(
+        table,
+        alloc,
+        runs=runs,
+        seed=seed,
+        signs=str(mc_settings.get("signs", "random")),
+        progress=progress,
+    )
+
+    calibration: dict[str, Any] | None = None
+    draws: dict[str, np.ndarray] | None = None
+    if _seed_geometry(table):
+        if requirement_obj is None:
+            p1, p2 = _plan_angles(cal_settings)
+            requirement_obj = orientation_requirement(
+                0.01, phi1_deg=p1, phi2_deg=p2, latitude_deg=cal_settings["latitude_deg"]
+            )
+        draws = calibration_check(
+            table,
+            alloc.upper_bounds_rad,
+            lower_bounds_rad=alloc.lower_bounds_rad,
+            runs=10_000,
+            seed=seed,
+            **cal_settings,
+        )
+        calibration = {
+            "plan": f"{cal_settings['outer_steps']} outer × {cal_settings['inner_steps']} inner",
+            "latitude_deg": cal_settings["latitude_deg"],
+            "runs": 10_000,
+            "max_rate_error_deg_h": {k: float(np.max(v)) for k, v in draws.items()},
+            "p95_rate_error_deg_h": {k: float(np.percentile(v, 95)) for k, v in draws.items()},
+            "orientation_requirement": requirement_obj.to_dict(),
+        }
+
+    lower = {n: float(alloc.lower_bounds_rad.get(n, 0.0)) for n in table.angular_error_names}
+    return TurntableBudget(
+        table=table.name,
+        error_names=table.error_names,
+        labels={e.name: e.label for e in table.errors},
+        requirement_arcmin={c: float(requirement[c]) * ARCMIN_PER_RAD for c in COMPONENTS},
+        requirement_source=source,
+        sensitivities=alloc.sensitivities,
+        lower_bounds_arcmin={k: float(v) * ARCMIN_PER_RAD for k, v in lower.items()},
+        upper_bounds_arcmin=_arcmin(alloc.upper_bounds_rad),
+        binding=dict(alloc.binding),
+        worst_case=alloc.worst_case,
+        allocation_within=bool(alloc.within),
+        monte_carlo={
+            "runs": mc.runs,
+            "seed": mc.seed,
+            "signs": mc.signs,
+            "max_abs_arcmin": dict(mc.max_abs_arcmin),
+            "all_within": bool(mc.all_within),
+            "outside": int(mc.outside),
+        },
+        calibration=calibration,
+        _table=table,
+        _allocation=alloc,
+        _monte_carlo=mc,
+        _requirement=requirement_obj,
+        _calibration_draws=draws,
+    )

@@ -1,0 +1,1200 @@
+"""Geometric error model of a multi-axis turntable by homogeneous transforms (seed 001, §3).
+
+A turntable is a chain of links from the base (frame F0) to the instrument (the last frame). A
+link is either a **rotary axis** — turning by its angle φ about its own x, y or z — or a **fixed
+link** that carries the orthogonality (squareness) and intersection (offset) errors between two
+axes. Each link also carries small error rotations, listed in order, and error translations. The
+two-axis table of seed 001 (Tables 2–3) is the chain::
+
+    0T1 = Ry(φ1) · E(Δαx1, Δφy1, Δαz1)          outer axis about y: position error Δφy1, wobbles
+    1T2 = E(Δεx, Δεy, 0) · Trans(Δη, 0, 0)      orthogonality Δεx, Δεy and intersection Δη
+    2T3 = Rz(φ2) · E(Δαx2, Δαy2, Δφz2)          inner axis about z: position error Δφz2, wobbles
+    3T4 = I                                     the gyro sits on the inner frame
+
+with the active rotations Ry, Rz printed in eqs. (17), (19) and the small-angle error matrix
+E(ex, ey, ez) = [[1, −ez, ey], [ez, 1, −ex], [−ey, ex, 1]] = I + skew(e). The actual transform is
+T_t = Π iT(i+1) (eq. (22)), the ideal one T_d the product of the perfect rotations (eq. (21)); the
+orientation error is ΔR = R_dᵀ·R_t (eq. (23)) and its components (eq. (24)), always in the order
+:data:`COMPONENTS`:
+
+    Δψ = ΔR[0, 2]  (about the instrument's y),  Δθ = ΔR[1, 0]  (about z),  Δγ = ΔR[2, 1]  (about x),
+
+so that ΔR ≈ I + skew(v) with v = (Δγ, Δψ, Δθ).
+
+Two models of a link's error rotations:
+
+- ``model="seed"`` (default): one small-angle matrix E per link, with every error of the link
+  summed about its axis, multiplied exactly as printed in eqs. (17)–(19) (E is not orthogonal);
+- ``model="exact"``: each error is a proper rotation (``scipy.spatial.transform.Rotation``),
+  applied in the order the link lists them — Table 3's order for the seed (e.g. φ1 about y, then
+  Δφy1 about y, Δαz1 about z, Δαx1 about x). It equals the seed model to first order.
+
+Translations are applied after the link's rotations (eq. (18): E·Trans; Table 3's wording puts the
+translation first — the difference is an origin shift of order Δη·Δε and none in orientation).
+Translations never change the orientation: "the intersection error has no effect on the
+orientation error" (seed 001, after eq. (25)).
+
+ΔR is computed by the recursion D ← A_kᵀ·D·A_k·E_k over the links (A_k the link's perfect
+rotation, E_k its error matrix), which equals R_dᵀR_t because A_kᵀA_k = I. It starts from D = I
+and skips the conjugation while D is still exactly the identity, so the outer axis of the seed
+table, R_y(φ1), cancels exactly (to the last bit), as it does in eq. (26). The first-order
+expansion, ΔR ≈ I + Σ_k skew(S_kᵀ e_k) with S_k the product of the perfect rotations after link k,
+gives the generalised eq. (26) (:meth:`Turntable.linear_coefficients`) and the sensitivities of
+eq. (28) (:meth:`Turntable.sensitivities`).
+
+Names: the seed's error vector χ (eq. (25)) is ``phi_y1, phi_z2, alpha_x1, alpha_z1, alpha_x2,
+alpha_y2, eps_x, eps_y`` plus the translation ``eta``. Every error may also be named by its
+ISO 230-1 / ISO 230-7 symbol: the one stated in the table (``iso``) or, when unambiguous, a
+generated one — a rotary axis about x/y/z has letter A/B/C; its position error is E{L}{L} (EBB),
+its wobble about another axis M is E{M}{L} (EAB, ECB), its offsets E{X|Y|Z}{L}; a fixed link's
+rotation about M before the axis with letter L is E{M}0{L} (EA0C, EB0C), its translation E{X}0{L}
+(EX0C). Aliases are matched case-insensitively; canonical names exactly.
+
+Units: radians for every angle and angular error, metres for translations (the TOML loader,
+:mod:`rotacal.turntable.config`, converts from the file's units).
+
+References
+----------
+Seed 001 (``../shared/seeds/001_4a387eb674e238f2.txt``): GyroWheel calibration tests — error
+analysis and turntable error allocation, §3.2, eqs. (17)–(27), Tables 2–3; §4.1, eq. (28), Figure 8.
+ISO 230-1:2012 and ISO 230-7:2015 (symbols of the geometric errors of axes of rotation).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any, Literal, cast
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from rotacal.errors import CaptureError, ConfigError
+
+__all__ = [
+    "ANGLE_UNITS",
+    "AXES",
+    "COMPONENTS",
+    "KINDS",
+    "LENGTH_UNITS",
+    "SEED_ERROR_NAMES",
+    "ErrorSpec",
+    "Link",
+    "Turntable",
+    "generated_aliases",
+    "load_turntable",
+    "orientation_error",
+    "seed_table",
+]
+
+AXES = ("x", "y", "z")
+#: Orientation error components, in this order everywhere: Δψ (about y), Δθ (about z), Δγ (about x).
+COMPONENTS = ("psi", "theta", "gamma")
+#: Kinds of error: rotation of a rotary axis about itself, about another axis, of a fixed link, and
+#: any translation.
+KINDS = ("position", "wobble", "squareness", "offset")
+#: The seed's χ (eq. (25)) followed by the intersection error η.
+SEED_ERROR_NAMES = (
+    "phi_y1",
+    "phi_z2",
+    "alpha_x1",
+    "alpha_z1",
+    "alpha_x2",
+    "alpha_y2",
+    "eps_x",
+    "eps_y",
+    "eta",
+)
+#: Radians per unit of the angular units a configuration may use.
+ANGLE_UNITS: dict[str, float] = {
+    "rad": 1.0,
+    "mrad": 1e-3,
+    "urad": 1e-6,
+    "deg": math.pi / 180.0,
+    "arcmin": math.pi / 10_800.0,
+    "arcsec": math.pi / 648_000.0,
+}
+#: Metres per unit of the length units a configuration may use.
+LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3, "um": 1e-6}
+
+Model = Literal["seed", "exact"]
+
+_AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
+_ISO_ROT = "ABC"
+_ISO_LIN = "XYZ"
+#: (row, column) of ΔR giving Δψ, Δθ, Δγ (eq. (24)).
+_DR_ENTRIES = ((0, 2), (1, 0), (2, 1))
+#: Index in v (x, y, z) of ΔR ≈ I + skew(v) giving Δψ, Δθ, Δγ.
+_V_INDEX = (1, 2, 0)
+#: The two indices a rotation about x, y, z mixes, in the cyclic order (i, j): R[i,i] = R[j,j] = c,
+#: R[i,j] = −s, R[j,i] = s.
+_PLANE = {0: (1, 2), 1: (2, 0), 2: (0, 1)}
+_FAST_CHUNK = 16_384
+
+
+# ------------------------------------------------------------------------------------ the chain
+@dataclasses.dataclass(frozen=True)
+class Link:
+    """One element of the chain base → instrument (a row of seed 001, Table 3).
+
+    Attributes
+    ----------
+    axis : {"x", "y", "z"} or None
+        The rotary axis the link turns about (its own axis), or None for a fixed link.
+    angle : str or None
+        The name of the rotation angle (rotary axes only), e.g. ``"phi1"``.
+    rotations : tuple of (name, axis)
+        Error rotations in the order they are applied (matters for ``model="exact"`` only).
+    translations : tuple of (name, axis)
+        Error translations (lengths), applied after the rotations.
+    """
+
+    axis: str | None
+    angle: str | None
+    rotations: tuple[tuple[str, str], ...] = ()
+    translations: tuple[tuple[str, str], ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.axis is not None and self.axis not in AXES:
+            raise ConfigError(
+                f"axis {self.axis!r} is not an axis letter: use 'x', 'y' or 'z' "
+                "(or no axis for a fixed link)."
+            )
+        if self.axis is not None and not (isinstance(self.angle, str) and self.angle):
+            raise ConfigError(
+                f"the rotary axis about {self.axis} has no angle: name its angle, e.g. angle = "
+                '"phi1".'
+            )
+        if self.axis is None and self.angle is not None:
+            raise ConfigError(
+                f"a fixed link (no axis) cannot have an angle ({self.angle!r}): give it an axis "
+                "or remove the angle."
+            )
+        for field in ("rotations", "translations"):
+            pairs = getattr(self, field)
+            if isinstance(pairs, Mapping):
+                pairs = tuple(pairs.items())
+            pairs = tuple((str(n), str(a)) for n, a in pairs)
+            for name, ax in pairs:
+                if ax not in AXES:
+                    raise ConfigError(
+                        f"error {name!r} is about/along axis {ax!r}: use 'x', 'y' or 'z'."
+                    )
+                if not name or any(ch.isspace() for ch in name):
+                    raise ConfigError(f"error name {name!r} is empty or contains spaces.")
+            object.__setattr__(self, field, pairs)
+
+
+@dataclasses.dataclass(frozen=True)
+class ErrorSpec:
+    """One geometric error of the table (a row of seed 001, Table 2).
+
+    Attributes
+    ----------
+    name : str
+        Canonical name (e.g. ``"phi_y1"``).
+    kind : {"position", "wobble", "squareness", "offset"}
+        Derived from where the error sits in the chain.
+    lower : float
+        Manufacturing lower bound LB (eq. (29)): rad for rotations, m for offsets; ≥ 0.
+    iso : str or None
+        ISO 230-1/-7 symbol (e.g. ``"EBB"``), accepted as an alias. A :class:`Turntable` fills it
+        with the generated symbol when none is given and the generated one is unambiguous.
+    label : str
+        Human description (Table 2's wording for the seed).
+    weight : float or None
+        Override of the allocation weight (default: 1/sensitivity, seed 001 after eq. (33)).
+    """
+
+    name: str
+    kind: str
+    lower: float = 0.0
+    iso: str | None = None
+    label: str = ""
+    weight: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ConfigError(
+                f"error {self.name!r} has kind {self.kind!r}: use one of {', '.join(KINDS)}."
+            )
+        if not (math.isfinite(self.lower) and self.lower >= 0.0):
+            raise ConfigError(
+                f"the lower bound of {self.name!r} is {self.lower!r}: lower bounds are "
+                "magnitudes, give a finite value ≥ 0."
+            )
+        if self.weight is not None and not (math.isfinite(self.weight) and self.weight > 0.0):
+            raise ConfigError(
+                f"the weight of {self.name!r} is {self.weight!r}: give a finite value > 0."
+            )
+
+
+@dataclasses.dataclass(frozen=True)
+class _LinkPlan:
+    axis: int  # −1 for a fixed link
+    angle: int  # index into angle_names, −1 for a fixed link
+    rotations: tuple[tuple[int, int], ...]  # (index into angular_error_names, axis index)
+    translations: tuple[tuple[int, int], ...]  # (index into offset names, axis index)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Plan:
+    links: tuple[_LinkPlan, ...]
+    angle_names: tuple[str, ...]
+    angular: tuple[str, ...]
+    offsets: tuple[str, ...]
+    aliases: dict[str, str]  # upper-case alias → canonical name
+    kinds: dict[str, str]
+
+
+def _chain_kinds(links: Sequence[Link]) -> dict[str, str]:
+    kinds: dict[str, str] = {}
+    for link in links:
+        for name, ax in link.rotations:
+            if link.axis is None:
+                kinds[name] = "squareness"
+            else:
+                kinds[name] = "position" if ax == link.axis else "wobble"
+        for name, _ in link.translations:
+            kinds[name] = "offset"
+    return kinds
+
+
+def generated_aliases(links: Sequence[Link]) -> dict[str, str]:
+    """ISO 230-1/-7 symbols generated from the chain, only those that name one error.
+
+    A rotary axis about x/y/z has letter A/B/C; its position error is E{L}{L}, its wobble about M
+    is E{M}{L}, its translation along X/Y/Z is E{X|Y|Z}{L}; a fixed link's rotation about M before
+    the next rotary axis (letter L) is E{M}0{L}, its translation E{X|Y|Z}0{L} (no symbol for a
+    fixed link with no rotary axis after it). A symbol two errors would share is not generated.
+
+    Parameters
+    ----------
+    links : sequence of Link
+        The chain, base → instrument.
+
+    Returns
+    -------
+    dict
+        Upper-case symbol → canonical error name.
+
+    References
+    ----------
+    ISO 230-1:2012 §3 and ISO 230-7:2015 §3 (error motions and location errors of rotary axes).
+    """
+    candidates: dict[str, set[str]] = {}
+    for k, link in enumerate(links):
+        if link.axis is not None:
+            letter = _ISO_ROT[_AXIS_INDEX[link.axis]]
+            infix = ""
+        else:
+            nxt = next((lk.axis for lk in links[k + 1 :] if lk.axis is not None), None)
+            if nxt is None:
+                continue
+            letter = _ISO_ROT[_AXIS_INDEX[nxt]]
+            infix = "0"
+        for name, ax in link.rotations:
+            sym = f"E{_ISO_ROT[_AXIS_INDEX[ax]]}{infix}{letter}"
+            candidates.setdefault(sym, set()).add(name)
+        for name, ax in link.translations:
+            sym = f"E{_ISO_LIN[_AXIS_INDEX[ax]]}{infix}{letter}"
+            candidates.setdefault(sym, set()).add(name)
+    return {sym: next(iter(names)) for sym, names in candidates.items() if len(names) == 1}
+
+
+def _alias_map(
+    links: tuple[Link, ...], errors: tuple[ErrorSpec, ...], angle_names: list[str]
+) -> tuple[dict[str, str], dict[str, str]]:
+    """Accepted symbols (upper case → name) and the generated symbol of each error that has one.
+
+    Explicit ``iso`` symbols come first and must each name one error (not another error's or an
+    angle's name); generated symbols are added when unambiguous and not already taken.
+    """
+    taken = {n.upper(): n for n in (*(e.name for e in errors), *angle_names)}
+    aliases: dict[str, str] = {}
+    for e in errors:
+        if e.iso is None:
+            continue
+        sym = str(e.iso).strip().upper()
+        if not sym:
+            raise ConfigError(f"the ISO symbol of {e.name!r} is empty: give one or omit it.")
+        other = aliases.get(sym, taken.get(sym, e.name))
+        if other != e.name:
+            raise ConfigError(
+                f"ISO symbol {e.iso!r} of {e.name!r} is already the name or symbol of "
+                f"{other!r}: symbols must name one error."
+            )
+        aliases[sym] = e.name
+    by_name: dict[str, str] = {}
+    for sym, name in generated_aliases(links).items():
+        if sym in aliases or (sym in taken and taken[sym] != name):
+            continue
+        aliases[sym] = name
+        by_name.setdefault(name, sym)
+    return aliases, by_name
+
+
+def _default_label(kind: str, link: Link, ax: str, next_angle: str | None) -> str:
+    if kind == "position":
+        return f"Position error of the axis turning by {link.angle}"
+    if kind == "wobble":
+        return f"Wobble error of the axis turning by {link.angle}, about {ax}"
+    if kind == "squareness":
+        where = f" before the axis turning by {next_angle}" if next_angle else ""
+        return f"Orthogonality (squareness) error about {ax}{where}"
+    where = f" of the axis turning by {link.angle}" if link.angle else ""
+    if not where and next_angle:
+        where = f" before the axis turning by {next_angle}"
+    return f"Offset along {ax}{where}"
+
+
+# -------------------------------------------------------------------------------- the turntable
+@dataclasses.dataclass(frozen=True)
+class Turntable:
+    """A turntable's chain of links, its geometric errors and its requirement (seed 001, §3–4).
+
+    Build it from a TOML description with :func:`load_turntable`, or :func:`seed_table` for the
+    two-axis table of seed 001. Constructing it validates the chain against ``errors``: every
+    chain error appears in ``errors`` exactly once and vice versa, names are unique, angle names
+    are unique. Missing ISO symbols in ``errors`` are filled with the generated ones (see the
+    module docstring); an empty label is filled with a description from the chain.
+
+    Attributes
+    ----------
+    name : str
+    links : tuple of Link
+        Base → instrument.
+    errors : tuple of ErrorSpec
+        In χ order (the configuration's ``[errors]`` order).
+    requirement : dict or None
+        Allowed |Δψ|, |Δθ|, |Δγ| (rad), keys :data:`COMPONENTS`.
+    calibration_requirement_deg_h : float or None
+        Required calibration accuracy (°/h) to derive the requirement from (eqs. (7)–(16)).
+    settings : dict
+        The ``[monte_carlo]`` and ``[calibration]`` tables as given (validated, no defaults added).
+    units : str
+        Display units of angles (a key of :data:`ANGLE_UNITS`).
+    length_units : str
+        Display units of translations (a key of :data:`LENGTH_UNITS`).
+    """
+
+    name: str
+    links: tuple[Link, ...]
+    errors: tuple[ErrorSpec, ...]
+    requirement: dict[str, float] | None = None
+    calibration_requirement_deg_h: float | None = None
+    settings: dict[str, Any] = dataclasses.field(default_factory=dict)
+    units: str = "arcmin"
+    length_units: str = "mm"
+
+    # ------------------------------------------------------------------------- validation
+    def __post_init__(self) -> None:
+        links = tuple(self.links)
+        errors = tuple(self.errors)
+        object.__setattr__(self, "links", links)
+        if not links:
+            raise ConfigError("the chain is empty: give at least one [[chain]] link.")
+        if self.units not in ANGLE_UNITS:
+            raise ConfigError(
+                f"units {self.units!r} is unknown: use one of {', '.join(ANGLE_UNITS)}."
+            )
+        if self.length_units not in LENGTH_UNITS:
+            raise ConfigError(
+                f"length_units {self.length_units!r} is unknown: use one of "
+                f"{', '.join(LENGTH_UNITS)}."
+            )
+        angle_names: list[str] = []
+        for link in links:
+            if link.angle is not None:
+                if link.angle in angle_names:
+                    raise ConfigError(
+                        f"two rotary axes have the same angle name {link.angle!r}: give each "
+                        "axis its own angle."
+                    )
+                angle_names.append(link.angle)
+        chain_names: list[str] = []
+        for link in links:
+            for name, _ in (*link.rotations, *link.translations):
+                if name in chain_names:
+                    raise ConfigError(
+                        f"error {name!r} appears twice in the chain: every error belongs to "
+                        "one link, once."
+                    )
+                if name in angle_names:
+                    raise ConfigError(
+                        f"error {name!r} has the name of an angle: rename one of them."
+                    )
+                chain_names.append(name)
+        spec_names = [e.name for e in errors]
+        seen: set[str] = set()
+        for name in spec_names:
+            if name in seen:
+                raise ConfigError(f"error {name!r} is listed twice in [errors]: list it once.")
+            seen.add(name)
+        for name in chain_names:
+            if name not in seen:
+                raise ConfigError(
+                    f"chain error {name!r} is missing from [errors]: add it there (in χ order)."
+                )
+        for name in spec_names:
+            if name not in chain_names:
+                raise ConfigError(
+                    f"[errors] lists {name!r}, which no [[chain]] link has: add it to a link or "
+                    f"remove it (chain errors: {', '.join(chain_names)})."
+                )
+        kinds = _chain_kinds(links)
+        for e in errors:
+            if e.kind != kinds[e.name]:
+                raise ConfigError(
+                    f"error {e.name!r} has kind {e.kind!r} but sits in the chain as a "
+                    f"{kinds[e.name]} error: fix its kind."
+                )
+        self._check_requirement()
+
+        aliases, by_name = _alias_map(links, errors, angle_names)
+        next_angle: dict[str, str | None] = {}
+        for k, link in enumerate(links):
+            nxt = next((lk.angle for lk in links[k + 1 :] if lk.axis is not None), None)
+            for name, _ in (*link.rotations, *link.translations):
+                next_angle[name] = nxt
+        where = {n: (lk, ax) for lk in links for n, ax in (*lk.rotations, *lk.translations)}
+        filled = []
+        for e in errors:
+            changes: dict[str, Any] = {}
+            if e.iso is None and e.name in by_name:
+                changes["iso"] = by_name[e.name]
+            if not e.label:
+                lk, ax = where[e.name]
+                changes["label"] = _default_label(e.kind, lk, ax, next_angle[e.name])
+            filled.append(dataclasses.replace(e, **changes) if changes else e)
+        object.__setattr__(self, "errors", tuple(filled))
+
+        index_ang = {n: i for i, n in enumerate(e.name for e in filled if e.kind != "offset")}
+        index_off = {n: i for i, n in enumerate(e.name for e in filled if e.kind == "offset")}
+        plans = []
+        for link in links:
+            plans.append(
+                _LinkPlan(
+                    axis=-1 if link.axis is None else _AXIS_INDEX[link.axis],
+                    angle=-1 if link.angle is None else angle_names.index(link.angle),
+                    rotations=tuple((index_ang[n], _AXIS_INDEX[a]) for n, a in link.rotations),
+                    translations=tuple(
+                        (index_off[n], _AXIS_INDEX[a]) for n, a in link.translations
+                    ),
+                )
+            )
+        object.__setattr__(
+            self,
+            "_plan",
+            _Plan(
+                links=tuple(plans),
+                angle_names=tuple(angle_names),
+                angular=tuple(index_ang),
+                offsets=tuple(index_off),
+                aliases=aliases,
+                kinds=kinds,
+            ),
+        )
+
+    def _check_requirement(self) -> None:
+        if self.requirement is not None and self.calibration_requirement_deg_h is not None:
+            raise ConfigError(
+                "both an orientation requirement and calibration_deg_h are given: keep one."
+            )
+        if self.requirement is not None:
+            req = dict(self.requirement)
+            for key in req:
+                if key not in COMPONENTS:
+                    raise ConfigError(
+                        f"requirement component {key!r} is unknown: use {', '.join(COMPONENTS)}."
+                    )
+            for key in COMPONENTS:
+                if key not in req:
+                    raise ConfigError(
+                        f"the requirement lacks {key!r}: give all of {', '.join(COMPONENTS)}."
+                    )
+                value = req[key]
+                if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                    raise ConfigError(f"requirement {key} = {value!r} must be a finite value > 0.")
+            object.__setattr__(self, "requirement", {k: float(req[k]) for k in COMPONENTS})
+        cal = self.calibration_requirement_deg_h
+        if cal is not None and not (math.isfinite(cal) and cal > 0):
+            raise ConfigError(f"calibration_deg_h = {cal!r} must be a finite value > 0 (°/h).")
+
+    @property
+    def _p(self) -> _Plan:
+        return cast(_Plan, self.__dict__["_plan"])
+
+    # ---------------------------------------------------------------------------- names
+    @property
+    def error_names(self) -> tuple[str, ...]:
+        """Canonical error names in χ order (translations included)."""
+        return tuple(e.name for e in self.errors)
+
+    @property
+    def angular_error_names(self) -> tuple[str, ...]:
+        """Names of the errors that rotate (all but the offsets), in χ order: the columns of
+        :meth:`error_array`, :meth:`linear_coefficients` and :meth:`sensitivities`."""
+        return self._p.angular
+
+    @property
+    def offset_names(self) -> tuple[str, ...]:
+        """Names of the translation errors, in χ order."""
+        return self._p.offsets
+
+    @property
+    def angle_names(self) -> tuple[str, ...]:
+        """Names of the rotation angles, in chain order (base → instrument)."""
+        return self._p.angle_names
+
+    @property
+    def aliases(self) -> dict[str, str]:
+        """Every accepted ISO symbol (upper case) → canonical name."""
+        return dict(self._p.aliases)
+
+    def error(self, name: str) -> ErrorSpec:
+        """The :class:`ErrorSpec` of ``name`` (canonical or alias)."""
+        canonical = self.resolve(name)
+        return next(e for e in self.errors if e.name == canonical)
+
+    def resolve(self, name: str) -> str:
+        """Canonical name of an error given by its name or an ISO 230-1/-7 alias.
+
+        Raises
+        ------
+        ConfigError
+            If the name is unknown (the message lists the valid names).
+        """
+        if name in self._p.kinds:
+            return name
+        canonical = self._p.aliases.get(str(name).strip().upper())
+        if canonical is not None:
+            return canonical
+        symbols = ", ".join(sorted(self._p.aliases))
+        raise ConfigError(
+            f"unknown error name {name!r}: valid names are {', '.join(self.error_names)}"
+            + (f" (or their ISO symbols {symbols})." if symbols else ".")
+        )
+
+    # ------------------------------------------------------------------------ inputs
+    def _angles(self, angles: Sequence[ArrayLike] | Mapping[str, ArrayLike]) -> list[np.ndarray]:
+        names = self._p.angle_names
+        if isinstance(angles, Mapping):
+            for key in angles:
+                if key not in names:
+                    raise ConfigError(
+                        f"unknown angle {key!r}: this table's angles are {', '.join(names)}."
+                    )
+            missing = [n for n in names if n not in angles]
+            if missing:
+                raise ConfigError(
+                    f"angle {missing[0]!r} is missing: give every angle of {', '.join(names)}."
+                )
+            values = [angles[n] for n in names]
+        else:
+            values = list(angles)
+            if len(values) != len(names):
+                raise ConfigError(
+                    f"{len(values)} angle(s) given, this table has {len(names)} "
+                    f"({', '.join(names)}): give them in chain order or as a mapping by name."
+                )
+        out = []
+        for name, value in zip(names, values, strict=True):
+            arr = np.asarray(value, dtype=float)
+            if not np.all(np.isfinite(arr)):
+                raise CaptureError(f"angle {name!r} has non-finite values: give finite radians.")
+            out.append(arr)
+        return out
+
+    def _error_values(
+        self, errors: Mapping[str, ArrayLike] | ArrayLike | None
+    ) -> tuple[list[np.ndarray | None], list[np.ndarray | None]]:
+        """Angular and offset error values (None = zero), names resolved."""
+        ang: list[np.ndarray | None] = [None] * len(self._p.angular)
+        off: list[np.ndarray | None] = [None] * len(self._p.offsets)
+        if errors is None:
+            return ang, off
+        if not isinstance(errors, Mapping):
+            arr = np.asarray(errors, dtype=float)
+            n_ang, n_all = len(ang), len(self.errors)
+            if arr.ndim == 0 or arr.shape[-1] not in (n_ang, n_all):
+                raise ConfigError(
+                    f"an error array needs a last axis of {n_ang} (angular errors "
+                    f"{', '.join(self._p.angular)}) or {n_all} (all errors in χ order), got "
+                    f"shape {arr.shape}; or pass a mapping by name."
+                )
+            if not np.all(np.isfinite(arr)):
+                raise CaptureError("the error array has non-finite values: give finite values.")
+            if arr.shape[-1] == n_ang:
+                return [arr[..., i] for i in range(n_ang)], off
+            columns = {e.name: arr[..., i] for i, e in enumerate(self.errors)}
+            return (
+                [columns[n] for n in self._p.angular],
+                [columns[n] for n in self._p.offsets],
+            )
+        index_ang = {n: i for i, n in enumerate(self._p.angular)}
+        index_off = {n: i for i, n in enumerate(self._p.offsets)}
+        given: dict[str, str] = {}
+        for key, value in errors.items():
+            name = self.resolve(key)
+            if name in given:
+                raise ConfigError(
+                    f"error {name!r} is given twice (as {given[name]!r} and {key!r}): give it once."
+                )
+            given[name] = key
+            arr = np.asarray(value, dtype=float)
+            if not np.all(np.isfinite(arr)):
+                raise CaptureError(f"error {key!r} has non-finite values: give finite values.")
+            if name in index_ang:
+                ang[index_ang[name]] = arr
+            else:
+                off[index_off[name]] = arr
+        return ang, off
+
+    def error_array(self, errors: Mapping[str, ArrayLike]) -> np.ndarray:
+        """The angular errors as one array in χ order (missing names are zero).
+
+        Parameters
+        ----------
+        errors : mapping
+            Error name (canonical or ISO alias) → value (rad; arrays broadcast). Translations are
+            accepted and left out.
+
+        Returns
+        -------
+        ndarray, shape (..., n_angular)
+            rad; columns :attr:`angular_error_names`.
+        """
+        ang, _ = self._error_values(errors)
+        shape = np.broadcast_shapes(*(a.shape for a in ang if a is not None))
+        out = np.zeros((*shape, len(ang)))
+        for i, a in enumerate(ang):
+            if a is not None:
+                out[..., i] = a
+        return out
+
+    # ------------------------------------------------------------------------ matrices
+    def _link_errors(self, ang: list[np.ndarray | None], model: str) -> list[np.ndarray | None]:
+        """Each link's error rotation matrix (..., 3, 3), or None when it is exactly I."""
+        if model not in ("seed", "exact"):
+            raise ConfigError(f"model {model!r} is unknown: use 'seed' or 'exact'.")
+        mats: list[np.ndarray | None] = []
+        for plan in self._p.links:
+            present = [(v, a) for i, a in plan.rotations if (v := ang[i]) is not None]
+            if not present:
+                mats.append(None)
+                continue
+            if model == "seed":
+                mats.append(_small_angle_matrix(present))
+            else:
+                mats.append(_exact_matrix(present))
+        return mats
+
+    def _batch_shape(
+        self, phis: list[np.ndarray], ang: list[np.ndarray | None], off: list[np.ndarray | None]
+    ) -> tuple[int, ...]:
+        shapes = [p.shape for p in phis] + [a.shape for a in (*ang, *off) if a is not None]
+        return np.broadcast_shapes(*shapes) if shapes else ()
+
+    def rotation_error(
+        self,
+        angles: Sequence[ArrayLike] | Mapping[str, ArrayLike],
+        errors: Mapping[str, ArrayLike] | ArrayLike | None,
+        *,
+        model: Model = "seed",
+    ) -> np.ndarray:
+        """Orientation error matrix ΔR = R_dᵀ·R_t of the instrument (seed 001, eq. (23)).
+
+        Parameters
+        ----------
+        angles : sequence (chain order) or mapping by name of array_like
+            Rotation angles (rad); broadcast together and with the errors.
+        errors : mapping or array_like
+            Error name (canonical or ISO alias) → value (rad for rotations, m for translations;
+            missing = 0; arrays broadcast, e.g. shape (k, 1) against angles of shape (m,)), or an
+            array whose last axis is the angular errors (or all errors) in χ order.
+        model : {"seed", "exact"}
+            Small-angle matrices as printed (eqs. (17)–(19)) or proper rotations in the link's
+            order (Table 3).
+
+        Returns
+        -------
+        ndarray, shape (..., 3, 3)
+            ΔR (dimensionless); orthogonal for ``model="exact"``.
+
+        References
+        ----------
+        Seed 001, eqs. (17)–(23), Table 3.
+        """
+        phis = self._angles(angles)
+        ang, off = self._error_values(errors)
+        batch = self._batch_shape(phis, ang, off)
+        if model == "exact":
+            return self._rotation_error_exact(phis, ang, batch)
+        mats = self._link_errors(ang, model)
+        d: np.ndarray | None = None
+        for plan, e in zip(self._p.links, mats, strict=True):
+            if plan.axis >= 0 and d is not None:
+                a = _rotation_matrix(plan.axis, phis[plan.angle])
+                d = np.swapaxes(a, -1, -2) @ d @ a
+            if e is not None:
+                d = e if d is None else d @ e
+        if d is None:
+            d = np.eye(3)
+        return np.array(np.broadcast_to(d, (*batch, 3, 3)))
+
+    def _rotation_error_exact(
+        self, phis: list[np.ndarray], ang: list[np.ndarray | None], batch: tuple[int, ...]
+    ) -> np.ndarray:
+        """ΔR of the exact model, composed as quaternions (one conversion to a matrix at the end,
+        so ΔR is orthogonal to a few ulp)."""
+        from scipy.spatial.transform import Rotation
+
+        size = math.prod(batch)
+
+        def elementary(axis: int, value: np.ndarray) -> Rotation:
+            rotvec = np.zeros((size, 3))
+            rotvec[:, axis] = np.broadcast_to(value, batch).reshape(-1)
+            return Rotation.from_rotvec(rotvec)
+
+        d: Rotation | None = None
+        for plan in self._p.links:
+            if plan.axis >= 0 and d is not None:
+                a = elementary(plan.axis, phis[plan.angle])
+                d = a.inv() * d * a
+            for i, axis in plan.rotations:
+                value = ang[i]
+                if value is not None:
+                    r = elementary(axis, value)
+                    d = r if d is None else d * r
+        if d is None:
+            return np.array(np.broadcast_to(np.eye(3), (*batch, 3, 3)))
+        return np.asarray(d.as_matrix()).reshape(*batch, 3, 3)
+
+    def orientation_error(
+        self,
+        angles: Sequence[ArrayLike] | Mapping[str, ArrayLike],
+        errors: Mapping[str, ArrayLike] | ArrayLike | None,
+        *,
+        model: Model = "seed",
+    ) -> np.ndarray:
+        """Orientation error (Δψ, Δθ, Δγ) of the instrument (seed 001, eqs. (23)–(25)).
+
+        Parameters
+        ----------
+        angles, errors, model
+            As for :meth:`rotation_error` (rad; translations in m).
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            (Δψ, Δθ, Δγ) = (ΔR[0,2], ΔR[1,0], ΔR[2,1]) in rad (:data:`COMPONENTS`).
+
+        References
+        ----------
+        Seed 001, eqs. (17)–(25).
+        """
+        dr = self.rotation_error(angles, errors, model=model)
+        return np.stack([dr[..., i, j] for i, j in _DR_ENTRIES], axis=-1)
+
+    def transform(
+        self,
+        angles: Sequence[ArrayLike] | Mapping[str, ArrayLike],
+        errors: Mapping[str, ArrayLike] | ArrayLike | None,
+        *,
+        model: Model = "seed",
+    ) -> np.ndarray:
+        """Actual homogeneous transform T_t = Π iT(i+1), base → instrument (seed 001, eq. (22)).
+
+        Each link is [A·E, A·E·t; 0, 1]: its perfect rotation A (eqs. (17), (19)), its error
+        rotation E, then its translation t (eq. (18): E·Trans).
+
+        Parameters
+        ----------
+        angles, errors, model
+            As for :meth:`rotation_error` (rad; translations in m).
+
+        Returns
+        -------
+        ndarray, shape (..., 4, 4)
+            T_t; rotation part dimensionless, translation column in m.
+
+        References
+        ----------
+        Seed 001, eqs. (17)–(22).
+        """
+        phis = self._angles(angles)
+        ang, off = self._error_values(errors)
+        batch = self._batch_shape(phis, ang, off)
+        mats = self._link_errors(ang, model)
+        t = np.zeros((*batch, 4, 4))
+        t[..., :, :] = np.eye(4)
+        for plan, e in zip(self._p.links, mats, strict=True):
+            link = np.zeros((*batch, 4, 4))
+            rot: np.ndarray = np.eye(3)
+            if plan.axis >= 0:
+                rot = _rotation_matrix(plan.axis, phis[plan.angle])
+            if e is not None:
+                rot = rot @ e
+            link[..., :3, :3] = rot
+            link[..., 3, 3] = 1.0
+            shift = [(v, a) for i, a in plan.translations if (v := off[i]) is not None]
+            if shift:
+                vec = np.zeros((*np.broadcast_shapes(*(v.shape for v, _ in shift)), 3))
+                for v, a in shift:
+                    vec[..., a] += v
+                link[..., :3, 3] = (rot @ vec[..., None])[..., 0]
+            t = t @ link
+        return t
+
+    def ideal_transform(self, angles: Sequence[ArrayLike] | Mapping[str, ArrayLike]) -> np.ndarray:
+        """Ideal homogeneous transform T_d, the product of the perfect rotations (eq. (21)).
+
+        Parameters
+        ----------
+        angles : sequence or mapping of array_like
+            Rotation angles (rad).
+
+        Returns
+        -------
+        ndarray, shape (..., 4, 4)
+
+        References
+        ----------
+        Seed 001, eq. (21).
+        """
+        return self.transform(angles, None)
+
+    def linear_coefficients(
+        self, angles: Sequence[ArrayLike] | Mapping[str, ArrayLike]
+    ) -> np.ndarray:
+        """First-order coefficients ∂(Δψ, Δθ, Δγ)/∂χ_i at χ = 0: the generalised eq. (26).
+
+        ΔR ≈ I + Σ_k skew(S_kᵀ·e_k) with S_k the product of the perfect rotations after link k, so
+        an error of link k about its axis a contributes row a of S_k (the same for both models).
+        For the seed table this is eq. (26): e.g. ∂Δψ/∂Δφy1 = cos φ2, ∂Δγ/∂Δφy1 = sin φ2.
+
+        Parameters
+        ----------
+        angles : sequence or mapping of array_like
+            Rotation angles (rad), broadcast together.
+
+        Returns
+        -------
+        ndarray, shape (..., 3, n_angular)
+            rad/rad; rows :data:`COMPONENTS`, columns :attr:`angular_error_names`.
+
+        References
+        ----------
+        Seed 001, eqs. (26)–(28).
+        """
+        phis = self._angles(angles)
+        batch = np.broadcast_shapes(*(p.shape for p in phis)) if phis else ()
+        n = len(self._p.angular)
+        out = np.zeros((*batch, 3, n))
+        suffix: np.ndarray = np.eye(3)
+        for plan in reversed(self._p.links):
+            for i, a in plan.rotations:
+                row = suffix[..., a, :]  # (..., 3): v = S_kᵀ·unit_a
+                for c, vi in enumerate(_V_INDEX):
+                    out[..., c, i] = row[..., vi]
+            if plan.axis >= 0:
+                suffix = _rotation_matrix(plan.axis, phis[plan.angle]) @ suffix
+        return out
+
+    def sensitivities(self, *, step_deg: float = 45.0) -> np.ndarray:
+        """Mean |∂(Δψ, Δθ, Δγ)/∂χ_i| at χ = 0 over the rotation angles (seed 001, eq. (28)).
+
+        The seed says only that the sensitivities "vary with the rotation angles" and that the
+        average values are given (Figure 8). rotacal averages |coefficient| over the grid 0, step,
+        …, 360° of every angle of the table (both ends included: 9 points per angle at 45°). For
+        the seed table this gives exactly Figure 8's 0.6476 (mean |cos φ2|) and 0.5365 (mean
+        |sin φ2|). Figure 8 also prints 0.6481/0.5372 and small values 0.002–0.006 where the
+        linear model has 0 or the same value: those are the partials of the full model (25) taken
+        at a non-zero nominal error that the paper does not state; rotacal takes them at χ = 0.
+
+        Parameters
+        ----------
+        step_deg : float
+            Grid step (deg); 360/step must be an integer.
+
+        Returns
+        -------
+        ndarray, shape (3, n_angular)
+            rad/rad; rows :data:`COMPONENTS`, columns :attr:`angular_error_names`.
+
+        References
+        ----------
+        Seed 001, eq. (28) and Figure 8.
+        """
+        step = float(step_deg)
+        count = 360.0 / step if step > 0 and math.isfinite(step) else math.nan
+        if not (math.isfinite(count) and abs(count - round(count)) < 1e-9 and count >= 1):
+            raise ConfigError(
+                f"step_deg = {step_deg!r} must be > 0 and divide 360° into whole steps."
+            )
+        grid = np.radians(np.linspace(0.0, 360.0, round(count) + 1))
+        n_angles = len(self._p.angle_names)
+        if n_angles == 0:
+            return np.abs(self.linear_coefficients([]))
+        total = np.zeros((3, len(self._p.angular)))
+        rest = np.meshgrid(*([grid] * (n_angles - 1)), indexing="ij") if n_angles > 1 else []
+        for first in grid:  # a loop over the outermost angle's grid keeps memory flat
+            coef = self.linear_coefficients([np.full(1, first), *(g.ravel() for g in rest)])
+            total += np.abs(coef).sum(axis=0)
+        return total / grid.size**n_angles
+
+    # ------------------------------------------------------------------------ fast path
+    def fast_orientation_error(self, angles: np.ndarray, chi: np.ndarray) -> np.ndarray:
+        """(Δψ, Δθ, Δγ) of many draws at once, the Monte Carlo path (seed model, eqs. (17)–(24)).
+
+        The same recursion as :meth:`rotation_error` with ``model="seed"``, written as whole-array
+        element-wise products of 3×3 matrices kept as nine arrays, in cache-sized chunks; constant
+        zeros and ones of each link are skipped. Orientation only: translations cannot change it.
+        Inputs are trusted (finite; checked for shape only).
+
+        Parameters
+        ----------
+        angles : ndarray, shape (N, n_angles)
+            Rotation angles (rad), columns :attr:`angle_names`.
+        chi : ndarray, shape (N, n_angular)
+            Angular errors (rad), columns :attr:`angular_error_names`.
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            (Δψ, Δθ, Δγ) in rad.
+
+        References
+        ----------
+        Seed 001, eqs. (17)–(24).
+        """
+        angles = np.asarray(angles, dtype=float)
+        chi = np.asarray(chi, dtype=float)
+        n_angles, n_ang = len(self._p.angle_names), len(self._p.angular)
+        if angles.ndim != 2 or angles.shape[1] != n_angles:
+            raise ConfigError(
+                f"angles must have shape (N, {n_angles}) (columns {', '.join(self.angle_names)}), "
+                f"got {angles.shape}."
+            )
+        if chi.ndim != 2 or chi.shape[1] != n_ang or chi.shape[0] != angles.shape[0]:
+            raise ConfigError(
+                f"chi must have shape ({angles.shape[0]}, {n_ang}) (columns "
+                f"{', '.join(self.angular_error_names)}), got {chi.shape}."
+            )
+        n = angles.shape[0]
+        out = np.empty((n, 3))
+        needs_angle = self._fast_angles()
+        for start in range(0, n, _FAST_CHUNK):
+            stop = min(n, start + _FAST_CHUNK)
+            a_t = angles[start:stop].T
+            c_t = np.ascontiguousarray(chi[start:stop].T)
+            trig = {
+                k: (np.cos(a_t[k]), np.sin(a_t[k])) for k in needs_angle
+            }  # only angles that do not cancel
+            psi, theta, gamma = _fast_kernel(self._p.links, trig, c_t)
+            out[start:stop, 0] = psi
+            out[start:stop, 1] = theta
+            out[start:stop, 2] = gamma
+        return out
+
+    def _fast_angles(self) -> tuple[int, ...]:
+        """Angles whose rotation conjugates a non-identity D (the others cancel exactly)."""
+        needed = []
+        seen_error = False
+        for plan in self._p.links:
+            if plan.axis >= 0 and seen_error:
+                needed.append(plan.angle)
+            if plan.rotations:
+                seen_error = True
+        return tuple(needed)
+
+
+# ---------------------------------------------------------------------------- matrix helpers
+def _rotation_matrix(axis: int, phi: np.ndarray) -> np.ndarray:
+    """Active rotation about x/y/z by φ (rad), as Ry, Rz of eqs. (17), (19): (..., 3, 3)."""
+    c, s = np.cos(phi), np.sin(phi)
+    out = np.zeros((*np.shape(phi), 3, 3))
+    i, j = _PLANE[axis]
+    out[..., axis, axis] = 1.0
+    out[..., i, i] = c
+    out[..., j, j] = c
+    out[..., i, j] = -s
+    out[..., j, i] = s
+    return out
+
+
+def _small_angle_matrix(present: list[tuple[np.ndarray, int]]) -> np.ndarray:
+    """E(ex, ey, ez) = I + skew(e) of eqs. (17)–(19), errors about the same axis summed."""
+    shape = np.broadcast_shapes(*(v.shape for v, _ in present))
+    e = np.zeros((*shape, 3))
+    for v, a in present:
+        e[..., a] += v
+    out = np.zeros((*shape, 3, 3))
+    out[..., 0, 0] = out[..., 1, 1] = out[..., 2, 2] = 1.0
+    out[..., 0, 1] = -e[..., 2]
+    out[..., 0, 2] = e[..., 1]
+    out[..., 1, 0] = e[..., 2]
+    out[..., 1, 2] = -e[..., 0]
+    out[..., 2, 0] = -e[..., 1]
+    out[..., 2, 1] = e[..., 0]
+    return out
+
+
+def _exact_matrix(present: list[tuple[np.ndarray, int]]) -> np.ndarray:
+    """Product of proper elementary rotations in the listed order (scipy Rotation)."""
+    from scipy.spatial.transform import Rotation
+
+    shape = np.broadcast_shapes(*(v.shape for v, _ in present))
+    size = int(np.prod(shape)) if shape else 1
+    total = None
+    for v, a in present:
+        rotvec = np.zeros((size, 3))
+        rotvec[:, a] = np.broadcast_to(v, shape).reshape(-1)
+        r = Rotation.from_rotvec(rotvec)
+        total = r if total is None else total * r  # total·r: r applied in the moved frame
+    assert total is not None
+    return np.asarray(total.as_matrix()).reshape(*shape, 3, 3)
+
+
+_Entry = Any  # float (an exact constant) or ndarray
+
+
+def _is_const(x: _Entry, value: float) -> bool:
+    return isinstance(x, float) and x == value
+
+
+def _add(a: _Entry, b: _Entry) -> _Entry:
+    if _is_const(a, 0.0):
+        return b
+    if _is_const(b, 0.0):
+        return a
+    return a + b
+
+
+def _sub(a: _Entry, b: _Entry) -> _Entry:
+    if _is_const(b, 0.0):
+        return a
+    if _is_const(a, 0.0):
+        return -b
+    return a - b
+
+
+def _mul(a: _Entry, b: _Entry) -> _Entry:
+    if _is_const(a, 0.0) or _is_const(b, 0.0):
+        return 0.0
+    if _is_const(a, 1.0):
+        return b
+    if _is_const(b, 1.0):
+        return a
+    return a * b
+
+
+def _fast_kernel(
+    links: tuple[_LinkPlan, ...], trig: dict[int, tuple[np.ndarray, np.ndarray]], chi: np.ndarray
+) -> tuple[_Entry, _Entry, _Entry]:
+    """ΔR[0,2], ΔR[1,0], ΔR[2,1] by D ← Aᵀ·D·A·E with D as nine entries (row-major)."""
+    d: list[_Entry] | None = None
+    # the last link with errors needs only the three entries of eq. (24) when no rotation follows
+    last = len(links) - 1
+    while last >= 0 and not links[last].rotations:
+        last -= 1
+    if any(plan.axis >= 0 for plan in links[last + 1 :]):
+        last = -1
+    for k, plan in enumerate(links):
+        if plan.axis >= 0 and d is not None:
+            c, s = trig[plan.angle]
+            i, j = _PLANE[plan.axis]
+            m = list(d)
+            for r in range(3):  # M = D·A: columns i, j mix
+                di, dj = d[3 * r + i], d[3 * r + j]
+                m[3 * r + i] = _add(_mul(di, c), _mul(dj, s))
+                m[3 * r + j] = _sub(_mul(dj, c), _mul(di, s))
+            d = list(m)
+            for col in range(3):  # Aᵀ·M: rows i, j mix
+                mi, mj = m[3 * i + col], m[3 * j + col]
+                d[3 * i + col] = _add(_mul(mi, c), _mul(mj, s))
+                d[3 * j + col] = _sub(_mul(mj, c), _mul(mi, s))
+        if not plan.rotations:
+            continue
+        e: list[_Entry] = [0.0, 0.0, 0.0]
+        for idx, a in plan.rotations:
+            e[a] = _add(e[a], chi[idx])
+        ex, ey, ez = e
+        if d is None:
+            d = [1.0, _sub(0.0, ez), ey, ez, 1.0, _sub(0.0, ex), _sub(0.0, ey), ex, 1.0]
+            continue
+        # D·(I + skew(e)): (D·K)[r] = (D[r,1]ez − D[r,2]ey, D[r,2]ex − D[r,0]ez, D[r,0]ey − D[r,1]ex)
+        rows = (
+            ((0, 2), (1, 0), (2, 1))
+            if k == last
+            else tuple((r, c) for r in range(3) for c in range(3))
+        )
+        new = list(d)
+        for r, col in rows:
+            d0, d1, d2 = d[3 * r], d[3 * r + 1], d[3 * r + 2]
+            if col == 0:
+                inc = _sub(_mul(d1, ez), _mul(d2, ey))
+            elif col == 1:
+                inc = _sub(_mul(d2, ex), _mul(d0, ez))
+            else:
+                inc = _sub(_mul(d0, ey), _mul(d1, ex))
+            new[3 * r + col] = _add(d[3 * r + col], inc)
+        d = new
+    if d is None:
+        return 0.0, 0.0, 0.0
+    return d[2], d[3], d[7]
+
+
+# ------------------------------------------------------------------------------ module level
+def load_turntable(
+    path_or_text: Any = None, *, text: str | None = None, name: str | None = None
+) -> Turntable:
+    """A turntable from its TOML description; see :func:`rotacal.turntable.config.load_turntable`."""
+    from rotacal.turntable.config import load_turntable as _load
+
+    return _load(path_or_text, text=text, name=name)
+
+
+def seed_table() -> Turntable:
+    """The two-axis turntable of seed 001 (Tables 2–3, eq. (16)), from the packaged TOML.
+
+    See :func:`rotacal.turntable.config.seed_table`.
+    """
+    from rotacal.turntable.config import seed_table as _seed
+
+    return _seed()
+
+
+@functools.lru_cache(maxsize=1)
+def _seed_cached() -> Turntable:
+    return seed_table()
+
+
+def orientation_error(
+    phi1: ArrayLike, phi2: ArrayLike, errors: Mapping[str, ArrayLike]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Orientation error (Δψ, Δθ, Δγ) of the seed's two-axis table (seed 001, eqs. (17)–(24)).
+
+    Parameters
+    ----------
+    phi1, phi2 : array_like
+        Outer (about y) and inner (about z) rotation angles (rad); broadcast.
+    errors : mapping
+        ``phi_y1, phi_z2, alpha_x1, alpha_z1, alpha_x2, alpha_y2, eps_x, eps_y`` (rad) and ``eta``
+        (m) — or their ISO symbols — to values; missing names are zero; arrays broadcast with the
+        angles (e.g. values of shape (k, 1) and angles of shape (m,) give (k, m)).
+
+    Returns
+    -------
+    dpsi, dtheta, dgamma : ndarray
+        rad, each of the broadcast shape.
+
+    References
+    ----------
+    Seed 001, eqs. (17)–(24), Tables 2–3.
+    """
+    out = _seed_cached().orientation_error([phi1, phi2], errors)
+    return out[..., 0], out[..., 1], out[..., 2]

@@ -1,0 +1,101 @@
+"""`rotacal turntable budget|example`: INTERFACE keys, a closed form, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from rotacal.cli import cli
+
+
+def run(*args: str):
+    return CliRunner().invoke(cli, list(args), prog_name="rotacal")
+
+
+def one_line_error(result, *needles):
+    assert result.exit_code == 2, result.output
+    err = result.stderr.strip()
+    assert err.count("\n") == 0 and "Traceback" not in result.output, err
+    for n in needles:
+        assert n.lower() in err.lower(), err
+
+
+@pytest.fixture()
+def example(tmp_path: Path) -> Path:
+    path = tmp_path / "table.toml"
+    r = run("turntable", "example", "--out", str(path))
+    assert r.exit_code == 0, r.output
+    return path
+
+
+def test_budget_json_has_the_interface_keys_and_the_closed_form(example, tmp_path):
+    out = tmp_path / "budget.json"
+    report = tmp_path / "budget.html"
+    r = run(
+        "turntable",
+        "budget",
+        str(example),
+        "--runs",
+        "20000",
+        "--json",
+        str(out),
+        "--report",
+        str(report),
+    )
+    assert r.exit_code == 0, r.output
+    d = json.loads(out.read_text())
+    for key in ("sensitivities", "upper_bounds_arcmin", "monte_carlo"):
+        assert key in d
+    for key in ("runs", "max_abs_arcmin", "all_within"):
+        assert key in d["monte_carlo"]
+    assert d["monte_carlo"]["runs"] == 20000 and d["monte_carlo"]["all_within"] is True
+    ub = d["upper_bounds_arcmin"]
+    # Δθ = φz2 + αz1 with equal weights: each gets half the 1.62′ requirement (the full-model guard
+    # may shave ~1e-4 off it).
+    assert ub["phi_z2"] == pytest.approx(0.81, rel=2e-4)
+    assert ub["eta"] is None
+    # Figure 8: mean |cos| over 0:45:360.
+    cos_mean = sum(abs(math.cos(math.radians(a))) for a in range(0, 361, 45)) / 9
+    assert d["sensitivities"]["psi"]["phi_y1"] == pytest.approx(cos_mean, abs=1e-12)
+    assert report.stat().st_size > 50_000
+
+
+def test_budget_text_summary(example):
+    r = run("turntable", "budget", str(example), "--runs", "5000")
+    assert r.exit_code == 0, r.output
+    assert "all within" in r.output and "alpha_x2" in r.output
+
+
+def test_example_refuses_to_overwrite(example):
+    one_line_error(run("turntable", "example", "--out", str(example)), "exists")
+
+
+def _edit(example: Path, old: str, new: str) -> Path:
+    text = example.read_text()
+    assert old in text
+    example.write_text(text.replace(old, new, 1))
+    return example
+
+
+def test_unknown_error_name_is_one_line(example):
+    one_line_error(
+        run("turntable", "budget", str(_edit(example, "phi_y1 = {", "phi_q1 = {"))), "phi_q1"
+    )
+
+
+def test_negative_bound_is_one_line(example):
+    bad = _edit(example, "phi_y1 = { lower = 0.05", "phi_y1 = { lower = -0.05")
+    one_line_error(run("turntable", "budget", str(bad)), "phi_y1", "negative")
+
+
+def test_infeasible_allocation_is_one_line(example):
+    bad = _edit(example, "alpha_y2 = { lower = 0.05", "alpha_y2 = { lower = 1.7")
+    one_line_error(run("turntable", "budget", str(bad)), "infeasible", "psi")
+
+
+def test_missing_config_is_one_line(tmp_path):
+    one_line_error(run("turntable", "budget", str(tmp_path / "nope.toml")), "nope.toml")

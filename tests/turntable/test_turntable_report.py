@@ -1,0 +1,152 @@
+"""The turntable report section (rotacal.report.turntable) for the seed table and a single axis.
+
+Truth that does not come from the code under test: the digits printed in seed 001 (Table 4,
+Figure 8) and the closed-form worst case of Table 4's bounds under the linearised model (eq. (26):
+max over φ2 of |a cos φ2 + b sin φ2| + c = √(a² + b²) + c).
+"""
+
+from __future__ import annotations
+
+import base64
+import math
+import re
+
+import pytest
+
+from rotacal.report.html import Report, render_html
+from rotacal.report.turntable import (
+    allocation_table,
+    calibration_draws_figure,
+    calibration_figure,
+    seed_comparison_table,
+    turntable_section,
+)
+from rotacal.turntable.budget import turntable_budget
+from rotacal.turntable.model import load_turntable, seed_table
+
+# Seed 001, Table 4 (arcmin), typed from the paper.
+TABLE4 = {
+    "phi_y1": 0.4235,
+    "phi_z2": 0.7800,
+    "alpha_x1": 0.4234,
+    "alpha_z1": 0.7800,
+    "alpha_x2": 0.2825,
+    "alpha_y2": 0.2824,
+    "eps_x": 0.4234,
+    "eps_y": 0.4233,
+}
+
+SINGLE_AXIS = """
+name = "single-axis rate table"
+units = "arcsec"
+[requirement]
+psi = 20.0
+theta = 30.0
+gamma = 20.0
+[[chain]]
+axis = "z"
+angle = "phi"
+rotations = { e_z = "z", a_x = "x", a_y = "y" }
+[errors]
+e_z = { lower = 1.0, label = "Position error" }
+a_x = { lower = 0.5, label = "Wobble about x" }
+a_y = { lower = 0.5, label = "Wobble about y" }
+"""
+
+
+@pytest.fixture(scope="module")
+def seed_budget():
+    return turntable_budget(seed_table(), runs=20_000)
+
+
+@pytest.fixture(scope="module")
+def seed_section(seed_budget):
+    return turntable_section(seed_budget)
+
+
+@pytest.fixture(scope="module")
+def single_budget():
+    return turntable_budget(load_turntable(text=SINGLE_AXIS), runs=20_000)
+
+
+def _is_png(fig) -> bool:
+    return base64.b64decode(fig.png_base64)[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_seed_section_has_every_part(seed_section) -> None:
+    s = seed_section
+    titles = [f.title for f in s.figures]
+    assert len(s.figures) == 4, titles  # sensitivities, Monte Carlo, calibration map, draws
+    assert all(_is_png(f) for f in s.figures)
+    assert len(s.tables) == 3  # allocation, worst case, reproducing seed 001
+    assert "seed Table 4 (′)" in s.tables[0].columns
+    assert "rotacal / Table 4" in s.tables[0].columns
+    assert s.tables[2].caption.startswith("Reproducing seed 001")
+    html = render_html(Report("t", sections=[s]))
+    assert s.title in html and html.count("<figure>") == 4
+
+
+def test_allocation_numbers_are_the_budgets(seed_budget) -> None:
+    t = allocation_table(seed_budget)
+    col_ub = t.columns.index("allocated upper bound (′)")
+    col_t4 = t.columns.index("seed Table 4 (′)")
+    col_ratio = t.columns.index("rotacal / Table 4")
+    assert len(t.rows) == len(seed_budget.error_names) == 9
+    for name, row in zip(seed_budget.error_names, t.rows, strict=True):
+        ub = seed_budget.upper_bounds_arcmin[name]
+        if ub is None:
+            assert name == "eta"
+            assert row[col_ub] == "no effect on orientation"
+            continue
+        assert row[col_ub] == f"{ub:.4f}"
+        assert float(row[col_t4]) == TABLE4[name]
+        assert float(row[col_ratio]) == pytest.approx(ub / TABLE4[name], abs=6e-4)
+
+
+def test_seed_comparison_prints_the_papers_numbers(seed_budget) -> None:
+    t = seed_comparison_table(seed_budget)
+    assert t is not None
+    rows = {r[0]: r for r in t.rows}
+    cos_row = next(r for k, r in rows.items() if "|cos" in k)
+    sin_row = next(r for k, r in rows.items() if "|sin" in k)
+    # Figure 8's printed digits, and rotacal's own value printed beside them
+    assert cos_row[1].startswith("0.6476") and cos_row[2] == "0.6476"
+    assert sin_row[1].startswith("0.5365") and sin_row[2] == "0.5365"
+    eq16 = next(r for k, r in rows.items() if "eq. (16)" in k)
+    assert eq16[1] == "0.027° each" and "neither plan nor latitude" in eq16[3]
+
+
+def test_table4_worst_case_matches_the_closed_form(seed_budget) -> None:
+    t = seed_comparison_table(seed_budget)
+    assert t is not None
+    row = next(r for r in t.rows if r[0].startswith("worst case"))
+    table4_part = row[2].split("; rotacal:")[0]
+    got = {
+        c: float(re.search(rf"{sym} ([0-9.]+)′", table4_part).group(1))  # type: ignore[union-attr]
+        for c, sym in (("psi", "Δψ"), ("theta", "Δθ"), ("gamma", "Δγ"))
+    }
+    t4 = TABLE4
+    # eq. (26): Δψ = (φy1 + εy) cos φ2 − (αx1 + εx) sin φ2 + αy2 at the worst signs
+    psi = math.hypot(t4["phi_y1"] + t4["eps_y"], t4["alpha_x1"] + t4["eps_x"]) + t4["alpha_y2"]
+    gamma = math.hypot(t4["phi_y1"] + t4["eps_y"], t4["alpha_x1"] + t4["eps_x"]) + t4["alpha_x2"]
+    theta = t4["phi_z2"] + t4["alpha_z1"]
+    # full model = linear + O(|χ|²): (1.6′ ≈ 4.7e-4 rad)² is ~1e-4 of the value
+    assert got["psi"] == pytest.approx(psi, abs=5e-4)
+    assert got["gamma"] == pytest.approx(gamma, abs=5e-4)
+    assert got["theta"] == pytest.approx(theta, abs=5e-4)
+
+
+def test_single_axis_table_builds_without_seed_parts(single_budget) -> None:
+    assert calibration_figure(single_budget) is None
+    assert calibration_draws_figure(single_budget) is None
+    assert seed_comparison_table(single_budget) is None
+    s = turntable_section(single_budget)
+    assert len(s.figures) == 2 and all(_is_png(f) for f in s.figures)
+    assert len(s.tables) == 2
+    alloc = s.tables[0]
+    assert "seed Table 4 (′)" not in alloc.columns
+    col = alloc.columns.index("allocated upper bound (′)")
+    for name, row in zip(single_budget.error_names, alloc.rows, strict=True):
+        assert row[col] == f"{single_budget.upper_bounds_arcmin[name]:.4f}"
+    assert "Reproducing" not in " ".join(s.paragraphs)
+    assert "all within" in s.figures[1].caption or "outside" in s.figures[1].caption
