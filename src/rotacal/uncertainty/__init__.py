@@ -1,0 +1,70 @@
+"""Measurement uncertainty shared by every calibration: the GUM law of propagation (JCGM 100),
+the Monte Carlo method (JCGM 101), distributions of input quantities, uncertainty budgets and the
+rounding of reported results (ILAC-P14).
+
+Validated on the worked examples of JCGM 100 Annex H, JCGM 101 §9 and JCGM 102 (see the tests and
+``../shared/UNCERTAINTY-EXAMPLES.md``).
+"""
+
+from rotacal.uncertainty.budget import BudgetRow, UncertaintyBudget, result_keys, round_ilac
+from rotacal.uncertainty.distributions import (
+    Arcsine,
+    Constant,
+    CurvilinearTrapezoid,
+    Distribution,
+    MultivariateNormal,
+    Normal,
+    Rectangular,
+    StudentT,
+    Trapezoidal,
+    Triangular,
+    distribution_from_spec,
+)
+from rotacal.uncertainty.gum import (
+    GUMResult,
+    Input,
+    LinearFit,
+    correlation_matrix,
+    coverage_factor,
+    linear_fit_uncertainty,
+    propagate,
+    welch_satterthwaite,
+)
+from rotacal.uncertainty.montecarlo import (
+    MonteCarloResult,
+    coverage_interval,
+    monte_carlo,
+    numerical_tolerance,
+    validate_gum,
+)
+
+__all__ = [
+    "Arcsine",
+    "BudgetRow",
+    "Constant",
+    "CurvilinearTrapezoid",
+    "Distribution",
+    "GUMResult",
+    "Input",
+    "LinearFit",
+    "MonteCarloResult",
+    "MultivariateNormal",
+    "Normal",
+    "Rectangular",
+    "StudentT",
+    "Trapezoidal",
+    "Triangular",
+    "UncertaintyBudget",
+    "correlation_matrix",
+    "coverage_factor",
+    "coverage_interval",
+    "distribution_from_spec",
+    "linear_fit_uncertainty",
+    "monte_carlo",
+    "numerical_tolerance",
+    "propagate",
+    "result_keys",
+    "round_ilac",
+    "validate_gum",
+    "welch_satterthwaite",
+]
