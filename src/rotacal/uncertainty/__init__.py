@@ -6,7 +6,13 @@ Validated on the worked examples of JCGM 100 Annex H, JCGM 101 §9 and JCGM 102 
 ``../shared/UNCERTAINTY-EXAMPLES.md``).
 """
 
-from rotacal.uncertainty.budget import BudgetRow, UncertaintyBudget, result_keys, round_ilac
+from rotacal.uncertainty.budget import (
+    BudgetRow,
+    UncertaintyBudget,
+    result_keys,
+    round_ilac,
+    uncertainty_keys,
+)
 from rotacal.uncertainty.distributions import (
     Arcsine,
     Constant,
@@ -37,8 +43,10 @@ from rotacal.uncertainty.montecarlo import (
     numerical_tolerance,
     validate_gum,
 )
+from rotacal.uncertainty.specs import KNOWN_SPECS, InstrumentSpecs, load_specs
 
 __all__ = [
+    "KNOWN_SPECS",
     "Arcsine",
     "BudgetRow",
     "Constant",
@@ -46,6 +54,7 @@ __all__ = [
     "Distribution",
     "GUMResult",
     "Input",
+    "InstrumentSpecs",
     "LinearFit",
     "MonteCarloResult",
     "MultivariateNormal",
@@ -60,11 +69,13 @@ __all__ = [
     "coverage_interval",
     "distribution_from_spec",
     "linear_fit_uncertainty",
+    "load_specs",
     "monte_carlo",
     "numerical_tolerance",
     "propagate",
     "result_keys",
     "round_ilac",
+    "uncertainty_keys",
     "validate_gum",
     "welch_satterthwaite",
 ]

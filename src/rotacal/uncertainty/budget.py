@@ -21,13 +21,15 @@ from __future__ import annotations
 import dataclasses
 import decimal
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
 from rotacal.errors import ConfigError
 from rotacal.results import Result
 
-__all__ = ["BudgetRow", "UncertaintyBudget", "result_keys", "round_ilac"]
+__all__ = ["BudgetRow", "UncertaintyBudget", "result_keys", "round_ilac", "uncertainty_keys"]
 
 #: Cell shown in a budget table where a number does not apply (e.g. the second-order row).
 _DASH = "—"
@@ -309,3 +311,35 @@ def result_keys(name: str, budget: UncertaintyBudget) -> dict[str, float]:
     JCGM 100:2008 (GUM), §7.2.2 (u_c) and §7.2.4 (U and k).
     """
     return {f"{name}_u": float(budget.u), f"{name}_U": float(budget.U), "k": float(budget.k)}
+
+
+def uncertainty_keys(budgets: Mapping[str, UncertaintyBudget]) -> dict[str, Any]:
+    """The uncertainty keys of a result's JSON, for several quantities at once.
+
+    For every ``name`` in ``budgets``: ``name_u`` (standard uncertainty) and ``name_U`` (expanded),
+    in the unit of the quantity; then ``k`` mapping each name to its coverage factor,
+    ``coverage_probability`` (the p all of them are stated for) and ``uncertainty_budgets`` (each
+    budget in full: rows, ν_eff, method, notes).
+
+    Parameters
+    ----------
+    budgets : mapping of str to UncertaintyBudget
+        JSON key of the quantity → its budget.
+
+    Returns
+    -------
+    dict
+
+    References
+    ----------
+    JCGM 100:2008 (GUM), §7.2.2 (u_c), §7.2.4 (U, k and p).
+    """
+    out: dict[str, Any] = {}
+    for name, b in budgets.items():
+        out[f"{name}_u"] = float(b.u)
+        out[f"{name}_U"] = float(b.U)
+    out["k"] = {name: float(b.k) for name, b in budgets.items()}
+    ps = {float(b.p) for b in budgets.values()}
+    out["coverage_probability"] = ps.pop() if len(ps) == 1 else None
+    out["uncertainty_budgets"] = {name: b.to_dict() for name, b in budgets.items()}
+    return out
