@@ -35,21 +35,11 @@ import numpy as np  # noqa: E402
 
 from rotacal.turntable.allocation import allocate, monte_carlo_check, worst_case  # noqa: E402
 from rotacal.turntable.model import Turntable, seed_table  # noqa: E402
+from rotacal.turntable.seed001 import TABLE4_ARCMIN as TABLE4  # noqa: E402
 
 ARCMIN = math.pi / 10_800.0
 CHUNK = 262_144
 LOOP_DRAWS = 10_000
-#: Table 4 of seed 001 (arcmin).
-TABLE4 = {
-    "phi_y1": 0.4235,
-    "phi_z2": 0.7800,
-    "alpha_x1": 0.4234,
-    "alpha_z1": 0.7800,
-    "alpha_x2": 0.2825,
-    "alpha_y2": 0.2824,
-    "eps_x": 0.4234,
-    "eps_y": 0.4233,
-}
 
 
 def best_of(fn: Callable[[], Any], repeat: int) -> tuple[float, Any]:

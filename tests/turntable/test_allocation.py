@@ -29,6 +29,7 @@ from rotacal.turntable.allocation import (
     monte_carlo_check,
     worst_case,
 )
+from rotacal.turntable.config import seed_table_toml
 from rotacal.turntable.model import load_turntable, seed_table
 
 ARCMIN = math.pi / 10_800.0
@@ -50,6 +51,24 @@ TABLE4 = {
 _GRID = np.radians(np.arange(0.0, 361.0, 45.0))
 C_COS = float(np.mean(np.abs(np.cos(_GRID))))
 C_SIN = float(np.mean(np.abs(np.sin(_GRID))))
+
+
+def grid_means(step_deg: float, endpoint: bool) -> tuple[float, float]:
+    """Mean |sin φ| and |cos φ| over a table's sensitivity grid, computed here (numpy only)."""
+    deg = (
+        np.linspace(0.0, 360.0, round(360 / step_deg) + 1)
+        if endpoint
+        else np.arange(0.0, 360.0, step_deg)
+    )
+    phi = np.radians(deg)
+    return float(np.mean(np.abs(np.sin(phi)))), float(np.mean(np.abs(np.cos(phi))))
+
+
+def seed_chain_unbiased():
+    """The packaged seed table without its [sensitivity] table: rotacal's default averaging."""
+    text = seed_table_toml()
+    start, stop = text.index("[sensitivity]"), text.index("[monte_carlo]")
+    return load_turntable(text[:start] + text[stop:])
 
 
 # --------------------------------------------------------------------- independent references
@@ -458,7 +477,13 @@ def test_single_axis_table_matches_closed_form(seed) -> None:
     np.testing.assert_allclose(c[:, 0, i["eps_y"]], np.cos(phi), atol=1e-15)
     a = allocate(t)
     ig, ip, it = 8.0 * ARCSEC, 10.0 * ARCSEC, 12.0 * ARCSEC
-    ws, wc = 1.0 / C_SIN, 1.0 / C_COS
+    # the table's own averaging (no [sensitivity]: 1° steps over a turn), its means computed here
+    assert t.sensitivity_grid == (1.0, False)
+    assert a.optimiser["sensitivity_grid"] == {"step_deg": 1.0, "endpoint": False}
+    m_sin, m_cos = grid_means(*t.sensitivity_grid)
+    ws, wc = 1.0 / m_sin, 1.0 / m_cos
+    assert a.weights["gamma"]["eps_y"] == pytest.approx(ws, rel=1e-12)
+    assert a.weights["gamma"]["eps_x"] == pytest.approx(wc, rel=1e-12)
     (gs, gc, gk) = kkt([ws], [wc], [1.0], ig)  # γ: εy |sin|, εx |cos|, αx1
     (ps, pc, pk) = kkt([ws], [wc], [1.0], ip)  # ψ: εx |sin|, εy |cos|, αy1
     assert a.per_component["gamma"]["eps_y"] == pytest.approx(gs[0], rel=1e-6)
@@ -529,3 +554,126 @@ def test_three_axis_table_is_optimal_and_passes(seed) -> None:
 def test_seed_kkt_certificate(seed, alloc) -> None:
     for comp in ("psi", "gamma"):
         assert kkt_certificate(seed, alloc, comp) < 1e-5
+
+
+# ------------------------------------------------------------- the default (unbiased) averaging
+def test_seed_chain_with_the_default_averaging_matches_closed_form_kkt() -> None:
+    """Without [sensitivity] every |sin| and |cos| term weighs 1/(2/π): the KKT with those weights."""
+    t = seed_chain_unbiased()
+    a = allocate(t)
+    assert a.optimiser["sensitivity_grid"] == {"step_deg": 1.0, "endpoint": False}
+    m_sin, m_cos = grid_means(1.0, False)
+    assert m_sin == pytest.approx(2 / math.pi, rel=1e-4) and m_cos == pytest.approx(m_sin)
+    ws, wc = 1.0 / m_sin, 1.0 / m_cos
+    assert a.weights["psi"]["phi_y1"] == pytest.approx(wc, rel=1e-12)
+    assert a.weights["gamma"]["phi_y1"] == pytest.approx(ws, rel=1e-12)
+    (g_s, g_c, g_k) = kkt([ws, ws], [wc, wc], [1.0], I_SEED)
+    pc = a.per_component
+    for name, ref in (("phi_y1", g_s[0]), ("eps_y", g_s[1]), ("alpha_x1", g_c[0]),
+                      ("eps_x", g_c[1]), ("alpha_x2", g_k[0])):  # fmt: skip
+        assert pc["gamma"][name] == pytest.approx(ref, rel=1e-6), name
+    for name, ref in (("phi_y1", g_c[0]), ("eps_y", g_c[1]), ("alpha_x1", g_s[0]),
+                      ("eps_x", g_s[1]), ("alpha_y2", g_k[0])):  # fmt: skip
+        assert pc["psi"][name] == pytest.approx(ref, rel=1e-6), name
+    # eq. (34), then the full-model guard's second-order shrink of ψ's errors (all five of them)
+    ub = a.upper_bounds_rad
+    s_psi = a.optimiser["full_model_scale"]["psi"]
+    assert 1.0 - 1e-3 < s_psi <= 1.0 and a.optimiser["full_model_scale"]["gamma"] == 1.0
+    for name in ("phi_y1", "alpha_x1", "eps_x", "eps_y"):
+        assert ub[name] == pytest.approx(min(g_s[0], g_c[0]) * s_psi, rel=1e-6), name
+    assert ub["alpha_x2"] == pytest.approx(g_k[0], rel=1e-6)
+    assert ub["alpha_y2"] == pytest.approx(g_k[0] * s_psi, rel=1e-6)
+    assert a.within
+    # equal weights spread the sin and cos groups evenly; the paper's weights do not
+    paper = allocate(seed_table())
+    assert ub["phi_y1"] != pytest.approx(paper.upper_bounds_rad["phi_y1"], rel=1e-3)
+
+
+# ----------------------------------------------------------------------- more bad input
+def test_a_table_whose_errors_do_not_rotate_is_one_line() -> None:
+    t = load_turntable(
+        """
+units = "arcsec"
+[requirement]
+psi = 5.0
+theta = 5.0
+gamma = 5.0
+[[chain]]
+axis = "z"
+angle = "phi1"
+translations = { d = "x" }
+[errors]
+d = {}
+"""
+    )
+    for call in (
+        lambda: allocate(t),
+        lambda: worst_case(t, {}),
+        lambda: monte_carlo_check(t, None, runs=10),  # type: ignore[arg-type]
+    ):
+        with pytest.raises(ConfigError) as exc:
+            call()
+        msg = str(exc.value)
+        assert "\n" not in msg and msg.startswith("turntable TOML text: ")
+        assert (
+            "no error of the chain changes the orientation" in msg and "nothing to allocate" in msg
+        )
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "fragment"),
+    [
+        ({"seed": -1}, "seed must be an integer ≥ 0, got -1"),
+        ({"seed": 1.5}, "seed must be an integer ≥ 0, got 1.5"),
+        ({"seed": True}, "seed must be an integer ≥ 0, got True"),
+        ({"seed": "7"}, "seed must be an integer ≥ 0, got '7'"),
+        ({"runs": True}, "runs must be an integer ≥ 1, got True"),
+        ({"runs": 2.0}, "runs must be an integer ≥ 1, got 2.0"),
+        ({"runs": 0}, "runs must be an integer ≥ 1, got 0"),
+        ({"chunk": False}, "chunk must be an integer ≥ 1, got False"),
+    ],
+)
+def test_monte_carlo_seed_and_runs_must_be_integers(seed, alloc, kwargs, fragment) -> None:
+    args = {"runs": 10} | kwargs
+    with pytest.raises(ConfigError, match=re.escape(fragment)) as exc:
+        monte_carlo_check(seed, alloc, **args)
+    assert "\n" not in str(exc.value)
+
+
+def test_monte_carlo_accepts_numpy_integers(seed, alloc) -> None:
+    a = monte_carlo_check(seed, alloc, runs=np.int64(2_000), seed=np.uint32(3))
+    b = monte_carlo_check(seed, alloc, runs=2_000, seed=3)
+    assert a.runs == 2_000 and a.seed == 3 and a.max_abs_rad == b.max_abs_rad
+
+
+def test_infeasible_message_names_the_source_and_only_the_angles_that_matter(seed) -> None:
+    # ψ of the seed table depends on φ2 only (eq. (26)): φ1 must not be named
+    with pytest.raises(ConfigError) as exc:
+        allocate(seed, 0.08 * ARCMIN)
+    msg = str(exc.value)
+    assert msg.startswith("packaged seed001.toml: the allocation of psi is infeasible")
+    assert "phi2 = " in msg and "phi1" not in msg
+    # θ = φz2 + αz1 depends on no angle: no angle is named
+    big = (
+        seed_table_toml()
+        .replace("phi_z2 = { lower = 0.05,", "phi_z2 = { lower = 1.0,")
+        .replace("alpha_z1 = { lower = 0.05,", "alpha_z1 = { lower = 1.0,")
+    )
+    with pytest.raises(ConfigError) as exc:
+        allocate(load_turntable(big))
+    msg = str(exc.value)
+    assert msg.startswith(
+        "turntable TOML text: the allocation of theta is infeasible: at every angle the lower"
+    )
+    assert "phi1" not in msg and "phi2" not in msg and "2 arcmin" in msg
+    # a table built in code is named by its name
+    t = dataclasses.replace(seed, source="")
+    with pytest.raises(ConfigError, match=r"^turntable 'Two-axis turntable of seed 001"):
+        allocate(t, 0.08 * ARCMIN)
+
+
+def test_values_beyond_the_small_angle_model_are_refused(seed, alloc) -> None:
+    with pytest.raises(ConfigError, match=r"requirement psi = 0.5 rad \(28.65°\) .*give radians"):
+        allocate(seed, {"psi": 0.5, "theta": 1e-3, "gamma": 1e-3})
+    with pytest.raises(ConfigError, match=r"the upper bound of phi_y1 = 0.4235 rad .*give radians"):
+        worst_case(seed, {"phi_y1": 0.4235}, I_SEED)  # Table 4's arcmin given as radians

@@ -111,8 +111,17 @@ def test_seed_table_is_tables_2_and_3() -> None:
     assert t.units == "arcmin" and t.length_units == "mm"
     assert t.settings == {
         "monte_carlo": {"runs": 1_000_000, "seed": 2026, "signs": "random"},
-        "calibration": {"latitude_deg": 45.75, "outer_steps": 8, "inner_steps": 8},
+        "calibration": {
+            "latitude_deg": 45.75,
+            "outer_steps": 8,
+            "inner_steps": 8,
+            "required_deg_h": 0.01,
+        },
+        "sensitivity": {"step_deg": 45.0, "endpoint": True},
     }
+    # the paper's averaging of Figure 8, chosen by the packaged file
+    assert t.sensitivity_grid == (45.0, True)
+    assert t.source == "packaged seed001.toml"
     # the model module's entry point gives the same table; each call a fresh object
     assert model.seed_table() == t and model.seed_table() is not t
 
@@ -120,6 +129,13 @@ def test_seed_table_is_tables_2_and_3() -> None:
 def test_the_packaged_file_says_the_lower_bounds_are_rotacals_choice() -> None:
     text = (Path(model.__file__).parent / "tables" / "seed001.toml").read_text(encoding="utf-8")
     assert "rotacal's stated choice" in text and "the paper prints none" in text
+    # ... and that its sensitivity averaging is the paper's, biased, and how to drop it
+    flat = " ".join(line.lstrip("# ") for line in text.splitlines())
+    assert (
+        "the paper's averaging (reproduces Figure 8's 0.6476/0.5365; it counts 0° and 360° twice)"
+        in flat
+    )
+    assert "delete this table for the unbiased mean over a turn (2/π = 0.6366" in flat
 
 
 # ----------------------------------------------------------------------------- loading forms
@@ -154,8 +170,12 @@ def test_units_are_converted() -> None:
     assert t.requirement["psi"] == pytest.approx(math.radians(0.027), rel=1e-15)
     assert t.requirement["theta"] == pytest.approx(1.62 * math.pi / 648_000, rel=1e-15)
     for unit, rad in (("rad", 1.0), ("mrad", 1e-3), ("urad", 1e-6), ("deg", math.pi / 180)):
-        t = load_turntable(variant('units = "arcmin"', f'units = "{unit}"'))
+        t = load_turntable(
+            variant('units = "arcmin"', f'units = "{unit}"').replace("= 1.62", "= 0.08")
+        )
         assert t.error("alpha_x2").lower == pytest.approx(0.05 * rad, rel=1e-15)
+        assert t.requirement is not None
+        assert t.requirement["gamma"] == pytest.approx(0.08 * rad, rel=1e-15)
 
 
 def test_calibration_requirement_form() -> None:
@@ -305,6 +325,37 @@ FAULTS = [
     ),
     ("[monte_carlo]", '[monte_carlo]\nsigns = "both"', r"signs = 'both' is unknown"),
     ("runs = 1000", "runs = 0", r"\[monte_carlo\] runs must be an integer ≥ 1"),
+    ("runs = 1000", "runs = true", r"\[monte_carlo\] runs must be an integer ≥ 1, got True"),
+    ("runs = 1000", "runs = 1.5", r"\[monte_carlo\] runs must be an integer ≥ 1, got 1.5"),
+    ("runs = 1000", "seed = -1", r"\[monte_carlo\] seed must be an integer ≥ 0, got -1"),
+    ("runs = 1000", "seed = 1.5", r"\[monte_carlo\] seed must be an integer ≥ 0, got 1.5"),
+    ("runs = 1000", "seed = true", r"\[monte_carlo\] seed must be an integer ≥ 0, got True"),
+    (
+        "theta = 1.62",
+        "theta = 1200",
+        r"\[requirement\] theta = 1200 arcmin is 20°: the small-angle error model needs errors ≪ 1 "
+        r"rad; check units",
+    ),
+    (
+        "phi_z2 = { lower = 0.05 }",
+        "phi_z2 = { lower = 600 }",
+        r"\[errors\] phi_z2: lower = 600 arcmin is 10°: the small-angle error model",
+    ),
+    (
+        "[calibration]",
+        "[sensitivity]\nstep_deg = 7\n[calibration]",
+        r"\[sensitivity\] step_deg = 7 must be a number of degrees > 0 that divides 360°",
+    ),
+    (
+        "[calibration]",
+        '[sensitivity]\nendpoint = "yes"\n[calibration]',
+        r"\[sensitivity\] endpoint = 'yes' must be true or false",
+    ),
+    (
+        "[calibration]",
+        "[sensitivity]\nstep = 5\n[calibration]",
+        r"\[sensitivity\] has an unknown key 'step' \(did you mean 'step_deg'\?\)",
+    ),
     (
         "runs = 1000",
         "rums = 1000",
@@ -361,6 +412,38 @@ def test_faults_in_a_file_name_the_file(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match=r"bad\.toml: TOML syntax error: .*line 8") as info:
         load_turntable(f)
     assert "\n" not in str(info.value)
+
+
+def test_sensitivity_table_chooses_the_averaging() -> None:
+    t = load_turntable(
+        variant("[calibration]", "[sensitivity]\nstep_deg = 45\nendpoint = true\n[calibration]")
+    )
+    assert t.sensitivity_grid == (45.0, True)
+    # mean |cos|, |sin| over 0:45:360 with both ends (Figure 8), typed out here
+    assert t.sensitivities()[0, 0] == pytest.approx((3 + 4 * 2**-0.5) / 9, rel=1e-12)
+    assert t.sensitivities()[0, 2] == pytest.approx((4 * 2**-0.5 + 2) / 9, rel=1e-12)
+    only_step = load_turntable(
+        variant("[calibration]", "[sensitivity]\nstep_deg = 5\n[calibration]")
+    )
+    assert only_step.sensitivity_grid == (5.0, False)
+    assert load_turntable(BASE).sensitivity_grid == (1.0, False)  # no table: the default
+
+
+def test_a_table_without_errors_is_refused_and_one_with_only_translations_loads() -> None:
+    with pytest.raises(ConfigError, match=r"^turntable TOML text: the chain has no errors") as info:
+        load_turntable('[[chain]]\naxis = "z"\nangle = "phi"\n[errors]\n')
+    assert "\n" not in str(info.value)
+    t = load_turntable(
+        '[[chain]]\naxis = "z"\nangle = "phi"\ntranslations = { d = "x" }\n[errors]\nd = {}\n'
+    )
+    assert t.angular_error_names == () and t.offset_names == ("d",)
+
+
+def test_the_source_is_the_file(tmp_path: Path) -> None:
+    f = tmp_path / "table.toml"
+    f.write_text(BASE, encoding="utf-8")
+    assert load_turntable(f).source == str(f)
+    assert load_turntable(BASE).source == "turntable TOML text"
 
 
 def test_no_chain_and_wrong_types() -> None:

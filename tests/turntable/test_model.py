@@ -2,7 +2,8 @@
 
 - an independent implementation: plain Python floats and nested lists multiplying the matrices of
   eqs. (17)–(21) as printed, then eqs. (22)–(24);
-- the closed form of eq. (26) and of Figure 8's averages (mean |cos|, mean |sin| on 0:45:360);
+- the closed form of eq. (26) and of Figure 8's averages (mean |cos|, mean |sin| on 0:45:360), the
+  mean over a turn 2/π, and central finite differences of the full model at a non-zero error;
 - proper rotations composed with scipy.spatial.transform.Rotation in the test;
 - hand-derived closed forms of a single-axis table; central finite differences.
 """
@@ -15,8 +16,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rotacal.errors import CaptureError, ConfigError
+from rotacal.errors import ConfigError
+from rotacal.turntable.config import seed_table_toml
 from rotacal.turntable.model import (
+    ARCMIN_PER_RAD,
     COMPONENTS,
     SEED_ERROR_NAMES,
     ErrorSpec,
@@ -255,10 +258,84 @@ def test_sensitivities_are_figure8(table: Turntable) -> None:
     assert round(float(sens[0, 2]), 4) == 0.5365
     assert round(float(sens[2, 2]), 4) == 0.6476
     assert round(float(sens[2, 0]), 4) == 0.5365
-    # a finer grid tends to 2/π for both (0° and 360° both counted: a bias of ~(1 − 2/π)/n)
-    np.testing.assert_allclose(table.sensitivities(step_deg=0.5)[0, [0, 2]], 2 / np.pi, atol=1e-3)
-    with pytest.raises(ConfigError, match="step_deg"):
-        table.sensitivities(step_deg=7.0)
+    # the packaged table chooses the paper's averaging, and says so
+    assert table.sensitivity_grid == (45.0, True)
+    np.testing.assert_array_equal(table.sensitivities(step_deg=45, endpoint=True), sens)
+    # a finer grid with both ends tends to 2/π for both (0° and 360° both counted: a bias of
+    # ~(1 − 2/π)/n for |cos|, −(2/π)/n for |sin|)
+    fine = table.sensitivities(step_deg=0.5)
+    np.testing.assert_allclose(fine[0, [0, 2]], 2 / np.pi, atol=1e-3)
+    assert fine[0, 0] > 2 / np.pi > fine[0, 2]
+    for bad in (7.0, 0.0, -45.0, "45", True, np.nan):
+        with pytest.raises(ConfigError, match="step_deg") as info:
+            table.sensitivities(step_deg=bad)  # type: ignore[arg-type]
+        assert "\n" not in str(info.value)
+    with pytest.raises(ConfigError, match="endpoint = 1 must be true or false"):
+        table.sensitivities(endpoint=1)  # type: ignore[arg-type]
+
+
+def _seed_without_sensitivity_table() -> Turntable:
+    text = seed_table_toml()
+    start, stop = text.index("[sensitivity]"), text.index("[monte_carlo]")
+    assert "endpoint = true" in text[start:stop]  # the table removed is the paper's averaging
+    return load_turntable(text[:start] + text[stop:])
+
+
+def test_default_sensitivities_are_the_unbiased_mean_over_a_turn(table: Turntable) -> None:
+    """Without [sensitivity]: 1° steps, 0 ≤ φ < 360°, so every |sin| and |cos| term is 2/π."""
+    plain = _seed_without_sensitivity_table()
+    assert plain.sensitivity_grid == (1.0, False)
+    sens = plain.sensitivities()
+    two_over_pi = 2.0 / math.pi
+    #                    φy1 φz2 αx1 αz1 αx2 αy2 εx  εy   (1: the |cos φ2| or |sin φ2| terms)
+    trig = np.array(
+        [
+            [1, 0, 1, 0, 0, 0, 1, 1],
+            [0, 0, 0, 0, 0, 0, 0, 0],
+            [1, 0, 1, 0, 0, 0, 1, 1],
+        ],
+        dtype=bool,
+    )
+    np.testing.assert_allclose(sens[trig], two_over_pi, rtol=1e-4)
+    # the constant terms of eq. (26) are exactly 1, the absent ones exactly 0
+    const = np.array([[0, 0, 0, 0, 0, 1, 0, 0], [0, 1, 0, 1, 0, 0, 0, 0], [0, 0, 0, 0, 1, 0, 0, 0]])
+    np.testing.assert_allclose(sens[~trig], const[~trig], rtol=0, atol=1e-15)
+    # on a periodic grid |sin| and |cos| have the same mean: the paper's 0.6476 ≠ 0.5365 is the
+    # double-counted 0°/360°
+    assert sens[0, 0] == pytest.approx(sens[0, 2], rel=1e-12)
+    # the same default asked of the packaged table explicitly
+    np.testing.assert_allclose(
+        table.sensitivities(step_deg=1.0, endpoint=False), sens, rtol=0, atol=1e-15
+    )
+
+
+def test_figure8_off_linear_values_match_full_model_partials_at_a_nonzero_error(
+    table: Turntable,
+) -> None:
+    """Figure 8's 0.6481/0.5372 and its 0.0021–0.0059 are consistent with partials of the full
+    model (eqs. (17)–(25)) at every error ≈ 3·10⁻³ rad, averaged over the paper's grid."""
+    grid = np.radians(np.arange(0.0, 361.0, 45.0))
+    phi1, phi2 = (g.ravel() for g in np.meshgrid(grid, grid, indexing="ij"))
+    x0, h = 3e-3, 1e-7
+    partial = np.zeros((3, 8))
+    for i in range(8):
+        hi, lo = np.full(8, x0), np.full(8, x0)
+        hi[i] += h
+        lo[i] -= h
+        d = table.orientation_error([phi1, phi2], hi) - table.orientation_error([phi1, phi2], lo)
+        partial[:, i] = np.mean(np.abs(d / (2 * h)), axis=0)
+    linear = table.sensitivities(step_deg=45, endpoint=True)
+    # the ψ terms of εx, εy (|sin φ2|, |cos φ2|) move off 0.5365/0.6476 towards Figure 8's
+    # 0.5372/0.6481 (rotacal measures 0.5375/0.6483 at 3·10⁻³ rad)
+    assert 0.6478 < partial[0, 7] < 0.6490 and 0.5368 < partial[0, 6] < 0.5385
+    assert 0.6478 < partial[2, 6] < 0.6490 and 0.5368 < partial[2, 7] < 0.5385
+    # the linear model's zeros: either still exactly 0 or small, within Figure 8's 0.002–0.006
+    zero = linear == 0.0
+    small = partial[zero]
+    assert np.all((small < 1e-9) | ((small > 1e-3) & (small < 6e-3))), small
+    assert np.count_nonzero(small > 1e-3) >= 6
+    # a linear model at χ = 0 gives exactly the paper's other pair: the figure mixes both
+    assert round(float(linear[0, 0]), 4) == 0.6476 and round(float(linear[0, 2]), 4) == 0.5365
 
 
 # ---------------------------------------------------------------------- 5. the exact model
@@ -546,7 +623,7 @@ def test_api_faults_are_one_line(table: Turntable) -> None:
         ),
         (lambda: table.orientation_error({"phi1": 0.0}, {}), ConfigError, "'phi2' is missing"),
         (
-            lambda: table.orientation_error([0.0, 0.0], {"phi_y1": 1.0, "EBB": 2.0}),
+            lambda: table.orientation_error([0.0, 0.0], {"phi_y1": 1e-4, "EBB": 2e-4}),
             ConfigError,
             "given twice",
         ),
@@ -555,19 +632,98 @@ def test_api_faults_are_one_line(table: Turntable) -> None:
             ConfigError,
             "model 'small'",
         ),  # type: ignore[arg-type]
-        (lambda: table.orientation_error([np.nan, 0.0], {}), CaptureError, "non-finite"),
+        (lambda: table.orientation_error([np.nan, 0.0], {}), ConfigError, "non-finite"),
         (
             lambda: table.orientation_error([0.0, 0.0], {"eps_x": np.inf}),
-            CaptureError,
-            "non-finite",
+            ConfigError,
+            "error 'eps_x' has non-finite",
         ),
         (lambda: table.orientation_error([0.0, 0.0], np.zeros(5)), ConfigError, "last axis of 8"),
         (lambda: table.error_array({"phi1": 1.0}), ConfigError, "unknown error name 'phi1'"),
+        # values that are not numbers: one line naming the error or angle
+        (
+            lambda: orientation_error(0, 0, {"phi_y1": "abc"}),
+            ConfigError,
+            "error 'phi_y1' = 'abc' is not a number",
+        ),
+        (lambda: orientation_error("a", 0, {}), ConfigError, "angle 'phi1' = 'a' is not a number"),
+        (
+            lambda: orientation_error(0, [0.1, "x"], {}),
+            ConfigError,
+            "angle 'phi2' .* is not a number",
+        ),
+        (
+            lambda: table.orientation_error([0.0, 0.0], {"eta": None}),
+            ConfigError,
+            "error 'eta' = None is not a number: give metres",
+        ),
+        (
+            lambda: table.orientation_error([0.0, 0.0], [["a"] * 8]),
+            ConfigError,
+            "the error array .* is not a number",
+        ),
+        # shapes that do not broadcast
+        (
+            lambda: orientation_error(np.zeros(3), np.zeros(2), {}),
+            ConfigError,
+            r"angle 'phi2' has shape \(2,\), which does not broadcast with the shape \(3,\) of "
+            "angle 'phi1'",
+        ),
+        (
+            lambda: orientation_error(np.zeros(3), 0.0, {"alpha_x1": np.zeros(2)}),
+            ConfigError,
+            r"error 'alpha_x1' has shape \(2,\), which does not broadcast",
+        ),
+        (
+            lambda: table.transform([np.zeros(3), 0.0], {"eta": np.zeros(4)}),
+            ConfigError,
+            r"error 'eta' has shape \(4,\)",
+        ),
+        (
+            lambda: table.error_array({"phi_y1": np.zeros(2), "eps_y": np.zeros(3)}),
+            ConfigError,
+            r"error 'eps_y' has shape \(3,\), which does not broadcast with the shape \(2,\) of "
+            "error 'phi_y1'",
+        ),
+        (
+            lambda: table.linear_coefficients([np.zeros(3), np.zeros(4)]),
+            ConfigError,
+            r"angle 'phi2' has shape \(4,\)",
+        ),
+        (
+            lambda: (
+                table.rotation_error([0.0, 0.0], {"phi_y1": np.zeros(3)}, model="exact")
+                + table.rotation_error([np.zeros(2), 0.0], {"phi_y1": np.zeros(3)}, model="exact")
+            ),
+            ConfigError,
+            "does not broadcast",
+        ),
+        # errors beyond the small-angle model: degrees or arcmin given by mistake
+        (
+            lambda: orientation_error(0, 0, {"phi_y1": 1.0}),
+            ConfigError,
+            r"error 'phi_y1' = 1 rad \(57.3°\) is beyond 0.1 rad: angular errors are in radians",
+        ),
+        (
+            lambda: orientation_error(0, 0, {"EAB": np.array([1e-4, -0.42])}),
+            ConfigError,
+            r"error 'EAB' = 0.42 rad .*radians",
+        ),
+        (
+            lambda: table.orientation_error([0.0, 0.0], np.full(8, 0.5)),
+            ConfigError,
+            r"error 'phi_y1' \(column of the error array\) = 0.5 rad",
+        ),
     ]
     for call, exc, text in cases:
         with pytest.raises(exc, match=text) as info:
             call()
         assert "\n" not in str(info.value)
+    # the limit is on angular errors only (radians); translations are metres, and 0.1 rad passes
+    np.testing.assert_array_equal(
+        table.orientation_error([0.3, 0.2], {"eta": 5.0}), table.orientation_error([0.3, 0.2], {})
+    )
+    assert np.all(np.isfinite(table.orientation_error([0.3, 0.2], {"phi_y1": -0.1})))
 
 
 def test_direct_construction_validates() -> None:
@@ -581,6 +737,40 @@ def test_direct_construction_validates() -> None:
         ErrorSpec("p", "position", lower=-1.0)
     with pytest.raises(ConfigError, match="lacks 'gamma'"):
         Turntable("t", (link,), (spec,), requirement={"psi": 1.0, "theta": 1.0})
+    # a requirement or an angular lower bound beyond 0.1 rad, in the table's units
+    with pytest.raises(
+        ConfigError, match=r"\[requirement\] theta = 1200 arcmin is 20°: .*check units"
+    ):
+        Turntable(
+            "t",
+            (link,),
+            (spec,),
+            requirement={"psi": 1e-3, "theta": 1200 / ARCMIN_PER_RAD, "gamma": 1e-3},
+        )
+    with pytest.raises(ConfigError, match=r"\[errors\] p: lower = 0.2 rad is 11.5°"):
+        Turntable("t", (link,), (ErrorSpec("p", "position", lower=0.2),), units="rad")
+    # offsets are lengths: no angular limit
+    t_off = Turntable(
+        "t",
+        (Link("z", "phi", (("p", "z"),), (("d", "x"),)),),
+        (spec, ErrorSpec("d", "offset", lower=0.5)),
+    )
+    assert t_off.error("d").lower == 0.5
+    # the chain's checks (one place, shared with the loader) and a chain without errors
+    with pytest.raises(ConfigError, match=r"link 2: error 'p' appears twice in the chain"):
+        Turntable("t", (link, Link("x", "chi", (("p", "x"),))), (spec,))
+    with pytest.raises(ConfigError, match="same angle name 'phi'"):
+        Turntable("t", (link, Link("x", "phi", (("q", "x"),))), (spec, ErrorSpec("q", "wobble")))
+    with pytest.raises(ConfigError, match="the chain has no errors"):
+        Turntable("t", (Link("z", "phi"),), ())
+    # settings: the sensitivity grid is checked; the source is not part of equality
+    with pytest.raises(ConfigError, match=r"\[sensitivity\] step_deg = 7"):
+        Turntable("t", (link,), (spec,), settings={"sensitivity": {"step_deg": 7}})
+    with pytest.raises(ConfigError, match=r"\[sensitivity\] has an unknown key 'steps'"):
+        Turntable("t", (link,), (spec,), settings={"sensitivity": {"steps": 5}})
+    a = Turntable("t", (link,), (spec,), source="a.toml", settings={"sensitivity": {"step_deg": 5}})
+    assert a == Turntable("t", (link,), (spec,), settings={"sensitivity": {"step_deg": 5.0}})
+    assert a.source == "a.toml" and a.sensitivity_grid == (5.0, False)
     with pytest.raises(ConfigError, match="both"):
         Turntable(
             "t",
@@ -589,3 +779,16 @@ def test_direct_construction_validates() -> None:
             requirement=dict.fromkeys(COMPONENTS, 1.0),
             calibration_requirement_deg_h=0.01,
         )
+
+
+def test_default_sensitivity_grid_is_coarsened_for_three_angles() -> None:
+    three = load_turntable(THREE_AXIS)
+    assert three.sensitivity_grid == (8.0, False)  # 45³ = 91 125 points ≤ 1.5·10⁵
+    assert load_turntable(SINGLE_AXIS).sensitivity_grid == (1.0, False)
+    coarse = three.sensitivities()
+    assert coarse.shape == (3, 15)
+    # the mean over the torus, estimated independently from 4·10⁵ uniform random angles
+    rng = np.random.default_rng(12)
+    phis = list(rng.uniform(0.0, 2 * np.pi, (3, 400_000)))
+    sampled = np.abs(three.linear_coefficients(phis)).mean(axis=0)
+    np.testing.assert_allclose(coarse, sampled, rtol=0, atol=3e-3)

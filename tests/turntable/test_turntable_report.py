@@ -113,7 +113,12 @@ def test_seed_comparison_prints_the_papers_numbers(seed_budget) -> None:
     assert cos_row[1].startswith("0.6476") and cos_row[2] == "0.6476"
     assert sin_row[1].startswith("0.5365") and sin_row[2] == "0.5365"
     eq16 = next(r for k, r in rows.items() if "eq. (16)" in k)
-    assert eq16[1] == "0.027° each" and "neither plan nor latitude" in eq16[3]
+    assert eq16[1] == "0.027° each"
+    # Over every scanned plan and latitude rotacal's equal limit stays far below the paper's
+    # 0.027°: the table says the gap is unexplained and prints the scanned range.
+    scan = seed_budget.reproduction["eq16_scan"]["coefficients"]
+    assert 0.0 < scan["min_deg"] <= scan["max_deg"] < 0.027 / 2
+    assert f"{scan['max_deg']:.4f}" in eq16[3] and "not explained" in eq16[3]
 
 
 def test_table4_worst_case_matches_the_closed_form(seed_budget) -> None:

@@ -29,11 +29,13 @@ from matplotlib.ticker import MaxNLocator
 
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
 from rotacal.turntable.budget import TurntableBudget
+from rotacal.turntable.model import ARCMIN_PER_RAD, COMPONENTS
+from rotacal.turntable.seed001 import CHI, EQ16_DEG, FIGURE8, TABLE4_ARCMIN, is_seed_table
 
 __all__ = [
-    "SEED_EQ16_DEG",
-    "SEED_FIGURE8",
-    "SEED_TABLE4_ARCMIN",
+    "EQ16_DEG",
+    "FIGURE8",
+    "TABLE4_ARCMIN",
     "allocation_table",
     "calibration_draws_figure",
     "calibration_figure",
@@ -43,30 +45,6 @@ __all__ = [
     "turntable_section",
     "worst_case_table",
 ]
-
-ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi
-COMPONENTS = ("psi", "theta", "gamma")
-
-#: The seed's error vector χ (its order, §3.2 after eq. (25)).
-SEED_CHI = ("phi_y1", "phi_z2", "alpha_x1", "alpha_z1", "alpha_x2", "alpha_y2", "eps_x", "eps_y")
-#: Seed 001, Table 4: the paper's allocated upper bounds (arcmin).
-SEED_TABLE4_ARCMIN = {
-    "phi_y1": 0.4235,
-    "phi_z2": 0.7800,
-    "alpha_x1": 0.4234,
-    "alpha_z1": 0.7800,
-    "alpha_x2": 0.2825,
-    "alpha_y2": 0.2824,
-    "eps_x": 0.4234,
-    "eps_y": 0.4233,
-}
-#: Seed 001, eq. (16): the orientation requirement for a calibration accuracy of 0.01 °/h (deg).
-SEED_EQ16_DEG = 0.027
-#: Seed 001, eq. (16): the calibration accuracy it is derived for (°/h).
-SEED_EQ16_DEG_H = 0.01
-#: Seed 001, Figure 8: the two non-trivial averaged sensitivities (mean |cos|, mean |sin|), and the
-#: slightly larger values it also prints (partials at an unstated non-zero nominal error).
-SEED_FIGURE8 = {"cos": 0.6476, "sin": 0.5365, "cos_alt": 0.6481, "sin_alt": 0.5372}
 
 _GREEK = {
     "phi": "φ",
@@ -109,7 +87,7 @@ def _iso(budget: TurntableBudget, name: str) -> str:
 
 def _is_seed(budget: TurntableBudget) -> bool:
     """True when the table's angular errors are the seed's χ (then Table 4 applies)."""
-    return tuple(budget._table.angular_error_names) == SEED_CHI
+    return is_seed_table(budget._table) and budget.reproduction is not None
 
 
 def _bar_label(budget: TurntableBudget, name: str) -> str:
@@ -157,14 +135,19 @@ def sensitivity_figure(budget: TurntableBudget) -> Figure:
     axes[0].set_yticks(y)
     axes[0].set_yticklabels(labels, fontsize=8.5)
     fig.tight_layout()
-    n_angles = len(budget._table.angle_names)
+    step, endpoint = budget._table.sensitivity_grid
+    grid = (
+        f"on the grid 0°, {step:g}°, …, 360° with both ends (the paper's averaging: 0° and 360° "
+        "count twice)"
+        if endpoint
+        else f"over a full turn, every {step:g}°"
+    )
     return figure_from_matplotlib(
         fig,
         "Sensitivity of the orientation error to each error source",
         "Each bar is |∂Δ/∂χᵢ| of the linearised model at zero error (seed 001, eqs. (26), (28)), "
         f"averaged over every rotation angle of the table ({', '.join(budget._table.angle_names)})"
-        f" on the grid 0°, 45°, …, 360° (9 points per angle, both ends included"
-        f"{f'; {9**n_angles} combinations' if n_angles > 1 else ''}). "
+        f" {grid}. "
         "A larger value means the error source must be held tighter. Translations (offsets) have "
         "no effect on orientation and are not shown.",
     )
@@ -214,7 +197,7 @@ def allocation_table(budget: TurntableBudget) -> Table:
                 f"{_COMP_SYMBOL.get(binding, binding)}" if binding else "—",
             ]
             if seed:
-                t4 = SEED_TABLE4_ARCMIN.get(name)
+                t4 = TABLE4_ARCMIN.get(name)
                 row += [_f4(t4), f"{ub / t4:.3f}" if t4 else "—"]
         rows.append(row)
     return Table(
@@ -253,14 +236,14 @@ def worst_case_table(budget: TurntableBudget) -> Table:
         if not wc:
             rows.append([_COMP_SYMBOL[comp], _f4(req), "—", "—", "—", "—"])
             continue
-        lin = wc.get("linear_rad")
-        full = wc.get("full_rad")
+        lin = wc.get("linear_arcmin")
+        full = wc.get("full_arcmin")
         rows.append(
             [
                 _COMP_SYMBOL[comp],
                 _f4(req),
-                _f4(None if lin is None else float(lin) * ARCMIN_PER_RAD),
-                _f4(None if full is None else float(full) * ARCMIN_PER_RAD),
+                _f4(None if lin is None else float(lin)),
+                _f4(None if full is None else float(full)),
                 _angles_text(wc.get("angles_deg"), names),
                 "yes" if wc.get("within") else "NO",
             ]
@@ -336,11 +319,9 @@ def monte_carlo_figure(budget: TurntableBudget) -> Figure:
 
 def _plan(budget: TurntableBudget) -> tuple[np.ndarray, np.ndarray, float]:
     """The multiposition plan (φ1, φ2 in deg) and latitude (deg) the budget used."""
-    from rotacal.turntable.budget import _calibration_settings, _plan_angles
-
-    settings = _calibration_settings(budget._table)
-    p1, p2 = _plan_angles(settings)
-    return p1, p2, float(settings["latitude_deg"])
+    assert budget._plan_deg is not None and budget.calibration is not None
+    p1, p2 = budget._plan_deg
+    return p1, p2, float(budget.calibration["latitude_deg"])
 
 
 def _box(ax: Any, half_x: float, half_y: float, **kw: Any) -> None:
@@ -393,7 +374,7 @@ def calibration_figure(budget: TurntableBudget, *, n: int = 101) -> Figure | Non
     from rotacal.turntable.calibration import rate_error_surfaces
 
     req = budget._requirement
-    if req is None:
+    if req is None or budget._plan_deg is None:
         return None
     p1, p2, lat = _plan(budget)
     wm = float(req.required_deg_h)
@@ -523,11 +504,9 @@ def calibration_draws_figure(budget: TurntableBudget) -> Figure | None:
 
 
 def _seed_table4_worst(budget: TurntableBudget) -> dict[str, dict[str, Any]]:
-    from rotacal.turntable.allocation import worst_case
-
-    t4 = {n: v / ARCMIN_PER_RAD for n, v in SEED_TABLE4_ARCMIN.items()}
-    req = {c: budget.requirement_arcmin[c] / ARCMIN_PER_RAD for c in COMPONENTS}
-    return worst_case(budget._table, t4, req)
+    """Table 4's bounds under rotacal's Lemma-1 check (arcmin), computed by the budget."""
+    assert budget.reproduction is not None
+    return dict(budget.reproduction["table4_worst_case"])
 
 
 def _pct(value_arcmin: float, req_arcmin: float) -> str:
@@ -550,58 +529,79 @@ def seed_comparison_table(
     if not _is_seed(budget):
         return None
     rows: list[list[str]] = []
+    assert budget.reproduction is not None
+    scan = budget.reproduction["eq16_scan"]
+    scan_text = (
+        f"over latitudes {scan['coefficients']['latitudes_deg'][0]:g}–"
+        f"{scan['coefficients']['latitudes_deg'][-1]:g}° and plans "
+        f"{', '.join(scan['coefficients']['plans'])}, rotacal's equal limit stays within "
+        f"{scan['coefficients']['min_deg']:.4f}–{scan['coefficients']['max_deg']:.4f}° "
+        f"({scan['eq13']['min_deg']:.4f}–{scan['eq13']['max_deg']:.4f}° with eq. (13) read as "
+        "printed): neither the unstated plan nor the latitude explains the paper's value; the gap "
+        "is not explained"
+    )
     req = budget._requirement
     if req is not None:
-        lat = req.latitude_deg
         box = ", ".join(f"I{_COMP_SYMBOL[c][1:]} = {req.limits_deg[c]:.4f}°" for c in COMPONENTS)
-        rows.append(
-            [
-                f"orientation requirement for {req.required_deg_h:g} °/h (eq. (16))",
-                f"{SEED_EQ16_DEG}° each",
-                f"box {box}; equal limit {req.equal_limit_deg:.4f}° "
-                f"(paper / rotacal = {SEED_EQ16_DEG / req.equal_limit_deg:.2f})",
-                f"rotacal's plan: {budget.calibration['plan'] if budget.calibration else '?'}"
-                f" ({req.positions} positions), latitude {lat:g}°, method {req.method!r}; the "
-                "paper states neither plan nor latitude, so no match is expected",
-            ]
+        rotacal = (
+            f"box {box}; equal limit {req.equal_limit_deg:.4f}° (paper / rotacal = "
+            f"{EQ16_DEG / req.equal_limit_deg:.2f}) for {req.positions} positions, latitude "
+            f"{req.latitude_deg:g}°, method {req.method!r}"
         )
+    else:
+        rotacal = "—"
+    rows.append(
+        [
+            "orientation requirement for 0.01 °/h (eq. (16))",
+            f"{EQ16_DEG}° each",
+            rotacal,
+            scan_text,
+        ]
+    )
     sens = budget.sensitivities
     c_cos = float(sens["psi"]["phi_y1"])
     c_sin = float(sens["psi"]["alpha_x1"])
+    step, endpoint = budget._table.sensitivity_grid
+    grid = (
+        f"mean over φ = 0°, {step:g}°, …, 360° (both ends) at zero error"
+        if endpoint
+        else f"mean over a turn (every {step:g}°) at zero error"
+    )
     rows.append(
         [
             "averaged sensitivity, |cos φ2| terms (Figure 8: Cψ1, Cψ8, Cγ3, Cγ7)",
-            f"{SEED_FIGURE8['cos']:.4f} (also {SEED_FIGURE8['cos_alt']:.4f})",
+            f"{FIGURE8['cos']:.4f} (also {FIGURE8['cos_alt']:.4f})",
             f"{c_cos:.4f}",
-            "mean over φ = 0°, 45°, …, 360° at zero error; the second printed value is the same "
-            "partial at an unstated non-zero error",
+            f"{grid}. The paper's 0.6476/0.5365 are exactly the means over 0°, 45°, …, 360° with "
+            "both ends (0° and 360° counted twice — hence cos ≠ sin); its second values are "
+            "consistent with the same partials of the full model at errors of about 3·10⁻³ rad",
         ]
     )
     rows.append(
         [
             "averaged sensitivity, |sin φ2| terms (Figure 8: Cψ3, Cψ7, Cγ1, Cγ8)",
-            f"{SEED_FIGURE8['sin']:.4f} (also {SEED_FIGURE8['sin_alt']:.4f})",
+            f"{FIGURE8['sin']:.4f} (also {FIGURE8['sin_alt']:.4f})",
             f"{c_sin:.4f}",
             "as above",
         ]
     )
     ratios = {
         n: budget.upper_bounds_arcmin[n] / v  # type: ignore[operator]
-        for n, v in SEED_TABLE4_ARCMIN.items()
+        for n, v in TABLE4_ARCMIN.items()
     }
     lo_n = min(ratios, key=ratios.__getitem__)
     hi_n = max(ratios, key=ratios.__getitem__)
     rows.append(
         [
             "allocated upper bounds (Table 4)",
-            ", ".join(f"{_symbol(n)} {v:.4f}′" for n, v in SEED_TABLE4_ARCMIN.items()),
-            ", ".join(f"{_symbol(n)} {budget.upper_bounds_arcmin[n]:.4f}′" for n in SEED_CHI),
+            ", ".join(f"{_symbol(n)} {v:.4f}′" for n, v in TABLE4_ARCMIN.items()),
+            ", ".join(f"{_symbol(n)} {budget.upper_bounds_arcmin[n]:.4f}′" for n in CHI),
             f"rotacal / Table 4 from {ratios[lo_n]:.3f} ({_symbol(lo_n)}) to {ratios[hi_n]:.3f} "
             f"({_symbol(hi_n)}); requirement "
             + ", ".join(
                 f"{_COMP_SYMBOL[c]} {budget.requirement_arcmin[c]:.4g}′" for c in COMPONENTS
             )
-            + f" (Table 4: {SEED_EQ16_DEG * 60:.4g}′ each)",
+            + f" (Table 4: {EQ16_DEG * 60:.4g}′ each)",
         ]
     )
     t4 = table4_worst if table4_worst is not None else _seed_table4_worst(budget)
@@ -612,13 +612,11 @@ def seed_comparison_table(
             "≤ requirement (proved for the linear model)",
             "Table 4: "
             + ", ".join(
-                f"{_COMP_SYMBOL[c]} {_pct(t4[c]['full_rad'] * ARCMIN_PER_RAD, reqs[c])}"
-                for c in COMPONENTS
+                f"{_COMP_SYMBOL[c]} {_pct(t4[c]['full_arcmin'], reqs[c])}" for c in COMPONENTS
             )
             + "; rotacal: "
             + ", ".join(
-                f"{_COMP_SYMBOL[c]} "
-                f"{_pct(budget.worst_case[c]['full_rad'] * ARCMIN_PER_RAD, reqs[c])}"
+                f"{_COMP_SYMBOL[c]} {_pct(budget.worst_case[c]['full_arcmin'], reqs[c])}"
                 for c in COMPONENTS
             ),
             "percentages of the requirement used by the worst table; the rest is unused margin",
@@ -648,7 +646,7 @@ def _seed_paragraph(budget: TurntableBudget, t4: Mapping[str, Mapping[str, Any]]
     reqs = budget.requirement_arcmin
 
     def unused(wc: Mapping[str, Mapping[str, Any]], c: str) -> float:
-        return 100.0 * (1.0 - float(wc[c]["full_rad"]) * ARCMIN_PER_RAD / reqs[c])
+        return 100.0 * (1.0 - float(wc[c]["full_arcmin"]) / reqs[c])
 
     return (
         "Why Table 4 and rotacal's allocation differ: with Table 4's bounds the worst table leaves "
@@ -704,15 +702,21 @@ def turntable_section(budget: TurntableBudget, title: str | None = None) -> Sect
         "orientation, averaged over the table's angles. An error the orientation is more "
         "sensitive to gets a tighter tolerance; an error that does not appear in a panel does not "
         "affect that component at all.",
-        "Allocation. Each error source gets the largest tolerance that, together with all the "
-        "others at their tolerances and at the worst angles, still keeps every orientation "
-        "component within its requirement; the weights favour the less sensitive sources (seed "
-        "001, eqs. (29)–(34)). 'Set by' names the component whose budget limits that source. "
+        "Allocation. For each orientation component, the tolerances minimise the weighted cost "
+        "Σ W²/χ² (W = 1/sensitivity: an error the component is less sensitive to gets a looser "
+        "tolerance) while every error at its tolerance, at the worst angles, keeps that component "
+        "within its requirement; an error shared by several components takes the smallest of "
+        "their tolerances (seed 001, eqs. (29)–(34)), which can leave a component some margin. "
+        "'Set by' names the component whose budget limits that source. "
         "The lower bounds are what manufacturing can achieve; a tolerance below them would make "
         "the table unbuildable.",
-        "Worst case. Every error at its allocated bound with the worst combination of signs, and "
-        "the worst angles: the linear bound is what Lemma 1 of the seed proves, the full model "
-        "multiplies the exact error matrices. Both must stay within the requirement.",
+        "Worst case. Every error at its allocated bound and the worst angles: the linear bound "
+        "(every term at its worst sign) is what Lemma 1 of the seed proves; the full model "
+        "multiplies the error matrices of eqs. (17)–(22) over "
+        + "; ".join(
+            sorted({str(budget.worst_case[c].get("vertices", "")) for c in COMPONENTS} - {""})
+        )
+        + ". Both must stay within the requirement.",
         f"Monte Carlo. {mc['runs']:,} tables built anywhere within the tolerances, each turned to "
         "random angles, with the full model: "
         + (

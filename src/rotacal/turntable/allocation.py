@@ -8,8 +8,9 @@ generalised eqs. (31)–(33),
 
 where c(φ) = ∂(Δψ, Δθ, Δγ)/∂χ at χ = 0 is the table's linearised model (eq. (26) for the seed;
 ``Turntable.linear_coefficients``), φ runs over every angle of the table on [0, 2π), and the weights
-are W_ji = 1/C_ji, the inverse of the averaged sensitivities of eq. (28) (or the error's ``weight``
-override). For the seed table this is the paper's constraint on [0, π/2] (γ) and [3π/2, 2π] (ψ) —
+are W_ji = 1/C_ji, the inverse of the averaged sensitivities of eq. (28) — averaged as the table
+chooses (``Turntable.sensitivity_grid``: by default the unbiased mean over a turn, the paper's
+45° grid with both ends for the packaged seed table) — or the error's ``weight`` override. For the seed table this is the paper's constraint on [0, π/2] (γ) and [3π/2, 2π] (ψ) —
 the four cases of Lemma 1 fold every angle onto it. The upper bounds are then eq. (34),
 UB_i = min_j χ*_ji, so that by Lemma 1 the linearised model meets every requirement for all
 angles and all |χ_i| ≤ UB_i.
@@ -49,7 +50,13 @@ from scipy.optimize import Bounds, minimize
 
 from rotacal.errors import ConfigError
 from rotacal.results import Result
-from rotacal.turntable.model import ANGLE_UNITS, COMPONENTS, Turntable
+from rotacal.turntable.model import (
+    ANGLE_UNITS,
+    ARCMIN_PER_RAD,
+    COMPONENTS,
+    SMALL_ANGLE_LIMIT_RAD,
+    Turntable,
+)
 
 __all__ = [
     "Allocation",
@@ -60,7 +67,6 @@ __all__ = [
 ]
 
 _UNIT_RAD = ANGLE_UNITS
-_ARCMIN = math.pi / 10_800.0
 #: An error with mean |∂Δ_j/∂χ_i| above this is one component j is sensitive to (eq. (28)).
 _SENSITIVE = 1e-12
 #: Relative tolerance of the worst cases (a worst case ≤ I_j·(1 + this) is within).
@@ -192,7 +198,23 @@ def _unit_factor(units: str) -> float:
 
 def _display(table: Turntable) -> tuple[str, float]:
     units = str(getattr(table, "units", "arcmin"))
-    return (units, _UNIT_RAD[units]) if units in _UNIT_RAD else ("arcmin", _ARCMIN)
+    return (units, _UNIT_RAD[units]) if units in _UNIT_RAD else ("arcmin", _UNIT_RAD["arcmin"])
+
+
+def _source(table: Turntable) -> str:
+    """How messages about ``table`` start: its file (or text), else its name."""
+    source = str(getattr(table, "source", "") or "")
+    return source or f"turntable {table.name!r}"
+
+
+def _require_angular(table: Turntable) -> None:
+    """Refuse a table none of whose errors changes the orientation (one ConfigError line)."""
+    if not table.angular_error_names:
+        raise ConfigError(
+            f"{_source(table)}: no error of the chain changes the orientation (only "
+            f"translations: {', '.join(table.error_names) or 'none'}), nothing to allocate or "
+            "check; add the links' error rotations."
+        )
 
 
 def _requirement(table: Turntable, requirement: Any) -> dict[str, float]:
@@ -225,6 +247,12 @@ def _requirement(table: Turntable, requirement: Any) -> dict[str, float]:
             raise ConfigError(f"requirement {c} must be a number in rad, got {v!r}.") from None
         if not (math.isfinite(f) and f > 0.0):
             raise ConfigError(f"requirement {c} must be a positive angle in rad, got {v!r}.")
+        if f > SMALL_ANGLE_LIMIT_RAD:
+            raise ConfigError(
+                f"requirement {c} = {f:.6g} rad ({math.degrees(f):.4g}°) is beyond "
+                f"{SMALL_ANGLE_LIMIT_RAD:g} rad: the small-angle error model needs errors ≪ 1 rad; "
+                "give radians."
+            )
         out[c] = f
     return out
 
@@ -445,6 +473,12 @@ def _bounds_vector(table: Turntable, bounds: Mapping[str, Any] | None, what: str
             raise ConfigError(f"{what} of {name} must be a number in rad, got {value!r}.") from None
         if not (math.isfinite(v) and v >= 0.0):
             raise ConfigError(f"{what} of {name} must be ≥ 0 rad and finite, got {value!r}.")
+        if v > SMALL_ANGLE_LIMIT_RAD:
+            raise ConfigError(
+                f"{what} of {name} = {v:.6g} rad ({math.degrees(v):.4g}°) is beyond "
+                f"{SMALL_ANGLE_LIMIT_RAD:g} rad: the small-angle error model needs errors ≪ 1 rad; "
+                "give radians."
+            )
         out[names.index(name)] = v
     return out
 
@@ -664,12 +698,14 @@ def worst_case(
     Raises
     ------
     ConfigError
-        A negative or non-numeric bound, an unknown error name, LB_i > UB_i, a bad requirement.
+        A negative, non-numeric or too large (> 0.1 rad) bound, an unknown error name,
+        LB_i > UB_i, a bad requirement, a table with no angular error.
 
     References
     ----------
     Seed 001, eq. (30), Lemma 1 (eqs. (35)–(38)); eqs. (17)–(26).
     """
+    _require_angular(table)
     req = _requirement(table, requirement)
     ub = _bounds_vector(table, upper_bounds, "the upper bound")
     if lower_bounds is not None:
@@ -739,13 +775,16 @@ def allocate(
     Raises
     ------
     ConfigError
-        No requirement; a bad requirement or step; lower bounds that alone exceed a requirement at
-        some angle (one line naming the component, the angle, the value, the largest bounds).
+        No requirement; a bad requirement or step; a table none of whose errors changes the
+        orientation; lower bounds that alone exceed a requirement at some angle (one line starting
+        with the table's source, naming the component, the angles that component depends on, the
+        value and the largest bounds).
 
     References
     ----------
     Seed 001, §4.1–4.2, eqs. (28)–(34), Lemma 1 (eqs. (35)–(38)), Table 4.
     """
+    _require_angular(table)
     req = _requirement(table, requirement)
     step_deg = _check_step(angle_step_deg)
     names = tuple(table.angular_error_names)
@@ -753,9 +792,14 @@ def allocate(
     angle_names = tuple(table.angle_names)
     units, ufac = _display(table)
     lb = np.array([float(specs[n].lower) for n in names])
-    sens = np.asarray(table.sensitivities(), dtype=float).reshape(3, len(names))
+    sens_step, sens_endpoint = table.sensitivity_grid
+    sens = np.asarray(
+        table.sensitivities(step_deg=sens_step, endpoint=sens_endpoint), dtype=float
+    ).reshape(3, len(names))
     grid, step = _grid(len(angle_names), step_deg, _MAX_GRID_POINTS)
     coef_abs = np.abs(_coefficients(table, grid))
+    per_axis = round(_TWO_PI / step)
+    mesh_abs = coef_abs.reshape((per_axis,) * len(angle_names) + coef_abs.shape[1:])
     reach = coef_abs.max(axis=0)  # (3, n): largest |c_ji| on the grid
     per_component: dict[str, dict[str, float]] = {}
     weights: dict[str, dict[str, float]] = {}
@@ -780,14 +824,19 @@ def allocate(
             largest = ", ".join(
                 f"{names[cols[i]]} {contrib[i] / ufac:.4g}" for i in order if contrib[i] > 0
             )
+            # only the angles the component's coefficients depend on (ψ of the seed: φ2, not φ1)
+            comp_mesh = mesh_abs[..., j, :][..., cols]
             where = ", ".join(
-                f"{a} = {v:.2f}°" for a, v in zip(angle_names, np.degrees(e.angles), strict=True)
+                f"{a} = {v:.2f}°"
+                for k, (a, v) in enumerate(zip(angle_names, np.degrees(e.angles), strict=True))
+                if float(np.ptp(comp_mesh, axis=k).max()) > _SENSITIVE
             )
             raise ConfigError(
-                f"the allocation of {comp} is infeasible: at {where} the lower bounds alone give "
-                f"{e.value * req[comp] / ufac:.4g} {units} against the requirement "
-                f"{req[comp] / ufac:.4g} {units} (largest contributions, {units}: {largest}); "
-                "lower those bounds or relax the requirement."
+                f"{_source(table)}: the allocation of {comp} is infeasible: "
+                + (f"at {where} " if where else "at every angle ")
+                + f"the lower bounds alone give {e.value * req[comp] / ufac:.4g} {units} against "
+                f"the requirement {req[comp] / ufac:.4g} {units} (largest contributions, "
+                f"{units}: {largest}); lower those bounds or relax the requirement."
             ) from None
         chi = x * req[comp]
         chi_star[j, cols] = chi
@@ -842,6 +891,7 @@ def allocate(
     optimiser = {
         "method": "SLSQP (analytic gradients, variables χ/I_j) with an exchange method for the "
         "semi-infinite angle constraint",
+        "sensitivity_grid": {"step_deg": float(sens_step), "endpoint": bool(sens_endpoint)},
         "grid_step_deg": math.degrees(step),
         "grid_points": int(grid.shape[0]),
         "components": comp_info,
@@ -930,9 +980,9 @@ def monte_carlo_check(
         Its ``upper_bounds_rad`` and ``lower_bounds_rad`` (rad) and ``requirement_rad`` are used
         (``None`` bounds: the error is held at 0).
     runs : int
-        Number of draws (the paper used 10 000).
+        Number of draws (the paper used 10 000); an integer ≥ 1.
     seed : int
-        Seed of the generator.
+        Seed of the generator; an integer ≥ 0.
     signs : {"random", "positive"}
         Sign of the errors.
     chunk : int
@@ -949,19 +999,18 @@ def monte_carlo_check(
     Raises
     ------
     ConfigError
-        runs or chunk < 1, an unknown ``signs``, LB_i > UB_i.
+        runs or chunk not an integer ≥ 1, seed not an integer ≥ 0 (booleans and floats such as
+        1.5 are refused, not truncated), an unknown ``signs``, LB_i > UB_i.
 
     References
     ----------
     Seed 001, §4.3 (Monte Carlo verification, 10 000 runs), Figure 9; eqs. (17)–(25).
     """
-    runs_i, chunk_i = _positive_int("runs", runs), _positive_int("chunk", chunk)
+    _require_angular(table)
+    runs_i, chunk_i = _integer("runs", runs, 1), _integer("chunk", chunk, 1)
+    seed_i = _integer("seed", seed, 0)
     if signs not in ("random", "positive"):
         raise ConfigError(f"signs must be 'random' or 'positive', got {signs!r}.")
-    try:
-        seed_i = int(seed)
-    except (TypeError, ValueError):
-        raise ConfigError(f"seed must be an integer, got {seed!r}.") from None
     names = tuple(table.angular_error_names)
     ub = _bounds_vector(table, allocation.upper_bounds_rad, "the upper bound")
     lb = _bounds_vector(table, allocation.lower_bounds_rad, "the lower bound")
@@ -1018,7 +1067,7 @@ def monte_carlo_check(
         seed=seed_i,
         signs=signs,
         max_abs_rad={c: float(max_abs[j]) for j, c in enumerate(COMPONENTS)},
-        max_abs_arcmin={c: float(max_abs[j] / _ARCMIN) for j, c in enumerate(COMPONENTS)},
+        max_abs_arcmin={c: float(max_abs[j] * ARCMIN_PER_RAD) for j, c in enumerate(COMPONENTS)},
         requirement_rad=req,
         all_within=outside == 0,
         outside=outside,
@@ -1027,11 +1076,10 @@ def monte_carlo_check(
     )
 
 
-def _positive_int(name: str, value: Any) -> int:
-    try:
-        v = int(value)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{name} must be a positive integer, got {value!r}.") from None
-    if v < 1 or v != value:
-        raise ConfigError(f"{name} must be a positive integer, got {value!r}.")
-    return v
+def _integer(name: str, value: Any, minimum: int) -> int:
+    """``value`` as an int ≥ ``minimum``; bools, floats and strings are one ConfigError line."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ConfigError(f"{name} must be an integer ≥ {minimum}, got {value!r}.")
+    if int(value) < minimum:
+        raise ConfigError(f"{name} must be an integer ≥ {minimum}, got {value!r}.")
+    return int(value)

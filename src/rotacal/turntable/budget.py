@@ -22,7 +22,6 @@ analysis and turntable error allocation — eqs. (7)–(16), (17)–(34), Lemma 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -31,17 +30,17 @@ import numpy as np
 
 from rotacal.errors import ConfigError
 from rotacal.results import Result
+from rotacal.sim.multiposition import DEFAULT_LATITUDE_DEG
 from rotacal.turntable.allocation import Allocation, MonteCarloCheck, allocate, monte_carlo_check
 from rotacal.turntable.calibration import (
     OrientationRequirement,
     orientation_requirement,
     rate_sensing_error_from_rotation,
 )
-from rotacal.turntable.model import COMPONENTS, Turntable, load_turntable
+from rotacal.turntable.model import ARCMIN_PER_RAD, COMPONENTS, Turntable, load_turntable
+from rotacal.turntable.seed001 import is_seed_table, reproduce_seed001
 
 __all__ = ["TurntableBudget", "calibration_check", "turntable_budget"]
-
-ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi
 
 
 def _arcmin(values: Mapping[str, float | None]) -> dict[str, float | None]:
@@ -71,11 +70,30 @@ class TurntableBudget(Result):
     allocation_within: bool
     monte_carlo: dict[str, Any]
     calibration: dict[str, Any] | None
+    reproduction: dict[str, Any] | None
     _table: Turntable = dataclasses.field(repr=False)
     _allocation: Allocation = dataclasses.field(repr=False)
     _monte_carlo: MonteCarloCheck = dataclasses.field(repr=False)
     _requirement: OrientationRequirement | None = dataclasses.field(repr=False)
     _calibration_draws: dict[str, np.ndarray] | None = dataclasses.field(repr=False)
+    _plan_deg: tuple[np.ndarray, np.ndarray] | None = dataclasses.field(repr=False)
+
+
+#: Tables drawn for the calibration check (the paper's Monte Carlo size).
+_CALIBRATION_RUNS = 10_000
+
+
+def _worst_case_arcmin(worst: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+    """The allocation's worst cases with every ``*_rad`` value also in arcmin (as the JSON is)."""
+    out: dict[str, dict[str, Any]] = {}
+    for comp, entry in worst.items():
+        out[comp] = {}
+        for key, value in entry.items():
+            if key.endswith("_rad"):
+                out[comp][key[: -len("_rad")] + "_arcmin"] = float(value) * ARCMIN_PER_RAD
+            else:
+                out[comp][key] = value
+    return out
 
 
 def _seed_geometry(table: Turntable) -> bool:
@@ -87,10 +105,18 @@ def _seed_geometry(table: Turntable) -> bool:
 def _calibration_settings(table: Turntable) -> dict[str, Any]:
     cal = dict(table.settings.get("calibration", {}))
     return {
-        "latitude_deg": float(cal.get("latitude_deg", 45.75)),
+        "latitude_deg": float(cal.get("latitude_deg", DEFAULT_LATITUDE_DEG)),
         "outer_steps": int(cal.get("outer_steps", 8)),
         "inner_steps": int(cal.get("inner_steps", 8)),
     }
+
+
+def _required_deg_h(table: Turntable) -> float | None:
+    """The calibration accuracy the table must allow, if the configuration states one."""
+    if table.calibration_requirement_deg_h is not None:
+        return float(table.calibration_requirement_deg_h)
+    value = table.settings.get("calibration", {}).get("required_deg_h")
+    return None if value is None else float(value)
 
 
 def _plan_angles(settings: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
@@ -109,7 +135,7 @@ def calibration_check(
     lower_bounds_rad: Mapping[str, float] | None = None,
     runs: int = 10_000,
     seed: int = 2026,
-    latitude_deg: float = 45.75,
+    latitude_deg: float = DEFAULT_LATITUDE_DEG,
     outer_steps: int = 8,
     inner_steps: int = 8,
 ) -> dict[str, np.ndarray]:
@@ -200,10 +226,9 @@ def turntable_budget(
     """
     table = config if isinstance(config, Turntable) else load_turntable(Path(config))
     mc_settings = dict(table.settings.get("monte_carlo", {}))
-    runs = int(runs if runs is not None else mc_settings.get("runs", 1_000_000))
-    seed = int(seed if seed is not None else mc_settings.get("seed", 2026))
-    if runs < 1:
-        raise ConfigError(f"the Monte Carlo needs at least one run, got {runs}.")
+    # monte_carlo_check validates both (integers, runs ≥ 1, seed ≥ 0) before anything else uses them.
+    runs = runs if runs is not None else mc_settings.get("runs", 1_000_000)
+    seed = seed if seed is not None else mc_settings.get("seed", 2026)
     cal_settings = _calibration_settings(table)
 
     requirement_obj: OrientationRequirement | None = None
@@ -246,28 +271,36 @@ def turntable_budget(
 
     calibration: dict[str, Any] | None = None
     draws: dict[str, np.ndarray] | None = None
-    if _seed_geometry(table):
+    plan: tuple[np.ndarray, np.ndarray] | None = None
+    required = _required_deg_h(table)
+    if _seed_geometry(table) and required is not None:
+        plan = _plan_angles(cal_settings)
         if requirement_obj is None:
-            p1, p2 = _plan_angles(cal_settings)
             requirement_obj = orientation_requirement(
-                0.01, phi1_deg=p1, phi2_deg=p2, latitude_deg=cal_settings["latitude_deg"]
+                required,
+                phi1_deg=plan[0],
+                phi2_deg=plan[1],
+                latitude_deg=cal_settings["latitude_deg"],
             )
         draws = calibration_check(
             table,
             alloc.upper_bounds_rad,
             lower_bounds_rad=alloc.lower_bounds_rad,
-            runs=10_000,
+            runs=_CALIBRATION_RUNS,
             seed=seed,
             **cal_settings,
         )
         calibration = {
+            "required_deg_h": required,
             "plan": f"{cal_settings['outer_steps']} outer × {cal_settings['inner_steps']} inner",
             "latitude_deg": cal_settings["latitude_deg"],
-            "runs": 10_000,
+            "runs": _CALIBRATION_RUNS,
             "max_rate_error_deg_h": {k: float(np.max(v)) for k, v in draws.items()},
             "p95_rate_error_deg_h": {k: float(np.percentile(v, 95)) for k, v in draws.items()},
+            "fraction_above_required": {k: float(np.mean(v > required)) for k, v in draws.items()},
             "orientation_requirement": requirement_obj.to_dict(),
         }
+    reproduction = reproduce_seed001(table, requirement) if is_seed_table(table) else None
 
     lower = {n: float(alloc.lower_bounds_rad.get(n, 0.0)) for n in table.angular_error_names}
     return TurntableBudget(
@@ -280,7 +313,7 @@ def turntable_budget(
         lower_bounds_arcmin={k: float(v) * ARCMIN_PER_RAD for k, v in lower.items()},
         upper_bounds_arcmin=_arcmin(alloc.upper_bounds_rad),
         binding=dict(alloc.binding),
-        worst_case=alloc.worst_case,
+        worst_case=_worst_case_arcmin(alloc.worst_case),
         allocation_within=bool(alloc.within),
         monte_carlo={
             "runs": mc.runs,
@@ -291,9 +324,11 @@ def turntable_budget(
             "outside": int(mc.outside),
         },
         calibration=calibration,
+        reproduction=reproduction,
         _table=table,
         _allocation=alloc,
         _monte_carlo=mc,
         _requirement=requirement_obj,
         _calibration_draws=draws,
+        _plan_deg=plan,
     )

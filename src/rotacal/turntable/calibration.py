@@ -58,6 +58,7 @@ from rotacal.gyro.multiposition import (
 )
 from rotacal.results import Result
 from rotacal.sim.multiposition import DEFAULT_LATITUDE_DEG, TABLE1_COEFFICIENTS
+from rotacal.turntable.model import COMPONENTS
 
 __all__ = [
     "COMPONENTS",
@@ -74,8 +75,6 @@ __all__ = [
     "rate_sensing_error_from_rotation",
 ]
 
-#: Orientation-error components in rotacal's order (Δψ about y, Δθ about z, Δγ about x).
-COMPONENTS = ("psi", "theta", "gamma")
 #: The two readings of eq. (13) (see the module docstring).
 METHODS = ("coefficients", "eq13")
 #: Largest |orientation error| accepted (rad, 5.7°): eq. (7) is a small-angle model, and a larger

@@ -34,19 +34,36 @@ mm); the loaded :class:`Turntable` is in rad and m. Example (the seed's table is
     phi_y1 = { lower = 0.05, iso = "EBB", label = "Position error of outer axis" }
     # … every chain error exactly once (an ISO symbol generated from the chain is accepted as key)
 
-    [monte_carlo]                # optional: runs (≥ 1), seed (≥ 0), signs = "random" | "positive"
-    [calibration]                # optional: latitude_deg, outer_steps, inner_steps
+    [monte_carlo]                # optional: runs (integer ≥ 1), seed (integer ≥ 0),
+                                 # signs = "random" | "positive"
+    [calibration]                # optional: latitude_deg, outer_steps, inner_steps, required_deg_h
+                                 # (the calibration accuracy to check the allocated table against)
+    [sensitivity]                # optional: how eq. (28)'s sensitivities are averaged
+    step_deg = 45                # grid step (deg), dividing 360 (default 1; 8 for three angles)
+    endpoint = true              # count 360° as well as 0° (default false)
+
+``[sensitivity]`` chooses the averaging of the sensitivities (eq. (28)) and so of the allocation
+weights (1/sensitivity): every angle of the table on 0, step, … below 360° by default — the unbiased
+mean over a turn, 2/π = 0.6366 for every |sin| and |cos| term — or up to 360° included with
+``endpoint = true``. ``step_deg = 45, endpoint = true`` is the paper's averaging: it reproduces
+Figure 8's 0.6476/0.5365 but counts 0° and 360° twice (the packaged seed table uses it).
+
+Angular values must be small angles: a requirement component or an angular lower bound above 0.1 rad
+(5.7°) is refused — the small-angle error model (eqs. (17)–(19)) needs errors ≪ 1 rad, and such a
+value is almost always given in the wrong units.
 
 Every fault is one :class:`~rotacal.errors.ConfigError` sentence naming the file, the table and the
 key or value at fault: a TOML syntax error (with its line), an unknown key or table (with the
 nearest valid key), an unknown or duplicate error name, a chain error missing from ``[errors]`` or
 vice versa, an axis letter other than x/y/z, a rotary axis without ``angle``, two axes with the same
-angle name, a negative lower bound, a non-positive or unknown requirement component, both
-requirement forms, unknown units.
+angle name, a chain with no error, a negative lower bound or one above 0.1 rad, a non-positive,
+unknown or too large (> 0.1 rad) requirement component, both requirement forms, unknown units,
+a ``[monte_carlo]`` runs or seed that is not an integer (≥ 1, ≥ 0; booleans refused), a
+``[sensitivity]`` step that does not divide 360° or an endpoint that is not true/false.
 
 References
 ----------
-Seed 001, §3.2 (Tables 2–3, eqs. (17)–(22)) and §4 (eqs. (16), (29)).
+Seed 001, §3.2 (Tables 2–3, eqs. (17)–(22)) and §4 (eqs. (16), (28), (29), Figure 8).
 """
 
 from __future__ import annotations
@@ -63,13 +80,13 @@ from typing import Any
 from rotacal.errors import ConfigError
 from rotacal.turntable.model import (
     ANGLE_UNITS,
-    AXES,
     COMPONENTS,
     LENGTH_UNITS,
     ErrorSpec,
     Link,
     Turntable,
     _chain_kinds,
+    _check_chain,
     generated_aliases,
 )
 
@@ -82,6 +99,7 @@ __all__ = [
     "CALIBRATION_KEYS",
     "MONTE_CARLO_KEYS",
     "SEED_TABLE_RESOURCE",
+    "SENSITIVITY_KEYS",
     "load_turntable",
     "parse_turntable",
     "seed_table",
@@ -99,6 +117,7 @@ _TOP_KEYS = (
     "errors",
     "monte_carlo",
     "calibration",
+    "sensitivity",
 )
 _LINK_KEYS = ("axis", "angle", "rotations", "translations")
 _ERROR_KEYS = ("lower", "iso", "label", "weight")
@@ -106,7 +125,10 @@ _REQUIREMENT_KEYS = (*COMPONENTS, "calibration_deg_h")
 #: Keys of ``[monte_carlo]`` (defaults applied by the consumers: 1 000 000, 2026, "random").
 MONTE_CARLO_KEYS = ("runs", "seed", "signs")
 #: Keys of ``[calibration]`` (defaults applied by the consumers: 45.75, 8, 8).
-CALIBRATION_KEYS = ("latitude_deg", "outer_steps", "inner_steps")
+CALIBRATION_KEYS = ("latitude_deg", "outer_steps", "inner_steps", "required_deg_h")
+#: Keys of ``[sensitivity]`` (defaults: a 1° step without the endpoint, see
+#: ``Turntable.sensitivity_grid``).
+SENSITIVITY_KEYS = ("step_deg", "endpoint")
 _SIGNS = ("random", "positive")
 
 
@@ -161,25 +183,14 @@ def _link(reader: _Reader, entry: Any, k: int) -> Link:
     entry = reader.table(entry, where)
     reader.keys(entry, _LINK_KEYS, where)
     axis = entry.get("axis")
-    if axis is not None and axis not in AXES:
-        raise reader.fail(f"{where}: axis = {axis!r} is not an axis letter; use 'x', 'y' or 'z'.")
     angle = entry.get("angle")
-    if axis is not None and angle is None:
-        raise reader.fail(
-            f'{where}: the rotary axis about {axis} has no angle; add e.g. angle = "phi{k + 1}".'
-        )
     if angle is not None:
         angle = reader.string(angle, f"{where} angle")
-    pairs: dict[str, tuple[tuple[str, str], ...]] = {}
+    pairs: dict[str, tuple[tuple[str, Any], ...]] = {}
     for field in ("rotations", "translations"):
         table = reader.table(entry.get(field, {}), f"{where} {field}")
-        for name, ax in table.items():
-            if ax not in AXES:
-                raise reader.fail(
-                    f"{where}: {field} {name} = {ax!r} is not an axis letter; use 'x', 'y' or 'z'."
-                )
-        pairs[field] = tuple((str(n), str(a)) for n, a in table.items())
-    try:
+        pairs[field] = tuple((str(n), a) for n, a in table.items())
+    try:  # Link checks the axis letters and the angle (one place)
         return Link(axis, angle, pairs["rotations"], pairs["translations"])
     except ConfigError as exc:
         raise reader.fail(f"{where}: {exc}") from None
@@ -226,25 +237,10 @@ def parse_turntable(
             "there is no [[chain]]: list the links base → instrument as [[chain]] tables."
         )
     links = tuple(_link(rd, entry, k) for k, entry in enumerate(chain))
-    angles = [lk.angle for lk in links if lk.angle is not None]
-    for a in angles:
-        if angles.count(a) > 1:
-            raise rd.fail(
-                f"two rotary axes have the same angle name {a!r}; give each axis its own angle."
-            )
-    seen: list[str] = []
-    for k, lk in enumerate(links):
-        for n, _ in (*lk.rotations, *lk.translations):
-            if n in seen:
-                raise rd.fail(
-                    f"[[chain]] link {k + 1}: error {n!r} appears twice in the chain; every "
-                    "error belongs to one link, once."
-                )
-            if n in angles:
-                raise rd.fail(
-                    f"[[chain]] link {k + 1}: error {n!r} has the name of an angle; rename one."
-                )
-            seen.append(n)
+    try:  # the chain's own checks live in the model (one place), before [errors] is read
+        _check_chain(links)
+    except ConfigError as exc:
+        raise rd.fail(str(exc)) from None
     kinds = _chain_kinds(links)
     generated = generated_aliases(links)
 
@@ -365,7 +361,16 @@ def parse_turntable(
         for key in ("outer_steps", "inner_steps"):
             if key in cal:
                 checked[key] = rd.integer(cal[key], f"[calibration] {key}", 1)
+        if "required_deg_h" in cal:
+            req = rd.number(cal["required_deg_h"], "[calibration] required_deg_h")
+            if req <= 0:
+                raise rd.fail(f"[calibration] required_deg_h = {req:g} must be > 0 (°/h).")
+            checked["required_deg_h"] = req
         settings["calibration"] = checked
+    if "sensitivity" in data:
+        sens = rd.table(data["sensitivity"], "[sensitivity]")
+        rd.keys(sens, SENSITIVITY_KEYS, "[sensitivity]")
+        settings["sensitivity"] = dict(sens)  # values checked by Turntable (sensitivity_grid)
 
     try:
         return Turntable(
@@ -377,6 +382,7 @@ def parse_turntable(
             settings=settings,
             units=units,
             length_units=length_units,
+            source=source,
         )
     except ConfigError as exc:
         raise rd.fail(str(exc)) from None
@@ -445,7 +451,9 @@ def seed_table() -> Turntable:
 
     Chain and error names of Tables 2–3 (χ order of eq. (25), then η), labels as in Table 2,
     requirement 1.62 arcmin = 0.027° per component (eq. (16)); lower bounds are rotacal's stated
-    choice (0.05 arcmin for every angular error, 0 mm for η): the paper gives none.
+    choice (0.05 arcmin for every angular error, 0 mm for η): the paper gives none. Its
+    ``[sensitivity]`` table keeps the paper's averaging (45° grid, 360° included), which
+    reproduces Figure 8's 0.6476/0.5365.
 
     Returns
     -------

@@ -71,15 +71,17 @@ from typing import Any, Literal, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from rotacal.errors import CaptureError, ConfigError
+from rotacal.errors import ConfigError
 
 __all__ = [
     "ANGLE_UNITS",
+    "ARCMIN_PER_RAD",
     "AXES",
     "COMPONENTS",
     "KINDS",
     "LENGTH_UNITS",
     "SEED_ERROR_NAMES",
+    "SMALL_ANGLE_LIMIT_RAD",
     "ErrorSpec",
     "Link",
     "Turntable",
@@ -116,6 +118,12 @@ ANGLE_UNITS: dict[str, float] = {
     "arcmin": math.pi / 10_800.0,
     "arcsec": math.pi / 648_000.0,
 }
+#: Arcminutes per radian (10 800/π): multiply radians by it to display arcmin.
+ARCMIN_PER_RAD = 1.0 / ANGLE_UNITS["arcmin"]
+#: Largest |angular error| (rad) the model accepts (requirements and lower bounds too): the
+#: small-angle matrices of eqs. (17)–(19) are meant for errors ≪ 1 rad, and a value above this is
+#: almost always degrees or arcmin given by mistake.
+SMALL_ANGLE_LIMIT_RAD = 0.1
 #: Metres per unit of the length units a configuration may use.
 LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3, "um": 1e-6}
 
@@ -132,6 +140,11 @@ _V_INDEX = (1, 2, 0)
 #: R[i,j] = −s, R[j,i] = s.
 _PLANE = {0: (1, 2), 1: (2, 0), 2: (0, 1)}
 _FAST_CHUNK = 16_384
+#: Largest default sensitivity grid (points over all angles); the default step is coarsened (to a
+#: whole-degree divisor of 360) for tables of three or more angles to stay below it.
+_MAX_SENSITIVITY_POINTS = 150_000
+#: Default averaging of the sensitivities (eq. (28)): a 1° step, periodic (0 ≤ φ < 360°).
+_DEFAULT_SENSITIVITY_STEP_DEG = 1.0
 
 
 # ------------------------------------------------------------------------------------ the chain
@@ -159,12 +172,12 @@ class Link:
     def __post_init__(self) -> None:
         if self.axis is not None and self.axis not in AXES:
             raise ConfigError(
-                f"axis {self.axis!r} is not an axis letter: use 'x', 'y' or 'z' "
+                f"axis = {self.axis!r} is not an axis letter; use 'x', 'y' or 'z' "
                 "(or no axis for a fixed link)."
             )
         if self.axis is not None and not (isinstance(self.angle, str) and self.angle):
             raise ConfigError(
-                f"the rotary axis about {self.axis} has no angle: name its angle, e.g. angle = "
+                f"the rotary axis about {self.axis} has no angle; name its angle, e.g. angle = "
                 '"phi1".'
             )
         if self.axis is None and self.angle is not None:
@@ -176,12 +189,13 @@ class Link:
             pairs = getattr(self, field)
             if isinstance(pairs, Mapping):
                 pairs = tuple(pairs.items())
-            pairs = tuple((str(n), str(a)) for n, a in pairs)
             for name, ax in pairs:
                 if ax not in AXES:
                     raise ConfigError(
-                        f"error {name!r} is about/along axis {ax!r}: use 'x', 'y' or 'z'."
+                        f"{field} {name} = {ax!r} is not an axis letter; use 'x', 'y' or 'z'."
                     )
+            pairs = tuple((str(n), str(a)) for n, a in pairs)
+            for name, _ in pairs:
                 if not name or any(ch.isspace() for ch in name):
                     raise ConfigError(f"error name {name!r} is empty or contains spaces.")
             object.__setattr__(self, field, pairs)
@@ -260,6 +274,118 @@ def _chain_kinds(links: Sequence[Link]) -> dict[str, str]:
         for name, _ in link.translations:
             kinds[name] = "offset"
     return kinds
+
+
+def _check_chain(links: Sequence[Link]) -> tuple[str, ...]:
+    """The chain's angle names, after checking that angles and errors each have one name.
+
+    The one place for these checks (:class:`Turntable` and the TOML loader both call it): two
+    rotary axes with the same angle, an error in two links (or twice in one), an error named like
+    an angle, a chain with no error at all. Messages name the link by its position (1 = base).
+    """
+    angle_names: list[str] = []
+    for link in links:
+        if link.angle is not None:
+            if link.angle in angle_names:
+                raise ConfigError(
+                    f"two rotary axes have the same angle name {link.angle!r}; give each axis its "
+                    "own angle."
+                )
+            angle_names.append(link.angle)
+    seen: set[str] = set()
+    for k, link in enumerate(links):
+        for name, _ in (*link.rotations, *link.translations):
+            if name in seen:
+                raise ConfigError(
+                    f"[[chain]] link {k + 1}: error {name!r} appears twice in the chain; every "
+                    "error belongs to one link, once."
+                )
+            if name in angle_names:
+                raise ConfigError(
+                    f"[[chain]] link {k + 1}: error {name!r} has the name of an angle; rename one "
+                    "of them."
+                )
+            seen.add(name)
+    if not seen:
+        raise ConfigError(
+            "the chain has no errors: give its links error rotations (rotations = { ... }) or "
+            "translations and list them in [errors]."
+        )
+    return tuple(angle_names)
+
+
+def _check_sensitivity_grid(step_deg: Any, endpoint: Any, where: str = "") -> tuple[float, bool]:
+    """(step_deg, endpoint) of a sensitivity grid, checked: step > 0 dividing 360°, a bool."""
+    ok = not isinstance(step_deg, (bool, np.bool_)) and isinstance(
+        step_deg, (int, float, np.integer, np.floating)
+    )
+    step = float(step_deg) if ok else math.nan
+    count = 360.0 / step if step > 0 and math.isfinite(step) else math.nan
+    if not (math.isfinite(count) and abs(count - round(count)) < 1e-9 and count >= 1):
+        raise ConfigError(
+            f"{where}step_deg = {step_deg!r} must be a number of degrees > 0 that divides 360° "
+            "into whole steps (e.g. 1, 5 or 45)."
+        )
+    if not isinstance(endpoint, (bool, np.bool_)):
+        raise ConfigError(
+            f"{where}endpoint = {endpoint!r} must be true or false (count 360° as well as 0°)."
+        )
+    return step, bool(endpoint)
+
+
+def _short(value: Any) -> str:
+    """A one-line, bounded repr of a user's value for a message."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _float_array(value: Any, what: str, unit: str) -> np.ndarray:
+    """``value`` as a float array; a non-number or non-finite value is one ConfigError line."""
+    try:
+        if value is None:
+            raise TypeError
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"{what} = {_short(value)} is not a number: give {unit} as a float or an array of "
+            "floats."
+        ) from None
+    if not np.all(np.isfinite(arr)):
+        raise ConfigError(f"{what} has non-finite values (nan or inf): give finite {unit}.")
+    return arr
+
+
+def _check_small(arr: np.ndarray, what: str) -> None:
+    """Refuse |angular error| > SMALL_ANGLE_LIMIT_RAD (one line naming it and saying radians)."""
+    if arr.size and (big := float(np.max(np.abs(arr)))) > SMALL_ANGLE_LIMIT_RAD:
+        raise ConfigError(
+            f"{what} = {big:.6g} rad ({math.degrees(big):.4g}°) is beyond "
+            f"{SMALL_ANGLE_LIMIT_RAD:g} rad: angular errors are in radians and the small-angle "
+            "model of eqs. (17)–(19) needs them ≪ 1 rad; convert degrees or arcmin to radians."
+        )
+
+
+def _broadcast(named: Sequence[tuple[str, tuple[int, ...]]]) -> tuple[int, ...]:
+    """np.broadcast_shapes of named shapes; a mismatch is one ConfigError naming the culprit."""
+    try:
+        return np.broadcast_shapes(*(shape for _, shape in named))
+    except ValueError:
+        pass
+    acc: tuple[int, ...] = ()
+    owners: list[str] = []
+    for label, shape in named:
+        try:
+            acc = np.broadcast_shapes(acc, shape)
+        except ValueError:
+            with_ = ", ".join(owners[:2]) + (", …" if len(owners) > 2 else "")
+            raise ConfigError(
+                f"{label} has shape {shape}, which does not broadcast with the shape {acc} of "
+                f"{with_}: give shapes that broadcast (e.g. errors of shape (k, 1) against angles "
+                "of shape (m,))."
+            ) from None
+        if shape:
+            owners.append(label)
+    return acc  # pragma: no cover - the first call raised, so some pair fails
 
 
 def generated_aliases(links: Sequence[Link]) -> dict[str, str]:
@@ -373,11 +499,20 @@ class Turntable:
     calibration_requirement_deg_h : float or None
         Required calibration accuracy (°/h) to derive the requirement from (eqs. (7)–(16)).
     settings : dict
-        The ``[monte_carlo]`` and ``[calibration]`` tables as given (validated, no defaults added).
+        The ``[monte_carlo]``, ``[calibration]`` and ``[sensitivity]`` tables as given (validated,
+        no defaults added); ``settings["sensitivity"]`` (``step_deg``, ``endpoint``) chooses the
+        averaging of :meth:`sensitivities` (see :attr:`sensitivity_grid`).
     units : str
         Display units of angles (a key of :data:`ANGLE_UNITS`).
     length_units : str
         Display units of translations (a key of :data:`LENGTH_UNITS`).
+    source : str
+        Where the description came from (the TOML file's path, ``"turntable TOML text"``,
+        ``"packaged seed001.toml"``; empty when built in code): messages about the table start
+        with it. Not part of equality.
+
+    Requirements and lower bounds of angular errors above :data:`SMALL_ANGLE_LIMIT_RAD` (0.1 rad)
+    are refused: the small-angle model of eqs. (17)–(19) needs errors ≪ 1 rad.
     """
 
     name: str
@@ -388,6 +523,7 @@ class Turntable:
     settings: dict[str, Any] = dataclasses.field(default_factory=dict)
     units: str = "arcmin"
     length_units: str = "mm"
+    source: str = dataclasses.field(default="", compare=False)
 
     # ------------------------------------------------------------------------- validation
     def __post_init__(self) -> None:
@@ -405,28 +541,8 @@ class Turntable:
                 f"length_units {self.length_units!r} is unknown: use one of "
                 f"{', '.join(LENGTH_UNITS)}."
             )
-        angle_names: list[str] = []
-        for link in links:
-            if link.angle is not None:
-                if link.angle in angle_names:
-                    raise ConfigError(
-                        f"two rotary axes have the same angle name {link.angle!r}: give each "
-                        "axis its own angle."
-                    )
-                angle_names.append(link.angle)
-        chain_names: list[str] = []
-        for link in links:
-            for name, _ in (*link.rotations, *link.translations):
-                if name in chain_names:
-                    raise ConfigError(
-                        f"error {name!r} appears twice in the chain: every error belongs to "
-                        "one link, once."
-                    )
-                if name in angle_names:
-                    raise ConfigError(
-                        f"error {name!r} has the name of an angle: rename one of them."
-                    )
-                chain_names.append(name)
+        angle_names = list(_check_chain(links))
+        chain_names = [n for lk in links for n, _ in (*lk.rotations, *lk.translations)]
         spec_names = [e.name for e in errors]
         seen: set[str] = set()
         for name in spec_names:
@@ -451,7 +567,14 @@ class Turntable:
                     f"error {e.name!r} has kind {e.kind!r} but sits in the chain as a "
                     f"{kinds[e.name]} error: fix its kind."
                 )
+            if e.kind != "offset" and e.lower > SMALL_ANGLE_LIMIT_RAD:
+                raise ConfigError(
+                    f"[errors] {e.name}: lower = {self._in_units(e.lower)} is "
+                    f"{math.degrees(e.lower):.3g}°: the small-angle error model needs errors ≪ 1 "
+                    "rad; check units."
+                )
         self._check_requirement()
+        self._check_settings()
 
         aliases, by_name = _alias_map(links, errors, angle_names)
         next_angle: dict[str, str | None] = {}
@@ -510,18 +633,89 @@ class Turntable:
                     raise ConfigError(
                         f"requirement component {key!r} is unknown: use {', '.join(COMPONENTS)}."
                     )
+            missing = [key for key in COMPONENTS if key not in req]
+            if missing:
+                raise ConfigError(
+                    f"the requirement lacks {missing[0]!r}: give all of {', '.join(COMPONENTS)}."
+                )
             for key in COMPONENTS:
-                if key not in req:
-                    raise ConfigError(
-                        f"the requirement lacks {key!r}: give all of {', '.join(COMPONENTS)}."
-                    )
                 value = req[key]
                 if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                     raise ConfigError(f"requirement {key} = {value!r} must be a finite value > 0.")
+                if value > SMALL_ANGLE_LIMIT_RAD:
+                    raise ConfigError(
+                        f"[requirement] {key} = {self._in_units(value)} is "
+                        f"{math.degrees(value):.3g}°: the small-angle error model needs errors ≪ "
+                        "1 rad; check units."
+                    )
             object.__setattr__(self, "requirement", {k: float(req[k]) for k in COMPONENTS})
         cal = self.calibration_requirement_deg_h
         if cal is not None and not (math.isfinite(cal) and cal > 0):
             raise ConfigError(f"calibration_deg_h = {cal!r} must be a finite value > 0 (°/h).")
+
+    def _in_units(self, value_rad: float) -> str:
+        """An angle (rad) in the table's display units, e.g. ``"1200 arcmin"``."""
+        return f"{value_rad / ANGLE_UNITS[self.units]:.6g} {self.units}"
+
+    def _check_settings(self) -> None:
+        settings = dict(self.settings)
+        if "sensitivity" in settings:
+            given = settings["sensitivity"]
+            if not isinstance(given, Mapping):
+                raise ConfigError(f"[sensitivity] must be a table, got {_short(given)}.")
+            unknown = [str(k) for k in given if k not in ("step_deg", "endpoint")]
+            if unknown:
+                raise ConfigError(
+                    f"[sensitivity] has an unknown key {unknown[0]!r}; valid keys: step_deg, "
+                    "endpoint."
+                )
+            step, end = _check_sensitivity_grid(
+                given.get("step_deg", _DEFAULT_SENSITIVITY_STEP_DEG),
+                given.get("endpoint", False),
+                "[sensitivity] ",
+            )
+            checked: dict[str, Any] = {}
+            if "step_deg" in given:
+                checked["step_deg"] = step
+            if "endpoint" in given:
+                checked["endpoint"] = end
+            settings["sensitivity"] = checked
+        object.__setattr__(self, "settings", settings)
+
+    @property
+    def sensitivity_grid(self) -> tuple[float, bool]:
+        """The averaging of :meth:`sensitivities` (and so of the allocation's weights).
+
+        ``(step_deg, endpoint)``: every angle of the table takes the values 0, step, … up to 360°
+        — with 360° itself when ``endpoint`` is True (the paper's grid, which counts 0° and 360°
+        twice), without it otherwise (the unbiased mean over a turn). The table's
+        ``[sensitivity]`` settings choose it; the default is a 1° step without the endpoint,
+        coarsened for tables of three or more angles to the finest whole-degree divisor of 360
+        whose grid stays ≤ 1.5·10⁵ points (8° for three angles).
+
+        Returns
+        -------
+        tuple of (float, bool)
+            Step (deg) and whether 360° is included.
+
+        References
+        ----------
+        Seed 001, eq. (28) and Figure 8.
+        """
+        given = self.settings.get("sensitivity", {})
+        step = given.get("step_deg")
+        if step is None:
+            n = max(len(self._p.angle_names), 1)
+            divisors = [d for d in range(1, 361) if 360 % d == 0]
+            step = float(
+                next(
+                    d
+                    for d in divisors
+                    if d >= _DEFAULT_SENSITIVITY_STEP_DEG
+                    and (360 // d) ** n <= _MAX_SENSITIVITY_POINTS
+                )
+            )
+        return float(step), bool(given.get("endpoint", False))
 
     @property
     def _p(self) -> _Plan:
@@ -600,13 +794,10 @@ class Turntable:
                     f"{len(values)} angle(s) given, this table has {len(names)} "
                     f"({', '.join(names)}): give them in chain order or as a mapping by name."
                 )
-        out = []
-        for name, value in zip(names, values, strict=True):
-            arr = np.asarray(value, dtype=float)
-            if not np.all(np.isfinite(arr)):
-                raise CaptureError(f"angle {name!r} has non-finite values: give finite radians.")
-            out.append(arr)
-        return out
+        return [
+            _float_array(value, f"angle {name!r}", "radians")
+            for name, value in zip(names, values, strict=True)
+        ]
 
     def _error_values(
         self, errors: Mapping[str, ArrayLike] | ArrayLike | None
@@ -617,7 +808,7 @@ class Turntable:
         if errors is None:
             return ang, off
         if not isinstance(errors, Mapping):
-            arr = np.asarray(errors, dtype=float)
+            arr = _float_array(errors, "the error array", "radians (metres for translations)")
             n_ang, n_all = len(ang), len(self.errors)
             if arr.ndim == 0 or arr.shape[-1] not in (n_ang, n_all):
                 raise ConfigError(
@@ -625,14 +816,13 @@ class Turntable:
                     f"{', '.join(self._p.angular)}) or {n_all} (all errors in χ order), got "
                     f"shape {arr.shape}; or pass a mapping by name."
                 )
-            if not np.all(np.isfinite(arr)):
-                raise CaptureError("the error array has non-finite values: give finite values.")
-            if arr.shape[-1] == n_ang:
-                return [arr[..., i] for i in range(n_ang)], off
-            columns = {e.name: arr[..., i] for i, e in enumerate(self.errors)}
+            order = self._p.angular if arr.shape[-1] == n_ang else self.error_names
+            columns = {n: arr[..., i] for i, n in enumerate(order)}
+            for name in self._p.angular:
+                _check_small(columns[name], f"error {name!r} (column of the error array)")
             return (
                 [columns[n] for n in self._p.angular],
-                [columns[n] for n in self._p.offsets],
+                [columns.get(n) for n in self._p.offsets],
             )
         index_ang = {n: i for i, n in enumerate(self._p.angular)}
         index_off = {n: i for i, n in enumerate(self._p.offsets)}
@@ -644,13 +834,12 @@ class Turntable:
                     f"error {name!r} is given twice (as {given[name]!r} and {key!r}): give it once."
                 )
             given[name] = key
-            arr = np.asarray(value, dtype=float)
-            if not np.all(np.isfinite(arr)):
-                raise CaptureError(f"error {key!r} has non-finite values: give finite values.")
             if name in index_ang:
+                arr = _float_array(value, f"error {key!r}", "radians")
+                _check_small(arr, f"error {key!r}")
                 ang[index_ang[name]] = arr
             else:
-                off[index_off[name]] = arr
+                off[index_off[name]] = _float_array(value, f"error {key!r}", "metres")
         return ang, off
 
     def error_array(self, errors: Mapping[str, ArrayLike]) -> np.ndarray:
@@ -668,7 +857,13 @@ class Turntable:
             rad; columns :attr:`angular_error_names`.
         """
         ang, _ = self._error_values(errors)
-        shape = np.broadcast_shapes(*(a.shape for a in ang if a is not None))
+        shape = _broadcast(
+            [
+                (f"error {n!r}", a.shape)
+                for n, a in zip(self._p.angular, ang, strict=True)
+                if a is not None
+            ]
+        )
         out = np.zeros((*shape, len(ang)))
         for i, a in enumerate(ang):
             if a is not None:
@@ -695,8 +890,15 @@ class Turntable:
     def _batch_shape(
         self, phis: list[np.ndarray], ang: list[np.ndarray | None], off: list[np.ndarray | None]
     ) -> tuple[int, ...]:
-        shapes = [p.shape for p in phis] + [a.shape for a in (*ang, *off) if a is not None]
-        return np.broadcast_shapes(*shapes) if shapes else ()
+        p = self._p
+        named = [(f"angle {n!r}", a.shape) for n, a in zip(p.angle_names, phis, strict=True)]
+        named += [
+            (f"error {n!r}", a.shape) for n, a in zip(p.angular, ang, strict=False) if a is not None
+        ]
+        named += [
+            (f"error {n!r}", a.shape) for n, a in zip(p.offsets, off, strict=False) if a is not None
+        ]
+        return _broadcast(named) if named else ()
 
     def rotation_error(
         self,
@@ -723,6 +925,13 @@ class Turntable:
         -------
         ndarray, shape (..., 3, 3)
             ΔR (dimensionless); orthogonal for ``model="exact"``.
+
+        Raises
+        ------
+        ConfigError
+            An unknown error or angle name; a value that is not a finite number; an angular error
+            beyond 0.1 rad (:data:`SMALL_ANGLE_LIMIT_RAD`: radians are expected); shapes that do
+            not broadcast. One line naming the error or angle.
 
         References
         ----------
@@ -891,7 +1100,7 @@ class Turntable:
         Seed 001, eqs. (26)–(28).
         """
         phis = self._angles(angles)
-        batch = np.broadcast_shapes(*(p.shape for p in phis)) if phis else ()
+        batch = self._batch_shape(phis, [], [])  # no errors: names the angle at fault
         n = len(self._p.angular)
         out = np.zeros((*batch, 3, n))
         suffix: np.ndarray = np.eye(3)
@@ -904,38 +1113,58 @@ class Turntable:
                 suffix = _rotation_matrix(plan.axis, phis[plan.angle]) @ suffix
         return out
 
-    def sensitivities(self, *, step_deg: float = 45.0) -> np.ndarray:
+    def sensitivities(
+        self, *, step_deg: float | None = None, endpoint: bool | None = None
+    ) -> np.ndarray:
         """Mean |∂(Δψ, Δθ, Δγ)/∂χ_i| at χ = 0 over the rotation angles (seed 001, eq. (28)).
 
-        The seed says only that the sensitivities "vary with the rotation angles" and that the
-        average values are given (Figure 8). rotacal averages |coefficient| over the grid 0, step,
-        …, 360° of every angle of the table (both ends included: 9 points per angle at 45°). For
-        the seed table this gives exactly Figure 8's 0.6476 (mean |cos φ2|) and 0.5365 (mean
-        |sin φ2|). Figure 8 also prints 0.6481/0.5372 and small values 0.002–0.006 where the
-        linear model has 0 or the same value: those are the partials of the full model (25) taken
-        at a non-zero nominal error that the paper does not state; rotacal takes them at χ = 0.
+        The seed says only that the sensitivities "vary with the rotation angles" and that their
+        average values are given (Figure 8). rotacal averages |coefficient| over a grid of every
+        angle of the table: 0, step, … below 360° (``endpoint=False``, the default: the unbiased
+        mean over a turn, 2/π = 0.6366 for every |sin| and |cos| term at a 1° step), or 0, step,
+        …, 360° (``endpoint=True``). The paper's grid is ``step_deg=45, endpoint=True`` (9 points
+        per angle, 0° and 360° both counted): for the seed table it gives exactly Figure 8's
+        0.6476 (mean |cos φ2|) and 0.5365 (mean |sin φ2|) — the counted-twice 0°/360° points are
+        where |cos| = 1 and |sin| = 0, hence the unequal pair. Without arguments the table's own
+        choice is used (:attr:`sensitivity_grid`, its ``[sensitivity]`` settings).
+
+        Figure 8 also prints 0.6481/0.5372 for some of the same terms and small values
+        0.0021–0.0059 where the linear model has 0. rotacal finds these consistent with central
+        finite-difference partials of the full model (eqs. (17)–(25)) at a non-zero nominal error,
+        averaged over the paper's grid: at every error ≈ 3·10⁻³ rad the full model gives
+        0.6483/0.5375 and insensitive pairs between 0.0018 and 0.0052 (the paper states no nominal
+        error; rotacal takes the partials at χ = 0).
 
         Parameters
         ----------
-        step_deg : float
-            Grid step (deg); 360/step must be an integer.
+        step_deg : float, optional
+            Grid step (deg); 360/step must be an integer. Default: the table's
+            (:attr:`sensitivity_grid`).
+        endpoint : bool, optional
+            Include 360° as well as 0°. Default: the table's.
 
         Returns
         -------
         ndarray, shape (3, n_angular)
             rad/rad; rows :data:`COMPONENTS`, columns :attr:`angular_error_names`.
 
+        Raises
+        ------
+        ConfigError
+            A step that is not > 0 or does not divide 360°; an endpoint that is not a bool.
+
         References
         ----------
         Seed 001, eq. (28) and Figure 8.
         """
-        step = float(step_deg)
-        count = 360.0 / step if step > 0 and math.isfinite(step) else math.nan
-        if not (math.isfinite(count) and abs(count - round(count)) < 1e-9 and count >= 1):
-            raise ConfigError(
-                f"step_deg = {step_deg!r} must be > 0 and divide 360° into whole steps."
-            )
-        grid = np.radians(np.linspace(0.0, 360.0, round(count) + 1))
+        table_step, table_end = self.sensitivity_grid
+        step, end = _check_sensitivity_grid(
+            table_step if step_deg is None else step_deg,
+            table_end if endpoint is None else endpoint,
+        )
+        count = round(360.0 / step)
+        degrees = np.linspace(0.0, 360.0, count + 1) if end else np.arange(count) * (360.0 / count)
+        grid = np.radians(degrees)
         n_angles = len(self._p.angle_names)
         if n_angles == 0:
             return np.abs(self.linear_coefficients([]))
@@ -1152,16 +1381,54 @@ def _fast_kernel(
 def load_turntable(
     path_or_text: Any = None, *, text: str | None = None, name: str | None = None
 ) -> Turntable:
-    """A turntable from its TOML description; see :func:`rotacal.turntable.config.load_turntable`."""
+    """A turntable from its TOML description (:func:`rotacal.turntable.config.load_turntable`).
+
+    Parameters
+    ----------
+    path_or_text : str or path-like, optional
+        The TOML file; a ``str`` containing a line break is the TOML text itself.
+    text : str, optional
+        The TOML text (give either this or ``path_or_text``).
+    name : str, optional
+        The table's name when the document has none (default: the file's stem).
+
+    Returns
+    -------
+    Turntable
+        Angles, angular errors, lower bounds and requirement in rad (converted from the file's
+        ``units``, default arcmin); translations in m (from ``length_units``, default mm).
+
+    Raises
+    ------
+    ConfigError
+        One line naming the file (or "turntable TOML text"), the table and key at fault.
+
+    References
+    ----------
+    Seed 001, §3.2, Tables 2–3 and eqs. (17)–(22) (the chain); eqs. (16), (29) (requirement,
+    lower bounds).
+    """
     from rotacal.turntable.config import load_turntable as _load
 
     return _load(path_or_text, text=text, name=name)
 
 
 def seed_table() -> Turntable:
-    """The two-axis turntable of seed 001 (Tables 2–3, eq. (16)), from the packaged TOML.
+    """The two-axis turntable of seed 001, from the packaged ``tables/seed001.toml``.
 
-    See :func:`rotacal.turntable.config.seed_table`.
+    Outer axis about y (φ1), a fixed link (orthogonality, intersection), inner axis about z (φ2);
+    errors in the χ order of eq. (25), then η. See :func:`rotacal.turntable.config.seed_table`.
+
+    Returns
+    -------
+    Turntable
+        Requirement 0.027° = 1.62 arcmin per component (eq. (16)), in rad; lower bounds 0.05
+        arcmin (rad) for every angular error and 0 m for η — rotacal's stated choice, the paper
+        gives none; the paper's sensitivity averaging (``sensitivity_grid`` = (45.0, True)).
+
+    References
+    ----------
+    Seed 001, Tables 2–3, eqs. (16)–(22), Figure 8.
     """
     from rotacal.turntable.config import seed_table as _seed
 
@@ -1191,6 +1458,12 @@ def orientation_error(
     -------
     dpsi, dtheta, dgamma : ndarray
         rad, each of the broadcast shape.
+
+    Raises
+    ------
+    ConfigError
+        An unknown name, a value that is not a finite number, an angular error beyond 0.1 rad
+        (radians are expected), shapes that do not broadcast: one line naming the error or angle.
 
     References
     ----------
