@@ -12,6 +12,13 @@ rate components and A the gravity terms, solved by least squares (eq. (6)). The 
 ``DF, Dx, Dy, Dz, Dyy, Dzz, Dyx`` with the columns 1, ax, ay, az, ay², az², ax·ay. Units: deg/h,
 deg/h/g, deg/h/g² (gravity components in g).
 
+Each coefficient gets an uncertainty budget (GUM): the least-squares covariance s²·(AᵀA)⁻¹
+(Type A, ν = N − 7), the latitude ``site.latitude_deg`` (the Earth-rate components of eq. (3)
+depend on it) and the turntable's orientation error ``table.orientation_error_arcsec`` (Δψ, Δθ,
+Δγ of eq. (7), acting on the Earth-rate and gravity components by eq. (8)); their sensitivities
+come from differentiating the least-squares solution (eqs. (9)–(11)) — see
+:func:`drift_sensitivities`.
+
 Not every set of positions identifies the seven coefficients: with φ1 and φ2 both multiples of 90°
 the column ax·ay is zero everywhere, and with inner angles only at odd multiples of 45° ax² = ay²
 makes 1, ax² and az² collinear. :func:`check_multiposition_plan` says which coefficients a plan
@@ -20,7 +27,7 @@ leaves unidentifiable; :func:`multiposition_plan` makes plans that identify all 
 References
 ----------
 Seed 001 (GyroWheel calibration tests: error analysis and turntable error allocation), §2.1,
-eqs. (1)–(6) and Table 1.
+eqs. (1)–(6) and Table 1; §2.2, eqs. (7)–(11). JCGM 100:2008 (GUM) §5.1, G.4.
 """
 
 from __future__ import annotations
@@ -34,6 +41,10 @@ from scipy.linalg import solve_triangular
 
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
+from rotacal.uncertainty.budget import UncertaintyBudget
+from rotacal.uncertainty.distributions import Distribution
+from rotacal.uncertainty.gum import Input, propagate
+from rotacal.uncertainty.specs import InstrumentSpecs
 
 __all__ = [
     "EARTH_RATE_DEG_H",
@@ -44,6 +55,7 @@ __all__ = [
     "coefficient_names",
     "coefficient_units",
     "drift_design_matrix",
+    "drift_sensitivities",
     "earth_rate_and_gravity",
     "multiposition_plan",
 ]
@@ -64,6 +76,16 @@ _UNITS = ("deg/h", "deg/h/g", "deg/h/g", "deg/h/g", "deg/h/g^2", "deg/h/g^2", "d
 _RANK_RTOL = 1e-9
 #: Angles equal to this (deg, modulo 360) are the same position (for per-position residuals).
 _POSITION_DECIMALS = 6
+#: Coverage probability of the expanded uncertainties.
+COVERAGE_PROBABILITY = 0.95
+#: One arcsecond in radians.
+_ARCSEC = math.pi / (180.0 * 3600.0)
+#: Budget row names of the orientation-error components (seed 001, eq. (7)).
+_ORIENTATION = (
+    ("Δψ", "orientation error Δψ about y (eq. 7)"),
+    ("Δθ", "orientation error Δθ about z (eq. 7)"),
+    ("Δγ", "orientation error Δγ about x (eq. 7)"),
+)
 
 
 def _axis(axis: Any) -> str:
@@ -186,9 +208,156 @@ def drift_design_matrix(
     """
     ax_ = _axis(axis)
     _, a = earth_rate_and_gravity(phi1_deg, phi2_deg, 0.0)
+    return _design(a, ax_)
+
+
+def _design(a: np.ndarray, axis: str) -> np.ndarray:
+    """Rows (1, ax, ay, az, a₁², az², ax·ay) of eq. (4) from gravity components (n, 3) in g."""
     gx, gy, gz = a[:, 0], a[:, 1], a[:, 2]
-    sq = gx * gx if ax_ == "x" else gy * gy
+    sq = gx * gx if axis == "x" else gy * gy
     return np.column_stack([np.ones_like(gx), gx, gy, gz, sq, gz * gz, gx * gy])
+
+
+def _design_derivative(a: np.ndarray, da: np.ndarray, axis: str) -> np.ndarray:
+    """dA for a change da (n, 3) of the gravity components: the derivative of :func:`_design`."""
+    gx, gy, gz = a[:, 0], a[:, 1], a[:, 2]
+    dx, dy, dz = da[:, 0], da[:, 1], da[:, 2]
+    dsq = 2.0 * gx * dx if axis == "x" else 2.0 * gy * dy
+    return np.column_stack([np.zeros_like(gx), dx, dy, dz, dsq, 2.0 * gz * dz, dx * gy + gx * dy])
+
+
+def _orientation_generators() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """∂ΔR/∂Δψ, ∂ΔR/∂Δθ, ∂ΔR/∂Δγ of seed 001 eq. (7) (ΔR = I + Δψ·Eψ + Δθ·Eθ + Δγ·Eγ)."""
+    e_psi = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
+    e_theta = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    e_gamma = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+    return e_psi, e_theta, e_gamma
+
+
+def _delta_r(dpsi: float, dtheta: float, dgamma: float) -> np.ndarray:
+    """ΔR of seed 001 eq. (7) for small rotations Δψ (about y), Δθ (about z), Δγ (about x), rad."""
+    e_psi, e_theta, e_gamma = _orientation_generators()
+    return np.eye(3) + dpsi * e_psi + dtheta * e_theta + dgamma * e_gamma
+
+
+def _earth_rate_dlat(
+    phi1_deg: np.ndarray, phi2_deg: np.ndarray, latitude_deg: float, earth_rate_deg_h: float
+) -> np.ndarray:
+    """∂ω/∂λ of eq. (3) (n, 3) in °/h per degree of latitude."""
+    r1, r2 = np.radians(phi1_deg), np.radians(phi2_deg)
+    s1, c1, s2, c2 = np.sin(r1), np.cos(r1), np.sin(r2), np.cos(r2)
+    lam = math.radians(latitude_deg)
+    sl, cl = math.sin(lam), math.cos(lam)
+    d = earth_rate_deg_h * np.column_stack(
+        [c2 * (-c1 * sl - s1 * cl), s2 * (c1 * sl + s1 * cl), -s1 * sl + c1 * cl]
+    )
+    return d * (math.pi / 180.0)
+
+
+def drift_sensitivities(
+    phi1_deg: np.ndarray,
+    phi2_deg: np.ndarray,
+    output_deg_h: np.ndarray,
+    *,
+    axis: str = "x",
+    latitude_deg: float,
+    earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+    orientation_error_arcsec: tuple[float, float, float] = (0.0, 0.0, 0.0),
+) -> tuple[np.ndarray, np.ndarray]:
+    """Drift coefficients and their sensitivities to the latitude and the orientation error.
+
+    With the orientation error ΔR of eq. (7) the Earth-rate and gravity components are
+    ``ω′ = ω·ΔR``, ``a′ = a·ΔR`` (eq. (8), row vectors), the regression is ``b1 − b2′ = A′β``
+    (eqs. (9)–(10)) and β = (A′ᵀA′)⁻¹A′ᵀ(b1 − b2′) (eq. (11)). Differentiating the normal
+    equations ``A′ᵀA′β = A′ᵀb`` (b = b1 − b2′) gives, for any input p of A′ or b2′,
+
+        ∂β/∂p = (A′ᵀA′)⁻¹·[(∂A′/∂p)ᵀ·r − A′ᵀ·(∂A′/∂p)·β − A′ᵀ·∂b2′/∂p],   r = b − A′β,
+
+    exact to first order (ΔR is linear in the angles, so ∂a′/∂Δψ = a·∂ΔR/∂Δψ everywhere).
+
+    Parameters
+    ----------
+    phi1_deg, phi2_deg : array
+        Outer and inner turntable angles of each row (deg).
+    output_deg_h : array
+        The axis's torquer output in rate units, k·i (deg/h).
+    axis : {"x", "y"}
+        The gyro axis.
+    latitude_deg : float
+        Latitude λ (deg).
+    earth_rate_deg_h : float
+        Ωe (°/h).
+    orientation_error_arcsec : (Δψ, Δθ, Δγ)
+        The orientation error at which β and the derivatives are evaluated (arcsec; rotations
+        about the gyro's y, z and x axes, seed 001 eq. (7)). Default: none.
+
+    Returns
+    -------
+    (beta, jacobian) : (ndarray (7,), ndarray (7, 4))
+        β in deg/h, deg/h/g, deg/h/g² (order of :func:`coefficient_names`); the columns of the
+        Jacobian are ∂β/∂λ (per degree) and ∂β/∂Δψ, ∂β/∂Δθ, ∂β/∂Δγ (per arcsec).
+
+    References
+    ----------
+    Seed 001, §2.1 eqs. (3)–(6) and §2.2 eqs. (7)–(11); JCGM 100:2008 (GUM) §5.1.3 (sensitivity
+    coefficients as partial derivatives of the measurement model).
+    """
+    ax_ = _axis(axis)
+    lat = _latitude(latitude_deg)
+    p1, p2 = _angles(phi1_deg, phi2_deg, ConfigError)
+    y = np.asarray(output_deg_h, dtype=float).reshape(-1)
+    if y.size != p1.size:
+        raise CaptureError(
+            f"column output_deg_h has {y.size} rows but phi1_deg has {p1.size}: give one output per "
+            "pair of angles."
+        )
+    try:
+        dpsi, dtheta, dgamma = (float(v) * _ARCSEC for v in orientation_error_arcsec)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            "orientation_error_arcsec must be three numbers (Δψ, Δθ, Δγ) in arcsec, got "
+            f"{orientation_error_arcsec!r}."
+        ) from None
+    w, a = earth_rate_and_gravity(p1, p2, lat, earth_rate_deg_h=earth_rate_deg_h)
+    beta, jac, *_ = _solve_with_sensitivities(
+        p1, p2, y, w, a, ax_, lat, float(earth_rate_deg_h), (dpsi, dtheta, dgamma)
+    )
+    return beta, jac
+
+
+def _solve_with_sensitivities(
+    p1: np.ndarray,
+    p2: np.ndarray,
+    y: np.ndarray,
+    w: np.ndarray,
+    a: np.ndarray,
+    axis: str,
+    lat: float,
+    we: float,
+    delta_rad: tuple[float, float, float],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """β, ∂β/∂(λ°, Δψ″, Δθ″, Δγ″), the residuals, A′ and (A′ᵀA′)⁻¹ (eqs. (8)–(11))."""
+    k = 0 if axis == "x" else 1
+    dr = _delta_r(*delta_rad)
+    wp, ap = w @ dr, a @ dr  # eq. (8), row vectors
+    design = _design(ap, axis)
+    q, r = np.linalg.qr(design)
+    beta = solve_triangular(r, q.T @ (y - wp[:, k]))
+    resid = y - wp[:, k] - design @ beta
+    r_inv = solve_triangular(r, np.eye(r.shape[0]))
+    cov_unit = r_inv @ r_inv.T
+    dw_lat = _earth_rate_dlat(p1, p2, lat, we) @ dr
+    cols = [-(cov_unit @ (design.T @ dw_lat[:, k]))]  # A′ does not depend on λ; ∂b = −∂ω
+    for gen in _orientation_generators():
+        da = _design_derivative(ap, a @ gen, axis)
+        dw = (w @ gen)[:, k]
+        cols.append(cov_unit @ (da.T @ resid - design.T @ (da @ beta) - design.T @ dw))
+    jac = np.column_stack(cols)
+    jac[:, 1:] *= _ARCSEC
+    # zero what is zero by the symmetry of the plan (round-off of ~1e-18 of the column's scale)
+    scale = np.max(np.abs(jac), axis=0, keepdims=True)
+    jac[np.abs(jac) <= 1e-12 * scale] = 0.0
+    return beta, jac, resid, design, cov_unit
 
 
 @dataclasses.dataclass(frozen=True)
@@ -395,8 +564,12 @@ class MultipositionResult(Result):
     ``gyro multiposition``).
 
     ``drift_coefficients`` and ``drift_coefficients_u`` map the seven names of the axis to values
-    and standard uncertainties in deg/h, deg/h/g and deg/h/g² (see ``drift_coefficient_units``).
-    ``residuals_deg_h`` holds one residual per row of the capture.
+    and standard uncertainties in deg/h, deg/h/g and deg/h/g² (see ``drift_coefficient_units``);
+    each u is that of the coefficient's budget in ``_budgets`` (key
+    ``"drift_coefficients.<name>"``). ``residuals_deg_h`` holds one residual per row of the
+    capture. The JSON adds ``drift_coefficients_U`` ({name: U}), ``k``
+    ({"drift_coefficients": {name: k}}), ``coverage_probability`` and ``uncertainty_budgets``
+    ({"drift_coefficients": {name: budget}}).
     """
 
     axis: str
@@ -416,6 +589,28 @@ class MultipositionResult(Result):
     notes: tuple[str, ...] = ()
     _covariance: np.ndarray | None = dataclasses.field(default=None, repr=False, compare=False)
     _plot: dict[str, Any] = dataclasses.field(default_factory=dict, repr=False, compare=False)
+    _budgets: dict[str, UncertaintyBudget] = dataclasses.field(
+        default_factory=dict, repr=False, compare=False
+    )
+
+    def to_dict(self) -> dict[str, Any]:
+        """INTERFACE.md ``gyro multiposition`` keys plus the expanded uncertainties and budgets."""
+        out = super().to_dict()
+        names = list(self.drift_coefficients)
+        found = {n: self._budgets.get(f"drift_coefficients.{n}") for n in names}
+        out["drift_coefficients_U"] = {
+            n: (None if b is None else float(b.U)) for n, b in found.items()
+        }
+        out["k"] = {
+            "drift_coefficients": {n: (None if b is None else float(b.k)) for n, b in found.items()}
+        }
+        out["coverage_probability"] = COVERAGE_PROBABILITY if self._budgets else None
+        out["uncertainty_budgets"] = {
+            "drift_coefficients": {
+                n: (None if b is None else b.to_dict()) for n, b in found.items()
+            }
+        }
+        return out
 
 
 def calibrate_multiposition(
@@ -424,10 +619,12 @@ def calibrate_multiposition(
     output_deg_h: np.ndarray,
     *,
     axis: str = "x",
-    latitude_deg: float,
+    latitude_deg: float | None = None,
     earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+    specs: InstrumentSpecs | None = None,
 ) -> MultipositionResult:
-    """Drift coefficients of one gyro axis from its outputs at several turntable positions.
+    """Drift coefficients of one gyro axis from its outputs at several turntable positions, each
+    with its uncertainty budget.
 
     Forms ``b1 − b2 = A·β`` (eq. (5)) with b1 the outputs k·i (deg/h), b2 the Earth-rate component
     of the axis at each row's position (eq. (3)) and A the gravity terms (eq. (4)), and solves it by
@@ -445,15 +642,29 @@ def calibrate_multiposition(
     axis : {"x", "y"}
         x: ``DF, Dx, Dy, Dz, Dxx, Dzz, Dxy``; y: ``DF, Dx, Dy, Dz, Dyy, Dzz, Dyx``.
     latitude_deg : float
-        Latitude of the laboratory (deg, −90…90).
+        Latitude of the laboratory (deg, −90…90). May be left out when ``specs`` states
+        ``site.latitude_deg``; when both are given they must agree.
     earth_rate_deg_h : float
         Earth rate Ωe (°/h); default the sidereal 15.041067 °/h.
+    specs : InstrumentSpecs, optional
+        The lab's instrument specifications. Used: ``site.latitude_deg`` (value and u, deg) and
+        ``table.orientation_error_arcsec`` (one distribution for each of Δψ, Δθ, Δγ, arcsec;
+        a stated mean is corrected for by eq. (8)); others do not apply. None: Type A only.
 
     Returns
     -------
     MultipositionResult
         Coefficients (deg/h, deg/h/g, deg/h/g²) with standard uncertainties, the condition number
-        and rank of A, residuals (deg/h).
+        and rank of A, residuals (deg/h), and one uncertainty budget per coefficient.
+
+    Notes
+    -----
+    Budget of each coefficient β_j (GUM law of propagation, k = t_0.975(ν_eff)):
+    the least-squares fit, u = s·√[(AᵀA)⁻¹]_jj with ν = N − 7 (Type A; white, equal noise on
+    every reading); the latitude, sensitivity ∂β_j/∂λ; the orientation error, one row per
+    component Δψ, Δθ, Δγ (taken as the same at every position: a mounting error of the gyro on
+    the table, as seed 001 §2.2 analyses it), sensitivities ∂β_j/∂Δ from
+    :func:`drift_sensitivities`. The inputs are independent.
 
     Raises
     ------
@@ -461,14 +672,31 @@ def calibrate_multiposition(
         Non-finite values (naming the rows), fewer than 7 distinct positions, or positions that
         leave coefficients unidentifiable (naming them).
     ConfigError
-        Latitude outside ±90°, an unknown axis.
+        Latitude outside ±90°, missing, or contradicting ``site.latitude_deg``; an unknown axis.
 
     References
     ----------
-    Seed 001, §2.1, eqs. (1)–(6).
+    Seed 001, §2.1, eqs. (1)–(6); §2.2, eqs. (7)–(11) (orientation error). JCGM 100:2008 (GUM)
+    §4.2 (Type A), §4.3 (Type B), §5.1 (law of propagation), G.4 (ν_eff, k).
     """
     ax_ = _axis(axis)
-    lat = _latitude(latitude_deg)
+    lat_spec = specs.get("site.latitude_deg") if specs is not None else None
+    orient_spec = specs.get("table.orientation_error_arcsec") if specs is not None else None
+    if latitude_deg is None:
+        if lat_spec is None:
+            raise ConfigError(
+                "give the latitude: latitude_deg (--latitude-deg, deg) or site.latitude_deg in the "
+                "instrument specifications."
+            )
+        lat = _latitude(lat_spec.mean)
+    else:
+        lat = _latitude(latitude_deg)
+        if lat_spec is not None and abs(float(lat_spec.mean) - lat) > 1e-9:
+            where = specs.source if specs is not None else "the specifications"
+            raise ConfigError(
+                f"latitude_deg = {lat:g}° contradicts site.latitude_deg = {float(lat_spec.mean):g}° "
+                f"in {where}: give one latitude."
+            )
     try:
         we = float(earth_rate_deg_h)
     except (TypeError, ValueError):
@@ -490,23 +718,26 @@ def calibrate_multiposition(
             f"column output_deg_h has {bad.size} non-finite value(s) (NaN or inf) at rows "
             f"{_rows(bad)} (counted from 0): remove those rows or re-measure those positions."
         )
-    plan, a, first, pos_of_row = _plan_core(p1, p2, ax_, CaptureError, "the capture")
+    plan, _, first, pos_of_row = _plan_core(p1, p2, ax_, CaptureError, "the capture")
     names = _NAMES[ax_]
-    w, _ = earth_rate_and_gravity(p1, p2, lat, earth_rate_deg_h=we)
-    omega = w[:, 0] if ax_ == "x" else w[:, 1]
-    b = y - omega
-    # Eq. (6) through A = QR (no normal equations): β = R⁻¹·Qᵀ(b1 − b2), (AᵀA)⁻¹ = R⁻¹R⁻ᵀ.
-    q, r = np.linalg.qr(a)
-    beta = solve_triangular(r, q.T @ b)
-    resid = b - a @ beta
+    w, g = earth_rate_and_gravity(p1, p2, lat, earth_rate_deg_h=we)
+    d0 = float(orient_spec.mean) if orient_spec is not None else 0.0
+    # Eq. (6) (eq. (11) with a stated mean orientation error) through A = QR, no normal
+    # equations: β = R⁻¹·Qᵀ(b1 − b2), (AᵀA)⁻¹ = R⁻¹R⁻ᵀ; and ∂β/∂(λ, Δψ, Δθ, Δγ).
+    beta, jac, resid, a, cov_unit = _solve_with_sensitivities(
+        p1, p2, y, w, g, ax_, lat, we, (d0 * _ARCSEC,) * 3
+    )
     n, p = a.shape
     dof = n - p
     notes: list[str] = [
         f"Earth rate {we:.8g} °/h (sidereal), latitude {lat:g}°; gravity components in g, "
         "positions by seed 001 eq. (3) (gyro axes north-west-up at φ1 = φ2 = 0)."
     ]
-    r_inv = solve_triangular(r, np.eye(r.shape[0]))
-    cov_unit = r_inv @ r_inv.T
+    if d0 != 0.0:
+        notes.append(
+            f"corrected for the stated mean orientation error Δψ = Δθ = Δγ = {d0:g} arcsec "
+            "(seed 001 eqs. (7)–(11))."
+        )
     if dof > 0:
         s2 = float(resid @ resid) / dof
         cov = s2 * cov_unit
@@ -525,6 +756,21 @@ def calibrate_multiposition(
             f"the design is poorly conditioned (condition number {plan.condition_number:.3g}): "
             "small errors in the outputs are strongly amplified; prefer multiposition_plan()."
         )
+    budgets: dict[str, UncertaintyBudget] = {}
+    if dof > 0:
+        budgets = _drift_budgets(
+            names,
+            ax_,
+            beta,
+            u,
+            jac,
+            dof,
+            s_std,
+            lat_spec,
+            orient_spec,
+            specs,
+        )
+        u = np.array([budgets[f"drift_coefficients.{nm}"].u for nm in names])
     cnt = np.bincount(pos_of_row, minlength=first.size)
     pos_mean = np.bincount(pos_of_row, weights=resid, minlength=first.size) / cnt
     plot = {
@@ -552,4 +798,89 @@ def calibrate_multiposition(
         notes=tuple(notes),
         _covariance=cov,
         _plot=plot,
+        _budgets=budgets,
     )
+
+
+def _drift_budgets(
+    names: tuple[str, ...],
+    axis: str,
+    beta: np.ndarray,
+    u_fit: np.ndarray,
+    jac: np.ndarray,
+    dof: int,
+    s_std: float,
+    lat_spec: Distribution | None,
+    orient_spec: Distribution | None,
+    specs: InstrumentSpecs | None,
+) -> dict[str, UncertaintyBudget]:
+    """One GUM budget per drift coefficient (see :func:`calibrate_multiposition`, Notes)."""
+    units = dict(zip(names, _UNITS, strict=True))
+    source_b = f"Type B, {specs.source}" if specs is not None else ""
+    extra: list[tuple[Input, int]] = []  # (input, column of jac)
+    notes: list[str] = []
+    if specs is None:
+        notes.append("no instrument specification stated: Type A only.")
+    else:
+        if lat_spec is not None:
+            extra.append(
+                (
+                    Input.from_distribution(
+                        "latitude λ (site.latitude_deg)", lat_spec, unit="deg", source=source_b
+                    ),
+                    0,
+                )
+            )
+        else:
+            notes.append("site.latitude_deg not stated: the latitude is taken as exact.")
+        if orient_spec is not None:
+            for col, (_, label) in enumerate(_ORIENTATION, start=1):
+                extra.append(
+                    (
+                        Input.from_distribution(
+                            f"{label} (table.orientation_error_arcsec)",
+                            orient_spec,
+                            unit="arcsec",
+                            source=source_b,
+                        ),
+                        col,
+                    )
+                )
+            notes.append(
+                "the orientation error is taken as the same at every position (a mounting "
+                "error, seed 001 §2.2); a part that changes from position to position shows in "
+                "the residuals (Type A)."
+            )
+        else:
+            notes.append("table.orientation_error_arcsec not stated: the orientation is exact.")
+    budgets: dict[str, UncertaintyBudget] = {}
+    for j, name in enumerate(names):
+        fit = Input(
+            name="least-squares fit, s·√[(AᵀA)⁻¹]_jj",
+            value=float(beta[j]),
+            u=float(u_fit[j]),
+            dof=float(dof),
+            distribution="normal",
+            unit=units[name],
+            source=f"Type A, s = {s_std:.3g} deg/h, ν = {dof}",
+            description="normal",
+        )
+        inputs = [fit, *(item for item, _ in extra)]
+        c = np.array([1.0, *(float(jac[j, col]) for _, col in extra)])
+        x0 = np.array([inp.value for inp in inputs])
+
+        def model(*x: float, _c: np.ndarray = c, _x0: np.ndarray = x0) -> float:
+            # β_j = β_fit,j + Σ_i ∂β_j/∂x_i·(x_i − x_i0): linear in every input
+            return float(x[0] + _c[1:] @ (np.asarray(x[1:]) - _x0[1:]))
+
+        res = propagate(
+            model,
+            inputs,
+            jacobian=lambda *x, _c=c: _c.reshape(1, -1),
+            p=COVERAGE_PROBABILITY,
+            names_out=[f"{name} ({axis} axis)"],
+            units_out=[units[name]],
+        )
+        b = res.budget(0)
+        budgets[f"drift_coefficients.{name}"] = dataclasses.replace(b, notes=(*b.notes, *notes))
+    return budgets

@@ -42,7 +42,19 @@ from rotacal.gyro.triad import (
     apply_triad_calibration,
     decompose_scale_misalignment,
 )
-from rotacal.results import Result
+from rotacal.gyro.uncertainty import (
+    TYPE_A_ONLY_NOTE,
+    as_specs,
+    element_key,
+    linear_gum,
+    spec_input,
+    specs_note,
+    uncertainty_json,
+)
+from rotacal.results import Result, to_jsonable
+from rotacal.uncertainty.budget import UncertaintyBudget
+from rotacal.uncertainty.gum import Input
+from rotacal.uncertainty.specs import InstrumentSpecs
 
 __all__ = [
     "FERRARIS_ROTATIONS",
@@ -78,10 +90,15 @@ class RotationCalibration(Result):
         :func:`~rotacal.gyro.triad.decompose_scale_misalignment` of K (imucal's K_g diagonal,
         R_g; deg).
     scale_misalignment_u, bias_u : ndarray
-        Standard uncertainties (u per °/s, u) from: white noise of the static sections integrated
-        over each rotation, the uncertainty of the offset during the rotations (the noise of the
-        bias plus the spread of the static-section means beyond what their noise explains: it
-        holds g-sensitivity and Earth rate), and ``angle_u_deg`` of the realised angles.
+        Combined standard uncertainties (u per °/s, u) of the budgets in ``_budgets`` (one per
+        element, keys ``scale_misalignment[i][j]`` and ``bias[i]``). K: white noise of the static
+        sections integrated over each rotation; the bias subtracted (its white-noise uncertainty,
+        common to every rotation); the offset change during each rotation (the spread of the
+        static-section means beyond what their noise explains: g-sensitivity, Earth rate);
+        the realised angles (``table.set_angle_arcsec`` or ``angle_u_deg``); the DAQ timebase
+        (``timebase.relative_error``). b: the white noise of the static mean. The JSON adds
+        ``scale_misalignment_U``, ``bias_U``, ``k``, ``coverage_probability`` and
+        ``uncertainty_budgets``.
     noise_std : ndarray (3,)
         Per-sample noise of the static sections about their own means (u), pooled.
     static_mean_spread : ndarray (3,)
@@ -98,7 +115,10 @@ class RotationCalibration(Result):
     static_samples : int
         Samples in the static sections.
     angle_u_deg : float
-        Standard uncertainty of each realised rotation angle (deg) used in the uncertainties.
+        Standard uncertainty of each realised rotation angle (deg) used in the uncertainties
+        (from ``angle_u_deg``, or the standard deviation of ``table.set_angle_arcsec``).
+    output_unit : str
+        Name of the output unit (for budgets and reports; "" when not given).
     """
 
     scale_misalignment: np.ndarray
@@ -116,11 +136,23 @@ class RotationCalibration(Result):
     static_samples: int
     angle_u_deg: float
     notes: tuple[str, ...] = ()
+    output_unit: str = ""
     _plot: dict[str, Any] = dataclasses.field(default_factory=dict, repr=False, compare=False)
+    _budgets: dict[str, UncertaintyBudget] = dataclasses.field(
+        default_factory=dict, repr=False, compare=False
+    )
 
     def calibrate(self, u: Any) -> np.ndarray:
         """ω̂ = K⁻¹(u − b) (°/s) for raw outputs ``u`` (n, 3)."""
         return apply_triad_calibration(u, self.scale_misalignment, self.bias)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON fields plus the uncertainty keys (arrays shaped like K and b)."""
+        out = super().to_dict()
+        if self._budgets:
+            keys = uncertainty_json(self._budgets, {"scale_misalignment": (3, 3), "bias": (3,)})
+            out.update(to_jsonable(keys))
+        return out
 
 
 # ------------------------------------------------------------------------------------ sections
@@ -317,6 +349,8 @@ def calibrate_triad_rotations(
     angle_deg: float = 360.0,
     angle_u_deg: float = 0.0,
     columns: Sequence[str] = TRIAD_OUTPUT_COLUMNS,
+    specs: InstrumentSpecs | None = None,
+    output_unit: str = "",
 ) -> RotationCalibration:
     """K and b of a gyro triad from rotations through known angles (Ferraris-style).
 
@@ -346,9 +380,19 @@ def calibrate_triad_rotations(
         Set angle of each rotation given without its own (deg, right-hand rule about the named
         axis; −360 for imucal's "clockwise" recordings).
     angle_u_deg : float
-        Standard uncertainty of each realised rotation angle (deg), for the uncertainties.
+        Standard uncertainty of each realised rotation angle (deg, normal, independent between
+        rotations), for the uncertainties; leave it 0 when ``specs`` states
+        ``table.set_angle_arcsec``.
     columns : sequence of 3 str
         Names of the rate columns, for messages.
+    specs : InstrumentSpecs or None
+        The lab's instrument specifications (Type B; a TOML path or a mapping also work). Used:
+        ``table.set_angle_arcsec`` (error of each realised angle, realised = set + e, independent
+        between rotations) and ``timebase.relative_error`` (a clock ε long makes the sampling
+        interval 1/(fs·(1 + ε)), so K = K₀/(1 + ε)); stated means correct the result. None: the
+        budgets hold the capture's Type A part (and ``angle_u_deg``).
+    output_unit : str
+        Name of the output unit, for the budgets and reports.
 
     Returns
     -------
@@ -368,7 +412,9 @@ def calibrate_triad_rotations(
     Ferraris F., Gorini I., Grimaldi U., Parvis M. (1994), Sensors and Actuators A 42:446–449;
     Ferraris F., Grimaldi U., Parvis M. (1995), Sensors and Materials 7(5):311–330, eqs. (12)–(15)
     (integrated rotations, K = W·Φ⁻¹; numbering as in imucal's implementation).
+    JCGM 100:2008 (GUM) §4.2, §4.3, §5.1.2, G.4.1 (the budgets).
     """
+    spec = as_specs(specs)
     cols = tuple(columns)
     if len(cols) != 3:
         raise ConfigError(f"columns must name the 3 rate columns, got {columns!r}.")
@@ -390,6 +436,25 @@ def calibrate_triad_rotations(
         raise ConfigError(f"angle_u_deg must be a number, got {angle_u_deg!r}.") from None
     if not math.isfinite(ang_u) or ang_u < 0:
         raise ConfigError(f"angle_u_deg must be ≥ 0 deg, got {angle_u_deg!r}.")
+    ang_in = spec_input(spec, "table.set_angle_arcsec", "angle error", unit="arcsec")
+    if ang_in is not None and ang_u > 0:
+        raise ConfigError(
+            "give the angle uncertainty once: either angle_u_deg or table.set_angle_arcsec in the "
+            "specifications, not both."
+        )
+    if ang_in is None and ang_u > 0:
+        ang_in = Input(
+            "angle error",
+            0.0,
+            ang_u * 3600.0,
+            distribution="normal",
+            unit="arcsec",
+            source="angle_u_deg",
+            description=f"normal u={ang_u:g}°",
+        )
+    tb_in = spec_input(spec, "timebase.relative_error", "timebase error ε_t")
+    ang_mean_deg = 0.0 if ang_in is None else ang_in.value / 3600.0
+    eps_t = 0.0 if tb_in is None else tb_in.value
     rots = _parse_rotations(rotations, angle_deg, n)
     stats_ = _parse_static(static, n)
     if not stats_ and bias is None:
@@ -404,7 +469,8 @@ def calibrate_triad_rotations(
                     f"static section {sname} [{ss}, {se}) overlaps rotation {name} [{s}, {e}); "
                     "fix the section list."
                 )
-    phi = np.column_stack([v * a for _, _, v, _, _, a in rots])  # 3×m, deg
+    # 3×m true angle vectors (deg): the set angles plus the stated mean angle error
+    phi = np.column_stack([v * (a + ang_mean_deg) for _, _, v, _, _, a in rots])
     if np.linalg.matrix_rank(phi, tol=1e-9 * np.abs(phi).max()) < 3:
         have = ", ".join(label for _, label, _, _, _, _ in rots)
         raise ConfigError(
@@ -461,28 +527,46 @@ def calibrate_triad_rotations(
         u_b = np.zeros(3)
         notes.append("bias given by the caller: its uncertainty is not included")
 
-    # --- integrate each rotation: Θ_l = Σ (u − offset)/fs
+    # --- integrate each rotation: Θ_l = Σ (u − offset)/fs; a clock ε_t long samples at fs·(1 + ε_t)
     theta = np.column_stack([np.sum(u[s:e] - offset[s:e], axis=0) / fs for *_, s, e, _ in rots])
     pinv = phi.T @ np.linalg.inv(phi @ phi.T)  # m×3: K = Θ·pinv
-    kmat = theta @ pinv
+    kmat = theta @ pinv / (1.0 + eps_t)
     if not np.isfinite(kmat).all() or abs(np.linalg.det(kmat)) <= 1e-12 * np.abs(kmat).max() ** 3:
         raise CaptureError(
             "the integrated rotations give a singular scale/misalignment matrix: check that the "
             "rotation sections hold the rotations about x, y and z."
         )
-    durations = np.array([(e - s) / fs for *_, s, e, _ in rots])
-    samples = np.array([e - s for *_, s, e, _ in rots], dtype=float)
-    # u(Θ_cl)²: white noise integrated over the section + offset uncertainty × duration
-    u_off = np.sqrt(u_b**2 + (excess**2 if bias is None else 0.0))
-    var_theta = (noise[:, None] ** 2) * samples[None, :] / fs**2 + (u_off[:, None] * durations) ** 2
-    var_k = var_theta @ (pinv**2)
-    # the realised angles: dΘ_cl = (K·e_l)_c·dφ_l
-    if ang_u > 0:
-        ke = kmat @ np.column_stack([v for _, _, v, _, _, _ in rots])  # 3×m
-        var_k = var_k + (ke**2 * ang_u**2) @ (pinv**2)
-    u_k = np.sqrt(var_k)
+    budgets = _rotation_budgets(
+        kmat=kmat,
+        theta=theta,
+        pinv=pinv,
+        axes=np.column_stack([v for _, _, v, _, _, _ in rots]),
+        labels=[label for _, label, _, _, _, _ in rots],
+        samples=np.array([e - s for *_, s, e, _ in rots], dtype=float),
+        fs=fs,
+        noise=noise,
+        noise_dof=float(max(static_samples - len(stats_), 1)),
+        b_out=np.asarray(b_out, dtype=float),
+        u_b=u_b,
+        excess=excess if bias is None else np.zeros(3),
+        sections=len(stats_),
+        bias_given=bias is not None,
+        ang_in=ang_in,
+        tb_in=tb_in,
+        spec=spec,
+        output_unit=output_unit,
+    )
+    u_k = np.array(
+        [[budgets[element_key("scale_misalignment", (i, j))].u for j in range(3)] for i in range(3)]
+    )
+    u_b = np.array([budgets[element_key("bias", (i,))].u for i in range(3)])
+    if ang_mean_deg != 0.0 or eps_t != 0.0:
+        notes.append(
+            f"stated mean errors correct K: realised angles = set + {ang_mean_deg * 3600:.3g}″, "
+            f"K = K₀/(1 + {eps_t:.3g}) for the timebase"
+        )
 
-    measured = apply_triad_calibration(theta.T, kmat, np.zeros(3))  # m×3, deg
+    measured = apply_triad_calibration(theta.T / (1.0 + eps_t), kmat, np.zeros(3))  # m×3, deg
     resid = measured - phi.T
     scale, axes_r, mis = decompose_scale_misalignment(kmat)
     diag_dom = np.all(np.abs(np.diag(kmat)) > np.sum(np.abs(kmat), axis=1) - np.abs(np.diag(kmat)))
@@ -526,7 +610,145 @@ def calibrate_triad_rotations(
         residual_rms=float(np.sqrt(np.mean(resid**2))),
         fs_hz=fs,
         static_samples=static_samples,
-        angle_u_deg=ang_u,
+        angle_u_deg=0.0 if ang_in is None else ang_in.u / 3600.0,
         notes=tuple(notes),
+        output_unit=output_unit,
         _plot=plot,
+        _budgets=budgets,
     )
+
+
+def _rotation_budgets(
+    *,
+    kmat: np.ndarray,
+    theta: np.ndarray,
+    pinv: np.ndarray,
+    axes: np.ndarray,
+    labels: Sequence[str],
+    samples: np.ndarray,
+    fs: float,
+    noise: np.ndarray,
+    noise_dof: float,
+    b_out: np.ndarray,
+    u_b: np.ndarray,
+    excess: np.ndarray,
+    sections: int,
+    bias_given: bool,
+    ang_in: Input | None,
+    tb_in: Input | None,
+    spec: InstrumentSpecs | None,
+    output_unit: str,
+) -> dict[str, UncertaintyBudget]:
+    """One GUM budget per element of K (9) and b (3), all inputs independent.
+
+    K_cj = Σ_l Θ_cl·P_lj/(1 + ε_t) (P = Φᵀ(ΦΦᵀ)⁻¹) with Θ_cl = Σ(u_c − b_c)/fs. Inputs of K_cj,
+    for each rotation l with P_lj ≠ 0: Θ_cl (white noise σ_c·√N_l/fs, c = P_lj/(1 + ε_t)), the
+    offset change during it (u = the excess spread of the static means, c = −T_l·P_lj/(1 + ε_t)),
+    its angle error e_l (c = −(K·a_l)_c·P_lj/3600 per arcsec, a_l the axis); once: the bias
+    subtracted (c = −Σ_l T_l·P_lj/(1 + ε_t), common to every rotation) and ε_t
+    (c = −K_cj/(1 + ε_t)). b_c: the static mean (σ_c/√N).
+
+    References
+    ----------
+    Ferraris et al. (1995), eqs. (12)–(15); JCGM 100:2008 (GUM) §4.2, §4.3, §5.1.2 eq. (10),
+    G.4.1.
+    """
+    ou = output_unit or "output unit"
+    unit_k = f"{ou}/(°/s)"
+    g = 1.0 + (0.0 if tb_in is None else tb_in.value)
+    dur = samples / fs
+    m = len(labels)
+    common = []
+    if (
+        note := specs_note(spec, ("table.set_angle_arcsec", "timebase.relative_error"))
+    ) is not None:
+        common.append(
+            note if ang_in is None else note.replace("Type A only", "Type A and angle_u_deg")
+        )
+    common.append(
+        "Type A assumes white noise (from the static sections) during the rotations and the "
+        "linear model u = K·ω + b."
+    )
+    budgets: dict[str, UncertaintyBudget] = {}
+    for c in range(3):
+        for j in range(3):
+            name = f"K_{_AXES[c]}{_AXES[j]}"
+            ins: list[Input] = []
+            sens: list[float] = []
+            for ln in range(m):
+                p = float(pinv[ln, j])
+                if p == 0.0:
+                    continue
+                rot = f"rotation about {labels[ln]}" + (f" #{ln}" if m > 3 else "")
+                ins.append(
+                    Input(
+                        f"Θ_{_AXES[c]} over the {rot}",
+                        float(theta[c, ln]),
+                        float(noise[c]) * math.sqrt(samples[ln]) / fs,
+                        noise_dof,
+                        "normal",
+                        f"{ou}·s",
+                        f"Type A: white noise of the static sections, {int(samples[ln])} samples",
+                    )
+                )
+                sens.append(p / g)
+                if excess[c] > 0:
+                    ins.append(
+                        Input(
+                            f"offset change during the {rot}",
+                            0.0,
+                            float(excess[c]),
+                            float(max(sections - 1, 1)),
+                            "normal",
+                            ou,
+                            "Type A: spread of the static-section means beyond their noise",
+                        )
+                    )
+                    sens.append(-dur[ln] * p / g)
+                if ang_in is not None:
+                    ins.append(dataclasses.replace(ang_in, name=f"angle error of the {rot}"))
+                    sens.append(-float(kmat[c] @ axes[:, ln]) * p / 3600.0)
+            if not bias_given:
+                ins.append(
+                    Input(
+                        f"bias b_{_AXES[c]} subtracted (static mean)",
+                        float(b_out[c]),
+                        float(u_b[c]),
+                        noise_dof,
+                        "normal",
+                        ou,
+                        "Type A: white noise of the static mean, common to every rotation",
+                    )
+                )
+                sens.append(-float(dur @ pinv[:, j]) / g)
+            if tb_in is not None:
+                ins.append(tb_in)
+                sens.append(-float(kmat[c, j]) / g)
+            b = linear_gum(name, unit_k, float(kmat[c, j]), ins, sens).budget(0)
+            budgets[element_key("scale_misalignment", (c, j))] = dataclasses.replace(
+                b, notes=b.notes + tuple(common)
+            )
+    for c in range(3):
+        name = f"b_{_AXES[c]}"
+        if bias_given:
+            b0 = Input(f"{name} given by the caller", float(b_out[c]), 0.0, unit=ou, source="bias=")
+            extra = ["bias given by the caller: its uncertainty is not included."]
+        else:
+            b0 = Input(
+                f"{name}: mean of the static sections",
+                float(b_out[c]),
+                float(u_b[c]),
+                noise_dof,
+                "normal",
+                ou,
+                "Type A: white noise of the static samples",
+            )
+            extra = []
+        b = linear_gum(name, ou, float(b_out[c]), [b0], [1.0]).budget(0)
+        extra.append(
+            TYPE_A_ONLY_NOTE
+            if spec is None
+            else "no instrument specification applies to the static mean: Type A only."
+        )
+        budgets[element_key("bias", (c,))] = dataclasses.replace(b, notes=b.notes + tuple(extra))
+    return budgets

@@ -21,9 +21,18 @@ Choices (documented in :func:`calibrate_scale_factor`):
   standard errors would let the quietest points define the line and make NL depend on how long
   each point was recorded. On the xinli_turntable recording the unweighted fit reproduces the
   published S = 1.000199, NL = 0.082 %FS; a 1/SE² fit gives 1.000489 and 0.122 %FS.
-- **Uncertainties** of S and V0 are the least-squares ones, s²·(AᵀA)⁻¹ with s² = Σδ²/(N − 2)
-  (GUM, JCGM 100:2008, H.3): the scatter of the points about the line, so they include the
-  nonlinearity. They do not include the table's rate uncertainty.
+- **Uncertainties** (one budget per quantity, :mod:`rotacal.gyro.uncertainty`). The measurand S
+  is the slope of the least-squares line through the DUT's mean output at the set rates (seed 004:
+  δ(Ω) is part of the model, reported as NL, not an error of S). Type A: the standard error of
+  each point mean (the spread of its samples) propagated through the line, u²(S₀) = Σ c_i²·u_i²
+  with c_i = (Ω_i − Ω̄)/Σ(Ω_k − Ω̄)², ν by Welch–Satterthwaite; points of one sample take the
+  pooled standard deviation of the others, and when no point has two samples the scatter of the
+  points about the line stands for the noise, s²·(AᵀA)⁻¹ with s² = Σδ²/(N − 2), ν = N − 2
+  (GUM, JCGM 100:2008, H.3). Type B: ``table.set_rate_relative`` ε, the table's realised rate
+  being Ω·(1 + ε), so S = S₀/(1 + ε) (V0 does not depend on ε). S and V0 are validated by Monte
+  Carlo; NL, a maximum of |δ|, takes its uncertainty, its bias and a bias-corrected value from
+  Monte Carlo (JCGM 101) over the same inputs. A lack-of-fit test tells when the points scatter
+  about the line more than their noise explains (nonlinearity, or drift between the points).
 
 References
 ----------
@@ -31,6 +40,8 @@ Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity ca
 using self-calibratable rotary encoder" (seed 004), §4 and Table 1.
 IEEE Std 952-1997, Annex C (scale factor and nonlinearity from a least-squares line).
 NHTSA, FMVSS 126 Laboratory Test Procedure for Electronic Stability Control Systems (2008).
+JCGM 100:2008 (GUM) §4.2, §5.1.2, G.4, H.3; JCGM 101:2008 §7, §8; ILAC-G8:09/2019 §4.2 (decision
+rules with a guard band w = U).
 """
 
 from __future__ import annotations
@@ -41,14 +52,33 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+from scipy import stats
 
 from rotacal.errors import CaptureError, ConfigError
-from rotacal.results import Result
+from rotacal.gyro.uncertainty import (
+    TScale,
+    as_specs,
+    linear_gum,
+    monte_carlo_budget,
+    spec_distribution,
+    spec_input,
+    specs_note,
+    uncertainty_json,
+    validated,
+)
+from rotacal.results import Result, to_jsonable
+from rotacal.uncertainty.budget import BudgetRow, UncertaintyBudget
+from rotacal.uncertainty.distributions import Distribution, Normal, StudentT
+from rotacal.uncertainty.gum import Input, linear_fit_uncertainty, welch_satterthwaite
+from rotacal.uncertainty.montecarlo import MonteCarloResult, monte_carlo
+from rotacal.uncertainty.specs import InstrumentSpecs
 
 __all__ = [
+    "DEFAULT_MC_TRIALS",
     "DEFAULT_RATE_TOLERANCE_DEG_S",
     "MIN_POINTS_RECOMMENDED",
     "REQUIREMENTS",
+    "DecisionWithU",
     "RatePoint",
     "RequirementCheck",
     "RequirementVerdict",
@@ -63,6 +93,15 @@ __all__ = [
 DEFAULT_RATE_TOLERANCE_DEG_S = 1e-3
 #: Seed 004, §4: "the number of measurement points should be greater than or equal 11".
 MIN_POINTS_RECOMMENDED = 11
+#: Monte Carlo trials for NL and for validating u(S), u(V0) (JCGM 101 §7.2 asks for ~10⁶ when the
+#: interval's ends must hold two digits; 2·10⁵ keeps one calibration well under a second).
+DEFAULT_MC_TRIALS = 200_000
+#: Seed of the Monte Carlo streams: the same capture gives the same budget.
+_MC_SEED = 2026
+#: Point means with ν at or below this are drawn normal in the Monte Carlo (see the note there).
+_MC_MIN_DOF = 4.0
+#: Lack of fit is reported when Σδ²/(ν·ū²) exceeds the χ²(ν)/ν quantile at this probability.
+_LACK_OF_FIT_P = 0.999
 
 #: Named requirements, FMVSS 126 first. Limits: ``range_deg_s`` (the tested rates must reach ±it),
 #: ``resolution_deg_s`` (must be below), ``accuracy_percent_fs`` (the nonlinearity must be below).
@@ -147,12 +186,41 @@ class RequirementVerdict(Result):
 
 
 @dataclasses.dataclass(frozen=True)
+class DecisionWithU(Result):
+    """A requirement's accuracy check judged with the expanded uncertainty of NL (ILAC-G8).
+
+    ``verdict`` is ``"pass with U"`` when NL + U < limit, ``"fail with U"`` when NL − U > limit and
+    ``"inconclusive"`` when the limit lies within NL ± U (guard band w = U, ILAC-G8:09/2019 §4.2;
+    p = 95 %). ``value`` is the plain NL (the value the verdict without U uses), ``U`` its expanded
+    uncertainty, both in ``unit``.
+    """
+
+    quantity: str
+    limit: float
+    value: float
+    U: float
+    unit: str
+    verdict: str
+    agrees: bool
+    rule: str
+    line: str
+
+
+@dataclasses.dataclass(frozen=True)
 class ScaleFactorResult(Result):
     """Scale factor, bias and nonlinearity (JSON keys of INTERFACE.md, ``gyro scale-factor``).
 
     Units: ``scale_factor`` output unit per °/s; ``bias``, ``residuals`` output unit;
     ``full_scale_deg_s``, ``rates_deg_s``, ``resolution_deg_s`` °/s; ``nonlinearity_percent_fs``,
     ``residuals_percent_fs`` % of full scale.
+
+    Uncertainties: ``scale_factor_u`` and ``bias_u`` are the standard uncertainties of the budgets
+    in ``_budgets`` (keys ``scale_factor``, ``bias``, ``nonlinearity_percent_fs``); the JSON adds
+    ``<name>_u``, ``<name>_U``, ``k``, ``coverage_probability`` and ``uncertainty_budgets``.
+    ``nonlinearity_bias_percent_fs`` is the Monte Carlo bias of NL (mean of the simulated NL minus
+    NL), ``nonlinearity_corrected_percent_fs`` = NL − bias, ``nonlinearity_interval_percent_fs``
+    the probabilistically symmetric 95 % interval of the simulated NL. ``decision_with_uncertainty`` is the
+    accuracy check judged with U (ILAC-G8).
     """
 
     scale_factor: float
@@ -176,18 +244,42 @@ class ScaleFactorResult(Result):
     output_quantum: float | None
     requirement: RequirementVerdict | None = None
     notes: tuple[str, ...] = ()
+    nonlinearity_bias_percent_fs: float = math.nan
+    nonlinearity_corrected_percent_fs: float = math.nan
+    nonlinearity_interval_percent_fs: tuple[float, float] = (math.nan, math.nan)
+    decision_with_uncertainty: DecisionWithU | None = None
+    _budgets: dict[str, UncertaintyBudget] = dataclasses.field(
+        default_factory=dict, repr=False, compare=False
+    )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of INTERFACE.md plus the uncertainty keys of every budget."""
+        out = super().to_dict()
+        if self._budgets:
+            out.update(to_jsonable(uncertainty_json(self._budgets)))
+        return out
 
     def summary_lines(self) -> list[str]:
-        """Human-readable result lines (for the CLI and logs)."""
+        """Human-readable result lines (for the CLI and logs): value ± U (k, p ≈ 95 %)."""
         unit = f" {self.output_unit}" if self.output_unit else ""
-        out = [
-            f"scale factor  {self.scale_factor:.8g} ± {self.scale_factor_u:.2g}{unit}/(°/s)",
-            f"bias          {self.bias:.6g} ± {self.bias_u:.2g}{unit}",
-            f"nonlinearity  {self.nonlinearity_percent_fs:.4g} %FS "
-            f"(FS {self.full_scale_deg_s:g} °/s, {self.n_points} rate points)",
-        ]
+        b = self._budgets
+        if b:
+            out = [f"{b[name].statement()}" for name in b]
+            out.append(
+                f"bias-corrected NL {self.nonlinearity_corrected_percent_fs:.4g} %FS "
+                f"(FS {self.full_scale_deg_s:g} °/s, {self.n_points} rate points)"
+            )
+        else:
+            out = [
+                f"scale factor  {self.scale_factor:.8g} ± {self.scale_factor_u:.2g}{unit}/(°/s)",
+                f"bias          {self.bias:.6g} ± {self.bias_u:.2g}{unit}",
+                f"nonlinearity  {self.nonlinearity_percent_fs:.4g} %FS "
+                f"(FS {self.full_scale_deg_s:g} °/s, {self.n_points} rate points)",
+            ]
         if self.requirement is not None:
             out += self.requirement.lines()
+        if self.decision_with_uncertainty is not None:
+            out.append(f"  {self.decision_with_uncertainty.line}")
         return out
 
 
@@ -553,6 +645,8 @@ def calibrate_scale_factor(
     rate_tolerance_deg_s: float = DEFAULT_RATE_TOLERANCE_DEG_S,
     nan_policy: str = "raise",
     output_unit: str = "",
+    specs: InstrumentSpecs | None = None,
+    mc_trials: int = DEFAULT_MC_TRIALS,
 ) -> ScaleFactorResult:
     """Scale factor, bias and nonlinearity of a gyro from a rate-table test.
 
@@ -587,19 +681,28 @@ def calibrate_scale_factor(
         Non-finite outputs raise, or are left out (with a note).
     output_unit : str
         Name of the output unit, for messages and reports.
+    specs : InstrumentSpecs or None
+        The lab's instrument specifications (Type B; :func:`rotacal.uncertainty.load_specs`, a
+        TOML path or a mapping also work). Used: ``table.set_rate_relative`` (relative error ε of
+        the table's set rate, the realised rate being Ω·(1 + ε)); others are ignored. None: the
+        budgets hold the capture's Type A part only.
+    mc_trials : int
+        Monte Carlo trials for NL and for validating u(S) and u(V0) (≥ 2000).
 
     Returns
     -------
     ScaleFactorResult
         ``scale_factor`` (output unit per °/s), ``bias`` (output unit), their standard
         uncertainties, ``nonlinearity_percent_fs`` (%FS), ``residuals`` (output unit, one per point),
-        the per-point table and the requirement's verdict.
+        the per-point table, the requirement's verdict, the budgets (``_budgets``: GUM for S and V0,
+        validated by Monte Carlo; Monte Carlo for NL with its bias and bias-corrected value) and the
+        accuracy verdict with U (``decision_with_uncertainty``).
 
     References
     ----------
     Kokuyama et al. (seed 004), §4: V(Ω) = S·Ω + V0 + δ(Ω), NL = max|δ|/FS, ≥ 11 points; Table 1
-    (FMVSS 126). IEEE Std 952-1997, Annex C. JCGM 100:2008 (GUM), H.3 (straight-line fit and its
-    uncertainties).
+    (FMVSS 126). IEEE Std 952-1997, Annex C. JCGM 100:2008 (GUM), §5.1.2, G.4.1, H.3 (straight-line
+    fit and its uncertainties); JCGM 101:2008 §7–8 (Monte Carlo, validation); ILAC-G8:09/2019 §4.2.
     """
     unit = f" {output_unit}" if output_unit else ""
     rate = np.asarray(rate_deg_s, dtype=float).reshape(-1)
@@ -624,6 +727,14 @@ def calibrate_scale_factor(
             f"rate_tolerance_deg_s must be a number ≥ 0 °/s, got {rate_tolerance_deg_s!r}."
         )
     req = None if requirement is None else resolve_requirement(requirement)
+    spec = as_specs(specs)
+    if isinstance(mc_trials, bool) or not isinstance(mc_trials, (int, np.integer)):
+        raise ConfigError(f"mc_trials must be an integer ≥ 2000, got {mc_trials!r}.")
+    if mc_trials < 2000:
+        raise ConfigError(
+            f"mc_trials must be at least 2000 for a 95 % interval (JCGM 101 §7.2), got {mc_trials}."
+        )
+    trials = int(mc_trials)
     fs_user = (
         None
         if full_scale_deg_s is None
@@ -682,22 +793,23 @@ def calibrate_scale_factor(
     _check_rail(y, gid, ok, rates, std, unit)
     _check_saturation(rates, means, std, counts, unit)
 
-    # Unweighted least-squares line through the point means (centred for accuracy).
+    # Unweighted least-squares line through the point means (centred for accuracy), against the
+    # set rates; the table's stated mean rate error ε̄ (realised rate Ω·(1 + ε̄)) corrects S.
+    eps_dist = spec_distribution(spec, "table.set_rate_relative")
+    eps_mean = 0.0 if eps_dist is None else float(eps_dist.mean)
     xbar = float(rates.mean())
     ybar = float(means.mean())
     xc = rates - xbar
     sxx = float(xc @ xc)
-    s = float(xc @ (means - ybar)) / sxx
-    v0 = ybar - s * xbar
-    resid = means - (s * rates + v0)
+    s_fit = float(xc @ (means - ybar)) / sxx
+    s = s_fit / (1.0 + eps_mean)
+    v0 = ybar - s_fit * xbar
+    resid = means - (s_fit * rates + v0)
     dof = ng - 2
     if dof > 0:
-        s2 = float(resid @ resid) / dof
-        s_u = math.sqrt(s2 / sxx)
-        v0_u = math.sqrt(s2 * (1.0 / ng + xbar * xbar / sxx))
-        res_std = math.sqrt(s2)
+        res_std = math.sqrt(float(resid @ resid) / dof)
     else:
-        s_u = v0_u = res_std = math.nan
+        res_std = math.nan
         notes.append(
             "two rate points fit the line exactly: the residuals, the nonlinearity and the "
             "uncertainties mean nothing."
@@ -721,6 +833,11 @@ def calibrate_scale_factor(
             f"set rates within {tol:g} °/s were merged into one point; the largest spread within "
             f"a point is {float(spread.max()):.3g} °/s."
         )
+    if eps_mean != 0.0:
+        notes.append(
+            f"the stated mean set-rate error ε̄ = {eps_mean:.3g} (table.set_rate_relative) "
+            f"corrects S: S = S₀/(1 + ε̄), S₀ = {s_fit:.8g} against the set rates."
+        )
 
     q = output_quantum(y, gid)
     if q is not None:
@@ -736,9 +853,42 @@ def calibrate_scale_factor(
             basis = "not visible"
     notes.append(
         "Unweighted least squares through the point means (seed 004 §4, IEEE Std 952 Annex C); "
-        "scale_factor_u and bias_u are the fit's standard uncertainties from the scatter of the "
-        "points about the line (nonlinearity included, table rate uncertainty not)."
+        "scale_factor_u and bias_u are the combined standard uncertainties of the budgets: the "
+        "standard errors of the point means through the line (Type A) and the stated table "
+        "set-rate error (Type B); the nonlinearity δ(Ω) is reported as NL, not as an "
+        "uncertainty of S."
     )
+
+    budgets: dict[str, UncertaintyBudget] = {}
+    nl_bias = nl_corr = math.nan
+    nl_interval = (math.nan, math.nan)
+    u_pt, nu_pt, basis_a = _point_uncertainties(counts, std, q, res_std, dof, unit)
+    if u_pt is not None:
+        assert nu_pt is not None
+        budgets, nl_bias, nl_interval, lof = _scale_factor_budgets(
+            rates=rates,
+            means=means,
+            counts=counts,
+            u_pt=u_pt,
+            nu_pt=nu_pt,
+            basis=basis_a,
+            s_fit=s_fit,
+            v0=v0,
+            nl=nl,
+            fs=fs,
+            resid=resid,
+            spec=spec,
+            eps_dist=eps_dist,
+            output_unit=output_unit,
+            mc_trials=trials,
+        )
+        nl_corr = nl - nl_bias
+        if lof:
+            notes.append(lof)
+    s_u = budgets["scale_factor"].u if budgets else math.nan
+    v0_u = budgets["bias"].u if budgets else math.nan
+
+    decision: DecisionWithU | None = None
     if req is not None:
         verdict: RequirementVerdict | None = evaluate_requirement(
             req,
@@ -749,6 +899,13 @@ def calibrate_scale_factor(
             resolution_deg_s=resolution,
             resolution_basis=basis,
         )
+        if "accuracy_percent_fs" in req and "nonlinearity_percent_fs" in budgets:
+            decision = decide_with_u(
+                nl,
+                budgets["nonlinearity_percent_fs"].U,
+                req["accuracy_percent_fs"],
+                title=req["title"],
+            )
     else:
         verdict = None
 
@@ -786,4 +943,327 @@ def calibrate_scale_factor(
         output_quantum=q,
         requirement=verdict,
         notes=tuple(notes),
+        nonlinearity_bias_percent_fs=nl_bias,
+        nonlinearity_corrected_percent_fs=nl_corr,
+        nonlinearity_interval_percent_fs=nl_interval,
+        decision_with_uncertainty=decision,
+        _budgets=budgets,
     )
+
+
+# ------------------------------------------------------------------------------- uncertainty
+def decide_with_u(value: float, big_u: float, limit: float, *, title: str = "") -> DecisionWithU:
+    """Judge an upper limit on the nonlinearity with its expanded uncertainty (ILAC-G8).
+
+    Parameters
+    ----------
+    value : float
+        The measured NL (%FS).
+    big_u : float
+        Its expanded uncertainty U (%FS, p = 95 %).
+    limit : float
+        The requirement's upper limit (%FS).
+    title : str
+        Name of the requirement, for the line.
+
+    Returns
+    -------
+    DecisionWithU
+        ``"pass with U"`` when value + U < limit, ``"fail with U"`` when value − U > limit,
+        otherwise ``"inconclusive"``; ``agrees`` tells whether the verdict without U (value <
+        limit) holds with U.
+
+    References
+    ----------
+    ILAC-G8:09/2019, §4.2.2–4.2.3 (guarded acceptance and rejection, guard band w = U);
+    JCGM 106:2012, §8 (conformity decisions with a measurement uncertainty).
+    """
+    if value + big_u < limit:
+        verdict = "pass with U"
+    elif value - big_u > limit:
+        verdict = "fail with U"
+    else:
+        verdict = "inconclusive"
+    plain_pass = value < limit
+    agrees = verdict == ("pass with U" if plain_pass else "fail with U")
+    rule = (
+        "guard band w = U (ILAC-G8:09/2019 §4.2): pass when NL + U < limit, fail when NL − U > "
+        "limit, inconclusive when the limit lies within NL ± U (p = 95 %)"
+    )
+    head = f"{title} accuracy " if title else "accuracy "
+    line = (
+        f"{head}with U: {verdict.upper()} — NL {value:.4g} ± {big_u:.2g} %FS against < {limit:g} "
+        f"%FS; the verdict without U ({'PASS' if plain_pass else 'FAIL'}) "
+        f"{'holds' if agrees else 'does not hold'} with U"
+    )
+    return DecisionWithU(
+        "accuracy",
+        float(limit),
+        float(value),
+        float(big_u),
+        "percent_fs",
+        verdict,
+        agrees,
+        rule,
+        line,
+    )
+
+
+def _point_uncertainties(
+    counts: np.ndarray,
+    std: np.ndarray,
+    q: float | None,
+    res_std: float,
+    dof: int,
+    unit: str,
+) -> tuple[np.ndarray | None, np.ndarray | None, str]:
+    """Standard uncertainty (output unit) and ν of each point mean, and how they were found.
+
+    Points with n ≥ 2 samples: s_i/√n_i, ν = n_i − 1 (a point whose samples are all equal on a
+    visible output grid: the rounding, q/√12, ν = ∞). Points of one sample: the pooled standard
+    deviation of the others, ν = Σ(n_k − 1). No point with two samples: the residual standard
+    deviation of the line (GUM H.3), ν = N − 2; None when N = 2.
+    """
+    multi = counts > 1
+    if multi.any():
+        nu_pool = float(np.sum(counts[multi] - 1))
+        pooled = math.sqrt(float(np.sum((counts[multi] - 1) * std[multi] ** 2)) / nu_pool)
+        sd = np.where(multi, std, pooled)
+        u = sd / np.sqrt(counts)
+        nu = np.where(multi, counts - 1.0, nu_pool)
+        flat = multi & (std == 0)
+        if q is not None and flat.any():
+            u = np.where(flat, q / math.sqrt(12.0), u)
+            nu = np.where(flat, math.inf, nu)
+        n_min, n_max = int(counts.min()), int(counts.max())
+        n_text = f"{n_min}" if n_min == n_max else f"{n_min}…{n_max}"
+        basis = (
+            f"Type A: standard errors of the {counts.size} point means ({n_text} samples each) "
+            "through the line"
+        )
+        if not multi.all():
+            basis += "; points of one sample take the pooled standard deviation"
+        if q is not None and flat.any():
+            basis += f"; points without spread take the output rounding q/√12 (q = {q:.3g}{unit})"
+        return u, nu, basis
+    if dof <= 0:
+        return None, None, ""
+    u = np.full(counts.size, res_std)
+    nu = np.full(counts.size, float(dof))
+    basis = (
+        f"Type A: one sample per point, so the scatter of the {counts.size} points about the line "
+        f"stands for the noise (GUM H.3, ν = {dof})"
+    )
+    return u, nu, basis
+
+
+def _scale_factor_budgets(
+    *,
+    rates: np.ndarray,
+    means: np.ndarray,
+    counts: np.ndarray,
+    u_pt: np.ndarray,
+    nu_pt: np.ndarray,
+    basis: str,
+    s_fit: float,
+    v0: float,
+    nl: float,
+    fs: float,
+    resid: np.ndarray,
+    spec: InstrumentSpecs | None,
+    eps_dist: Distribution | None,
+    output_unit: str,
+    mc_trials: int,
+) -> tuple[dict[str, UncertaintyBudget], float, tuple[float, float], str | None]:
+    """Budgets of S, V0 (GUM, validated by Monte Carlo) and NL (Monte Carlo); NL's bias and
+    interval; a lack-of-fit note (or None).
+
+    References
+    ----------
+    Seed 004 §4; JCGM 100:2008 §5.1.2, G.4.1, H.3; JCGM 101:2008 §7, §8.
+    """
+    ou = output_unit or "output unit"
+    unit_s = f"{ou}/(°/s)"
+    n = rates.size
+    xbar = float(rates.mean())
+    xc = rates - xbar
+    sxx = float(xc @ xc)
+    c_s = xc / sxx  # ∂S₀/∂ȳ_i (1/(°/s))
+    c_b = 1.0 / n - xbar * c_s  # ∂V0/∂ȳ_i (1)
+    h3 = bool(np.all(counts == 1))
+    if h3:
+        fit = linear_fit_uncertainty(rates, means)
+        u_s0, u_b0 = fit.u_slope, fit.u_intercept
+        nu_s = nu_b = float(fit.dof)
+    else:
+        u_s0 = math.sqrt(float(np.sum((c_s * u_pt) ** 2)))
+        u_b0 = math.sqrt(float(np.sum((c_b * u_pt) ** 2)))
+        nu_s = welch_satterthwaite(c_s * u_pt, nu_pt)
+        nu_b = welch_satterthwaite(c_b * u_pt, nu_pt)
+    eps_in = spec_input(spec, "table.set_rate_relative", "table set-rate error ε")
+    eps = 0.0 if eps_in is None else eps_in.value
+    type_a = [] if (note := specs_note(spec, ("table.set_rate_relative",))) is None else [note]
+
+    s_in = Input("S₀: slope of the line", s_fit, u_s0, nu_s, "normal", unit_s, basis)
+    s_inputs, s_sens = [s_in], [1.0 / (1.0 + eps)]
+    if eps_in is not None:
+        s_inputs.append(eps_in)
+        s_sens.append(-s_fit / (1.0 + eps) ** 2)
+    gum_s = linear_gum("scale factor S", unit_s, s_fit / (1.0 + eps), s_inputs, s_sens)
+    b_in = Input("V0: intercept of the line", v0, u_b0, nu_b, "normal", ou, basis)
+    gum_b = linear_gum("bias V0", ou, v0, [b_in], [1.0])
+    b_notes = list(type_a)
+    if eps_in is not None:
+        b_notes.append(
+            "table.set_rate_relative does not enter: a relative rate error leaves zero rate at "
+            "zero, so the line's intercept does not change."
+        )
+
+    # Monte Carlo over the point means and ε: S, V0 and NL. A point mean of n samples is a
+    # scaled-and-shifted t with n − 1 dof (JCGM 101 §6.4.9); points that share the residual s of
+    # the line (GUM H.3) are a multivariate t (JCGM 102 §5.3.2): N(0, s²) deviations times one
+    # common √(ν/χ²_ν) per trial. A t with ν ≤ 4 has no finite fourth moment, so the standard
+    # deviation of the Monte Carlo values would not settle: such points are drawn normal, and S
+    # and V0 keep their GUM interval (k from ν_eff) unvalidated.
+    heavy = bool(np.any(nu_pt <= _MC_MIN_DOF))
+    inputs: dict[str, Distribution] = {}
+    if h3:
+        for i in range(n):
+            inputs[f"p{i}"] = Normal(0.0, float(u_pt[i]))
+        if not heavy:
+            inputs["w"] = TScale(float(nu_pt[0]))
+    elif heavy:
+        for i in range(n):
+            inputs[f"p{i}"] = Normal(float(means[i]), float(u_pt[i]))
+    else:
+        for i in range(n):
+            inputs[f"p{i}"] = StudentT(float(means[i]), float(u_pt[i]), float(nu_pt[i]))
+    if eps_dist is not None:
+        inputs["eps"] = eps_dist
+    names = [f"p{i}" for i in range(n)]
+
+    def model(**kw: np.ndarray) -> dict[str, np.ndarray]:
+        yy = np.stack([kw[k] for k in names])  # (N, M): one row per rate point
+        if h3:
+            if "w" in kw:
+                yy *= kw["w"]
+            yy += means[:, None]
+        e = kw.get("eps", 0.0)
+        ym = yy.mean(axis=0)
+        slope = c_s @ yy
+        yy -= ym
+        yy -= xc[:, None] * slope
+        dmax = np.maximum(yy.max(axis=0), -yy.min(axis=0))
+        sf = slope / (1.0 + e)
+        return {
+            "scale factor S": sf,
+            "bias V0": ym - slope * xbar,
+            "nonlinearity NL": 100.0 * dmax / (np.abs(sf) * fs),
+        }
+
+    batch = max(10_000, (4_000_000 // max(n, 1)) // 10_000 * 10_000)
+    mc = monte_carlo(model, inputs, trials=mc_trials, seed=_MC_SEED, batch=batch)
+    assert isinstance(mc, dict)
+    budgets: dict[str, UncertaintyBudget] = {}
+    few = (
+        f"the point means have ν ≤ {_MC_MIN_DOF:g} (≤ {_MC_MIN_DOF + 1:g} samples, or a line "
+        "of few points): the Monte Carlo draws them normal (a t with ν ≤ 4 has no settled "
+        "standard deviation), so u(NL) leaves out the small-ν widening and S and V0 are not "
+        "validated by it."
+    )
+    flat = int(np.count_nonzero(u_pt == 0))
+    flat_note = (
+        f"{flat} of the {n} points have identical samples and no visible output grid: the "
+        "rounding of their means (the output's resolution) is not known here and is not included."
+        if flat
+        else None
+    )
+    for key, gum, extra in (("scale_factor", gum_s, type_a), ("bias", gum_b, b_notes)):
+        m = mc[gum.names_out[0]]
+        more = list(extra) + ([flat_note] if flat_note else [])
+        if float(gum.u[0]) > 0 and m.u > 0 and not heavy:
+            budgets[key] = validated(gum, m, more)
+        else:
+            b = gum.budget(0)
+            budgets[key] = dataclasses.replace(
+                b, notes=b.notes + tuple(more) + ((few,) if heavy else ())
+            )
+
+    m_nl: MonteCarloResult = mc["nonlinearity NL"]
+    bias = float(m_nl.value) - nl
+    lo, hi = m_nl.interval_symmetric
+    rows = []
+    u_eps_part = 0.0
+    if eps_in is not None:
+        sens = nl / (1.0 + eps)  # NL ∝ (1 + ε): ∂NL/∂ε
+        u_eps_part = abs(sens) * eps_in.u
+    u_pts_part = math.sqrt(max(m_nl.u**2 - u_eps_part**2, 0.0))
+    u2 = m_nl.u**2
+    rows.append(
+        BudgetRow(
+            source=f"point means at the {n} rates",
+            value=math.nan,
+            unit=ou,
+            distribution="normal, one per point",
+            u=math.nan,
+            sensitivity=math.nan,
+            contribution=u_pts_part,
+            share=u_pts_part**2 / u2 if u2 > 0 else 0.0,
+            dof=float(np.min(nu_pt)),
+            origin=basis.replace(" through the line", ""),
+        )
+    )
+    if eps_in is not None:
+        rows.append(
+            BudgetRow(
+                source=eps_in.name,
+                value=eps_in.value,
+                unit="",
+                distribution=eps_in.description or eps_in.distribution,
+                u=eps_in.u,
+                sensitivity=nl / (1.0 + eps),
+                contribution=u_eps_part,
+                share=u_eps_part**2 / u2 if u2 > 0 else 0.0,
+                dof=eps_in.dof,
+                origin=eps_in.source,
+            )
+        )
+    nl_notes = [
+        "NL = 100·max|δ|/(|S|·FS) is a maximum of absolute residuals: noise in the point means "
+        "biases it upward (as a magnitude near zero, JCGM 102), and first-order propagation does "
+        f"not apply. Monte Carlo (JCGM 101), {m_nl.trials} trials over the point means and the "
+        f"inputs below: mean of the simulated NL {m_nl.value:.4g} %FS, bias {bias:+.2g} %FS, "
+        f"bias-corrected NL = {nl - bias:.4g} %FS.",
+        f"probabilistically symmetric 95 % interval of the simulated NL: [{lo:.4g}, {hi:.4g}] %FS "
+        "(JCGM 101 §7.7.1); U is its half-width and k = U/u.",
+        "contributions: the point means' part is the Monte Carlo u less the set-rate part; the "
+        "set-rate part is first order (NL ∝ 1 + ε). A maximum has no sensitivity coefficient "
+        "for the point means (—).",
+    ]
+    nl_notes += type_a
+    if heavy:
+        nl_notes.append(few)
+    if flat_note:
+        nl_notes.append(flat_note)
+    budgets["nonlinearity_percent_fs"] = monte_carlo_budget(
+        "nonlinearity NL", "%FS", nl, m_nl, rows, nl_notes
+    )
+
+    # lack of fit: do the points scatter about the line more than their noise explains?
+    lof = None
+    if not h3 and n > 2:
+        var_mean = float(np.mean(u_pt**2))
+        if var_mean > 0:
+            ratio = float(resid @ resid) / ((n - 2) * var_mean)
+            if ratio > float(stats.chi2.ppf(_LACK_OF_FIT_P, n - 2)) / (n - 2):
+                s2 = float(resid @ resid) / (n - 2)
+                u_h3 = math.sqrt(s2 / sxx) / abs(1.0 + eps)
+                lof = (
+                    f"lack of fit: the point means scatter about the line {math.sqrt(ratio):.3g} "
+                    "times more (rms) than their standard errors explain. That is the "
+                    "nonlinearity NL reports (seed 004's δ(Ω)) or drift between the points; only "
+                    "drift is an uncertainty of S, and u(S) does not hold it — repeat the test to "
+                    f"tell. The scatter about the line (GUM H.3) would give u(S) = {u_h3:.2g} "
+                    f"{unit_s}."
+                )
+    return budgets, bias, (float(lo), float(hi)), lof

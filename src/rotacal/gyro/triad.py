@@ -38,7 +38,18 @@ import numpy as np
 from scipy import stats
 
 from rotacal.errors import CaptureError, ConfigError
-from rotacal.results import Result
+from rotacal.gyro.uncertainty import (
+    as_specs,
+    element_key,
+    linear_gum,
+    spec_input,
+    specs_note,
+    uncertainty_json,
+)
+from rotacal.results import Result, to_jsonable
+from rotacal.uncertainty.budget import UncertaintyBudget
+from rotacal.uncertainty.gum import Input
+from rotacal.uncertainty.specs import InstrumentSpecs
 
 __all__ = [
     "RATE_COLUMNS",
@@ -420,9 +431,12 @@ class TriadResult(Result):
     fit_residual_rms : ndarray (3,)
         rms of u − (K·ω + b) per output over its kept rows (u).
     scale_misalignment_u, bias_u : ndarray
-        Standard uncertainties of K (u per °/s) and b (u) from the least squares: white,
-        uncorrelated noise per row, exact reference rates, the linear model. Correlated noise
-        (MEMS flicker, drift during the test) makes them optimistic.
+        Combined standard uncertainties of K (u per °/s) and b (u): those of the budgets in
+        ``_budgets`` (one per element, keys ``scale_misalignment[i][j]`` and ``bias[i]``). Type A
+        from the least squares (white, uncorrelated noise per row, the linear model: correlated
+        noise such as MEMS flicker or drift during the test makes it optimistic); Type B from
+        ``table.set_rate_relative`` (K only). The JSON adds ``scale_misalignment_U``, ``bias_U``
+        (same shapes), ``k``, ``coverage_probability`` and ``uncertainty_budgets``.
     scale_factors, sensitive_axes, misalignment_deg
         :func:`decompose_scale_misalignment` of K (u per °/s; unit rows; deg).
     robust_sigma : ndarray (3,)
@@ -436,6 +450,8 @@ class TriadResult(Result):
         Rows given; rows kept in all three outputs; distinct reference-rate vectors.
     plan : TriadPlanCheck
         Rank and conditioning of the plan in the capture.
+    output_unit : str
+        Name of the output unit (for budgets and reports; "" when not given).
     """
 
     scale_misalignment: np.ndarray
@@ -458,11 +474,23 @@ class TriadResult(Result):
     nominal_scale: float
     plan: TriadPlanCheck
     notes: tuple[str, ...] = ()
+    output_unit: str = ""
     _plot: dict[str, Any] = dataclasses.field(default_factory=dict, repr=False, compare=False)
+    _budgets: dict[str, UncertaintyBudget] = dataclasses.field(
+        default_factory=dict, repr=False, compare=False
+    )
 
     def calibrate(self, u: Any) -> np.ndarray:
         """ω̂ = K⁻¹(u − b) (°/s) for raw outputs ``u`` (n, 3) — seed 003, eq. (7)."""
         return apply_triad_calibration(u, self.scale_misalignment, self.bias)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of INTERFACE.md plus the uncertainty keys (arrays shaped like K and b)."""
+        out = super().to_dict()
+        if self._budgets:
+            keys = uncertainty_json(self._budgets, {"scale_misalignment": (3, 3), "bias": (3,)})
+            out.update(to_jsonable(keys))
+        return out
 
 
 # ------------------------------------------------------------------------------------ fitting
@@ -588,6 +616,8 @@ def calibrate_triad(
     output_limits: tuple[float, float] | None = None,
     max_reject_fraction: float = 0.2,
     columns: Sequence[str] = RATE_COLUMNS + TRIAD_OUTPUT_COLUMNS,
+    specs: InstrumentSpecs | None = None,
+    output_unit: str = "",
 ) -> TriadResult:
     """Scale/misalignment matrix K and bias b of a gyro triad by least squares (seed 003).
 
@@ -619,12 +649,19 @@ def calibrate_triad(
         as not following u = K·ω + b (default 0.2).
     columns : sequence of 6 str
         Names used in messages for the rate and output columns.
+    specs : InstrumentSpecs or None
+        The lab's instrument specifications (Type B; a TOML path or a mapping also work). Used:
+        ``table.set_rate_relative`` (relative error ε of the table's rates, realised ω·(1 + ε), so
+        K = K₀/(1 + ε) with K₀ fitted against the set rates; b does not depend on ε). None: Type A
+        only.
+    output_unit : str
+        Name of the output unit, for the budgets and reports.
 
     Returns
     -------
     TriadResult
-        K (output unit per °/s), b (output unit), their standard uncertainties, rejected rows,
-        residual rms before and after (°/s).
+        K (output unit per °/s), b (output unit), their standard uncertainties and budgets
+        (``_budgets``), rejected rows, residual rms before and after (°/s).
 
     Raises
     ------
@@ -640,8 +677,9 @@ def calibrate_triad(
     March 2023 (seed 003): U and A, eq. (5); least squares, eq. (4); calibrated output, eq. (7);
     rejection of anomalous measurements (processing step 2).
     Huber P. J. (1981), Robust Statistics, Wiley, §7; Rousseeuw P. J., Croux C. (1993), JASA
-    88:1273 (1.4826·MAD).
+    88:1273 (1.4826·MAD). JCGM 100:2008 (GUM) §4.2, §4.3, §5.1.2, G.4.1 (the budgets).
     """
+    spec = as_specs(specs)
     cols = tuple(columns)
     if len(cols) != 6:
         raise ConfigError(f"columns must name 3 rate and 3 output columns, got {columns!r}.")
@@ -742,18 +780,27 @@ def calibrate_triad(
         coef[:, c] = beta
         keep[:, c] = kc
         sigma[c] = s
-    kmat = coef[:3].T.copy()
+    k_fit = coef[:3].T.copy()
     bias = coef[3].copy()
-    u_k = np.sqrt(np.array([np.diag(cov[c])[:3] for c in range(3)]))
-    u_b = np.sqrt(np.array([cov[c][3, 3] for c in range(3)]))
+    eps_in = spec_input(spec, "table.set_rate_relative", "table set-rate error ε")
+    eps = 0.0 if eps_in is None else eps_in.value
+    kmat = k_fit / (1.0 + eps)
+    budgets = _triad_budgets(
+        k_fit, bias, cov, np.count_nonzero(keep, axis=0), eps_in, spec, out_cols, output_unit
+    )
+    u_k = np.array(
+        [[budgets[element_key("scale_misalignment", (i, j))].u for j in range(3)] for i in range(3)]
+    )
+    u_b = np.array([budgets[element_key("bias", (i,))].u for i in range(3)])
 
     fitted = x @ coef
     fit_res = uu - fitted
     all_kept = keep.all(axis=1)
     fit_rms = np.array([math.sqrt(float(np.mean(fit_res[keep[:, c], c] ** 2))) for c in range(3)])
     omega_hat = apply_triad_calibration(uu, kmat, bias)
-    after = omega_hat - omega
-    before = uu / ns - omega
+    omega_true = omega * (1.0 + eps)  # the rates the table realised (ε̄ stated, else 0)
+    after = omega_hat - omega_true
+    before = uu / ns - omega_true
     rms_after = np.sqrt(np.mean(after[all_kept] ** 2, axis=0))
     rms_before = np.sqrt(np.mean(before[all_kept] ** 2, axis=0))
 
@@ -775,6 +822,11 @@ def calibrate_triad(
         notes.append(
             f"the plan is poorly conditioned (scaled condition number "
             f"{plan.condition_number_scaled:.3g}): the coefficients are imprecise"
+        )
+    if eps != 0.0:
+        notes.append(
+            f"the stated mean set-rate error ε̄ = {eps:.3g} (table.set_rate_relative) corrects K: "
+            "K = K₀/(1 + ε̄), K₀ fitted against the set rates"
         )
     if math.isfinite(k) and (~keep).any():
         notes.append(
@@ -839,8 +891,86 @@ def calibrate_triad(
         nominal_scale=ns,
         plan=plan,
         notes=tuple(notes),
+        output_unit=output_unit,
         _plot=plot,
+        _budgets=budgets,
     )
+
+
+def _triad_budgets(
+    k_fit: np.ndarray,
+    bias: np.ndarray,
+    cov: np.ndarray,
+    rows_kept: np.ndarray,
+    eps_in: Input | None,
+    spec: InstrumentSpecs | None,
+    out_cols: Sequence[str],
+    output_unit: str,
+) -> dict[str, UncertaintyBudget]:
+    """One GUM budget per element of K (9) and b (3).
+
+    K_ij = K₀_ij/(1 + ε): inputs K₀_ij (Type A, the least-squares covariance s²(XᵀX)⁻¹ of output
+    i, ν = rows kept − 4) with c = 1/(1 + ε), and ε (Type B, ``table.set_rate_relative``) with
+    c = −K₀_ij/(1 + ε)². b_i: the fitted b_i alone (a relative rate error does not move it).
+
+    References
+    ----------
+    Seed 003, eqs. (4)–(5); JCGM 100:2008 (GUM) §4.2 (Type A), §4.3 (Type B), §5.1.2 eq. (10),
+    G.4.1 (ν_eff), H.3 (least-squares parameters).
+    """
+    ou = output_unit or "output unit"
+    unit_k = f"{ou}/(°/s)"
+    eps = 0.0 if eps_in is None else eps_in.value
+    general = (
+        "Type A assumes white, uncorrelated noise per row and the linear model u = K·ω + b; "
+        "correlated noise (MEMS flicker, drift during the test) makes it optimistic."
+    )
+    extra = [general]
+    if (note := specs_note(spec, ("table.set_rate_relative",))) is not None:
+        extra.append(note)
+    budgets: dict[str, UncertaintyBudget] = {}
+    for i in range(3):
+        dof = float(rows_kept[i] - 4)
+        origin = f"Type A: least squares of column {out_cols[i]}, {int(rows_kept[i])} rows"
+        for j in range(3):
+            name = f"K_{_AXES[i]}{_AXES[j]}"
+            k0 = Input(
+                f"{name},0: fitted against the set rates",
+                float(k_fit[i, j]),
+                math.sqrt(max(float(cov[i][j, j]), 0.0)),
+                dof,
+                "normal",
+                unit_k,
+                origin,
+            )
+            inputs, sens = [k0], [1.0 / (1.0 + eps)]
+            if eps_in is not None:
+                inputs.append(eps_in)
+                sens.append(-float(k_fit[i, j]) / (1.0 + eps) ** 2)
+            b = linear_gum(name, unit_k, float(k_fit[i, j]) / (1.0 + eps), inputs, sens).budget(0)
+            budgets[element_key("scale_misalignment", (i, j))] = dataclasses.replace(
+                b, notes=b.notes + tuple(extra)
+            )
+    for i in range(3):
+        name = f"b_{_AXES[i]}"
+        b0 = Input(
+            f"{name}: fitted",
+            float(bias[i]),
+            math.sqrt(max(float(cov[i][3, 3]), 0.0)),
+            float(rows_kept[i] - 4),
+            "normal",
+            ou,
+            f"Type A: least squares of column {out_cols[i]}, {int(rows_kept[i])} rows",
+        )
+        b = linear_gum(name, ou, float(bias[i]), [b0], [1.0]).budget(0)
+        notes = list(b.notes) + extra
+        if eps_in is not None:
+            notes.append(
+                "table.set_rate_relative does not enter: a relative rate error leaves the "
+                "constant term of the fit unchanged."
+            )
+        budgets[element_key("bias", (i,))] = dataclasses.replace(b, notes=tuple(notes))
+    return budgets
 
 
 def calibrate_triad_columns(columns: Mapping[str, Any] | Any, **options: Any) -> TriadResult:

@@ -12,6 +12,7 @@ import numpy as np
 
 from rotacal.gyro.scale_factor import ScaleFactorResult
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
+from rotacal.report.uncertainty import budget_tables
 
 __all__ = ["scale_factor_figure", "scale_factor_section"]
 
@@ -148,8 +149,15 @@ def scale_factor_section(
         [
             "nonlinearity NL",
             f"{r.nonlinearity_percent_fs:.4g} %FS",
-            "",
+            _g(r._budgets["nonlinearity_percent_fs"].u, 3) if r._budgets else "",
             _g(truth["nonlinearity_percent_fs"], 4) if truth else "",
+        ],
+        [
+            "NL bias-corrected (Monte Carlo)",
+            f"{_g(r.nonlinearity_corrected_percent_fs, 4)} %FS "
+            f"(bias {_g(r.nonlinearity_bias_percent_fs, 2)} %FS)",
+            "",
+            "",
         ],
         ["full scale FS", f"{r.full_scale_deg_s:g} °/s", "", ""],
         ["rate points / samples", f"{r.n_points} / {r.samples_used}", "", ""],
@@ -167,9 +175,16 @@ def scale_factor_section(
     if r.requirement is not None:
         v = r.requirement
         verdict = {True: "PASS", False: "FAIL", None: "NOT ASSESSED"}
+        d = r.decision_with_uncertainty
+
+        def with_u(quantity: str) -> str:
+            if quantity == "accuracy" and d is not None:
+                return f"{d.verdict.upper()} (NL ± U = {d.value:.4g} ± {d.U:.2g} %FS)"
+            return "— (no U)"
+
         tables.append(
             Table(
-                ["check", "limit", "measured", "margin", "verdict"],
+                ["check", "limit", "measured", "margin", "verdict", "verdict with U (ILAC-G8)"],
                 [
                     [
                         c.quantity,
@@ -178,6 +193,7 @@ def scale_factor_section(
                         _g(c.value, 4),
                         _g(c.margin, 3),
                         verdict[c.passed],
+                        with_u(c.quantity),
                     ]
                     for c in v.checks
                 ],
@@ -185,6 +201,12 @@ def scale_factor_section(
             )
         )
         paragraphs.append(v.note)
+        if d is not None:
+            paragraphs.append(
+                f"Decision rule: {d.rule}. {d.line[0].upper()}{d.line[1:]}. The range and "
+                "resolution checks carry no uncertainty here (set rates and the estimated "
+                "resolution)."
+            )
     tables.append(
         Table(
             [
@@ -211,6 +233,7 @@ def scale_factor_section(
             caption="Rate points",
         )
     )
+    tables += budget_tables(r._budgets)
     return Section(
         title=title or "Gyro scale factor and nonlinearity",
         paragraphs=paragraphs,

@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
+from rotacal.report.uncertainty import budget_tables, results_table
 from rotacal.table.motion import MotionResult, SchemeComparison
 
 __all__ = ["comparison_section", "motion_figures", "motion_section"]
@@ -234,8 +235,14 @@ def motion_figures(r: MotionResult) -> list[Figure]:
     return [f for f in figs if f is not None]
 
 
+def _u(r: MotionResult, key: str, unit: str) -> str:
+    b = r._budgets.get(key)
+    return f"{b.u:.2g} {unit}" if b is not None else ""
+
+
 def motion_section(r: MotionResult, title: str | None = None, *, figures: bool = True) -> Section:
-    """A report section for one motion calibration: results, errors against set values, figures."""
+    """A report section for one motion calibration: results, errors against set values, figures,
+    then the results with their expanded uncertainties and one uncertainty budget per quantity."""
     name = _SCHEME_NAMES.get(r.scheme, r.scheme)
     rows = [
         ["amplitude (fundamental)", f"{r.amplitude_deg:.7g} °", f"{r.amplitude_deg_u:.2g} °"],
@@ -243,18 +250,38 @@ def motion_section(r: MotionResult, title: str | None = None, *, figures: bool =
         [
             "angular-acceleration amplitude",
             f"{r.angular_acceleration_amplitude_deg_s2:.6g} °/s²",
-            "",
+            _u(r, "angular_acceleration_amplitude_deg_s2", "°/s²"),
         ],
         [f"THD (h = 2…{r.harmonics})", f"{r.thd_percent:.4f} %", f"{r.thd_percent_u:.2g} %"],
+        [
+            "THD, bias-corrected (noise power removed)",
+            f"{_fmt(r.thd_percent_bias_corrected, 5)} %",
+            "",
+        ],
+        [
+            "THD, Monte Carlo mean (bias)",
+            f"{_fmt(r.thd_percent_mc_mean, 5)} % ({r.thd_percent_bias:+.2g} pp)",
+            "",
+        ],
+        [
+            "THD, 95 % coverage interval (Monte Carlo)",
+            f"[{_fmt(r.thd_percent_coverage_interval[0])}, "
+            f"{_fmt(r.thd_percent_coverage_interval[1])}] %",
+            "",
+        ],
         ["periods analysed", str(r.periods_used), ""],
-        ["reversing moments found", str(r.reversal_times_s.size), ""],
+        [
+            "reversing moments found",
+            str(r.reversal_times_s.size),
+            _u(r, "reversal_times_s", "s") + (" each" if r._budgets else ""),
+        ],
         ["fit residual (rms)", f"{r.residual_rms_deg * 3600:.3g} arcsec", ""],
     ]
     if r.snr_db is not None:
         rows.append(["SNR of the rate signal", f"{r.snr_db:.2f} dB", ""])
     tables = [
         Table(
-            ["quantity", "value", "standard uncertainty (fit, white noise)"],
+            ["quantity", "value", "standard uncertainty u (see the budgets)"],
             rows,
             caption="Results",
         )
@@ -287,6 +314,7 @@ def motion_section(r: MotionResult, title: str | None = None, *, figures: bool =
             caption="Harmonic amplitudes of the angular displacement",
         )
     )
+    tables.extend(budget_tables(r._budgets))
     return Section(
         title=title or f"Sinusoidal motion by {name}",
         paragraphs=list(r.notes),
@@ -320,7 +348,8 @@ def comparison_section(
             ose,
             lts,
             f"{c.thd_other_percent:.3f}",
-            f"{c.thd_difference_percent:+.3f} ± {c.thd_difference_percent_u:.2g}",
+            f"{c.thd_difference_percent:+.3f} ± {c.thd_difference_percent_u:.2g}"
+            + (f" (U = {c._budgets['thd_difference_percent'].U:.2g})" if c._budgets else ""),
             _fmt(c.snr_db, 3),
         ]
         if has_truth:
@@ -333,11 +362,19 @@ def comparison_section(
         paragraphs=[
             "Each run is measured by the combined scheme (OSE for large amplitudes, LTS for the "
             "smallest) and by the FOG at the same time. The difference is combined minus FOG, in "
-            "percentage points, ± its first-order standard uncertainty from the two fits' residuals "
-            "(a difference beyond about three of them is not explained by noise). The paper's own values are shown for comparison; the twin's motion was "
-            "chosen to resemble them, so agreement with the twin's truth, not with the paper's digits, "
-            "is what validates the methods."
+            "percentage points, ± its standard uncertainty (each THD's by Monte Carlo, the two "
+            "taken as independent) and the expanded uncertainty U at 95 % (a difference beyond U "
+            "is not explained by noise). The paper's own values are shown for comparison; the "
+            "twin's motion was chosen to resemble them, so agreement with the twin's truth, not "
+            "with the paper's digits, is what validates the methods."
         ],
-        tables=[Table(cols, body, caption="THD of the angular displacement")],
+        tables=[
+            Table(cols, body, caption="THD of the angular displacement"),
+            *(
+                results_table(c._budgets, caption=f"{label}: differences with their U (ILAC-P14)")
+                for label, c, _ in rows
+                if c._budgets
+            ),
+        ],
         anchor="table1",
     )

@@ -13,6 +13,7 @@ import numpy as np
 
 from rotacal.gyro.multiposition import MultipositionResult
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
+from rotacal.report.uncertainty import budget_tables
 
 __all__ = ["multiposition_figure", "multiposition_section"]
 
@@ -111,10 +112,17 @@ def multiposition_section(
         title=title or f"Multiposition drift coefficients, {r.axis} axis",
         paragraphs=[
             "Least squares of k·i − ω on the gravity terms at each turntable position (seed 001, "
-            "eqs. (1)–(6)); standard uncertainties from the residual variance, s²·(AᵀA)⁻¹.",
+            "eqs. (1)–(6)). Each coefficient's uncertainty budget holds the fit's residual "
+            "variance s²·(AᵀA)⁻¹ (Type A) and, where the lab states them, the latitude and the "
+            "turntable's orientation error (seed 001 eqs. (7)–(11)), with sensitivities from the "
+            "derivative of the least-squares solution.",
             *r.notes,
         ],
-        tables=[Table(cols, rows, caption="Drift coefficients"), design],
+        tables=[
+            Table(cols, rows, caption="Drift coefficients"),
+            design,
+            *budget_tables(r._budgets),
+        ],
         figures=[multiposition_figure(r)] if figures else [],
         anchor=f"multiposition-{r.axis}",
     )

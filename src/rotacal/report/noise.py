@@ -10,6 +10,7 @@ import numpy as np
 
 from rotacal.gyro.noise import GyroNoise
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
+from rotacal.report.uncertainty import budget_tables
 
 __all__ = ["noise_section"]
 
@@ -86,8 +87,24 @@ def noise_section(r: GyroNoise, title: str = "Gyro noise (IEEE Std 952)") -> Sec
     if not rows:
         rows.append(["no term identified", "", "", "", ""])
     table = Table(
-        ["term", "slope", "value", "interval (±1/√(2(N/m−1)))", "read at τ"],
+        ["term", "slope", "value", "IEEE 952 C.4 interval (±1/√(2(N/m−1)))", "read at τ"],
         rows,
         caption="Noise terms",
     )
-    return Section(title=title, paragraphs=list(r.notes), tables=[table], figures=[_figure(r)])
+    paragraphs = list(r.notes)
+    if r._budgets:
+        paragraphs.append(
+            "Uncertainty budgets: each term's Type A standard uncertainty is the ±1σ χ² interval "
+            "of the reading it comes from — the level of the line fitted through correlated "
+            "points of the curve (equivalent degrees of freedom for the term's own noise type), "
+            "or the one point of the flat minimum for B — rather than IEEE 952 C.4's rule of "
+            "thumb in the table above. The slope method's own bias (other terms adding to the "
+            "fitted points, the minimum of noisy points) is not in u; each budget's notes give "
+            "an upper estimate of the first part."
+        )
+    return Section(
+        title=title,
+        paragraphs=paragraphs,
+        tables=[table, *budget_tables(r._budgets)],
+        figures=[_figure(r)],
+    )

@@ -13,7 +13,9 @@ import numpy as np
 from rotacal.encoder.selfcal import SelfCalibration
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
 from rotacal.report.motion import _fmt, _style
+from rotacal.report.uncertainty import budget_tables
 from rotacal.table.rate import RateResult
+from rotacal.uncertainty import UncertaintyBudget
 
 __all__ = ["rate_section", "selfcal_section"]
 
@@ -141,7 +143,22 @@ def selfcal_section(r: SelfCalibration, title: str = "Self-calibration of the en
         ["deviation, peak-to-peak", f"{r.deviation_pp_arcsec:.4g} arcsec"],
         ["deviation, rms", f"{r.deviation_rms_arcsec:.4g} arcsec"],
         ["repeatability, rms (revolution − mean)", f"{_fmt(r.repeatability_rms_arcsec, 3)} arcsec"],
-        ["standard uncertainty of the mean curve (rms)", f"{_fmt(r.deviation_u_arcsec, 2)} arcsec"],
+        [
+            "standard uncertainty of every point of the curve",
+            f"{_fmt(r.deviation_u_arcsec, 2)} arcsec"
+            + (
+                f" (U = {r.point_budget.U:.2g} arcsec, k = {r.point_budget.k:.3g})"
+                if r.point_budget is not None
+                else ""
+            ),
+        ],
+        [
+            "peak-to-peak corrected for the noise's bias",
+            "—"
+            if r.deviation_pp_corrected_arcsec is None
+            else f"{r.deviation_pp_corrected_arcsec:.4g} arcsec "
+            f"(bias {r.deviation_pp_bias_arcsec:+.2g} arcsec)",
+        ],
         [
             "closure residual of the head differences (rms)",
             f"{r.closure_residual_rms_arcsec:.3g} arcsec",
@@ -163,11 +180,64 @@ def selfcal_section(r: SelfCalibration, title: str = "Self-calibration of the en
     rep = _repeatability_figure(r)
     if rep is not None:
         figures.append(rep)
+    tables = [Table(["quantity", "value"], rows, caption="Results"), heads]
+    if r.point_budget is not None:
+        tables.append(_point_table(r.point_budget))
+    tables.extend(budget_tables(r.budgets))
     return Section(
         title=title,
         paragraphs=[r.undetectable_harmonics_note, *r.notes],
-        tables=[Table(["quantity", "value"], rows, caption="Results"), heads],
+        tables=tables,
         figures=figures,
+    )
+
+
+def _point_table(b: UncertaintyBudget) -> Table:
+    """The budget of one point of the deviation curve (the same at every line)."""
+    header, rows = b.table()
+    notes = " ".join(b.notes)
+    return Table(
+        header,
+        rows,
+        caption=(
+            f"Uncertainty budget of each point of the deviation curve ({b.method}): "
+            f"u = {b.u:.2g} arcsec, U = {b.U:.2g} arcsec (k = {b.k:.3g}, p ≈ {100 * b.p:g} %) "
+            f"at every line. {notes}"
+        ),
+    )
+
+
+def _allan_table(r: RateResult) -> Table:
+    """s(φ) with its χ² uncertainty, one row per angle."""
+    names = {2: "white PM", 1: "flicker PM", 0: "white FM", -1: "flicker FM", -2: "random-walk FM"}
+    rows = [
+        [
+            f"{phi:.4g}",
+            f"{100 * s:.3g}",
+            f"{100 * u:.2g}",
+            f"{100 * lo:.3g} … {100 * hi:.3g}",
+            f"{edf:.3g}",
+            names.get(a, str(a)),
+        ]
+        for phi, s, u, (lo, hi), edf, a in zip(
+            r.allan_angle_deg,
+            r.allan_relative,
+            r.allan_relative_u,
+            r.allan_relative_interval,
+            r.allan_relative_edf,
+            r.allan_noise_alpha,
+            strict=True,
+        )
+    ]
+    return Table(
+        ["φ (°)", "s(φ) (%)", "u (%)", "95 % interval (%)", "edf", "noise type assumed"],
+        rows,
+        caption=(
+            "Relative root Allan variance with its uncertainty: ν·ŝ²/s² ~ χ²(ν), ν the equivalent "
+            "degrees of freedom of the overlapping estimator for the noise type the local slope "
+            "suggests (Greenhall & Riley 2003); u = ŝ/√(2ν). Sinusoidal fluctuations of the table "
+            "are no power-law noise: there the edf is an approximation."
+        ),
     )
 
 
@@ -287,10 +357,19 @@ def rate_section(r: RateResult, title: str = "Constant-rate stability") -> Secti
         ["s(φ) near 10°", _near(r.allan_angle_deg, r.allan_relative, 10.0), ""],
         ["s(φ) near 360°", _near(r.allan_angle_deg, r.allan_relative, 360.0), ""],
         ["record", f"{r.duration_s:.4g} s, {r.revolutions} whole revolution(s)", r.head],
+        [
+            "timing noise of the pulses (Type A)",
+            "—" if r.timing_jitter_s is None else f"{r.timing_jitter_s:.3g} s",
+            "" if r.timing_jitter_dof is None else f"ν = {r.timing_jitter_dof:.3g}",
+        ],
     ]
+    tables = [Table(["quantity", "value", ""], rows, caption="Results")]
+    tables.extend(budget_tables(r.budgets))
+    if r.allan_relative_u:
+        tables.append(_allan_table(r))
     return Section(
         title=title,
         paragraphs=list(r.notes),
-        tables=[Table(["quantity", "value", ""], rows, caption="Results")],
+        tables=tables,
         figures=[_rate_figure(r), _allan_figure(r)],
     )

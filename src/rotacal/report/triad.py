@@ -14,6 +14,7 @@ import numpy as np
 from rotacal.gyro.rotations import RotationCalibration
 from rotacal.gyro.triad import TriadResult
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
+from rotacal.report.uncertainty import budget_tables
 
 __all__ = ["rotations_figures", "rotations_section", "triad_figures", "triad_section"]
 
@@ -272,9 +273,12 @@ def triad_section(r: TriadResult, title: str | None = None, *, figures: bool = T
         "Seed 003 (modified six-position method): the outputs fill U, the reference rates with a "
         "row of ones fill A (eq. 5), [K | b] solves U = [K | b]·A by least squares (eq. 4). "
         "Anomalous measurements are rejected per output by a Huber fit and |r| > k·1.4826·MAD. "
-        "Uncertainties assume white, uncorrelated noise per row and exact reference rates."
+        "Uncertainties: the least-squares covariance (Type A: white, uncorrelated noise per row) "
+        "and, when stated, the table's set-rate error (Type B, table.set_rate_relative); one "
+        "budget per element of K and b below."
     ]
     paragraphs += list(r.notes)
+    tables += budget_tables(r._budgets)
     return Section(
         title=title or "3-axis gyro calibration (seed 003)",
         paragraphs=paragraphs,
@@ -392,10 +396,12 @@ def rotations_section(
         "Ferraris et al. (1994, 1995): the rate minus the bias (from the static sections) is "
         "integrated over each rotation; the integrated vectors against the set angles give "
         "K = Θ·Φᵀ(Φ·Φᵀ)⁻¹. Uncertainties: white noise of the static sections integrated over "
-        "each rotation, the offset during the rotations (noise of the bias and spread of the "
-        f"static means) and {r.angle_u_deg:g}° on each realised angle."
+        "each rotation, the bias subtracted and the offset change during the rotations (spread "
+        f"of the static means), {r.angle_u_deg * 3600:.3g}″ on each realised angle, and the DAQ "
+        "timebase when stated; one budget per element of K and b below."
     ]
     paragraphs += list(r.notes)
+    tables += budget_tables(r._budgets)
     return Section(
         title=title or "Gyro triad from rotations through known angles (Ferraris)",
         paragraphs=paragraphs,

@@ -49,6 +49,7 @@ def simulate_gyro_noise(
     bias_band_s: tuple[float, float] = (1.0, 1000.0),
     bias_deg_s: float = 0.0,
     quantum_deg_s: float | None = None,
+    timebase_relative_error: float = 0.0,
     seed: int = 0,
 ) -> SimCapture:
     """A static gyro record ``time_s, rate_deg_s`` with known noise coefficients.
@@ -69,6 +70,10 @@ def simulate_gyro_noise(
         Constant bias (does not change the Allan deviation).
     quantum_deg_s : float, °/s, optional
         Quantise the output to this step.
+    timebase_relative_error : float
+        Fractional error e of the DAQ clock that stamps ``time_s``: every recorded time is
+        (1 + e) times the true one (a +1e-6 clock makes every time 1 ppm long). The noise
+        coefficients of the truth are those of true time. Default 0.
     seed : int
 
     Returns
@@ -94,6 +99,16 @@ def simulate_gyro_noise(
     if not 0 < t_lo < t_hi or t_lo < 2.0 / fs:
         raise ConfigError(
             "bias_band_s must be (shortest, longest) correlation times, 2/fs ≤ shortest < longest."
+        )
+    try:
+        clock = float(timebase_relative_error)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"timebase_relative_error must be a number, got {timebase_relative_error!r}."
+        ) from None
+    if not math.isfinite(clock) or clock <= -1.0:
+        raise ConfigError(
+            f"timebase_relative_error must be finite and > −1, got {timebase_relative_error!r}."
         )
     rng = np.random.default_rng(seed)
     dt = 1.0 / fs
@@ -128,13 +143,14 @@ def simulate_gyro_noise(
         "bias_band_s": [t_lo, t_hi],
         "bias_deg_s": float(bias_deg_s),
         "quantum_deg_s": quantum_deg_s,
+        "timebase_relative_error": clock,
         "fs_hz": fs,
         "samples": n,
         "seed": seed,
     }
     return SimCapture(
         kind="gyro-noise",
-        columns={"time_s": np.arange(n) * dt, "rate_deg_s": rate},
+        columns={"time_s": np.arange(n) * (dt * (1.0 + clock)), "rate_deg_s": rate},
         truth=truth,
     )
 

@@ -68,6 +68,7 @@ def simulate_gyro_rates(
     samples_per_point: int | Sequence[int] = 5000,
     quantum: float | None = None,
     saturation: tuple[float, float] | None = None,
+    rate_relative_error: float = 0.0,
     seed: int = 0,
 ) -> SimCapture:
     """A rate-table test of a single-axis gyro: ``samples_per_point`` outputs at each set rate.
@@ -94,6 +95,10 @@ def simulate_gyro_rates(
         Output quantum (output units): values are rounded to ``quantum·round(v/quantum)``.
     saturation : (float, float) or None
         Output rails (low, high) in output units: the output is clipped to them.
+    rate_relative_error : float
+        Relative error ε of the table's rate (dimensionless, > −1): the table turns at
+        Ω·(1 + ε) while the capture records the set rate Ω (the systematic effect behind the
+        specification ``table.set_rate_relative``; draw it per run to check a budget).
     seed : int
         Seed of ``numpy.random.default_rng``.
 
@@ -103,7 +108,9 @@ def simulate_gyro_rates(
         ``kind="gyro-rates"``, columns ``rate_deg_s`` (°/s, the set rate of each row) and ``output``
         (output units). ``truth`` holds ``scale_factor``/``bias`` of the model, ``ls_scale_factor``,
         ``ls_bias``, ``ls_residuals`` and ``nonlinearity_percent_fs`` (= 100·max|δ|/(|S_ls|·FS)) of
-        the least-squares line through the noise-free analog response, ``full_scale_deg_s``,
+        the least-squares line through the noise-free analog response against the rates the table
+        realised (``true_rates_deg_s``; the set rates when ``rate_relative_error`` is 0; FS is the
+        largest |set rate|), ``full_scale_deg_s``,
         ``clean_output`` per rate, ``saturated_rates_deg_s`` (rates whose clean output lies beyond a
         rail) and every setting.
 
@@ -142,6 +149,9 @@ def simulate_gyro_rates(
             f"the test would have {int(counts.sum())} rows, more than {_MAX_ROWS}; lower "
             "samples_per_point."
         )
+    eps = _finite("rate_relative_error", rate_relative_error)
+    if eps <= -1.0:
+        raise ConfigError(f"rate_relative_error must be > −1, got {rate_relative_error!r}.")
     q = None if quantum is None else _finite("quantum", quantum)
     if q is not None and q <= 0:
         raise ConfigError(f"quantum must be > 0 output units, got {quantum!r}.")
@@ -168,13 +178,15 @@ def simulate_gyro_rates(
             v = v + c * w**p
         return v
 
-    clean_pts = clean(rates)
-    # Truth of the fit: least-squares line of the noise-free analog response, one point per distinct
-    # set rate (a rate run twice is still one point: the method groups equal set rates).
+    clean_pts = clean(rates * (1.0 + eps))
+    # Truth of the fit: least-squares line of the noise-free analog response against the realised
+    # rates, one point per distinct set rate (a rate run twice is still one point: the method
+    # groups equal set rates).
     uniq = np.unique(rates)
-    clean_uniq = clean(uniq)
-    ls_s, ls_v0 = np.polyfit(uniq, clean_uniq, 1)
-    ls_res = clean_uniq - (ls_s * uniq + ls_v0)
+    true_uniq = uniq * (1.0 + eps)
+    clean_uniq = clean(true_uniq)
+    ls_s, ls_v0 = np.polyfit(true_uniq, clean_uniq, 1)
+    ls_res = clean_uniq - (ls_s * true_uniq + ls_v0)
     fs = float(np.max(np.abs(uniq)))
     nl = 100.0 * float(np.max(np.abs(ls_res))) / (abs(ls_s) * fs)
 
@@ -198,6 +210,8 @@ def simulate_gyro_rates(
         "ls_scale_factor": float(ls_s),
         "ls_bias": float(ls_v0),
         "rates_deg_s": uniq,
+        "true_rates_deg_s": true_uniq,
+        "rate_relative_error": eps,
         "clean_output": clean_uniq,
         "ls_residuals": ls_res,
         "full_scale_deg_s": fs,

@@ -104,6 +104,7 @@ def simulate_gyro_triad(
     output_limit: float | None = None,
     quantum: float | None = None,
     fs_hz: float = 100.0,
+    rate_relative_error: float = 0.0,
     seed: int = 0,
 ) -> SimCapture:
     """A 3-axis gyro test on a rate table: set rates about each axis, both directions (seed 003).
@@ -142,6 +143,9 @@ def simulate_gyro_triad(
         Round the outputs to multiples of this step (output unit): an ADC or a digital output.
     fs_hz : float
         Sampling rate for ``time_s`` (Hz).
+    rate_relative_error : float
+        Relative error ε of the table's rates (dimensionless, > −1): the DUT turns at ω·(1 + ε)
+        while the capture records the set rates ω (the effect behind ``table.set_rate_relative``).
     seed : int
         Seed of ``numpy.random.default_rng``.
 
@@ -176,6 +180,9 @@ def simulate_gyro_triad(
     fs = _finite("fs_hz", fs_hz)
     if fs <= 0:
         raise ConfigError(f"fs_hz must be > 0 Hz, got {fs_hz!r}.")
+    eps = _finite("rate_relative_error", rate_relative_error)
+    if eps <= -1.0:
+        raise ConfigError(f"rate_relative_error must be > −1, got {rate_relative_error!r}.")
 
     mags = np.ravel(np.column_stack([rates, -rates]))  # +r1, −r1, +r2, −r2, …
     pts = np.zeros((3 * mags.size, 3))
@@ -188,7 +195,7 @@ def simulate_gyro_triad(
         raise ConfigError(f"{n} rows is more than the twin makes at once ({_MAX_ROWS}).")
     omega = np.repeat(pts, spp, axis=0)
     rng = np.random.default_rng(seed)
-    u = omega @ k.T + b
+    u = (omega * (1.0 + eps)) @ k.T + b
     if sigma > 0:
         u += rng.normal(0.0, sigma, u.shape)
     n_out = round(frac * n)
@@ -230,6 +237,7 @@ def simulate_gyro_triad(
             "output_limit": None if output_limit is None else float(output_limit),
             "quantum": None if quantum is None else float(quantum),
             "fs_hz": fs,
+            "rate_relative_error": eps,
             "seed": int(seed),
         },
     }
@@ -249,6 +257,7 @@ def simulate_gyro_rotations(
     output_limit: float | None = None,
     quantum: float | None = None,
     fs_hz: float = 100.0,
+    angle_error_deg: Any = 0.0,
     seed: int = 0,
 ) -> SimCapture:
     """A Ferraris-style rotation recording: rest, rotate about x, rest, about y, rest, about z, rest.
@@ -277,6 +286,10 @@ def simulate_gyro_rotations(
         Clipping and quantisation of the outputs (output unit), as in :func:`simulate_gyro_triad`.
     fs_hz : float
         Sampling rate (Hz).
+    angle_error_deg : float or sequence of 3 float
+        Error of each realised angle (deg; one for all rotations or one each about x, y, z): the
+        DUT turns through ``angle_deg + error`` while the set angle stays ``angle_deg`` (the
+        effect behind ``table.set_angle_arcsec``; draw it per run to check a budget).
     seed : int
         Seed of ``numpy.random.default_rng``.
 
@@ -284,7 +297,8 @@ def simulate_gyro_rotations(
     -------
     SimCapture
         Kind ``"gyro-rotations"``; columns ``time_s`` (s), ``ux``, ``uy``, ``uz`` (output unit).
-        Truth: ``scale_misalignment``, ``bias``, ``angle_deg``, ``rotations`` ({"x": [start, stop],
+        Truth: ``scale_misalignment``, ``bias``, ``angle_deg`` (set), ``angle_realised_deg`` (one
+        per rotation), ``rotations`` ({"x": [start, stop],
         …}: half-open sample ranges including the margins), ``motion`` (the exact sample ranges
         of the motion), ``static`` (the rests minus the margins), the settings.
 
@@ -312,12 +326,21 @@ def simulate_gyro_rotations(
             f"(margin_s={margin_s!r} s)."
         )
     sigma = _nonneg("noise_std", noise_std)
+    try:
+        errs = np.broadcast_to(np.asarray(angle_error_deg, dtype=float), (3,)).copy()
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"angle_error_deg must be one number or three (deg), got {angle_error_deg!r}."
+        ) from None
+    if not np.isfinite(errs).all():
+        raise ConfigError(f"angle_error_deg must be finite (deg), got {angle_error_deg!r}.")
+    realised = ang + errs
     n = 4 * n_rest + 3 * n_rot
     if n > _MAX_ROWS:
         raise ConfigError(f"{n} samples is more than the twin makes at once ({_MAX_ROWS}).")
     omega = np.zeros((n, 3))
     kk = np.arange(n_rot)
-    profile = (2.0 * ang * fs / n_rot) * np.sin(np.pi * kk / n_rot) ** 2  # °/s; Σ = ang·fs
+    shape = (2.0 * fs / n_rot) * np.sin(np.pi * kk / n_rot) ** 2  # per deg of angle; Σ = fs
     motion: dict[str, list[int]] = {}
     rotations: dict[str, list[int]] = {}
     static: list[list[int]] = []
@@ -325,7 +348,7 @@ def simulate_gyro_rotations(
     for j, a in enumerate(_AXES):
         static.append([pos + (n_margin if j else 0), pos + n_rest - n_margin])
         pos += n_rest
-        omega[pos : pos + n_rot, j] = profile
+        omega[pos : pos + n_rot, j] = realised[j] * shape  # °/s; Σ = realised angle · fs
         motion[a] = [pos, pos + n_rot]
         rotations[a] = [pos - n_margin, pos + n_rot + n_margin]
         pos += n_rot
@@ -342,6 +365,7 @@ def simulate_gyro_rotations(
         "scale_misalignment": k.tolist(),
         "bias": b.tolist(),
         "angle_deg": ang,
+        "angle_realised_deg": realised.tolist(),
         "peak_rate_deg_s": 2.0 * abs(ang) * fs / n_rot,
         "rotations": rotations,
         "motion": motion,

@@ -19,6 +19,10 @@ with D₁ = Dxx, a₁ = ax for the x axis and D₁ = Dyy, a₁ = ay for the y ax
 rearranged). The kinematics are written here from the turntable's geometry, not taken from the
 method's eq. (3), so agreement between the two checks both.
 
+An orientation error of the gyro on the table (seed 001 §2.2: small rotations Δψ about its y,
+Δθ about its z and Δγ about its x axis, the same at every position) turns the gyro's frame by the
+rotation vector (Δγ, Δψ, Δθ); the twin applies it exactly (Rodrigues), v_g′ = Rᵀ·v_g.
+
 This module imports only numpy, rotacal.errors and rotacal.sim.sensors.SimCapture (twin rule).
 """
 
@@ -120,6 +124,36 @@ def _coefficients(axis: str, coefficients: Mapping[str, float] | None) -> dict[s
     return base
 
 
+def _orientation(value: Any) -> tuple[float, float, float]:
+    if value is None:
+        return (0.0, 0.0, 0.0)
+    try:
+        v = tuple(float(x) for x in value)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"orientation_error_arcsec must be three angles (Δψ, Δθ, Δγ) in arcsec, got {value!r}."
+        ) from None
+    if len(v) != 3 or not all(math.isfinite(x) for x in v):
+        raise ConfigError(
+            f"orientation_error_arcsec must be three finite angles (Δψ, Δθ, Δγ) in arcsec, got "
+            f"{value!r}."
+        )
+    return v[0], v[1], v[2]
+
+
+def _misaligned(orient: tuple[float, float, float]) -> np.ndarray:
+    """Rᵀ for the frame turned by the rotation vector (Δγ, Δψ, Δθ) (about x, y, z; Rodrigues)."""
+    dpsi, dtheta, dgamma = (math.radians(x / 3600.0) for x in orient)
+    r = np.array([dgamma, dpsi, dtheta])
+    angle = float(np.linalg.norm(r))
+    if angle == 0.0:
+        return np.eye(3)
+    k = r / angle
+    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    rot = np.eye(3) + math.sin(angle) * kx + (1.0 - math.cos(angle)) * (kx @ kx)
+    return rot.T
+
+
 def gyro_frame(phi1_deg: np.ndarray, phi2_deg: np.ndarray) -> np.ndarray:
     """Direction cosine matrices C (…, 3, 3) with v_gyro = C·v_NWU at each turntable position."""
     p1 = np.radians(np.asarray(phi1_deg, dtype=float))
@@ -154,6 +188,7 @@ def simulate_multiposition(
     coefficients: Mapping[str, float] | None = None,
     noise_deg_h: float = 0.005,
     repeats: int = 4,
+    orientation_error_arcsec: Sequence[float] | None = None,
     seed: int = 0,
 ) -> SimCapture:
     """Torquer outputs (in rate units) of one gyro axis at each turntable position.
@@ -175,6 +210,9 @@ def simulate_multiposition(
         ~100 s average of a tuned dynamically tuned gyro's rebalance output.
     repeats : int
         Readings per position (≥ 1); the rows run through all positions, then again.
+    orientation_error_arcsec : (Δψ, Δθ, Δγ) or None
+        Orientation error of the gyro's axes on the table (arcsec): rotations about its y, z and
+        x axes (seed 001 §2.2, Fig. 3), the same at every position. None: none.
     seed : int
         Seed of ``numpy.random.default_rng``.
 
@@ -213,6 +251,8 @@ def simulate_multiposition(
     coef = _coefficients(axis, coefficients)
 
     c = gyro_frame(pos[:, 0], pos[:, 1])
+    orient = _orientation(orientation_error_arcsec)
+    c = _misaligned(orient) @ c
     lam = math.radians(lat)
     earth_nwu = EARTH_RATE_DEG_H * np.array([math.cos(lam), 0.0, math.sin(lam)])
     up_nwu = np.array([0.0, 0.0, 1.0])
@@ -255,6 +295,7 @@ def simulate_multiposition(
         "clean_output_deg_h": clean,
         "earth_rate_components_deg_h": w,
         "gravity_components_g": a,
+        "orientation_error_arcsec": list(orient),
         "rows": int(out.size),
         "sensor": {"noise_deg_h": sigma, "repeats": reps, "seed": int(seed)},
     }

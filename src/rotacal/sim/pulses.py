@@ -18,6 +18,10 @@ The model, all angles in degrees:
 * **Pulses.** Head i pulses whenever ``θ(t) = P_j − h_i + 360·w`` (any line j, any integer w). The
   crossing times are solved by a bracketed Newton iteration on θ(t) over whole arrays, then
   Gaussian timing jitter is added.
+* **Timebase.** The DAQ's clock runs with a fractional error δ: it records ``(1 + δ)·t`` for an
+  edge at true time t (a +1e-6 clock makes every time 1 ppm long, as the ``timebase.relative_error``
+  specification of :mod:`rotacal.uncertainty.specs` says). δ is a stated offset plus, optionally,
+  a rectangular draw per seed, so that a batch of runs samples the error a specification states.
 
 The truth is computed from the model's own parameters (line errors, drawn placements, the closed
 form θ(t)), never by a self-calibration method. The twin imports nothing of rotacal's methods.
@@ -197,13 +201,15 @@ def simulate_pulses(
     fluctuation_hz: Iterable[float] | None = None,
     jitter_s: float = 1e-9,
     start_spread_s: float | None = None,
+    timebase_relative_error: float = 0.0,
+    timebase_error_half_width: float = 0.0,
     seed: int = 0,
 ) -> SimCapture:
     """Pulse-edge times of an n-head self-calibratable encoder on a table turning at constant rate.
 
     See the module docstring for the model. Every random component (graduation noise, head
-    placement, fluctuation phases, θ0, record delays, jitter) has its own stream spawned from
-    ``seed``, so switching one off leaves the others unchanged.
+    placement, fluctuation phases, θ0, record delays, jitter, timebase error) has its own stream
+    spawned from ``seed``, so switching one off leaves the others unchanged.
 
     Parameters
     ----------
@@ -265,7 +271,11 @@ def simulate_pulses(
           jitter-free time it sees line L0 again after them (None when R = 0);
         - ``rate_fluctuation_rms_percent`` (%, as set);
         - ``newton_iterations`` and ``newton_max_step_s``: the last Newton step (s), ≤ 1e-13 s
-          unless the record is so long that float64 times cannot resolve that (then ≤ 16·ε·t).
+          unless the record is so long that float64 times cannot resolve that (then ≤ 16·ε·t);
+        - ``timebase_relative_error_drawn``: δ, the clock's fractional error in this capture.
+
+        Every time in the truth (``first_pulse_time_head0_s``, ``record_start_s`` …) and the
+        argument of :func:`table_angle_deg` are true times; divide a column by ``1 + δ`` first.
 
     Raises
     ------
@@ -307,6 +317,13 @@ def simulate_pulses(
     place_sd = _nonneg("head_placement_arcsec", head_placement_arcsec)
     fluct_pct = _nonneg("rate_fluctuation_percent", rate_fluctuation_percent)
     jitter = _nonneg("jitter_s", jitter_s)
+    tb_offset = _finite("timebase_relative_error", timebase_relative_error)
+    tb_half = _nonneg("timebase_error_half_width", timebase_error_half_width)
+    if abs(tb_offset) + tb_half >= 0.5:
+        raise ConfigError(
+            f"timebase_relative_error={tb_offset!r} ± {tb_half!r} lets the clock err by 50 % or "
+            "more; a timebase error is a small fraction (e.g. 2e-6)."
+        )
     seed_i = _int("seed", seed, 0)
 
     pitch = 360.0 / m  # deg
@@ -353,9 +370,11 @@ def simulate_pulses(
         )
 
     # independent streams: switching one component off leaves the others' draws unchanged
-    (s_grad, s_place, s_psi, s_theta0, s_delay, s_jitter) = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(seed_i).spawn(6)
+    # (SeedSequence.spawn gives the same first six children whatever their number)
+    (s_grad, s_place, s_psi, s_theta0, s_delay, s_jitter, s_clock) = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(seed_i).spawn(7)
     )
+    delta = tb_offset + (float(s_clock.uniform(-tb_half, tb_half)) if tb_half > 0 else 0.0)
 
     # ---- scale: line errors (arcsec) in scale numbering
     j = np.arange(m, dtype=np.float64)
@@ -446,7 +465,7 @@ def simulate_pulses(
                 raise ConfigError(
                     f"jitter_s={jitter:.3g} s reordered pulses of {name}; lower jitter_s."
                 )
-        cols[name] = t
+        cols[name] = t * (1.0 + delta) if delta != 0.0 else t
 
     # ---- truth
     l0 = first_g[0] % m
@@ -502,6 +521,9 @@ def simulate_pulses(
         "rate_fluctuation_rms_percent": fluct_pct,
         "newton_iterations": iterations,
         "newton_max_step_s": max_step,
+        "timebase_relative_error": tb_offset,
+        "timebase_error_half_width": tb_half,
+        "timebase_relative_error_drawn": delta,
     }
     truth = to_jsonable(truth)
     # long arrays of finite floats: plain lists directly (to_jsonable walks them per element)

@@ -148,6 +148,24 @@ def _time_axis(
     return t, fs, dur, t0
 
 
+def _timebase(value: Any) -> float:
+    e = _finite("timebase_relative_error", value)
+    if not abs(e) < 0.01:
+        raise ConfigError(
+            f"timebase_relative_error={value!r} is not a small fraction; give |e| < 0.01 "
+            "(e.g. 2e-6 for a clock 2 ppm fast)."
+        )
+    return e
+
+
+def _stamped(t: np.ndarray, t0: float, e: float) -> np.ndarray:
+    """The DAQ's time stamps of the true sampling instants t for a clock running e fast.
+
+    Every interval since the first sample is stamped (1 + e) long; the first stamp is exact.
+    """
+    return t if e == 0.0 else t0 + (1.0 + e) * (t - t0)
+
+
 def _truth(
     motion: SineMotion, kind: str, t: np.ndarray, sensor: dict[str, Any], harmonics: int
 ) -> dict[str, Any]:
@@ -176,6 +194,7 @@ def simulate_encoder(
     seed: int = 0,
     start_s: float = 0.0,
     harmonics: int = 10,
+    timebase_relative_error: float = 0.0,
 ) -> SimCapture:
     """Analog quadrature signals of an optical shaft encoder on the table.
 
@@ -212,11 +231,15 @@ def simulate_encoder(
         Time of the first sample (s).
     harmonics : int
         Highest harmonic order in the truth.
+    timebase_relative_error : float
+        Fractional error e of the DAQ clock (-): the samples are taken at the true instants t but
+        stamped ``start_s + (1 + e)·(t − start_s)``, so every measured time is (1 + e) long and a
+        frequency comes out f/(1 + e). The truth stays in true time. |e| < 0.01.
 
     Returns
     -------
     SimCapture
-        Columns ``time_s`` (s), ``a``, ``b`` (signal units).
+        Columns ``time_s`` (s, as the DAQ stamps them), ``a``, ``b`` (signal units).
 
     References
     ----------
@@ -224,6 +247,7 @@ def simulate_encoder(
     signal period).
     """
     motion = _check_motion(motion)
+    tb = _timebase(timebase_relative_error)
     if isinstance(lines, bool) or not float(lines).is_integer() or int(lines) < 1:
         raise ConfigError(f"lines must be a positive integer, got {lines!r}.")
     lines = int(lines)
@@ -281,9 +305,12 @@ def simulate_encoder(
         "seed": int(seed),
         "max_phase_step_rad": step,
         "clipped_samples": clipped,
+        "timebase_relative_error": tb,
     }
     return SimCapture(
-        "encoder", {"time_s": t, "a": a, "b": b}, _truth(motion, "encoder", t, sensor, harmonics)
+        "encoder",
+        {"time_s": _stamped(t, t0, tb), "a": a, "b": b},
+        _truth(motion, "encoder", t, sensor, harmonics),
     )
 
 
@@ -299,6 +326,7 @@ def simulate_lts(
     seed: int = 0,
     start_s: float = 0.0,
     harmonics: int = 10,
+    timebase_relative_error: float = 0.0,
 ) -> SimCapture:
     """Laser triangulation sensor reading a reflector at radius R: ``D = R·tan θ + zero + n``.
 
@@ -312,7 +340,7 @@ def simulate_lts(
         White Gaussian displacement noise (mm rms); 3·10⁻⁵ mm = 0.03 µm.
     zero_offset_mm : float
         Constant displacement offset (mm).
-    fs_hz, duration_s, seed, start_s, harmonics
+    fs_hz, duration_s, seed, start_s, harmonics, timebase_relative_error
         As in :func:`simulate_encoder`.
 
     Returns
@@ -330,6 +358,7 @@ def simulate_lts(
         raise ConfigError(f"radius_mm must be > 0 mm, got {radius_mm!r}.")
     nmm = _nonneg("noise_mm", noise_mm)
     z = _finite("zero_offset_mm", zero_offset_mm)
+    tb = _timebase(timebase_relative_error)
     t, fs, dur, t0 = _time_axis(motion, fs_hz, duration_s, start_s)
     theta = motion.angle_deg(t)
     if float(np.max(np.abs(theta))) >= 80.0:
@@ -345,9 +374,12 @@ def simulate_lts(
         "duration_s": dur,
         "start_s": t0,
         "seed": int(seed),
+        "timebase_relative_error": tb,
     }
     return SimCapture(
-        "lts", {"time_s": t, "displacement_mm": d}, _truth(motion, "lts", t, sensor, harmonics)
+        "lts",
+        {"time_s": _stamped(t, t0, tb), "displacement_mm": d},
+        _truth(motion, "lts", t, sensor, harmonics),
     )
 
 
@@ -363,8 +395,10 @@ def simulate_fog(
     seed: int = 0,
     start_s: float = 0.0,
     harmonics: int = 10,
+    scale_factor_error: float = 0.0,
+    timebase_relative_error: float = 0.0,
 ) -> SimCapture:
-    """A fibre-optic gyro on the table: ``rate = dθ/dt + bias + white noise`` (deg/s).
+    """A fibre-optic gyro on the table: ``rate = (1 + s)·dθ/dt + bias + white noise`` (deg/s).
 
     Parameters
     ----------
@@ -379,8 +413,11 @@ def simulate_fog(
         Constant rate bias (deg/s).
     duration_s : float or None
         Record length (s); default 40⅛ motion periods (the FOG's THD is noise-limited).
-    fs_hz, seed, start_s, harmonics
+    fs_hz, seed, start_s, harmonics, timebase_relative_error
         As in :func:`simulate_encoder`.
+    scale_factor_error : float
+        Relative error s of the gyro's scale factor (-): the output is (1 + s) times the true
+        rate (the noise σ and the SNR are set on the true rate). |s| < 0.5.
 
     Returns
     -------
@@ -395,6 +432,10 @@ def simulate_fog(
     motion = _check_motion(motion)
     bias = _finite("bias_deg_s", bias_deg_s)
     sigma = _nonneg("noise_deg_s", noise_deg_s)
+    sf = _finite("scale_factor_error", scale_factor_error)
+    if not abs(sf) < 0.5:
+        raise ConfigError(f"scale_factor_error={scale_factor_error!r} must lie within ±0.5.")
+    tb = _timebase(timebase_relative_error)
     if duration_s is None:  # the FOG's THD is noise-limited: record it longer (seed §5)
         duration_s = FOG_DEFAULT_PERIODS / motion.frequency_hz
     t, fs, dur, t0 = _time_axis(motion, fs_hz, duration_s, start_s)
@@ -405,7 +446,7 @@ def simulate_fog(
         if sigma > 0:
             raise ConfigError("give either snr_db or noise_deg_s for the FOG, not both.")
         sigma = math.sqrt(p_sig / 10.0 ** (snr / 10.0))
-    rate = clean + bias
+    rate = (1.0 + sf) * clean + bias
     snr_real: float | None = None
     if sigma > 0:
         noise = np.random.default_rng(seed).normal(0.0, sigma, t.size)
@@ -422,9 +463,13 @@ def simulate_fog(
         "duration_s": dur,
         "start_s": t0,
         "seed": int(seed),
+        "scale_factor_error": sf,
+        "timebase_relative_error": tb,
     }
     return SimCapture(
-        "fog", {"time_s": t, "rate_deg_s": rate}, _truth(motion, "fog", t, sensor, harmonics)
+        "fog",
+        {"time_s": _stamped(t, t0, tb), "rate_deg_s": rate},
+        _truth(motion, "fog", t, sensor, harmonics),
     )
 
 

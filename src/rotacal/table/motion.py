@@ -38,8 +38,13 @@ from rotacal.signal import (
     fit_sine_3p,
     snr_db,
     thd_percent,
-    thd_standard_uncertainty_percent,
 )
+from rotacal.table.motion_uncertainty import (
+    ReversalDetection,
+    comparison_budgets,
+    motion_budgets,
+)
+from rotacal.uncertainty import InstrumentSpecs, UncertaintyBudget, uncertainty_keys
 
 __all__ = [
     "MotionResult",
@@ -85,7 +90,7 @@ class MotionResult(Result):
     harmonics: int
     offset_deg: float
     residual_rms_deg: float
-    # Standard uncertainties from the fit's residuals (white-noise model; full budgets: issue 6).
+    # Standard uncertainties: the u of the budgets in ``_budgets`` (one number, one truth).
     amplitude_deg_u: float
     frequency_hz_u: float
     thd_percent_u: float
@@ -99,15 +104,29 @@ class MotionResult(Result):
     position_error_max_deg: float | None = None
     position_error_rms_deg: float | None = None
     snr_db: float | None = None
+    # THD by Monte Carlo (JCGM 101; see rotacal.table.motion_uncertainty), all in %:
+    # the mean of the Monte Carlo values, its bias over the plain THD, the bias-corrected THD
+    # (noise-power subtraction) and the 95 % probabilistically symmetric coverage interval.
+    thd_percent_mc_mean: float = math.nan
+    thd_percent_bias: float = math.nan
+    thd_percent_bias_corrected: float = math.nan
+    thd_percent_coverage_interval: tuple[float, float] = (math.nan, math.nan)
     # For figures and reports only (not in JSON): the fit, decimated samples, scheme details.
     _fit: SineFit | None = dataclasses.field(default=None, repr=False, compare=False)
     _plot: dict[str, Any] = dataclasses.field(default_factory=dict, repr=False, compare=False)
+    # The uncertainty budget of every quantity, by its JSON key.
+    _budgets: dict[str, UncertaintyBudget] = dataclasses.field(
+        default_factory=dict, repr=False, compare=False
+    )
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON of INTERFACE.md ``motion`` plus ``<name>_u``, ``<name>_U``, ``k``,
+        ``coverage_probability`` and ``uncertainty_budgets`` for every quantity."""
         out = super().to_dict()
         for key in _OPTIONAL_KEYS:
             if out.get(key) is None:
                 out.pop(key, None)
+        out.update(uncertainty_keys(self._budgets) if self._budgets else {})
         return out
 
 
@@ -124,6 +143,15 @@ class SchemeComparison(Result):
     amplitude_difference_percent: float
     frequency_difference_percent: float
     snr_db: float | None
+    _budgets: dict[str, UncertaintyBudget] = dataclasses.field(
+        default_factory=dict, repr=False, compare=False
+    )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The row's JSON plus ``<name>_u``, ``<name>_U``, ``k`` of each difference."""
+        out = super().to_dict()
+        out.update(uncertainty_keys(self._budgets) if self._budgets else {})
+        return out
 
 
 def _plot_stride(n: int) -> int:
@@ -227,6 +255,9 @@ def _finish(
     notes: list[str],
     snr: float | None,
     plot: dict[str, Any],
+    detection: ReversalDetection,
+    specs: InstrumentSpecs | None = None,
+    radius_mm: float | None = None,
 ) -> MotionResult:
     amp = float(displacement_amplitudes[0])
     freq = float(fit.frequency_hz)
@@ -253,6 +284,19 @@ def _finish(
             )
             step = _plot_stride(err.size)
             plot["position_error_deg"] = err[::step]
+    unc = motion_budgets(
+        scheme=scheme,  # type: ignore[arg-type]
+        fit=fit,
+        displacement_amplitudes=np.asarray(displacement_amplitudes, dtype=float),
+        displacement_amplitudes_u=np.asarray(displacement_amplitudes_u, dtype=float),
+        reversal_times_s=np.asarray(reversal_times, dtype=float),
+        detection=detection,
+        specs=specs,
+        set_amplitude_deg=set_amplitude_deg,
+        set_frequency_hz=set_frequency_hz,
+        radius_mm=radius_mm,
+    )
+    budgets = unc.budgets
     return MotionResult(
         scheme=scheme,
         amplitude_deg=amp,
@@ -267,16 +311,19 @@ def _finish(
         harmonics=int(displacement_amplitudes.size),
         offset_deg=float(offset_deg),
         residual_rms_deg=float(residual_rms_deg),
-        amplitude_deg_u=float(displacement_amplitudes_u[0]),
-        frequency_hz_u=float(fit.frequency_u_hz),
-        thd_percent_u=thd_standard_uncertainty_percent(
-            displacement_amplitudes, displacement_amplitudes_u
-        ),
+        amplitude_deg_u=budgets["amplitude_deg"].u,
+        frequency_hz_u=budgets["frequency_hz"].u,
+        thd_percent_u=budgets["thd_percent"].u,
         samples_used=int(t_used.size),
         notes=tuple(notes),
         snr_db=snr,
+        thd_percent_mc_mean=unc.thd.mc_mean,
+        thd_percent_bias=unc.thd.bias,
+        thd_percent_bias_corrected=unc.thd.bias_corrected,
+        thd_percent_coverage_interval=unc.thd.interval,
         _fit=fit,
         _plot=plot,
+        _budgets=budgets,
         **extra,
     )
 
@@ -311,6 +358,7 @@ def calibrate_encoder_motion(
     set_amplitude_deg: float | None = None,
     set_frequency_hz: float | None = None,
     correction: QuadratureCorrection | None = None,
+    specs: InstrumentSpecs | None = None,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from an optical shaft encoder (the OSE scheme).
 
@@ -327,14 +375,18 @@ def calibrate_encoder_motion(
     periods : int, optional — whole motion periods to analyse (default: all the capture holds).
     set_amplitude_deg, set_frequency_hz : float, optional — the table's set values (deg, Hz).
     correction : QuadratureCorrection, optional — a known correction instead of fitting one.
+    specs : InstrumentSpecs, optional — the lab's instrument specifications (Type B inputs:
+        ``timebase.relative_error``, ``encoder.graduation_error_arcsec``); None: Type A only.
 
     Returns
     -------
     MotionResult
+        With the uncertainty budget of every quantity (:mod:`rotacal.table.motion_uncertainty`).
 
     References
     ----------
-    Feng et al. (2023), Sensors 23:4876, §3 and eqs. (1)–(8); IEEE Std 1057-2017, §4.1.3.
+    Feng et al. (2023), Sensors 23:4876, §3 and eqs. (1)–(8); IEEE Std 1057-2017, §4.1.3;
+    JCGM 100:2008 and JCGM 101:2008 (budgets).
     """
     _check_settings(harmonics, periods)
     if int(lines) != lines or lines < 1:
@@ -357,6 +409,12 @@ def calibrate_encoder_motion(
         "lissajous_corrected": correct_quadrature(a[::step], b[::step], demod.correction),
         "correction": demod.correction,
     }
+    detection = ReversalDetection(
+        method="argmax",
+        fit=fit,
+        sample_interval_s=float(t[last] - t[first]) / max(last - first, 1),
+        capture_start_s=float(t[0]),
+    )
     return _finish(
         scheme="encoder",
         fit=fit,
@@ -373,6 +431,8 @@ def calibrate_encoder_motion(
         notes=notes,
         snr=None,
         plot=plot,
+        detection=detection,
+        specs=specs,
     )
 
 
@@ -462,6 +522,7 @@ def calibrate_lts_motion(
     periods: int | None = None,
     set_amplitude_deg: float | None = None,
     set_frequency_hz: float | None = None,
+    specs: InstrumentSpecs | None = None,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from a laser triangulation sensor (the LTS scheme).
 
@@ -474,10 +535,13 @@ def calibrate_lts_motion(
     displacement_mm : array, mm — the LTS reading D of the reflector at radius R.
     radius_mm : float, mm — R, distance from the laser spot to the table's axis.
     harmonics, periods, set_amplitude_deg, set_frequency_hz : as `calibrate_encoder_motion`.
+    specs : InstrumentSpecs, optional — Type B inputs (``timebase.relative_error``,
+        ``lts.radius_mm`` — its value must be ``radius_mm`` —, ``lts.resolution_um``).
 
     References
     ----------
-    Feng et al. (2023), Sensors 23:4876, §5, eqs. (1), (2), (15); IEEE Std 1057-2017, §4.1.3.
+    Feng et al. (2023), Sensors 23:4876, §5, eqs. (1), (2), (15); IEEE Std 1057-2017, §4.1.3;
+    JCGM 100:2008 and JCGM 101:2008 (budgets).
     """
     _check_settings(harmonics, periods)
     if not radius_mm > 0:
@@ -498,6 +562,13 @@ def calibrate_lts_motion(
     f0 = n / (rev_times[2 * n] - rev_times[0])
     fit = fit_harmonics(t[seg], angle[seg], frequency_hz=f0, harmonics=harmonics)
     plot = _displacement_plot(t, angle, seg, fit)
+    detection = ReversalDetection(
+        method="parabola",
+        fit=fit,
+        sample_interval_s=float(t[last] - t[first]) / max(last - first, 1),
+        capture_start_s=float(t[0]),
+        half_window_s=1.0 / (20.0 * fit.frequency_hz),  # extreme_reversals: ±period/20
+    )
     return _finish(
         scheme="lts",
         fit=fit,
@@ -514,6 +585,9 @@ def calibrate_lts_motion(
         notes=[f"θ = arctan(D/R), R = {radius_mm:g} mm"],
         snr=None,
         plot=plot,
+        detection=detection,
+        specs=specs,
+        radius_mm=float(radius_mm),
     )
 
 
@@ -533,6 +607,7 @@ def calibrate_fog_motion(
     periods: int | None = None,
     set_amplitude_deg: float | None = None,
     set_frequency_hz: float | None = None,
+    specs: InstrumentSpecs | None = None,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from a fibre-optic gyro's rate (the FOG scheme).
 
@@ -549,10 +624,13 @@ def calibrate_fog_motion(
     t : array, s.
     rate_deg_s : array, deg/s.
     harmonics, periods, set_amplitude_deg, set_frequency_hz : as `calibrate_encoder_motion`.
+    specs : InstrumentSpecs, optional — Type B inputs (``timebase.relative_error``,
+        ``fog.scale_factor_relative``).
 
     References
     ----------
-    Feng et al. (2023), Sensors 23:4876, §4, eqs. (9)–(14), §5 (SNR); IEEE Std 1057-2017, §4.1.3.
+    Feng et al. (2023), Sensors 23:4876, §4, eqs. (9)–(14), §5 (SNR); IEEE Std 1057-2017, §4.1.3;
+    JCGM 100:2008 and JCGM 101:2008 (budgets).
     """
     _check_settings(harmonics, periods)
     t, w = _check_samples(t, "rate_deg_s", rate_deg_s)
@@ -581,6 +659,12 @@ def calibrate_fog_motion(
         "angle_deg_integrated": angle[::seg_step],
         "unit": "deg/s",
     }
+    detection = ReversalDetection(
+        method="rate_zero",
+        fit=first_fit,
+        sample_interval_s=float(t[-1] - t[0]) / max(t.size - 1, 1),
+        capture_start_s=float(t[0]),
+    )
     return _finish(
         scheme="fog",
         fit=fit,
@@ -599,6 +683,8 @@ def calibrate_fog_motion(
         ],
         snr=float(snr),
         plot=plot,
+        detection=detection,
+        specs=specs,
     )
 
 
@@ -607,19 +693,30 @@ def compare_schemes(reference: MotionResult, other: MotionResult) -> SchemeCompa
 
     Every difference is ``reference − other``: THD in percentage points (the seed's "Difference
     Value of THD": the combined OSE/LTS scheme minus the FOG), amplitude and frequency in % of the
-    reference's value.
+    reference's value. Each difference has a budget (:func:`~rotacal.table.motion_uncertainty.
+    comparison_budgets`) from the two results' budgets; ``thd_difference_percent_u`` is its u.
 
     References
     ----------
-    Feng et al. (2023), Sensors 23:4876, §5, Table 1.
+    Feng et al. (2023), Sensors 23:4876, §5, Table 1; JCGM 100:2008 (GUM) eq. (10).
     """
+    if not reference._budgets or not other._budgets:
+        raise ConfigError(
+            "compare_schemes needs two results of rotacal's motion calibrations (with budgets)"
+        )
+    budgets = comparison_budgets(
+        reference._budgets,
+        other._budgets,
+        reference_scheme=reference.scheme,
+        other_scheme=other.scheme,
+    )
     return SchemeComparison(
         reference_scheme=reference.scheme,
         other_scheme=other.scheme,
         thd_reference_percent=reference.thd_percent,
         thd_other_percent=other.thd_percent,
         thd_difference_percent=reference.thd_percent - other.thd_percent,
-        thd_difference_percent_u=math.hypot(reference.thd_percent_u, other.thd_percent_u),
+        thd_difference_percent_u=budgets["thd_difference_percent"].u,
         amplitude_difference_percent=100
         * (reference.amplitude_deg - other.amplitude_deg)
         / reference.amplitude_deg,
@@ -627,4 +724,5 @@ def compare_schemes(reference: MotionResult, other: MotionResult) -> SchemeCompa
         * (reference.frequency_hz - other.frequency_hz)
         / reference.frequency_hz,
         snr_db=other.snr_db if other.snr_db is not None else reference.snr_db,
+        _budgets=budgets,
     )

@@ -5,6 +5,17 @@ pulse. From them: the mean rate over whole revolutions (where the scale's deviat
 exactly), its bias against the set rate, the rate over time by the time-difference method with and
 without compensation by the self-calibrated deviation (rms and peak deviation in % of rate), and the
 relative root Allan variance of angular velocity as a function of rotation angle, s(φ).
+
+Uncertainty (GUM, JCGM 100; Monte Carlo, JCGM 101). The mean rate is the mean over the stated
+window of whole revolutions: 360·R over the time of R revolutions of one line. Its inputs are the
+timing jitter of the window's two end pulses (Type A, estimated from the pulse times themselves:
+the same line one and two revolutions later, where the graduation cancels exactly), the DAQ
+timebase (Type B, ``timebase.relative_error``: rate ∝ 1/time) and the graduation — zero, because
+the window starts and ends on the same line, and m pitches are exactly 360°. The bias against the
+set rate is a property of the table, not of one record: it adds the table's wander, the spread of
+the single-revolution rates (Type A). The rms and peak of the rate deviation are rms/max-type:
+noise raises them, so their budgets are Monte Carlo, with the bias stated and removed. Each s(φ)
+point has the χ² uncertainty of its equivalent degrees of freedom (Greenhall & Riley 2003).
 """
 
 from __future__ import annotations
@@ -26,11 +37,46 @@ from rotacal.encoder.pulses import (
     pulse_rate,
     whole_revolution_rate,
 )
-from rotacal.encoder.selfcal import SelfCalibration, check_period, head_shifts, self_calibrate
+from rotacal.encoder.selfcal import (
+    COVERAGE,
+    TYPE_A_ONLY,
+    UNDETECTABLE_SPEC,
+    DeviationNoise,
+    SelfCalibration,
+    check_period,
+    drop_large_dof_notes,
+    head_shifts,
+    mc_budget,
+    self_calibrate,
+    simex_estimate,
+    spec_entry,
+    statistic_samples,
+    undetectable_orders,
+)
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
+from rotacal.signal.allan import adev_confidence_interval, edf_overlapping_adev
+from rotacal.uncertainty import (
+    Constant,
+    Input,
+    InstrumentSpecs,
+    UncertaintyBudget,
+    linear_fit_uncertainty,
+    monte_carlo,
+    propagate,
+    uncertainty_keys,
+    validate_gum,
+)
+from rotacal.uncertainty.distributions import Distribution, Normal
 
-__all__ = ["RateResult", "align_deviation", "allan_versus_angle", "calibrate_rate"]
+__all__ = [
+    "RateResult",
+    "align_deviation",
+    "allan_uncertainty",
+    "allan_versus_angle",
+    "calibrate_rate",
+    "timing_jitter",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -41,6 +87,14 @@ MIN_ALIGNMENT_CORRELATION = 0.7
 #: A single head's phase-correlation peak must stand this many robust spreads above the rest
 #: (the largest of m Gaussian values stands about 4.5 spreads out for m ~ 10⁴).
 _SINGLE_HEAD_SIGNIFICANCE = 10.0
+#: Difference filters of the timing-jitter estimate: across revolutions (the same line, so the
+#: graduation cancels) and along the pulses (removes the table's slow rate changes).
+_REV_FILTER = np.array([1.0, -2.0, 1.0])
+_PULSE_FILTER = np.array([1.0, -3.0, 3.0, -1.0])
+#: Trials of the Monte Carlo that validates the mean rate's GUM budget (JCGM 101 §8).
+_VALIDATION_TRIALS = 200_000
+_TIMEBASE = "timebase.relative_error"
+_GRADUATION = "encoder.graduation_error_arcsec"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,6 +118,26 @@ class RateResult(Result):
     allan_relative_uncompensated : list of float
     set_rate_deg_s, rate_bias_deg_s, rate_bias_percent : float or None
         Set rate and mean − set (deg/s and % of the set rate), when a set rate is given.
+    timing_jitter_s, timing_jitter_dof : float or None
+        Standard deviation (s) of the timing noise of the pulses used, estimated from them (see
+        :func:`timing_jitter`), and its degrees of freedom.
+    timebase_correction : float
+        The stated mean fractional timebase error δ̂ the rates were corrected for (rate·(1 + δ̂));
+        0 when none was stated.
+    rate_deviation_rms_bias_percent, rate_deviation_peak_bias_percent : float or None, %
+        How much the measurement noise raises the rms and peak (Monte Carlo).
+    rate_deviation_rms_corrected_percent, rate_deviation_peak_corrected_percent : float or None
+        The rms and peak minus their bias (%): the budgets' estimates.
+    allan_relative_u, allan_relative_U : list of float
+        Standard and expanded (p = 95 %) uncertainty of each s(φ) from its equivalent degrees
+        of freedom; U is half the width of the χ² interval, so k = U/u differs per point.
+    allan_relative_edf : list of float
+        Equivalent degrees of freedom of each σ²(φ/ω_m) (Greenhall & Riley 2003).
+    allan_relative_interval : list of [float, float]
+        The 95 % χ² interval of each s(φ).
+    allan_noise_alpha : list of int
+        Power-law noise type α assumed for each edf (2 white PM … −2 random-walk FM), from the
+        local slope of s(φ).
     head : str
         ``"head_k"`` or ``"all heads"`` (the head-averaged times).
     average : int
@@ -80,6 +154,11 @@ class RateResult(Result):
         Correlation of the capture's own angle error with the deviation when it had to be
         aligned by correlation (None when the deviation came from the same capture).
     notes : list of str
+
+    ``to_dict()`` adds ``<name>_u``/``<name>_U`` for ``mean_rate_deg_s``, ``rate_bias_deg_s``,
+    ``rate_bias_percent`` (with a set rate), ``rate_deviation_rms_percent`` and
+    ``rate_deviation_peak_percent``, ``k`` (per quantity; a list for ``allan_relative``),
+    ``coverage_probability`` and ``uncertainty_budgets``.
     """
 
     mean_rate_deg_s: float
@@ -107,6 +186,33 @@ class RateResult(Result):
     _rate_deg_s: FloatArray = dataclasses.field(repr=False)
     _rate_uncompensated_deg_s: FloatArray = dataclasses.field(repr=False)
     _selfcal: SelfCalibration | None = dataclasses.field(repr=False, default=None)
+    timing_jitter_s: float | None = None
+    timing_jitter_dof: float | None = None
+    timebase_correction: float = 0.0
+    rate_deviation_rms_bias_percent: float | None = None
+    rate_deviation_rms_corrected_percent: float | None = None
+    rate_deviation_peak_bias_percent: float | None = None
+    rate_deviation_peak_corrected_percent: float | None = None
+    allan_relative_u: list[float] = dataclasses.field(default_factory=list)
+    allan_relative_U: list[float] = dataclasses.field(default_factory=list)
+    allan_relative_edf: list[float] = dataclasses.field(default_factory=list)
+    allan_relative_interval: list[list[float]] = dataclasses.field(default_factory=list)
+    allan_noise_alpha: list[int] = dataclasses.field(default_factory=list)
+    _budgets: dict[str, UncertaintyBudget] = dataclasses.field(repr=False, default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        out = super().to_dict()
+        out.update(uncertainty_keys(self._budgets))
+        out["k"]["allan_relative"] = [
+            big / u if u > 0 else None
+            for big, u in zip(self.allan_relative_U, self.allan_relative_u, strict=True)
+        ]
+        return out
+
+    @property
+    def budgets(self) -> dict[str, UncertaintyBudget]:
+        """Uncertainty budgets by JSON key."""
+        return dict(self._budgets)
 
     @property
     def time_s(self) -> FloatArray:
@@ -342,6 +448,576 @@ def _as_deviation(selfcal: Any, m: int) -> _Deviation:
     return _Deviation(values, fingerprint, str(rotation), shifts)
 
 
+def _sum_rho2(h: FloatArray) -> float:
+    """Σ over all lags of the squared autocorrelation of white noise filtered by ``h``."""
+    r = np.correlate(h, h, mode="full")
+    return float(np.sum((r / r[h.size - 1]) ** 2))
+
+
+def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float, bool]:
+    """Standard deviation of the white timing noise of a pulse train, from the train itself.
+
+    With two whole revolutions and a few pulses to spare, the same line one and two revolutions
+    later gives D_j = t_{j+2m} − 2t_{j+m} + t_j, in which the scale's graduation error cancels
+    exactly (m pitches are 360° from any line) and the mean rate drops out; a third difference
+    along the pulses, E_j = D_{j+3} − 3D_{j+2} + 3D_{j+1} − D_j, then suppresses the table's
+    slow rate changes by (2π·f/f_pulse)³. White timing noise of variance σ_t² gives
+    E[E_j²] = Σh²·σ_t² with Σh² = 6·20 = 120. Shorter trains use the third difference along the
+    pulses alone, which also holds the graduation error (an upper bound, flagged by the third
+    return value).
+
+    Parameters
+    ----------
+    times_s : array_like, s
+        Pulse times of one head (or the head-averaged times of a set of heads).
+    pulses_per_rev : int
+        m.
+
+    Returns
+    -------
+    sigma_t : float, s
+        Estimated standard deviation of the timing noise of one pulse time.
+    dof : float
+        Its degrees of freedom, n/Σρ² for n differences with autocorrelation ρ (the filtered
+        values are correlated; Bartlett 1946).
+    graduation_free : bool
+        True when the graduation cancelled (two revolutions available).
+
+    Raises
+    ------
+    CaptureError
+        Fewer than 8 pulses.
+
+    References
+    ----------
+    JCGM 100:2008 (GUM) §4.2 (Type A evaluation); Kokuyama et al. (seed 004) §3, the head output
+    s_i(k) = kΔθ + 360i/n + a_i(k), a(k) periodic in k with period m, and §5 ("nearly-white
+    electronic noise in the encoder output signals"); M. S. Bartlett, "On the theoretical
+    specification of sampling properties of autocorrelated time series", J. R. Stat. Soc. Suppl.
+    8 (1946) — the variance of a variance estimate from correlated values.
+    """
+    t = np.asarray(times_s, dtype=np.float64)
+    m = check_pulses_per_rev(pulses_per_rev)
+    h = _PULSE_FILTER
+    if t.size >= 2 * m + 2 * h.size:
+        d = t[2 * m :] - 2.0 * t[m:-m] + t[: -2 * m]
+        e = np.convolve(d, h[::-1], mode="valid")
+        norm = float(np.sum(_REV_FILTER**2) * np.sum(h**2))
+        rho2 = _sum_rho2(_REV_FILTER) * _sum_rho2(h)
+        exact = True
+    elif t.size >= 2 * h.size:
+        e = np.convolve(t, h[::-1], mode="valid")
+        norm = float(np.sum(h**2))
+        rho2 = _sum_rho2(h)
+        exact = False
+    else:
+        raise CaptureError(
+            f"{t.size} pulses are too few to estimate the timing noise; record more."
+        )
+    sigma = math.sqrt(float(np.mean(e * e)) / norm)
+    return sigma, e.size / rho2, exact
+
+
+def _noise_alpha(phi: FloatArray, s: FloatArray) -> NDArray[np.int64]:
+    """Power-law noise type of each s(φ) point from the local log-log slope μ of s(φ)."""
+    if phi.size < 2:
+        return np.full(phi.size, 2, dtype=np.int64)
+    with np.errstate(divide="ignore"):
+        mu = np.gradient(np.log(np.maximum(s, 1e-300)), np.log(phi))
+    # σ ∝ τ^μ: μ = −1 white (or flicker) PM, −½ white FM, 0 flicker FM, +½ random-walk FM.
+    # White PM (the pulses' electronic noise, seed 004 §5) only in the leading run of the φ⁻¹
+    # slope: a steep fall further out is the 360° dip of the graduation or a fluctuation's
+    # notch, over which the FM types' smaller edf is the cautious choice.
+    alpha = np.select([mu <= -0.25, mu <= 0.25], [0, -1], -2).astype(np.int64)
+    steep = mu <= -0.75
+    lead = int(np.argmin(steep)) if not steep.all() else steep.size
+    alpha[:lead] = 2
+    return alpha
+
+
+def allan_uncertainty(
+    s: ArrayLike, angles_deg: ArrayLike, pitch_deg: float, pulses: int
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, NDArray[np.int64]]:
+    """Uncertainty of each relative root Allan variance s(φ) from its equivalent dof.
+
+    The angle is sampled at the pulses (equal angles), so the pulse times play the part of the
+    phase and φ = k·Δθ the part of τ = m·τ₀: σ²(φ) is the overlapping Allan variance of cluster
+    size k over N pulses. Its edf (Greenhall & Riley 2003) depends on the noise type, taken from
+    the local slope of s(φ). ν·ŝ²/s² ~ χ²(ν), so u(ŝ) = ŝ/√(2ν) and the 95 % interval is
+    [ŝ·√(ν/χ²₀.₉₇₅), ŝ·√(ν/χ²₀.₀₂₅)].
+
+    Parameters
+    ----------
+    s : array_like
+        s(φ) (dimensionless).
+    angles_deg : array_like, deg
+        φ of each point (whole pulses).
+    pitch_deg : float, deg
+        Δθ.
+    pulses : int
+        N, the pulses the variance was computed from.
+
+    Returns
+    -------
+    u, U, edf, low, high : ndarray
+        Standard uncertainty, U (half the width of the 95 % interval), edf, and the interval.
+    alpha : ndarray of int
+        The noise type assumed at each point.
+
+    References
+    ----------
+    C. A. Greenhall and W. J. Riley, "Uncertainty of stability variances based on finite
+    differences", Proc. 35th PTTI (2003); NIST SP 1065 (Riley 2008) §5.3; Kokuyama et al.
+    (seed 004) §5, s(φ) = √σ²(φ/ω_m)/ω_m.
+    """
+    sv = np.asarray(s, dtype=np.float64)
+    phi = np.asarray(angles_deg, dtype=np.float64)
+    ks = np.maximum(1, np.rint(phi / pitch_deg)).astype(np.int64)
+    alpha = _noise_alpha(phi, sv)
+    edf = np.empty(sv.size)
+    for a in np.unique(alpha):  # one whole-array call per noise type
+        sel = alpha == a
+        edf[sel] = edf_overlapping_adev(int(pulses), ks[sel], int(a))
+    u = sv / np.sqrt(2.0 * edf)
+    low, high = adev_confidence_interval(sv, edf, COVERAGE)
+    return u, 0.5 * (high - low), edf, low, high, alpha
+
+
+def _timebase_input(specs: InstrumentSpecs | None, dist: Distribution) -> Input:
+    origin = specs.describe(_TIMEBASE) if specs is not None else _TIMEBASE
+    return Input(
+        name="timebase relative error",
+        value=float(dist.mean),
+        u=float(dist.std),
+        dof=float(getattr(dist, "dof", math.inf)),
+        distribution=str(dist.name),
+        unit="",
+        source=f"Type B, {origin}",
+        description=str(dist.describe()),
+    )
+
+
+def _with_notes(
+    b: UncertaintyBudget, notes: Sequence[str], method: str | None = None
+) -> UncertaintyBudget:
+    return dataclasses.replace(b, notes=(*b.notes, *notes), method=method or b.method)
+
+
+def _mean_rate_budgets(
+    times: FloatArray,
+    angle: FloatArray,
+    m: int,
+    revs: int,
+    set_rate: float | None,
+    specs: InstrumentSpecs | None,
+    jitter: tuple[float, float, bool],
+) -> dict[str, UncertaintyBudget]:
+    """GUM budgets of the mean rate (validated by Monte Carlo) and of the bias against the set rate.
+
+    References
+    ----------
+    JCGM 100:2008 (GUM) §4.2–4.3, §5.1 eq. (10), G.4 (Welch–Satterthwaite); JCGM 101:2008 §8
+    (validation of the GUM uncertainty framework); Kokuyama et al. (seed 004) §3, §5.
+    """
+    sigma_t, sigma_dof, graduation_free = jitter
+    tb = spec_entry(specs, _TIMEBASE)
+    inputs: list[Input] = []
+    dists: dict[str, Distribution] = {}
+    notes: list[str] = []
+    if revs >= 1:
+        span = float(times[revs * m] - times[0])
+        inputs.append(
+            Input(
+                name="pulse timing jitter at the window's two ends",
+                value=0.0,
+                u=math.sqrt(2.0) * sigma_t,
+                dof=sigma_dof,
+                distribution="normal",
+                unit="s",
+                source=(
+                    f"Type A, σ_t = {sigma_t:.3g} s per pulse from the pulse times "
+                    + (
+                        "(the same line one and two revolutions later)"
+                        if graduation_free
+                        else "(along the pulses: includes the graduation, an upper bound)"
+                    )
+                ),
+                description="normal, √2·σ_t",
+            )
+        )
+        inputs.append(
+            Input(
+                name="graduation error over whole revolutions",
+                value=0.0,
+                u=0.0,
+                distribution="constant",
+                unit="arcsec",
+                source=(
+                    "exact: the window starts and ends on the same line, and m pitches make "
+                    "exactly 360° whatever the scale's deviation"
+                ),
+                description="exact (0)",
+            )
+        )
+        turns = 360.0 * revs
+
+        def rate(*x: Any) -> Any:  # x = (end-pulse timing error e, graduation g[, δ])
+            return (turns + x[1] / 3600.0) / (span - x[0]) * (1.0 + (x[2] if len(x) > 2 else 0.0))
+
+        def grad(*x: float) -> list[float]:  # exact ∂ω/∂(e, g[, δ])
+            f = 1.0 + (x[2] if len(x) > 2 else 0.0)
+            a, t = turns + x[1] / 3600.0, span - x[0]
+            return [a / t**2 * f, f / (3600.0 * t), *([a / t] if len(x) > 2 else [])]
+
+        dists["e"] = Normal(0.0, math.sqrt(2.0) * sigma_t)
+        dists["g"] = Constant(0.0)
+    else:
+        fit = linear_fit_uncertainty(times - times[0], angle)
+        inputs.append(
+            Input(
+                name="straight-line fit of the angle over time",
+                value=fit.slope,
+                u=fit.u_slope,
+                dof=float(fit.dof),
+                distribution="normal",
+                unit="deg/s",
+                source=f"Type A, slope of {fit.n} pulses (residuals taken as independent)",
+            )
+        )
+        notes.append(
+            "less than one revolution: the graduation error the compensation leaves is not "
+            "averaged out, and its correlated residuals make the fit's u a lower bound."
+        )
+
+        def rate(*x: Any) -> Any:  # x = (fitted slope[, δ])
+            return x[0] * (1.0 + (x[1] if len(x) > 1 else 0.0))
+
+        def grad(*x: float) -> list[float]:  # exact ∂ω/∂(slope[, δ])
+            return [1.0 + (x[1] if len(x) > 1 else 0.0), *([x[0]] if len(x) > 1 else [])]
+
+        dists["e"] = Normal(fit.slope, fit.u_slope)
+    if tb is not None:
+        inputs.append(_timebase_input(specs, tb))
+        dists["d"] = tb
+    elif specs is None:
+        notes.append(TYPE_A_ONLY)
+    else:
+        notes.append(
+            f"{_TIMEBASE} not stated: the timebase error is not in the budget; rate ∝ 1/time, so "
+            "a timebase of ±a makes the rate ∓a (relative)."
+        )
+
+    gum = propagate(
+        rate,
+        inputs,
+        jacobian=grad,
+        p=COVERAGE,
+        names_out=["mean_rate_deg_s"],
+        units_out=["deg/s"],
+    )
+    budget = drop_large_dof_notes(gum.budget(0))
+    mc = monte_carlo(
+        lambda **kw: rate(*(kw[k] for k in dists)),
+        dists,
+        trials=_VALIDATION_TRIALS,
+        p=COVERAGE,
+    )
+    assert not isinstance(mc, dict)
+    check = validate_gum(gum, mc, shortest=False)
+    if check["passed"]:
+        budget = _with_notes(
+            budget,
+            [
+                *notes,
+                f"the GUM interval agrees with a Monte Carlo of {mc.trials} trials within the "
+                f"numerical tolerance {check['delta']:.2g} deg/s (JCGM 101 §8).",
+            ],
+            "GUM, validated by Monte Carlo",
+        )
+    else:
+        lo, hi = mc.interval_symmetric
+        big_u = 0.5 * (hi - lo)
+        budget = dataclasses.replace(
+            budget,
+            U=big_u,
+            k=big_u / budget.u if budget.u > 0 else budget.k,
+            dof_eff=math.inf,
+            method="Monte Carlo",
+            notes=(
+                *(n for n in budget.notes if "truncated to" not in n),
+                *notes,
+                f"the GUM interval ±{budget.U:.3g} deg/s is not validated by a Monte Carlo of "
+                f"{mc.trials} trials (ends off by {max(check['d_low'], check['d_high']):.2g} > "
+                f"{check['delta']:.2g} deg/s, JCGM 101 §8; a rectangular input dominates): U is "
+                f"half the Monte Carlo 95 % interval [{lo:.10g}, {hi:.10g}] deg/s.",
+            ),
+        )
+    budgets = {"mean_rate_deg_s": budget}
+    if set_rate is None:
+        return budgets
+
+    # the bias is the table's: its mean rate at this setting, not only in this record
+    per_rev = 360.0 / np.diff(times[: revs * m + 1 : m]) if revs >= 1 else np.zeros(0)
+    wander: list[Input] = []
+    bias_notes: list[str] = []
+    if per_rev.size >= 2:
+        wander.append(
+            Input(
+                name="table rate wander between revolutions",
+                value=0.0,
+                u=float(np.std(per_rev, ddof=1)) / math.sqrt(per_rev.size),
+                dof=float(per_rev.size - 1),
+                distribution="normal",
+                unit="deg/s",
+                source=f"Type A, s/√R of {per_rev.size} single-revolution rates",
+            )
+        )
+        bias_notes.append(
+            "the wander is the spread of the single-revolution rates (it also holds their "
+            "timing jitter); it makes the bias a statement about the table at this setting, "
+            "not only about this record."
+        )
+    else:
+        bias_notes.append(
+            "fewer than two whole revolutions: the table's rate wander between records cannot be "
+            "estimated, so the bias budget holds only this record's measurement."
+        )
+    n_in = len(inputs)
+
+    def bias(*x: Any) -> Any:
+        y = rate(*x[:n_in]) + (x[n_in] if len(x) > n_in else 0.0) - set_rate
+        return np.array([y, 100.0 * y / set_rate])
+
+    def bias_grad(*x: float) -> np.ndarray:
+        g = np.array([*grad(*x[:n_in]), *([1.0] if len(x) > n_in else [])])
+        return np.vstack([g, 100.0 * g / set_rate])
+
+    gb = propagate(
+        bias,
+        [*inputs, *wander],
+        jacobian=bias_grad,
+        p=COVERAGE,
+        names_out=["rate_bias_deg_s", "rate_bias_percent"],
+        units_out=["deg/s", "%"],
+    )
+    extra = [*notes, *bias_notes, f"set rate {set_rate:.10g} deg/s taken as exact (the reference)."]
+    budgets["rate_bias_deg_s"] = _with_notes(drop_large_dof_notes(gb.budget(0)), extra)
+    budgets["rate_bias_percent"] = _with_notes(drop_large_dof_notes(gb.budget(1)), extra)
+    return budgets
+
+
+def _deviation_noises(
+    *,
+    m: int,
+    heads: int,
+    use_all: bool,
+    compensated: bool,
+    selfcal: Any,
+    specs: InstrumentSpecs | None,
+) -> tuple[list[tuple[Input, DeviationNoise, bool]], list[str]]:
+    """The error curves of the scale (per line, arcsec) that the compensated angle still holds:
+    (row, noise model, whether it is the model's undetectable part)."""
+    out: list[tuple[Input, DeviationNoise, bool]] = []
+    notes: list[str] = []
+    und = spec_entry(specs, UNDETECTABLE_SPEC)
+    grad = spec_entry(specs, _GRADUATION)
+    if compensated:
+        noise: DeviationNoise | None = None
+        if isinstance(selfcal, SelfCalibration):
+            noise = selfcal._noise
+            if noise is None:
+                notes.append(
+                    "the self-calibration has no uncertainty (one revolution): its noise is not "
+                    "in the budgets."
+                )
+        elif isinstance(selfcal, Mapping) and selfcal.get("deviation_arcsec_u") is not None:
+            try:
+                u_pts = np.asarray(selfcal["deviation_arcsec_u"], dtype=np.float64)
+            except (TypeError, ValueError):
+                raise ConfigError(
+                    "the self-calibration's 'deviation_arcsec_u' must be a list of numbers."
+                ) from None
+            if u_pts.shape != (m,) or not np.all(np.isfinite(u_pts)) or np.any(u_pts < 0):
+                raise ConfigError(
+                    f"the self-calibration's 'deviation_arcsec_u' must hold {m} finite values ≥ 0."
+                )
+            noise = DeviationNoise.white(m, float(np.sqrt(np.mean(u_pts**2))))
+            notes.append(
+                "the deviation's uncertainty comes from its JSON (one u per line): drawn as white "
+                "noise of that size (it may already hold the undetectable orders)."
+            )
+        else:
+            notes.append(
+                "the deviation was given without its uncertainty: its noise is not in the budgets."
+            )
+        if noise is not None:
+            out.append(
+                (
+                    Input(
+                        name="noise of the self-calibrated deviation",
+                        value=0.0,
+                        u=noise.point_u,
+                        distribution="normal",
+                        unit="arcsec",
+                        source="Type A, the self-calibration's budget (per line)",
+                        description="normal, with the curve's spectrum",
+                    ),
+                    noise,
+                    False,
+                )
+            )
+    if (compensated or use_all) and und is not None:
+        n_sc = heads
+        if isinstance(selfcal, SelfCalibration):
+            n_sc = selfcal.heads
+        elif isinstance(selfcal, Mapping) and isinstance(selfcal.get("heads"), int):
+            n_sc = int(selfcal["heads"])
+        mask = np.zeros(m // 2 + 1, dtype=bool)
+        if n_sc >= 2:
+            mask[undetectable_orders(n_sc, m)] = True
+        model = DeviationNoise(m, np.zeros(m // 2 + 1), mask, float(und.std))
+        out.append(
+            (
+                Input(
+                    name="orders no head arrangement sees (multiples of n)",
+                    value=0.0,
+                    u=float(und.std),
+                    dof=float(getattr(und, "dof", math.inf)),
+                    distribution=str(und.name),
+                    unit="arcsec",
+                    source=f"Type B, {UNDETECTABLE_SPEC}",
+                    description=str(und.describe()),
+                ),
+                model,
+                True,
+            )
+        )
+        notes.append(
+            f"{UNDETECTABLE_SPEC} is drawn as a random curve, white across the undetectable "
+            "orders (the cautious choice for a rate: a smooth n-th harmonic of the same rms moves "
+            "it far less)."
+        )
+    elif compensated or use_all:
+        notes.append(
+            "the orders that are multiples of the number of heads stay in the rate (no "
+            f"self-calibration sees them) and are not in its uncertainty; state {UNDETECTABLE_SPEC}."
+        )
+    if not compensated and not use_all:
+        if grad is not None:
+            model = DeviationNoise.white(m, float(grad.std))
+            out.append(
+                (
+                    Input(
+                        name="graduation error (not compensated)",
+                        value=0.0,
+                        u=float(grad.std),
+                        dof=float(getattr(grad, "dof", math.inf)),
+                        distribution=str(grad.name),
+                        unit="arcsec",
+                        source=f"Type B, {_GRADUATION}",
+                        description=str(grad.describe()),
+                    ),
+                    model,
+                    False,
+                )
+            )
+        else:
+            notes.append(
+                "the rate is not compensated: the scale's graduation error is in it but not in its "
+                f"uncertainty; compensate, or state {_GRADUATION}."
+            )
+    return out, notes
+
+
+def _rate_deviation_budgets(
+    dev_pct: FloatArray,
+    *,
+    m: int,
+    average: int,
+    line_offset: int,
+    omega: float,
+    jitter: tuple[float, float, bool],
+    curves: list[tuple[Input, DeviationNoise, bool]],
+    notes: list[str],
+    specs: InstrumentSpecs | None,
+) -> tuple[dict[str, UncertaintyBudget], dict[str, float]]:
+    """Monte Carlo budgets of the rms and peak rate deviation (with their bias).
+
+    A rate point averages ``average`` pulse intervals, so an angle error ξ_j at pulse j (deg:
+    the angle's error minus ω times the time's error) moves it by (ξ_end − ξ_start)/(A·Δθ)
+    relative: only the errors at the block boundaries count.
+
+    References
+    ----------
+    JCGM 101:2008 §7 (Monte Carlo); Kokuyama et al. (seed 004) §5 (the time-difference rate,
+    10-point averaging).
+    """
+    sigma_t, sigma_dof, _ = jitter
+    nb = dev_pct.size
+    bounds = np.arange(nb + 1) * average
+    lines = (bounds + line_offset) % m
+    scale = 100.0 / (average * 360.0 / m)  # % of rate per degree of boundary error
+
+    def jitter_draw(rng: np.random.Generator, size: int) -> FloatArray:
+        xi = rng.standard_normal((size, nb + 1)) * (abs(omega) * sigma_t)
+        return scale * np.diff(xi, axis=-1)
+
+    def line_draw(noise: DeviationNoise, undetectable: bool) -> Any:
+        # only the lines at the block boundaries matter: every average-th line
+        draw = noise.sampler(average, undetectable=undetectable)
+        idx = lines if m % average else np.arange(nb + 1) % (m // average)
+
+        def f(rng: np.random.Generator, size: int) -> FloatArray:
+            xi = draw(rng, size)[:, idx] / 3600.0
+            return scale * np.diff(xi, axis=-1)
+
+        return f
+
+    inputs = [
+        Input(
+            name="pulse timing jitter",
+            value=0.0,
+            u=sigma_t,
+            dof=sigma_dof,
+            distribution="normal",
+            unit="s",
+            source="Type A, from the pulse times (see timing_jitter)",
+        ),
+        *(inp for inp, _, _ in curves),
+    ]
+    # every error is in the measured rate: each biases the rms and peak
+    sources = [(inputs[0], jitter_draw, True)]
+    sources.extend((inp, line_draw(noise, und), True) for inp, noise, und in curves)
+    mc = statistic_samples(
+        dev_pct,
+        sources,
+        {
+            "rms": lambda x: np.sqrt(np.mean(x * x, axis=-1)),
+            "peak": lambda x: np.max(np.abs(x), axis=-1),
+        },
+    )
+    extra = [
+        *notes,
+        "the measurand is the table's rate deviation in this record, so the table's own "
+        "fluctuation is the value, not an error; a timebase error scales every rate and the mean "
+        "alike and leaves a relative deviation unchanged.",
+    ]
+    if specs is None:
+        extra.append(TYPE_A_ONLY)
+    plain = {
+        "rms": float(np.sqrt(np.mean(dev_pct**2))),
+        "peak": float(np.max(np.abs(dev_pct))),
+    }
+    budgets = {
+        f"rate_deviation_{key}_percent": mc_budget(
+            f"rate_deviation_{key}_percent", "%", plain[key], mc[key], inputs, notes=extra
+        )
+        for key in ("rms", "peak")
+    }
+    biases = {key: plain[key] - simex_estimate(plain[key], mc[key]) for key in ("rms", "peak")}
+    return budgets, biases
+
+
 def calibrate_rate(
     heads: Sequence[ArrayLike] | Mapping[str, ArrayLike],
     *,
@@ -352,6 +1028,7 @@ def calibrate_rate(
     set_rate_deg_s: float | None = None,
     allan_angles_deg: ArrayLike | None = None,
     compensate: bool = True,
+    specs: InstrumentSpecs | None = None,
 ) -> RateResult:
     """Angular velocity of a table from pulse timing: mean, bias, stability and s(φ).
 
@@ -377,10 +1054,17 @@ def calibrate_rate(
         Angles φ for s(φ) (default 12 per decade).
     compensate : bool
         Set False to skip compensation (results then equal the uncompensated ones).
+    specs : InstrumentSpecs, optional
+        The lab's instrument specifications (Type B inputs). Used: ``timebase.relative_error``
+        (mean rate and bias; a stated mean error δ̂ corrects the rates by (1 + δ̂)),
+        ``encoder.undetectable_harmonics_arcsec`` (what the compensation cannot remove),
+        ``encoder.graduation_error_arcsec`` (an uncompensated rate). None: Type A only.
 
     Returns
     -------
     RateResult
+        With uncertainty budgets of the mean rate, the bias, the rms and peak rate deviation
+        and the uncertainty of every s(φ).
 
     Raises
     ------
@@ -392,9 +1076,14 @@ def calibrate_rate(
     ----------
     Kokuyama et al. (seed 004), §5: time-difference rate with 10-point averaging, Figure 9 (rate
     compensated with the extracted deviation, bias and fluctuation in % of rate), the relative root
-    Allan variance s(φ) of Figure 10.
+    Allan variance s(φ) of Figure 10. JCGM 100:2008 (GUM), JCGM 101:2008 (the budgets); Greenhall
+    & Riley 2003 (edf of s(φ)).
     """
     m = check_pulses_per_rev(pulses_per_rev)
+    if specs is not None and not isinstance(specs, InstrumentSpecs):
+        raise ConfigError(
+            f"specs must be the InstrumentSpecs of load_specs(...), got {type(specs).__name__}."
+        )
     if isinstance(heads, Mapping):
         trains = head_columns(heads)
     else:
@@ -429,7 +1118,7 @@ def calibrate_rate(
     if compensate and not use_all:
         if selfcal is None and n >= 2:
             try:
-                made = self_calibrate(trains, pulses_per_rev=m)
+                made = self_calibrate(trains, pulses_per_rev=m, specs=specs)
             except CaptureError as e:
                 raise CaptureError(
                     f"{e} (the rate is compensated with a self-calibration of this capture; "
@@ -515,6 +1204,12 @@ def calibrate_rate(
             f"less than one whole revolution ({times.size} pulses of {m}): the mean rate is a "
             "straight-line fit of the compensated angle, not exact over revolutions."
         )
+    jitter = timing_jitter(times, m)
+    if not jitter[2]:
+        notes.append(
+            "fewer than two whole revolutions: the timing jitter is estimated along the pulses "
+            "and holds the graduation error too (an upper bound)."
+        )
 
     t_avg, rate = pulse_rate(times, angle, average=average)
     _, rate_nom = pulse_rate(times, angle_nom, average=average)
@@ -530,7 +1225,7 @@ def calibrate_rate(
         )
     else:
         s_nom = s
-    bias = bias_pct = None
+    set_rate: float | None = None
     if set_rate_deg_s is not None:
         set_rate = abs(float(set_rate_deg_s))
         if float(set_rate_deg_s) < 0:
@@ -538,8 +1233,45 @@ def calibrate_rate(
                 "pulse times carry no sense of rotation: the mean rate is a magnitude and is "
                 f"compared with |set rate| = {set_rate:g} °/s."
             )
-        bias = mean_rate - set_rate
-        bias_pct = 100.0 * bias / set_rate
+
+    # ---- uncertainty
+    tb = spec_entry(specs, _TIMEBASE)
+    correction = float(tb.mean) if tb is not None else 0.0
+    if correction != 0.0:
+        notes.append(
+            f"rates corrected for the stated timebase error {correction:+.3g} (× {1 + correction:.10g})."
+        )
+    raw_rate = mean_rate  # in the DAQ's seconds, as the rate points
+    budgets = _mean_rate_budgets(times, angle, m, revs, set_rate, specs, jitter)
+    mean_rate = budgets["mean_rate_deg_s"].value  # one truth: the field is the budget's value
+    bias = bias_pct = None
+    if set_rate is not None:
+        bias = budgets["rate_bias_deg_s"].value
+        bias_pct = budgets["rate_bias_percent"].value
+    curves, curve_notes = _deviation_noises(
+        m=m,
+        heads=n,
+        use_all=use_all,
+        compensated=deviation is not None,
+        selfcal=selfcal,
+        specs=specs,
+    )
+    dev_budgets, dev_bias = _rate_deviation_budgets(
+        dev_pct,
+        m=m,
+        average=int(average),
+        line_offset=shift or 0,
+        omega=raw_rate,
+        jitter=jitter,
+        curves=curves,
+        notes=curve_notes,
+        specs=specs,
+    )
+    budgets.update(dev_budgets)
+    a_u, a_big_u, a_edf, a_lo, a_hi, a_alpha = allan_uncertainty(s, phi, 360.0 / m, times.size)
+    factor = 1.0 + correction
+    rate = rate * factor
+    rate_nom = rate_nom * factor
     return RateResult(
         mean_rate_deg_s=float(mean_rate),
         rate_deviation_rms_percent=float(np.sqrt(np.mean(dev_pct**2))),
@@ -566,4 +1298,17 @@ def calibrate_rate(
         _rate_deg_s=rate,
         _rate_uncompensated_deg_s=rate_nom,
         _selfcal=made,
+        timing_jitter_s=jitter[0],
+        timing_jitter_dof=jitter[1],
+        timebase_correction=correction,
+        rate_deviation_rms_bias_percent=dev_bias["rms"],
+        rate_deviation_rms_corrected_percent=dev_budgets["rate_deviation_rms_percent"].value,
+        rate_deviation_peak_bias_percent=dev_bias["peak"],
+        rate_deviation_peak_corrected_percent=dev_budgets["rate_deviation_peak_percent"].value,
+        allan_relative_u=[float(x) for x in a_u],
+        allan_relative_U=[float(x) for x in a_big_u],
+        allan_relative_edf=[float(x) for x in a_edf],
+        allan_relative_interval=[[float(lo), float(hi)] for lo, hi in zip(a_lo, a_hi, strict=True)],
+        allan_noise_alpha=[int(x) for x in a_alpha],
+        _budgets=budgets,
     )

@@ -64,6 +64,8 @@ from rotacal.table.motion import (
     _finish,
     _plot_stride,
 )
+from rotacal.table.motion_uncertainty import ReversalDetection
+from rotacal.uncertainty import InstrumentSpecs
 
 __all__ = ["ChunkSource", "calibrate_encoder_motion_chunked", "encoder_chunks_from_file"]
 
@@ -415,6 +417,7 @@ def calibrate_encoder_motion_chunked(
     set_frequency_hz: float | None = None,
     correction: QuadratureCorrection | None = None,
     progress: Callable[[int], None] | None = None,
+    specs: InstrumentSpecs | None = None,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from an encoder capture read in chunks (flat memory).
 
@@ -446,6 +449,8 @@ def calibrate_encoder_motion_chunked(
     progress : callable, optional
         Called after each chunk with the number of samples processed so far, summed over the
         passes (at most 6·N for a capture of N samples; passes 4–6 read only what they need).
+    specs : InstrumentSpecs, optional
+        The lab's instrument specifications (Type B inputs of the budgets, as in memory).
 
     Returns
     -------
@@ -464,7 +469,8 @@ def calibrate_encoder_motion_chunked(
     References
     ----------
     Feng et al. (2023), Sensors 23:4876, §3 and eqs. (1)–(8); IEEE Std 1057-2017, §4.1.3;
-    Heydemann 1981, Appl. Opt. 20:3382 (signal correction).
+    Heydemann 1981, Appl. Opt. 20:3382 (signal correction); JCGM 100:2008, JCGM 101:2008
+    (budgets, :mod:`rotacal.table.motion_uncertainty`).
     """
     _check_settings(harmonics, periods)
     if int(lines) != lines or lines < 1:
@@ -505,6 +511,10 @@ def calibrate_encoder_motion_chunked(
         "set_frequency_hz": set_frequency_hz,
         "notes": notes,
         "snr": None,
+        "specs": specs,
+        # sampling interval and capture start for the reversal budget (as in memory)
+        "_dt": float(t_last - t_first) / max(last - first, 1),
+        "_t0": float(demod.plot_t[0]),
     }
 
     if n_seg <= _GATHER_MAX_SAMPLES:
@@ -574,7 +584,15 @@ def _result(
     t_used: np.ndarray,
     angle_used: np.ndarray | None,
 ) -> MotionResult:
+    common = dict(common)
+    detection = ReversalDetection(
+        method="argmax",
+        fit=fit,
+        sample_interval_s=common.pop("_dt"),
+        capture_start_s=common.pop("_t0"),
+    )
     return _finish(
+        detection=detection,
         fit=fit,
         displacement_amplitudes=fit.amplitudes,
         displacement_amplitudes_u=fit.amplitudes_u,

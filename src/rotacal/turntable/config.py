@@ -362,10 +362,10 @@ def parse_turntable(
             if key in cal:
                 checked[key] = rd.integer(cal[key], f"[calibration] {key}", 1)
         if "required_deg_h" in cal:
-            req = rd.number(cal["required_deg_h"], "[calibration] required_deg_h")
-            if req <= 0:
-                raise rd.fail(f"[calibration] required_deg_h = {req:g} must be > 0 (°/h).")
-            checked["required_deg_h"] = req
+            accuracy = rd.number(cal["required_deg_h"], "[calibration] required_deg_h")
+            if accuracy <= 0:
+                raise rd.fail(f"[calibration] required_deg_h = {accuracy:g} must be > 0 (°/h).")
+            checked["required_deg_h"] = accuracy
         settings["calibration"] = checked
     if "sensitivity" in data:
         sens = rd.table(data["sensitivity"], "[sensitivity]")

@@ -57,6 +57,11 @@ KNOWN_SPECS: dict[str, tuple[str, str, str]] = {
         "angle error of one encoder reading (graduation and interpolation)",
         "motion amplitude by the optical encoder (seed 000)",
     ),
+    "encoder.undetectable_harmonics_arcsec": (
+        "arcsec",
+        "rms of the scale deviation at the orders that are multiples of the number of heads",
+        "self-calibrated deviation and compensated rate (seed 004)",
+    ),
     "lts.resolution_um": (
         "µm",
         "resolution (quantisation) of the laser triangulation sensor's distance",
@@ -84,7 +89,7 @@ KNOWN_SPECS: dict[str, tuple[str, str, str]] = {
     ),
     "table.orientation_error_arcsec": (
         "arcsec",
-        "orientation error of the instrument on the turntable, per component (seed 001 eq. 16)",
+        "orientation error of the instrument on the turntable, per component (seed 001 eq. 7)",
         "multiposition drift coefficients (seed 001)",
     ),
     "site.latitude_deg": (

@@ -1,0 +1,505 @@
+"""Uncertainty budgets of the sinusoidal-motion calibration (seed 000) against truths they do not make.
+
+Closed forms (sensitivities and u by hand), recalibration with a changed input (finite differences
+through the calibration, not through the budget), JCGM 102's magnitude example, and the twin run
+many times: the spread of the results must agree with the reported u within the χ² bounds of the
+number of repeats (99.9 %), with Type A only and with systematic effects the twin draws per run
+from the same distributions the specifications state.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from rotacal import sim
+from rotacal.errors import ConfigError
+from rotacal.report.html import Report, render_html
+from rotacal.report.motion import comparison_section, motion_section
+from rotacal.table import (
+    calibrate_encoder_motion,
+    calibrate_encoder_motion_chunked,
+    calibrate_fog_motion,
+    calibrate_lts_motion,
+    compare_schemes,
+)
+from rotacal.table.motion_uncertainty import (
+    reversal_time_u_argmax,
+    reversal_time_u_parabola,
+    thd_bias_corrected_percent,
+    thd_uncertainty,
+)
+from rotacal.uncertainty import load_specs
+
+LINES = 36000
+#: THD well above the noise of every scheme (≈ 1.28 %).
+DISTORTED = sim.SineMotion(
+    amplitude_deg=0.5, frequency_hz=2.0, harmonics={2: (0.010, 0.4), 3: (0.008, 1.1)}
+)
+#: Small harmonics (THD ≈ 0.25 %): the LTS's parabola is then not biased by asymmetric extremes.
+MILD_LTS = sim.SineMotion(
+    amplitude_deg=0.025, frequency_hz=10.0, harmonics={2: (0.002, 0.4), 3: (0.0015, 1.1)}
+)
+PURE = sim.SineMotion(amplitude_deg=0.5, frequency_hz=2.0)
+ENC = {"noise_rms": 0.01, "fs_hz": 20_000.0, "duration_s": 3.125 / 2.0}
+FOG = {"snr_db": 20.0, "fs_hz": 2000.0, "duration_s": 10.125 / 2.0}  # 10 125 samples
+LTS = {"noise_mm": 3e-5}  # 6125 samples at 10 kHz
+
+ALL_KEYS = (
+    "amplitude_deg",
+    "frequency_hz",
+    "angular_acceleration_amplitude_deg_s2",
+    "thd_percent",
+    "reversal_times_s",
+)
+ERROR_KEYS = (
+    "amplitude_error_percent",
+    "frequency_error_percent",
+    "angular_acceleration_error_percent",
+)
+
+
+def _specs(**sections):
+    return load_specs(sections)
+
+
+def _rect(half_width):
+    return {"distribution": "rectangular", "half_width": half_width}
+
+
+def _calibrate(kind, columns, specs=None, radius_mm=100.0, **kw):
+    c = columns
+    if kind == "encoder":
+        return calibrate_encoder_motion(c["time_s"], c["a"], c["b"], lines=LINES, specs=specs, **kw)
+    if kind == "lts":
+        return calibrate_lts_motion(
+            c["time_s"], c["displacement_mm"], radius_mm=radius_mm, specs=specs, **kw
+        )
+    return calibrate_fog_motion(c["time_s"], c["rate_deg_s"], specs=specs, **kw)
+
+
+def _nearest(found, truth):
+    """found − the nearest true reversal (the capture may cut one at either end)."""
+    truth = np.asarray(truth)
+    i = np.clip(np.searchsorted(truth, found), 1, truth.size - 1)
+    left, right = truth[i - 1], truth[i]
+    return found - np.where(np.abs(found - left) < np.abs(found - right), left, right)
+
+
+def _chi2_bounds(n, dof):
+    """Bounds of (sample std)/σ at 99.9 % for a χ² with ``dof`` from n values."""
+    lo, hi = stats.chi2.ppf([0.0005, 0.9995], dof)
+    return math.sqrt(lo / dof), math.sqrt(hi / dof)
+
+
+# ------------------------------------------------------------------------------ closed forms
+def test_frequency_and_acceleration_budgets_are_the_closed_form():
+    """f = f_fit(1 + e): u² = u_A² + (f·a/√3)²; α = Aω²: ∂α/∂A = ω², ∂α/∂f = 2α/f, ∂α/∂e = 2α."""
+    a = 2e-6
+    c = sim.simulate_encoder(DISTORTED, noise_rms=0.004, seed=1).columns
+    r = calibrate_encoder_motion(
+        c["time_s"],
+        c["a"],
+        c["b"],
+        lines=LINES,
+        specs=_specs(timebase={"relative_error": _rect(a)}),
+    )
+    fit = r._fit
+    f, amp = r.frequency_hz, r.amplitude_deg
+    u_e = a / math.sqrt(3)
+    u_f = math.hypot(fit.frequency_u_hz, f * u_e)
+    b = r._budgets["frequency_hz"]
+    assert b.u == pytest.approx(u_f, rel=1e-12)
+    assert r.frequency_hz_u == b.u  # one number, one truth
+    row = next(x for x in b.rows if x.source.startswith("timebase"))
+    assert row.sensitivity == pytest.approx(f, rel=1e-12)
+    w2 = (2 * math.pi * f) ** 2
+    alpha = r.angular_acceleration_amplitude_deg_s2
+    u_alpha = math.sqrt(
+        (w2 * fit.amplitudes_u[0]) ** 2
+        + (2 * alpha / f * fit.frequency_u_hz) ** 2
+        + (2 * alpha * u_e) ** 2
+    )
+    assert r._budgets["angular_acceleration_amplitude_deg_s2"].u == pytest.approx(
+        u_alpha, rel=1e-12
+    )
+    assert alpha == pytest.approx(amp * w2, rel=1e-12)
+    # the timebase dominates: ν_eff is huge and k the normal quantile
+    assert b.k == pytest.approx(1.959964, abs=1e-5)
+    assert b.U == pytest.approx(b.k * b.u, rel=1e-12)
+
+
+def test_encoder_graduation_error_enters_at_both_extremes():
+    """A = A_fit + (g₊ − g₋)/7200: u(A)² = u_fit² + 2·(u_g/7200)², u_g = a/√3 (arcsec)."""
+    a = 1.0
+    c = sim.simulate_encoder(DISTORTED, noise_rms=0.004, seed=2).columns
+    r = calibrate_encoder_motion(
+        c["time_s"],
+        c["a"],
+        c["b"],
+        lines=LINES,
+        specs=_specs(encoder={"graduation_error_arcsec": _rect(a)}),
+        set_amplitude_deg=0.5,
+        set_frequency_hz=2.0,
+    )
+    u_g = a / math.sqrt(3) / 7200
+    u_a = math.hypot(r._fit.amplitudes_u[0], math.sqrt(2) * u_g)
+    assert r.amplitude_deg_u == pytest.approx(u_a, rel=1e-12)
+    assert r._budgets["amplitude_error_percent"].u == pytest.approx(100 * u_a / 0.5, rel=1e-12)
+    rows = [x for x in r._budgets["amplitude_deg"].rows if "graduation" in x.source]
+    assert [x.sensitivity for x in rows] == pytest.approx([1 / 7200, -1 / 7200])
+    # the timebase is not stated: the budget says so, and the frequency is Type A alone
+    assert any("timebase.relative_error" in n for n in r._budgets["frequency_hz"].notes)
+    assert r.frequency_hz_u == r._fit.frequency_u_hz
+
+
+def test_lts_radius_sensitivity_equals_a_recalibration_with_another_radius():
+    """∂A/∂R of the budget against (A(R + δ) − A(R − δ))/2δ through the whole calibration."""
+    m = sim.SineMotion(amplitude_deg=2.0, frequency_hz=1.0, harmonics={3: (0.01, 0.3)})
+    c = sim.simulate_lts(m, radius_mm=100.0, noise_mm=0.0, fs_hz=2000.0, seed=0).columns
+    specs = _specs(lts={"radius_mm": {"distribution": "normal", "value": 100.0, "u": 0.05}})
+    r = calibrate_lts_motion(c["time_s"], c["displacement_mm"], radius_mm=100.0, specs=specs)
+    row = next(x for x in r._budgets["amplitude_deg"].rows if "radius" in x.source)
+    d = 0.01
+    up = calibrate_lts_motion(c["time_s"], c["displacement_mm"], radius_mm=100.0 + d)
+    dn = calibrate_lts_motion(c["time_s"], c["displacement_mm"], radius_mm=100.0 - d)
+    numeric = (up.amplitude_deg - dn.amplitude_deg) / (2 * d)
+    assert row.sensitivity == pytest.approx(numeric, rel=1e-4)
+    assert row.sensitivity == pytest.approx(-r.amplitude_deg / 100.0, rel=2e-3)  # ≈ −A/R
+    assert row.contribution == pytest.approx(row.sensitivity * 0.05, rel=1e-12)
+
+
+def test_lts_resolution_sensitivity_is_half_dtheta_dd_at_each_extreme():
+    m = sim.SineMotion(amplitude_deg=5.0, frequency_hz=1.0)
+    c = sim.simulate_lts(m, radius_mm=100.0, noise_mm=0.0, fs_hz=2000.0, seed=0).columns
+    specs = _specs(lts={"resolution_um": _rect(0.05)})
+    r = calibrate_lts_motion(c["time_s"], c["displacement_mm"], radius_mm=100.0, specs=specs)
+    rows = [x for x in r._budgets["amplitude_deg"].rows if "resolution" in x.source]
+    d = 100.0 * math.tan(math.radians(5.0))
+    c_closed = 0.5 * math.degrees(100.0 / (100.0**2 + d**2)) * 1e-3  # deg per µm
+    assert [abs(x.sensitivity) for x in rows] == pytest.approx([c_closed, c_closed], rel=1e-4)
+    assert rows[0].u == pytest.approx(0.05 / math.sqrt(3))
+
+
+def test_fog_scale_factor_and_timebase_sensitivities_match_recalibrations():
+    """∂A/∂s = −A, ∂A/∂e = −A, ∂α/∂e = α, ∂α/∂s = −α: scale the rate, then the time stamps."""
+    c = sim.simulate_fog(DISTORTED, snr_db=30.0, seed=3, **{"duration_s": 10.125 / 2.0}).columns
+    specs = _specs(
+        timebase={"relative_error": _rect(1e-5)},
+        fog={"scale_factor_relative": {"distribution": "normal", "u": 1e-3}},
+    )
+    r = calibrate_fog_motion(c["time_s"], c["rate_deg_s"], specs=specs)
+    d = 1e-4
+    by_s = calibrate_fog_motion(c["time_s"], c["rate_deg_s"] / (1 + d))  # true rate if s = d
+    t0 = c["time_s"][0]
+    by_e = calibrate_fog_motion(t0 + (c["time_s"] - t0) / (1 + d), c["rate_deg_s"])
+    for key in ("amplitude_deg", "angular_acceleration_amplitude_deg_s2"):
+        rows = {x.source.split(" (")[0]: x for x in r._budgets[key].rows}
+        ds = (getattr(by_s, key) - getattr(r, key)) / d
+        de = (getattr(by_e, key) - getattr(r, key)) / d
+        assert rows["FOG scale-factor error s"].sensitivity == pytest.approx(ds, rel=2e-4)
+        assert rows["timebase error e"].sensitivity == pytest.approx(de, rel=2e-4)
+
+
+# ------------------------------------------------------------------------------ reversal times
+def test_parabola_vertex_formula_against_a_direct_simulation():
+    """u = σ√3/(κW√n) against np.polyfit on noisy parabolas (not the budget's code)."""
+    rng = np.random.default_rng(0)
+    kappa, sigma, dt, w = 80.0, 2e-5, 1e-4, 5e-3
+    tau = np.arange(-w, w + dt / 2, dt)
+    est = []
+    for _ in range(3000):
+        y = -0.5 * kappa * tau**2 + sigma * rng.standard_normal(tau.size)
+        c2, c1, _ = np.polyfit(tau, y, 2)
+        est.append(-c1 / (2 * c2))
+    u = float(reversal_time_u_parabola(sigma, kappa, w, dt)[0])
+    assert np.std(est) == pytest.approx(u, rel=0.05)
+
+
+def test_argmax_estimator_without_noise_is_the_sampling_quantisation():
+    assert reversal_time_u_argmax(0.0, 80.0, 2e-5) == pytest.approx(2e-5 / math.sqrt(12))
+    # with noise: between the quantisation and the width where the parabola drops by ~σ
+    u = reversal_time_u_argmax(1e-5, 80.0, 2e-5)
+    assert 2e-5 / math.sqrt(12) < u < math.sqrt(2 * 10 * 1e-5 / 80.0)
+
+
+# ------------------------------------------------------------------------------ THD
+def test_jcgm102_magnitude_example_through_the_thd_code_path():
+    """|Z| with Re ~ N(0.001, 0.01²), Im ~ N(0, 0.01²): as a THD of A_2 over A_1 = 1 (JCGM 102).
+
+    Published: first-order |Z| = 0.001, u = 0.010; Monte Carlo |Z| = 0.013, u = 0.007.
+    """
+    t = thd_uncertainty([1.0, 0.001], [0.0, 0.01], trials=1_000_000)
+    assert t.plain == pytest.approx(0.1)  # percent of A_1 = 1
+    assert round(t.mc_mean / 100, 3) == 0.013
+    assert round(t.u / 100, 3) == 0.007
+    assert any("GUM gives u = 1 %" in n and "does not agree" in n for n in t.budget.notes)
+    assert t.budget.method == "Monte Carlo"
+    lo, hi = t.interval
+    assert lo > 0.0 and t.U == pytest.approx((hi - lo) / 2)
+
+
+def _fog_thd(motion, seed, snr_db):
+    c = sim.simulate_fog(motion, snr_db=snr_db, fs_hz=2000.0, duration_s=10.125 / 2, seed=seed)
+    return calibrate_fog_motion(c.columns["time_s"], c.columns["rate_deg_s"])
+
+
+def test_bias_corrected_thd_of_a_pure_sine_is_closer_to_zero():
+    """True THD 0 at 10 dB SNR: plain THD is all noise; the noise-power subtraction removes most
+    of it, and more than subtracting the Monte Carlo bias (plain − bias) does."""
+    plain, corrected, minus_bias = [], [], []
+    for seed in range(20):
+        r = _fog_thd(PURE, seed, 10.0)
+        plain.append(r.thd_percent)
+        corrected.append(r.thd_percent_bias_corrected)
+        minus_bias.append(r.thd_percent - r.thd_percent_bias)
+        assert r.thd_percent_bias > 0  # noise only pushes up
+    assert np.mean(corrected) < 0.5 * np.mean(plain)
+    assert np.mean(np.abs(corrected)) < np.mean(np.abs(minus_bias))
+
+
+def test_bias_correction_is_negligible_for_a_thd_well_above_the_noise():
+    """THD ≈ 25 u: the correction and the bias stay below u/5 (added in quadrature to the
+    uncertainty they would change U by less than 2 %)."""
+    for seed in range(3):
+        r = _fog_thd(DISTORTED, seed, 20.0)
+        assert r.thd_percent > 10 * r.thd_percent_u
+        assert abs(r.thd_percent_bias_corrected - r.thd_percent) < 0.2 * r.thd_percent_u
+        assert abs(r.thd_percent_bias) < 0.2 * r.thd_percent_u
+        lo, hi = r.thd_percent_coverage_interval
+        assert lo < r.thd_percent < hi
+
+
+def test_thd_bias_corrected_closed_form():
+    a = np.array([2.0, 0.03, 0.04, 0.001])
+    u = np.array([1e-3, 0.002, 0.002, 0.002])
+    expect = 100 * math.sqrt(0.03**2 + 0.04**2 + 0.001**2 - 3 * 2 * 0.002**2) / 2.0
+    assert thd_bias_corrected_percent(a, u) == pytest.approx(expect, rel=1e-12)
+    assert thd_bias_corrected_percent([1.0, 1e-4], [0, 1e-3]) == 0.0
+
+
+# ------------------------------------------------------------------------------ honesty
+def _honesty(kind, motion, sensor, *, n, specs=None, draw=None, nominal_radius=100.0):
+    """Run the twin n times; return {quantity: (std/mean u, lower bound, upper bound)}."""
+    rng = np.random.default_rng(2024)
+    errs = {k: [] for k in ALL_KEYS if k != "reversal_times_s"}
+    us = {k: [] for k in errs}
+    rev_e, rev_u = [], []
+    for i in range(n):
+        opts = {**sensor, "seed": 100 + i, "start_s": float(rng.uniform(0.0, 0.01))}
+        if draw is not None:
+            opts.update(draw(rng))
+        cap = sim.simulate(kind, motion=motion, **opts)
+        r = _calibrate(kind, cap.columns, specs, radius_mm=nominal_radius)
+        truth = motion.truth(r.analysis_start_s, r.analysis_stop_s)
+        for k in errs:
+            errs[k].append(getattr(r, k) - truth[k])
+            us[k].append(r._budgets[k].u)
+        e = _nearest(r.reversal_times_s, cap.truth["reversal_times_s"])
+        u = r._budgets["reversal_times_s"].u
+        if kind == "fog":  # the zero crossings of one fitted model are correlated: one per run
+            e = e[[i % e.size]]
+        rev_e.append(e)
+        rev_u.append(np.full(e.size, u))
+    out = {}
+    for k in errs:
+        out[k] = (np.std(errs[k], ddof=1) / np.mean(us[k]), *_chi2_bounds(n, n - 1))
+    e, u = np.concatenate(rev_e), np.concatenate(rev_u)
+    # about the truth (no mean removed): a χ² with one degree of freedom per reversal
+    out["reversal_times_s"] = (
+        math.sqrt(np.mean(e**2) / np.mean(u**2)),
+        *_chi2_bounds(e.size, e.size),
+    )
+    return out
+
+
+def _assert_honest(out, keys=None):
+    for k in keys or out:
+        ratio, lo, hi = out[k]
+        assert lo < ratio < hi, f"{k}: std/u = {ratio:.3f} outside [{lo:.3f}, {hi:.3f}]"
+
+
+@pytest.mark.slow
+def test_encoder_budgets_are_honest_type_a():
+    _assert_honest(_honesty("encoder", DISTORTED, ENC, n=30))
+
+
+@pytest.mark.slow
+def test_encoder_frequency_budget_is_honest_with_a_drawn_timebase_error():
+    """A clock error of ±2e-8 (rectangular), drawn per run: comparable to the fit's own u(f)."""
+    a = 2e-8
+    out = _honesty(
+        "encoder",
+        DISTORTED,
+        ENC,
+        n=30,
+        specs=_specs(timebase={"relative_error": _rect(a)}),
+        draw=lambda rng: {"timebase_relative_error": float(rng.uniform(-a, a))},
+    )
+    _assert_honest(out)
+
+
+@pytest.mark.slow
+def test_lts_budgets_are_honest_type_a():
+    _assert_honest(_honesty("lts", MILD_LTS, LTS, n=30))
+
+
+@pytest.mark.slow
+def test_lts_budgets_are_honest_with_a_drawn_radius_and_timebase():
+    """The reflector's true R is drawn from N(100, 0.002²) mm per run, the user states 100 mm."""
+    specs = _specs(
+        timebase={"relative_error": _rect(1e-6)},
+        lts={"radius_mm": {"distribution": "normal", "value": 100.0, "u": 0.002}},
+    )
+    out = _honesty(
+        "lts",
+        MILD_LTS,
+        LTS,
+        n=30,
+        specs=specs,
+        draw=lambda rng: {
+            "timebase_relative_error": float(rng.uniform(-1e-6, 1e-6)),
+            "radius_mm": float(rng.normal(100.0, 0.002)),
+        },
+    )
+    _assert_honest(out)
+
+
+@pytest.mark.slow
+def test_fog_budgets_are_honest_type_a():
+    _assert_honest(_honesty("fog", DISTORTED, FOG, n=30))
+
+
+@pytest.mark.slow
+def test_fog_budgets_are_honest_with_a_drawn_scale_factor_and_timebase():
+    specs = _specs(
+        timebase={"relative_error": _rect(2e-5)},
+        fog={"scale_factor_relative": {"distribution": "normal", "u": 1e-3}},
+    )
+    out = _honesty(
+        "fog",
+        DISTORTED,
+        FOG,
+        n=30,
+        specs=specs,
+        draw=lambda rng: {
+            "timebase_relative_error": float(rng.uniform(-2e-5, 2e-5)),
+            "scale_factor_error": float(rng.normal(0.0, 1e-3)),
+        },
+    )
+    _assert_honest(out)
+
+
+# ------------------------------------------------------------------------------ JSON, paths, errors
+@pytest.mark.parametrize("kind", ["encoder", "lts", "fog"])
+def test_every_quantity_has_u_big_u_and_k_in_the_json(kind):
+    motion = MILD_LTS if kind == "lts" else DISTORTED
+    set_values = {
+        "set_amplitude_deg": motion.amplitude_deg,
+        "set_frequency_hz": motion.frequency_hz,
+    }
+    c = sim.simulate(kind, motion=motion, seed=0).columns
+    r = _calibrate(kind, c, **set_values)
+    d = r.to_dict()
+    for key in ALL_KEYS + ERROR_KEYS:
+        assert d[f"{key}_u"] > 0, key
+        assert d[f"{key}_U"] == pytest.approx(d["k"][key] * d[f"{key}_u"], rel=1e-9), key
+        assert d["uncertainty_budgets"][key]["rows"], key
+    assert d["coverage_probability"] == 0.95
+    assert d["thd_percent_u"] == r.thd_percent_u == r._budgets["thd_percent"].u
+    assert d["amplitude_deg_u"] == r.amplitude_deg_u
+    for key in ("thd_percent_mc_mean", "thd_percent_bias", "thd_percent_bias_corrected"):
+        assert math.isfinite(d[key])
+    assert len(d["thd_percent_coverage_interval"]) == 2
+    notes = d["uncertainty_budgets"]["amplitude_deg"]["notes"]
+    assert "no instrument specification stated: Type A only" in notes
+
+
+def test_compare_schemes_difference_u_is_its_budget():
+    c = sim.simulate_encoder(DISTORTED, seed=0).columns
+    a = calibrate_encoder_motion(c["time_s"], c["a"], c["b"], lines=LINES)
+    f = sim.simulate_fog(DISTORTED, snr_db=20.0, seed=0).columns
+    b = calibrate_fog_motion(f["time_s"], f["rate_deg_s"])
+    row = compare_schemes(a, b)
+    d = row.to_dict()
+    assert row.thd_difference_percent_u == pytest.approx(
+        math.hypot(a.thd_percent_u, b.thd_percent_u)
+    )
+    assert d["thd_difference_percent_u"] == row.thd_difference_percent_u
+    u_amp = 100 * math.hypot(
+        b.amplitude_deg / a.amplitude_deg**2 * a.amplitude_deg_u,
+        b.amplitude_deg_u / a.amplitude_deg,
+    )
+    assert d["amplitude_difference_percent_u"] == pytest.approx(u_amp, rel=1e-9)
+    for key in (
+        "thd_difference_percent",
+        "amplitude_difference_percent",
+        "frequency_difference_percent",
+    ):
+        assert d[f"{key}_U"] == pytest.approx(d["k"][key] * d[f"{key}_u"])
+
+
+def test_chunked_path_gives_the_in_memory_budgets(monkeypatch):
+    import rotacal.table.streaming as streaming
+
+    monkeypatch.setattr(streaming, "_GATHER_MAX_SAMPLES", 1000)  # the accumulated fit
+    c = sim.simulate_encoder(DISTORTED, noise_rms=0.004, seed=3).columns
+    specs = _specs(timebase={"relative_error": _rect(1e-6)})
+    kw = {"lines": LINES, "specs": specs, "set_amplitude_deg": 0.5, "set_frequency_hz": 2.0}
+    r0 = calibrate_encoder_motion(c["time_s"], c["a"], c["b"], **kw)
+
+    def chunks():
+        for i in range(0, c["a"].size, 20_011):
+            yield {k: c[k][i : i + 20_011] for k in ("time_s", "a", "b")}
+
+    r = calibrate_encoder_motion_chunked(chunks, **kw)
+    assert r._budgets.keys() == r0._budgets.keys()
+    for key, b0 in r0._budgets.items():
+        assert r._budgets[key].u == pytest.approx(b0.u, rel=1e-4), key
+        assert r._budgets[key].value == pytest.approx(b0.value, rel=1e-9, abs=1e-12), key
+
+
+def test_bad_specifications_are_one_line_config_errors():
+    with pytest.raises(ConfigError, match=r"must be ≥ 0"):
+        load_specs({"timebase": {"relative_error": {"distribution": "normal", "u": -1e-6}}})
+    with pytest.raises(ConfigError, match="unknown distribution"):
+        load_specs({"timebase": {"relative_error": {"distribution": "lognormal", "u": 1e-6}}})
+    c = sim.simulate_lts(MILD_LTS, seed=0).columns
+    offset = _specs(
+        timebase={"relative_error": {"distribution": "normal", "value": 1e-6, "u": 1e-7}}
+    )
+    with pytest.raises(ConfigError, match="centred on zero") as err:
+        _calibrate("lts", c, offset)
+    assert "\n" not in str(err.value)
+    other_r = _specs(lts={"radius_mm": {"distribution": "normal", "value": 150.0, "u": 0.1}})
+    with pytest.raises(ConfigError, match="radius-mm 100"):
+        _calibrate("lts", c, other_r)
+
+
+def test_a_specification_that_does_not_apply_is_ignored():
+    c = sim.simulate_encoder(DISTORTED, noise_rms=0.004, seed=4).columns
+    r0 = _calibrate("encoder", c)
+    r = _calibrate("encoder", c, _specs(lts={"resolution_um": _rect(1.0)}))
+    assert r.amplitude_deg_u == r0.amplitude_deg_u
+    assert not any("LTS" in row.source for b in r._budgets.values() for row in b.rows)
+
+
+def test_report_shows_the_budget_tables_without_nan():
+    c = sim.simulate_encoder(DISTORTED, noise_rms=0.004, seed=1).columns
+    specs = _specs(
+        timebase={"relative_error": _rect(2e-6)}, encoder={"graduation_error_arcsec": _rect(1.0)}
+    )
+    r = _calibrate("encoder", c, specs, set_amplitude_deg=0.5, set_frequency_hz=2.0)
+    f = sim.simulate_fog(DISTORTED, snr_db=20.0, seed=0).columns
+    rf = calibrate_fog_motion(f["time_s"], f["rate_deg_s"])
+    sec = motion_section(r, figures=False)
+    captions = [t.caption for t in sec.tables]
+    for key in r._budgets:
+        assert any(cap.startswith(f"Uncertainty budget of {key} ") for cap in captions), key
+    cmp = comparison_section([("run", compare_schemes(r, rf), None)])
+    text = render_html(Report("t", sections=[sec, motion_section(rf, figures=False), cmp]))
+    assert "nan" not in text.lower()
+    assert "0.50000 ° ± 0.00022 °" in text  # ILAC-P14: U to two digits, value to the same place
