@@ -179,6 +179,17 @@ def _refuse_overwrite(path: Path, protect: Sequence[Path], option: str) -> None:
             )
 
 
+def _load_specs_option(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
+    """``--specs FILE.toml`` → InstrumentSpecs (one line on any fault, before the capture is read)."""
+    if value is None:
+        return None
+    from rotacal.uncertainty.specs import load_specs
+
+    if not Path(value).is_file():
+        raise ConfigError(f"--specs {value}: no such file")
+    return load_specs(Path(value))
+
+
 def _analysis_options(func: F) -> F:
     """Options every analysis command takes."""
     options = [
@@ -200,6 +211,15 @@ def _analysis_options(func: F) -> F:
         ),
         click.option("--group", default=None, help="HDF5 group or TDMS group holding the columns."),
         click.option("--overwrite", is_flag=True, help="Replace existing --json/--report files."),
+        click.option(
+            "--specs",
+            "specs",
+            metavar="FILE.toml",
+            callback=_load_specs_option,
+            expose_value=True,
+            help="Instrument specifications (Type B inputs of the uncertainty budgets; see "
+            "'rotacal specs example').",
+        ),
     ]
     for option in reversed(options):
         func = option(func)
@@ -463,7 +483,12 @@ def selfcal_cmd(
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     heads = _read_heads(capture, columns, group)
     with _status("self-calibrating"):
-        result = self_calibrate(heads, pulses_per_rev=pulses_per_rev, rotation=rotation)  # type: ignore[arg-type]
+        result = self_calibrate(
+            heads,
+            pulses_per_rev=pulses_per_rev,
+            rotation=rotation,  # type: ignore[arg-type]
+            specs=kw.pop("specs"),
+        )
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
         from rotacal.report.pulses import selfcal_section
@@ -547,6 +572,7 @@ def rate_cmd(
             average=average,
             set_rate_deg_s=set_rate_deg_s,
             compensate=not no_compensation,
+            specs=kw.pop("specs"),
         )
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
@@ -624,6 +650,7 @@ def gyro_scale_factor(
             full_scale_deg_s=full_scale_deg_s,
             requirement=requirement,
             output_unit=output_unit,
+            specs=kw.pop("specs"),
         )
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
@@ -660,7 +687,7 @@ def gyro_triad(
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     cap = _read(capture, [*RATE_COLUMNS, *TRIAD_OUTPUT_COLUMNS], columns, group)
     with _status("fitting"):
-        result = calibrate_triad_columns(cap.columns, reject_k=reject_k)
+        result = calibrate_triad_columns(cap.columns, reject_k=reject_k, specs=kw.pop("specs"))
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
         from rotacal.report.triad import triad_section
@@ -742,7 +769,7 @@ def gyro_rotations(
     rate = np.column_stack([cap[c] for c in TRIAD_OUTPUT_COLUMNS])
     with _status("integrating the rotations"):
         result = calibrate_triad_rotations(
-            rate, fs_hz, rotations, static=static, angle_deg=angle_deg
+            rate, fs_hz, rotations, static=static, angle_deg=angle_deg, specs=kw.pop("specs")
         )
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
@@ -765,12 +792,17 @@ def gyro_rotations(
 @gyro.command("multiposition")
 @click.argument("capture", type=click.Path(dir_okay=False))
 @click.option("--axis", type=click.Choice(["x", "y"]), required=True, help="Gyro axis.")
-@click.option("--latitude-deg", type=float, required=True, help="Latitude of the laboratory.")
+@click.option(
+    "--latitude-deg",
+    type=float,
+    default=None,
+    help="Latitude of the laboratory (or site.latitude_deg in --specs).",
+)
 @_analysis_options
 def gyro_multiposition(
     capture: str,
     axis: str,
-    latitude_deg: float,
+    latitude_deg: float | None,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -788,6 +820,7 @@ def gyro_multiposition(
             cap["output_deg_h"],
             axis=axis,
             latitude_deg=latitude_deg,
+            specs=kw.pop("specs"),
         )
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
@@ -901,6 +934,26 @@ def turntable_example(out: str, overwrite: bool) -> None:
     click.echo(f"wrote {out}")
 
 
+# ----------------------------------------------------------------------------------------------- specs
+@cli.group("specs")
+def specs_group() -> None:
+    """Instrument specifications: the Type B inputs of the uncertainty budgets (--specs)."""
+
+
+@specs_group.command("example")
+@click.option("--out", required=True, metavar="FILE.toml", help="Where to write the example.")
+@click.option("--overwrite", is_flag=True, help="Replace an existing file.")
+def specs_example(out: str, overwrite: bool) -> None:
+    """Write a commented specifications file with every entry rotacal's budgets use."""
+    from rotacal.uncertainty.specs import example_specs_toml
+
+    path = Path(out)
+    if path.exists() and not overwrite:
+        raise ConfigError(f"{out} exists; choose another name or pass --overwrite")
+    path.write_text(example_specs_toml(), encoding="utf-8")
+    click.echo(f"wrote {out}")
+
+
 # ----------------------------------------------------------------------------------------------- allan
 @cli.command("allan")
 @click.argument("capture", type=click.Path(dir_okay=False))
@@ -963,6 +1016,7 @@ def allan_cmd(
             unit=unit,
             taus=taus,
             column=rate_column,
+            specs=kw.pop("specs"),
         )
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:

@@ -32,6 +32,7 @@ import dataclasses
 import difflib
 import sys
 from collections.abc import Mapping
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -43,7 +44,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["KNOWN_SPECS", "InstrumentSpecs", "load_specs"]
+__all__ = ["KNOWN_SPECS", "InstrumentSpecs", "example_specs_toml", "load_specs"]
 
 #: Every specification rotacal's budgets use: ``"section.name"`` → (unit, what it is, who uses it).
 KNOWN_SPECS: dict[str, tuple[str, str, str]] = {
@@ -190,3 +191,12 @@ def load_specs(source: str | Path | Mapping[str, Any]) -> InstrumentSpecs:
                 spec = {**spec, "value": 0.0}  # an error specification: centred on zero
             entries[key] = distribution_from_spec(spec, where=f"{where}: [{section}] {name}")
     return InstrumentSpecs(entries=entries, source=where)
+
+
+def example_specs_toml() -> str:
+    """A commented specifications file with every known entry (example values, not defaults)."""
+    return (
+        resources.files("rotacal.uncertainty")
+        .joinpath("templates", "specs_example.toml")
+        .read_text(encoding="utf-8")
+    )
