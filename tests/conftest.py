@@ -3,10 +3,17 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
-from pathlib import Path
 
-import pytest
+# One BLAS thread per process: pytest runs one worker per core (-n auto), and threaded BLAS on
+# top of that oversubscribes the cores (small least-squares fits get many times slower). Set
+# before NumPy is first imported in this process; the workers inherit it.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+from collections.abc import Callable  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import pytest  # noqa: E402
 
 #: The project's shared folder of real recordings (never copied into the repository).
 SHARED_DATA = Path(

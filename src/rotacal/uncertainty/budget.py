@@ -226,6 +226,10 @@ class UncertaintyBudget(Result):
     rows: tuple[BudgetRow, ...]
     method: str = "GUM"
     notes: tuple[str, ...] = ()
+    #: The coverage interval for the true value when it is not value ± U — a biased, bounded
+    #: quantity near its bound (a THD or a peak-to-peak near zero): then the statement gives the
+    #: interval, and U is half its width (JCGM 101 §7.7; JCGM 102 for a magnitude near zero).
+    interval: tuple[float, float] | None = None
 
     def rounded(self, *, round_up: bool = False) -> tuple[str, str]:
         """``(value_str, U_str)`` rounded by :func:`round_ilac` (ILAC-P14:09/2020 §5.4).
@@ -249,6 +253,16 @@ class UncertaintyBudget(Result):
         if self.U == 0.0 and self.u == 0.0:
             return f"{self.quantity} = {self.value!r}{unit} (exact: every input has u = 0)"
         value_str, u_str = self.rounded(round_up=round_up)
+        if self.interval is not None:
+            lo, hi = (float(v) for v in self.interval)
+            # Round the limits to the decimal place of U, as the value is (ILAC-P14 §5.4).
+            decimals = len(u_str.split(".")[1]) if "." in u_str else 0
+            lo_str = f"{max(lo, 0.0) if lo <= 0.0 <= self.value else lo:.{decimals}f}"
+            return (
+                f"{self.quantity} = {value_str}{unit}; the true value lies in "
+                f"[{lo_str}, {hi:.{decimals}f}]{unit} (p ≈ {_percent(self.p)} %, "
+                f"interval not centred on the value)"
+            )
         return (
             f"{self.quantity} = {value_str}{unit} ± {u_str}{unit} "
             f"(k = {self.k:.3g}, p ≈ {_percent(self.p)} %)"
@@ -317,7 +331,8 @@ def uncertainty_keys(budgets: Mapping[str, UncertaintyBudget]) -> dict[str, Any]
     """The uncertainty keys of a result's JSON, for several quantities at once.
 
     For every ``name`` in ``budgets``: ``name_u`` (standard uncertainty) and ``name_U`` (expanded),
-    in the unit of the quantity; then ``k`` mapping each name to its coverage factor,
+    in the unit of the quantity, and ``name_interval`` when the budget states a coverage interval
+    that is not centred on the value; then ``k`` mapping each name to its coverage factor,
     ``coverage_probability`` (the p all of them are stated for) and ``uncertainty_budgets`` (each
     budget in full: rows, ν_eff, method, notes).
 
@@ -338,6 +353,8 @@ def uncertainty_keys(budgets: Mapping[str, UncertaintyBudget]) -> dict[str, Any]
     for name, b in budgets.items():
         out[f"{name}_u"] = float(b.u)
         out[f"{name}_U"] = float(b.U)
+        if b.interval is not None:
+            out[f"{name}_interval"] = [float(b.interval[0]), float(b.interval[1])]
     out["k"] = {name: float(b.k) for name, b in budgets.items()}
     ps = {float(b.p) for b in budgets.values()}
     out["coverage_probability"] = ps.pop() if len(ps) == 1 else None
