@@ -39,7 +39,8 @@ def _sim(tmp_path: Path, kind: str, name: str) -> Path:
 
 
 def _rows(d: dict, name: str) -> list[str]:
-    return [row["source"] for row in d["uncertainty_budgets"][name]["rows"]]
+    """Each row's source with its origin (the specification's name lives in the origin)."""
+    return [f"{row['source']} ({row['origin']})" for row in d["uncertainty_budgets"][name]["rows"]]
 
 
 def test_encoder_motion_budget_takes_the_specs(tmp_path, specs):

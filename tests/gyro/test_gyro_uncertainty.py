@@ -21,13 +21,13 @@ from rotacal.errors import ConfigError
 from rotacal.gyro.rotations import calibrate_triad_rotations
 from rotacal.gyro.scale_factor import calibrate_scale_factor, decide_with_u
 from rotacal.gyro.triad import calibrate_triad_columns
-from rotacal.gyro.uncertainty import TYPE_A_ONLY_NOTE
 from rotacal.report.gyro_scale import scale_factor_section
 from rotacal.report.html import Report, write_html
 from rotacal.report.triad import rotations_section, triad_section
 from rotacal.sim.gyro_rates import simulate_gyro_rates
 from rotacal.sim.gyro_triad import simulate_gyro_rotations, simulate_gyro_triad
 from rotacal.uncertainty import load_specs
+from rotacal.uncertainty.specs import TYPE_A_ONLY_NOTE
 
 RUNS = 40  # twin repeats per honesty check
 
@@ -105,33 +105,58 @@ def test_one_sample_per_point_falls_back_to_gum_h3() -> None:
     assert TYPE_A_ONLY_NOTE in sb.notes
 
 
-def test_nonlinearity_monte_carlo_is_the_folded_normal_of_three_points() -> None:
-    # Three points at −1, 0, +1 °/s: the residuals are q·(1, −2, 1)/6 with q = y₀ − 2y₁ + y₂, so
-    # NL = 100·|q|/(3·|S|·FS) — a folded normal when the point means are normal (S independent).
-    n = 2000  # t-distributed point means (JCGM 101 §6.4.9) with ν = 1999: normal to 5e-4
-    se = 1e-3
+def _three_points(q_hat: float, se: float, n: int = 2000):
+    """Three points at −1, 0, +1 °/s with means exactly (−1, q̂/2, 1), so q = y₀ − 2y₁ + y₂ = −q̂,
+    and standard errors se (ν = n − 1): residuals q̂·(−1, 2, −1)/6, S = 1, NL = 100·|q̂|/3."""
     d = np.full(3, se * math.sqrt(n - 1))  # std = d·√(n/(n − 1)), SE = d/√(n − 1)
-    sigma_q = math.sqrt(6.0) * se
-    c = 0.5 * sigma_q  # |q̂| = 2c = σ_q: noise as large as the nonlinearity
     x = np.array([-1.0, 0.0, 1.0])
-    r = calibrate_scale_factor(
-        np.repeat(x, n), _alternating(x + c * np.array([0.0, 1.0, 0.0]), d, n)
+    return calibrate_scale_factor(
+        np.repeat(x, n), _alternating(x + 0.5 * q_hat * np.array([0.0, 1.0, 0.0]), d, n)
     )
-    q_hat = 2 * c
+
+
+@pytest.mark.parametrize("q_over_sigma", [3.0, 0.5])
+def test_nonlinearity_budget_is_the_folded_normal_of_three_points(q_over_sigma: float) -> None:
+    # Three points at −1, 0, +1 °/s: the residuals are q·(1, −2, 1)/6 with q = y₀ − 2y₁ + y₂, so
+    # NL = 100·|q|/(3·|S|·FS) and the residual errors are q_e·(1, −2, 1)/6, q_e ~ N(0, σ_q²) with
+    # σ_q² = 6·se² (t with ν = 1999: normal to 5e-4; S = 1 is independent of q, u(S)/S = 7e-4).
+    se = 1e-3
+    sigma_q = math.sqrt(6.0) * se
+    q_hat = q_over_sigma * sigma_q
+    r = _three_points(q_hat, se)
     assert r.nonlinearity_percent_fs == pytest.approx(100 * q_hat / 3, rel=1e-9)
-    fold = stats.foldnorm(q_hat / sigma_q, scale=sigma_q)
     nl = r._budgets["nonlinearity_percent_fs"]
     assert nl.method == "Monte Carlo" and math.isinf(nl.dof_eff)
+    assert nl.value == r.nonlinearity_percent_fs  # one truth: the budget holds the plain NL
+    # u and the bias re-measure q shrunk to √(q̂² − σ_q²) (|δ̂|² = q̂²/6, tr C = se²): a folded
+    # normal about it
+    q_b = math.sqrt(max(q_hat**2 - sigma_q**2, 0.0))
+    fold = stats.foldnorm(q_b / sigma_q, scale=sigma_q)
     assert nl.u == pytest.approx(100 / 3 * fold.std(), rel=0.01)
-    bias = 100 / 3 * (fold.mean() - q_hat)
-    assert bias > 0.1 * nl.u  # a maximum is biased upward
-    assert r.nonlinearity_bias_percent_fs == pytest.approx(bias, rel=0.03)
-    assert r.nonlinearity_corrected_percent_fs == pytest.approx(100 * q_hat / 3 - bias, rel=0.01)
-    lo, hi = r.nonlinearity_interval_percent_fs
-    assert lo == pytest.approx(100 / 3 * fold.ppf(0.025), rel=0.02)
-    assert hi == pytest.approx(100 / 3 * fold.ppf(0.975), rel=0.01)
+    bias = 100 / 3 * (fold.mean() - q_b)
+    mc_se = 5 * nl.u / math.sqrt(200_000)  # 5 Monte Carlo standard errors of a mean
+    assert r.nonlinearity_percent_fs_bias == pytest.approx(bias, abs=mc_se)
+    # a bounded quantity: the correction stops at 0
+    assert r.nonlinearity_percent_fs_bias_corrected == pytest.approx(
+        max(100 * q_hat / 3 - bias, 0.0), abs=mc_se
+    )
+    if q_over_sigma < 1:  # consistent with noise: q_b = 0, all of NL is bias, corrected ≈ 0
+        assert q_b == 0 and bias == pytest.approx(100 / 3 * sigma_q * math.sqrt(2 / math.pi))
+        assert bias > 0.1 * nl.u
+    # the interval for the TRUE NL: max|e| = |q_e|/3 (97.5 % quantile: the folded normal's,
+    # 2.2414·σ_q/3), the widest e_j the middle one (2·σ_q/6, one-sided 1.96)
+    lo, hi = nl.interval
+    assert lo == pytest.approx(
+        100 / 3 * max(q_hat - stats.norm.isf(0.0125) * sigma_q, 0.0), abs=0.02 * nl.u
+    )
+    assert hi == pytest.approx(100 / 3 * (q_hat + stats.norm.isf(0.025) * sigma_q), rel=0.005)
     assert nl.U == pytest.approx((hi - lo) / 2, rel=1e-12)
     assert nl.k == pytest.approx(nl.U / nl.u, rel=1e-12)
+    assert r.to_dict()["nonlinearity_percent_fs_interval"] == [lo, hi]
+    assert r.nonlinearity_percent_fs_interval == (lo, hi)
+    if lo == 0.0:  # consistent with noise: the statement gives [0, high]
+        assert "lies in [0.0" in nl.statement()
+        assert any("firm statement is the upper end" in note for note in nl.notes)
 
 
 def test_a_dominant_rectangular_rate_error_takes_the_monte_carlo_interval() -> None:
@@ -142,8 +167,12 @@ def test_a_dominant_rectangular_rate_error_takes_the_monte_carlo_interval() -> N
     cap = simulate_gyro_rates(samples_per_point=200, seed=3)
     r = calibrate_scale_factor(cap.columns["rate_deg_s"], cap.columns["output"], specs=specs)
     b = r._budgets["scale_factor"]
-    assert b.method == "GUM u, Monte Carlo interval"
+    assert b.method == "Monte Carlo"  # one of the engine's three names
     assert b.k == pytest.approx(0.95 * math.sqrt(3.0), rel=0.01)
+    # the notes state the k that is used, not the GUM's t_p(ν) that was replaced
+    assert not any("for k = t_p(ν)" in note for note in b.notes)
+    assert any(f"k = U/u = {b.k:.3g}" in note for note in b.notes), b.notes
+    assert b.u == pytest.approx(math.sqrt(sum(row.contribution**2 for row in b.rows)), rel=1e-9)
     assert r._budgets["bias"].method == "GUM, validated by Monte Carlo"
 
 
@@ -160,6 +189,13 @@ def test_a_stated_mean_rate_error_corrects_s() -> None:
         cap.truth["nonlinearity_percent_fs"], abs=3e-3
     )
     assert any("corrects S" in note for note in r.notes)
+    # Policy A: the budgets of S and NL say so (the standard text), the bias's does not
+    fix = "corrected for the stated mean of table.set_rate_relative = 0.0004"
+    assert any(fix in note for note in r._budgets["scale_factor"].notes)
+    assert any(fix in note for note in r._budgets["nonlinearity_percent_fs"].notes)
+    assert not any(fix in note for note in r._budgets["bias"].notes)
+    eps_row = r._budgets["scale_factor"].rows[1]
+    assert (eps_row.value, eps_row.u) == (eps, 1e-6)
 
 
 # ---------------------------------------------------------------------- closed form: rotations
@@ -239,6 +275,9 @@ def test_rotation_angle_uncertainty_once_and_stated_means_correct_k() -> None:
     np.testing.assert_allclose(r.scale_misalignment, k_true * (1 + eps), rtol=1e-9)
     np.testing.assert_allclose(rc.scale_misalignment, k_true, rtol=1e-9)
     assert any("stated mean errors correct K" in note for note in rc.notes)
+    fix = "corrected for the stated mean of timebase.relative_error = 0.0001"
+    assert any(fix in note for note in rc._budgets["scale_misalignment[0][0]"].notes)
+    assert not any(fix in note for note in rc._budgets["bias[0]"].notes)
 
 
 # ---------------------------------------------------------------------- decision rule (ILAC-G8)
@@ -249,6 +288,12 @@ def test_decision_with_u_three_outcomes() -> None:
     assert inc.verdict == "inconclusive" and inc.agrees is False
     assert decide_with_u(0.07, 0.01, 0.05).agrees is True
     assert "does not hold" in inc.line
+    # with the interval for the true NL (not centred on the plain value): its ends decide
+    assert decide_with_u(0.045, 0.01, 0.05, interval=(0.03, 0.048)).verdict == "pass with U"
+    assert decide_with_u(0.056, 0.01, 0.05, interval=(0.051, 0.07)).verdict == "fail with U"
+    inc = decide_with_u(0.048, 0.01, 0.05, interval=(0.02, 0.06))
+    assert inc.verdict == "inconclusive" and inc.interval == (0.02, 0.06)
+    assert "true NL in [0.02, 0.06] %FS" in inc.line
 
 
 def test_requirement_within_u_is_inconclusive_and_the_json_is_unchanged() -> None:
@@ -256,8 +301,9 @@ def test_requirement_within_u_is_inconclusive_and_the_json_is_unchanged() -> Non
     first = calibrate_scale_factor(
         cap.columns["rate_deg_s"], cap.columns["output"], mc_trials=20_000
     )
-    nl, big_u = first.nonlinearity_percent_fs, first._budgets["nonlinearity_percent_fs"].U
-    limit = nl + 0.5 * big_u  # passes without U, but within NL ± U
+    nl = first.nonlinearity_percent_fs
+    hi = first._budgets["nonlinearity_percent_fs"].interval[1]
+    limit = 0.5 * (nl + hi)  # passes without U, but within the interval for the true NL
     r = calibrate_scale_factor(
         cap.columns["rate_deg_s"],
         cap.columns["output"],
@@ -301,8 +347,15 @@ def test_json_keys_of_every_quantity() -> None:
         assert d["k"][name] > 1.5
         assert d["uncertainty_budgets"][name]["rows"]
     assert d["coverage_probability"] == 0.95
-    assert d["nonlinearity_corrected_percent_fs"] < d["nonlinearity_percent_fs"]
-    assert len(d["nonlinearity_interval_percent_fs"]) == 2
+    nl = d["nonlinearity_percent_fs"]
+    corrected = d["nonlinearity_percent_fs_bias_corrected"]
+    assert corrected == pytest.approx(nl - d["nonlinearity_percent_fs_bias"], rel=1e-12)
+    assert corrected < nl
+    lo, hi = d["nonlinearity_percent_fs_interval"]
+    assert 0 <= lo < nl < hi
+    assert d["nonlinearity_percent_fs_U"] == pytest.approx((hi - lo) / 2, rel=1e-12)
+    assert d["uncertainty_budgets"]["nonlinearity_percent_fs"]["value"] == nl
+    assert "nonlinearity_interval_percent_fs" not in d  # one interval, the budget's
 
     triad = calibrate_triad_columns(simulate_gyro_triad(samples_per_point=20, seed=2).columns)
     rc = simulate_gyro_rotations(seed=2)
@@ -371,7 +424,7 @@ def _sf_runs(specs=None, half_width: float = 0.0, **twin) -> dict[str, np.ndarra
         out["ub"].append(r.bias_u)
         out["nl"].append(r.nonlinearity_percent_fs)
         out["unl"].append(r._budgets["nonlinearity_percent_fs"].u)
-        out["bias"].append(r.nonlinearity_bias_percent_fs)
+        out["bias"].append(r.nonlinearity_percent_fs_bias)
         out["nl_true"].append(cap.truth["nonlinearity_percent_fs"])
     return {k: np.asarray(v) for k, v in out.items()}
 
@@ -417,6 +470,76 @@ def test_nonlinearity_bias_correction_moves_toward_the_truth_when_noise_is_large
     assert plain - truth > 5 * np.std(o["nl"], ddof=1) / math.sqrt(RUNS)  # visibly biased
     assert np.all(o["bias"] > 0)
     assert abs(corrected - truth) < 0.7 * abs(plain - truth)
+
+
+#: Coverage runs per case: misses of the 95 % interval must stay within the binomial bounds.
+COVERAGE_RUNS = 100
+
+
+@pytest.mark.parametrize(
+    ("case", "nonlinearity"),
+    [
+        ("zero", None),  # a linear gyro with noise: true NL = 0
+        ("small", (2e-8, -7.5e-12)),  # true NL 0.0098 %FS, the noise of a point mean 0.0071 %FS
+        ("clear", (2e-7, -7.5e-11)),  # true NL 0.098 %FS, 14 times that noise
+    ],
+)
+def test_nonlinearity_interval_covers_the_true_nl(case: str, nonlinearity) -> None:
+    # Policy B: the budget's interval is for the TRUE NL and must hold it ~95 % of the time,
+    # also at 0 (an interval of the re-measured NL, drawn about the biased plain value, never
+    # holds 0). 50 samples per point: a noise of 8.8e-5 V per point mean (0.0071 %FS).
+    n = COVERAGE_RUNS
+    misses, reaches_zero, nl, u, corrected, truth = 0, 0, [], [], [], []
+    for seed in range(n):
+        cap = simulate_gyro_rates(seed=seed, nonlinearity=nonlinearity, samples_per_point=50)
+        r = calibrate_scale_factor(
+            cap.columns["rate_deg_s"], cap.columns["output"], mc_trials=20_000
+        )
+        b = r._budgets["nonlinearity_percent_fs"]
+        lo, hi = b.interval
+        t = cap.truth["nonlinearity_percent_fs"]
+        misses += not lo <= t <= hi
+        reaches_zero += lo == 0.0
+        nl.append(r.nonlinearity_percent_fs)
+        u.append(b.u)
+        corrected.append(r.nonlinearity_percent_fs_bias_corrected)
+        truth.append(t)
+    # the number of misses against Binomial(n, 0.05), two-sided at 99.9 %
+    low, high = stats.binom.ppf([0.0005, 0.9995], n, 0.05)
+    assert low <= misses <= high, (case, misses, low, high)
+    t = float(np.mean(truth))
+    plain_err = float(np.mean(nl)) - t
+    ratio = float(np.std(nl, ddof=1) / np.mean(u))
+    lo_r, hi_r = _bounds(n)
+    if case == "clear":
+        assert reaches_zero == 0  # a clear NL is told apart from noise in every run
+        assert lo_r < ratio < hi_r, ratio
+    else:
+        assert plain_err > 5 * np.std(nl, ddof=1) / math.sqrt(n)  # the plain NL is biased up
+        # the bias correction (Type A noise) removes most of it
+        assert abs(float(np.mean(corrected)) - t) < 0.5 * plain_err
+        # u is the spread of the estimator; at 0 it errs high (the shrunk base is not 0 when
+        # the noise happens to look like a nonlinearity), never low
+        assert ratio < hi_r, ratio
+        if case == "small":
+            assert lo_r < ratio, ratio
+        else:
+            assert reaches_zero >= 0.9 * n  # consistent with noise: [0, high]
+
+
+def test_one_sample_per_point_nl_is_not_bias_corrected() -> None:
+    # GUM H.3: the noise level is the scatter about the line, which holds the NL too — an upper
+    # bound, not a level: no correction (a cautious noise figure must not make NL look better)
+    cap = simulate_gyro_rates(samples_per_point=1, noise_std=2e-4, seed=7)
+    r = calibrate_scale_factor(cap.columns["rate_deg_s"], cap.columns["output"], mc_trials=20_000)
+    d = json.loads(json.dumps(r.to_dict()))
+    assert d["nonlinearity_percent_fs_bias"] is None
+    assert d["nonlinearity_percent_fs_bias_corrected"] is None
+    b = r._budgets["nonlinearity_percent_fs"]
+    lo, hi = b.interval
+    assert lo <= cap.truth["nonlinearity_percent_fs"] <= hi
+    assert any(note.startswith("not bias-corrected") for note in b.notes)
+    assert any("not bias-corrected" in line for line in r.summary_lines())
 
 
 @pytest.mark.parametrize("half_width", [0.0, 1e-3])

@@ -138,6 +138,15 @@ def test_stated_mean_orientation_error_is_corrected():
     # eq. (7) is first order: what remains is O(Δ²·|β|) ≈ (2e-4 rad)²·100 °/h ≈ 4e-6 °/h
     assert worst_plain > 5e-3 and worst < 2e-5
     assert any("corrected" in n for n in r.notes)
+    # Policy A: each budget says so in the standard text and its rows keep the stated value and u
+    for b in r._budgets.values():
+        assert any(
+            "corrected for the stated mean of table.orientation_error_arcsec = 40" in n
+            for n in b.notes
+        )
+        rows = [row for row in b.rows if "table.orientation_error_arcsec" in row.origin]
+        assert len(rows) == 3
+        assert all(row.value == err and row.u == pytest.approx(5 / 3**0.5) for row in rows)
 
 
 def test_latitude_from_the_specs_and_contradictions():

@@ -15,7 +15,8 @@ from rotacal.errors import ConfigError
 from rotacal.gyro.noise import gyro_noise, line_level_variance
 from rotacal.signal.allan import edf_overlapping_adev
 from rotacal.sim import simulate_gyro_noise
-from rotacal.uncertainty.specs import load_specs
+from rotacal.uncertainty.distributions import Rectangular
+from rotacal.uncertainty.specs import InstrumentSpecs, load_specs
 
 NAMED = (
     "arw_deg_rt_h",
@@ -167,10 +168,10 @@ def test_honesty_arw_spread_matches_its_u_on_the_twin(with_timebase):
     the twin and stated in the specs, the Type B row is checked too (it is then ~60 % of u²)."""
     n = 60
     half = 0.1
+    # ±10 % is far beyond a real clock (load_specs would call it implausible): built in code so
+    # that the Type B row carries a real share of u²
     specs = (
-        load_specs(
-            {"timebase": {"relative_error": {"distribution": "rectangular", "half_width": half}}}
-        )
+        InstrumentSpecs({"timebase.relative_error": Rectangular.centered(0.0, half)})
         if with_timebase
         else None
     )
@@ -222,3 +223,23 @@ def test_twin_timebase_error_stretches_the_time_column_only():
     assert b.truth["timebase_relative_error"] == 0.01
     with pytest.raises(ConfigError, match="timebase_relative_error"):
         simulate_gyro_noise(timebase_relative_error=-1.0)
+
+
+def test_a_stated_mean_timebase_error_is_corrected_and_said():
+    """Policy A: a stated non-zero mean clock error corrects each term by (1 + e)^p (τ of the
+    record is τ_true·(1 + e); p the slope of the term's line), the budget says so in the standard
+    text and its row keeps the stated value and u. B (a minimum, slope 0) does not change."""
+    e = 1e-3
+    cap = simulate_gyro_noise(duration_s=600.0, seed=3, timebase_relative_error=e)
+    spec = {"timebase": {"relative_error": {"distribution": "normal", "value": e, "u": 1e-5}}}
+    plain = gyro_noise(cap.columns["rate_deg_s"], time_s=cap.columns["time_s"])
+    r = gyro_noise(cap.columns["rate_deg_s"], time_s=cap.columns["time_s"], specs=load_specs(spec))
+    assert r.arw_deg_rt_h == pytest.approx(plain.arw_deg_rt_h * (1 + e) ** -0.5, rel=1e-12)
+    assert r.bias_instability_deg_h == plain.bias_instability_deg_h
+    b = r._budgets["arw_deg_rt_h"]
+    assert b.value == r.arw_deg_rt_h
+    assert any(
+        "corrected for the stated mean of timebase.relative_error = 0.001" in n for n in b.notes
+    )
+    row = b.rows[1]
+    assert (row.value, row.u) == (e, 1e-5) and "timebase.relative_error" in row.origin

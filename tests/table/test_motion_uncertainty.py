@@ -150,7 +150,8 @@ def test_encoder_graduation_error_enters_at_both_extremes():
     assert r.amplitude_deg_u == pytest.approx(u_a, rel=1e-12)
     assert r._budgets["amplitude_error_percent"].u == pytest.approx(100 * u_a / 0.5, rel=1e-12)
     rows = [x for x in r._budgets["amplitude_deg"].rows if "graduation" in x.source]
-    assert [x.sensitivity for x in rows] == pytest.approx([1 / 7200, -1 / 7200])
+    # reading = true + g: A = A_fit − (g₊ − g₋)/7200
+    assert [x.sensitivity for x in rows] == pytest.approx([-1 / 7200, 1 / 7200])
     # the timebase is not stated: the budget says so, and the frequency is Type A alone
     assert any("timebase.relative_error" in n for n in r._budgets["frequency_hz"].notes)
     assert r.frequency_hz_u == r._fit.frequency_u_hz
@@ -230,16 +231,97 @@ def test_argmax_estimator_without_noise_is_the_sampling_quantisation():
 def test_jcgm102_magnitude_example_through_the_thd_code_path():
     """|Z| with Re ~ N(0.001, 0.01²), Im ~ N(0, 0.01²): as a THD of A_2 over A_1 = 1 (JCGM 102).
 
-    Published: first-order |Z| = 0.001, u = 0.010; Monte Carlo |Z| = 0.013, u = 0.007.
+    Published: first-order |Z| = 0.001, u = 0.010; Monte Carlo |Z| = 0.013, u = 0.007. The
+    estimator is simulated at the bias-corrected value (0 here: 0.001² < 2·0.01²), which is where
+    JCGM 102's numbers are (a Rayleigh distribution: mean 0.01·√(π/2), sd 0.01·√(2 − π/2)).
     """
     t = thd_uncertainty([1.0, 0.001], [0.0, 0.01], trials=1_000_000)
     assert t.plain == pytest.approx(0.1)  # percent of A_1 = 1
+    assert t.bias_corrected == 0.0
     assert round(t.mc_mean / 100, 3) == 0.013
     assert round(t.u / 100, 3) == 0.007
+    assert t.mc_mean == pytest.approx(100 * 0.01 * math.sqrt(math.pi / 2), rel=3e-3)
     assert any("GUM gives u = 1 %" in n and "does not agree" in n for n in t.budget.notes)
     assert t.budget.method == "Monte Carlo"
     lo, hi = t.interval
-    assert lo > 0.0 and t.U == pytest.approx((hi - lo) / 2)
+    assert lo == 0.0 and t.U == pytest.approx((hi - lo) / 2)
+    assert t.budget.interval == t.interval and t.budget.value == t.plain
+
+
+def _belt_by_ncx2(observed, a1, u, nh, p=0.95):
+    """The belt of thd_uncertainty for equal u_h and an exact A_1, from scipy's noncentral χ².
+
+    T/u² ~ χ'²(2(N − 1), P/u²); the tail split α_lo = (1 − p)/2·min(1, P/P*), P* = 4u²√(N − 1)
+    (thd_uncertainty's documented rule). An implementation independent of the Monte Carlo.
+    """
+    nu = 2 * (nh - 1)
+    p_star = 4 * u**2 * math.sqrt(nh - 1)
+    alpha = 1 - p
+
+    def quantile(theta, q):
+        lam = (theta * a1 / 100) ** 2 / u**2
+        if q <= 0:
+            return 0.0
+        x = stats.chi2.ppf(q, nu) if lam == 0 else stats.ncx2.ppf(q, nu, lam)
+        return 100 * u * math.sqrt(x) / a1
+
+    def a_lo(theta):
+        return 0.5 * alpha * min(1.0, (theta * a1 / 100) ** 2 / p_star)
+
+    def lower(theta):
+        return quantile(theta, a_lo(theta)) - observed
+
+    def upper(theta):
+        return quantile(theta, 1 - (alpha - a_lo(theta))) - observed
+
+    from scipy.optimize import brentq
+
+    lo = 0.0 if upper(0.0) >= 0 else brentq(upper, 0.0, 10 * observed + 1.0)
+    hi = brentq(lower, 1e-12, 10 * observed + 1.0)
+    return lo, hi
+
+
+@pytest.mark.parametrize(
+    "harmonics",
+    [
+        [1.2e-4, 0.8e-4, 0.0, 0.5e-4],  # power consistent with noise: [0, high]
+        [4e-4, 3e-4, 0.5e-4, 0.0],  # just detected
+        [4e-3, 3e-3, 1e-4, 0.0],  # well above the noise
+    ],
+)
+def test_thd_interval_is_the_noncentral_chi2_belt_for_equal_u(harmonics):
+    a = np.array([0.5, *harmonics])
+    u = np.array([0.0, *([1e-4] * len(harmonics))])
+    t = thd_uncertainty(a, u)
+    lo, hi = _belt_by_ncx2(t.plain, 0.5, 1e-4, a.size)
+    assert t.interval[1] == pytest.approx(hi, rel=0.01)
+    if lo == 0.0:
+        assert t.interval[0] == 0.0
+    else:
+        assert t.interval[0] == pytest.approx(lo, rel=0.01)
+    assert t.U_mc_error < 0.02 * t.U  # the Monte Carlo's own error of U, stated in the budget
+    assert any("Monte Carlo standard error of U" in n for n in t.budget.notes)
+
+
+def test_thd_u_and_bias_against_a_direct_simulation_of_the_estimator():
+    """u and bias at a known truth: draw the fitted components, apply eq. (1), no belt code."""
+    rng = np.random.default_rng(7)
+    truth = np.array([0.5, 3e-4, 2e-4, 0.0, 0.0])
+    u = np.array([1e-4, 1e-4, 1e-4, 1e-4, 1e-4])
+    z = rng.standard_normal((200_000, truth.size, 2)) * u[None, :, None]
+    comp = truth[None, :, None] * np.array([1.0, 0.0]) + z
+    amp = np.hypot(comp[..., 0], comp[..., 1])
+    est = 100 * np.sqrt(np.sum(amp[:, 1:] ** 2, axis=1)) / amp[:, 0]
+    true_thd = 100 * math.sqrt(float(truth[1:] @ truth[1:])) / 0.5
+    # thd_uncertainty at a measurement whose bias-corrected THD is the truth (T − 2Σu² = P):
+    # its Monte Carlo then runs at that truth
+    # (equal u_h: how the power splits over the harmonics does not change the distribution)
+    meas = np.array([0.5, math.sqrt(3e-4**2 + 2e-4**2 + 2 * 4 * 1e-8), 0.0, 0.0, 0.0])
+    t = thd_uncertainty(meas, u)
+    assert t.bias_corrected == pytest.approx(true_thd, rel=1e-12)
+    assert t.u == pytest.approx(np.std(est), rel=0.02)
+    assert t.bias == pytest.approx(np.mean(est) - true_thd, abs=0.02 * t.u)
+    assert t.bias > 0.1 * t.u  # a bias that matters: the check is not vacuous
 
 
 def _fog_thd(motion, seed, snr_db):
@@ -247,30 +329,34 @@ def _fog_thd(motion, seed, snr_db):
     return calibrate_fog_motion(c.columns["time_s"], c.columns["rate_deg_s"])
 
 
-def test_bias_corrected_thd_of_a_pure_sine_is_closer_to_zero():
-    """True THD 0 at 10 dB SNR: plain THD is all noise; the noise-power subtraction removes most
-    of it, and more than subtracting the Monte Carlo bias (plain − bias) does."""
-    plain, corrected, minus_bias = [], [], []
-    for seed in range(20):
+def test_bias_corrected_thd_of_a_pure_sine_is_near_zero_and_the_interval_one_sided():
+    """True THD 0 at 10 dB SNR: the plain THD is all noise; the noise-power subtraction removes
+    most of it, the bias is positive, and the interval is [0, high] when nothing is detected."""
+    plain, corrected, one_sided = [], [], 0
+    for seed in range(8):
         r = _fog_thd(PURE, seed, 10.0)
         plain.append(r.thd_percent)
         corrected.append(r.thd_percent_bias_corrected)
-        minus_bias.append(r.thd_percent - r.thd_percent_bias)
         assert r.thd_percent_bias > 0  # noise only pushes up
+        lo, hi = r._budgets["thd_percent"].interval
+        one_sided += lo == 0.0
+        assert hi > r.thd_percent_bias_corrected
     assert np.mean(corrected) < 0.5 * np.mean(plain)
-    assert np.mean(np.abs(corrected)) < np.mean(np.abs(minus_bias))
+    assert one_sided >= 6  # P(lo = 0) = 95 % at a true THD of 0: ≥ 6 of 8 at 99.4 %
 
 
 def test_bias_correction_is_negligible_for_a_thd_well_above_the_noise():
     """THD ≈ 25 u: the correction and the bias stay below u/5 (added in quadrature to the
-    uncertainty they would change U by less than 2 %)."""
+    uncertainty they would change U by less than 2 %); the interval is about ±1.96 u."""
     for seed in range(3):
         r = _fog_thd(DISTORTED, seed, 20.0)
+        b = r._budgets["thd_percent"]
         assert r.thd_percent > 10 * r.thd_percent_u
         assert abs(r.thd_percent_bias_corrected - r.thd_percent) < 0.2 * r.thd_percent_u
         assert abs(r.thd_percent_bias) < 0.2 * r.thd_percent_u
-        lo, hi = r.thd_percent_coverage_interval
+        lo, hi = b.interval
         assert lo < r.thd_percent < hi
+        assert b.k == pytest.approx(1.96, abs=0.1)
 
 
 def test_thd_bias_corrected_closed_form():
@@ -279,6 +365,55 @@ def test_thd_bias_corrected_closed_form():
     expect = 100 * math.sqrt(0.03**2 + 0.04**2 + 0.001**2 - 3 * 2 * 0.002**2) / 2.0
     assert thd_bias_corrected_percent(a, u) == pytest.approx(expect, rel=1e-12)
     assert thd_bias_corrected_percent([1.0, 1e-4], [0, 1e-3]) == 0.0
+
+
+#: Twin runs per coverage test of the THD interval.
+COVERAGE_RUNS = 50
+
+
+def _thd_motion(thd_percent):
+    """A 0.5° motion at 2 Hz of the given true THD (%): harmonics 2 and 3 in the ratio 1 : 0.8."""
+    if thd_percent == 0:
+        return PURE
+    r2 = thd_percent / 100 / math.hypot(1.0, 0.8)  # relative to the fundamental
+    return sim.SineMotion(
+        amplitude_deg=0.5, frequency_hz=2.0, harmonics={2: (r2, 0.4), 3: (0.8 * r2, 1.1)}
+    )
+
+
+def _misses(kind, sensor, thd_percent, n):
+    motion = _thd_motion(thd_percent)
+    misses = 0
+    for i in range(n):
+        cap = sim.simulate(kind, motion=motion, seed=5000 + i, start_s=0.001 * i, **sensor)
+        r = _calibrate(kind, cap.columns)
+        truth = motion.truth(r.analysis_start_s, r.analysis_stop_s)["thd_percent"]
+        assert truth == pytest.approx(thd_percent, abs=1e-9)
+        lo, hi = r._budgets["thd_percent"].interval
+        misses += not lo <= truth <= hi
+    return misses
+
+
+@pytest.mark.parametrize(
+    ("kind", "thd_percent"),
+    [
+        ("fog", 0.0),
+        ("fog", 0.1),
+        ("fog", 1.0),
+        ("encoder", 0.0),
+        ("encoder", 3e-4),  # about the encoder's noise level (FOG: 0.1 % is)
+        ("encoder", 0.1),
+        ("encoder", 1.0),
+    ],
+)
+def test_thd_interval_covers_the_true_thd(kind, thd_percent):
+    """The 95 % interval holds the twin's true THD in 95 % of the runs — also at a true THD of
+    0 (FOG at 20 dB; encoder with noise): the count of misses within the binomial bounds of
+    COVERAGE_RUNS runs at 99.9 %."""
+    sensor = FOG if kind == "fog" else ENC
+    misses = _misses(kind, sensor, thd_percent, COVERAGE_RUNS)
+    lo, hi = stats.binom.ppf([0.0005, 0.9995], COVERAGE_RUNS, 0.05)
+    assert lo <= misses <= hi, f"{misses} misses of {COVERAGE_RUNS} outside [{lo:g}, {hi:g}]"
 
 
 # ------------------------------------------------------------------------------ honesty
@@ -338,6 +473,33 @@ def test_encoder_frequency_budget_is_honest_with_a_drawn_timebase_error():
         n=30,
         specs=_specs(timebase={"relative_error": _rect(a)}),
         draw=lambda rng: {"timebase_relative_error": float(rng.uniform(-a, a))},
+    )
+    _assert_honest(out)
+
+
+def _graduation_draw(motion, a):
+    """A reading error linear across the stroke, its two end values drawn from U(−a, a) arcsec:
+    the budget's model (the error at the two extremes, independent), drawn per run."""
+    theta = motion.angle_deg(np.linspace(0.0, 1.0 / motion.frequency_hz, 20_001))
+    ends = [float(theta.min()), float(theta.max())]
+
+    def draw(rng):
+        return {"graduation_error_arcsec": (ends, rng.uniform(-a, a, 2))}
+
+    return draw
+
+
+@pytest.mark.slow
+def test_encoder_amplitude_budget_is_honest_with_a_drawn_graduation_error():
+    """±0.003″ (rectangular) per reading: ~80 % of u(A), the rest the fit's Type A."""
+    a = 0.003
+    out = _honesty(
+        "encoder",
+        DISTORTED,
+        ENC,
+        n=30,
+        specs=_specs(encoder={"graduation_error_arcsec": _rect(a)}),
+        draw=_graduation_draw(DISTORTED, a),
     )
     _assert_honest(out)
 
@@ -411,11 +573,18 @@ def test_every_quantity_has_u_big_u_and_k_in_the_json(kind):
     assert d["coverage_probability"] == 0.95
     assert d["thd_percent_u"] == r.thd_percent_u == r._budgets["thd_percent"].u
     assert d["amplitude_deg_u"] == r.amplitude_deg_u
-    for key in ("thd_percent_mc_mean", "thd_percent_bias", "thd_percent_bias_corrected"):
+    # one truth: every reported value is its budget's value (the THD's is the plain estimate)
+    for key in ALL_KEYS + ERROR_KEYS:
+        if key != "reversal_times_s":
+            assert d[key] == d["uncertainty_budgets"][key]["value"], key
+    for key in ("thd_percent_bias", "thd_percent_bias_corrected"):
         assert math.isfinite(d[key])
-    assert len(d["thd_percent_coverage_interval"]) == 2
+    lo, hi = d["thd_percent_interval"]
+    assert d["thd_percent_U"] == pytest.approx((hi - lo) / 2)
+    tol = 1e-9 * d["thd_percent"]
+    assert lo - tol <= d["thd_percent_bias_corrected"] <= hi + tol
     notes = d["uncertainty_budgets"]["amplitude_deg"]["notes"]
-    assert "no instrument specification stated: Type A only" in notes
+    assert any(n.startswith("no instrument specification stated: Type A only") for n in notes)
 
 
 def test_compare_schemes_difference_u_is_its_budget():
@@ -468,15 +637,60 @@ def test_bad_specifications_are_one_line_config_errors():
     with pytest.raises(ConfigError, match="unknown distribution"):
         load_specs({"timebase": {"relative_error": {"distribution": "lognormal", "u": 1e-6}}})
     c = sim.simulate_lts(MILD_LTS, seed=0).columns
-    offset = _specs(
-        timebase={"relative_error": {"distribution": "normal", "value": 1e-6, "u": 1e-7}}
-    )
-    with pytest.raises(ConfigError, match="centred on zero") as err:
-        _calibrate("lts", c, offset)
-    assert "\n" not in str(err.value)
     other_r = _specs(lts={"radius_mm": {"distribution": "normal", "value": 150.0, "u": 0.1}})
     with pytest.raises(ConfigError, match="radius-mm 100"):
         _calibrate("lts", c, other_r)
+
+
+def test_a_stated_timebase_mean_is_corrected_for():
+    """Policy A: a clock stated 5e-3 fast (the twin's clock is) — the frequency, the
+    acceleration and the reversal times come back to the truth; the row keeps value and u."""
+    e0 = 5e-3
+    c = sim.simulate_encoder(DISTORTED, noise_rms=0.004, seed=5, timebase_relative_error=e0)
+    stated = {"distribution": "normal", "value": e0, "u": 1e-7}
+    r0 = _calibrate("encoder", c.columns)
+    r = _calibrate("encoder", c.columns, _specs(timebase={"relative_error": stated}))
+    truth = DISTORTED.truth(0.0, 1.0)
+    assert abs(r0.frequency_hz - 2.0) > 50 * r0.frequency_hz_u  # uncorrected: far off
+    assert r.frequency_hz == pytest.approx(r0.frequency_hz * (1 + e0), rel=1e-12)
+    assert abs(r.frequency_hz - 2.0) < 3 * r.frequency_hz_u
+    alpha = truth["angular_acceleration_amplitude_deg_s2"]
+    assert abs(r.angular_acceleration_amplitude_deg_s2 - alpha) < 3 * (
+        r._budgets["angular_acceleration_amplitude_deg_s2"].u
+    )
+    err = _nearest(r.reversal_times_s, c.truth["reversal_times_s"])
+    err0 = _nearest(r0.reversal_times_s, c.truth["reversal_times_s"])
+    assert np.max(np.abs(err)) < 0.1 * np.max(np.abs(err0))
+    b = r._budgets["frequency_hz"]
+    row = next(x for x in b.rows if x.source.startswith("timebase"))
+    assert (row.value, row.u) == (e0, 1e-7)
+    assert any("corrected for the stated mean of timebase.relative_error" in n for n in b.notes)
+    assert r.amplitude_deg == r0.amplitude_deg  # the encoder's amplitude needs no clock
+
+
+def test_a_stated_fog_scale_factor_mean_is_corrected_for():
+    s0 = 0.005
+    c = sim.simulate_fog(
+        DISTORTED, snr_db=30.0, seed=6, scale_factor_error=s0, duration_s=10.125 / 2.0
+    )
+    stated = {"distribution": "normal", "value": s0, "u": 1e-4}
+    r = _calibrate("fog", c.columns, _specs(fog={"scale_factor_relative": stated}))
+    r0 = _calibrate("fog", c.columns)
+    truth = DISTORTED.truth(r.analysis_start_s, r.analysis_stop_s)
+    assert abs(r0.amplitude_deg - truth["amplitude_deg"]) > 10 * r0.amplitude_deg_u
+    assert abs(r.amplitude_deg - truth["amplitude_deg"]) < 3 * r.amplitude_deg_u
+    assert r.thd_percent == pytest.approx(r0.thd_percent, rel=1e-12)  # a ratio: unchanged
+    assert r.harmonic_amplitudes_deg[0] == r.amplitude_deg
+
+
+def test_a_stated_graduation_mean_cancels_in_the_amplitude():
+    c = sim.simulate_encoder(DISTORTED, noise_rms=0.004, seed=7).columns
+    stated = {"distribution": "rectangular", "value": 0.5, "half_width": 1.0}
+    r0 = _calibrate("encoder", c)
+    r = _calibrate("encoder", c, _specs(encoder={"graduation_error_arcsec": stated}))
+    assert r.amplitude_deg == r0.amplitude_deg
+    notes = r._budgets["amplitude_deg"].notes
+    assert any("graduation_error_arcsec" in n and "the correction is 0" in n for n in notes)
 
 
 def test_a_specification_that_does_not_apply_is_ignored():
@@ -503,3 +717,49 @@ def test_report_shows_the_budget_tables_without_nan():
     text = render_html(Report("t", sections=[sec, motion_section(rf, figures=False), cmp]))
     assert "nan" not in text.lower()
     assert "0.50000 ° ± 0.00022 °" in text  # ILAC-P14: U to two digits, value to the same place
+
+
+def test_report_states_one_thing_about_a_thd_near_zero():
+    """A pure sine on the FOG: the budget states the interval for the true THD (not plain ± U),
+    the results rows show the same interval — as an upper limit when the measured power is
+    consistent with noise — and the bias-corrected value lies in it. Two runs: one of each."""
+    kinds = set()
+    for seed in (0, 3):
+        f = sim.simulate_fog(PURE, snr_db=20.0, fs_hz=2000.0, duration_s=10.125 / 2, seed=seed)
+        r = calibrate_fog_motion(f.columns["time_s"], f.columns["rate_deg_s"])
+        b = r._budgets["thd_percent"]
+        lo, hi = b.interval
+        assert lo <= r.thd_percent_bias_corrected <= hi
+        statement = b.statement()
+        assert "the true value lies in [" in statement and "±" not in statement
+        text = render_html(Report("t", sections=[motion_section(r, figures=False)]))
+        _, u_str = b.rounded()
+        dec = len(u_str.split(".")[1])
+        if lo == 0.0:
+            assert f"[0, {hi:.{dec}f}] % (consistent with noise" in text
+        else:
+            assert f"[{lo:.{dec}f}, {hi:.{dec}f}] %" in text
+        assert "nan" not in text.lower()
+        kinds.add(lo == 0.0)
+    assert kinds == {True, False}
+
+
+def test_budget_tidying_helpers():
+    """rotacal.uncertainty.notes: the truncation note goes only when k moves < 10⁻³; rows with a
+    zero sensitivity go; notes are appended in order, None skipped."""
+    from rotacal.uncertainty import Input, propagate
+    from rotacal.uncertainty.notes import drop_truncation_note, tidy, with_notes
+
+    def budget(dof):
+        ins = [Input("x", 1.0, 0.1, dof=dof), Input("y", 2.0, 0.1)]
+        g = propagate(lambda x, y: x, ins, jacobian=lambda *v: np.array([1.0, 0.0]))
+        return g.budget(0)
+
+    small, large = budget(4.5), budget(400.5)
+    assert any("truncated to 4" in n for n in small.notes)
+    assert drop_truncation_note(small).notes == small.notes  # t(4) vs t(4.5): 3 % apart
+    assert not any("truncated" in n for n in drop_truncation_note(large).notes)
+    t = tidy(large, "first", None, "second")
+    assert [r.source for r in t.rows] == ["x"] and t.u == large.u
+    assert t.notes[-2:] == ("first", "second")
+    assert with_notes(small, method="Monte Carlo").method == "Monte Carlo"

@@ -286,6 +286,8 @@ def test_from_spec_dof() -> None:
         ({"distribution": "normal", "value": 1.0, "sigma": 0.1}, "unknown key 'sigma'"),
         ({"distribution": "normal", "value": 1.0}, "missing key 'u'"),
         ({"distribution": "t", "value": 1.0, "u": 0.1}, "missing key 'dof'"),
+        ({"distribution": "t", "value": 1.0, "u": 0.1, "dof": 2}, "needs dof > 2"),
+        ({"distribution": "rectangular", "value": 0.0, "half_width": 1e300}, "u² overflows"),
         ({"value": 1.0, "u": 0.1}, "missing key 'distribution'"),
         ({"distribution": "normal", "value": 1.0, "U": 0.2}, "missing key 'k'"),
         ({"distribution": "normal", "value": "one", "u": 0.1}, "'value' must be a number"),

@@ -571,3 +571,12 @@ def test_result_is_frozen_and_json_ready():
     exact = propagate(lambda a: a, [Input("a", 1.0, 0.0)])
     assert exact.u[0] == 0.0 and math.isinf(exact.dof_eff[0])
     assert json.loads(json.dumps(exact.to_dict()))["dof_eff"] == [None]
+
+
+def test_an_overflowing_contribution_names_the_input() -> None:
+    # a u stated in the wrong unit by many orders: one line naming the input, no "np.float64(inf)"
+    with pytest.raises(ConfigError) as exc:
+        propagate(lambda a, b: a + 1e10 * b, [Input("a", 0.0, 1.0), Input("big", 0.0, 1e300)])
+    msg = str(exc.value)
+    assert msg.startswith("input 'big':") and "too large" in msg
+    assert "\n" not in msg and "np.float64" not in msg

@@ -166,10 +166,24 @@ def test_additive_model_adaptive(case: str) -> None:
     assert abs(r.interval_shortest[1] - e_pub) <= delta + 0.5 * unit
 
 
-def test_published_924_u_is_a_rounding_of_the_exact_value() -> None:
-    # JCGM 101 Table 4 gives u(y) = 10.2 for both GUM and Monte Carlo; the exact GUM value is
-    # √(3·1 + 10²) = 10.149, and the GUM interval ±1.96·10.149 = ±19.9 matches the published one.
-    assert math.sqrt(103.0) * stats.norm.ppf(0.975) == pytest.approx(19.9, abs=0.05)
+def test_published_924_gum_column_and_its_failed_validation() -> None:
+    # JCGM 101 §9.2.4, Table 4: the GUM column gives u(y) = 10.2 (the exact √(3·1 + 10²) = 10.149
+    # rounded up) and the interval ±19.9; the Monte Carlo interval is ±17.0, so the GUM framework
+    # is NOT validated there (§9.2.4: one rectangular input dominates).
+    inputs = ADDITIVE["9.2.4"][0]
+    gum = propagate(
+        lambda a, b, c, d: a + b + c + d,
+        [Input.from_distribution(name, dist) for name, dist in inputs.items()],
+    )
+    assert float(gum.u[0]) == pytest.approx(math.sqrt(103.0), rel=1e-12)
+    assert math.isinf(float(gum.dof_eff[0]))
+    assert float(gum.U[0]) == pytest.approx(19.9, abs=0.05)  # published GUM interval
+    mc = _one(monte_carlo(_additive, inputs, trials=200_000, seed=7))
+    check = validate_gum(gum, mc, ndigits=2)
+    assert check["passed"] is False
+    # the ends differ by ≈ 19.9 − 17.0 (published) on both sides
+    assert check["d_low"] == pytest.approx(19.9 - 17.0, abs=0.2)
+    assert check["d_high"] == pytest.approx(19.9 - 17.0, abs=0.2)
 
 
 # ------------------------------------------------------------------------------ JCGM 101 §9.3

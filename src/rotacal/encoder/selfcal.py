@@ -29,16 +29,17 @@ fit per Fourier order — so its noise has the same variance at every line: the 
 of each point is the revolutions' spread pooled over the lines (Type A; ν from the spread of every
 detectable order, Welch–Satterthwaite), plus, when the lab states it, the orders no n-head
 arrangement can see (``encoder.undetectable_harmonics_arcsec``, Type B). The peak-to-peak and rms
-of the curve are max/rms-type: noise biases them upward, and first-order propagation says nothing
-about that, so their budgets come from a Monte Carlo of the curve's noise, drawn per order with
-the spectrum the revolutions show; the bias is stated and removed.
+of the curve are max/rms-type: noise biases them upward, so their budgets
+(:mod:`rotacal.uncertainty.summaries`) state the plain value, the noise's bias beside it, and a
+95 % interval for the true value (closed form for the rms, Monte Carlo for the peak-to-peak), the
+noise drawn with the spectrum the revolutions show.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any, Literal
 
 import numpy as np
@@ -54,29 +55,30 @@ from rotacal.encoder.pulses import (
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 from rotacal.uncertainty import (
-    KNOWN_SPECS,
-    BudgetRow,
     Input,
     InstrumentSpecs,
     UncertaintyBudget,
-    coverage_factor,
-    coverage_interval,
     propagate,
     uncertainty_keys,
 )
-from rotacal.uncertainty.distributions import Distribution
+from rotacal.uncertainty.specs import TYPE_A_ONLY_NOTE, spec_input
+from rotacal.uncertainty.summaries import (
+    COVERAGE,
+    CirculantError,
+    ErrorProcess,
+    drop_large_dof_notes,
+    mc_budget,
+    rms_budget,
+)
 
 __all__ = [
+    "UNDETECTABLE_SPEC",
     "DeviationNoise",
     "SelfCalibration",
-    "drop_large_dof_notes",
     "head_shifts",
-    "mc_budget",
-    "monte_carlo_statistics",
+    "noise_gain",
     "self_calibrate",
-    "simex_estimate",
-    "spec_entry",
-    "statistic_samples",
+    "undetectable_input",
     "undetectable_orders",
 ]
 
@@ -89,43 +91,36 @@ RATE_WINDOW = 32
 _UNDETECTABLE_TOL = 1e-2
 #: Correlation thresholds of the pulses-per-revolution check (see _check_period).
 _PERIODIC = 0.8
-#: Specification of the deviation at the orders the heads cannot see (proposed for KNOWN_SPECS).
+#: Specification of the deviation at the orders the heads cannot see.
 UNDETECTABLE_SPEC = "encoder.undetectable_harmonics_arcsec"
-#: Monte Carlo trials and seed of the budgets of max/rms-type summaries (reproducible results):
-#: 100/(1 − p), the batch JCGM 101 §7.9.4 starts from for p = 95 % (u to about 1.6 %).
-MC_TRIALS = 2000
-MC_SEED = 2026
-#: Coverage probability of every stated expanded uncertainty.
-COVERAGE = 0.95
 #: Half-width (orders) of the moving average that smooths the noise spectrum of the curve.
 _SPECTRUM_SMOOTH = 8
-#: Trials evaluated at once by :func:`monte_carlo_statistics` (memory: chunk × vector length).
-_MC_CHUNK_ELEMENTS = 4_000_000
-#: Note of every budget made without instrument specifications.
-TYPE_A_ONLY = "no instrument specification stated: Type A only."
 
 
-def spec_entry(specs: InstrumentSpecs | None, key: str) -> Distribution | None:
-    """The distribution a lab stated for ``key``, or None (no specifications, or not stated).
+def undetectable_input(specs: InstrumentSpecs | None) -> tuple[Input | None, str | None]:
+    """The budget row of ``encoder.undetectable_harmonics_arcsec`` and, when its stated mean is
+    not 0, the note on how it is used; (None, None) when it is not stated.
 
-    Names that :data:`rotacal.uncertainty.KNOWN_SPECS` does not list yet (such as
-    ``encoder.undetectable_harmonics_arcsec``) are looked up in ``specs.entries`` directly, so an
-    :class:`~rotacal.uncertainty.InstrumentSpecs` built in Python can state them.
+    The specification is the rms of the scale's deviation at the orders no head arrangement sees.
+    Their phases are unknown, so a stated mean cannot be a correction of the curve: the rms used
+    is √(mean² + u²), the root mean square of the stated distribution (GUM §3.2.4 asks to correct
+    for a known systematic effect; here the known part raises the rms the truth holds).
     """
-    if specs is None:
-        return None
-    if key in KNOWN_SPECS:
-        return specs.get(key)
-    return specs.entries.get(key)
-
-
-def _describe(specs: InstrumentSpecs | None, key: str) -> str:
-    """Origin text of a specification's budget row (``key (unit): distribution, from file``)."""
-    if specs is not None and key in KNOWN_SPECS:
-        return specs.describe(key)
-    dist = spec_entry(specs, key)
-    what = dist.describe() if dist is not None else "not stated"
-    return f"{key}: {what}, from {specs.source if specs is not None else 'nowhere'}"
+    inp = spec_input(
+        specs,
+        UNDETECTABLE_SPEC,
+        name="orders no head arrangement sees (multiples of n)",
+        unit="arcsec",
+    )
+    if inp is None or inp.value == 0.0:
+        return inp, None
+    rms = math.hypot(inp.value, inp.u)
+    note = (
+        f"{UNDETECTABLE_SPEC} is stated with mean {inp.value:g} arcsec: the orders' phases are "
+        f"unknown, so it is not a correction of the curve; their rms is taken as "
+        f"√(mean² + u²) = {rms:.3g} arcsec (the row shows the stated mean and u)."
+    )
+    return dataclasses.replace(inp, u=rms, description=f"{inp.description}; rms {rms:.3g}"), note
 
 
 def _order_weights(m: int) -> FloatArray:
@@ -135,16 +130,6 @@ def _order_weights(m: int) -> FloatArray:
     if m % 2 == 0:
         w[-1] = 1.0
     return w
-
-
-def _complex_normal(rng: np.random.Generator, size: int, var: FloatArray, m: int) -> np.ndarray:
-    """rfft coefficients (size, m//2+1) of a real Gaussian curve with E|c_q|² = var[q]."""
-    c = rng.standard_normal((size, 2 * var.size)).view(np.complex128)  # re, im ~ N(0, 1)
-    c *= np.sqrt(0.5 * var)
-    c[:, 0] = c[:, 0].real * math.sqrt(2.0)  # order 0 and Nyquist of a real curve are real
-    if m % 2 == 0:
-        c[:, -1] = c[:, -1].real * math.sqrt(2.0)
-    return c
 
 
 @dataclasses.dataclass(frozen=True)
@@ -206,293 +191,11 @@ class DeviationNoise:
         w = _order_weights(m)
         return np.where(mask, (self.undetectable_u * m) ** 2 / float(np.sum(w[mask])), 0.0)
 
-    def draw(self, rng: np.random.Generator, size: int) -> FloatArray:
-        """``size`` error curves of the detectable orders (arcsec), shape (size, m)."""
-        return _draw(rng, size, self.variance, self.pulses_per_rev)
-
-    def draw_undetectable(self, rng: np.random.Generator, size: int) -> FloatArray:
-        """``size`` curves at the undetectable orders with rms ``undetectable_u`` (arcsec)."""
-        return _draw(rng, size, self.undetectable_variance(), self.pulses_per_rev)
-
-    def sampler(
-        self, step: int, *, undetectable: bool = False
-    ) -> Callable[[np.random.Generator, int], FloatArray]:
-        """Draws of the error at every ``step``-th line only: shape (size, m/step), element k at
-        line L + k·step for any L (the error is stationary). Needs m divisible by ``step``.
-
-        The lines ``step`` apart form a circulant process of length m' = m/step whose
-        autocovariance is the curve's at lags k·step, so m' normals per draw suffice.
-        """
-        m = self.pulses_per_rev
+    def autocov(self, *, undetectable: bool = False) -> FloatArray:
+        """Autocovariance c(k), k = 0 … m − 1 (arcsec²), of the curve's error along the lines
+        (``undetectable``: of the true deviation's part at the undetectable orders)."""
         var = self.undetectable_variance() if undetectable else self.variance
-        if step <= 1 or m % step:
-            return lambda rng, size: _draw(rng, size, var, m)
-        cov = np.fft.irfft(var, m) / m  # autocovariance at lags 0 … m − 1 (arcsec²)
-        short = m // step
-        var_short = np.maximum(np.fft.rfft(cov[::step]).real * short, 0.0)
-        return lambda rng, size: _draw(rng, size, var_short, short)
-
-
-def _draw(rng: np.random.Generator, size: int, var: FloatArray, m: int) -> FloatArray:
-    """``size`` real Gaussian curves of length m whose rfft orders have E|c_q|² = var[q]."""
-    return np.fft.irfft(_complex_normal(rng, size, var, m), m, axis=-1)
-
-
-def monte_carlo_statistics(
-    base: FloatArray,
-    noises: Mapping[str, Callable[[np.random.Generator, int], FloatArray]],
-    statistics: Mapping[str, Callable[[FloatArray], FloatArray]],
-    subsets: Mapping[str, Sequence[tuple[str, float]]],
-    *,
-    trials: int = MC_TRIALS,
-    seed: int = MC_SEED,
-) -> dict[str, dict[str, FloatArray]]:
-    """Monte Carlo values of statistics (max, rms, …) of a measured vector plus drawn errors.
-
-    Every trial draws each error source once; for every subset the statistics are evaluated on
-    ``base`` plus the sum of that subset's draws, each times its factor (the same draws in every
-    subset).
-
-    Parameters
-    ----------
-    base : ndarray, shape (n,)
-        The measured vector (any unit).
-    noises : mapping of str to callable
-        ``draw(rng, size) -> (size, n)``: additive errors (unit of ``base``), one stream each.
-    statistics : mapping of str to callable
-        ``stat(x) -> (size,)`` for x of shape (size, n).
-    subsets : mapping of str to sequence of (str, float)
-        Name of each subset → the sources it adds and the factor each is scaled by.
-    trials : int
-        M, trials.
-    seed : int
-        Seed of the streams (``SeedSequence(seed).spawn``): the result is reproducible.
-
-    Returns
-    -------
-    dict
-        ``{statistic: {subset: (M,) values}}``.
-
-    References
-    ----------
-    JCGM 101:2008, §5.9, §7.2–7.6 (propagation of distributions: draw the inputs, evaluate the
-    model, take the estimate and standard deviation of the M values).
-    """
-    names = list(noises)
-    rngs = {
-        name: np.random.default_rng(ss)
-        for name, ss in zip(names, np.random.SeedSequence(seed).spawn(len(names)), strict=True)
-    }
-    parts: dict[str, dict[str, list[FloatArray]]] = {
-        k: {sub: [] for sub in subsets} for k in statistics
-    }
-    chunk = max(1, _MC_CHUNK_ELEMENTS // max(base.size, 1))
-    done = 0
-    while done < trials:
-        size = min(chunk, trials - done)
-        draws = {name: noises[name](rngs[name], size) for name in names}
-        for sub, members in subsets.items():
-            x = np.broadcast_to(base, (size, base.size)).copy()
-            for name, factor in members:
-                x += factor * draws[name] if factor != 1.0 else draws[name]
-            for k, stat in statistics.items():
-                parts[k][sub].append(np.asarray(stat(x), dtype=np.float64))
-        done += size
-    return {k: {sub: np.concatenate(v) for sub, v in d.items()} for k, d in parts.items()}
-
-
-def statistic_samples(
-    base: FloatArray,
-    sources: Sequence[tuple[Input, Callable[[np.random.Generator, int], FloatArray], bool]],
-    statistics: Mapping[str, Callable[[FloatArray], FloatArray]],
-) -> dict[str, dict[str, FloatArray]]:
-    """Monte Carlo values for :func:`mc_budget`: the errors present in ``base`` together, once
-    (``"present"``) and √2 times (``"present2"``, twice their variance), those missing from it
-    together (``"absent"``), and each source alone.
-
-    ``sources`` holds (input, draw, present): ``present`` is True for an error the measured
-    vector holds (noise: it biases a max/rms-type statistic) and False for a part the measured
-    vector lacks (e.g. the deviation's orders the heads cannot see).
-    """
-    noises = {inp.name: draw for inp, draw, _ in sources}
-    subsets: dict[str, list[tuple[str, float]]] = {}
-    present = [inp.name for inp, _, here in sources if here]
-    absent = [inp.name for inp, _, here in sources if not here]
-    if present:
-        subsets["present"] = [(name, 1.0) for name in present]
-        subsets["present2"] = [(name, math.sqrt(2.0)) for name in present]
-    if absent:
-        subsets["absent"] = [(name, 1.0) for name in absent]
-    for inp, _, _ in sources:
-        if len(sources) > 1:
-            subsets[inp.name] = [(inp.name, 1.0)]
-    out = monte_carlo_statistics(base, noises, statistics, subsets)
-    if len(sources) == 1:
-        only = sources[0][0].name
-        for d in out.values():
-            d[only] = d["present" if present else "absent"]
-    return out
-
-
-def mc_budget(
-    quantity: str,
-    unit: str,
-    plain: float,
-    samples: Mapping[str, FloatArray],
-    inputs: Sequence[Input],
-    *,
-    notes: Sequence[str] = (),
-    nonnegative: bool = True,
-) -> UncertaintyBudget:
-    """The budget of a max/rms-type statistic from its Monte Carlo values (bias-corrected).
-
-    y₀ is the statistic of the measured vector, which holds the noise once. Adding a fresh draw
-    of the noise (y*₁, twice its variance) and √2 times a draw (y*₂, three times) gives the
-    statistic as a function of the noise variance; its square is extrapolated back to no noise
-    with a quadratic (SIMEX): ŷ² = 3y₀² − 3·mean(y*₁²) + mean(y*₂²) — exact for an rms (a mean
-    square is linear in the noise variance), and much better than the bootstrap's 2y₀ − mean(y*₁)
-    for a peak, though still partial when the noise dominates it. The error's spread is that of
-    y*₁ (mirrored about its mean: y₀ − y is taken as distributed as y*₁ − y₀). Parts the vector
-    lacks add y*ₐ − y₀ (y*ₐ: the vector plus a draw of them). So the values of the measurand are
-    ŷ − (y*₁ − mean y*₁) + (y*ₐ − y₀), trial by trial: their mean is the estimate, their standard
-    deviation u, their 95 % probabilistically symmetric interval the coverage interval; U is half
-    its width and k = U/u. The bias is y₀ − ŷ. Each input's row holds the standard deviation of
-    the statistic with that input alone.
-
-    Parameters
-    ----------
-    quantity, unit : str
-        The JSON key of the statistic and its unit.
-    plain : float
-        y₀ (unit).
-    samples : mapping
-        From :func:`statistic_samples`: ``"present"``, ``"present2"`` and/or ``"absent"`` →
-        (M,) values, and each input's name → (M,) values with that input alone.
-    inputs : sequence of Input
-        The error sources (their u, ν, distribution and origin for the rows).
-    notes : sequence of str
-        Extra sentences for the budget.
-    nonnegative : bool
-        The statistic cannot be negative: the estimate and the interval are clipped at 0.
-
-    Returns
-    -------
-    UncertaintyBudget
-        ``method = "Monte Carlo"``, ``value`` the corrected estimate.
-
-    References
-    ----------
-    JCGM 101:2008, §7.6 (estimate and standard uncertainty), §7.7.1 (probabilistically symmetric
-    coverage interval); JCGM 102:2011 §9 and the magnitude example (a max/magnitude-type output is
-    biased by the noise of its inputs); J. R. Cook and L. A. Stefanski, "Simulation-extrapolation
-    estimation in parametric measurement error models", J. Am. Stat. Assoc. 89 (1994) 1314–1328
-    (SIMEX, the quadratic extrapolant); Efron & Tibshirani, An Introduction to the Bootstrap
-    (1993), §13.4 (the basic interval).
-    """
-    y = np.full(next(iter(samples.values())).size, plain)
-    bias = shift = 0.0
-    if "present" in samples:
-        q1, q2 = samples["present"] ** 2, samples["present2"] ** 2
-        simex = simex_estimate(plain, samples)
-        bias = plain - simex
-        # the spread of y*₁ holds the data's own noise twice (curvature): the variance of the
-        # square at the data's noise level is 3·var(y*₁²) − var(y*₂²) (exact for a mean square)
-        v1 = float(np.var(q1, ddof=1))
-        v0 = 3.0 * v1 - float(np.var(q2, ddof=1))
-        scale = math.sqrt(min(max(v0, 0.25 * v1), v1) / v1) if v1 > 0 else 0.0
-        y = np.sqrt(np.maximum(simex * simex - scale * (q1 - float(np.mean(q1))), 0.0))
-        y = y + (simex - float(np.mean(y)))
-    if "absent" in samples:
-        y = y + (samples["absent"] - plain)
-        shift = float(np.mean(samples["absent"])) - plain
-    value = float(np.mean(y))
-    u = float(np.std(y, ddof=1)) if y.size > 1 else 0.0
-    lo, hi = coverage_interval(y, COVERAGE)
-    extra: list[str] = []
-    if nonnegative and value < 0.0:
-        extra.append(f"the corrected value {value:.3g} {unit} is below zero; stated as 0.")
-        value = 0.0
-    if nonnegative and lo < 0.0:
-        lo = 0.0
-    big_u = 0.5 * (hi - lo)
-    k = big_u / u if u > 0 else coverage_factor(math.inf, COVERAGE)
-    rows = []
-    for inp in inputs:
-        alone = samples[inp.name]
-        contrib = float(np.std(alone, ddof=1)) if alone.size > 1 else 0.0
-        rows.append(
-            BudgetRow(
-                source=inp.name,
-                value=inp.value,
-                unit=inp.unit,
-                distribution=inp.description or inp.distribution,
-                u=inp.u,
-                sensitivity=contrib / inp.u if inp.u > 0 else 0.0,
-                contribution=contrib,
-                share=(contrib / u) ** 2 if u > 0 else 0.0,
-                dof=inp.dof,
-                origin=inp.source,
-            )
-        )
-    se = u / math.sqrt(y.size)
-    text = [
-        f"Monte Carlo with M = {y.size} trials (seed {MC_SEED}) from the plain value "
-        f"{plain:.6g} {unit}:"
-    ]
-    if "present" in samples:
-        text.append(
-            f"the noise in the data biases it by {bias:+.3g} {unit} (extrapolated to no noise, "
-            f"SIMEX; Monte Carlo standard error about {se:.2g} {unit}), which is removed;"
-        )
-    if "absent" in samples:
-        text.append(f"the parts the data lack add {shift:+.3g} {unit} on average;")
-    text.append(
-        f"estimate {value:.6g} {unit}, 95 % probabilistically symmetric interval "
-        f"[{lo:.6g}, {hi:.6g}] {unit} (U = half its width, k = U/u)."
-    )
-    text = [" ".join(text), *extra]
-    if abs(bias) > 0.1 * abs(plain):
-        text.append(
-            "the noise makes up much of the plain value (its bias exceeds a tenth of it): the "
-            "correction is approximate — reduce the noise (average more, a better encoder) for a "
-            "firmer value."
-        )
-    if len(inputs) > 1:
-        text.append(
-            "each row's contribution is the spread with that input alone; the statistic is not "
-            "linear, so the shares need not sum to 100 %."
-        )
-    return UncertaintyBudget(
-        quantity=quantity,
-        unit=unit,
-        value=float(value),
-        u=u,
-        dof_eff=math.inf,
-        k=float(k),
-        p=COVERAGE,
-        U=float(big_u),
-        rows=tuple(rows),
-        method="Monte Carlo",
-        notes=(*text, *notes),
-    )
-
-
-def simex_estimate(plain: float, samples: Mapping[str, FloatArray]) -> float:
-    """The SIMEX estimate of :func:`mc_budget`: the square of a non-negative statistic at
-    1, 2 and 3 times the noise variance, extrapolated to none by a quadratic, then its root."""
-    sq = (
-        3.0 * plain * plain
-        - 3.0 * float(np.mean(samples["present"] ** 2))
-        + float(np.mean(samples["present2"] ** 2))
-    )
-    return math.sqrt(max(sq, 0.0))
-
-
-def drop_large_dof_notes(b: UncertaintyBudget) -> UncertaintyBudget:
-    """Leave out the note on truncating ν_eff when ν_eff ≥ 10⁴ (k is then t_p(∞) to 2·10⁻⁴)."""
-    if not (b.dof_eff >= 1e4):
-        return b
-    return dataclasses.replace(b, notes=tuple(n for n in b.notes if "truncated to" not in n))
+        return np.fft.irfft(var, self.pulses_per_rev) / self.pulses_per_rev
 
 
 @dataclasses.dataclass(frozen=True)
@@ -508,6 +211,7 @@ class SelfCalibration(Result):
         multiples of n are zero (undetectable).
     heads, pulses_per_rev : int
     deviation_pp_arcsec, deviation_rms_arcsec : float, arcsec
+        Plain peak-to-peak and rms of ``deviation_arcsec`` (also the budgets' values).
     undetectable_harmonics_note : str
     undetectable_orders : list of int
         Fourier orders (per revolution, 1 … m/2) the heads cannot see.
@@ -519,15 +223,17 @@ class SelfCalibration(Result):
         Standard uncertainty of every point of the curve (the same at every line): the
         revolutions' spread pooled over the lines (rms over the lines of std/√R), combined with
         the stated ``encoder.undetectable_harmonics_arcsec`` when given. The same number as each
-        element of the JSON ``deviation_arcsec_u``. None with one revolution.
+        element of the JSON ``deviation_arcsec_u``. None with one revolution and no
+        specification (with one revolution and the specification: the specification alone).
     deviation_dof : float or None
         Effective degrees of freedom of ``deviation_u_arcsec`` (Welch–Satterthwaite).
-    deviation_pp_bias_arcsec, deviation_rms_bias_arcsec : float or None, arcsec
-        How much the curve's noise raises the peak-to-peak and rms (Monte Carlo mean minus the
-        plain value); None with one revolution.
-    deviation_pp_corrected_arcsec, deviation_rms_corrected_arcsec : float or None, arcsec
-        The budgets' estimates: the plain values minus their bias (plus, with
-        ``encoder.undetectable_harmonics_arcsec``, what the missing orders add on average).
+    deviation_pp_arcsec_bias, deviation_rms_arcsec_bias : float or None, arcsec
+        How much the curve's noise (Type A, from the revolutions) raises the plain peak-to-peak
+        and rms; None with one revolution (the noise is then unknown).
+    deviation_pp_arcsec_bias_corrected, deviation_rms_arcsec_bias_corrected : float or None
+        The plain values less that bias (arcsec). The 95 % interval for the true value (which
+        also holds the undetectable orders when their specification is stated) is the JSON
+        ``deviation_pp_arcsec_interval`` / ``deviation_rms_arcsec_interval``.
     closure_residual_rms_arcsec : float, arcsec
         rms of what the fitted curve leaves unexplained in the head differences (noise, rate
         changes within a pitch, head misnumbering).
@@ -547,7 +253,8 @@ class SelfCalibration(Result):
 
     ``to_dict()`` adds the uncertainty keys: ``deviation_arcsec_u`` and ``deviation_arcsec_U``
     (arrays of m values, arcsec), ``deviation_pp_arcsec_u``/``_U`` and
-    ``deviation_rms_arcsec_u``/``_U`` (arcsec), ``k`` (per quantity), ``coverage_probability``
+    ``deviation_rms_arcsec_u``/``_U``/``_interval`` (arcsec; u the standard deviation of the
+    summary's error, U half the interval's width), ``k`` (per quantity), ``coverage_probability``
     and ``uncertainty_budgets``.
     """
 
@@ -563,10 +270,10 @@ class SelfCalibration(Result):
     repeatability_pp_arcsec: float | None
     deviation_u_arcsec: float | None
     deviation_dof: float | None
-    deviation_pp_bias_arcsec: float | None
-    deviation_pp_corrected_arcsec: float | None
-    deviation_rms_bias_arcsec: float | None
-    deviation_rms_corrected_arcsec: float | None
+    deviation_pp_arcsec_bias: float | None
+    deviation_pp_arcsec_bias_corrected: float | None
+    deviation_rms_arcsec_bias: float | None
+    deviation_rms_arcsec_bias_corrected: float | None
     closure_residual_rms_arcsec: float
     head_offsets_arcsec: list[float]
     harmonic_amplitudes_arcsec: list[float]
@@ -607,7 +314,7 @@ class SelfCalibration(Result):
     @property
     def point_budget(self) -> UncertaintyBudget | None:
         """The budget of one point of the curve (any line; its ``value`` is 0: the budget's
-        inputs are errors), None with one revolution."""
+        inputs are errors), None with one revolution and no specification."""
         return self._point_budget
 
     @property
@@ -673,6 +380,53 @@ def undetectable_orders(
     bad = info <= _UNDETECTABLE_TOL * heads
     bad[0] = False
     return [int(q) for q in np.flatnonzero(bad)]
+
+
+def noise_gain(shifts: ArrayLike, pulses_per_rev: int, head: int) -> NDArray[np.complex128]:
+    """How one head's own angle noise enters the self-calibrated curve, order by order.
+
+    The fit per order is â(q) = [Σ g_i*·D_i − (Σ g_i*)(Σ D_i)/n]/I(q); head 0's noise N₀ enters
+    every D_i with −1, head k's N_k enters D_k with +1 at the head-0 pulse it pairs with, i.e. at
+    the line it reads shifted by s_k. So a head's noise at the line it reads appears in the curve
+    at that line with the gain κ(q) = −Σ g_i*/(n·I) (head 0) or (g_k* − Σ g_i*/n)/I·e^(2πiqs_k/m)
+    (head k) — 1/n at every detectable order for equally spaced heads — averaged over the
+    revolutions. A rate from the same head, compensated with this curve, therefore carries that
+    head's timing noise twice, partly cancelling.
+
+    Parameters
+    ----------
+    shifts : array_like of int
+        The heads' line shifts s_i (``SelfCalibration.head_line_shifts``).
+    pulses_per_rev : int
+        m.
+    head : int
+        The head whose noise is followed.
+
+    Returns
+    -------
+    ndarray of complex, shape (m//2 + 1,)
+        κ(q); 0 at order 0 and at the undetectable orders (set to zero by the fit).
+
+    References
+    ----------
+    Kokuyama et al. (seed 004) §3; the fit of :func:`self_calibrate` (generalised least squares
+    per order, noise shared through head 0).
+    """
+    s = np.asarray(shifts, dtype=np.int64)
+    m = int(pulses_per_rev)
+    g, info = _information(s, m)
+    n = s.size
+    ok = info > _UNDETECTABLE_TOL * n
+    ok[0] = False
+    total = np.conj(np.sum(g, axis=0))
+    if head == 0:
+        num = -total / n
+    else:
+        q = np.arange(m // 2 + 1)
+        num = (np.conj(g[head - 1]) - total / n) * np.exp(2j * np.pi * q * s[head] / m)
+    out = np.zeros(m // 2 + 1, dtype=np.complex128)
+    out[ok] = num[ok] / info[ok]
+    return out
 
 
 def _gls(diff_spec: np.ndarray, shifts: NDArray[np.int64], m: int) -> tuple[np.ndarray, np.ndarray]:
@@ -869,74 +623,85 @@ def _deviation_uncertainty(
     deviation: FloatArray,
     undetect: list[int],
     specs: InstrumentSpecs | None,
-) -> tuple[DeviationNoise, UncertaintyBudget, dict[str, UncertaintyBudget], dict[str, float]]:
-    """Noise model, per-point budget, Monte Carlo budgets of pp and rms and their biases.
+) -> tuple[DeviationNoise | None, UncertaintyBudget | None, dict[str, Any]]:
+    """Noise model, per-point budget and the budgets of the peak-to-peak and rms.
+
+    With two or more revolutions the curve's noise comes from their spread (Type A); with one,
+    only a stated ``encoder.undetectable_harmonics_arcsec`` can be budgeted (no budget without).
+
+    Returns
+    -------
+    noise : DeviationNoise or None
+    point : UncertaintyBudget or None
+    summaries : dict
+        ``{"deviation_pp_arcsec": Summary, "deviation_rms_arcsec": Summary}`` (empty without any
+        input).
 
     References
     ----------
-    JCGM 100:2008 (GUM) §4.2 (Type A: the mean of R revolutions, s²/R), G.4 (Welch–Satterthwaite
-    over the orders); JCGM 101:2008 §7 (Monte Carlo of the max/rms-type summaries).
+    JCGM 100:2008 (GUM) §4.2 (Type A: the mean of R revolutions, s²/R), §4.3 (Type B), G.4
+    (Welch–Satterthwaite over the orders); JCGM 101:2008 §7 (Monte Carlo of the peak-to-peak).
     """
     revs, m = per_rev.shape
     w = _order_weights(m)
-    resid = np.fft.rfft(per_rev - deviation, axis=-1)
-    var = np.sum(np.abs(resid) ** 2, axis=0) / ((revs - 1) * revs)  # of the mean curve's orders
     und = np.zeros(m // 2 + 1, dtype=bool)
     und[np.asarray(undetect, dtype=np.int64)] = True
-    keep = ~und
-    keep[0] = False
-    var = np.where(keep, var, 0.0)
-    total = float(np.sum(w * var))
-    smooth = _smooth_spectrum(var, keep)
-    s_total = float(np.sum(w * smooth))
-    if s_total > 0:
-        smooth *= total / s_total
-    # Welch–Satterthwaite over the orders: each order's variance has 2(R − 1) degrees of freedom
-    # (R − 1 for the real Nyquist order), the pooled one their effective number
-    nu_q = np.where(w == 2.0, 2.0 * (revs - 1), float(revs - 1))
-    den = float(np.sum((w * smooth) ** 2 / nu_q))
-    nu_a = (float(np.sum(w * smooth)) ** 2 / den) if den > 0 else math.inf
-
-    dist = spec_entry(specs, UNDETECTABLE_SPEC)
-    u_und = float(dist.std) if dist is not None else 0.0
-    noise = DeviationNoise(m, smooth if s_total > 0 else var, und, u_und)
-    u_a = math.sqrt(total) / m
-    inputs = [
-        Input(
-            name=f"repeatability over {revs} revolutions",
-            value=0.0,
-            u=u_a,
-            dof=nu_a,
-            distribution="normal",
-            unit="arcsec",
-            source=f"Type A, the spread of {revs} single-revolution curves pooled over the lines",
-            description="normal (per order, from the revolutions' spread)",
-        )
-    ]
+    und_input, und_note = undetectable_input(specs)
+    u_und = und_input.u if und_input is not None else 0.0
+    inputs: list[Input] = []
     notes: list[str] = []
-    if dist is not None:
+    noise: DeviationNoise | None = None
+    nu_a = math.inf
+    if revs >= 2:
+        resid = np.fft.rfft(per_rev - deviation, axis=-1)
+        var = np.sum(np.abs(resid) ** 2, axis=0) / ((revs - 1) * revs)  # of the mean's orders
+        keep = ~und
+        keep[0] = False
+        var = np.where(keep, var, 0.0)
+        total = float(np.sum(w * var))
+        smooth = _smooth_spectrum(var, keep)
+        s_total = float(np.sum(w * smooth))
+        if s_total > 0:
+            smooth *= total / s_total
+        # Welch–Satterthwaite over the orders: each order's variance has 2(R − 1) degrees of
+        # freedom (R − 1 for the real Nyquist order), the pooled one their effective number
+        nu_q = np.where(w == 2.0, 2.0 * (revs - 1), float(revs - 1))
+        den = float(np.sum((w * smooth) ** 2 / nu_q))
+        nu_a = (float(np.sum(w * smooth)) ** 2 / den) if den > 0 else math.inf
+        noise = DeviationNoise(m, smooth if s_total > 0 else var, und, u_und)
         inputs.append(
             Input(
-                name="orders no head arrangement sees (multiples of n)",
+                name=f"repeatability over {revs} revolutions",
                 value=0.0,
-                u=u_und,
-                dof=float(getattr(dist, "dof", math.inf)),
-                distribution=str(dist.name),
+                u=math.sqrt(total) / m,
+                dof=nu_a,
+                distribution="normal",
                 unit="arcsec",
-                source=f"Type B, {_describe(specs, UNDETECTABLE_SPEC)}",
-                description=str(dist.describe()),
+                source=f"Type A, the spread of {revs} single-revolution curves pooled over the lines",
+                description="normal (per order, from the revolutions' spread)",
             )
         )
+    elif und_input is None:
+        return None, None, {}
+    else:
+        notes.append(
+            "one whole revolution: the curve's own noise cannot be estimated from the data and is "
+            "not in this budget (record several revolutions); only the stated specification is."
+        )
+    if und_input is not None:
+        inputs.append(und_input)
+        if und_note:
+            notes.append(und_note)
     else:
         notes.append(
             "the orders that are multiples of the number of heads are neither in the curve nor in "
             f"its uncertainty; state {UNDETECTABLE_SPEC} to include them."
         )
     if specs is None:
-        notes.append(TYPE_A_ONLY)
+        notes.append(TYPE_A_ONLY_NOTE)
     gum = propagate(
         lambda *x: float(sum(x)),
-        inputs,
+        [dataclasses.replace(inp, value=0.0) for inp in inputs],  # errors about their estimates
         p=COVERAGE,
         names_out=["deviation_arcsec (every line)"],
         units_out=["arcsec"],
@@ -944,41 +709,44 @@ def _deviation_uncertainty(
     point = drop_large_dof_notes(gum.budget(0))
     point = dataclasses.replace(
         point,
+        rows=tuple(
+            dataclasses.replace(row, value=inp.value)
+            for row, inp in zip(point.rows, inputs, strict=True)
+        ),
         notes=(
             *point.notes,
-            "the fit is the same at every Fourier order, so every line has this uncertainty "
-            f"(ν = {nu_a:.4g} from the spread of every detectable order, Welch–Satterthwaite).",
+            "the fit is the same at every Fourier order, so every line has this uncertainty"
+            + (
+                f" (ν = {nu_a:.4g} from the spread of every detectable order, Welch–Satterthwaite)."
+                if revs >= 2
+                else "."
+            ),
             *notes,
         ),
     )
 
     # the curve holds its noise (it biases pp and rms) but lacks the undetectable orders
-    sources: list[tuple[Input, Callable[[np.random.Generator, int], FloatArray], bool]] = [
-        (inputs[0], noise.draw, True)
-    ]
-    if dist is not None:
-        sources.append((inputs[1], noise.draw_undetectable, False))
+    sources: list[ErrorProcess] = []
+    if noise is not None:
+        sources.append(CirculantError(inputs[0], "noise", autocov=noise.autocov()))
+    if und_input is not None:
+        model = noise or DeviationNoise(m, np.zeros(m // 2 + 1), und, u_und)
+        sources.append(
+            CirculantError(und_input, "absent", autocov=model.autocov(undetectable=True))
+        )
         notes.append(
-            f"{UNDETECTABLE_SPEC} is drawn as a random curve over the undetectable orders with "
+            f"{UNDETECTABLE_SPEC} is taken as a random curve over the undetectable orders with "
             "the stated rms (white across them)."
         )
-    mc = statistic_samples(
-        deviation,
-        sources,
-        {
-            "pp": lambda x: np.ptp(x, axis=-1),
-            "rms": lambda x: np.sqrt(np.mean(x * x, axis=-1)),
-        },
-    )
-    plain = {"pp": float(np.ptp(deviation)), "rms": float(np.sqrt(np.mean(deviation**2)))}
-    budgets = {
-        f"deviation_{key}_arcsec": mc_budget(
-            f"deviation_{key}_arcsec", "arcsec", plain[key], mc[key], inputs, notes=notes
-        )
-        for key in ("pp", "rms")
+    summaries = {
+        "deviation_pp_arcsec": mc_budget(
+            "deviation_pp_arcsec", "arcsec", deviation, sources, statistic="pp", notes=notes
+        ),
+        "deviation_rms_arcsec": rms_budget(
+            "deviation_rms_arcsec", "arcsec", deviation, sources, notes=notes
+        ),
     }
-    biases = {key: plain[key] - simex_estimate(plain[key], mc[key]) for key in ("pp", "rms")}
-    return noise, point, budgets, biases
+    return noise, point, summaries
 
 
 def self_calibrate(
@@ -1005,15 +773,17 @@ def self_calibrate(
     specs : InstrumentSpecs, optional
         The lab's instrument specifications (Type B inputs). Used:
         ``encoder.undetectable_harmonics_arcsec`` (the rms, arcsec, of the scale's deviation at
-        the orders that are multiples of n). A timebase error scales the delays and the rate
-        that turns them into angles alike, so it does not enter. None: Type A only.
+        the orders that are multiples of n; a stated mean enters as √(mean² + u²), see
+        :func:`undetectable_input`). A timebase error scales the delays and the rate that turns
+        them into angles alike, so it does not enter. None: Type A only.
 
     Returns
     -------
     SelfCalibration
-        With the standard uncertainty of every point (the revolutions' spread, Type A) and
-        Monte Carlo budgets of the peak-to-peak and rms (with their bias), when the heads share
-        two or more whole revolutions.
+        With the standard uncertainty of every point (the revolutions' spread, Type A) and the
+        budgets of the peak-to-peak (Monte Carlo) and rms (closed form) — plain value, noise
+        bias, 95 % interval for the true value — when the heads share two or more whole
+        revolutions; with one, from ``encoder.undetectable_harmonics_arcsec`` alone when stated.
 
     Raises
     ------
@@ -1113,21 +883,23 @@ def self_calibrate(
     per_rev = np.roll(per_rev, roll, axis=1)
 
     undetect = undetectable_orders(n, m, shifts)
-    noise: DeviationNoise | None = None
-    point: UncertaintyBudget | None = None
-    budgets: dict[str, UncertaintyBudget] = {}
-    biases: dict[str, float] = {}
     if revs >= 2:
         rep = per_rev - deviation
         rep_rms: float | None = float(np.sqrt(np.mean(rep**2)))
         rep_pp: float | None = float(np.max(rep.max(axis=1) - rep.min(axis=1)))
-        noise, point, budgets, biases = _deviation_uncertainty(per_rev, deviation, undetect, specs)
     else:
         rep_rms = rep_pp = None
         notes.append(
             "one whole revolution only: no repeatability and no uncertainty from the data; "
             "record several revolutions."
         )
+    noise, point, summaries = _deviation_uncertainty(per_rev, deviation, undetect, specs)
+    budgets = {key: sm.budget for key, sm in summaries.items()}
+    # one truth: the JSON values are the budgets' values (the plain summaries of the curve)
+    pp = budgets["deviation_pp_arcsec"].value if budgets else float(np.ptp(deviation))
+    rms = (
+        budgets["deviation_rms_arcsec"].value if budgets else float(np.sqrt(np.mean(deviation**2)))
+    )
     amp = np.abs(np.fft.rfft(deviation)) * 2.0 / m
     amp[0] = 0.0
     if m % 2 == 0:
@@ -1158,8 +930,8 @@ def self_calibrate(
         deviation_arcsec=deviation,
         heads=n,
         pulses_per_rev=m,
-        deviation_pp_arcsec=float(np.ptp(deviation)),
-        deviation_rms_arcsec=float(np.sqrt(np.mean(deviation**2))),
+        deviation_pp_arcsec=pp,
+        deviation_rms_arcsec=rms,
         undetectable_harmonics_note=note,
         undetectable_orders=undetect,
         revolutions_used=int(revs),
@@ -1167,10 +939,10 @@ def self_calibrate(
         repeatability_pp_arcsec=rep_pp,
         deviation_u_arcsec=None if point is None else point.u,
         deviation_dof=None if point is None else point.dof_eff,
-        deviation_pp_bias_arcsec=biases.get("pp"),
-        deviation_pp_corrected_arcsec=_value(budgets, "deviation_pp_arcsec"),
-        deviation_rms_bias_arcsec=biases.get("rms"),
-        deviation_rms_corrected_arcsec=_value(budgets, "deviation_rms_arcsec"),
+        deviation_pp_arcsec_bias=_bias(summaries, "deviation_pp_arcsec"),
+        deviation_pp_arcsec_bias_corrected=_bias(summaries, "deviation_pp_arcsec", True),
+        deviation_rms_arcsec_bias=_bias(summaries, "deviation_rms_arcsec"),
+        deviation_rms_arcsec_bias_corrected=_bias(summaries, "deviation_rms_arcsec", True),
         closure_residual_rms_arcsec=closure_rms,
         head_offsets_arcsec=[float(x) for x in head_off],
         harmonic_amplitudes_arcsec=[float(x) for x in amp[1 : min(m // 2, 100) + 1]],
@@ -1189,5 +961,8 @@ def self_calibrate(
     )
 
 
-def _value(budgets: Mapping[str, UncertaintyBudget], key: str) -> float | None:
-    return budgets[key].value if key in budgets else None
+def _bias(summaries: Mapping[str, Any], key: str, corrected: bool = False) -> float | None:
+    if key not in summaries:
+        return None
+    sm = summaries[key]
+    return sm.bias_corrected if corrected else sm.bias

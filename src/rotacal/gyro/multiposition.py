@@ -42,9 +42,8 @@ from scipy.linalg import solve_triangular
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 from rotacal.uncertainty.budget import UncertaintyBudget
-from rotacal.uncertainty.distributions import Distribution
 from rotacal.uncertainty.gum import Input, propagate
-from rotacal.uncertainty.specs import InstrumentSpecs
+from rotacal.uncertainty.specs import TYPE_A_ONLY_NOTE, InstrumentSpecs, spec_distribution
 
 __all__ = [
     "EARTH_RATE_DEG_H",
@@ -680,8 +679,8 @@ def calibrate_multiposition(
     §4.2 (Type A), §4.3 (Type B), §5.1 (law of propagation), G.4 (ν_eff, k).
     """
     ax_ = _axis(axis)
-    lat_spec = specs.get("site.latitude_deg") if specs is not None else None
-    orient_spec = specs.get("table.orientation_error_arcsec") if specs is not None else None
+    lat_spec = spec_distribution(specs, "site.latitude_deg")
+    orient_spec = spec_distribution(specs, "table.orientation_error_arcsec")
     if latitude_deg is None:
         if lat_spec is None:
             raise ConfigError(
@@ -766,8 +765,6 @@ def calibrate_multiposition(
             jac,
             dof,
             s_std,
-            lat_spec,
-            orient_spec,
             specs,
         )
         u = np.array([budgets[f"drift_coefficients.{nm}"].u for nm in names])
@@ -810,42 +807,28 @@ def _drift_budgets(
     jac: np.ndarray,
     dof: int,
     s_std: float,
-    lat_spec: Distribution | None,
-    orient_spec: Distribution | None,
     specs: InstrumentSpecs | None,
 ) -> dict[str, UncertaintyBudget]:
     """One GUM budget per drift coefficient (see :func:`calibrate_multiposition`, Notes)."""
     units = dict(zip(names, _UNITS, strict=True))
-    source_b = f"Type B, {specs.source}" if specs is not None else ""
     extra: list[tuple[Input, int]] = []  # (input, column of jac)
     notes: list[str] = []
     if specs is None:
-        notes.append("no instrument specification stated: Type A only.")
+        notes.append(TYPE_A_ONLY_NOTE)
     else:
-        if lat_spec is not None:
-            extra.append(
-                (
-                    Input.from_distribution(
-                        "latitude λ (site.latitude_deg)", lat_spec, unit="deg", source=source_b
-                    ),
-                    0,
-                )
-            )
+        lat_in = specs.input("site.latitude_deg", name="latitude λ", unit="deg")
+        if lat_in is not None:
+            extra.append((lat_in, 0))
         else:
             notes.append("site.latitude_deg not stated: the latitude is taken as exact.")
-        if orient_spec is not None:
+        if specs.get("table.orientation_error_arcsec") is not None:
             for col, (_, label) in enumerate(_ORIENTATION, start=1):
-                extra.append(
-                    (
-                        Input.from_distribution(
-                            f"{label} (table.orientation_error_arcsec)",
-                            orient_spec,
-                            unit="arcsec",
-                            source=source_b,
-                        ),
-                        col,
-                    )
-                )
+                o_in = specs.input("table.orientation_error_arcsec", name=label)
+                assert o_in is not None
+                extra.append((o_in, col))
+            # a stated mean Δ̄ enters eq. (11) (GUM §3.2.4); its u stays in the rows
+            if (fix := specs.correction_note("table.orientation_error_arcsec")) is not None:
+                notes.append(fix)
             notes.append(
                 "the orientation error is taken as the same at every position (a mounting "
                 "error, seed 001 §2.2); a part that changes from position to position shows in "

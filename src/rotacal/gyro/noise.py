@@ -43,7 +43,7 @@ from rotacal.signal.allan import (
 )
 from rotacal.uncertainty.budget import UncertaintyBudget, uncertainty_keys
 from rotacal.uncertainty.gum import Input, propagate
-from rotacal.uncertainty.specs import InstrumentSpecs
+from rotacal.uncertainty.specs import TYPE_A_ONLY_NOTE, InstrumentSpecs, spec_input
 
 __all__ = ["GyroNoise", "gyro_noise", "line_level_variance"]
 
@@ -354,7 +354,7 @@ def _noise_budgets(
     adev_of_m = dict(
         zip(np.asarray(adev.cluster_sizes).tolist(), np.asarray(adev.adev), strict=True)
     )
-    timebase = specs.get("timebase.relative_error") if specs is not None else None
+    timebase = spec_input(specs, "timebase.relative_error", name="DAQ timebase relative error")
     for name, term in terms.terms.items():
         key = _TERM_KEY[name]
         value = getattr(terms, key)
@@ -434,16 +434,9 @@ def _noise_budgets(
         slope = 0.0 if name == "bias_instability" else term.slope
         has_e = False
         if specs is None:
-            notes.append("no instrument specification stated: Type A only.")
+            notes.append(TYPE_A_ONLY_NOTE)
         elif timebase is not None and slope != 0.0:
-            inputs.append(
-                Input.from_distribution(
-                    "DAQ timebase relative error (timebase.relative_error)",
-                    timebase,
-                    unit="",
-                    source=f"Type B, {specs.source}",
-                )
-            )
+            inputs.append(timebase)
             has_e = True
         elif slope != 0.0:
             notes.append("timebase.relative_error not stated: τ taken as exact.")
@@ -460,8 +453,8 @@ def _noise_budgets(
                 row.append(_f * sigma * _p * g ** (_p - 1.0))
             return np.array([row])
 
-        if e0 != 0.0:
-            notes.append(f"corrected for the stated mean timebase error {e0:g}.")
+        if e0 != 0.0 and specs is not None:
+            notes.append(str(specs.correction_note("timebase.relative_error")))
         res = propagate(
             model,
             inputs,

@@ -43,18 +43,20 @@ from rotacal.gyro.triad import (
     decompose_scale_misalignment,
 )
 from rotacal.gyro.uncertainty import (
-    TYPE_A_ONLY_NOTE,
     as_specs,
     element_key,
     linear_gum,
-    spec_input,
-    specs_note,
     uncertainty_json,
 )
 from rotacal.results import Result, to_jsonable
 from rotacal.uncertainty.budget import UncertaintyBudget
 from rotacal.uncertainty.gum import Input
-from rotacal.uncertainty.specs import InstrumentSpecs
+from rotacal.uncertainty.specs import (
+    TYPE_A_ONLY_NOTE,
+    InstrumentSpecs,
+    spec_input,
+    type_a_note,
+)
 
 __all__ = [
     "FERRARIS_ROTATIONS",
@@ -436,7 +438,7 @@ def calibrate_triad_rotations(
         raise ConfigError(f"angle_u_deg must be a number, got {angle_u_deg!r}.") from None
     if not math.isfinite(ang_u) or ang_u < 0:
         raise ConfigError(f"angle_u_deg must be ≥ 0 deg, got {angle_u_deg!r}.")
-    ang_in = spec_input(spec, "table.set_angle_arcsec", "angle error", unit="arcsec")
+    ang_in = spec_input(spec, "table.set_angle_arcsec", name="angle error")
     if ang_in is not None and ang_u > 0:
         raise ConfigError(
             "give the angle uncertainty once: either angle_u_deg or table.set_angle_arcsec in the "
@@ -452,7 +454,7 @@ def calibrate_triad_rotations(
             source="angle_u_deg",
             description=f"normal u={ang_u:g}°",
         )
-    tb_in = spec_input(spec, "timebase.relative_error", "timebase error ε_t")
+    tb_in = spec_input(spec, "timebase.relative_error", name="timebase error ε_t")
     ang_mean_deg = 0.0 if ang_in is None else ang_in.value / 3600.0
     eps_t = 0.0 if tb_in is None else tb_in.value
     rots = _parse_rotations(rotations, angle_deg, n)
@@ -660,11 +662,15 @@ def _rotation_budgets(
     m = len(labels)
     common = []
     if (
-        note := specs_note(spec, ("table.set_angle_arcsec", "timebase.relative_error"))
+        note := type_a_note(spec, ("table.set_angle_arcsec", "timebase.relative_error"))
     ) is not None:
         common.append(
             note if ang_in is None else note.replace("Type A only", "Type A and angle_u_deg")
         )
+    if spec is not None:  # stated means correct K (GUM §3.2.4): angles set + ā, K = K₀/(1 + ε̄_t)
+        for key in ("table.set_angle_arcsec", "timebase.relative_error"):
+            if (fix := spec.correction_note(key)) is not None:
+                common.append(fix)
     common.append(
         "Type A assumes white noise (from the static sections) during the rotations and the "
         "linear model u = K·ω + b."

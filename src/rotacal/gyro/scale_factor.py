@@ -30,9 +30,13 @@ Choices (documented in :func:`calibrate_scale_factor`):
   points about the line stands for the noise, s²·(AᵀA)⁻¹ with s² = Σδ²/(N − 2), ν = N − 2
   (GUM, JCGM 100:2008, H.3). Type B: ``table.set_rate_relative`` ε, the table's realised rate
   being Ω·(1 + ε), so S = S₀/(1 + ε) (V0 does not depend on ε). S and V0 are validated by Monte
-  Carlo; NL, a maximum of |δ|, takes its uncertainty, its bias and a bias-corrected value from
-  Monte Carlo (JCGM 101) over the same inputs. A lack-of-fit test tells when the points scatter
-  about the line more than their noise explains (nonlinearity, or drift between the points).
+  Carlo. NL, a maximum of |δ|, is biased upward by noise and bounded below by 0: its JSON value
+  and budget value are the plain NL, u the standard deviation of NL re-measured (Monte Carlo,
+  JCGM 101), the bias from the point means' noise and the bias-corrected NL stand beside
+  it, and the budget states a 95 % interval for the TRUE NL (it reaches 0 when the residuals are
+  consistent with noise), U being half its width. A lack-of-fit test tells when the points
+  scatter about the line more than their noise explains (nonlinearity, or drift between the
+  points).
 
 References
 ----------
@@ -40,15 +44,16 @@ Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity ca
 using self-calibratable rotary encoder" (seed 004), §4 and Table 1.
 IEEE Std 952-1997, Annex C (scale factor and nonlinearity from a least-squares line).
 NHTSA, FMVSS 126 Laboratory Test Procedure for Electronic Stability Control Systems (2008).
-JCGM 100:2008 (GUM) §4.2, §5.1.2, G.4, H.3; JCGM 101:2008 §7, §8; ILAC-G8:09/2019 §4.2 (decision
-rules with a guard band w = U).
+JCGM 100:2008 (GUM) §4.2, §5.1.2, G.4, H.3; JCGM 101:2008 §7, §8; JCGM 102:2011 §9; Efron &
+Tibshirani, An Introduction to the Bootstrap (1993) §6, §10; ILAC-G8:09/2019 §4.2 (decision rules
+with a guard band).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 import numpy as np
@@ -60,18 +65,20 @@ from rotacal.gyro.uncertainty import (
     as_specs,
     linear_gum,
     monte_carlo_budget,
-    spec_distribution,
-    spec_input,
-    specs_note,
     uncertainty_json,
     validated,
 )
 from rotacal.results import Result, to_jsonable
 from rotacal.uncertainty.budget import BudgetRow, UncertaintyBudget
-from rotacal.uncertainty.distributions import Distribution, Normal, StudentT
+from rotacal.uncertainty.distributions import Distribution, Normal
 from rotacal.uncertainty.gum import Input, linear_fit_uncertainty, welch_satterthwaite
 from rotacal.uncertainty.montecarlo import MonteCarloResult, monte_carlo
-from rotacal.uncertainty.specs import InstrumentSpecs
+from rotacal.uncertainty.specs import (
+    InstrumentSpecs,
+    spec_distribution,
+    spec_input,
+    type_a_note,
+)
 
 __all__ = [
     "DEFAULT_MC_TRIALS",
@@ -98,6 +105,8 @@ MIN_POINTS_RECOMMENDED = 11
 DEFAULT_MC_TRIALS = 200_000
 #: Seed of the Monte Carlo streams: the same capture gives the same budget.
 _MC_SEED = 2026
+#: Random numbers held at once by the interval's Monte Carlo (memory).
+_CHUNK_ELEMENTS = 4_000_000
 #: Point means with ν at or below this are drawn normal in the Monte Carlo (see the note there).
 _MC_MIN_DOF = 4.0
 #: Lack of fit is reported when Σδ²/(ν·ū²) exceeds the χ²(ν)/ν quantile at this probability.
@@ -187,12 +196,13 @@ class RequirementVerdict(Result):
 
 @dataclasses.dataclass(frozen=True)
 class DecisionWithU(Result):
-    """A requirement's accuracy check judged with the expanded uncertainty of NL (ILAC-G8).
+    """A requirement's accuracy check judged with the uncertainty of NL (ILAC-G8).
 
-    ``verdict`` is ``"pass with U"`` when NL + U < limit, ``"fail with U"`` when NL − U > limit and
-    ``"inconclusive"`` when the limit lies within NL ± U (guard band w = U, ILAC-G8:09/2019 §4.2;
-    p = 95 %). ``value`` is the plain NL (the value the verdict without U uses), ``U`` its expanded
-    uncertainty, both in ``unit``.
+    With the 95 % interval [low, high] for the true NL (``interval``): ``verdict`` is
+    ``"pass with U"`` when high < limit, ``"fail with U"`` when low > limit and ``"inconclusive"``
+    when the limit lies within it. Without one, the interval is NL ± U (guard band w = U,
+    ILAC-G8:09/2019 §4.2). ``value`` is the plain NL (the value the verdict without U uses), ``U``
+    its expanded uncertainty (half the interval's width), all in ``unit``.
     """
 
     quantity: str
@@ -204,6 +214,7 @@ class DecisionWithU(Result):
     agrees: bool
     rule: str
     line: str
+    interval: tuple[float, float] | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -216,11 +227,14 @@ class ScaleFactorResult(Result):
 
     Uncertainties: ``scale_factor_u`` and ``bias_u`` are the standard uncertainties of the budgets
     in ``_budgets`` (keys ``scale_factor``, ``bias``, ``nonlinearity_percent_fs``); the JSON adds
-    ``<name>_u``, ``<name>_U``, ``k``, ``coverage_probability`` and ``uncertainty_budgets``.
-    ``nonlinearity_bias_percent_fs`` is the Monte Carlo bias of NL (mean of the simulated NL minus
-    NL), ``nonlinearity_corrected_percent_fs`` = NL − bias, ``nonlinearity_interval_percent_fs``
-    the probabilistically symmetric 95 % interval of the simulated NL. ``decision_with_uncertainty`` is the
-    accuracy check judged with U (ILAC-G8).
+    ``<name>_u``, ``<name>_U``, ``k``, ``coverage_probability``, ``uncertainty_budgets`` and
+    ``nonlinearity_percent_fs_interval`` — the 95 % interval for the TRUE NL (%FS), which the
+    budget of NL states instead of ± U (U is half its width; it reaches 0 when the residuals are
+    consistent with noise). ``nonlinearity_percent_fs`` stays the plain NL (the budget's value).
+    ``nonlinearity_percent_fs_bias`` is how much the noise of the point means raises NL (SIMEX,
+    %FS; NaN when the noise level is not known apart from the nonlinearity — one sample per
+    point) and ``nonlinearity_percent_fs_bias_corrected`` = max(NL − bias, 0). ``decision_with_uncertainty``
+    is the accuracy check judged with the interval (ILAC-G8).
     """
 
     scale_factor: float
@@ -244,13 +258,18 @@ class ScaleFactorResult(Result):
     output_quantum: float | None
     requirement: RequirementVerdict | None = None
     notes: tuple[str, ...] = ()
-    nonlinearity_bias_percent_fs: float = math.nan
-    nonlinearity_corrected_percent_fs: float = math.nan
-    nonlinearity_interval_percent_fs: tuple[float, float] = (math.nan, math.nan)
+    nonlinearity_percent_fs_bias: float = math.nan
+    nonlinearity_percent_fs_bias_corrected: float = math.nan
     decision_with_uncertainty: DecisionWithU | None = None
     _budgets: dict[str, UncertaintyBudget] = dataclasses.field(
         default_factory=dict, repr=False, compare=False
     )
+
+    @property
+    def nonlinearity_percent_fs_interval(self) -> tuple[float, float] | None:
+        """The 95 % interval for the true NL (%FS), from its budget (None without a budget)."""
+        b = self._budgets.get("nonlinearity_percent_fs")
+        return None if b is None else b.interval
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of INTERFACE.md plus the uncertainty keys of every budget."""
@@ -265,10 +284,14 @@ class ScaleFactorResult(Result):
         b = self._budgets
         if b:
             out = [f"{b[name].statement()}" for name in b]
-            out.append(
-                f"bias-corrected NL {self.nonlinearity_corrected_percent_fs:.4g} %FS "
-                f"(FS {self.full_scale_deg_s:g} °/s, {self.n_points} rate points)"
-            )
+            corr = self.nonlinearity_percent_fs_bias_corrected
+            if math.isfinite(corr):
+                head = f"bias-corrected NL {corr:.4g} %FS"
+            elif "nonlinearity_percent_fs" in b:
+                head = "NL not bias-corrected (noise level not known apart from the NL)"
+            else:
+                head = f"nonlinearity  {self.nonlinearity_percent_fs:.4g} %FS (no uncertainty)"
+            out.append(f"{head} (FS {self.full_scale_deg_s:g} °/s, {self.n_points} rate points)")
         else:
             out = [
                 f"scale factor  {self.scale_factor:.8g} ± {self.scale_factor_u:.2g}{unit}/(°/s)",
@@ -861,11 +884,10 @@ def calibrate_scale_factor(
 
     budgets: dict[str, UncertaintyBudget] = {}
     nl_bias = nl_corr = math.nan
-    nl_interval = (math.nan, math.nan)
     u_pt, nu_pt, basis_a = _point_uncertainties(counts, std, q, res_std, dof, unit)
     if u_pt is not None:
         assert nu_pt is not None
-        budgets, nl_bias, nl_interval, lof = _scale_factor_budgets(
+        budgets, nl_bias, lof = _scale_factor_budgets(
             rates=rates,
             means=means,
             counts=counts,
@@ -882,7 +904,7 @@ def calibrate_scale_factor(
             output_unit=output_unit,
             mc_trials=trials,
         )
-        nl_corr = nl - nl_bias
+        nl_corr = max(nl - nl_bias, 0.0) if math.isfinite(nl_bias) else math.nan
         if lof:
             notes.append(lof)
     s_u = budgets["scale_factor"].u if budgets else math.nan
@@ -900,11 +922,9 @@ def calibrate_scale_factor(
             resolution_basis=basis,
         )
         if "accuracy_percent_fs" in req and "nonlinearity_percent_fs" in budgets:
+            b_nl = budgets["nonlinearity_percent_fs"]
             decision = decide_with_u(
-                nl,
-                budgets["nonlinearity_percent_fs"].U,
-                req["accuracy_percent_fs"],
-                title=req["title"],
+                nl, b_nl.U, req["accuracy_percent_fs"], title=req["title"], interval=b_nl.interval
             )
     else:
         verdict = None
@@ -943,57 +963,79 @@ def calibrate_scale_factor(
         output_quantum=q,
         requirement=verdict,
         notes=tuple(notes),
-        nonlinearity_bias_percent_fs=nl_bias,
-        nonlinearity_corrected_percent_fs=nl_corr,
-        nonlinearity_interval_percent_fs=nl_interval,
+        nonlinearity_percent_fs_bias=nl_bias,
+        nonlinearity_percent_fs_bias_corrected=nl_corr,
         decision_with_uncertainty=decision,
         _budgets=budgets,
     )
 
 
 # ------------------------------------------------------------------------------- uncertainty
-def decide_with_u(value: float, big_u: float, limit: float, *, title: str = "") -> DecisionWithU:
-    """Judge an upper limit on the nonlinearity with its expanded uncertainty (ILAC-G8).
+def decide_with_u(
+    value: float,
+    big_u: float,
+    limit: float,
+    *,
+    title: str = "",
+    interval: tuple[float, float] | None = None,
+) -> DecisionWithU:
+    """Judge an upper limit on the nonlinearity with its uncertainty (ILAC-G8).
 
     Parameters
     ----------
     value : float
-        The measured NL (%FS).
+        The measured (plain) NL (%FS).
     big_u : float
         Its expanded uncertainty U (%FS, p = 95 %).
     limit : float
         The requirement's upper limit (%FS).
     title : str
         Name of the requirement, for the line.
+    interval : (float, float) or None
+        The 95 % interval [low, high] for the true NL (%FS), when the budget states one (a
+        biased, bounded quantity: not centred on the value); None takes value ± U.
 
     Returns
     -------
     DecisionWithU
-        ``"pass with U"`` when value + U < limit, ``"fail with U"`` when value − U > limit,
-        otherwise ``"inconclusive"``; ``agrees`` tells whether the verdict without U (value <
-        limit) holds with U.
+        ``"pass with U"`` when high < limit, ``"fail with U"`` when low > limit, otherwise
+        ``"inconclusive"``; ``agrees`` tells whether the verdict without U (value < limit) holds
+        with U.
 
     References
     ----------
     ILAC-G8:09/2019, §4.2.2–4.2.3 (guarded acceptance and rejection, guard band w = U);
-    JCGM 106:2012, §8 (conformity decisions with a measurement uncertainty).
+    JCGM 106:2012, §8 (conformity decisions with a measurement uncertainty: the coverage
+    interval for the measurand against the tolerance limit).
     """
-    if value + big_u < limit:
+    if interval is None:
+        low, high = value - big_u, value + big_u
+        rule = (
+            "guard band w = U (ILAC-G8:09/2019 §4.2): pass when NL + U < limit, fail when NL − U "
+            "> limit, inconclusive when the limit lies within NL ± U (p = 95 %)"
+        )
+        stated = f"NL {value:.4g} ± {big_u:.2g} %FS"
+    else:
+        low, high = float(interval[0]), float(interval[1])
+        rule = (
+            "guarded acceptance with the 95 % interval [low, high] for the true NL (ILAC-G8:09/2019 "
+            "§4.2, JCGM 106 §8): pass when high < limit, fail when low > limit, inconclusive when "
+            "the limit lies within it (the interval is not centred on the plain NL, which noise "
+            "biases upward)"
+        )
+        stated = f"NL {value:.4g} %FS, true NL in [{low:.4g}, {high:.4g}] %FS"
+    if high < limit:
         verdict = "pass with U"
-    elif value - big_u > limit:
+    elif low > limit:
         verdict = "fail with U"
     else:
         verdict = "inconclusive"
     plain_pass = value < limit
     agrees = verdict == ("pass with U" if plain_pass else "fail with U")
-    rule = (
-        "guard band w = U (ILAC-G8:09/2019 §4.2): pass when NL + U < limit, fail when NL − U > "
-        "limit, inconclusive when the limit lies within NL ± U (p = 95 %)"
-    )
     head = f"{title} accuracy " if title else "accuracy "
     line = (
-        f"{head}with U: {verdict.upper()} — NL {value:.4g} ± {big_u:.2g} %FS against < {limit:g} "
-        f"%FS; the verdict without U ({'PASS' if plain_pass else 'FAIL'}) "
+        f"{head}with U: {verdict.upper()} — {stated} against < {limit:g} %FS; the verdict "
+        f"without U ({'PASS' if plain_pass else 'FAIL'}) "
         f"{'holds' if agrees else 'does not hold'} with U"
     )
     return DecisionWithU(
@@ -1006,6 +1048,7 @@ def decide_with_u(value: float, big_u: float, limit: float, *, title: str = "") 
         agrees,
         rule,
         line,
+        None if interval is None else (low, high),
     )
 
 
@@ -1057,6 +1100,113 @@ def _point_uncertainties(
     return u, nu, basis
 
 
+def _quantile_se(x: np.ndarray, q: float) -> float:
+    """Monte Carlo standard error of the q-quantile of the values x (their unit): half the
+    distance between the order statistics one binomial standard deviation either side of it
+    (David & Nagaraja 2003, §7.1)."""
+    srt = np.sort(np.asarray(x, dtype=float))
+    m = srt.size
+    half = math.sqrt(m * q * (1.0 - q))
+    i_lo = int(np.clip(math.floor(m * q - half), 0, m - 1))
+    i_hi = int(np.clip(math.ceil(m * q + half), 0, m - 1))
+    return 0.5 * float(srt[i_hi] - srt[i_lo])
+
+
+def _nl_interval(
+    resid: np.ndarray,
+    u_pt: np.ndarray,
+    w_dists: list[TScale],
+    xc: np.ndarray,
+    sxx: float,
+    s_fit: float,
+    eps_dist: Distribution | None,
+    fs: float,
+    trials: int,
+) -> tuple[float, float, float, float, int]:
+    """The 95 % interval for the true NL (%FS), the Monte Carlo standard errors of its ends (%FS)
+    and the number of candidate points.
+
+    With e = δ̂ − δ the residual errors (the line's residual projector applied to the errors of
+    the point means; independent of the true curve), for any true residuals δ:
+    max|δ̂| − max|δ| ≤ |e_k| (k where |δ̂| peaks) and max|δ| ≤ max|δ̂| + |e_j*| (j* where |δ|
+    peaks). With τ the 99.9 % quantile of max|e|, both k and j* lie, but for a probability of
+    10⁻³, among the points K whose |δ̂| comes within 4τ of max|δ̂| (they have |δ| ≥ max|δ| − 2τ).
+    The lower end is max|δ̂| less the 97.5 % quantile of max_K|e_j|, the upper end max|δ̂| plus the
+    largest 97.5 % quantile of e_j over K, each divided by |S|·FS/100 drawn with it (S from the
+    same errors and the set-rate error ε): each end holds with probability ≥ 97.5 % − 0.1 %.
+
+    Parameters
+    ----------
+    resid : array
+        Residuals δ̂ of the point means from the line (output unit).
+    u_pt : array
+        Standard uncertainties (t scale) of the point means (output unit).
+    w_dists : list of TScale
+        One √(ν/χ²_ν) per point, or one shared by all (GUM H.3: a multivariate t).
+    xc, sxx : array, float
+        Rates less their mean (°/s) and Σxc² ((°/s)²).
+    s_fit : float
+        Slope of the line against the set rates (output unit per °/s).
+    eps_dist : Distribution or None
+        Relative set-rate error ε of the table (1).
+    fs : float
+        Full scale (°/s).
+    trials : int
+        Monte Carlo trials.
+
+    Returns
+    -------
+    low, high, se_low, se_high : float
+        %FS.
+    n_candidates : int
+
+    References
+    ----------
+    JCGM 101:2008 §6.4.9 (t-distributed means), §7.7 (coverage interval); JCGM 102:2011 §5.3.2
+    (multivariate t), §9 (a magnitude near zero); David & Nagaraja, Order Statistics, 3rd ed.
+    (2003) §7.1 (Monte Carlo error of a quantile).
+    """
+    n = resid.size
+    a_plain = float(np.max(np.abs(resid)))
+    chunk = max(1, min(trials, _CHUNK_ELEMENTS // max(n, 1)))
+
+    def draws() -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        """(residual errors (m, N), 100/(|S|·FS) (m,)) in chunks, the same on every call."""
+        rng = np.random.default_rng(_MC_SEED + 1)
+        done = 0
+        while done < trials:
+            m = min(chunk, trials - done)
+            z = rng.standard_normal((m, n)) * u_pt
+            w = np.column_stack([d.sample(rng, m) for d in w_dists])
+            e = z * w
+            eps = np.zeros(m) if eps_dist is None else eps_dist.sample(rng, m)
+            ds = e @ xc / sxx
+            pe = e - e.mean(axis=1, keepdims=True) - ds[:, None] * xc
+            yield pe, 100.0 * np.abs(1.0 + eps) / (np.abs(s_fit + ds) * fs)
+            done += m
+
+    # both passes see the same draws: held in memory when they fit, else drawn again
+    held = list(draws()) if trials * n <= 2 * _CHUNK_ELEMENTS else None
+    tau = float(
+        np.quantile(
+            np.concatenate([np.max(np.abs(pe), axis=1) for pe, _ in (held or draws())]), 0.999
+        )
+    )
+    cand = np.flatnonzero(np.abs(resid) >= a_plain - 4.0 * tau)
+    lows, highs = [], []
+    for pe, g in held or draws():
+        pk = pe[:, cand]
+        lows.append((a_plain - np.max(np.abs(pk), axis=1)) * g)
+        highs.append((a_plain + pk) * g[:, None])
+    low_t, high_t = np.concatenate(lows), np.concatenate(highs)
+    q_lo, q_hi = 0.025, 0.975
+    lo = max(float(np.quantile(low_t, q_lo)), 0.0)
+    hi_j = np.quantile(high_t, q_hi, axis=0)
+    j = int(np.argmax(hi_j))
+    hi = max(float(hi_j[j]), lo)
+    return lo, hi, _quantile_se(low_t, q_lo), _quantile_se(high_t[:, j], q_hi), int(cand.size)
+
+
 def _scale_factor_budgets(
     *,
     rates: np.ndarray,
@@ -1074,13 +1224,28 @@ def _scale_factor_budgets(
     eps_dist: Distribution | None,
     output_unit: str,
     mc_trials: int,
-) -> tuple[dict[str, UncertaintyBudget], float, tuple[float, float], str | None]:
-    """Budgets of S, V0 (GUM, validated by Monte Carlo) and NL (Monte Carlo); NL's bias and
-    interval; a lack-of-fit note (or None).
+) -> tuple[dict[str, UncertaintyBudget], float, str | None]:
+    """Budgets of S, V0 (GUM, validated by Monte Carlo) and NL (Monte Carlo); NL's noise bias
+    (%FS; NaN when the noise level is not known apart from the nonlinearity), its 95 % interval
+    for the true NL (%FS); a lack-of-fit note (or None).
+
+    The interval for the true NL rests on two inequalities that hold whatever the true residuals
+    δ: with e = δ̂ − δ the residual errors (the line's residual projector applied to the errors of
+    the point means, independent of the true curve), max|δ̂| − max|e| ≤ max|δ| ≤ max|δ̂| + |e_j*|
+    (j* where |δ| peaks). The 97.5 % quantiles of max|e| and of the most widely spread e_j (Monte
+    Carlo) then give ends that each hold with probability ≥ 97.5 %, also at NL = 0, where the
+    interval becomes [0, high]. u and the noise bias come from re-measuring (parametric
+    bootstrap) the residuals shrunk toward the line by √max(0, 1 − tr C/|δ̂|²) (C the covariance
+    of e), so that their sum of squares is the unbiased estimate of the true one.
 
     References
     ----------
-    Seed 004 §4; JCGM 100:2008 §5.1.2, G.4.1, H.3; JCGM 101:2008 §7, §8.
+    Seed 004 §4; JCGM 100:2008 §5.1.2, G.4.1, H.3; JCGM 101:2008 §6.4.9, §7.6, §7.7, §8;
+    JCGM 102:2011 §5.3.2, §9 (a magnitude near zero); Efron B. & Tibshirani R. J., An
+    Introduction to the Bootstrap (1993) §6, §10 (parametric bootstrap: standard error, bias);
+    Mathai A. M. & Provost S. B., Quadratic Forms in Random Variables (1992) Thm 3.2b.2
+    (E|δ̂|² = |δ|² + tr C); David H. A. & Nagaraja H. N., Order Statistics, 3rd ed. (2003) §7.1
+    (Monte Carlo error of a quantile).
     """
     ou = output_unit or "output unit"
     unit_s = f"{ou}/(°/s)"
@@ -1100,9 +1265,12 @@ def _scale_factor_budgets(
         u_b0 = math.sqrt(float(np.sum((c_b * u_pt) ** 2)))
         nu_s = welch_satterthwaite(c_s * u_pt, nu_pt)
         nu_b = welch_satterthwaite(c_b * u_pt, nu_pt)
-    eps_in = spec_input(spec, "table.set_rate_relative", "table set-rate error ε")
+    eps_in = spec_input(spec, "table.set_rate_relative", name="table set-rate error ε")
     eps = 0.0 if eps_in is None else eps_in.value
-    type_a = [] if (note := specs_note(spec, ("table.set_rate_relative",))) is None else [note]
+    type_a = [] if (note := type_a_note(spec, ("table.set_rate_relative",))) is None else [note]
+    # a stated mean ε̄ corrects S = S₀/(1 + ε̄) and NL through S (GUM §3.2.4); V0 does not change
+    fixed = [] if spec is None else [spec.correction_note("table.set_rate_relative")]
+    s_notes = type_a + [n for n in fixed if n is not None]
 
     s_in = Input("S₀: slope of the line", s_fit, u_s0, nu_s, "normal", unit_s, basis)
     s_inputs, s_sens = [s_in], [1.0 / (1.0 + eps)]
@@ -1119,47 +1287,65 @@ def _scale_factor_budgets(
             "zero, so the line's intercept does not change."
         )
 
-    # Monte Carlo over the point means and ε: S, V0 and NL. A point mean of n samples is a
-    # scaled-and-shifted t with n − 1 dof (JCGM 101 §6.4.9); points that share the residual s of
-    # the line (GUM H.3) are a multivariate t (JCGM 102 §5.3.2): N(0, s²) deviations times one
-    # common √(ν/χ²_ν) per trial. A t with ν ≤ 4 has no finite fourth moment, so the standard
-    # deviation of the Monte Carlo values would not settle: such points are drawn normal, and S
-    # and V0 keep their GUM interval (k from ν_eff) unvalidated.
+    # Monte Carlo over the point means and ε (JCGM 101). The error of a point mean is u_i·z_i·w_i
+    # with z_i ~ N(0, 1) and w_i = √(ν_i/χ²_ν): a scaled-and-shifted t with ν_i = n_i − 1 (JCGM 101
+    # §6.4.9); points that share the residual s of the line (GUM H.3) share one w, a multivariate
+    # t (JCGM 102 §5.3.2). A t with ν ≤ 4 has no finite fourth moment, so the standard deviation
+    # of the Monte Carlo values would not settle: the re-measurements of S, V0 and NL then use z
+    # alone (normal), and S and V0 keep their GUM interval unvalidated. The interval for the true
+    # NL (two quantiles) always uses the t.
     heavy = bool(np.any(nu_pt <= _MC_MIN_DOF))
-    inputs: dict[str, Distribution] = {}
+    inputs: dict[str, Distribution] = {f"z{i}": Normal(0.0, float(u_pt[i])) for i in range(n)}
     if h3:
-        for i in range(n):
-            inputs[f"p{i}"] = Normal(0.0, float(u_pt[i]))
-        if not heavy:
-            inputs["w"] = TScale(float(nu_pt[0]))
-    elif heavy:
-        for i in range(n):
-            inputs[f"p{i}"] = Normal(float(means[i]), float(u_pt[i]))
+        inputs["w"] = TScale(float(nu_pt[0]))
     else:
         for i in range(n):
-            inputs[f"p{i}"] = StudentT(float(means[i]), float(u_pt[i]), float(nu_pt[i]))
+            inputs[f"w{i}"] = TScale(float(nu_pt[i]))
     if eps_dist is not None:
         inputs["eps"] = eps_dist
-    names = [f"p{i}" for i in range(n)]
+    z_names = [f"z{i}" for i in range(n)]
+    w_names = ["w"] if h3 else [f"w{i}" for i in range(n)]
+    # The residual errors e = δ̂ − δ = P·(errors of the point means), P = I − H the residual
+    # projector of the line (they do not depend on the true curve), C = P·diag(u²)·P.
+    proj = np.eye(n) - 1.0 / n - np.outer(xc, xc) / sxx
+    var_e = np.einsum("ij,j,ij->i", proj, u_pt**2, proj)  # diagonal of C (output unit²)
+    to_nl = 100.0 / fs  # %FS per (output unit / |S|)
+    # The base of the re-measurements (parametric bootstrap): the residuals shrunk toward the
+    # line so that their sum of squares is the unbiased estimate |δ̂|² − tr C of the true one
+    # (E|δ̂|² = |δ|² + tr C, C = P·diag(u²)·P): re-measuring δ̂ itself would count its noise
+    # twice. Only when the noise level is known apart from the nonlinearity (n_i ≥ 2); with one
+    # sample per point the noise is the scatter about the line itself (then tr C = |δ̂|²), and
+    # the data are re-measured as they are, without a bias correction.
+    known_noise = not h3
+    ss_res = float(resid @ resid)
+    shrink = (
+        math.sqrt(max(0.0, 1.0 - float(var_e.sum()) / ss_res))
+        if known_noise and ss_res > 0
+        else 1.0
+    )
+    base = shrink * resid
+
+    def line_errors(err: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Slope error, intercept error and residual errors P·err of point-mean errors (N, M)."""
+        m = err.mean(axis=0)
+        ds = c_s @ err
+        return ds, m - ds * xbar, err - m - xc[:, None] * ds
 
     def model(**kw: np.ndarray) -> dict[str, np.ndarray]:
-        yy = np.stack([kw[k] for k in names])  # (N, M): one row per rate point
-        if h3:
-            if "w" in kw:
-                yy *= kw["w"]
-            yy += means[:, None]
-        e = kw.get("eps", 0.0)
-        ym = yy.mean(axis=0)
-        slope = c_s @ yy
-        yy -= ym
-        yy -= xc[:, None] * slope
-        dmax = np.maximum(yy.max(axis=0), -yy.min(axis=0))
-        sf = slope / (1.0 + e)
-        return {
+        z = np.stack([kw[k] for k in z_names])  # (N, M): normal part, one row per rate point
+        et = z * np.stack([kw[k] for k in w_names])  # the t errors
+        e = kw.get("eps", eps)
+        ds, db, pe = line_errors(z if heavy else et)
+        sf = (s_fit + ds) / (1.0 + e)
+        out = {
             "scale factor S": sf,
-            "bias V0": ym - slope * xbar,
-            "nonlinearity NL": 100.0 * dmax / (np.abs(sf) * fs),
+            "bias V0": v0 + db,
+            "nonlinearity NL": to_nl * np.max(np.abs(base[:, None] + pe), axis=0) / np.abs(sf),
         }
+        if known_noise:  # the bias: the Type A noise alone at its estimated level, ε at its mean
+            _, _, pz = line_errors(z)
+            out["max|δ| noise only"] = np.max(np.abs(base[:, None] + pz), axis=0)
+        return out
 
     batch = max(10_000, (4_000_000 // max(n, 1)) // 10_000 * 10_000)
     mc = monte_carlo(model, inputs, trials=mc_trials, seed=_MC_SEED, batch=batch)
@@ -1167,9 +1353,9 @@ def _scale_factor_budgets(
     budgets: dict[str, UncertaintyBudget] = {}
     few = (
         f"the point means have ν ≤ {_MC_MIN_DOF:g} (≤ {_MC_MIN_DOF + 1:g} samples, or a line "
-        "of few points): the Monte Carlo draws them normal (a t with ν ≤ 4 has no settled "
+        "of few points): the Monte Carlo re-measures them normal (a t with ν ≤ 4 has no settled "
         "standard deviation), so u(NL) leaves out the small-ν widening and S and V0 are not "
-        "validated by it."
+        "validated by it; the interval for the true NL keeps the t."
     )
     flat = int(np.count_nonzero(u_pt == 0))
     flat_note = (
@@ -1178,7 +1364,7 @@ def _scale_factor_budgets(
         if flat
         else None
     )
-    for key, gum, extra in (("scale_factor", gum_s, type_a), ("bias", gum_b, b_notes)):
+    for key, gum, extra in (("scale_factor", gum_s, s_notes), ("bias", gum_b, b_notes)):
         m = mc[gum.names_out[0]]
         more = list(extra) + ([flat_note] if flat_note else [])
         if float(gum.u[0]) > 0 and m.u > 0 and not heavy:
@@ -1190,8 +1376,10 @@ def _scale_factor_budgets(
             )
 
     m_nl: MonteCarloResult = mc["nonlinearity NL"]
-    bias = float(m_nl.value) - nl
-    lo, hi = m_nl.interval_symmetric
+    w_dists = [TScale(float(v)) for v in (nu_pt[:1] if h3 else nu_pt)]
+    lo, hi, se_lo, se_hi, n_cand = _nl_interval(
+        resid, u_pt, w_dists, xc, sxx, s_fit, eps_dist, fs, mc_trials
+    )
     rows = []
     u_eps_part = 0.0
     if eps_in is not None:
@@ -1204,7 +1392,7 @@ def _scale_factor_budgets(
             source=f"point means at the {n} rates",
             value=math.nan,
             unit=ou,
-            distribution="normal, one per point",
+            distribution="multivariate t (GUM H.3)" if h3 else "t, one per point",
             u=math.nan,
             sensitivity=math.nan,
             contribution=u_pts_part,
@@ -1231,23 +1419,74 @@ def _scale_factor_budgets(
     nl_notes = [
         "NL = 100·max|δ|/(|S|·FS) is a maximum of absolute residuals: noise in the point means "
         "biases it upward (as a magnitude near zero, JCGM 102), and first-order propagation does "
-        f"not apply. Monte Carlo (JCGM 101), {m_nl.trials} trials over the point means and the "
-        f"inputs below: mean of the simulated NL {m_nl.value:.4g} %FS, bias {bias:+.2g} %FS, "
-        f"bias-corrected NL = {nl - bias:.4g} %FS.",
-        f"probabilistically symmetric 95 % interval of the simulated NL: [{lo:.4g}, {hi:.4g}] %FS "
-        "(JCGM 101 §7.7.1); U is its half-width and k = U/u.",
+        f"not apply. Monte Carlo (JCGM 101), M = {m_nl.trials} trials (seed {_MC_SEED}) over the "
+        "point means and the inputs below; u is the standard deviation of NL re-measured "
+        "(parametric bootstrap, JCGM 101 §7.6).",
+        f"95 % interval for the TRUE NL: [{lo:.4g}, {hi:.4g}] %FS. The residual errors "
+        "e = δ̂ − δ do not depend on the true curve, and max|δ̂| − max_K|e_j| ≤ max|δ| ≤ "
+        "max|δ̂| + |e_j*| (j* where the true |δ| peaks; K the points that can hold the peak of "
+        f"the true residuals or of the measured ones, here {n_cand} of {n}): the lower end is "
+        "max|δ̂| less the 97.5 % quantile of max_K|e_j|, the upper end max|δ̂| plus the largest "
+        "97.5 % quantile of e_j in K, both over |S|·FS drawn with S (Monte Carlo, t-distributed "
+        "point means) — each end holds with probability ≥ 97.5 % (less 0.1 % for choosing K) "
+        "whatever the true NL, also at 0; conservative when the peak is clear. Monte Carlo "
+        f"standard errors of the ends ≈ {se_lo:.2g} and {se_hi:.2g} %FS. U is half the "
+        "interval's width and k = U/u.",
+    ]
+    if lo == 0.0:
+        nl_notes.append(
+            "the residuals are consistent with noise alone (the interval reaches 0): the firm "
+            f"statement is the upper end, true NL ≤ {hi:.4g} %FS (p ≥ 97.5 %)."
+        )
+    bias = math.nan
+    if known_noise:
+        m_b = mc["max|δ| noise only"]
+        a_base = float(np.max(np.abs(base)))
+        bias = to_nl * (float(m_b.value) - a_base) / abs(s_fit / (1.0 + eps))
+        se_b = to_nl * float(m_b.u) / math.sqrt(m_b.trials) / abs(s_fit / (1.0 + eps))
+        nl_notes.append(
+            "u and the bias re-measure the residuals shrunk toward the line by the factor "
+            f"{shrink:.3g} = √max(0, 1 − tr C/|δ̂|²), which makes their sum of squares the "
+            "unbiased estimate |δ̂|² − tr C of the true one (C the covariance of the residual "
+            "errors): re-measuring δ̂ itself would count its noise twice. Bias from the noise of "
+            "the point means (Type A: its level is the spread of the samples at each rate) "
+            f"{bias:+.2g} %FS (Monte Carlo standard error ≈ {se_b:.1g} %FS); bias-corrected NL = "
+            f"max(NL − bias, 0) = {max(nl - bias, 0.0):.4g} %FS. A specification (Type B) does "
+            "not enter the correction."
+        )
+        if bias > 0.1 * nl:
+            nl_notes.append(
+                "the noise makes up much of the plain NL: the bias-corrected value is "
+                "approximate; the interval stays valid."
+            )
+    else:
+        nl_notes.append(
+            "not bias-corrected: with one sample per point the noise level is the scatter of the "
+            "points about the line, which holds the nonlinearity too (an upper bound of the "
+            f"noise, not its level); u re-measures the residuals as they are, and the firm "
+            f"statement is the upper end, true NL ≤ {hi:.4g} %FS."
+        )
+    nl_notes.append(
         "contributions: the point means' part is the Monte Carlo u less the set-rate part; the "
         "set-rate part is first order (NL ∝ 1 + ε). A maximum has no sensitivity coefficient "
-        "for the point means (—).",
-    ]
-    nl_notes += type_a
+        "for the point means (—)."
+    )
+    nl_notes += s_notes
     if heavy:
         nl_notes.append(few)
     if flat_note:
         nl_notes.append(flat_note)
-    budgets["nonlinearity_percent_fs"] = monte_carlo_budget(
-        "nonlinearity NL", "%FS", nl, m_nl, rows, nl_notes
-    )
+    b_nl = monte_carlo_budget("nonlinearity NL", "%FS", nl, m_nl, rows, nl_notes)
+    big_u = 0.5 * (hi - lo)
+    if n > 2:  # two points fit the line exactly: NL = 0 says nothing of the truth, no budget
+        budgets["nonlinearity_percent_fs"] = dataclasses.replace(
+            b_nl,
+            U=big_u,
+            k=big_u / b_nl.u if b_nl.u > 0 else b_nl.k,
+            interval=(lo, hi),
+        )
+    else:
+        bias = math.nan
 
     # lack of fit: do the points scatter about the line more than their noise explains?
     lof = None
@@ -1266,4 +1505,4 @@ def _scale_factor_budgets(
                     f"tell. The scatter about the line (GUM H.3) would give u(S) = {u_h3:.2g} "
                     f"{unit_s}."
                 )
-    return budgets, bias, (float(lo), float(hi)), lof
+    return budgets, bias, lof

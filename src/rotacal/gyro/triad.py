@@ -42,14 +42,12 @@ from rotacal.gyro.uncertainty import (
     as_specs,
     element_key,
     linear_gum,
-    spec_input,
-    specs_note,
     uncertainty_json,
 )
 from rotacal.results import Result, to_jsonable
 from rotacal.uncertainty.budget import UncertaintyBudget
 from rotacal.uncertainty.gum import Input
-from rotacal.uncertainty.specs import InstrumentSpecs
+from rotacal.uncertainty.specs import InstrumentSpecs, spec_input, type_a_note
 
 __all__ = [
     "RATE_COLUMNS",
@@ -782,7 +780,7 @@ def calibrate_triad(
         sigma[c] = s
     k_fit = coef[:3].T.copy()
     bias = coef[3].copy()
-    eps_in = spec_input(spec, "table.set_rate_relative", "table set-rate error ε")
+    eps_in = spec_input(spec, "table.set_rate_relative", name="table set-rate error ε")
     eps = 0.0 if eps_in is None else eps_in.value
     kmat = k_fit / (1.0 + eps)
     budgets = _triad_budgets(
@@ -926,8 +924,11 @@ def _triad_budgets(
         "correlated noise (MEMS flicker, drift during the test) makes it optimistic."
     )
     extra = [general]
-    if (note := specs_note(spec, ("table.set_rate_relative",))) is not None:
+    if (note := type_a_note(spec, ("table.set_rate_relative",))) is not None:
         extra.append(note)
+    # a stated mean ε̄ corrects K = K₀/(1 + ε̄) (GUM §3.2.4); the constant term b does not change
+    fixed = [] if spec is None else [spec.correction_note("table.set_rate_relative")]
+    k_extra = extra + [n for n in fixed if n is not None]
     budgets: dict[str, UncertaintyBudget] = {}
     for i in range(3):
         dof = float(rows_kept[i] - 4)
@@ -949,7 +950,7 @@ def _triad_budgets(
                 sens.append(-float(k_fit[i, j]) / (1.0 + eps) ** 2)
             b = linear_gum(name, unit_k, float(k_fit[i, j]) / (1.0 + eps), inputs, sens).budget(0)
             budgets[element_key("scale_misalignment", (i, j))] = dataclasses.replace(
-                b, notes=b.notes + tuple(extra)
+                b, notes=b.notes + tuple(k_extra)
             )
     for i in range(3):
         name = f"b_{_AXES[i]}"

@@ -7,7 +7,9 @@ The scale-factor (seed 004), 3-axis (seed 003) and rotation (Ferraris) calibrati
   covariance of a fit, the noise of static sections (JCGM 100:2008 §4.2);
 - **Type B**, from the lab's instrument specifications (:class:`~rotacal.uncertainty.InstrumentSpecs`,
   JCGM 100:2008 §4.3): ``table.set_rate_relative``, ``table.set_angle_arcsec``,
-  ``timebase.relative_error``.
+  ``timebase.relative_error``, ``table.orientation_error_arcsec``, ``site.latitude_deg``, read
+  through :func:`rotacal.uncertainty.specs.spec_input` (its notes: ``type_a_note``,
+  ``corrected_note``); a stated non-zero mean is corrected for (GUM §3.2.4).
 
 Models that are linear in their inputs use the GUM law of propagation (:func:`linear_gum`); the
 nonlinearity, a maximum of absolute residuals, uses Monte Carlo (:func:`monte_carlo_budget`). Array
@@ -41,23 +43,17 @@ from rotacal.uncertainty.specs import InstrumentSpecs, load_specs
 
 __all__ = [
     "COVERAGE_PROBABILITY",
-    "TYPE_A_ONLY_NOTE",
     "TScale",
     "as_specs",
     "element_key",
     "linear_gum",
     "monte_carlo_budget",
-    "spec_distribution",
-    "spec_input",
-    "specs_note",
     "uncertainty_json",
     "validated",
 ]
 
 #: Coverage probability of every expanded uncertainty of the gyro calibrations.
 COVERAGE_PROBABILITY = 0.95
-#: The note of a budget built without any instrument specification.
-TYPE_A_ONLY_NOTE = "no instrument specification stated: Type A only."
 
 
 def as_specs(specs: Any) -> InstrumentSpecs | None:
@@ -79,51 +75,6 @@ def as_specs(specs: Any) -> InstrumentSpecs | None:
     raise ConfigError(
         "specs must be rotacal.uncertainty.InstrumentSpecs (from load_specs('lab.toml')), a TOML "
         f"path or a mapping of specifications; got {type(specs).__name__}."
-    )
-
-
-def spec_distribution(specs: InstrumentSpecs | None, key: str) -> Distribution | None:
-    """The stated distribution of ``key`` (a name of ``KNOWN_SPECS``), or None."""
-    return None if specs is None else specs.get(key)
-
-
-def spec_input(
-    specs: InstrumentSpecs | None, key: str, name: str, *, unit: str = ""
-) -> Input | None:
-    """The input quantity of a stated specification, or None when it is not stated.
-
-    Parameters
-    ----------
-    specs : InstrumentSpecs or None
-    key : str
-        Name of the specification (``"table.set_rate_relative"``, …).
-    name : str
-        Name of the input in the budget.
-    unit : str
-        Unit of the input as shown in the budget (the specification's unit; "" for a ratio).
-
-    Returns
-    -------
-    Input or None
-        Value = mean, u = standard deviation and ν of the distribution (JCGM 101 §6.4), its
-        description, and the specification and its file as the source.
-    """
-    dist = spec_distribution(specs, key)
-    if dist is None:
-        return None
-    assert specs is not None
-    return Input.from_distribution(name, dist, unit=unit, source=f"Type B, {key}, {specs.source}")
-
-
-def specs_note(specs: InstrumentSpecs | None, applicable: Sequence[str]) -> str | None:
-    """The note of a budget without Type B inputs, or None when one of ``applicable`` is stated."""
-    if specs is None:
-        return TYPE_A_ONLY_NOTE
-    if any(specs.get(k) is not None for k in applicable):
-        return None
-    return (
-        f"no applicable instrument specification stated ({', '.join(applicable)} in "
-        f"{specs.source}): Type A only."
     )
 
 
@@ -185,9 +136,9 @@ def validated(gum: GUMResult, mc: MonteCarloResult, notes: Sequence[str] = ()) -
     the Monte Carlo's own noise does not decide when M is below the δ/5 run of JCGM 101 §8.2.
     When they agree, ``method`` is ``"GUM, validated by Monte Carlo"``. Otherwise (JCGM 101 §8.3:
     use the Monte Carlo result) U becomes the half-width of the Monte Carlo interval and k = U/u,
-    u staying the GUM one (the rows add up to it), ``method`` is ``"GUM u, Monte Carlo
-    interval"``, and a note states both intervals — typical when one rectangular input dominates
-    (JCGM 101 §9.2.4).
+    u staying the GUM one (the rows add up to it), ``method`` is ``"Monte Carlo"``, the GUM's
+    truncation note (its k = t_p(ν)) is dropped and a note states both intervals and the k used —
+    typical when one rectangular input dominates (JCGM 101 §9.2.4).
 
     References
     ----------
@@ -210,16 +161,19 @@ def validated(gum: GUMResult, mc: MonteCarloResult, notes: Sequence[str] = ()) -
         )
         return dataclasses.replace(b, method="GUM, validated by Monte Carlo", notes=tuple(out))
     big_u = 0.5 * (hi - lo)
-    out.append(
-        f"the GUM interval y ± {b.U:.3g}{unit} (k = {b.k:.3g}) is not validated by Monte Carlo "
-        f"(JCGM 101 §8; {mc.trials} trials: its ends differ from the symmetric 95 % interval "
-        f"[{lo:.6g}, {hi:.6g}]{unit} by {check['d_low']:.2g} and {check['d_high']:.2g} > "
-        f"{tol:.2g}); U is the half-width of the Monte Carlo interval and k = U/u "
-        "(JCGM 101 §8.3)."
-    )
     k = big_u / b.u if b.u > 0 else b.k
+    # the GUM's k (and its truncated ν_eff) is not the one stated: say what was done instead
+    out = [n for n in out if "for k = t_p(ν)" not in n]
+    out.append(
+        f"the GUM interval y ± {b.U:.3g}{unit} (k = t_p(ν_eff) = {b.k:.3g}) is not validated by "
+        f"Monte Carlo (JCGM 101 §8; {mc.trials} trials: its ends differ from the symmetric 95 % "
+        f"interval [{lo:.6g}, {hi:.6g}]{unit} by {check['d_low']:.2g} and "
+        f"{check['d_high']:.2g} > {tol:.2g}). Stated instead (JCGM 101 §8.3): U = "
+        f"{big_u:.3g}{unit}, the half-width of the Monte Carlo interval, and k = U/u = {k:.3g}; "
+        "u is the GUM combined standard uncertainty, which the rows add up to."
+    )
     return dataclasses.replace(
-        b, U=float(big_u), k=float(k), method="GUM u, Monte Carlo interval", notes=tuple(out)
+        b, U=float(big_u), k=float(k), method="Monte Carlo", notes=tuple(out)
     )
 
 

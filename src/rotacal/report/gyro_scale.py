@@ -30,6 +30,19 @@ def _g(x: float | None, digits: int = 6) -> str:
     return f"{x:.{digits}g}"
 
 
+def _interval(r: ScaleFactorResult) -> str:
+    """The 95 % interval for the true NL, rounded to the decimal place of U (ILAC-P14 §5.4)."""
+    b = r._budgets.get("nonlinearity_percent_fs")
+    if b is None or b.interval is None:
+        return "—"
+    if b.U <= 0:
+        return f"[{b.interval[0]:.4g}, {b.interval[1]:.4g}] %FS"
+    _, u_str = b.rounded()
+    decimals = len(u_str.split(".")[1]) if "." in u_str else 0
+    lo, hi = b.interval
+    return f"[{lo:.{decimals}f}, {hi:.{decimals}f}] %FS"
+
+
 def _accuracy_limit(r: ScaleFactorResult) -> float | None:
     if r.requirement is None:
         return None
@@ -153,9 +166,21 @@ def scale_factor_section(
             _g(truth["nonlinearity_percent_fs"], 4) if truth else "",
         ],
         [
-            "NL bias-corrected (Monte Carlo)",
-            f"{_g(r.nonlinearity_corrected_percent_fs, 4)} %FS "
-            f"(bias {_g(r.nonlinearity_bias_percent_fs, 2)} %FS)",
+            "true NL, 95 % interval",
+            _interval(r),
+            "",
+            "",
+        ],
+        [
+            "NL bias-corrected",
+            (
+                f"{_g(r.nonlinearity_percent_fs_bias_corrected, 4)} %FS "
+                f"(noise bias {_g(r.nonlinearity_percent_fs_bias, 2)} %FS)"
+                if np.isfinite(r.nonlinearity_percent_fs_bias)
+                else "— (noise level not known apart from the NL: not corrected)"
+                if "nonlinearity_percent_fs" in r._budgets
+                else "—"
+            ),
             "",
             "",
         ],
@@ -179,6 +204,8 @@ def scale_factor_section(
 
         def with_u(quantity: str) -> str:
             if quantity == "accuracy" and d is not None:
+                if d.interval is not None:
+                    return f"{d.verdict.upper()} (true NL in {_interval(r)})"
                 return f"{d.verdict.upper()} (NL ± U = {d.value:.4g} ± {d.U:.2g} %FS)"
             return "— (no U)"
 

@@ -14,6 +14,7 @@ import numpy as np
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
 from rotacal.report.uncertainty import budget_tables, results_table
 from rotacal.table.motion import MotionResult, SchemeComparison
+from rotacal.uncertainty import round_ilac
 
 __all__ = ["comparison_section", "motion_figures", "motion_section"]
 
@@ -240,6 +241,33 @@ def _u(r: MotionResult, key: str, unit: str) -> str:
     return f"{b.u:.2g} {unit}" if b is not None else ""
 
 
+def _thd_rows(r: MotionResult) -> list[list[str]]:
+    """The THD as one statement: the plain value with its u, its noise bias, the bias-corrected
+    value and the 95 % interval for the true THD — every number from the THD's budget, rounded
+    to the decimal place of U (ILAC-P14 §5.4)."""
+    b = r._budgets.get("thd_percent")
+    plain = [f"THD (h = 2…{r.harmonics}), plain (eq. 1)", f"{r.thd_percent:.4f} %"]
+    if b is None or b.interval is None or not b.U > 0:
+        return [[*plain, f"{r.thd_percent_u:.2g} %"]]
+    _, u_str = round_ilac(b.value, b.U)
+    dec = len(u_str.split(".")[1]) if "." in u_str else 0
+    lo, hi = b.interval
+    if lo <= 0.0:
+        where = f"[0, {hi:.{dec}f}] % (consistent with noise: an upper limit)"
+    else:
+        where = f"[{lo:.{dec}f}, {hi:.{dec}f}] %"
+    return [
+        [f"THD (h = 2…{r.harmonics}), plain (eq. 1)", f"{b.value:.{dec}f} %", f"{b.u:.2g} %"],
+        ["THD, noise bias of the plain value (Monte Carlo)", f"{r.thd_percent_bias:+.2g} pp", ""],
+        [
+            "THD, bias-corrected (noise power removed)",
+            f"{r.thd_percent_bias_corrected:.{dec}f} %",
+            "",
+        ],
+        ["true THD, 95 % coverage interval", where, f"U = {u_str} % (half-width)"],
+    ]
+
+
 def motion_section(r: MotionResult, title: str | None = None, *, figures: bool = True) -> Section:
     """A report section for one motion calibration: results, errors against set values, figures,
     then the results with their expanded uncertainties and one uncertainty budget per quantity."""
@@ -252,23 +280,7 @@ def motion_section(r: MotionResult, title: str | None = None, *, figures: bool =
             f"{r.angular_acceleration_amplitude_deg_s2:.6g} °/s²",
             _u(r, "angular_acceleration_amplitude_deg_s2", "°/s²"),
         ],
-        [f"THD (h = 2…{r.harmonics})", f"{r.thd_percent:.4f} %", f"{r.thd_percent_u:.2g} %"],
-        [
-            "THD, bias-corrected (noise power removed)",
-            f"{_fmt(r.thd_percent_bias_corrected, 5)} %",
-            "",
-        ],
-        [
-            "THD, Monte Carlo mean (bias)",
-            f"{_fmt(r.thd_percent_mc_mean, 5)} % ({r.thd_percent_bias:+.2g} pp)",
-            "",
-        ],
-        [
-            "THD, 95 % coverage interval (Monte Carlo)",
-            f"[{_fmt(r.thd_percent_coverage_interval[0])}, "
-            f"{_fmt(r.thd_percent_coverage_interval[1])}] %",
-            "",
-        ],
+        *_thd_rows(r),
         ["periods analysed", str(r.periods_used), ""],
         [
             "reversing moments found",

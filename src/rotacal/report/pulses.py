@@ -11,6 +11,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from rotacal.encoder.selfcal import SelfCalibration
+from rotacal.errors import ConfigError
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
 from rotacal.report.motion import _fmt, _style
 from rotacal.report.uncertainty import budget_tables
@@ -152,13 +153,23 @@ def selfcal_section(r: SelfCalibration, title: str = "Self-calibration of the en
                 else ""
             ),
         ],
-        [
-            "peak-to-peak corrected for the noise's bias",
-            "—"
-            if r.deviation_pp_corrected_arcsec is None
-            else f"{r.deviation_pp_corrected_arcsec:.4g} arcsec "
-            f"(bias {r.deviation_pp_bias_arcsec:+.2g} arcsec)",
-        ],
+        *(
+            _summary_row(label, r.budgets.get(key), bias, corrected, "arcsec", 4)
+            for label, key, bias, corrected in (
+                (
+                    "peak-to-peak",
+                    "deviation_pp_arcsec",
+                    r.deviation_pp_arcsec_bias,
+                    r.deviation_pp_arcsec_bias_corrected,
+                ),
+                (
+                    "rms",
+                    "deviation_rms_arcsec",
+                    r.deviation_rms_arcsec_bias,
+                    r.deviation_rms_arcsec_bias_corrected,
+                ),
+            )
+        ),
         [
             "closure residual of the head differences (rms)",
             f"{r.closure_residual_rms_arcsec:.3g} arcsec",
@@ -190,6 +201,32 @@ def selfcal_section(r: SelfCalibration, title: str = "Self-calibration of the en
         tables=tables,
         figures=figures,
     )
+
+
+def _summary_row(
+    label: str,
+    b: UncertaintyBudget | None,
+    bias: float | None,
+    corrected: float | None,
+    unit: str,
+    digits: int,
+) -> list[str]:
+    """One results row of a biased, bounded summary: the interval for the true value, the bias."""
+    if b is None or b.interval is None:
+        return [f"{label}: 95 % interval for the true value", "—"]
+    lo, hi = b.interval
+    try:  # the limits to the decimal place of U, as ILAC-P14 rounds a value (§5.4)
+        big_u = b.rounded()[1]
+        dec = len(big_u.split(".")[1]) if "." in big_u else 0
+        text = f"{lo:.{dec}f} … {hi:.{dec}f} {unit}"
+        fmt = f".{dec}f"
+    except ConfigError:  # U = 0
+        text, fmt = f"{lo:.{digits}g} … {hi:.{digits}g} {unit}", f".{digits}g"
+    if bias is not None and corrected is not None:
+        text += f" (noise bias {bias:+.2g} {unit}; bias-corrected {corrected:{fmt}} {unit})"
+    else:
+        text += " (no noise of known level: not bias-corrected)"
+    return [f"{label}: 95 % interval for the true value", text]
 
 
 def _point_table(b: UncertaintyBudget) -> Table:
@@ -354,6 +391,23 @@ def rate_section(r: RateResult, title: str = "Constant-rate stability") -> Secti
             f"{r.rate_deviation_peak_percent:.3g} %",
             f"{r.rate_deviation_peak_percent_uncompensated:.3g} % uncompensated",
         ],
+        *(
+            [*_summary_row(label, r.budgets.get(key), bias, corrected, "%", 3), ""]
+            for label, key, bias, corrected in (
+                (
+                    "rate deviation, rms",
+                    "rate_deviation_rms_percent",
+                    r.rate_deviation_rms_percent_bias,
+                    r.rate_deviation_rms_percent_bias_corrected,
+                ),
+                (
+                    "rate deviation, peak",
+                    "rate_deviation_peak_percent",
+                    r.rate_deviation_peak_percent_bias,
+                    r.rate_deviation_peak_percent_bias_corrected,
+                ),
+            )
+        ),
         ["s(φ) near 10°", _near(r.allan_angle_deg, r.allan_relative, 10.0), ""],
         ["s(φ) near 360°", _near(r.allan_angle_deg, r.allan_relative, 360.0), ""],
         ["record", f"{r.duration_s:.4g} s, {r.revolutions} whole revolution(s)", r.head],

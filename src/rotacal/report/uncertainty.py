@@ -15,6 +15,18 @@ from rotacal.uncertainty.budget import UncertaintyBudget
 __all__ = ["budget_table", "budget_tables", "results_table"]
 
 
+#: ν_eff at or above this is shown as ∞ (a t-factor no longer differs from the normal one).
+NU_INFINITE = 1e6
+
+
+def _nu_text(nu: float) -> str:
+    return "∞" if not nu < NU_INFINITE else f"{nu:.3g}"
+
+
+def _is_monte_carlo(b: UncertaintyBudget) -> bool:
+    return b.method == "Monte Carlo"
+
+
 def _rounded(b: UncertaintyBudget) -> tuple[str, str]:
     try:
         return b.rounded()
@@ -34,12 +46,19 @@ def results_table(budgets: Mapping[str, UncertaintyBudget], caption: str = "") -
     for b in budgets.values():
         value, big_u = _rounded(b)
         unit = f" {b.unit}" if b.unit else ""
-        nu = "∞" if b.dof_eff == float("inf") else f"{b.dof_eff:.3g}"
+        nu = _nu_text(b.dof_eff)
+        cell_u = f"{big_u}{unit}" if big_u != "—" else "—"
+        if b.interval is not None and big_u != "—":
+            # a biased, bounded quantity: the interval for the true value, not ± U
+            decimals = len(big_u.split(".")[1]) if "." in big_u else 0
+            lo, hi = (float(v) for v in b.interval)
+            lo = max(lo, 0.0) if lo <= 0.0 <= b.value else lo  # as UncertaintyBudget.statement
+            cell_u = f"[{lo:.{decimals}f}, {hi:.{decimals}f}]{unit}"
         rows.append(
             [
                 b.quantity,
                 f"{value}{unit}",
-                f"{big_u}{unit}" if big_u != "—" else "—",
+                cell_u,
                 f"{b.k:.3g}",
                 f"{100 * b.p:g} %",
                 nu,
@@ -48,11 +67,13 @@ def results_table(budgets: Mapping[str, UncertaintyBudget], caption: str = "") -
             ]
         )
     return Table(
-        ["quantity", "value", "U", "k", "p", "ν_eff", "u", "method"],
+        ["quantity", "value", "U (or interval)", "k", "p", "ν_eff", "u", "method"],
         rows,
         caption=caption
         or "Results with their expanded uncertainty U = k·u (value rounded to the last digit of U, "
-        "U to two significant digits: ILAC-P14)",
+        "U to two significant digits: ILAC-P14); where the value is biased and bounded (near "
+        "zero) the coverage interval for the true value is given instead of U; ν_eff ≥ 10⁶ "
+        "shows as ∞",
     )
 
 
@@ -65,6 +86,20 @@ def budget_table(budget: UncertaintyBudget) -> Table:
     JCGM 100:2008 (GUM) §7.2.7 and Table H.1.
     """
     header, rows = budget.table()
+    for row in rows:  # the dof column: ν ≥ 10⁶ is ∞ for a reader
+        try:
+            row[-1] = _nu_text(float(row[-1]))
+        except ValueError:
+            pass
+    orientation = ""
+    if _is_monte_carlo(budget) and "share" in header:
+        # the rows' c·u are first-order estimates beside a Monte Carlo interval: need not add up
+        header = list(header)
+        header[header.index("share")] = "share (first order, for orientation)"
+        orientation = (
+            " Monte Carlo budget: the contributions and shares are first-order estimates shown "
+            "for orientation; they need not add up to u, and a share may exceed 100 %."
+        )
     try:
         statement = budget.statement()
     except ConfigError:
@@ -73,7 +108,10 @@ def budget_table(budget: UncertaintyBudget) -> Table:
     return Table(
         header,
         rows,
-        caption=f"Uncertainty budget of {budget.quantity} ({budget.method}): {statement}.{notes}",
+        caption=(
+            f"Uncertainty budget of {budget.quantity} ({budget.method}): {statement}."
+            f"{orientation}{notes}"
+        ),
     )
 
 

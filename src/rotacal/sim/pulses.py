@@ -204,6 +204,7 @@ def simulate_pulses(
     timebase_relative_error: float = 0.0,
     timebase_error_half_width: float = 0.0,
     seed: int = 0,
+    noise_seed: int | None = None,
 ) -> SimCapture:
     """Pulse-edge times of an n-head self-calibratable encoder on a table turning at constant rate.
 
@@ -250,6 +251,10 @@ def simulate_pulses(
         and ends early by another one (s). None: 5 % of a revolution (``0.05·360/ω``).
     seed : int
         Seed (≥ 0) of ``numpy.random.SeedSequence``; the same seed gives the same capture.
+    noise_seed : int or None
+        Seed (≥ 0) of the timing jitter alone; None: drawn from ``seed`` like every other
+        component. With ``seed`` fixed and ``noise_seed`` varied, the table, scale and heads stay
+        the same and only the measurement noise changes — repeated measurements of one truth.
 
     Returns
     -------
@@ -325,6 +330,7 @@ def simulate_pulses(
             "more; a timebase error is a small fraction (e.g. 2e-6)."
         )
     seed_i = _int("seed", seed, 0)
+    noise_i = None if noise_seed is None else _int("noise_seed", noise_seed, 0)
 
     pitch = 360.0 / m  # deg
     rev_s = 360.0 / omega  # s per revolution
@@ -374,6 +380,8 @@ def simulate_pulses(
     (s_grad, s_place, s_psi, s_theta0, s_delay, s_jitter, s_clock) = (
         np.random.default_rng(s) for s in np.random.SeedSequence(seed_i).spawn(7)
     )
+    if noise_i is not None:
+        s_jitter = np.random.default_rng(np.random.SeedSequence([noise_i, 0x7A5E]))
     delta = tb_offset + (float(s_clock.uniform(-tb_half, tb_half)) if tb_half > 0 else 0.0)
 
     # ---- scale: line errors (arcsec) in scale numbering
@@ -503,6 +511,7 @@ def simulate_pulses(
         "record_start_s": start,
         "record_stop_s": stop,
         "seed": seed_i,
+        "noise_seed": noise_i,
         "pulses_per_head": counts,
         "first_line_per_head": [gg % m for gg in first_g],
         "first_line_head0": l0,

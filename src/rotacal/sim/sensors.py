@@ -176,6 +176,29 @@ def _truth(
     return truth
 
 
+def _graduation_table(value: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """(angles_deg, errors_arcsec) of an encoder's reading error, checked; None stays None."""
+    if value is None:
+        return None
+    try:
+        ang, err = (np.asarray(v, dtype=float) for v in value)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            "graduation_error_arcsec must be a pair (angles_deg, errors_arcsec) of equal 1-D "
+            f"arrays, got {value!r}."
+        ) from None
+    if ang.ndim != 1 or ang.shape != err.shape or ang.size < 1:
+        raise ConfigError(
+            "graduation_error_arcsec must be a pair (angles_deg, errors_arcsec) of equal 1-D "
+            f"arrays; got shapes {ang.shape} and {err.shape}."
+        )
+    if not (np.all(np.isfinite(ang)) and np.all(np.isfinite(err))):
+        raise ConfigError("graduation_error_arcsec holds a non-finite angle or error.")
+    if np.any(np.diff(ang) <= 0):
+        raise ConfigError("graduation_error_arcsec: its angles_deg must increase strictly.")
+    return ang, err
+
+
 # ---------------------------------------------------------------------- encoder
 def simulate_encoder(
     motion: SineMotion,
@@ -195,6 +218,7 @@ def simulate_encoder(
     start_s: float = 0.0,
     harmonics: int = 10,
     timebase_relative_error: float = 0.0,
+    graduation_error_arcsec: tuple[Any, Any] | None = None,
 ) -> SimCapture:
     """Analog quadrature signals of an optical shaft encoder on the table.
 
@@ -235,6 +259,11 @@ def simulate_encoder(
         Fractional error e of the DAQ clock (-): the samples are taken at the true instants t but
         stamped ``start_s + (1 + e)·(t − start_s)``, so every measured time is (1 + e) long and a
         frequency comes out f/(1 + e). The truth stays in true time. |e| < 0.01.
+    graduation_error_arcsec : (angles_deg, errors_arcsec) or None
+        The scale's reading error (reading − true, arcsec) as a table over the true angle (deg,
+        increasing), linearly interpolated and held constant beyond its ends: the encoder reads
+        ``θ + e(θ)/3600``, so its signals carry ``φ`` of that reading. The truth stays the true
+        motion. None: a perfect scale.
 
     Returns
     -------
@@ -267,6 +296,9 @@ def simulate_encoder(
         raise ConfigError(f"adc_bits must be an integer from 2 to 32 or None, got {adc_bits!r}.")
 
     theta = motion.angle_deg(t)
+    grad = _graduation_table(graduation_error_arcsec)
+    if grad is not None:
+        theta = theta + np.interp(theta, grad[0], grad[1]) / 3600.0
     phi = (2.0 * math.pi * lines / 360.0) * theta
     step = float(np.max(np.abs(np.diff(phi))))
     if step >= math.pi / 6:
@@ -306,6 +338,7 @@ def simulate_encoder(
         "max_phase_step_rad": step,
         "clipped_samples": clipped,
         "timebase_relative_error": tb,
+        "graduation_error_arcsec": None if grad is None else [grad[0], grad[1]],
     }
     return SimCapture(
         "encoder",

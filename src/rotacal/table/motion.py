@@ -37,7 +37,6 @@ from rotacal.signal import (
     fit_harmonics,
     fit_sine_3p,
     snr_db,
-    thd_percent,
 )
 from rotacal.table.motion_uncertainty import (
     ReversalDetection,
@@ -104,13 +103,11 @@ class MotionResult(Result):
     position_error_max_deg: float | None = None
     position_error_rms_deg: float | None = None
     snr_db: float | None = None
-    # THD by Monte Carlo (JCGM 101; see rotacal.table.motion_uncertainty), all in %:
-    # the mean of the Monte Carlo values, its bias over the plain THD, the bias-corrected THD
-    # (noise-power subtraction) and the 95 % probabilistically symmetric coverage interval.
-    thd_percent_mc_mean: float = math.nan
+    # THD near zero (see rotacal.table.motion_uncertainty.thd_uncertainty), in %: the noise bias
+    # of the plain THD (Monte Carlo) and the bias-corrected THD (noise power removed); the 95 %
+    # interval for the true THD is the budget's (JSON ``thd_percent_interval``).
     thd_percent_bias: float = math.nan
     thd_percent_bias_corrected: float = math.nan
-    thd_percent_coverage_interval: tuple[float, float] = (math.nan, math.nan)
     # For figures and reports only (not in JSON): the fit, decimated samples, scheme details.
     _fit: SineFit | None = dataclasses.field(default=None, repr=False, compare=False)
     _plot: dict[str, Any] = dataclasses.field(default_factory=dict, repr=False, compare=False)
@@ -259,31 +256,11 @@ def _finish(
     specs: InstrumentSpecs | None = None,
     radius_mm: float | None = None,
 ) -> MotionResult:
-    amp = float(displacement_amplitudes[0])
-    freq = float(fit.frequency_hz)
-    accel = amp * (2 * math.pi * freq) ** 2
-    extra: dict[str, Any] = {}
     if set_amplitude_deg is not None or set_frequency_hz is not None:
         if set_amplitude_deg is None or set_frequency_hz is None:
             raise ConfigError("give both --set-amplitude-deg and --set-frequency-hz, or neither")
         if not set_amplitude_deg > 0 or not set_frequency_hz > 0:
             raise ConfigError("set amplitude and set frequency must both be positive")
-        set_accel = set_amplitude_deg * (2 * math.pi * set_frequency_hz) ** 2
-        extra.update(
-            set_amplitude_deg=float(set_amplitude_deg),
-            set_frequency_hz=float(set_frequency_hz),
-            amplitude_error_percent=100 * (amp - set_amplitude_deg) / set_amplitude_deg,
-            frequency_error_percent=100 * (freq - set_frequency_hz) / set_frequency_hz,
-            angular_acceleration_error_percent=100 * (accel - set_accel) / set_accel,
-        )
-        if angle_used is not None:
-            err = position_error(t_used, angle_used, set_amplitude_deg, set_frequency_hz)
-            extra.update(
-                position_error_max_deg=float(np.max(np.abs(err))),
-                position_error_rms_deg=float(np.sqrt(np.mean(err**2))),
-            )
-            step = _plot_stride(err.size)
-            plot["position_error_deg"] = err[::step]
     unc = motion_budgets(
         scheme=scheme,  # type: ignore[arg-type]
         fit=fit,
@@ -297,14 +274,40 @@ def _finish(
         radius_mm=radius_mm,
     )
     budgets = unc.budgets
+    # One truth: every reported value is its budget's (corrected for stated systematic effects).
+    amp = budgets["amplitude_deg"].value
+    freq = budgets["frequency_hz"].value
+    extra: dict[str, Any] = {}
+    if set_amplitude_deg is not None and set_frequency_hz is not None:
+        extra.update(
+            set_amplitude_deg=float(set_amplitude_deg),
+            set_frequency_hz=float(set_frequency_hz),
+            amplitude_error_percent=budgets["amplitude_error_percent"].value,
+            frequency_error_percent=budgets["frequency_error_percent"].value,
+            angular_acceleration_error_percent=budgets["angular_acceleration_error_percent"].value,
+        )
+        if angle_used is not None:
+            t_true = t_used
+            if unc.timebase_error != 0.0:  # eq. (2) in true time (the set frequency is true)
+                t0 = float(detection.capture_start_s)
+                t_true = t0 + (t_used - t0) / (1.0 + unc.timebase_error)
+            err = position_error(t_true, angle_used, set_amplitude_deg, set_frequency_hz)
+            extra.update(
+                position_error_max_deg=float(np.max(np.abs(err))),
+                position_error_rms_deg=float(np.sqrt(np.mean(err**2))),
+            )
+            step = _plot_stride(err.size)
+            plot["position_error_deg"] = err[::step]
     return MotionResult(
         scheme=scheme,
         amplitude_deg=amp,
         frequency_hz=freq,
-        angular_acceleration_amplitude_deg_s2=accel,
-        thd_percent=thd_percent(displacement_amplitudes),
-        harmonic_amplitudes_deg=np.asarray(displacement_amplitudes, dtype=float),
-        reversal_times_s=np.asarray(reversal_times, dtype=float),
+        angular_acceleration_amplitude_deg_s2=budgets[
+            "angular_acceleration_amplitude_deg_s2"
+        ].value,
+        thd_percent=unc.thd.plain,
+        harmonic_amplitudes_deg=unc.amplitudes_deg,
+        reversal_times_s=unc.reversal_times_s,
         periods_used=int(periods),
         analysis_start_s=float(t_used[0]),
         analysis_stop_s=float(t_used[-1]),
@@ -317,10 +320,8 @@ def _finish(
         samples_used=int(t_used.size),
         notes=tuple(notes),
         snr_db=snr,
-        thd_percent_mc_mean=unc.thd.mc_mean,
         thd_percent_bias=unc.thd.bias,
         thd_percent_bias_corrected=unc.thd.bias_corrected,
-        thd_percent_coverage_interval=unc.thd.interval,
         _fit=fit,
         _plot=plot,
         _budgets=budgets,

@@ -8,48 +8,56 @@ noise and its covariance, Type A with ν = N − p) and from the lab's instrumen
 chunked calibrations alike; :func:`comparison_budgets` serves
 :func:`~rotacal.table.compare_schemes`.
 
-Measurement models (sensitivities analytic):
+Measurement models (sensitivities analytic). A specification stated with a non-zero mean is a
+recognised systematic effect: the result is corrected for it (GUM §3.2.4), its row keeps the stated
+value and u, and a note says so.
 
-* OSE: ``A = A_fit + (g₊ − g₋)/7200`` — g± (arcsec) the encoder's reading error at the two
-  extremes of the motion (the amplitude is half the stroke between them; two graduation positions
-  2A apart, taken as independent); ``f = f_fit·(1 + e)`` — e the timebase's fractional error (a
-  clock running e fast stamps every time (1 + e) long, so the fitted frequency is f/(1 + e));
-  ``α = A·(2πf)²``, hence ``∂α/∂A = (2πf)²``, ``∂α/∂f = 2α/f``, ``∂α/∂e = 2α``.
-* LTS: θ = arctan(D/R) (eq. (15)): ``A = A_fit + c_R·(R − R₀) + c₊·q₊ − c₋·q₋`` with
+* OSE: ``A = A_fit − (g₊ − g₋)/7200`` — g± (arcsec) the encoder's reading error (reading − true)
+  at the two extremes of the motion (the amplitude is half the stroke between them; two
+  graduation positions 2A apart, taken as independent; exact for a reading error linear across
+  the stroke, and a mean common to both cancels); ``f = f_fit·(1 + e)`` — e the timebase's
+  fractional error (a clock running e fast stamps every time (1 + e) long, so the fitted
+  frequency is f/(1 + e)); ``α = A·(2πf)²``, hence ``∂α/∂A = (2πf)²``, ``∂α/∂f = 2α/f``,
+  ``∂α/∂e = 2α/(1 + e)``.
+* LTS: θ = arctan(D/R) (eq. (15)): ``A = A_fit + c_R·(R − R₀) − c₊·q₊ + c₋·q₋`` with
   ``c_R = ∂A/∂R`` the projection of ``∂θ/∂R = −sin 2θ/(2R)`` onto the fundamental (≈ −A/R) and
   ``c± = ½·∂θ/∂D = ½·R/(R² + D±²)`` at the two extremes (q± the reading's resolution error there,
   not averaged by the fit when the noise does not dither the quantiser); f and α as for the OSE.
 * FOG: the rate amplitude A′ and f are fitted; ``A = A′/(2πf_fit·(1 + s)(1 + e))`` and
   ``α = A′·2πf_fit·(1 + e)/(1 + s)`` with s the scale factor's relative error — so
-  ``∂A/∂s = −A``, ``∂A/∂e = −A``, ``∂α/∂e = α``, ``∂α/∂s = −α``, ``∂A/∂f_fit = −A/f``.
+  ``∂A/∂s = −A/(1 + s)``, ``∂A/∂e = −A/(1 + e)``, ``∂α/∂e = α/(1 + e)``, ``∂α/∂s = −α/(1 + s)``,
+  ``∂A/∂f_fit = −A/f_fit``; every harmonic amplitude scales alike (the THD does not change).
 * Errors against set values: ``100·(y − y_set)/y_set`` with exact set values.
-* THD (eq. (1)) by Monte Carlo (JCGM 101): near zero it is biased upward by noise and first-order
-  propagation is meaningless (JCGM 102, magnitude of a complex quantity). Each harmonic's
-  in-phase and quadrature components are drawn from N(·, u_h²) — the fit's white-noise
-  covariance, whose two components of one harmonic have equal variance and no correlation over
-  whole periods, so u_h is also the standard uncertainty of A_h. Reported: the plain THD
-  (unchanged), the Monte Carlo mean and u, the bias (mean − plain), the probabilistically
-  symmetric 95 % interval and a bias-corrected value by noise-power subtraction (below).
+* THD (eq. (1)), by Monte Carlo (JCGM 101): near zero it is biased upward by noise and
+  first-order propagation is meaningless (JCGM 102, magnitude of a complex quantity). The fitted
+  in-phase and quadrature components of harmonic h are N(A_h, u_h²) (the fit's white-noise
+  covariance: equal variances, no correlation over whole periods). Reported (the integrator's
+  policy B): the plain THD (JSON ``thd_percent`` and the budget's value); u, the standard
+  deviation of that estimator, and its noise bias, both simulated at the bias-corrected THD
+  (noise power 2Σu_h² removed); the bias-corrected THD; and the 95 % coverage interval for the
+  TRUE THD from a Neyman confidence belt — one-sided [0, high] when the measured power is
+  consistent with noise — with U its half-width and k = U/u (:func:`thd_uncertainty`).
 * Reversing moments: the estimator's noise over the motion's curvature κ = |θ''| at the extremes
   (OSE: arg max of a noisy sampled parabola — the Chp of eqs. (7)–(8) —, evaluated by a Monte
   Carlo of that estimator; LTS: vertex of the least-squares parabola over ±T/20,
   ``u = s·√3/(κ·W·√n)``, plus that parabola's own error on extremes made asymmetric by the
   harmonics (the estimator applied to the fitted motion); FOG: zero crossing of the fitted rate,
-  ``u² = s²(1 + 2H)/(N·κ²) + (τ·u(f)/f)²``), and the timebase: ``∂t/∂e = −(t − t₀)``.
+  ``u² = s²(1 + 2H)/(N·κ²) + (τ·u(f)/f)²``), and the timebase: ``t = t₀ + (t_stamp − t₀)/(1 + e)``,
+  ``∂t/∂e ≈ −(t − t₀)``.
 
-Bias-corrected THD. ``E[Â_h²] = A_h² + 2u_h²`` for the fitted amplitude of a harmonic with
-noise, so ``THD_bc = 100·√max(0, Σ_{h≥2}(Â_h² − 2u_h²))/Â_1`` removes the noise power instead of
-subtracting the Monte Carlo bias (``2·plain − mean``). On the twin with a pure sine (true THD 0,
-FOG at 10 dB, 20 seeds) the mean plain THD is 0.36 %, ``plain − bias`` 0.22 % (the Monte Carlo
-adds noise to an estimate that already carries it, so its bias is too small) and the noise-power
-subtraction 0.11 %; for a THD well above the noise all three agree within u/5
-(tests/table/test_motion_uncertainty.py).
+Why the interval is built for the true value: the earlier evaluation drew each harmonic about the
+already-biased measured amplitudes, which gives the spread of a re-measurement shifted up by the
+bias a second time; on the FOG twin at 20 dB its interval held a true THD of 0 in 0 of 20 runs.
+The belt holds the truth at the stated probability at every THD (coverage tests on the twin in
+tests/table/test_motion_uncertainty.py).
 
 References
 ----------
 Feng R., Yan J., Wu Y., Yu N., Yin X. (2023). Sensors 23:4876, eqs. (1), (2), (7)–(8), (9)–(15).
 JCGM 100:2008 (GUM) §5.1.2, §6, G.4; JCGM 101:2008 §7 (Monte Carlo), §8 (validation of GUM);
-JCGM 102:2011 §9 (magnitude near zero); IEEE Std 1057-2017 §4.1.3 (fit covariance).
+JCGM 102:2011 §9 (magnitude near zero); IEEE Std 1057-2017 §4.1.3 (fit covariance);
+J. Neyman (1937), Phil. Trans. R. Soc. A 236:333 (confidence belts); G. J. Feldman & R. D. Cousins
+(1998), Phys. Rev. D 57:3873 (intervals near a physical boundary).
 """
 
 from __future__ import annotations
@@ -60,6 +68,8 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Literal
 
 import numpy as np
+from scipy import stats
+from scipy.optimize import brentq
 
 from rotacal.errors import ConfigError
 from rotacal.signal import SineFit
@@ -67,14 +77,12 @@ from rotacal.uncertainty import (
     BudgetRow,
     Input,
     InstrumentSpecs,
-    MonteCarloResult,
-    Normal,
     UncertaintyBudget,
-    monte_carlo,
+    numerical_tolerance,
     propagate,
-    validate_gum,
 )
-from rotacal.uncertainty.distributions import Distribution
+from rotacal.uncertainty.notes import tidy
+from rotacal.uncertainty.specs import spec_input, type_a_note
 
 __all__ = [
     "ReversalDetection",
@@ -89,15 +97,16 @@ __all__ = [
     "thd_uncertainty",
 ]
 
-#: Monte Carlo trials of the THD (fixed: ~0.1 s; u(THD) to ~0.2 %).
-THD_TRIALS = 100_000
+#: Monte Carlo draws of the THD (belt and spread; ~30 ms). Each tail probability of the belt is
+#: then known to √(α(1−α)/M) ≈ 7·10⁻⁴ (coverage 95 ± 0.1 %); the standard error of U that
+#: follows is stated in the budget (typically well under 1 % of U).
+THD_TRIALS = 50_000
 #: Seed of the THD Monte Carlo (the same capture always gives the same budget).
 THD_SEED = 4876
-#: Draws of the Monte Carlo of the OSE's reversal estimator.
+#: Draws of the Monte Carlo of the OSE's reversal estimator (u to ≈ 1/√(2·4000) ≈ 1.1 %).
 REVERSAL_DRAWS = 4000
 _P = 0.95
 _ARCSEC_PER_DEG = 3600.0
-_TYPE_A_ONLY = "no instrument specification stated: Type A only"
 _DEG = "°"
 
 Scheme = Literal["encoder", "lts", "fog"]
@@ -139,32 +148,17 @@ def _one_period(fit: SineFit, points: int = 4096) -> tuple[np.ndarray, np.ndarra
     return tau, np.asarray(fit.evaluate(fit.t_ref_s + tau))
 
 
-def _error_spec(specs: InstrumentSpecs | None, key: str) -> Distribution | None:
-    """A stated instrument error, which rotacal takes as centred on zero."""
-    if specs is None:
-        return None
-    dist = specs.get(key)
-    if dist is None:
-        return None
-    mean = float(dist.mean)
-    if mean != 0.0:
-        raise ConfigError(
-            f"{specs.source}: {key} has value {mean:g}, but rotacal takes this instrument error as "
-            "centred on zero; correct the capture for a known error and state only its "
-            "uncertainty (leave out value)."
-        )
-    return dist
-
-
-def _spec_input(
-    name: str, specs: InstrumentSpecs, key: str, dist: Distribution, unit: str
-) -> Input:
-    return Input.from_distribution(name, dist, unit=unit, source=f"Type B, {specs.source}")
+def _stated_mean(specs: InstrumentSpecs | None, key: str) -> float:
+    """The stated mean of a specification (0 when not stated): a recognised systematic effect
+    the result is corrected for (GUM §3.2.4, the integrator's policy A)."""
+    return 0.0 if specs is None else specs.mean(key)
 
 
 def _spec_notes(specs: InstrumentSpecs | None, keys: Sequence[str]) -> tuple[str, ...]:
-    if specs is None:
-        return (_TYPE_A_ONLY,)
+    """The "Type A only" note when none of ``keys`` is stated, else the keys not stated."""
+    note = type_a_note(specs, keys)
+    if note is not None or specs is None:
+        return (note,) if note else ()
     missing = [k for k in keys if specs.get(k) is None]
     if not missing:
         return ()
@@ -173,13 +167,22 @@ def _spec_notes(specs: InstrumentSpecs | None, keys: Sequence[str]) -> tuple[str
     )
 
 
-def _with_notes(b: UncertaintyBudget, *notes: str) -> UncertaintyBudget:
-    """The budget with ``notes`` added, the rows of inputs that do not enter it (sensitivity
-    exactly 0: the outputs of one model share its inputs) left out, and the note on truncating
-    a ν_eff above 100 dropped (it moves k by less than 10⁻³ relative)."""
-    kept = tuple(n for n in b.notes if not (b.dof_eff > 100 and "truncated to" in n))
-    rows = tuple(r for r in b.rows if r.sensitivity != 0.0) or b.rows
-    return dataclasses.replace(b, rows=rows, notes=kept + tuple(n for n in notes if n))
+def _correction_notes(specs: InstrumentSpecs | None, keys: Sequence[str]) -> tuple[str, ...]:
+    """The standard "corrected for the stated mean …" note of every key with a non-zero mean."""
+    if specs is None:
+        return ()
+    out = []
+    for key in keys:
+        note = specs.correction_note(key)
+        if note is None:
+            continue
+        if key == "encoder.graduation_error_arcsec":
+            note += (
+                " A reading error common to both extremes cancels in the amplitude (half the "
+                "stroke): the correction is 0."
+            )
+        out.append(note)
+    return tuple(out)
 
 
 # ------------------------------------------------------------------------------ reversing moments
@@ -388,7 +391,9 @@ def _reversal_budget(
     det: ReversalDetection,
     specs: InstrumentSpecs | None,
 ) -> UncertaintyBudget:
-    """u of every reversing moment: detection (Type A) and timebase (Type B)."""
+    """u of every reversing moment: detection (Type A) and timebase (Type B).
+
+    ``reversal_times`` are already corrected for a stated timebase mean (true time)."""
     times = np.asarray(reversal_times, dtype=float)
     fit = det.fit
     dof = _fit_dof(fit)
@@ -449,14 +454,15 @@ def _reversal_budget(
         )
     )
     jac.append(1.0)
-    tb = _error_spec(specs, "timebase.relative_error")
-    if tb is not None and specs is not None:
-        inputs.append(_spec_input("timebase error e", specs, "timebase.relative_error", tb, ""))
-        jac.append(-span)
+    tb = spec_input(specs, "timebase.relative_error", name="timebase error e")
+    if tb is not None:
+        inputs.append(tb)
+        jac.append(-span / (1.0 + tb.value))  # t = t₀ + (t_stamp − t₀)/(1 + e)
     jrow = np.array(jac)
+    x0 = np.array([inp.value for inp in inputs])
 
     def model(*x: float) -> float:
-        return t_last + float(np.dot(jrow, x))
+        return t_last + float(np.dot(jrow, np.asarray(x) - x0))
 
     gum = propagate(
         model,
@@ -471,8 +477,9 @@ def _reversal_budget(
         f"timebase row is for the latest ({t_last:.6g} s, {span:.6g} s after the capture's first "
         "sample, from which a clock error accumulates), earlier ones are affected less.",
         *_spec_notes(specs, _TIMEBASE),
+        *_correction_notes(specs, _TIMEBASE),
     ]
-    return _with_notes(gum.budget(0), *notes)
+    return tidy(gum.budget(0), *notes)
 
 
 # ------------------------------------------------------------------------------ THD
@@ -506,41 +513,162 @@ def thd_bias_corrected_percent(amplitudes: Any, amplitudes_u: Any) -> float:
 
 @dataclasses.dataclass(frozen=True)
 class ThdUncertainty:
-    """The THD's Monte Carlo evaluation (all in % of the fundamental).
+    """The THD's evaluation (all in % of the fundamental; see :func:`thd_uncertainty`).
 
     Attributes
     ----------
-    plain : eq. (1) from the fitted amplitudes (the reported ``thd_percent``).
-    mc_mean : mean of the Monte Carlo values.
-    bias : mc_mean − plain (pp): the noise's upward push.
-    bias_corrected : :func:`thd_bias_corrected_percent`.
-    u : standard deviation of the Monte Carlo values.
-    interval : probabilistically symmetric 95 % coverage interval.
-    U, k : half-width of that interval and U/u.
-    budget : the UncertaintyBudget (method "Monte Carlo").
-    mc : the engine's result.
+    plain : eq. (1) from the fitted amplitudes — the reported ``thd_percent`` and the budget's
+        value.
+    bias_corrected : :func:`thd_bias_corrected_percent` (noise power removed).
+    mc_mean : mean of the plain estimator simulated at the bias-corrected THD.
+    bias : ``mc_mean − bias_corrected`` (pp): the noise's upward push at that THD.
+    u : standard deviation of the plain estimator there.
+    interval : 95 % coverage interval for the TRUE THD (lower end 0 when the measured harmonic
+        power is consistent with noise).
+    U, k : half the interval's width, and U/u.
+    U_mc_error : Monte Carlo standard error of U (pp), from the draws' quantile errors.
+    trials : Monte Carlo draws M.
+    budget : the UncertaintyBudget (method "Monte Carlo", ``interval`` set).
     """
 
     plain: float
+    bias_corrected: float
     mc_mean: float
     bias: float
-    bias_corrected: float
     u: float
     U: float
     k: float
     interval: tuple[float, float]
+    U_mc_error: float
+    trials: int
     budget: UncertaintyBudget
-    mc: MonteCarloResult
 
 
-def _thd_model(nh: int) -> Callable[..., np.ndarray]:
-    def model(**x: np.ndarray) -> np.ndarray:
-        num = np.zeros_like(x["A1_inphase"])
-        for h in range(2, nh + 1):
-            num = num + x[f"A{h}_inphase"] ** 2 + x[f"A{h}_quadrature"] ** 2
-        return np.asarray(100.0 * np.sqrt(num) / np.hypot(x["A1_inphase"], x["A1_quadrature"]))
+class _ThdDraws:
+    """Common random numbers of the THD Monte Carlo, reduced to two numbers per draw.
 
-    return model
+    With harmonic h's true components (√(w_h·P), 0) in its own frame and noise u_h·(z₁, z₂), the
+    measured power ``T = Σ_h |Â_h|² = P + 2√P·X + Y`` with ``X = Σ √w_h·u_h·z_h1`` and
+    ``Y = Σ u_h²(z_h1² + z_h2²)`` (Σ w_h = 1): one set of draws serves every true power P, so
+    the confidence belt is smooth in P (common random numbers) and each evaluation is O(M).
+    """
+
+    def __init__(
+        self, a: np.ndarray, u: np.ndarray, weights: np.ndarray, trials: int, seed: int
+    ) -> None:
+        rng = np.random.default_rng(seed)
+        nh = a.size - 1
+        z1 = rng.standard_normal((trials, nh))
+        z2 = rng.standard_normal((trials, nh))
+        uh = u[1:]
+        self.x = z1 @ (np.sqrt(weights) * uh)
+        self.y = (z1 * z1 + z2 * z2) @ (uh * uh)
+        za, zb = rng.standard_normal((2, trials))
+        self.a1_true = float(a[0])
+        self.a1 = np.hypot(a[0] + u[0] * za, u[0] * zb)
+        self.trials = trials
+
+    def power(self, thd: float) -> float:
+        """True harmonic power P (unit of A squared) of a true THD (%)."""
+        return (max(thd, 0.0) * self.a1_true / 100.0) ** 2
+
+    def plain(self, thd: float) -> np.ndarray:
+        """The plain estimator of eq. (1) in every draw, at a true THD ``thd`` (%)."""
+        p = self.power(thd)
+        t = np.maximum(p + 2.0 * math.sqrt(p) * self.x + self.y, 0.0)
+        return np.asarray(100.0 * np.sqrt(t) / self.a1)
+
+
+def _quantile(values: np.ndarray, q: float) -> float:
+    return float(np.quantile(values, min(max(q, 0.0), 1.0)))
+
+
+def _thd_interval(
+    draws: _ThdDraws, observed: float, p: float, p_star: float, scale: float
+) -> tuple[float, float, float]:
+    """Neyman interval [lo, hi] for the true THD and the Monte Carlo standard error of its U.
+
+    Acceptance region of a true THD θ: [Q(θ, α_lo(θ)), Q(θ, 1 − α_hi(θ))], Q the quantile of the
+    plain estimator, α_lo + α_hi = 1 − p and ``α_lo(θ) = (1 − p)/2·min(1, P(θ)/P*)``: one-sided
+    (α_lo = 0) at a true THD of 0, central from a true power P* on. The split depends on the true
+    value only, never on the data, so every θ is covered with probability p (Neyman 1937); the
+    interval is {θ : observed ∈ region(θ)}.
+    """
+    alpha = 1.0 - p
+
+    def a_lo(theta: float) -> float:
+        if not p_star > 0:
+            return 0.5 * alpha
+        return 0.5 * alpha * min(1.0, draws.power(theta) / p_star)
+
+    def lower_edge(theta: float) -> float:
+        return _quantile(draws.plain(theta), a_lo(theta))
+
+    def upper_edge(theta: float) -> float:
+        return _quantile(draws.plain(theta), 1.0 - (alpha - a_lo(theta)))
+
+    def bracket(edge: Callable[[float], float]) -> float:
+        b = observed + 10.0 * scale
+        for _ in range(200):
+            if edge(b) > observed:
+                return b
+            b *= 2.0
+        raise ConfigError("the THD's confidence belt could not be bracketed; check A_h and u_h.")
+
+    def root(edge: Callable[[float], float]) -> float:
+        if edge(0.0) >= observed:
+            return 0.0
+        b = bracket(edge)
+        return float(brentq(lambda th: edge(th) - observed, 0.0, b, xtol=1e-9 * b, rtol=1e-10))
+
+    lo = root(upper_edge)
+    hi = root(lower_edge)
+
+    def se(theta: float, edge: Callable[[float], float], q: float) -> float:
+        """Standard error of an endpoint: the quantile's √(q(1−q)/M)·dQ/dq over the edge's slope."""
+        if not theta > 0:
+            return 0.0
+        vals = draws.plain(theta)
+        d = 0.25 * min(q, 1.0 - q)
+        if not d > 0:
+            return 0.0
+        dq = (_quantile(vals, q + d) - _quantile(vals, q - d)) / (2.0 * d)
+        h = 1e-2 * max(theta, scale)
+        slope = (edge(theta + h) - edge(max(theta - h, 0.0))) / (theta + h - max(theta - h, 0.0))
+        if not slope > 0:
+            return 0.0
+        return math.sqrt(q * (1.0 - q) / draws.trials) * dq / slope
+
+    se_lo = se(lo, upper_edge, 1.0 - (alpha - a_lo(lo))) if lo > 0 else 0.0
+    se_hi = se(hi, lower_edge, a_lo(hi))
+    return lo, hi, 0.5 * math.hypot(se_lo, se_hi)
+
+
+def _power_split(ah: np.ndarray, uh: np.ndarray) -> np.ndarray:
+    """Shares w_h of the true harmonic power (Σ w_h = 1) for the Monte Carlo — a nuisance.
+
+    A harmonic counts as detected when |Â_h|² exceeds the χ²₂ quantile of noise alone at
+    0.05/(N − 1) (Bonferroni over the harmonics); it gets its excess power Â_h² − 2u_h². The
+    power the others may hold (their summed excess, ≥ 0) goes to the noisiest of them: where
+    the data cannot say which harmonic holds it, the split that spreads the THD most (largest
+    u_h) is taken, so the belt is not made too narrow by a noise-driven split (with unequal u_h,
+    as for the FOG). All of it there when nothing is detected.
+    """
+    n = ah.size
+    q = 2.0 * math.log(n / 0.05)  # χ²₂ isf(0.05/n) = −2·ln(0.05/n)
+    detected = ah**2 > q * uh**2
+    w = np.where(detected, ah**2 - 2.0 * uh**2, 0.0)
+    rest = ~detected
+    if np.any(rest):
+        rem = max(float(np.sum(ah[rest] ** 2 - 2.0 * uh[rest] ** 2)), 0.0)
+        noisiest = int(np.flatnonzero(rest)[np.argmax(uh[rest])])
+        w[noisiest] += rem
+    total = float(w.sum())
+    if not total > 0:
+        w = np.zeros(n)
+        w[int(np.argmax(uh))] = 1.0
+        total = 1.0
+    return np.asarray(w / total)
 
 
 def thd_uncertainty(
@@ -553,23 +681,37 @@ def thd_uncertainty(
     trials: int = THD_TRIALS,
     seed: int = THD_SEED,
 ) -> ThdUncertainty:
-    """THD (eq. (1)) with its Monte Carlo uncertainty, bias and bias-corrected value.
+    """THD (eq. (1)) with its standard uncertainty, bias, bias-corrected value and the 95 %
+    coverage interval for the true THD, valid down to a true THD of zero.
 
-    Each harmonic h is (A_h + u_h·z₁, u_h·z₂) in its own in-phase/quadrature frame (the fit's
-    isotropic white-noise covariance; the phase of a harmonic does not enter the THD), M =
-    ``trials`` draws through :func:`rotacal.uncertainty.monte_carlo`. The budget rows show each
-    amplitude with its first-order sensitivity ∂THD/∂A_h for orientation; the first-order GUM u
-    is compared with the Monte Carlo interval (JCGM 101 §8) in a note.
+    Model. The fitted in-phase and quadrature components of harmonic h are N(A_h, u_h²) each
+    (the multi-harmonic fit's white-noise covariance: equal variances, uncorrelated over whole
+    periods), so the measured power ``T = Σ_{h≥2} |Â_h|²`` has the mean P + 2Σu_h² and a
+    (generalised) noncentral χ² distribution; A_1 likewise. The plain THD ``100·√T/|Â_1|`` is
+    biased upward by noise and first-order propagation is meaningless near zero (JCGM 102 §9).
+
+    * ``bias_corrected`` removes the expected noise power (:func:`thd_bias_corrected_percent`).
+    * ``u`` and ``bias``: the plain estimator simulated (M draws) at the bias-corrected THD, the
+      power split over the harmonics as detected (:func:`_power_split`; the undetected part in
+      the noisiest harmonic) — its standard deviation and its mean minus that THD. (Simulating at the plain value instead adds the noise a second time.)
+    * ``interval``: a Neyman confidence belt of the plain THD over true values, from the same
+      draws: coverage p at every true THD, up to the Monte Carlo error √(α(1−α)/M) of each tail
+      and the plug-in of A_1, u_h and the power split. One-sided [0, high] when the measured
+      power is consistent with noise, central well above it (see :func:`_thd_interval`). For
+      equal u_h the belt is the noncentral χ² one of ``T/u²`` (2(N − 1) degrees of freedom);
+      with unequal u_h (the FOG: u_h ∝ 1/h) no closed form exists, hence the simulation.
+    * ``U`` = half the interval's width, ``k = U/u``; ``U_mc_error`` its Monte Carlo standard
+      error.
 
     Parameters
     ----------
     amplitudes : array_like — A_1…A_N (unit ``unit``), h = 1 first.
     amplitudes_u : array_like — their standard uncertainties (same unit).
-    dof : float — ν of the u_h (N − p of the fit).
+    dof : float — ν of the u_h (N − p of the fit; the first-order rows only).
     unit : str — unit of the amplitudes (budget text).
     p : float — coverage probability.
-    trials : int — Monte Carlo trials M.
-    seed : int — seed of the draws.
+    trials : int — Monte Carlo draws M.
+    seed : int — seed of the draws (the same capture always gives the same budget).
 
     Returns
     -------
@@ -577,8 +719,11 @@ def thd_uncertainty(
 
     References
     ----------
-    Feng et al. 2023, Sensors 23:4876, eq. (1), (14); JCGM 101:2008 §7, §8;
-    JCGM 102:2011 §9 (magnitude of a complex quantity near zero).
+    Feng et al. 2023, Sensors 23:4876, eq. (1); JCGM 101:2008 §7 (Monte Carlo), §7.9 (its
+    numerical accuracy), §8; JCGM 102:2011 §9 (magnitude of a complex quantity near zero);
+    J. Neyman (1937), Phil. Trans. R. Soc. A 236:333, §III (confidence belts); G. J. Feldman &
+    R. D. Cousins (1998), Phys. Rev. D 57:3873 (intervals near a physical boundary, without
+    choosing one- or two-sided from the data).
     """
     a = np.asarray(amplitudes, dtype=float)
     u = np.asarray(amplitudes_u, dtype=float)
@@ -586,21 +731,31 @@ def thd_uncertainty(
         raise ConfigError("amplitudes and amplitudes_u must be 1-D arrays of the same length.")
     if not a[0] > 0 or np.any(a < 0) or np.any(u < 0) or not np.all(np.isfinite(a + u)):
         raise ConfigError("amplitudes must be finite with A_1 > 0, their u finite and ≥ 0.")
+    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1000:
+        raise ConfigError(f"trials must be an integer ≥ 1000, got {trials!r}.")
     nh = a.size
+    tail = 0.5 * (1.0 - p)
     root = math.sqrt(float(a[1:] @ a[1:]))
     plain = 100.0 * root / float(a[0])
-    inputs: dict[str, Distribution] = {}
-    for h in range(1, nh + 1):
-        inputs[f"A{h}_inphase"] = Normal(float(a[h - 1]), float(u[h - 1]))
-        inputs[f"A{h}_quadrature"] = Normal(0.0, float(u[h - 1]))
-    mc = monte_carlo(_thd_model(nh), inputs, trials=trials, p=p, seed=seed)
-    assert isinstance(mc, MonteCarloResult)
-    lo, hi = mc.interval_symmetric
-    big_u = 0.5 * (hi - lo)
-    k = big_u / mc.u if mc.u > 0 else 1.959963984540054
     corrected = thd_bias_corrected_percent(a, u)
+    uh = u[1:]
+    noise_free = nh < 2 or not (float(uh @ uh) > 0 or u[0] > 0)
+    if noise_free:
+        lo = hi = plain
+        u_thd, mc_mean, u_mc = 0.0, plain, 0.0
+    else:
+        draws = _ThdDraws(a, u, _power_split(a[1:], uh), trials, seed)
+        at_corrected = draws.plain(corrected)
+        mc_mean = float(np.mean(at_corrected))
+        u_thd = float(np.std(at_corrected, ddof=1))
+        p_star = 4.0 * math.sqrt(float(np.sum(uh**4)))  # 2 standard deviations of T at P = 0
+        scale = 100.0 * (math.sqrt(2.0 * float(uh @ uh)) + plain * u[0]) / float(a[0])
+        lo, hi, u_mc = _thd_interval(draws, plain, p, p_star, max(scale, 1e-300))
+    big_u = 0.5 * (hi - lo)
+    k = big_u / u_thd if u_thd > 0 else float(stats.norm.isf(tail))
+    bias = mc_mean - corrected
 
-    # first-order GUM for the rows and the JCGM 101 §8 comparison
+    # first-order GUM for the rows and the comparison with the interval
     sens = np.empty(nh)
     sens[0] = -plain / a[0]
     sens[1:] = 100.0 * a[1:] / (a[0] * root) if root > 0 else 100.0 / a[0]
@@ -615,28 +770,37 @@ def thd_uncertainty(
 
     gum = propagate(thd_model, ins, jacobian=lambda *x: sens, p=p, names_out=["thd_percent"])
     u_gum = float(gum.u[0])
+    side = "two-sided"
+    if lo == 0:
+        side = "one-sided: the measured harmonic power is consistent with noise"
     notes = [
-        f"Monte Carlo (JCGM 101), M = {mc.trials} trials: the in-phase and quadrature components "
-        "of every harmonic drawn from N(·, u_h²) (the fit's white-noise covariance); u is the "
-        "standard deviation of the THD values.",
-        f"Monte Carlo mean {mc.value:.6g} %, bias (mean − plain) {mc.value - plain:+.3g} pp; "
-        f"bias-corrected THD {corrected:.6g} % (noise-power subtraction "
-        "100·√max(0, Σ(A_h² − 2u_h²))/A_1); 95 % probabilistically symmetric coverage interval "
-        f"[{lo:.6g}, {hi:.6g}] %, U its half-width, k = U/u.",
+        f"Monte Carlo (JCGM 101), M = {trials} draws of every harmonic's in-phase and quadrature "
+        "components from N(A_h, u_h²) (the fit's white-noise covariance), A_h at the "
+        f"bias-corrected THD {corrected:.4g} % (noise power 2Σu_h² subtracted; split over the "
+        "harmonics as detected, the undetected part on the noisiest): u is the standard deviation of the plain THD of eq. (1), "
+        f"its noise bias {bias:+.3g} pp.",
+        f"95 % coverage interval for the true THD [{lo:.4g}, {hi:.4g}] % ({side}): a Neyman "
+        "confidence belt of the plain THD over true values from the same draws, one-sided at a "
+        "true THD of 0 and central from a true harmonic power of 2 standard deviations of the "
+        "noise power on (the split set by the true value, not by the data, so the coverage "
+        f"holds near zero too); U is half its width, k = U/u. Monte Carlo standard error of U: "
+        f"{u_mc:.2g} pp ({100.0 * u_mc / big_u if big_u > 0 else 0.0:.2g} % of U).",
     ]
-    if u_gum > 0 and mc.u > 0:
-        check = validate_gum(gum, mc, ndigits=1)
-        verdict = "agrees" if check["passed"] else "does not agree"
+    if u_gum > 0 and big_u > 0:
+        delta = numerical_tolerance(u_gum, 1)
+        y_gum = float(gum.U[0])
+        ok = abs(plain - y_gum - lo) <= delta and abs(plain + y_gum - hi) <= delta
         notes.append(
-            f"first-order GUM gives u = {u_gum:.3g} %; its interval {verdict} with the Monte "
-            f"Carlo one at one significant digit (JCGM 101 §8)"
+            f"first-order GUM gives u = {u_gum:.3g} %, plain ± U = [{plain - y_gum:.4g}, "
+            f"{plain + y_gum:.4g}] %, which "
             + (
-                ""
-                if check["passed"]
-                else ": first order is not adequate here (harmonics at the noise level push the "
-                "THD up, as for a magnitude near zero, JCGM 102)"
+                "agrees with the interval at one significant digit of u (JCGM 101 §8)."
+                if ok
+                else "does not agree with the interval (JCGM 101 §8): first order is not "
+                "adequate here (harmonics near the noise push the THD up, as for a magnitude "
+                "near zero, JCGM 102)."
             )
-            + ". The rows show the first-order sensitivities and shares, for orientation."
+            + " The rows show the first-order sensitivities and shares, for orientation."
         )
     notes.append(
         "no instrument specification enters the THD: it is a ratio of amplitudes of one sensor "
@@ -661,7 +825,7 @@ def thd_uncertainty(
         quantity="thd_percent",
         unit="%",
         value=plain,
-        u=float(mc.u),
+        u=u_thd,
         dof_eff=math.inf,
         k=float(k),
         p=float(p),
@@ -669,28 +833,46 @@ def thd_uncertainty(
         rows=rows,
         method="Monte Carlo",
         notes=tuple(notes),
+        interval=(float(lo), float(hi)),
     )
     return ThdUncertainty(
         plain=plain,
-        mc_mean=float(mc.value),
-        bias=float(mc.value) - plain,
         bias_corrected=corrected,
-        u=float(mc.u),
+        mc_mean=mc_mean,
+        bias=bias,
+        u=u_thd,
         U=float(big_u),
         k=float(k),
         interval=(float(lo), float(hi)),
+        U_mc_error=float(u_mc),
+        trials=int(trials),
         budget=budget,
-        mc=mc,
     )
 
 
 # ------------------------------------------------------------------------------ the budgets
 @dataclasses.dataclass(frozen=True)
 class MotionUncertainty:
-    """Budgets of one motion calibration (JSON key → budget) and the THD's Monte Carlo."""
+    """Budgets of one motion calibration (JSON key → budget), the THD's evaluation, and the
+    results corrected for the stated means of the specifications (GUM §3.2.4).
+
+    Attributes
+    ----------
+    budgets : JSON key → budget; each budget's ``value`` is the reported result.
+    thd : the THD's evaluation (its ``plain`` is ``thd_percent``).
+    amplitudes_deg, amplitudes_u_deg : A_h and u(A_h) (deg), h = 1…N, corrected: A_1 is
+        ``amplitude_deg``; a scale-factor or timebase mean scales every A_h alike.
+    reversal_times_s : the reversing moments (s), in true time when a timebase mean is stated.
+    timebase_error : the stated mean e₀ of the timebase's fractional error (0 when none): a time
+        stamp t is the true time ``t₀ + (t − t₀)/(1 + e₀)``.
+    """
 
     budgets: dict[str, UncertaintyBudget]
     thd: ThdUncertainty
+    amplitudes_deg: np.ndarray
+    amplitudes_u_deg: np.ndarray
+    reversal_times_s: np.ndarray
+    timebase_error: float = 0.0
 
 
 def _lts_sensitivities(
@@ -729,13 +911,20 @@ def motion_budgets(
 ) -> MotionUncertainty:
     """Every budget of a sinusoidal-motion calibration (see the module docstring for the models).
 
+    A specification stated with a non-zero mean is a recognised systematic effect: the results
+    are corrected for it (GUM §3.2.4) and its budget row keeps the stated value and u, with a
+    note. Corrections: timebase e₀ → f = f_fit(1 + e₀), reversal times t₀ + (t − t₀)/(1 + e₀)
+    and, for the FOG, A = A_fit/(1 + e₀); FOG scale factor s₀ → A = A_fit/(1 + s₀); LTS
+    resolution q₀ → A − (c₊ − c₋)·q₀; an encoder reading error common to both extremes cancels.
+
     Parameters
     ----------
     scheme : ``"encoder"``, ``"lts"`` or ``"fog"``.
     fit : SineFit — the multi-harmonic fit over the whole periods: of θ (deg) for the OSE and the
         LTS, of the rate (deg/s) for the FOG.
-    displacement_amplitudes, displacement_amplitudes_u : array, deg — A_h and u(A_h), h = 1..N.
-    reversal_times_s : array, s — every reversing moment reported.
+    displacement_amplitudes, displacement_amplitudes_u : array, deg — A_h and u(A_h), h = 1..N,
+        as fitted (before corrections).
+    reversal_times_s : array, s — every reversing moment found (capture's time stamps).
     detection : ReversalDetection — how those were found.
     specs : InstrumentSpecs, optional — the lab's Type B inputs (None: Type A only).
     set_amplitude_deg, set_frequency_hz : float, optional — the set values (deg, Hz).
@@ -747,36 +936,37 @@ def motion_budgets(
         ``budgets`` keyed by the JSON names: ``amplitude_deg``, ``frequency_hz``,
         ``angular_acceleration_amplitude_deg_s2``, ``thd_percent``, ``reversal_times_s`` and,
         with set values, ``amplitude_error_percent``, ``frequency_error_percent``,
-        ``angular_acceleration_error_percent``.
+        ``angular_acceleration_error_percent``; the corrected amplitudes and reversal times.
 
     Raises
     ------
     ConfigError
-        A stated instrument error with a non-zero value, or ``lts.radius_mm`` whose value is not
-        the radius the calibration used.
+        ``lts.radius_mm`` whose value is not the radius the calibration used.
 
     References
     ----------
-    Feng et al. 2023, Sensors 23:4876, eqs. (1), (2), (7)–(8), (9)–(15); JCGM 100:2008 §5, G.4;
-    JCGM 101:2008 §7–8.
+    Feng et al. 2023, Sensors 23:4876, eqs. (1), (2), (7)–(8), (9)–(15); JCGM 100:2008 §3.2.4,
+    §5, G.4; JCGM 101:2008 §7–8.
     """
     dof = _fit_dof(fit)
     f_fit = float(fit.frequency_hz)
     n_text = f"Type A: multi-harmonic fit, N = {fit.n_samples}, ν = N − {2 * fit.harmonics + 2}"
+    a_fit = np.asarray(displacement_amplitudes, dtype=float)
+    a_fit_u = np.asarray(displacement_amplitudes_u, dtype=float)
+    e0 = _stated_mean(specs, "timebase.relative_error")
+    s0 = _stated_mean(specs, "fog.scale_factor_relative") if scheme == "fog" else 0.0
+    gain = 1.0 / ((1.0 + s0) * (1.0 + e0)) if scheme == "fog" else 1.0
+    freq = f_fit * (1.0 + e0)
+    amp = float(a_fit[0]) * gain  # + the LTS resolution's correction, below
     inputs: list[Input] = []
-    # d(A, f)/d(input) per input, in the order of ``inputs``
+    # dA/d(input) and df/d(input) per input, in the order of ``inputs``; dα from them
     d_amp: list[float] = []
     d_freq: list[float] = []
-    d_acc_extra: list[float] = []  # FOG: α is not A·ω² of the inputs' own amplitude row
-    amp = float(displacement_amplitudes[0])
-    w = 2.0 * math.pi * f_fit
-    acc = amp * w * w
 
-    def add(inp: Input, da: float, df: float, dacc: float | None = None) -> None:
+    def add(inp: Input, da: float, df: float) -> None:
         inputs.append(inp)
         d_amp.append(da)
         d_freq.append(df)
-        d_acc_extra.append(math.nan if dacc is None else dacc)
 
     if scheme == "fog":
         a_rate = float(fit.amplitudes[0])
@@ -791,20 +981,19 @@ def motion_budgets(
             ),
             amp / a_rate,
             0.0,
-            acc / a_rate,
         )
+        # A = A′/(2π·f_fit·(1 + s)(1 + e)): ∂A/∂f_fit = −A/f_fit, ∂f/∂f_fit = 1 + e₀
         add(
             Input("f (fit)", f_fit, float(fit.frequency_u_hz), dof=dof, unit="Hz", source=n_text),
             -amp / f_fit,
-            1.0,
-            acc / f_fit,
+            1.0 + e0,
         )
     else:
         add(
             Input(
                 "A (fundamental, fit)",
-                amp,
-                float(displacement_amplitudes_u[0]),
+                float(a_fit[0]),
+                float(a_fit_u[0]),
                 dof=dof,
                 unit=_DEG,
                 source=n_text,
@@ -815,73 +1004,51 @@ def motion_budgets(
         add(
             Input("f (fit)", f_fit, float(fit.frequency_u_hz), dof=dof, unit="Hz", source=n_text),
             0.0,
-            1.0,
+            1.0 + e0,
         )
-    tb = _error_spec(specs, "timebase.relative_error")
-    if tb is not None and specs is not None:
-        inp = _spec_input("timebase error e", specs, "timebase.relative_error", tb, "")
-        if scheme == "fog":
-            add(inp, -amp, f_fit, acc)
-        else:
-            add(inp, 0.0, f_fit)
-    if scheme == "encoder" and specs is not None:
-        g = _error_spec(specs, "encoder.graduation_error_arcsec")
-        if g is not None:
-            c = 1.0 / (2.0 * _ARCSEC_PER_DEG)
-            for name, sign in (("at θ max", 1.0), ("at θ min", -1.0)):
-                add(
-                    _spec_input(
-                        f"encoder graduation error {name}",
-                        specs,
-                        "encoder.graduation_error_arcsec",
-                        g,
-                        "arcsec",
-                    ),
-                    sign * c,
-                    0.0,
-                )
-    if scheme == "lts" and specs is not None:
-        r_dist = specs.get("lts.radius_mm")
-        q = _error_spec(specs, "lts.resolution_um")
-        if (r_dist is not None or q is not None) and radius_mm is not None:
+    tb = spec_input(specs, "timebase.relative_error", name="timebase error e")
+    if tb is not None:
+        add(tb, -amp / (1.0 + e0) if scheme == "fog" else 0.0, f_fit)
+    if scheme == "encoder":
+        c = 1.0 / (2.0 * _ARCSEC_PER_DEG)
+        for name, sign in (("at θ max", 1.0), ("at θ min", -1.0)):
+            g = spec_input(
+                specs, "encoder.graduation_error_arcsec", name=f"encoder graduation error {name}"
+            )
+            if g is not None:  # reading = true + g: A = A_fit − (g₊ − g₋)/7200
+                add(g, -sign * c, 0.0)
+    if scheme == "lts" and specs is not None and radius_mm is not None:
+        r_in = specs.input("lts.radius_mm", name="LTS radius R")
+        q_stated = specs.get("lts.resolution_um") is not None
+        if r_in is not None or q_stated:
             c_r, (c_p, c_m), (t_max, t_min) = _lts_sensitivities(fit, float(radius_mm))
-            if r_dist is not None:
-                r_mean = float(r_dist.mean)
-                if abs(r_mean - radius_mm) > 1e-9 * abs(radius_mm):
+            if r_in is not None:
+                if abs(r_in.value - radius_mm) > 1e-9 * abs(radius_mm):
                     raise ConfigError(
-                        f"{specs.source}: lts.radius_mm states R = {r_mean:g} mm but the "
+                        f"{specs.source}: lts.radius_mm states R = {r_in.value:g} mm but the "
                         f"calibration used --radius-mm {radius_mm:g}; make them the same."
                     )
-                add(
-                    Input.from_distribution(
-                        "LTS radius R", r_dist, unit="mm", source=f"Type B, {specs.source}"
-                    ),
-                    c_r,
-                    0.0,
-                )
-            if q is not None:
-                for name, c, sign in (
-                    (f"LTS resolution at θ max ({t_max:.4g}°)", c_p, 1.0),
-                    (f"LTS resolution at θ min ({t_min:.4g}°)", c_m, -1.0),
-                ):
-                    add(_spec_input(name, specs, "lts.resolution_um", q, "µm"), sign * c, 0.0)
-    if scheme == "fog" and specs is not None:
-        s = _error_spec(specs, "fog.scale_factor_relative")
+                add(r_in, c_r, 0.0)
+            for name, cc, sign in (
+                (f"LTS resolution at θ max ({t_max:.4g}°)", c_p, 1.0),
+                (f"LTS resolution at θ min ({t_min:.4g}°)", c_m, -1.0),
+            ):
+                q = specs.input("lts.resolution_um", name=name)
+                if q is not None:  # reading = true + q: A = A_fit − c₊·q₊ + c₋·q₋
+                    add(q, -sign * cc, 0.0)
+                    amp += -sign * cc * q.value
+    if scheme == "fog":
+        s = spec_input(specs, "fog.scale_factor_relative", name="FOG scale-factor error s")
         if s is not None:
-            add(
-                _spec_input("FOG scale-factor error s", specs, "fog.scale_factor_relative", s, ""),
-                -amp,
-                0.0,
-                -acc,
-            )
+            add(s, -amp / (1.0 + s0), 0.0)
 
+    w = 2.0 * math.pi * freq
+    acc = amp * w * w  # α = A·(2πf)² with the corrected A and f (the FOG's too)
     j_amp = np.array(d_amp)
     j_freq = np.array(d_freq)
-    extra = np.array(d_acc_extra)
-    # α = A·(2πf)² for OSE/LTS: ∂α = ω²·∂A + (2α/f)·∂f; the FOG rows carry their own ∂α
-    j_acc = np.where(np.isnan(extra), w * w * j_amp + 2.0 * acc / f_fit * j_freq, extra)
+    j_acc = w * w * j_amp + 2.0 * acc / freq * j_freq  # ∂α = ω²·∂A + (2α/f)·∂f
     rows = [j_amp, j_freq, j_acc]
-    values = [amp, f_fit, acc]
+    values = [amp, freq, acc]
     names = ["amplitude_deg", "frequency_hz", "angular_acceleration_amplitude_deg_s2"]
     units = [_DEG, "Hz", "°/s²"]
     with_set = set_amplitude_deg is not None and set_frequency_hz is not None
@@ -890,7 +1057,7 @@ def motion_budgets(
         set_acc = set_amplitude_deg * (2 * math.pi * set_frequency_hz) ** 2
         for val, jr, ref, name in (
             (amp, j_amp, set_amplitude_deg, "amplitude_error_percent"),
-            (f_fit, j_freq, set_frequency_hz, "frequency_error_percent"),
+            (freq, j_freq, set_frequency_hz, "frequency_error_percent"),
             (acc, j_acc, set_acc, "angular_acceleration_error_percent"),
         ):
             rows.append(100.0 * jr / ref)
@@ -901,7 +1068,7 @@ def motion_budgets(
     x0 = np.array([inp.value for inp in inputs])
     y0 = np.array(values)
 
-    def model(*x: float) -> np.ndarray:  # linearised about the estimates (all first order)
+    def model(*x: float) -> np.ndarray:  # linearised about the (corrected) estimates
         return np.asarray(y0 + jac @ (np.asarray(x) - x0))
 
     gum = propagate(model, inputs, jacobian=lambda *x: jac, p=_P, names_out=names, units_out=units)
@@ -918,13 +1085,14 @@ def motion_budgets(
     budgets: dict[str, UncertaintyBudget] = {}
     for j, name in enumerate(names):
         keys = spec_keys[name]
-        notes = list(_spec_notes(specs, keys))
+        notes = [*_spec_notes(specs, keys), *_correction_notes(specs, keys)]
         b = gum.budget(j)
         sources = " ".join(r.source for r in b.rows if r.sensitivity != 0.0)
-        if "encoder graduation" in sources:
+        if "encoder graduation error" in sources:
             notes.append(
                 "the graduation error enters as the reading error at the two extremes of the "
-                "stroke (A is half the stroke), the two taken as independent."
+                "stroke (A is half the stroke), the two taken as independent: exact for an error "
+                "that varies linearly across the stroke."
             )
         if "LTS radius" in sources:
             notes.append(
@@ -937,13 +1105,17 @@ def motion_budgets(
             )
         if name.endswith("_error_percent"):
             notes.append("set values are exact (they define the error).")
-        budgets[name] = _with_notes(b, *notes)
+        budgets[name] = tidy(b, *notes)
 
-    thd = thd_uncertainty(displacement_amplitudes, displacement_amplitudes_u, dof=dof)
+    # every A_h alike for the scale factor and timebase; A_1 also carries the LTS correction
+    amps = a_fit * gain
+    amps[0] = amp
+    amps_u = a_fit_u * gain
+    thd = thd_uncertainty(amps, amps_u, dof=dof)
     budgets["thd_percent"] = thd.budget
-    budgets["reversal_times_s"] = _reversal_budget(
-        np.asarray(reversal_times_s, dtype=float), detection, specs
-    )
+    t0 = float(detection.capture_start_s)
+    times = t0 + (np.asarray(reversal_times_s, dtype=float) - t0) / (1.0 + e0)
+    budgets["reversal_times_s"] = _reversal_budget(times, detection, specs)
     order = [
         "amplitude_deg",
         "frequency_hz",
@@ -954,7 +1126,14 @@ def motion_budgets(
         "frequency_error_percent",
         "angular_acceleration_error_percent",
     ]
-    return MotionUncertainty(budgets={k: budgets[k] for k in order if k in budgets}, thd=thd)
+    return MotionUncertainty(
+        budgets={k: budgets[k] for k in order if k in budgets},
+        thd=thd,
+        amplitudes_deg=amps,
+        amplitudes_u_deg=amps_u,
+        reversal_times_s=times,
+        timebase_error=e0,
+    )
 
 
 # ------------------------------------------------------------------------------ comparison
@@ -1035,5 +1214,5 @@ def comparison_budgets(
             names_out=[name],
             units_out=["%" if key != "thd_percent" else "pp"],
         )
-        out[name] = _with_notes(gum.budget(0), note)
+        out[name] = tidy(gum.budget(0), note)
     return out

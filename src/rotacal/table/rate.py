@@ -13,9 +13,12 @@ the same line one and two revolutions later, where the graduation cancels exactl
 timebase (Type B, ``timebase.relative_error``: rate ∝ 1/time) and the graduation — zero, because
 the window starts and ends on the same line, and m pitches are exactly 360°. The bias against the
 set rate is a property of the table, not of one record: it adds the table's wander, the spread of
-the single-revolution rates (Type A). The rms and peak of the rate deviation are rms/max-type:
-noise raises them, so their budgets are Monte Carlo, with the bias stated and removed. Each s(φ)
-point has the χ² uncertainty of its equivalent degrees of freedom (Greenhall & Riley 2003).
+the single-revolution rates (Type A); both budgets are validated by the same Monte Carlo (JCGM 101
+§8). The rms and peak of the rate deviation are rms/max-type: noise raises them, so their budgets
+(:mod:`rotacal.uncertainty.summaries`) state the plain value, the bias of the noise whose level
+the capture gives (never of a bound or a specification), and a 95 % interval for the true value.
+Each s(φ) point has the χ² uncertainty of its equivalent degrees of freedom (Greenhall & Riley
+2003).
 """
 
 from __future__ import annotations
@@ -38,19 +41,14 @@ from rotacal.encoder.pulses import (
     whole_revolution_rate,
 )
 from rotacal.encoder.selfcal import (
-    COVERAGE,
-    TYPE_A_ONLY,
     UNDETECTABLE_SPEC,
     DeviationNoise,
     SelfCalibration,
     check_period,
-    drop_large_dof_notes,
     head_shifts,
-    mc_budget,
+    noise_gain,
     self_calibrate,
-    simex_estimate,
-    spec_entry,
-    statistic_samples,
+    undetectable_input,
     undetectable_orders,
 )
 from rotacal.errors import CaptureError, ConfigError
@@ -67,7 +65,24 @@ from rotacal.uncertainty import (
     uncertainty_keys,
     validate_gum,
 )
-from rotacal.uncertainty.distributions import Distribution, Normal
+from rotacal.uncertainty.distributions import Distribution, Normal, StudentT
+from rotacal.uncertainty.specs import (
+    TYPE_A_ONLY_NOTE,
+    corrected_note,
+    spec_distribution,
+    spec_input,
+)
+from rotacal.uncertainty.summaries import (
+    COVERAGE,
+    CirculantError,
+    CovarianceCorrection,
+    ErrorProcess,
+    FilteredWhite,
+    Summary,
+    drop_large_dof_notes,
+    mc_budget,
+    rms_budget,
+)
 
 __all__ = [
     "RateResult",
@@ -124,10 +139,15 @@ class RateResult(Result):
     timebase_correction : float
         The stated mean fractional timebase error δ̂ the rates were corrected for (rate·(1 + δ̂));
         0 when none was stated.
-    rate_deviation_rms_bias_percent, rate_deviation_peak_bias_percent : float or None, %
-        How much the measurement noise raises the rms and peak (Monte Carlo).
-    rate_deviation_rms_corrected_percent, rate_deviation_peak_corrected_percent : float or None
-        The rms and peak minus their bias (%): the budgets' estimates.
+    rate_deviation_rms_percent_bias, rate_deviation_peak_percent_bias : float or None, %
+        How much the noise whose level the capture gives (the timing jitter with two or more
+        whole revolutions, the self-calibration's noise) raises the plain rms and peak; None
+        when there is none (e.g. fewer than two revolutions: the jitter estimate is then only an
+        upper bound, and a bound or a specification is never subtracted).
+    rate_deviation_rms_percent_bias_corrected, rate_deviation_peak_percent_bias_corrected : float
+        or None, %
+        The plain values less that bias. The 95 % interval for the true value is the JSON
+        ``rate_deviation_rms_percent_interval`` / ``rate_deviation_peak_percent_interval``.
     allan_relative_u, allan_relative_U : list of float
         Standard and expanded (p = 95 %) uncertainty of each s(φ) from its equivalent degrees
         of freedom; U is half the width of the χ² interval, so k = U/u differs per point.
@@ -157,8 +177,9 @@ class RateResult(Result):
 
     ``to_dict()`` adds ``<name>_u``/``<name>_U`` for ``mean_rate_deg_s``, ``rate_bias_deg_s``,
     ``rate_bias_percent`` (with a set rate), ``rate_deviation_rms_percent`` and
-    ``rate_deviation_peak_percent``, ``k`` (per quantity; a list for ``allan_relative``),
-    ``coverage_probability`` and ``uncertainty_budgets``.
+    ``rate_deviation_peak_percent`` (with ``<name>_interval``: u the standard deviation of the
+    summary's error, U half the interval's width), ``k`` (per quantity; a list for
+    ``allan_relative``), ``coverage_probability`` and ``uncertainty_budgets``.
     """
 
     mean_rate_deg_s: float
@@ -189,10 +210,10 @@ class RateResult(Result):
     timing_jitter_s: float | None = None
     timing_jitter_dof: float | None = None
     timebase_correction: float = 0.0
-    rate_deviation_rms_bias_percent: float | None = None
-    rate_deviation_rms_corrected_percent: float | None = None
-    rate_deviation_peak_bias_percent: float | None = None
-    rate_deviation_peak_corrected_percent: float | None = None
+    rate_deviation_rms_percent_bias: float | None = None
+    rate_deviation_rms_percent_bias_corrected: float | None = None
+    rate_deviation_peak_percent_bias: float | None = None
+    rate_deviation_peak_percent_bias_corrected: float | None = None
     allan_relative_u: list[float] = dataclasses.field(default_factory=list)
     allan_relative_U: list[float] = dataclasses.field(default_factory=list)
     allan_relative_edf: list[float] = dataclasses.field(default_factory=list)
@@ -448,10 +469,17 @@ def _as_deviation(selfcal: Any, m: int) -> _Deviation:
     return _Deviation(values, fingerprint, str(rotation), shifts)
 
 
-def _sum_rho2(h: FloatArray) -> float:
-    """Σ over all lags of the squared autocorrelation of white noise filtered by ``h``."""
+def _rho(h: FloatArray) -> FloatArray:
+    """Autocorrelation of white noise filtered by ``h``, lags −(r−1) … r−1."""
     r = np.correlate(h, h, mode="full")
-    return float(np.sum((r / r[h.size - 1]) ** 2))
+    return r / r[h.size - 1]
+
+
+def _dof_of_mean_square(n: int, lags: NDArray[np.int64], rho: FloatArray) -> float:
+    """Degrees of freedom 2·E²/Var of the mean of n squared Gaussian values whose correlation is
+    ``rho`` at ``lags``: n²/Σ_ℓ (n − |ℓ|)·ρ(ℓ)² (only pairs within the series count)."""
+    weight = np.maximum(n - np.abs(lags), 0).astype(np.float64)
+    return float(n) ** 2 / float(np.sum(weight * rho**2))
 
 
 def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float, bool]:
@@ -478,8 +506,9 @@ def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float
     sigma_t : float, s
         Estimated standard deviation of the timing noise of one pulse time.
     dof : float
-        Its degrees of freedom, n/Σρ² for n differences with autocorrelation ρ (the filtered
-        values are correlated; Bartlett 1946).
+        Its degrees of freedom, n²/Σ_ℓ (n − |ℓ|)·ρ(ℓ)² for n differences with autocorrelation ρ
+        (the filtered values are correlated; Bartlett 1946) — only the pairs inside the series
+        count, which matters when it is shorter than the lag 2m of the same-line difference.
     graduation_free : bool
         True when the graduation cancelled (two revolutions available).
 
@@ -503,19 +532,24 @@ def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float
         d = t[2 * m :] - 2.0 * t[m:-m] + t[: -2 * m]
         e = np.convolve(d, h[::-1], mode="valid")
         norm = float(np.sum(_REV_FILTER**2) * np.sum(h**2))
-        rho2 = _sum_rho2(_REV_FILTER) * _sum_rho2(h)
+        # the same-line difference correlates values m and 2m apart, the pulse filter 1 … 3
+        lag_r = (np.arange(_REV_FILTER.size * 2 - 1) - (_REV_FILTER.size - 1)) * m
+        lag_p = np.arange(h.size * 2 - 1) - (h.size - 1)
+        lags = (lag_r[:, None] + lag_p[None, :]).ravel()
+        rho = np.outer(_rho(_REV_FILTER), _rho(h)).ravel()
+        dof = _dof_of_mean_square(e.size, lags, rho)
         exact = True
     elif t.size >= 2 * h.size:
         e = np.convolve(t, h[::-1], mode="valid")
         norm = float(np.sum(h**2))
-        rho2 = _sum_rho2(h)
+        dof = _dof_of_mean_square(e.size, np.arange(h.size * 2 - 1) - (h.size - 1), _rho(h))
         exact = False
     else:
         raise CaptureError(
             f"{t.size} pulses are too few to estimate the timing noise; record more."
         )
     sigma = math.sqrt(float(np.mean(e * e)) / norm)
-    return sigma, e.size / rho2, exact
+    return sigma, dof, exact
 
 
 def _noise_alpha(phi: FloatArray, s: FloatArray) -> NDArray[np.int64]:
@@ -583,24 +617,65 @@ def allan_uncertainty(
     return u, 0.5 * (high - low), edf, low, high, alpha
 
 
-def _timebase_input(specs: InstrumentSpecs | None, dist: Distribution) -> Input:
-    origin = specs.describe(_TIMEBASE) if specs is not None else _TIMEBASE
-    return Input(
-        name="timebase relative error",
-        value=float(dist.mean),
-        u=float(dist.std),
-        dof=float(getattr(dist, "dof", math.inf)),
-        distribution=str(dist.name),
-        unit="",
-        source=f"Type B, {origin}",
-        description=str(dist.describe()),
-    )
-
-
 def _with_notes(
     b: UncertaintyBudget, notes: Sequence[str], method: str | None = None
 ) -> UncertaintyBudget:
     return dataclasses.replace(b, notes=(*b.notes, *notes), method=method or b.method)
+
+
+def _validated(
+    gum: Any,
+    model: Any,
+    dists: Mapping[str, Distribution],
+    names: Sequence[str],
+    unit: str,
+    notes: Sequence[str],
+) -> dict[str, UncertaintyBudget]:
+    """The GUM budgets of ``names`` (the outputs of ``gum``), each validated by one Monte Carlo
+    of the same model (JCGM 101 §8); where the GUM interval fails, U is half the Monte Carlo
+    probabilistically symmetric 95 % interval (method "Monte Carlo")."""
+    mc = monte_carlo(model, dists, trials=_VALIDATION_TRIALS, p=COVERAGE)
+    results = mc if isinstance(mc, Mapping) else {names[0]: mc}
+    checks = [validate_gum(gum, results[name], j=j, shortest=False) for j, name in enumerate(names)]
+    # one decision for all outputs of the model (e.g. a bias in deg/s and in %): the same inputs
+    # must not give a validated GUM U for one and a Monte Carlo U for the other
+    passed = all(c["passed"] for c in checks)
+    out: dict[str, UncertaintyBudget] = {}
+    for j, name in enumerate(names):
+        budget = drop_large_dof_notes(gum.budget(j))
+        res, check = results[name], checks[j]
+        unit_j = budget.unit or unit
+        if passed:
+            out[name] = _with_notes(
+                budget,
+                [
+                    *notes,
+                    f"the GUM interval agrees with a Monte Carlo of {res.trials} trials within "
+                    f"the numerical tolerance {check['delta']:.2g} {unit_j} (JCGM 101 §8).",
+                ],
+                "GUM, validated by Monte Carlo",
+            )
+            continue
+        lo, hi = res.interval_symmetric
+        big_u = 0.5 * (hi - lo)
+        worst = max(max(c["d_low"], c["d_high"]) / c["delta"] for c in checks)
+        out[name] = dataclasses.replace(
+            budget,
+            U=big_u,
+            k=big_u / budget.u if budget.u > 0 else budget.k,
+            dof_eff=math.inf,
+            method="Monte Carlo",
+            notes=(
+                *(n for n in budget.notes if "truncated to" not in n),
+                *notes,
+                f"the GUM interval ±{budget.U:.3g} {unit_j} is not validated by a Monte Carlo of "
+                f"{res.trials} trials (an end is off by {worst:.2g} times the numerical "
+                "tolerance, JCGM 101 §8; a rectangular or a t input with few degrees of freedom "
+                f"dominates): U is half the Monte Carlo 95 % interval [{lo:.10g}, {hi:.10g}] "
+                f"{unit_j}.",
+            ),
+        )
+    return out
 
 
 def _mean_rate_budgets(
@@ -612,15 +687,18 @@ def _mean_rate_budgets(
     specs: InstrumentSpecs | None,
     jitter: tuple[float, float, bool],
 ) -> dict[str, UncertaintyBudget]:
-    """GUM budgets of the mean rate (validated by Monte Carlo) and of the bias against the set rate.
+    """GUM budgets of the mean rate and of the bias against the set rate, both validated by a
+    Monte Carlo of their own model (JCGM 101 §8) — the same inputs give the same U.
 
     References
     ----------
-    JCGM 100:2008 (GUM) §4.2–4.3, §5.1 eq. (10), G.4 (Welch–Satterthwaite); JCGM 101:2008 §8
-    (validation of the GUM uncertainty framework); Kokuyama et al. (seed 004) §3, §5.
+    JCGM 100:2008 (GUM) §3.2.4 (correction for a stated systematic effect), §4.2–4.3, §5.1
+    eq. (10), G.4 (Welch–Satterthwaite); JCGM 101:2008 §6.4.9 (a Type A input with ν degrees of
+    freedom as a scaled t), §8 (validation of the GUM uncertainty framework); Kokuyama et al.
+    (seed 004) §3, §5.
     """
     sigma_t, sigma_dof, graduation_free = jitter
-    tb = spec_entry(specs, _TIMEBASE)
+    tb = spec_input(specs, _TIMEBASE, name="timebase relative error", unit="")
     inputs: list[Input] = []
     dists: dict[str, Distribution] = {}
     notes: list[str] = []
@@ -696,11 +774,14 @@ def _mean_rate_budgets(
             return [1.0 + (x[1] if len(x) > 1 else 0.0), *([x[0]] if len(x) > 1 else [])]
 
         dists["e"] = Normal(fit.slope, fit.u_slope)
-    if tb is not None:
-        inputs.append(_timebase_input(specs, tb))
-        dists["d"] = tb
+    dist_tb = spec_distribution(specs, _TIMEBASE)
+    if tb is not None and dist_tb is not None:
+        inputs.append(tb)
+        dists["d"] = dist_tb
+        if tb.value != 0.0:
+            notes.append(corrected_note(_TIMEBASE, tb.value, "", specs.source if specs else ""))
     elif specs is None:
-        notes.append(TYPE_A_ONLY)
+        notes.append(TYPE_A_ONLY_NOTE)
     else:
         notes.append(
             f"{_TIMEBASE} not stated: the timebase error is not in the budget; rate ∝ 1/time, so "
@@ -715,44 +796,14 @@ def _mean_rate_budgets(
         names_out=["mean_rate_deg_s"],
         units_out=["deg/s"],
     )
-    budget = drop_large_dof_notes(gum.budget(0))
-    mc = monte_carlo(
+    budgets = _validated(
+        gum,
         lambda **kw: rate(*(kw[k] for k in dists)),
         dists,
-        trials=_VALIDATION_TRIALS,
-        p=COVERAGE,
+        ["mean_rate_deg_s"],
+        "deg/s",
+        notes,
     )
-    assert not isinstance(mc, dict)
-    check = validate_gum(gum, mc, shortest=False)
-    if check["passed"]:
-        budget = _with_notes(
-            budget,
-            [
-                *notes,
-                f"the GUM interval agrees with a Monte Carlo of {mc.trials} trials within the "
-                f"numerical tolerance {check['delta']:.2g} deg/s (JCGM 101 §8).",
-            ],
-            "GUM, validated by Monte Carlo",
-        )
-    else:
-        lo, hi = mc.interval_symmetric
-        big_u = 0.5 * (hi - lo)
-        budget = dataclasses.replace(
-            budget,
-            U=big_u,
-            k=big_u / budget.u if budget.u > 0 else budget.k,
-            dof_eff=math.inf,
-            method="Monte Carlo",
-            notes=(
-                *(n for n in budget.notes if "truncated to" not in n),
-                *notes,
-                f"the GUM interval ±{budget.U:.3g} deg/s is not validated by a Monte Carlo of "
-                f"{mc.trials} trials (ends off by {max(check['d_low'], check['d_high']):.2g} > "
-                f"{check['delta']:.2g} deg/s, JCGM 101 §8; a rectangular input dominates): U is "
-                f"half the Monte Carlo 95 % interval [{lo:.10g}, {hi:.10g}] deg/s.",
-            ),
-        )
-    budgets = {"mean_rate_deg_s": budget}
     if set_rate is None:
         return budgets
 
@@ -760,22 +811,26 @@ def _mean_rate_budgets(
     per_rev = 360.0 / np.diff(times[: revs * m + 1 : m]) if revs >= 1 else np.zeros(0)
     wander: list[Input] = []
     bias_notes: list[str] = []
+    bias_dists = dict(dists)
     if per_rev.size >= 2:
+        s_w = float(np.std(per_rev, ddof=1)) / math.sqrt(per_rev.size)
         wander.append(
             Input(
                 name="table rate wander between revolutions",
                 value=0.0,
-                u=float(np.std(per_rev, ddof=1)) / math.sqrt(per_rev.size),
+                u=s_w,
                 dof=float(per_rev.size - 1),
                 distribution="normal",
                 unit="deg/s",
                 source=f"Type A, s/√R of {per_rev.size} single-revolution rates",
             )
         )
+        bias_dists["w"] = StudentT(0.0, s_w, float(per_rev.size - 1))
         bias_notes.append(
             "the wander is the spread of the single-revolution rates (it also holds their "
             "timing jitter); it makes the bias a statement about the table at this setting, "
-            "not only about this record."
+            "not only about this record; in the Monte Carlo it is a scaled t with ν = R − 1 "
+            "(JCGM 101 §6.4.9)."
         )
     else:
         bias_notes.append(
@@ -783,6 +838,7 @@ def _mean_rate_budgets(
             "estimated, so the bias budget holds only this record's measurement."
         )
     n_in = len(inputs)
+    names = ["rate_bias_deg_s", "rate_bias_percent"]
 
     def bias(*x: Any) -> Any:
         y = rate(*x[:n_in]) + (x[n_in] if len(x) > n_in else 0.0) - set_rate
@@ -792,21 +848,41 @@ def _mean_rate_budgets(
         g = np.array([*grad(*x[:n_in]), *([1.0] if len(x) > n_in else [])])
         return np.vstack([g, 100.0 * g / set_rate])
 
+    def bias_mc(**kw: Any) -> dict[str, Any]:
+        y = rate(*(kw[k] for k in dists)) + kw.get("w", 0.0) - set_rate
+        return {names[0]: y, names[1]: 100.0 * y / set_rate}
+
     gb = propagate(
         bias,
         [*inputs, *wander],
         jacobian=bias_grad,
         p=COVERAGE,
-        names_out=["rate_bias_deg_s", "rate_bias_percent"],
+        names_out=names,
         units_out=["deg/s", "%"],
     )
     extra = [*notes, *bias_notes, f"set rate {set_rate:.10g} deg/s taken as exact (the reference)."]
-    budgets["rate_bias_deg_s"] = _with_notes(drop_large_dof_notes(gb.budget(0)), extra)
-    budgets["rate_bias_percent"] = _with_notes(drop_large_dof_notes(gb.budget(1)), extra)
+    budgets.update(_validated(gb, bias_mc, bias_dists, names, "deg/s", extra))
     return budgets
 
 
-def _deviation_noises(
+def _point_errors(autocov_lines: FloatArray, m: int, average: int, scale: float) -> FloatArray:
+    """Autocovariance, over the rate points, of the error a curve on the scale lines gives them.
+
+    Rate point i averages ``average`` pulse intervals from boundary line L_i = (i·A + L₀) mod m,
+    so an angle error ξ(L) (arcsec) moves it by scale·(ξ(L_i + A) − ξ(L_i))/3600 (%). Along the
+    points this is stationary with period P = m/gcd(A, m): c_η(k) = (scale/3600)²·[2c(kA) −
+    c(kA + A) − c(kA − A)] (indices of c mod m), k = 0 … P − 1.
+    """
+    a = int(average)
+    period = m // math.gcd(a, m)
+    k = np.arange(period)
+    c = autocov_lines
+    lag = (k * a) % m
+    eta = 2.0 * c[lag] - c[(lag + a) % m] - c[(lag - a) % m]
+    return np.asarray((scale / 3600.0) ** 2 * eta, dtype=np.float64)
+
+
+def _deviation_sources(
     *,
     m: int,
     heads: int,
@@ -814,21 +890,60 @@ def _deviation_noises(
     compensated: bool,
     selfcal: Any,
     specs: InstrumentSpecs | None,
-) -> tuple[list[tuple[Input, DeviationNoise, bool]], list[str]]:
-    """The error curves of the scale (per line, arcsec) that the compensated angle still holds:
-    (row, noise model, whether it is the model's undetectable part)."""
-    out: list[tuple[Input, DeviationNoise, bool]] = []
+    average: int,
+    omega: float,
+    jitter: tuple[float, float, bool],
+    own: tuple[list[int], int, int, float] | None = None,
+) -> tuple[list[ErrorProcess], list[str]]:
+    """The errors of the rate points (% of rate): the timing jitter at each point's two ends,
+    and the scale-curve errors the angle still holds (the self-calibration's noise, the orders
+    it cannot see, an uncompensated graduation), each in its role.
+
+    ``own`` = (head line shifts, rate head, revolutions of the self-calibration, share of the
+    rate's pulses inside them) when the curve was self-calibrated from this capture: the rate
+    head's timing noise is then also in the curve (:func:`rotacal.encoder.selfcal.noise_gain`),
+    and the two partly cancel — a covariance correction of −2·Cov(curve error, the head's angle
+    noise) per line."""
+    sigma_t, sigma_dof, graduation_free = jitter
+    scale = 100.0 / (average * 360.0 / m)  # % of rate per degree of boundary angle error
+    out: list[ErrorProcess] = []
     notes: list[str] = []
-    und = spec_entry(specs, UNDETECTABLE_SPEC)
-    grad = spec_entry(specs, _GRADUATION)
+    out.append(
+        FilteredWhite(
+            Input(
+                name="pulse timing jitter",
+                value=0.0,
+                u=sigma_t,
+                dof=sigma_dof,
+                distribution="normal",
+                unit="s",
+                source="Type A, from the pulse times (see timing_jitter)"
+                + ("" if graduation_free else "; an upper bound that holds the graduation too"),
+            ),
+            "noise" if graduation_free else "bound",
+            level="timing jitter",
+            taps=np.array([-1.0, 1.0]) * scale * abs(omega),
+            sigma=sigma_t,
+        )
+    )
+
+    def curve(inp: Input, autocov: FloatArray, role: Any) -> CirculantError:
+        return CirculantError(inp, role, autocov=_point_errors(autocov, m, average, scale))
+
+    und, und_note = undetectable_input(specs)
+    grad = spec_input(specs, _GRADUATION, name="graduation error (not compensated)", unit="arcsec")
     if compensated:
         noise: DeviationNoise | None = None
+        dof_sc = math.inf
         if isinstance(selfcal, SelfCalibration):
             noise = selfcal._noise
+            pb = selfcal.point_budget
+            if noise is not None and pb is not None and pb.rows:
+                dof_sc = pb.rows[0].dof  # the revolutions' spread (Type A) alone
             if noise is None:
                 notes.append(
-                    "the self-calibration has no uncertainty (one revolution): its noise is not "
-                    "in the budgets."
+                    "the self-calibration has no uncertainty from its data (one revolution): its "
+                    "noise is not in the budgets."
                 )
         elif isinstance(selfcal, Mapping) and selfcal.get("deviation_arcsec_u") is not None:
             try:
@@ -843,7 +958,7 @@ def _deviation_noises(
                 )
             noise = DeviationNoise.white(m, float(np.sqrt(np.mean(u_pts**2))))
             notes.append(
-                "the deviation's uncertainty comes from its JSON (one u per line): drawn as white "
+                "the deviation's uncertainty comes from its JSON (one u per line): taken as white "
                 "noise of that size (it may already hold the undetectable orders)."
             )
         else:
@@ -851,21 +966,41 @@ def _deviation_noises(
                 "the deviation was given without its uncertainty: its noise is not in the budgets."
             )
         if noise is not None:
-            out.append(
-                (
-                    Input(
-                        name="noise of the self-calibrated deviation",
-                        value=0.0,
-                        u=noise.point_u,
-                        distribution="normal",
-                        unit="arcsec",
-                        source="Type A, the self-calibration's budget (per line)",
-                        description="normal, with the curve's spectrum",
-                    ),
-                    noise,
-                    False,
-                )
+            inp = Input(
+                name="noise of the self-calibrated deviation",
+                value=0.0,
+                u=noise.point_u,
+                dof=dof_sc,
+                distribution="normal",
+                unit="arcsec",
+                source="Type A, the self-calibration's budget (per line)",
+                description="normal, with the curve's spectrum",
             )
+            out.append(curve(inp, noise.autocov(), "noise"))
+            if own is not None and own[2] >= 2:
+                shifts, head, revs, share = own
+                kappa = noise_gain(shifts, m, head)
+                s2 = (abs(omega) * sigma_t * 3600.0) ** 2  # the head's angle noise, arcsec²
+                cross = np.fft.irfft(kappa.real, m) * (s2 / revs)  # Cov(curve(L), noise(L − ℓ))
+                out.append(
+                    CovarianceCorrection(
+                        Input(
+                            name="correlation of the rate head's timing noise with the curve",
+                            value=0.0,
+                            u=0.0,
+                            unit="arcsec",
+                            source=(
+                                f"the curve was self-calibrated from this capture over {revs} "
+                                "revolutions, so it holds this head's own timing noise "
+                                f"(gain {float(np.mean(kappa.real[kappa.real != 0])):.3g} per "
+                                "order, averaged over the revolutions)"
+                            ),
+                        ),
+                        "noise",
+                        level="timing jitter",
+                        autocov=_point_errors(-2.0 * share * cross, m, average, scale),
+                    )
+                )
     if (compensated or use_all) and und is not None:
         n_sc = heads
         if isinstance(selfcal, SelfCalibration):
@@ -875,25 +1010,12 @@ def _deviation_noises(
         mask = np.zeros(m // 2 + 1, dtype=bool)
         if n_sc >= 2:
             mask[undetectable_orders(n_sc, m)] = True
-        model = DeviationNoise(m, np.zeros(m // 2 + 1), mask, float(und.std))
-        out.append(
-            (
-                Input(
-                    name="orders no head arrangement sees (multiples of n)",
-                    value=0.0,
-                    u=float(und.std),
-                    dof=float(getattr(und, "dof", math.inf)),
-                    distribution=str(und.name),
-                    unit="arcsec",
-                    source=f"Type B, {UNDETECTABLE_SPEC}",
-                    description=str(und.describe()),
-                ),
-                model,
-                True,
-            )
-        )
+        model = DeviationNoise(m, np.zeros(m // 2 + 1), mask, und.u)
+        out.append(curve(und, model.autocov(undetectable=True), "bound"))
+        if und_note:
+            notes.append(und_note)
         notes.append(
-            f"{UNDETECTABLE_SPEC} is drawn as a random curve, white across the undetectable "
+            f"{UNDETECTABLE_SPEC} is taken as a random curve, white across the undetectable "
             "orders (the cautious choice for a rate: a smooth n-th harmonic of the same rms moves "
             "it far less)."
         )
@@ -904,23 +1026,13 @@ def _deviation_noises(
         )
     if not compensated and not use_all:
         if grad is not None:
-            model = DeviationNoise.white(m, float(grad.std))
-            out.append(
-                (
-                    Input(
-                        name="graduation error (not compensated)",
-                        value=0.0,
-                        u=float(grad.std),
-                        dof=float(getattr(grad, "dof", math.inf)),
-                        distribution=str(grad.name),
-                        unit="arcsec",
-                        source=f"Type B, {_GRADUATION}",
-                        description=str(grad.describe()),
-                    ),
-                    model,
-                    False,
+            out.append(curve(grad, DeviationNoise.white(m, grad.u).autocov(), "bound"))
+            if grad.value != 0.0:
+                notes.append(
+                    f"the stated mean {grad.value:g} arcsec of {_GRADUATION} is a common offset "
+                    "of every reading: a rate takes angle differences, so the correction for it "
+                    "is exactly 0 (GUM §3.2.4); its u stays in the budget."
                 )
-            )
         else:
             notes.append(
                 "the rate is not compensated: the scale's graduation error is in it but not in its "
@@ -931,71 +1043,21 @@ def _deviation_noises(
 
 def _rate_deviation_budgets(
     dev_pct: FloatArray,
-    *,
-    m: int,
-    average: int,
-    line_offset: int,
-    omega: float,
-    jitter: tuple[float, float, bool],
-    curves: list[tuple[Input, DeviationNoise, bool]],
+    sources: list[ErrorProcess],
     notes: list[str],
     specs: InstrumentSpecs | None,
-) -> tuple[dict[str, UncertaintyBudget], dict[str, float]]:
-    """Monte Carlo budgets of the rms and peak rate deviation (with their bias).
+) -> dict[str, Summary]:
+    """Budgets of the rms (closed form) and the peak (Monte Carlo) of the rate deviation.
 
-    A rate point averages ``average`` pulse intervals, so an angle error ξ_j at pulse j (deg:
-    the angle's error minus ω times the time's error) moves it by (ξ_end − ξ_start)/(A·Δθ)
-    relative: only the errors at the block boundaries count.
+    A rate point averages A pulse intervals, so an angle error ξ_j at pulse j (deg: the angle's
+    error minus ω times the time's error) moves it by (ξ_end − ξ_start)/(A·Δθ) relative: only the
+    errors at the block boundaries count.
 
     References
     ----------
     JCGM 101:2008 §7 (Monte Carlo); Kokuyama et al. (seed 004) §5 (the time-difference rate,
-    10-point averaging).
+    10-point averaging); :mod:`rotacal.uncertainty.summaries`.
     """
-    sigma_t, sigma_dof, _ = jitter
-    nb = dev_pct.size
-    bounds = np.arange(nb + 1) * average
-    lines = (bounds + line_offset) % m
-    scale = 100.0 / (average * 360.0 / m)  # % of rate per degree of boundary error
-
-    def jitter_draw(rng: np.random.Generator, size: int) -> FloatArray:
-        xi = rng.standard_normal((size, nb + 1)) * (abs(omega) * sigma_t)
-        return scale * np.diff(xi, axis=-1)
-
-    def line_draw(noise: DeviationNoise, undetectable: bool) -> Any:
-        # only the lines at the block boundaries matter: every average-th line
-        draw = noise.sampler(average, undetectable=undetectable)
-        idx = lines if m % average else np.arange(nb + 1) % (m // average)
-
-        def f(rng: np.random.Generator, size: int) -> FloatArray:
-            xi = draw(rng, size)[:, idx] / 3600.0
-            return scale * np.diff(xi, axis=-1)
-
-        return f
-
-    inputs = [
-        Input(
-            name="pulse timing jitter",
-            value=0.0,
-            u=sigma_t,
-            dof=sigma_dof,
-            distribution="normal",
-            unit="s",
-            source="Type A, from the pulse times (see timing_jitter)",
-        ),
-        *(inp for inp, _, _ in curves),
-    ]
-    # every error is in the measured rate: each biases the rms and peak
-    sources = [(inputs[0], jitter_draw, True)]
-    sources.extend((inp, line_draw(noise, und), True) for inp, noise, und in curves)
-    mc = statistic_samples(
-        dev_pct,
-        sources,
-        {
-            "rms": lambda x: np.sqrt(np.mean(x * x, axis=-1)),
-            "peak": lambda x: np.max(np.abs(x), axis=-1),
-        },
-    )
     extra = [
         *notes,
         "the measurand is the table's rate deviation in this record, so the table's own "
@@ -1003,19 +1065,15 @@ def _rate_deviation_budgets(
         "alike and leaves a relative deviation unchanged.",
     ]
     if specs is None:
-        extra.append(TYPE_A_ONLY)
-    plain = {
-        "rms": float(np.sqrt(np.mean(dev_pct**2))),
-        "peak": float(np.max(np.abs(dev_pct))),
+        extra.append(TYPE_A_ONLY_NOTE)
+    return {
+        "rate_deviation_rms_percent": rms_budget(
+            "rate_deviation_rms_percent", "%", dev_pct, sources, notes=extra
+        ),
+        "rate_deviation_peak_percent": mc_budget(
+            "rate_deviation_peak_percent", "%", dev_pct, sources, statistic="peak", notes=extra
+        ),
     }
-    budgets = {
-        f"rate_deviation_{key}_percent": mc_budget(
-            f"rate_deviation_{key}_percent", "%", plain[key], mc[key], inputs, notes=extra
-        )
-        for key in ("rms", "peak")
-    }
-    biases = {key: plain[key] - simex_estimate(plain[key], mc[key]) for key in ("rms", "peak")}
-    return budgets, biases
 
 
 def calibrate_rate(
@@ -1056,15 +1114,18 @@ def calibrate_rate(
         Set False to skip compensation (results then equal the uncompensated ones).
     specs : InstrumentSpecs, optional
         The lab's instrument specifications (Type B inputs). Used: ``timebase.relative_error``
-        (mean rate and bias; a stated mean error δ̂ corrects the rates by (1 + δ̂)),
+        (mean rate and bias; a stated mean error δ̂ corrects the rates by (1 + δ̂), GUM §3.2.4),
         ``encoder.undetectable_harmonics_arcsec`` (what the compensation cannot remove),
-        ``encoder.graduation_error_arcsec`` (an uncompensated rate). None: Type A only.
+        ``encoder.graduation_error_arcsec`` (an uncompensated rate; its mean is a common offset
+        that cancels in every rate). None: Type A only. A specification is never subtracted from
+        the rate deviation: it widens its interval only.
 
     Returns
     -------
     RateResult
         With uncertainty budgets of the mean rate, the bias, the rms and peak rate deviation
-        and the uncertainty of every s(φ).
+        (plain value, bias of the noise of known level, 95 % interval for the true value) and
+        the uncertainty of every s(φ).
 
     Raises
     ------
@@ -1112,6 +1173,8 @@ def calibrate_rate(
     notes: list[str] = []
 
     made: SelfCalibration | None = None
+    own_revs: int | None = None  # revolutions of a curve self-calibrated from this capture
+    own_shifts: list[int] | None = None
     deviation: FloatArray | None = None
     shift: int | None = None
     correlation: float | None = None
@@ -1141,6 +1204,12 @@ def calibrate_rate(
                 and dev.fingerprint[2] == here[2]
             )
             shift = 0  # deviation index of head 0's first pulse
+            if same and dev.shifts is not None and len(dev.shifts) == n:
+                own_shifts = dev.shifts
+                if isinstance(selfcal, SelfCalibration):
+                    own_revs = selfcal.revolutions_used
+                elif isinstance(selfcal, Mapping):
+                    own_revs = _json_number(selfcal, "revolutions_used", int)
             if not same:
                 shift, correlation = align_deviation(trains, deviation, m)
                 if correlation < MIN_ALIGNMENT_CORRELATION:
@@ -1235,11 +1304,11 @@ def calibrate_rate(
             )
 
     # ---- uncertainty
-    tb = spec_entry(specs, _TIMEBASE)
-    correction = float(tb.mean) if tb is not None else 0.0
+    correction = specs.mean(_TIMEBASE) if specs is not None else 0.0
     if correction != 0.0:
         notes.append(
-            f"rates corrected for the stated timebase error {correction:+.3g} (× {1 + correction:.10g})."
+            f"{specs.correction_note(_TIMEBASE) if specs is not None else ''} Every rate is "
+            f"multiplied by 1 + δ̂ = {1 + correction:.10g}."
         )
     raw_rate = mean_rate  # in the DAQ's seconds, as the rate points
     budgets = _mean_rate_budgets(times, angle, m, revs, set_rate, specs, jitter)
@@ -1248,34 +1317,34 @@ def calibrate_rate(
     if set_rate is not None:
         bias = budgets["rate_bias_deg_s"].value
         bias_pct = budgets["rate_bias_percent"].value
-    curves, curve_notes = _deviation_noises(
+    sources, source_notes = _deviation_sources(
         m=m,
         heads=n,
         use_all=use_all,
         compensated=deviation is not None,
         selfcal=selfcal,
         specs=specs,
-    )
-    dev_budgets, dev_bias = _rate_deviation_budgets(
-        dev_pct,
-        m=m,
         average=int(average),
-        line_offset=shift or 0,
         omega=raw_rate,
         jitter=jitter,
-        curves=curves,
-        notes=curve_notes,
-        specs=specs,
+        own=(
+            None
+            if own_shifts is None or own_revs is None or use_all
+            else (own_shifts, k, own_revs, min(1.0, own_revs * m / max(times.size - 1, 1)))
+        ),
     )
-    budgets.update(dev_budgets)
+    dev_sum = _rate_deviation_budgets(dev_pct, sources, source_notes, specs)
+    budgets.update({key: sm.budget for key, sm in dev_sum.items()})
+    rms_sum = dev_sum["rate_deviation_rms_percent"]
+    peak_sum = dev_sum["rate_deviation_peak_percent"]
     a_u, a_big_u, a_edf, a_lo, a_hi, a_alpha = allan_uncertainty(s, phi, 360.0 / m, times.size)
     factor = 1.0 + correction
     rate = rate * factor
     rate_nom = rate_nom * factor
     return RateResult(
         mean_rate_deg_s=float(mean_rate),
-        rate_deviation_rms_percent=float(np.sqrt(np.mean(dev_pct**2))),
-        rate_deviation_peak_percent=float(np.max(np.abs(dev_pct))),
+        rate_deviation_rms_percent=rms_sum.budget.value,  # one truth: the budgets' values
+        rate_deviation_peak_percent=peak_sum.budget.value,
         rate_deviation_rms_percent_uncompensated=float(np.sqrt(np.mean(dev_nom_pct**2))),
         rate_deviation_peak_percent_uncompensated=float(np.max(np.abs(dev_nom_pct))),
         allan_angle_deg=[float(x) for x in phi],
@@ -1301,10 +1370,10 @@ def calibrate_rate(
         timing_jitter_s=jitter[0],
         timing_jitter_dof=jitter[1],
         timebase_correction=correction,
-        rate_deviation_rms_bias_percent=dev_bias["rms"],
-        rate_deviation_rms_corrected_percent=dev_budgets["rate_deviation_rms_percent"].value,
-        rate_deviation_peak_bias_percent=dev_bias["peak"],
-        rate_deviation_peak_corrected_percent=dev_budgets["rate_deviation_peak_percent"].value,
+        rate_deviation_rms_percent_bias=rms_sum.bias,
+        rate_deviation_rms_percent_bias_corrected=rms_sum.bias_corrected,
+        rate_deviation_peak_percent_bias=peak_sum.bias,
+        rate_deviation_peak_percent_bias_corrected=peak_sum.bias_corrected,
         allan_relative_u=[float(x) for x in a_u],
         allan_relative_U=[float(x) for x in a_big_u],
         allan_relative_edf=[float(x) for x in a_edf],

@@ -692,7 +692,8 @@ def distribution_from_spec(spec: Mapping[str, Any], *, where: str) -> Distributi
     ------
     ConfigError
         One line naming ``where``: unknown distribution, unknown or missing key, a key that does
-        not apply, a non-number, a negative u or half-width, lower > upper.
+        not apply, a non-number, a negative u or half-width, lower > upper, a t distribution
+        with dof ≤ 2, a u that is not finite (or whose square overflows).
 
     References
     ----------
@@ -778,7 +779,8 @@ def distribution_from_spec(spec: Mapping[str, Any], *, where: str) -> Distributi
     dof = num("dof", allow_inf=True) if "dof" in spec else math.inf
     if "dof" in spec and dof <= 0.0:
         raise ConfigError(f"{where}: 'dof' must be > 0 (or inf), got {spec['dof']!r}.")
-    try:
+
+    def build() -> Distribution:
         if kind == "normal":
             need("value")
             return Normal(num("value"), std_u(), dof)
@@ -806,10 +808,26 @@ def distribution_from_spec(spec: Mapping[str, Any], *, where: str) -> Distributi
             return Arcsine(0.5 * (lo + hi), 0.5 * (hi - lo), dof)
         if kind == "t":
             need("value", "dof")
+            if dof <= 2.0:
+                raise ConfigError(
+                    f"{where}: a t distribution needs dof > 2 (for ν ≤ 2 its standard "
+                    f"uncertainty is infinite), got {spec['dof']!r}; give ν = n − 1 ≥ 3."
+                )
             return StudentT(num("value"), std_u(), dof)
         need("value")
         return Constant(num("value"))
+
+    try:
+        dist = build()
     except ConfigError as exc:
         if str(exc).startswith(where):
             raise
         raise ConfigError(f"{where}: {exc}") from None
+    u = float(dist.std)
+    if not (math.isfinite(u) and math.isfinite(u * u)):
+        why = "too large (u² overflows)" if math.isfinite(u) else "not finite"
+        raise ConfigError(
+            f"{where}: the standard uncertainty u = {u:.3g} is {why}; "
+            "state a finite width in the unit of the quantity."
+        )
+    return dist

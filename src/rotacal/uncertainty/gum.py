@@ -60,6 +60,8 @@ _R_TOLERANCE = 1e-12
 #: Relative and absolute-by-u steps of the central differences for the Jacobian.
 _STEP_U = 1e-3
 _STEP_X = 1e-9
+#: ν_eff from which the truncation note is left out (the t-factor equals the normal one there).
+_NU_NOTE_MAX = 1e6
 #: Steps of the second- and third-order differences for GUM §5.1.2 note, as fractions of u(x_i).
 _STEP_SECOND = 0.02
 _STEP_THIRD = 0.5
@@ -412,7 +414,7 @@ def welch_satterthwaite(contributions: Any, dofs: Any) -> float:
         raise ConfigError("welch_satterthwaite needs at least one contribution.")
     if not np.all(np.isfinite(c)):
         i = int(np.flatnonzero(~np.isfinite(c))[0])
-        raise ConfigError(f"contribution {i} = {c[i]!r} is not finite; give c_i·u(x_i).")
+        raise ConfigError(f"contribution {i} = {float(c[i])!r} is not finite; give c_i·u(x_i).")
     if np.any(np.isnan(nu)) or np.any(nu <= 0.0):
         i = int(np.flatnonzero(np.isnan(nu) | (nu <= 0.0))[0])
         raise ConfigError(f"degrees of freedom ν_{i} = {nu[i]!r} must be > 0 (math.inf for none).")
@@ -896,6 +898,16 @@ def propagate(
     else:
         jac = _user_jacobian(jacobian, x, m, n)
 
+    with np.errstate(over="ignore", invalid="ignore"):
+        c_check = jac * u[None, :]
+        bad = ~np.isfinite(c_check) | ~np.isfinite(c_check**2)
+    if np.any(bad):  # a huge u (a unit slip) must not end in an overflow deep inside
+        j_bad, i_bad = (int(v[0]) for v in np.nonzero(bad))
+        raise ConfigError(
+            f"input '{names_in[i_bad]}': its contribution c·u = {float(jac[j_bad, i_bad]):.3g} × "
+            f"{float(u[i_bad]):.3g} to {out_names[j_bad]} is too large to combine; check the "
+            "input's u and unit (or the model's sensitivity to it)."
+        )
     cov_x = u[:, None] * corr * u[None, :]
     cov_y = jac @ cov_x @ jac.T
     cov_y = 0.5 * (cov_y + cov_y.T)
@@ -931,12 +943,12 @@ def propagate(
             notes_j.append(f"k = {k_user:g} was given; p = {pf:g} is nominal.")
         else:
             kk[j] = coverage_factor(nu_j, pf)
-            if math.isfinite(nu_j):
+            if math.isfinite(nu_j) and nu_j < _NU_NOTE_MAX:  # beyond, t_p(ν) = z_p to 6 digits
                 nu_t = math.floor(nu_j + 1e-9 * max(1.0, nu_j))
                 if nu_t != nu_j:
                     notes_j.append(
-                        f"ν_eff = {nu_j:.4g} truncated to {nu_t} for k = t_p(ν) = {kk[j]:.4g} "
-                        "(GUM G.4.1 note 1)."
+                        f"ν_eff = {nu_j:.{len(str(nu_t)) + 2}g} truncated to {nu_t} for "
+                        f"k = t_p(ν) = {kk[j]:.4g} (GUM G.4.1 note 1)."
                     )
         if second_order:
             notes_j.append(
