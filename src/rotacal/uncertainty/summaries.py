@@ -60,6 +60,7 @@ interval end).
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
@@ -120,7 +121,7 @@ def drop_large_dof_notes(b: UncertaintyBudget) -> UncertaintyBudget:
 
 # ------------------------------------------------------------------------------ error processes
 @dataclasses.dataclass(frozen=True)
-class ErrorProcess:
+class ErrorProcess(abc.ABC):
     """A stationary Gaussian error along a vector of N elements, and its role in a budget.
 
     Attributes
@@ -145,15 +146,15 @@ class ErrorProcess:
         if self.role not in _ROLES:
             raise ConfigError(f"role must be one of {_ROLES}, got {self.role!r}.")
 
+    @abc.abstractmethod
     def lags(self, n: int) -> FloatArray:
         """Autocovariance g(ℓ), ℓ = 0 … n − 1, along the vector (unit of the vector, squared)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def draw_at(
         self, rng: np.random.Generator, size: int, positions: NDArray[np.int64], n: int
     ) -> FloatArray:
         """``size`` draws of the error at the given elements of an n-vector, shape (size, K)."""
-        raise NotImplementedError
 
     def local_cost(self, k: int) -> float:
         """Relative cost per trial of drawing K elements through a Cholesky factor (inf: never)."""
