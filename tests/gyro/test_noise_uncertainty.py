@@ -82,9 +82,8 @@ def test_one_point_variance_is_greenhalls_edf_where_that_is_exact():
     for alpha, ms in ((2, (1, 10, 1000, 30000)), (0, (200, 2000, 20000)), (-2, (200, 2000, 20000))):
         for m in ms:
             edf = float(edf_overlapping_adev(n_phase, [m], alpha)[0])
-            assert 1.0 / (2.0 * line_level_variance([m], n_phase, alpha)) == pytest.approx(
-                edf, rel=2e-3
-            ), (alpha, m)
+            edf_of_line = 1.0 / (2.0 * line_level_variance([m], n_phase, alpha))
+            assert edf_of_line == pytest.approx(edf, rel=2e-3), (alpha, m)
     with pytest.raises(ConfigError, match="noise_alpha"):
         line_level_variance([10], 1000, -1)
     with pytest.raises(ConfigError, match="cluster sizes"):

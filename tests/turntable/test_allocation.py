@@ -293,7 +293,7 @@ def test_seed_upper_bounds_are_eq34_of_the_kkt_optima(alloc) -> None:
     assert alloc.binding["alpha_x2"] == "gamma" and alloc.binding["alpha_y2"] == "psi"
     # θ: I/2, shrunk by the full-model guard by a second-order amount only
     scale = alloc.optimiser["full_model_scale"]["theta"]
-    assert 1.0 - 1e-3 < scale < 1.0
+    assert scale < 1.0 and scale == pytest.approx(1.0, abs=1e-3)
     assert ub["phi_z2"] == pytest.approx(I_SEED / 2 * scale, rel=1e-12)
     assert ub["alpha_z1"] == pytest.approx(I_SEED / 2 * scale, rel=1e-12)
     assert ub["eta"] is None  # "the intersection error has no effect"
@@ -578,7 +578,8 @@ def test_seed_chain_with_the_default_averaging_matches_closed_form_kkt() -> None
     # eq. (34), then the full-model guard's second-order shrink of ψ's errors (all five of them)
     ub = a.upper_bounds_rad
     s_psi = a.optimiser["full_model_scale"]["psi"]
-    assert 1.0 - 1e-3 < s_psi <= 1.0 and a.optimiser["full_model_scale"]["gamma"] == 1.0
+    assert s_psi <= 1.0 and s_psi == pytest.approx(1.0, abs=1e-3)
+    assert a.optimiser["full_model_scale"]["gamma"] == 1.0
     for name in ("phi_y1", "alpha_x1", "eps_x", "eps_y"):
         assert ub[name] == pytest.approx(min(g_s[0], g_c[0]) * s_psi, rel=1e-6), name
     assert ub["alpha_x2"] == pytest.approx(g_k[0], rel=1e-6)
