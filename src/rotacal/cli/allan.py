@@ -1,0 +1,108 @@
+"""``rotacal allan``: Allan deviation and IEEE 952 noise terms."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import click
+
+from rotacal.errors import CaptureError, ConfigError
+
+from ._app import cli
+from ._common import (
+    _analysis_options,
+    _check_outputs,
+    _status,
+    _write_json,
+    _write_report,
+)
+
+
+@cli.command("allan")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option("--fs-hz", type=float, default=None, help="Sampling rate, when there is no time_s.")
+@click.option(
+    "--unit",
+    type=click.Choice(["deg/s", "rad/s", "deg/h", "other"]),
+    default="deg/s",
+    show_default=True,
+    help="Unit of the rate column (the named noise terms are in deg).",
+)
+@click.option(
+    "--taus",
+    type=click.Choice(["log", "octave", "decade", "all"]),
+    default="log",
+    show_default=True,
+    help="τ grid: 'all' computes every cluster size (O(N log² N)).",
+)
+@_analysis_options
+def allan_cmd(
+    capture: str,
+    fs_hz: float | None,
+    unit: str,
+    taus: str,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Overlapping Allan deviation and IEEE 952 noise terms of a rate column.
+
+    --column NAME picks the rate column (default rate_deg_s); --column OLD=NEW maps names as
+    everywhere else. A time_s column, when present, gives the sampling rate.
+    """
+    from rotacal.gyro.noise import gyro_noise
+    from rotacal.io import parse_column_mapping, read_capture
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    names = [c for c in columns if "=" not in c]
+    mappings = [c for c in columns if "=" in c]
+    if len(names) > 1:
+        raise ConfigError(f"--column names one rate column; got {', '.join(names)}")
+    rate_column = names[0] if names else "rate_deg_s"
+    mapping = parse_column_mapping(mappings)
+    with _status(f"reading {capture}"):
+        cap = read_capture(capture, mapping=mapping, group=group, columns=None)
+    if rate_column not in cap.columns:
+        raise CaptureError(
+            f"{Path(capture).name} has no column {rate_column!r} (it has "
+            f"{', '.join(cap.file_columns)}); name the rate column with --column NAME"
+        )
+    time_s = cap.columns.get("time_s")
+    if time_s is None and fs_hz is None:
+        raise ConfigError(f"{Path(capture).name} has no time_s column: give --fs-hz")
+    with _status("computing the Allan deviation"):
+        result = gyro_noise(
+            cap[rate_column],
+            fs_hz=fs_hz if time_s is None else None,
+            time_s=time_s,
+            unit=unit,
+            taus=taus,
+            column=rate_column,
+            specs=kw.pop("specs"),
+        )
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.noise import noise_section
+
+        _write_report(
+            "Gyro noise: Allan deviation",
+            "IEEE Std 952-1997 Annex C: overlapping Allan deviation and noise terms",
+            [noise_section(result)],
+            capture,
+            report_path,
+        )
+    if json_path is None and report_path is None:
+        for label, value, u in (
+            ("angle random walk", result.arw_deg_rt_h, "deg/rt-h"),
+            ("bias instability", result.bias_instability_deg_h, "deg/h"),
+            ("rate random walk", result.rrw_deg_h_rt_h, "deg/h/rt-h"),
+            ("quantization", result.quantization_deg, "deg"),
+            ("rate ramp", result.rate_ramp_deg_h2, "deg/h^2"),
+        ):
+            text = "not seen" if value is None else f"{value:.4g} {u}"
+            click.echo(f"{label:<18} {text}")
+        for note in result.notes:
+            click.echo(f"note               {note}")

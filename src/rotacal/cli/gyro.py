@@ -1,0 +1,254 @@
+"""``rotacal gyro``: gyroscope calibrations (seeds 004, 003, 001)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import click
+import numpy as np
+
+from rotacal.errors import CaptureError, ConfigError
+
+from ._app import cli
+from ._common import (
+    _analysis_options,
+    _check_outputs,
+    _read,
+    _status,
+    _write_json,
+    _write_report,
+)
+
+
+@cli.group()
+def gyro() -> None:
+    """Gyroscope calibrations on the table (seeds 004, 003, 001)."""
+
+
+@gyro.command("scale-factor")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option(
+    "--full-scale-deg-s",
+    type=float,
+    default=None,
+    help="FS for the nonlinearity in %FS [default: the largest |set rate|].",
+)
+@click.option(
+    "--requirement",
+    default=None,
+    help="Check against a named requirement (fmvss126) and say pass/fail with the margin.",
+)
+@click.option("--output-unit", default="", help="Unit of the output column, for the report.")
+@_analysis_options
+def gyro_scale_factor(
+    capture: str,
+    full_scale_deg_s: float | None,
+    requirement: str | None,
+    output_unit: str,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Scale factor, bias, nonlinearity %FS: capture with rate_deg_s (set rate), output."""
+    from rotacal.gyro import calibrate_scale_factor
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    cap = _read(capture, ["rate_deg_s", "output"], columns, group)
+    with _status("fitting"):
+        result = calibrate_scale_factor(
+            cap["rate_deg_s"],
+            cap["output"],
+            full_scale_deg_s=full_scale_deg_s,
+            requirement=requirement,
+            output_unit=output_unit,
+            specs=kw.pop("specs"),
+        )
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.gyro_scale import scale_factor_section
+
+        _write_report(
+            "Gyro scale factor and nonlinearity",
+            "Kokuyama et al. (seed 004), §4: V(Ω) = S·Ω + V0 + δ(Ω), NL = max|δ|/FS",
+            [scale_factor_section(result)],
+            capture,
+            report_path,
+        )
+    if json_path is None and report_path is None:
+        for line in result.summary_lines():
+            click.echo(line)
+
+
+@gyro.command("triad")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option(
+    "--reject-k",
+    type=float,
+    default=None,
+    help="Reject residuals beyond k robust sigmas [default: 5 % family-wise for Gaussian noise].",
+)
+@_analysis_options
+def gyro_triad(
+    capture: str, reject_k: float | None, columns: Sequence[str], group: str | None, **kw: Any
+) -> None:
+    """3-axis K and bias with outlier rejection: wx_deg_s, wy_deg_s, wz_deg_s, ux, uy, uz."""
+    from rotacal.gyro import RATE_COLUMNS, TRIAD_OUTPUT_COLUMNS, calibrate_triad_columns
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    cap = _read(capture, [*RATE_COLUMNS, *TRIAD_OUTPUT_COLUMNS], columns, group)
+    with _status("fitting"):
+        result = calibrate_triad_columns(cap.columns, reject_k=reject_k, specs=kw.pop("specs"))
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.triad import triad_section
+
+        _write_report(
+            "3-axis gyro calibration",
+            "Modified six-position method (seed 003): u = K·ω + b by least squares",
+            [triad_section(result)],
+            capture,
+            report_path,
+        )
+    if json_path is None and report_path is None:
+        k = np.asarray(result.scale_misalignment)
+        click.echo("K (output per deg/s):")
+        for row in k:
+            click.echo("   " + "  ".join(f"{x:+.6f}" for x in row))
+        click.echo("bias              " + "  ".join(f"{x:+.5g}" for x in result.bias))
+        click.echo(f"outliers rejected {result.outliers_rejected}")
+        click.echo("residual rms      " + "  ".join(f"{x:.3g}" for x in result.residual_rms))
+
+
+@gyro.command("rotations")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option(
+    "--sections",
+    "sections_path",
+    type=click.Path(dir_okay=False),
+    required=True,
+    help="JSON of sample ranges: imucal's Ferraris list (x_p … z_a, x_rot, y_rot, z_rot) or "
+    "{'rotations': {'x': [start, stop], …}, 'static': {…}} (a twin's truth file works).",
+)
+@click.option("--fs-hz", type=float, default=None, help="Sampling rate, when there is no time_s.")
+@click.option(
+    "--angle-deg", type=float, default=360.0, show_default=True, help="Angle of each rotation."
+)
+@_analysis_options
+def gyro_rotations(
+    capture: str,
+    sections_path: str,
+    fs_hz: float | None,
+    angle_deg: float,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Triad K and bias from rotations through a known angle (Ferraris): ux, uy, uz."""
+    from rotacal.gyro import TRIAD_OUTPUT_COLUMNS, calibrate_triad_rotations, ferraris_sections
+    from rotacal.io import parse_column_mapping, read_capture
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    try:
+        spec = json.loads(Path(sections_path).read_text(encoding="utf-8"))
+    except OSError as e:
+        raise ConfigError(f"--sections {sections_path}: cannot read it ({e.strerror})") from None
+    except json.JSONDecodeError as e:
+        raise ConfigError(
+            f"--sections {sections_path} is not JSON ({e.msg}, line {e.lineno})"
+        ) from None
+    if not isinstance(spec, dict):
+        raise ConfigError(f"--sections {sections_path} must hold a JSON object of sample ranges")
+    if "rotations" in spec:
+        rotations, static = spec["rotations"], spec.get("static")
+    else:
+        rotations, static = ferraris_sections(spec)
+    with _status(f"reading {capture}"):
+        cap = read_capture(capture, mapping=parse_column_mapping(columns), group=group)
+    missing = [c for c in TRIAD_OUTPUT_COLUMNS if c not in cap.columns]
+    if missing:
+        raise CaptureError(
+            f"{Path(capture).name} has no column {missing[0]!r}; map the gyro outputs with "
+            "--column gyr_x=ux (and uy, uz)"
+        )
+    if "time_s" in cap.columns:
+        step = float(np.median(np.diff(cap["time_s"])))
+        fs_hz = 1.0 / step if fs_hz is None else fs_hz
+    if fs_hz is None:
+        raise ConfigError(f"{Path(capture).name} has no time_s column: give --fs-hz")
+    rate = np.column_stack([cap[c] for c in TRIAD_OUTPUT_COLUMNS])
+    with _status("integrating the rotations"):
+        result = calibrate_triad_rotations(
+            rate, fs_hz, rotations, static=static, angle_deg=angle_deg, specs=kw.pop("specs")
+        )
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.triad import rotations_section
+
+        _write_report(
+            "Gyro triad from rotations",
+            "Rotations through a known angle (Ferraris et al.): Θ = K·Φ by least squares",
+            [rotations_section(result)],
+            capture,
+            report_path,
+        )
+    if json_path is None and report_path is None:
+        click.echo("K (output per deg/s):")
+        for row in np.asarray(result.scale_misalignment):
+            click.echo("   " + "  ".join(f"{x:+.6f}" for x in row))
+        click.echo("bias              " + "  ".join(f"{x:+.5g}" for x in result.bias))
+
+
+@gyro.command("multiposition")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option("--axis", type=click.Choice(["x", "y"]), required=True, help="Gyro axis.")
+@click.option(
+    "--latitude-deg",
+    type=float,
+    default=None,
+    help="Latitude of the laboratory (or site.latitude_deg in --specs).",
+)
+@_analysis_options
+def gyro_multiposition(
+    capture: str,
+    axis: str,
+    latitude_deg: float | None,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Drift coefficients: phi1_deg, phi2_deg, output_deg_h (seed 001, eqs. 1–6)."""
+    from rotacal.gyro import calibrate_multiposition
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    cap = _read(capture, ["phi1_deg", "phi2_deg", "output_deg_h"], columns, group)
+    with _status("fitting"):
+        result = calibrate_multiposition(
+            cap["phi1_deg"],
+            cap["phi2_deg"],
+            cap["output_deg_h"],
+            axis=axis,
+            latitude_deg=latitude_deg,
+            specs=kw.pop("specs"),
+        )
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.multiposition import multiposition_section
+
+        _write_report(
+            "Multiposition calibration of drift coefficients",
+            "Seed 001, eqs. (1)–(6): Earth rate and gravity at each turntable position",
+            [multiposition_section(result)],
+            capture,
+            report_path,
+        )
+    if json_path is None and report_path is None:
+        for name, value in result.drift_coefficients.items():
+            u = result.drift_coefficients_u[name]
+            click.echo(f"{name:<5} {value:+.6f} ± {u:.2g}")

@@ -1,0 +1,204 @@
+"""``rotacal motion``: sinusoidal-motion calibration (seed 000)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import click
+
+from rotacal.errors import CaptureError
+
+from ._app import cli
+from ._common import (
+    _IN_MEMORY_MAX_SAMPLES,
+    F,
+    _analysis_options,
+    _check_outputs,
+    _read,
+    _refuse_overwrite,
+    _sample_progress,
+    _status,
+    _write_json,
+)
+
+
+@cli.group()
+def motion() -> None:
+    """Sinusoidal-motion calibration of a rotary table (Feng et al. 2023)."""
+
+
+def _motion_common(func: F) -> F:
+    options = [
+        click.option(
+            "--harmonics",
+            default=10,
+            show_default=True,
+            help="N_H: highest harmonic in fit and THD.",
+        ),
+        click.option(
+            "--periods", type=int, default=None, help="Whole periods to analyse [default: all]."
+        ),
+        click.option(
+            "--set-amplitude-deg",
+            type=float,
+            default=None,
+            help="Set amplitude of the table (deg).",
+        ),
+        click.option(
+            "--set-frequency-hz", type=float, default=None, help="Set frequency of the table (Hz)."
+        ),
+    ]
+    for option in reversed(options):
+        func = option(func)
+    return _analysis_options(func)
+
+
+def _finish_motion(
+    result: Any, capture_path: str, json_path: str | None, report_path: str | None
+) -> None:
+    protect = (Path(capture_path),)
+    for note in result.notes:
+        if "partial" in note:
+            click.echo(
+                f"rotacal: warning: {note}: amplitude and THD may be biased by the signals' "
+                "gain and phase errors; prefer the LTS scheme for motions this small",
+                err=True,
+            )
+    _write_json(result.to_dict(), json_path, protect)
+    if report_path:
+        from rotacal.report.html import Report, write_html
+        from rotacal.report.motion import motion_section
+
+        report = Report(
+            title="Sinusoidal-motion calibration",
+            subtitle="Feng et al. (2023), Sensors 23:4876 — IEEE Std 1057 sine fitting",
+            sections=[motion_section(result)],
+            inputs={"capture": str(capture_path)},
+        )
+        _refuse_overwrite(Path(report_path), protect, "--report")
+        with _status("drawing the report"):
+            write_html(report, report_path)
+    if json_path is None and report_path is None:
+        _print_motion(result)
+
+
+def _print_motion(r: Any) -> None:
+    click.echo(f"scheme            {r.scheme}")
+    click.echo(f"amplitude         {r.amplitude_deg:.7g} deg")
+    click.echo(f"frequency         {r.frequency_hz:.9g} Hz")
+    click.echo(f"ang. acceleration {r.angular_acceleration_amplitude_deg_s2:.6g} deg/s^2")
+    click.echo(
+        f"THD               {r.thd_percent:.4f} %  (u = {r.thd_percent_u:.2g} %, h = 2..{r.harmonics})"
+    )
+    click.echo(
+        f"periods used      {r.periods_used}  ({r.reversal_times_s.size} reversing moments found)"
+    )
+    if r.snr_db is not None:
+        click.echo(f"SNR               {r.snr_db:.2f} dB")
+    for note in r.notes:
+        click.echo(f"note              {note}")
+    if r.set_amplitude_deg is not None:
+        click.echo(f"amplitude error   {r.amplitude_error_percent:+.4f} %")
+        click.echo(f"frequency error   {r.frequency_error_percent:+.5f} %")
+        click.echo(
+            f"position error    max {r.position_error_max_deg:.4g} deg, rms {r.position_error_rms_deg:.4g} deg"
+        )
+
+
+@motion.command("encoder")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option("--lines", type=int, required=True, help="Encoder lines per revolution (e.g. 36000).")
+@click.option(
+    "--correction-from",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Fit the Heydemann correction on this capture (time_s, a, b with more motion, same "
+    "encoder and electronics) instead of on CAPTURE: for motions shorter than a signal period.",
+)
+@click.option(
+    "--chunked/--in-memory",
+    default=None,
+    help="Stream the capture in chunks (flat memory) or load it whole "
+    f"[default: chunked above {_IN_MEMORY_MAX_SAMPLES:.0e} samples].",
+)
+@_motion_common
+def motion_encoder(
+    capture: str,
+    lines: int,
+    correction_from: str | None,
+    chunked: bool | None,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """OSE scheme: capture with columns time_s, a, b (quadrature signals)."""
+    from rotacal.io import capture_length, parse_column_mapping
+    from rotacal.table import (
+        calibrate_encoder_motion,
+        calibrate_encoder_motion_chunked,
+        encoder_chunks_from_file,
+    )
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    mapping = parse_column_mapping(columns)
+    if correction_from is not None:
+        from rotacal.encoder import fit_quadrature_correction
+
+        ref = _read(correction_from, ["a", "b"], columns, group)
+        kw["correction"] = fit_quadrature_correction(ref["a"], ref["b"])
+        if kw["correction"].method != "heydemann":
+            raise CaptureError(
+                f"--correction-from {correction_from} covers only part of a signal period too; "
+                "record the reference with the table turning through several signal periods"
+            )
+    n = capture_length(capture, "a", mapping=mapping, group=group)
+    if chunked is None:
+        chunked = n > _IN_MEMORY_MAX_SAMPLES
+    if chunked:
+        source = encoder_chunks_from_file(capture, mapping=mapping, group=group)
+        # the chunked calibration reads the capture in up to six passes
+        with _sample_progress(6 * n, "calibrating (chunked)") as progress:
+            result = calibrate_encoder_motion_chunked(source, lines=lines, progress=progress, **kw)
+    else:
+        cap = _read(capture, ["time_s", "a", "b"], columns, group)
+        with _status("demodulating and fitting"):
+            result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
+    _finish_motion(result, capture, json_path, report_path)
+
+
+@motion.command("lts")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@click.option("--radius-mm", type=float, required=True, help="R: laser spot to table axis (mm).")
+@_motion_common
+def motion_lts(
+    capture: str, radius_mm: float, columns: Sequence[str], group: str | None, **kw: Any
+) -> None:
+    """LTS scheme: capture with columns time_s, displacement_mm; θ = arctan(D/R)."""
+    from rotacal.table import calibrate_lts_motion
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    cap = _read(capture, ["time_s", "displacement_mm"], columns, group)
+    with _status("fitting"):
+        result = calibrate_lts_motion(
+            cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw
+        )
+    _finish_motion(result, capture, json_path, report_path)
+
+
+@motion.command("fog")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@_motion_common
+def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: Any) -> None:
+    """FOG scheme: capture with columns time_s, rate_deg_s; THD of displacement from the rate fit."""
+    from rotacal.table import calibrate_fog_motion
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    cap = _read(capture, ["time_s", "rate_deg_s"], columns, group)
+    with _status("fitting"):
+        result = calibrate_fog_motion(cap["time_s"], cap["rate_deg_s"], **kw)
+    _finish_motion(result, capture, json_path, report_path)

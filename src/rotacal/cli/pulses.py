@@ -1,0 +1,178 @@
+"""``rotacal selfcal`` and ``rotacal rate``: the multi-head encoder (seed 004)."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import click
+
+from rotacal.errors import ConfigError
+
+from ._app import cli
+from ._common import (
+    _analysis_options,
+    _check_outputs,
+    _read_heads,
+    _status,
+    _write_json,
+    _write_report,
+)
+
+_PULSES_PER_REV = click.option(
+    "--pulses-per-rev", type=int, required=True, help="m: pulses per revolution of one head."
+)
+_SEED004 = "Kokuyama et al., angular velocity standard with a self-calibratable encoder (seed 004)"
+
+
+@cli.command("selfcal")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@_PULSES_PER_REV
+@click.option(
+    "--rotation",
+    type=click.Choice(["auto", "forward", "reverse"]),
+    default="auto",
+    show_default=True,
+    help="Whether head i lies i·360/n ahead of head 0 in the sense of rotation (forward).",
+)
+@_analysis_options
+def selfcal_cmd(
+    capture: str,
+    pulses_per_rev: int,
+    rotation: str,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Scale deviation of a multi-head encoder (columns head_0 … head_{n-1}: pulse times, s)."""
+    from rotacal.encoder.selfcal import self_calibrate
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    heads = _read_heads(capture, columns, group)
+    with _status("self-calibrating"):
+        result = self_calibrate(
+            heads,
+            pulses_per_rev=pulses_per_rev,
+            rotation=rotation,  # type: ignore[arg-type]
+            specs=kw.pop("specs"),
+        )
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.pulses import selfcal_section
+
+        _write_report(
+            "Self-calibration of a multi-head encoder",
+            _SEED004 + " — equal-division-averaged method",
+            [selfcal_section(result)],
+            capture,
+            report_path,
+        )
+    if json_path is None and report_path is None:
+        click.echo(f"heads x pulses/rev    {result.heads} x {result.pulses_per_rev}")
+        click.echo(f"revolutions averaged  {result.revolutions_used}")
+        click.echo(f"deviation p-p         {result.deviation_pp_arcsec:.4g} arcsec")
+        click.echo(f"deviation rms         {result.deviation_rms_arcsec:.4g} arcsec")
+        if result.repeatability_rms_arcsec is not None:
+            click.echo(f"repeatability rms     {result.repeatability_rms_arcsec:.3g} arcsec")
+        click.echo(f"closure residual rms  {result.closure_residual_rms_arcsec:.3g} arcsec")
+        click.echo(f"note                  {result.undetectable_harmonics_note}")
+        for note in result.notes:
+            click.echo(f"note                  {note}")
+
+
+@cli.command("rate")
+@click.argument("capture", type=click.Path(dir_okay=False))
+@_PULSES_PER_REV
+@click.option(
+    "--selfcal",
+    "selfcal_path",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="A `rotacal selfcal --json` result to compensate with [default: self-calibrate CAPTURE "
+    "when it has several heads].",
+)
+@click.option(
+    "--head", default="0", show_default=True, help="Head whose pulses give the rate, or 'all'."
+)
+@click.option(
+    "--average", type=int, default=10, show_default=True, help="Pulse intervals per rate point."
+)
+@click.option("--set-rate-deg-s", type=float, default=None, help="Commanded rate, for the bias.")
+@click.option("--no-compensation", is_flag=True, help="Use the nominal pitch only.")
+@_analysis_options
+def rate_cmd(
+    capture: str,
+    pulses_per_rev: int,
+    selfcal_path: str | None,
+    head: str,
+    average: int,
+    set_rate_deg_s: float | None,
+    no_compensation: bool,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Angular velocity from pulse timing: mean, bias, stability, root Allan variance vs angle."""
+    from rotacal.table.rate import calibrate_rate
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    selfcal: Any = None
+    if selfcal_path is not None:
+        try:
+            selfcal = json.loads(Path(selfcal_path).read_text(encoding="utf-8"))
+        except OSError as e:
+            raise ConfigError(f"--selfcal {selfcal_path}: cannot read it ({e.strerror})") from None
+        except json.JSONDecodeError as e:
+            raise ConfigError(
+                f"--selfcal {selfcal_path} is not JSON ({e.msg}, line {e.lineno})"
+            ) from None
+        if not isinstance(selfcal, dict):
+            raise ConfigError(f"--selfcal {selfcal_path} is not a `rotacal selfcal --json` result")
+    heads = _read_heads(capture, columns, group)
+    with _status("timing the pulses"):
+        result = calibrate_rate(
+            heads,
+            pulses_per_rev=pulses_per_rev,
+            selfcal=selfcal,
+            head=head,
+            average=average,
+            set_rate_deg_s=set_rate_deg_s,
+            compensate=not no_compensation,
+            specs=kw.pop("specs"),
+        )
+    _write_json(result.to_dict(), json_path, (Path(capture),))
+    if report_path:
+        from rotacal.report.pulses import rate_section, selfcal_section
+
+        sections = [rate_section(result)]
+        if result.selfcal is not None:
+            sections.append(selfcal_section(result.selfcal))
+        _write_report(
+            "Angular-velocity stability of a rate table", _SEED004, sections, capture, report_path
+        )
+    if json_path is None and report_path is None:
+        click.echo(f"mean rate          {result.mean_rate_deg_s:.7f} deg/s ({result.head})")
+        if result.rate_bias_percent is not None:
+            click.echo(
+                f"bias               {result.rate_bias_deg_s:+.3g} deg/s "
+                f"({result.rate_bias_percent:+.3g} %)"
+            )
+        click.echo(
+            f"rate deviation     rms {result.rate_deviation_rms_percent:.3g} %, "
+            f"peak {result.rate_deviation_peak_percent:.3g} %"
+            + (" (compensated)" if result.compensated else "")
+        )
+        for phi, s in zip(result.allan_angle_deg, result.allan_relative, strict=True):
+            if (
+                abs(math.log10(phi)) < 0.04
+                or abs(math.log10(phi / 10)) < 0.04
+                or abs(math.log10(phi / 360)) < 0.01
+            ):
+                click.echo(f"s({phi:.4g} deg)".ljust(19) + f"{100 * s:.3g} %")
+        for note in result.notes:
+            click.echo(f"note               {note}")
