@@ -185,14 +185,31 @@ def _read_heads(path: str, columns: Sequence[str], group: str | None) -> Any:
         raise CaptureError(f"{Path(path).name}: {e}") from None
 
 
+def _emit_warnings(result: Any) -> None:
+    """Print each of the result's ``warnings`` as one ``rotacal: warning:`` line on stderr."""
+    for line in getattr(result, "warnings", ()):
+        click.echo(f"rotacal: warning: {' '.join(str(line).split())}", err=True)
+
+
 def _write_report(
-    title: str, subtitle: str, sections: list[Any], capture: str, report_path: str | None
+    title: str,
+    subtitle: str,
+    sections: list[Any],
+    capture: str,
+    report_path: str | None,
+    warnings: Sequence[str] = (),
 ) -> None:
     if not report_path:
         return
     from rotacal.report.html import Report, write_html
 
-    report = Report(title=title, subtitle=subtitle, sections=sections, inputs={"capture": capture})
+    report = Report(
+        title=title,
+        subtitle=subtitle,
+        sections=sections,
+        inputs={"capture": capture},
+        warnings=list(warnings),
+    )
     _refuse_overwrite(Path(report_path), (Path(capture),), "--report")
     with _status("drawing the report"):
         write_html(report, report_path)

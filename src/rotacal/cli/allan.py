@@ -14,6 +14,7 @@ from ._app import cli
 from ._common import (
     _analysis_options,
     _check_outputs,
+    _emit_warnings,
     _status,
     _write_json,
     _write_report,
@@ -83,6 +84,7 @@ def allan_cmd(
             column=rate_column,
             specs=kw.pop("specs"),
         )
+    _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
         from rotacal.report.noise import noise_section
@@ -93,6 +95,7 @@ def allan_cmd(
             [noise_section(result)],
             capture,
             report_path,
+            warnings=result.warnings,
         )
     if json_path is None and report_path is None:
         for label, value, u in (

@@ -16,6 +16,7 @@ from ._app import cli
 from ._common import (
     _analysis_options,
     _check_outputs,
+    _emit_warnings,
     _read,
     _status,
     _write_json,
@@ -67,6 +68,7 @@ def gyro_scale_factor(
             output_unit=output_unit,
             specs=kw.pop("specs"),
         )
+    _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
         from rotacal.report.gyro_scale import scale_factor_section
@@ -77,6 +79,7 @@ def gyro_scale_factor(
             [scale_factor_section(result)],
             capture,
             report_path,
+            warnings=result.warnings,
         )
     if json_path is None and report_path is None:
         for line in result.summary_lines():
@@ -103,6 +106,7 @@ def gyro_triad(
     cap = _read(capture, [*RATE_COLUMNS, *TRIAD_OUTPUT_COLUMNS], columns, group)
     with _status("fitting"):
         result = calibrate_triad_columns(cap.columns, reject_k=reject_k, specs=kw.pop("specs"))
+    _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
         from rotacal.report.triad import triad_section
@@ -113,6 +117,7 @@ def gyro_triad(
             [triad_section(result)],
             capture,
             report_path,
+            warnings=result.warnings,
         )
     if json_path is None and report_path is None:
         k = np.asarray(result.scale_misalignment)
@@ -186,6 +191,7 @@ def gyro_rotations(
         result = calibrate_triad_rotations(
             rate, fs_hz, rotations, static=static, angle_deg=angle_deg, specs=kw.pop("specs")
         )
+    _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
         from rotacal.report.triad import rotations_section
@@ -196,6 +202,7 @@ def gyro_rotations(
             [rotations_section(result)],
             capture,
             report_path,
+            warnings=result.warnings,
         )
     if json_path is None and report_path is None:
         click.echo("K (output per deg/s):")
@@ -237,6 +244,7 @@ def gyro_multiposition(
             latitude_deg=latitude_deg,
             specs=kw.pop("specs"),
         )
+    _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
         from rotacal.report.multiposition import multiposition_section
@@ -247,6 +255,7 @@ def gyro_multiposition(
             [multiposition_section(result)],
             capture,
             report_path,
+            warnings=result.warnings,
         )
     if json_path is None and report_path is None:
         for name, value in result.drift_coefficients.items():

@@ -16,6 +16,7 @@ from ._common import (
     F,
     _analysis_options,
     _check_outputs,
+    _emit_warnings,
     _read,
     _refuse_overwrite,
     _sample_progress,
@@ -66,6 +67,7 @@ def _finish_motion(
                 "gain and phase errors; prefer the LTS scheme for motions this small",
                 err=True,
             )
+    _emit_warnings(result)
     _write_json(result.to_dict(), json_path, protect)
     if report_path:
         from rotacal.report.html import Report, write_html
@@ -76,6 +78,7 @@ def _finish_motion(
             subtitle="Feng et al. (2023), Sensors 23:4876 — IEEE Std 1057 sine fitting",
             sections=[motion_section(result)],
             inputs={"capture": str(capture_path)},
+            warnings=list(result.warnings),
         )
         _refuse_overwrite(Path(report_path), protect, "--report")
         with _status("drawing the report"):

@@ -16,6 +16,7 @@ from ._app import cli
 from ._common import (
     _analysis_options,
     _check_outputs,
+    _emit_warnings,
     _read_heads,
     _status,
     _write_json,
@@ -60,6 +61,7 @@ def selfcal_cmd(
             rotation=rotation,  # type: ignore[arg-type]
             specs=kw.pop("specs"),
         )
+    _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
         from rotacal.report.pulses import selfcal_section
@@ -70,6 +72,7 @@ def selfcal_cmd(
             [selfcal_section(result)],
             capture,
             report_path,
+            warnings=result.warnings,
         )
     if json_path is None and report_path is None:
         click.echo(f"heads x pulses/rev    {result.heads} x {result.pulses_per_rev}")
@@ -145,6 +148,7 @@ def rate_cmd(
             compensate=not no_compensation,
             specs=kw.pop("specs"),
         )
+    _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
         from rotacal.report.pulses import rate_section, selfcal_section
@@ -153,7 +157,12 @@ def rate_cmd(
         if result.selfcal is not None:
             sections.append(selfcal_section(result.selfcal))
         _write_report(
-            "Angular-velocity stability of a rate table", _SEED004, sections, capture, report_path
+            "Angular-velocity stability of a rate table",
+            _SEED004,
+            sections,
+            capture,
+            report_path,
+            warnings=result.warnings,
         )
     if json_path is None and report_path is None:
         click.echo(f"mean rate          {result.mean_rate_deg_s:.7f} deg/s ({result.head})")

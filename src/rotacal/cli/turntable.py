@@ -11,6 +11,7 @@ from rotacal.errors import ConfigError
 from ._app import cli
 from ._common import (
     _check_outputs,
+    _emit_warnings,
     _sample_progress,
     _write_json,
     _write_report,
@@ -61,6 +62,7 @@ def turntable_budget_cmd(
         result = turntable_budget(
             table, runs=runs, seed=seed, progress=lambda done, _t: advance(done)
         )
+    _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(config),))
     if report_path:
         from rotacal.report.turntable import turntable_section
@@ -71,6 +73,7 @@ def turntable_budget_cmd(
             [turntable_section(result)],
             config,
             report_path,
+            warnings=result.warnings,
         )
     if json_path is None and report_path is None:
         req = result.requirement_arcmin

@@ -57,6 +57,8 @@ class Report:
     subtitle: str = ""
     sections: list[Section] = dataclasses.field(default_factory=list)
     inputs: dict[str, str] = dataclasses.field(default_factory=dict)
+    #: what the reader must know before trusting the numbers (the results' ``warnings``)
+    warnings: list[str] = dataclasses.field(default_factory=list)
 
 
 def figure_from_matplotlib(fig: Any, title: str, caption: str = "", dpi: int = 110) -> Figure:
@@ -88,6 +90,8 @@ _TEMPLATE = jinja2.Template(
  figure { margin: 1em 0 1.6em; } figure img { max-width: 100%; border: 1px solid #e3e7eb; }
  figcaption { font-size: 0.9em; color: #445; margin-top: 0.3em; }
  .meta td { text-align: left; } nav a { margin-right: 1em; }
+ .warnings { border: 2px solid #b8860b; background: #fff8e1; padding: 0.4em 1em; margin: 1em 0; }
+ .warnings h3 { margin: 0.3em 0; font-size: 1.05em; color: #7a5200; }
  @media print { h2 { page-break-before: auto; } figure { page-break-inside: avoid; } }
 </style></head><body>
 <h1>{{ report.title }}</h1>
@@ -98,6 +102,8 @@ _TEMPLATE = jinja2.Template(
  <tr><th class="k">machine</th><td>{{ machine }}</td></tr>
  {% for k, v in report.inputs.items() %}<tr><th class="k">{{ k }}</th><td>{{ v }}</td></tr>{% endfor %}
 </table>
+{% if report.warnings %}<div class="warnings"><h3>Warnings — read these before using the results</h3>
+<ul>{% for w in report.warnings %}<li>{{ w }}</li>{% endfor %}</ul></div>{% endif %}
 {% if report.sections|length > 2 %}<nav>{% for s in report.sections %}
 <a href="#{{ s.anchor or 's' ~ loop.index }}">{{ s.title }}</a>{% endfor %}</nav>{% endif %}
 {% for s in report.sections %}

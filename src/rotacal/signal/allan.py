@@ -750,7 +750,7 @@ def noise_terms(
             named[key + "_high"] = term.high * f
     if "bias_instability" not in found:
         notes.append("no flat part (slope 0) in the curve: bias instability not observed.")
-    fields = {}
+    fields: dict[str, Any] = {}
     for key, _ in _NAMED.values():
         for suffix in ("", "_low", "_high"):
             fields[key + suffix] = named.get(key + suffix)
