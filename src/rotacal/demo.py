@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from rotacal import sim
+from rotacal.io.outputs import write_output
 from rotacal.results import to_jsonable
 from rotacal.table import (
     MotionResult,
@@ -32,6 +33,11 @@ from rotacal.table import (
 __all__ = ["demo_steps", "run_demo"]
 
 _NAMES = {"encoder": "OSE", "lts": "LTS", "fog": "FOG"}
+
+
+def _save(path: Path, text: str) -> None:
+    """Write one file of the demo's folder: whole or not at all, replacing an older demo's."""
+    write_output(path, text, overwrite=True)
 
 
 def demo_steps() -> int:
@@ -59,8 +65,8 @@ def _rate_standard(out: Path) -> tuple[list[Any], dict[str, Any]]:
     rate = calibrate_rate(heads, pulses_per_rev=18000, set_rate_deg_s=300.0)
     selfcal = rate.selfcal
     assert selfcal is not None  # several heads: calibrate_rate self-calibrates the capture
-    (out / "selfcal.json").write_text(json.dumps(selfcal.to_dict()) + "\n", encoding="utf-8")
-    (out / "rate.json").write_text(json.dumps(rate.to_dict(), indent=2) + "\n", encoding="utf-8")
+    _save(out / "selfcal.json", json.dumps(selfcal.to_dict()) + "\n")
+    _save(out / "rate.json", json.dumps(rate.to_dict(), indent=2) + "\n")
     truth = capture.truth
     err = selfcal.deviation_arcsec - np.asarray(truth["deviation_detectable_arcsec"])
     err_rms = float(np.sqrt(np.mean(err**2)))
@@ -219,9 +225,7 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
         ("gyro_rotations", rot),
         ("allan", noise),
     ):
-        (out / f"{name}.json").write_text(
-            json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8"
-        )
+        _save(out / f"{name}.json", json.dumps(result.to_dict(), indent=2) + "\n")
     k_err = np.abs(
         np.asarray(triad.scale_misalignment) - np.asarray(triad_cap.truth["scale_misalignment"])
     ).max()
@@ -279,9 +283,7 @@ def _turntable(out: Path) -> tuple[list[Any], dict[str, Any]]:
     from rotacal.turntable import seed_table, turntable_budget
 
     budget = turntable_budget(seed_table(), runs=1_000_000)
-    (out / "turntable_budget.json").write_text(
-        json.dumps(budget.to_dict(), indent=2) + "\n", encoding="utf-8"
-    )
+    _save(out / "turntable_budget.json", json.dumps(budget.to_dict(), indent=2) + "\n")
     summary = {
         "upper_bounds_arcmin": budget.upper_bounds_arcmin,
         "monte_carlo": budget.monte_carlo,
@@ -313,7 +315,7 @@ def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> Path:
             t = capture.columns["time_s"]
             true_reversals.append(len(sc["motion"].truth(t[0], t[-1])["reversal_times_s"]))
             name = f"motion_{sc['name']}_{kind}.json"
-            (out / name).write_text(json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8")
+            _save(out / name, json.dumps(result.to_dict(), indent=2) + "\n")
             step(f"{sc['name']} by {_NAMES[kind]}")
         truth = sc["motion"].truth(results[0].analysis_start_s, results[0].analysis_stop_s)
         comparison = compare_schemes(results[0], results[1])
@@ -340,9 +342,7 @@ def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> Path:
     step("gyros: scale factor, triad, multiposition")
     turntable_sections, summary["turntable"] = _turntable(out)
     step("turntable: error allocation and Monte Carlo")
-    (out / "summary.json").write_text(
-        json.dumps(to_jsonable(summary), indent=2) + "\n", encoding="utf-8"
-    )
+    _save(out / "summary.json", json.dumps(to_jsonable(summary), indent=2) + "\n")
     intro = Section(
         title="What this is",
         paragraphs=[
@@ -371,6 +371,6 @@ def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> Path:
         ],
         inputs={"captures": "simulated (rotacal.sim.table1_scenarios)", "output folder": str(out)},
     )
-    path = write_html(report, out / "report.html")
+    path = write_html(report, out / "report.html", overwrite=True)
     step("report")
     return path

@@ -148,32 +148,30 @@ def test_encoder_phase_step_limit_is_pi_over_6() -> None:
         simulate_encoder(m, fs_hz=fs_min * 0.99, duration_s=0.3)
 
 
-def test_write_uses_io_and_writes_truth(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    calls = []
-
-    def fake_write_capture(path, columns, *, overwrite=False):  # type: ignore[no-untyped-def]
-        calls.append((Path(path), sorted(columns), overwrite))
-        np.savez(path, **columns)
-        return Path(path)
-
-    monkeypatch.setattr(rotacal.io, "write_capture", fake_write_capture, raising=False)
+def test_write_writes_capture_and_truth_together(tmp_path: Path) -> None:
     cap = simulate_fog(MOTION, noise_deg_s=0.1, duration_s=0.5)
     out = cap.write(tmp_path / "fog.npz")
     assert out == tmp_path / "fog.npz"
-    assert calls == [(tmp_path / "fog.npz", ["rate_deg_s", "time_s"], False)]
+    back = rotacal.io.read_capture(out)
+    for name, values in cap.columns.items():
+        assert np.array_equal(back[name], values)
     truth = json.loads((tmp_path / "fog.npz.truth.json").read_text())
     assert truth["thd_percent"] == pytest.approx(cap.truth["thd_percent"], rel=1e-15)
     assert truth["sensor"]["noise_deg_s"] == 0.1
     with pytest.raises(ConfigError, match="exists"):
         cap.write(tmp_path / "fog.npz")
     cap.write(tmp_path / "fog.npz", overwrite=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fog.npz", "fog.npz.truth.json"]
 
 
-def test_write_without_io_fails_clearly(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.delattr(rotacal.io, "write_capture", raising=False)
-    cap = SimCapture("fog", {"time_s": np.zeros(3), "rate_deg_s": np.zeros(3)}, {})
-    with pytest.raises(ConfigError, match="write_capture"):
+def test_write_is_both_or_neither(tmp_path: Path) -> None:
+    """A truth file in the way: the capture is not written either (and no temporary is left)."""
+    cap = SimCapture("fog", {"time_s": np.arange(3.0), "rate_deg_s": np.zeros(3)}, {"k": 1})
+    (tmp_path / "x.csv.truth.json").write_text("keep")
+    with pytest.raises(ConfigError, match=r"x\.csv\.truth\.json already exists"):
         cap.write(tmp_path / "x.csv")
+    assert [p.name for p in tmp_path.iterdir()] == ["x.csv.truth.json"]
+    assert (tmp_path / "x.csv.truth.json").read_text() == "keep"
 
 
 def test_table1_scenarios() -> None:

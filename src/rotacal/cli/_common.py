@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
@@ -77,44 +78,86 @@ def _status(message: str) -> Iterator[None]:
         yield
 
 
+class _InputFileType(click.Path):
+    """A file the command reads (declare every one with ``type=INPUT_FILE``).
+
+    Converting the value records it in the context, and every output of the command is checked
+    against all that were recorded: no ``--json``/``--report`` can replace an input, through a
+    symbolic or a hard link, with ``--overwrite`` or not.
+    """
+
+    def __init__(self) -> None:
+        super().__init__(dir_okay=False)
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        path = super().convert(value, param, ctx)
+        if ctx is not None and param is not None:
+            from rotacal.io.outputs import InputFile
+
+            name = param.opts[0] if isinstance(param, click.Option) else param.human_readable_name
+            text = os.fsdecode(path)
+            ctx.meta.setdefault(_INPUTS_KEY, {})[param.name] = InputFile(text, f"{name} {text}")
+        return path
+
+
+#: The type of every parameter that names a file the command reads.
+INPUT_FILE = _InputFileType()
+_INPUTS_KEY = "rotacal.inputs"
+_OVERWRITE_KEY = "rotacal.overwrite"
+
+
+def _declared_inputs() -> tuple[Any, ...]:
+    """The files the running command reads (every parameter of type INPUT_FILE that was given)."""
+    ctx = click.get_current_context(silent=True)
+    return tuple(ctx.meta.get(_INPUTS_KEY, {}).values()) if ctx is not None else ()
+
+
+def _overwrite_given() -> bool:
+    ctx = click.get_current_context(silent=True)
+    return bool(ctx.meta.get(_OVERWRITE_KEY, False)) if ctx is not None else False
+
+
 def _check_outputs(json_path: str | None, report_path: str | None, overwrite: bool) -> None:
-    """Refuse outputs that would replace an existing file (unless --overwrite) or each other."""
+    """The pre-flight, before any analysis: refuse outputs that cannot or may not be written.
+
+    Refused: an output naming an input of the command (always), an existing file (unless
+    --overwrite), --json and --report naming one file, a folder, a path under a regular file, a
+    folder without write permission, a dangling symbolic link. Remembers ``overwrite`` for the
+    writes.
+    """
+    from rotacal.io.outputs import check_outputs
+
     if report_path == "-":
         raise ConfigError("--report needs a file name (the report is HTML, not for stdout)")
-    if json_path and report_path and json_path != "-":
-        if Path(json_path).resolve() == Path(report_path).resolve():
-            raise ConfigError("--json and --report name the same file; give them different names")
-    for option, target in (("--json", json_path), ("--report", report_path)):
-        if not target or target == "-":
-            continue
-        if Path(target).is_dir():
-            raise ConfigError(f"{option} {target} is a folder; give a file name")
-        if not overwrite and Path(target).exists():
-            raise ConfigError(f"{option} {target} exists; choose another name or pass --overwrite")
+    ctx = click.get_current_context(silent=True)
+    if ctx is not None:
+        ctx.meta[_OVERWRITE_KEY] = overwrite
+    targets = [
+        (target, f"{option} {target}")
+        for option, target in (("--json", json_path), ("--report", report_path))
+        if target and target != "-"
+    ]
+    check_outputs(targets, overwrite=overwrite, inputs=_declared_inputs(), make_folders=True)
 
 
-def _write_json(data: Any, target: str | None, protect: Sequence[Path] = ()) -> None:
+def _write_json(data: Any, target: str | None) -> None:
     if target is None:
         return
+    from rotacal.io.outputs import write_output
     from rotacal.results import to_jsonable
 
     text = json.dumps(to_jsonable(data), indent=2, allow_nan=False)
     if target == "-":
         click.echo(text)
         return
-    path = Path(target)
-    _refuse_overwrite(path, protect, "--json")
-    if not path.parent.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text + "\n", encoding="utf-8")
-
-
-def _refuse_overwrite(path: Path, protect: Sequence[Path], option: str) -> None:
-    for p in protect:
-        if path.exists() and p.exists() and path.resolve() == p.resolve():
-            raise ConfigError(
-                f"{option} {path} would overwrite the input file {p}; choose another name"
-            )
+    write_output(
+        target,
+        text + "\n",
+        label=f"--json {target}",
+        overwrite=_overwrite_given(),
+        inputs=_declared_inputs(),
+        make_folders=True,
+    )
 
 
 def _load_specs_option(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
@@ -152,6 +195,7 @@ def _analysis_options(func: F) -> F:
         click.option(
             "--specs",
             "specs",
+            type=INPUT_FILE,
             metavar="FILE.toml",
             callback=_load_specs_option,
             expose_value=True,
@@ -210,6 +254,11 @@ def _write_report(
         inputs={"capture": capture},
         warnings=list(warnings),
     )
-    _refuse_overwrite(Path(report_path), (Path(capture),), "--report")
     with _status("drawing the report"):
-        write_html(report, report_path)
+        write_html(
+            report,
+            report_path,
+            overwrite=_overwrite_given(),
+            inputs=_declared_inputs(),
+            label=f"--report {report_path}",
+        )

@@ -12,6 +12,7 @@ from rotacal.errors import CaptureError, ConfigError
 
 from ._app import cli
 from ._common import (
+    INPUT_FILE,
     _analysis_options,
     _check_outputs,
     _emit_warnings,
@@ -22,7 +23,7 @@ from ._common import (
 
 
 @cli.command("allan")
-@click.argument("capture", type=click.Path(dir_okay=False))
+@click.argument("capture", type=INPUT_FILE)
 @click.option("--fs-hz", type=float, default=None, help="Sampling rate, when there is no time_s.")
 @click.option(
     "--unit",
@@ -85,7 +86,7 @@ def allan_cmd(
             specs=kw.pop("specs"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path, (Path(capture),))
+    _write_json(result.to_dict(), json_path)
     if report_path:
         from rotacal.report.noise import noise_section
 

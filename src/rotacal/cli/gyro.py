@@ -14,6 +14,7 @@ from rotacal.errors import CaptureError, ConfigError
 
 from ._app import cli
 from ._common import (
+    INPUT_FILE,
     _analysis_options,
     _check_outputs,
     _emit_warnings,
@@ -30,7 +31,7 @@ def gyro() -> None:
 
 
 @gyro.command("scale-factor")
-@click.argument("capture", type=click.Path(dir_okay=False))
+@click.argument("capture", type=INPUT_FILE)
 @click.option(
     "--full-scale-deg-s",
     type=float,
@@ -69,7 +70,7 @@ def gyro_scale_factor(
             specs=kw.pop("specs"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path, (Path(capture),))
+    _write_json(result.to_dict(), json_path)
     if report_path:
         from rotacal.report.gyro_scale import scale_factor_section
 
@@ -87,7 +88,7 @@ def gyro_scale_factor(
 
 
 @gyro.command("triad")
-@click.argument("capture", type=click.Path(dir_okay=False))
+@click.argument("capture", type=INPUT_FILE)
 @click.option(
     "--reject-k",
     type=float,
@@ -107,7 +108,7 @@ def gyro_triad(
     with _status("fitting"):
         result = calibrate_triad_columns(cap.columns, reject_k=reject_k, specs=kw.pop("specs"))
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path, (Path(capture),))
+    _write_json(result.to_dict(), json_path)
     if report_path:
         from rotacal.report.triad import triad_section
 
@@ -130,11 +131,11 @@ def gyro_triad(
 
 
 @gyro.command("rotations")
-@click.argument("capture", type=click.Path(dir_okay=False))
+@click.argument("capture", type=INPUT_FILE)
 @click.option(
     "--sections",
     "sections_path",
-    type=click.Path(dir_okay=False),
+    type=INPUT_FILE,
     required=True,
     help="JSON of sample ranges: imucal's Ferraris list (x_p … z_a, x_rot, y_rot, z_rot) or "
     "{'rotations': {'x': [start, stop], …}, 'static': {…}} (a twin's truth file works).",
@@ -192,7 +193,7 @@ def gyro_rotations(
             rate, fs_hz, rotations, static=static, angle_deg=angle_deg, specs=kw.pop("specs")
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path, (Path(capture),))
+    _write_json(result.to_dict(), json_path)
     if report_path:
         from rotacal.report.triad import rotations_section
 
@@ -212,7 +213,7 @@ def gyro_rotations(
 
 
 @gyro.command("multiposition")
-@click.argument("capture", type=click.Path(dir_okay=False))
+@click.argument("capture", type=INPUT_FILE)
 @click.option("--axis", type=click.Choice(["x", "y"]), required=True, help="Gyro axis.")
 @click.option(
     "--latitude-deg",
@@ -245,7 +246,7 @@ def gyro_multiposition(
             specs=kw.pop("specs"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path, (Path(capture),))
+    _write_json(result.to_dict(), json_path)
     if report_path:
         from rotacal.report.multiposition import multiposition_section
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 import click
@@ -13,15 +12,16 @@ from rotacal.errors import CaptureError
 from ._app import cli
 from ._common import (
     _IN_MEMORY_MAX_SAMPLES,
+    INPUT_FILE,
     F,
     _analysis_options,
     _check_outputs,
     _emit_warnings,
     _read,
-    _refuse_overwrite,
     _sample_progress,
     _status,
     _write_json,
+    _write_report,
 )
 
 
@@ -59,7 +59,6 @@ def _motion_common(func: F) -> F:
 def _finish_motion(
     result: Any, capture_path: str, json_path: str | None, report_path: str | None
 ) -> None:
-    protect = (Path(capture_path),)
     for note in result.notes:
         if "partial" in note:
             click.echo(
@@ -68,21 +67,18 @@ def _finish_motion(
                 err=True,
             )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path, protect)
+    _write_json(result.to_dict(), json_path)
     if report_path:
-        from rotacal.report.html import Report, write_html
         from rotacal.report.motion import motion_section
 
-        report = Report(
-            title="Sinusoidal-motion calibration",
-            subtitle="Feng et al. (2023), Sensors 23:4876 — IEEE Std 1057 sine fitting",
-            sections=[motion_section(result)],
-            inputs={"capture": str(capture_path)},
-            warnings=list(result.warnings),
+        _write_report(
+            "Sinusoidal-motion calibration",
+            "Feng et al. (2023), Sensors 23:4876 — IEEE Std 1057 sine fitting",
+            [motion_section(result)],
+            capture_path,
+            report_path,
+            warnings=result.warnings,
         )
-        _refuse_overwrite(Path(report_path), protect, "--report")
-        with _status("drawing the report"):
-            write_html(report, report_path)
     if json_path is None and report_path is None:
         _print_motion(result)
 
@@ -111,11 +107,11 @@ def _print_motion(r: Any) -> None:
 
 
 @motion.command("encoder")
-@click.argument("capture", type=click.Path(dir_okay=False))
+@click.argument("capture", type=INPUT_FILE)
 @click.option("--lines", type=int, required=True, help="Encoder lines per revolution (e.g. 36000).")
 @click.option(
     "--correction-from",
-    type=click.Path(dir_okay=False),
+    type=INPUT_FILE,
     default=None,
     help="Fit the Heydemann correction on this capture (time_s, a, b with more motion, same "
     "encoder and electronics) instead of on CAPTURE: for motions shorter than a signal period.",
@@ -173,7 +169,7 @@ def motion_encoder(
 
 
 @motion.command("lts")
-@click.argument("capture", type=click.Path(dir_okay=False))
+@click.argument("capture", type=INPUT_FILE)
 @click.option("--radius-mm", type=float, required=True, help="R: laser spot to table axis (mm).")
 @_motion_common
 def motion_lts(
@@ -193,7 +189,7 @@ def motion_lts(
 
 
 @motion.command("fog")
-@click.argument("capture", type=click.Path(dir_okay=False))
+@click.argument("capture", type=INPUT_FILE)
 @_motion_common
 def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: Any) -> None:
     """FOG scheme: capture with columns time_s, rate_deg_s; THD of displacement from the rate fit."""

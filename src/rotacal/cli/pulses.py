@@ -14,6 +14,7 @@ from rotacal.errors import ConfigError
 
 from ._app import cli
 from ._common import (
+    INPUT_FILE,
     _analysis_options,
     _check_outputs,
     _emit_warnings,
@@ -30,7 +31,7 @@ _SEED004 = "Kokuyama et al., angular velocity standard with a self-calibratable 
 
 
 @cli.command("selfcal")
-@click.argument("capture", type=click.Path(dir_okay=False))
+@click.argument("capture", type=INPUT_FILE)
 @_PULSES_PER_REV
 @click.option(
     "--rotation",
@@ -62,7 +63,7 @@ def selfcal_cmd(
             specs=kw.pop("specs"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path, (Path(capture),))
+    _write_json(result.to_dict(), json_path)
     if report_path:
         from rotacal.report.pulses import selfcal_section
 
@@ -88,12 +89,12 @@ def selfcal_cmd(
 
 
 @cli.command("rate")
-@click.argument("capture", type=click.Path(dir_okay=False))
+@click.argument("capture", type=INPUT_FILE)
 @_PULSES_PER_REV
 @click.option(
     "--selfcal",
     "selfcal_path",
-    type=click.Path(dir_okay=False),
+    type=INPUT_FILE,
     default=None,
     help="A `rotacal selfcal --json` result to compensate with [default: self-calibrate CAPTURE "
     "when it has several heads].",
@@ -149,7 +150,7 @@ def rate_cmd(
             specs=kw.pop("specs"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path, (Path(capture),))
+    _write_json(result.to_dict(), json_path)
     if report_path:
         from rotacal.report.pulses import rate_section, selfcal_section
 

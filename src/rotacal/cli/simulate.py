@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -24,6 +25,11 @@ def simulate() -> None:
 
 
 def _sim_common(func: F) -> F:
+    @functools.wraps(func)
+    def checked(*args: Any, out: str, overwrite: bool, **kw: Any) -> Any:
+        _check_sim_outputs(out, overwrite)  # before the simulation, which may take a while
+        return func(*args, out=out, overwrite=overwrite, **kw)
+
     options = [
         click.option(
             "--out",
@@ -36,8 +42,19 @@ def _sim_common(func: F) -> F:
         click.option("--overwrite", is_flag=True, help="Replace FILE if it exists."),
     ]
     for option in reversed(options):
-        func = option(func)
-    return func
+        checked = option(checked)
+    return checked  # type: ignore[return-value]
+
+
+def _check_sim_outputs(out: str, overwrite: bool) -> None:
+    """The pre-flight of ``simulate``: both the capture and its truth file may be written."""
+    from rotacal.io.outputs import check_outputs
+    from rotacal.sim.sensors import truth_path
+
+    truth = truth_path(out)
+    check_outputs(
+        [(out, f"--out {out}"), (truth, f"{truth} (the truth beside --out)")], overwrite=overwrite
+    )
 
 
 def _motion_sim_options(func: F) -> F:
@@ -270,7 +287,9 @@ def simulate_multiposition_cmd(out: str, overwrite: bool, **kw: Any) -> None:
 def demo(out: str) -> None:
     """Simulate a calibration campaign on the digital twin, analyse it, write DIR/report.html."""
     from rotacal.demo import demo_steps, run_demo
+    from rotacal.io.outputs import check_folder
 
+    check_folder(out, label=f"--out {out}")
     with _progress(demo_steps(), "demo") as advance:
         report = run_demo(Path(out), progress=advance)
     click.echo(f"wrote {report}")

@@ -6,10 +6,9 @@ from pathlib import Path
 
 import click
 
-from rotacal.errors import ConfigError
-
 from ._app import cli
 from ._common import (
+    INPUT_FILE,
     _check_outputs,
     _emit_warnings,
     _sample_progress,
@@ -27,7 +26,7 @@ _SEED001 = "GyroWheel calibration tests: turntable error analysis and allocation
 
 
 @turntable.command("budget")
-@click.argument("config", type=click.Path(dir_okay=False))
+@click.argument("config", type=INPUT_FILE)
 @click.option(
     "--runs", type=int, default=None, help="Monte Carlo draws (default: config, else 10⁶)."
 )
@@ -63,7 +62,7 @@ def turntable_budget_cmd(
             table, runs=runs, seed=seed, progress=lambda done, _t: advance(done)
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path, (Path(config),))
+    _write_json(result.to_dict(), json_path)
     if report_path:
         from rotacal.report.turntable import turntable_section
 
@@ -105,12 +104,10 @@ def turntable_budget_cmd(
 @click.option("--overwrite", is_flag=True, help="Replace an existing file.")
 def turntable_example(out: str, overwrite: bool) -> None:
     """Write the seed's two-axis table as a commented TOML to start a configuration from."""
+    from rotacal.io.outputs import write_output
     from rotacal.turntable import seed_table_toml
 
-    path = Path(out)
-    if path.exists() and not overwrite:
-        raise ConfigError(f"{out} exists; choose another name or pass --overwrite")
-    path.write_text(seed_table_toml(), encoding="utf-8")
+    write_output(out, seed_table_toml(), label=f"--out {out}", overwrite=overwrite)
     click.echo(f"wrote {out}")
 
 
@@ -125,10 +122,8 @@ def specs_group() -> None:
 @click.option("--overwrite", is_flag=True, help="Replace an existing file.")
 def specs_example(out: str, overwrite: bool) -> None:
     """Write a commented specifications file with every entry rotacal's budgets use."""
+    from rotacal.io.outputs import write_output
     from rotacal.uncertainty.specs import example_specs_toml
 
-    path = Path(out)
-    if path.exists() and not overwrite:
-        raise ConfigError(f"{out} exists; choose another name or pass --overwrite")
-    path.write_text(example_specs_toml(), encoding="utf-8")
+    write_output(out, example_specs_toml(), label=f"--out {out}", overwrite=overwrite)
     click.echo(f"wrote {out}")

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import contextlib
 import os
-import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -18,6 +16,7 @@ from ._csv import ENCODING, write_csv
 from ._hdf5 import write_hdf5
 from ._npz import write_npz
 from ._tdms import write_tdms
+from .outputs import Writer, write_output
 
 
 def _check_columns(columns: Mapping[str, Any]) -> dict[str, np.ndarray]:
@@ -42,6 +41,10 @@ def _check_columns(columns: Mapping[str, Any]) -> dict[str, np.ndarray]:
     return out
 
 
+#: How write_capture's messages say "allow replacing" (the API's argument and the CLI's option).
+OVERWRITE_HINT = "overwrite=True (--overwrite)"
+
+
 def write_capture(
     path: str | os.PathLike[str],
     columns: Mapping[str, np.ndarray],
@@ -59,8 +62,10 @@ def write_capture(
     attributes. TDMS: one group (``group``, default ``"capture"``), metadata as group properties.
     Binary formats keep the arrays' own numeric dtype; columns may differ in length.
 
-    The file is written to a temporary name beside ``path`` and moved into place, so a failed
-    write leaves nothing behind; an existing ``path`` is never replaced unless ``overwrite``.
+    The file is written as every rotacal output is (:mod:`rotacal.io.outputs`): to a temporary
+    name beside ``path``, then given its name, so a failed write leaves nothing behind; an existing
+    ``path`` is never replaced unless ``overwrite`` (and then atomically), and of several
+    processes writing one name exactly one succeeds.
 
     Returns
     -------
@@ -76,6 +81,30 @@ def write_capture(
         A column that is not a non-empty 1-D numeric array.
     """
     p = Path(path)
+    writer = capture_writer(p, columns, group=group, metadata=metadata)
+    return write_output(p, writer, label=p.name, overwrite=overwrite, hint=OVERWRITE_HINT)
+
+
+def capture_writer(
+    path: str | os.PathLike[str],
+    columns: Mapping[str, np.ndarray],
+    *,
+    group: str | None = None,
+    metadata: Mapping[str, Any] | None = None,
+) -> Writer:
+    """Check columns and options for a capture at ``path``; return what writes it to a file.
+
+    The returned function writes the capture, in the format given by the extension of ``path``,
+    to the file it is given (a temporary file of :func:`rotacal.io.outputs.write_outputs`).
+
+    Raises
+    ------
+    ConfigError
+        Unknown extension, ``group`` given for CSV/NPZ, a bad column name.
+    CaptureError
+        A column that is not a non-empty 1-D numeric array.
+    """
+    p = Path(path)
     fmt = FORMATS.get(p.suffix.lower())
     if fmt is None:
         raise ConfigError(
@@ -84,73 +113,19 @@ def write_capture(
         )
     if group is not None and fmt in ("csv", "npz"):
         raise ConfigError(f"group= applies to HDF5 and TDMS files, not to {p.name}; leave it out")
-    if p.is_dir():
-        raise ConfigError(f"{p} is a directory; give a file name for the capture")
-    if p.exists() and not overwrite:
-        raise ConfigError(
-            f"{p.name} already exists and will not be overwritten; choose another name or pass "
-            "overwrite=True (--overwrite)"
-        )
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise ConfigError(f"cannot write {p.name}: directory {parent} does not exist; create it")
     cols = _check_columns(columns)
     meta = dict(metadata or {})
-    fd, tmp_name = tempfile.mkstemp(dir=parent, prefix=f".{p.name}.", suffix=p.suffix)
-    tmp = Path(tmp_name)
-    try:
+
+    def write(target: Path) -> None:
         if fmt == "csv":
-            with os.fdopen(fd, "w", encoding=ENCODING.replace("-sig", ""), newline="\n") as fh:
+            with open(target, "w", encoding=ENCODING.replace("-sig", ""), newline="\n") as fh:
                 write_csv(fh, cols, meta)
         elif fmt == "npz":
-            with os.fdopen(fd, "wb") as fb:
+            with open(target, "wb") as fb:
                 write_npz(fb, cols, meta)
+        elif fmt == "hdf5":
+            write_hdf5(target, cols, group, meta)
         else:
-            os.close(fd)
-            if fmt == "hdf5":
-                write_hdf5(tmp, cols, group, meta)
-            else:
-                write_tdms(tmp, cols, group, meta)
-        _move_into_place(tmp, p, overwrite)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
-    return p
+            write_tdms(target, cols, group, meta)
 
-
-def _move_into_place(tmp: Path, dest: Path, overwrite: bool) -> None:
-    """Rename ``tmp`` to ``dest``; without ``overwrite`` never replace a file (even in a race)."""
-    with contextlib.suppress(OSError):
-        os.chmod(tmp, 0o666 & ~_umask())
-    if overwrite:
-        os.replace(tmp, dest)
-        return
-    try:
-        os.link(tmp, dest)
-    except FileExistsError:
-        raise ConfigError(
-            f"{dest.name} already exists and will not be overwritten; choose another name or "
-            "pass overwrite=True (--overwrite)"
-        ) from None
-    except OSError:  # no hard links on this file system: check, then rename
-        if dest.exists():
-            raise ConfigError(
-                f"{dest.name} already exists and will not be overwritten; choose another name "
-                "or pass overwrite=True (--overwrite)"
-            ) from None
-        os.replace(tmp, dest)
-        return
-    tmp.unlink()
-
-
-def _umask() -> int:
-    """The process umask, read without changing it (Linux); 0o022 elsewhere."""
-    try:
-        with open("/proc/self/status") as fh:
-            for line in fh:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except OSError:
-        pass
-    return 0o022
+    return write

@@ -7,12 +7,14 @@ import dataclasses
 import datetime as _dt
 import io
 import platform
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import jinja2
 
 import rotacal
+from rotacal.io.outputs import InputFile, write_output
 
 __all__ = [
     "Figure",
@@ -129,10 +131,25 @@ def render_html(report: Report) -> str:
     return _TEMPLATE.render(report=report, version=rotacal.__version__, made=made, machine=machine)
 
 
-def write_html(report: Report, path: str | Path) -> Path:
-    """Write the report (the CLI decides beforehand whether the path may be written)."""
-    path = Path(path)
-    if path.parent and not path.parent.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(render_html(report), encoding="utf-8")
-    return path
+def write_html(
+    report: Report,
+    path: str | Path,
+    *,
+    overwrite: bool = False,
+    inputs: Sequence[InputFile] = (),
+    label: str | None = None,
+) -> Path:
+    """Write the report as every rotacal output is written (:mod:`rotacal.io.outputs`).
+
+    Missing folders are created; the file appears whole or not at all, never replaces one of
+    ``inputs``, and replaces an existing file (atomically) only with ``overwrite``. ``label`` names
+    the file in messages (e.g. ``--report r.html``).
+    """
+    return write_output(
+        path,
+        render_html(report),
+        label=label,
+        overwrite=overwrite,
+        inputs=inputs,
+        make_folders=True,
+    )

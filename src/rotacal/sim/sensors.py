@@ -29,6 +29,7 @@ __all__ = [
     "simulate_encoder",
     "simulate_fog",
     "simulate_lts",
+    "truth_path",
 ]
 
 #: Largest capture the twin makes in one go (samples).
@@ -58,45 +59,41 @@ class SimCapture:
         return len(next(iter(self.columns.values()))) if self.columns else 0
 
     def write(self, path: str | Path, *, overwrite: bool = False) -> Path:
-        """Write the capture with ``rotacal.io.write_capture`` and its truth to ``PATH.truth.json``.
+        """Write the capture with ``rotacal.io`` and its truth to ``PATH.truth.json``.
+
+        Both files appear together or neither does (``rotacal.io.outputs.write_outputs``): each is
+        written to a temporary file first and named only when both are complete.
 
         Parameters
         ----------
         path : str or Path
             Capture file; the format follows the suffix (as ``rotacal.io.write_capture`` decides).
         overwrite : bool
-            Replace existing files; otherwise an existing capture or truth file is an error.
+            Replace existing files (atomically); otherwise an existing capture or truth file is an
+            error.
 
         Returns
         -------
         Path
             The capture's path.
         """
+        from rotacal.io.outputs import Output, write_outputs
+        from rotacal.io.write import OVERWRITE_HINT, capture_writer
+
         path = Path(path)
-        truth_path = path.with_name(path.name + ".truth.json")
-        try:
-            from rotacal.io import write_capture
-        except ImportError:
-            raise ConfigError(
-                "cannot write captures: rotacal.io.write_capture is not available in this "
-                "installation."
-            ) from None
-        if not overwrite:
-            for p in (path, truth_path):
-                if p.exists():
-                    raise ConfigError(
-                        f"{p} exists; pass overwrite=True (--overwrite) to replace it."
-                    )
-        params = inspect.signature(write_capture).parameters
-        if "overwrite" in params:
-            written = write_capture(path, self.columns, overwrite=overwrite)
-        else:
-            written = write_capture(path, self.columns)
-        out = Path(written) if isinstance(written, (str, Path)) else path
-        with open(truth_path, "w", encoding="utf-8") as fh:
-            json.dump(to_jsonable(self.truth), fh, indent=2)
-            fh.write("\n")
-        return out
+        truth = json.dumps(to_jsonable(self.truth), indent=2) + "\n"
+        write_outputs(
+            [Output(path, capture_writer(path, self.columns)), Output(truth_path(path), truth)],
+            overwrite=overwrite,
+            hint=OVERWRITE_HINT,
+        )
+        return path
+
+
+def truth_path(path: str | Path) -> Path:
+    """Where :meth:`SimCapture.write` puts the truth of a capture written to ``path``."""
+    path = Path(path)
+    return path.with_name(path.name + ".truth.json")
 
 
 # ---------------------------------------------------------------------- helpers
