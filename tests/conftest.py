@@ -12,6 +12,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 from collections.abc import Callable  # noqa: E402
 from pathlib import Path  # noqa: E402
+from typing import Any  # noqa: E402
 
 import pytest  # noqa: E402
 
@@ -35,3 +36,55 @@ def shared_data() -> Callable[..., Path]:
         return path
 
     return need
+
+
+#: Linux capabilities that let root write past permission bits (capability.h).
+_CAP_DAC_OVERRIDE, _CAP_DAC_READ_SEARCH = 1, 2
+_PR_CAPBSET_DROP = 24
+
+
+def _drop_permission_override() -> None:
+    """In a child before exec: take away root's power to ignore permission bits (bounding set)."""
+    import ctypes
+
+    libc = ctypes.CDLL(None, use_errno=True)
+    for cap in (_CAP_DAC_OVERRIDE, _CAP_DAC_READ_SEARCH):
+        if libc.prctl(_PR_CAPBSET_DROP, cap, 0, 0, 0) != 0:
+            raise OSError(ctypes.get_errno(), "prctl(PR_CAPBSET_DROP) failed")
+
+
+@pytest.fixture
+def bound_by_permissions() -> Callable[..., Any]:
+    """``run(argv, unwritable=folder)``: a Python child process that permission bits really stop.
+
+    Tests run as root here, and root writes into a read-only folder. For root the child drops the
+    capabilities that override permission bits (so the kernel refuses it as it refuses anyone);
+    for another user the child is unprivileged already. It imports this rotacal.
+    """
+    import subprocess
+    import sys
+
+    import rotacal
+
+    src = str(Path(rotacal.__file__).resolve().parents[1])
+
+    def run(argv: list[str], unwritable: Path) -> subprocess.CompletedProcess[str]:
+        """Run ``python argv`` after checking that such a child cannot create a file in
+        ``unwritable`` by itself (so what the test sees is the kernel's refusal, not rotacal's
+        guess)."""
+
+        def child(args: list[str]) -> subprocess.CompletedProcess[str]:
+            return subprocess.run(
+                [sys.executable, *args],
+                capture_output=True,
+                text=True,
+                env={**os.environ, "PYTHONPATH": src},
+                preexec_fn=_drop_permission_override if os.geteuid() == 0 else None,
+                check=False,
+            )
+
+        probe = child(["-c", f"open({str(unwritable / 'probe')!r}, 'w')"])
+        assert "PermissionError" in probe.stderr, "the child is not bound by permission bits"
+        return child(argv)
+
+    return run

@@ -271,13 +271,13 @@ def _check_folder(folder: Path, label: str, make_folders: bool) -> None:
     """The folder (``folder`` is resolved) exists or can be made, and this process may write in it."""
     existing = folder
     while not os.path.exists(existing):
-        if not make_folders:
-            raise ConfigError(f"cannot write {label}: folder {folder} does not exist; create it")
         existing = existing.parent
     if not os.path.isdir(existing):
         raise ConfigError(
             f"cannot write {label}: {existing} is a file, not a folder; give a path in a folder"
         )
+    if existing != folder and not make_folders:
+        raise ConfigError(f"cannot write {label}: folder {folder} does not exist; create it")
     if not os.access(existing, os.W_OK | os.X_OK, effective_ids=_EFFECTIVE_IDS):
         raise ConfigError(
             f"cannot write {label}: no permission to write in folder {existing} (or it is on a "
