@@ -291,6 +291,12 @@ def test_a_dangling_symlink_is_not_followed(tmp_path, overwrite):
     assert not target.exists()
 
 
+def test_simulate_checks_the_extension_before_simulating(tmp_path):
+    r = run("simulate", "gyro-rates", "--out", str(tmp_path / "x.xlsx"), "--noise-std", "-1")
+    one_line_error(r, "unknown capture extension '.xlsx'")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_simulate_writes_the_capture_and_its_truth_or_neither(tmp_path):
     (tmp_path / "x.npz.truth.json").write_text("keep")
     r = run("simulate", "gyro-rates", "--out", str(tmp_path / "x.npz"))

@@ -96,7 +96,7 @@ class _InputFileType(click.Path):
 
             name = param.opts[0] if isinstance(param, click.Option) else param.human_readable_name
             text = os.fsdecode(path)
-            ctx.meta.setdefault(_INPUTS_KEY, {})[param.name] = InputFile(text, f"{name} {text}")
+            ctx.meta.setdefault(_INPUTS_KEY, []).append(InputFile(text, f"{name} {text}"))
         return path
 
 
@@ -109,7 +109,7 @@ _OVERWRITE_KEY = "rotacal.overwrite"
 def _declared_inputs() -> tuple[Any, ...]:
     """The files the running command reads (every parameter of type INPUT_FILE that was given)."""
     ctx = click.get_current_context(silent=True)
-    return tuple(ctx.meta.get(_INPUTS_KEY, {}).values()) if ctx is not None else ()
+    return tuple(ctx.meta.get(_INPUTS_KEY, ())) if ctx is not None else ()
 
 
 def _overwrite_given() -> bool:
@@ -191,7 +191,11 @@ def _analysis_options(func: F) -> F:
             help="Map a column of the file onto a canonical name (repeatable).",
         ),
         click.option("--group", default=None, help="HDF5 group or TDMS group holding the columns."),
-        click.option("--overwrite", is_flag=True, help="Replace existing --json/--report files."),
+        click.option(
+            "--overwrite",
+            is_flag=True,
+            help="Replace existing --json/--report files (never an input of the command).",
+        ),
         click.option(
             "--specs",
             "specs",

@@ -49,8 +49,10 @@ def _sim_common(func: F) -> F:
 def _check_sim_outputs(out: str, overwrite: bool) -> None:
     """The pre-flight of ``simulate``: both the capture and its truth file may be written."""
     from rotacal.io.outputs import check_outputs
+    from rotacal.io.write import capture_format
     from rotacal.sim.sensors import truth_path
 
+    capture_format(out)
     truth = truth_path(out)
     check_outputs(
         [(out, f"--out {out}"), (truth, f"{truth} (the truth beside --out)")], overwrite=overwrite

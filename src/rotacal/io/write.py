@@ -85,6 +85,20 @@ def write_capture(
     return write_output(p, writer, label=p.name, overwrite=overwrite, hint=OVERWRITE_HINT)
 
 
+def capture_format(path: str | os.PathLike[str], group: str | None = None) -> str:
+    """The format a capture at ``path`` is written in (from its extension), or a ConfigError."""
+    p = Path(path)
+    fmt = FORMATS.get(p.suffix.lower())
+    if fmt is None:
+        raise ConfigError(
+            f"cannot write {p.name}: unknown capture extension {p.suffix or '(none)'!r}; "
+            f"use one of {known_extensions()}"
+        )
+    if group is not None and fmt in ("csv", "npz"):
+        raise ConfigError(f"group= applies to HDF5 and TDMS files, not to {p.name}; leave it out")
+    return fmt
+
+
 def capture_writer(
     path: str | os.PathLike[str],
     columns: Mapping[str, np.ndarray],
@@ -104,15 +118,7 @@ def capture_writer(
     CaptureError
         A column that is not a non-empty 1-D numeric array.
     """
-    p = Path(path)
-    fmt = FORMATS.get(p.suffix.lower())
-    if fmt is None:
-        raise ConfigError(
-            f"cannot write {p.name}: unknown capture extension {p.suffix or '(none)'!r}; "
-            f"use one of {known_extensions()}"
-        )
-    if group is not None and fmt in ("csv", "npz"):
-        raise ConfigError(f"group= applies to HDF5 and TDMS files, not to {p.name}; leave it out")
+    fmt = capture_format(path, group)
     cols = _check_columns(columns)
     meta = dict(metadata or {})
 
