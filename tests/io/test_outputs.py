@@ -180,6 +180,8 @@ def test_folders_and_devices_are_not_output_files(tmp_path):
         write_output(tmp_path / "pipe", "x", overwrite=True)
     with pytest.raises(ConfigError, match="not a regular file"):
         write_output("/dev/null", "x", overwrite=True)
+    with pytest.raises(ConfigError, match=r"^--json needs a file name$"):
+        write_output("", "x", label="--json ")
 
 
 def test_permission_bits_are_honoured(tmp_path, bound_by_permissions):

@@ -7,11 +7,14 @@ import json
 import os
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
 from rotacal.errors import CaptureError, ConfigError
+
+if TYPE_CHECKING:
+    from rotacal.io.outputs import InputFile
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -106,7 +109,7 @@ _INPUTS_KEY = "rotacal.inputs"
 _OVERWRITE_KEY = "rotacal.overwrite"
 
 
-def _declared_inputs() -> tuple[Any, ...]:
+def _declared_inputs() -> tuple[InputFile, ...]:
     """The files the running command reads (every parameter of type INPUT_FILE that was given)."""
     ctx = click.get_current_context(silent=True)
     return tuple(ctx.meta.get(_INPUTS_KEY, ())) if ctx is not None else ()
@@ -135,7 +138,7 @@ def _check_outputs(json_path: str | None, report_path: str | None, overwrite: bo
     targets = [
         (target, f"{option} {target}")
         for option, target in (("--json", json_path), ("--report", report_path))
-        if target and target != "-"
+        if target is not None and target != "-"
     ]
     check_outputs(targets, overwrite=overwrite, inputs=_declared_inputs(), make_folders=True)
 

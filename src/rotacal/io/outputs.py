@@ -225,7 +225,7 @@ def _check_output(
     hint: str,
 ) -> Path:
     if not os.fspath(path):
-        raise ConfigError(f"{label}: an output needs a file name")
+        raise ConfigError(f"{label.strip() or 'an output'} needs a file name")
     _refuse_dangling_links(Path(path), label)
     dest = Path(os.path.realpath(path))
     for source in inputs:
