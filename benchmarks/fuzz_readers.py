@@ -121,7 +121,7 @@ def _collect(proc: subprocess.Popen[str], reader: str, hi: int, tally: _Tally) -
         return None
     marks = [ln for ln in err.splitlines() if ln.startswith("at ")]
     index = int(marks[-1].split()[1]) if marks else -1
-    why = "hang or crash (process ended with %d)" % proc.returncode
+    why = f"hang or crash (process ended with {proc.returncode})"
     detail = " | ".join(ln.strip() for ln in err.splitlines()[-12:] if ln.strip())
     tally.add(
         {"kind": "untyped", "key": f"all: {why}", "index": index, "seed": "?", "text": detail}
