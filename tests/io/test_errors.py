@@ -384,7 +384,7 @@ def test_overwrite_refused_bytes_unchanged(tmp_path, ext):
     original = b"precious user data \x00\x01"
     path.write_bytes(original)
     _raises(
-        [f"keep.{ext} already exists", "overwrite=True"],
+        [f"keep.{ext} already exists", "--overwrite"],
         write_capture,
         path,
         {"a": np.arange(3.0)},
@@ -412,7 +412,7 @@ def test_write_errors(tmp_path):
     _raises(["'a,b'", "CSV"], write_capture, tmp_path / "x.csv", {"a,b": [1.0]}, err=ConfigError)
     _raises(["'a/b'", "HDF5"], write_capture, tmp_path / "x.h5", {"a/b": [1.0]}, err=ConfigError)
     _raises(
-        ["group=", "x.npz"],
+        ["--group", "x.npz"],
         write_capture,
         tmp_path / "x.npz",
         {"a": [1.0]},

@@ -281,7 +281,7 @@ def library_errors(fname: str, label: str, where: str = "") -> Iterator[None]:
     except RotacalError:
         raise
     except LIBRARY_ERRORS as exc:
-        part = f" {where}" if where else ""
+        part = f" at {where}" if where else ""
         raise damaged(
-            fname, f"reading its {label} structure{part} failed ({reason(exc)})"
+            fname, f"its {label} structure cannot be read{part} ({reason(exc)})"
         ) from None

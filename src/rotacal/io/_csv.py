@@ -19,6 +19,7 @@ import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
 
+from ._common import reason
 from ._validate import RAGGED_USE, ColumnInfo
 
 ENCODING = "utf-8-sig"
@@ -203,7 +204,7 @@ class CsvReader:
                 raise self._not_utf8() from None
             self._diagnose(self._lines(self.header_lines), self.header_lines + 1, idx, ragged)
             raise CaptureError(
-                f"{self.fname} could not be parsed as numbers ({exc}); check its data rows"
+                f"{self.fname} could not be parsed as numbers ({reason(exc)}); check its data rows"
             ) from None
         if data.shape[0] == 0:
             raise self._no_data()
@@ -246,7 +247,7 @@ class CsvReader:
                 self._diagnose(pending, lineno, idx, ragged=False)
                 raise CaptureError(
                     f"{self.fname} could not be parsed as numbers near line {lineno} "
-                    f"({exc}); check its data rows"
+                    f"({reason(exc)}); check its data rows"
                 ) from None
             lineno += len(pending)
             cols = np.ascontiguousarray(data.T)

@@ -145,8 +145,8 @@ class NpzReader:
             self.names = [i.filename[:-4] for i in infos if i.filename[:-4] != NPZ_METADATA_KEY]
             if not self.names:
                 raise CaptureError(
-                    f"{self.fname} holds no NumPy arrays; write one array per column with "
-                    "numpy.savez"
+                    f"{self.fname} holds no NumPy arrays (.npy members); an NPZ capture holds "
+                    "one array per column — write it again, or save the capture as CSV"
                 )
             if NPZ_METADATA_KEY in self._infos:
                 self._read_metadata(self._infos[NPZ_METADATA_KEY])

@@ -24,7 +24,7 @@ from nptdms import ChannelObject, GroupObject, RootObject, TdmsFile, TdmsWriter
 
 from rotacal.errors import CaptureError
 
-from ._common import damaged, plain
+from ._common import damaged, plain, reason
 from ._validate import ColumnInfo
 
 DEFAULT_GROUP = "capture"
@@ -101,8 +101,18 @@ def _nptdms_quiet(fname: str) -> Iterator[None]:
             log.removeFilter(collect)
     warned = [r for r in collect.records if r.levelno >= logging.WARNING]
     if warned:
-        text = " ".join(warned[0].getMessage().split())
-        raise damaged(fname, f"npTDMS reports: {text[:160]}")
+        raise damaged(fname, _meaning(warned[0].getMessage()))
+
+
+def _meaning(text: str) -> str:
+    """What an npTDMS warning says about the file, in a user's words."""
+    if text.startswith("Error decoding string"):
+        return "a name or property in it is not UTF-8 text"
+    if "is not a multiple of the chunk size" in text:
+        return "a segment holds a part of a chunk of data (its sizes contradict its contents)"
+    if "Cropping data" in text:
+        return "a segment of interleaved data holds a part of a row"
+    return "npTDMS reports: " + reason(Exception(text))
 
 
 class TdmsReader:

@@ -22,11 +22,11 @@ from ._tdms import write_tdms
 
 def _check_columns(columns: Mapping[str, Any]) -> dict[str, np.ndarray]:
     if not isinstance(columns, Mapping) or not columns:
-        raise CaptureError("write_capture needs at least one column (a mapping name -> 1-D array)")
+        raise CaptureError("a capture needs at least one column to write (a name and its values)")
     out: dict[str, np.ndarray] = {}
     for name, values in columns.items():
         if not isinstance(name, str) or not name:
-            raise ConfigError(f"column names must be non-empty strings, not {name!r}")
+            raise ConfigError(f"column names must be non-empty text, not {name!r}")
         if name == NPZ_METADATA_KEY:
             raise ConfigError(f"column name {name!r} is reserved for metadata; rename the column")
         arr = np.asarray(values)
@@ -83,13 +83,13 @@ def write_capture(
             f"use one of {known_extensions()}"
         )
     if group is not None and fmt in ("csv", "npz"):
-        raise ConfigError(f"group= applies to HDF5 and TDMS files, not to {p.name}; leave it out")
+        raise ConfigError(f"--group applies to HDF5 and TDMS files, not to {p.name}; leave it out")
     if p.is_dir():
         raise ConfigError(f"{p} is a directory; give a file name for the capture")
     if p.exists() and not overwrite:
         raise ConfigError(
-            f"{p.name} already exists and will not be overwritten; choose another name or pass "
-            "overwrite=True (--overwrite)"
+            f"{p.name} already exists and will not be overwritten; choose another name or give "
+            "--overwrite"
         )
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
@@ -131,13 +131,13 @@ def _move_into_place(tmp: Path, dest: Path, overwrite: bool) -> None:
     except FileExistsError:
         raise ConfigError(
             f"{dest.name} already exists and will not be overwritten; choose another name or "
-            "pass overwrite=True (--overwrite)"
+            "give --overwrite"
         ) from None
     except OSError:  # no hard links on this file system: check, then rename
         if dest.exists():
             raise ConfigError(
                 f"{dest.name} already exists and will not be overwritten; choose another name "
-                "or pass overwrite=True (--overwrite)"
+                "or give --overwrite"
             ) from None
         os.replace(tmp, dest)
         return
