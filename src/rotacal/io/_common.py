@@ -258,7 +258,9 @@ _REASON_CHARS = 160
 
 def reason(exc: BaseException) -> str:
     """A library's exception as one short line of text for a message."""
-    text = " ".join(str(exc).split()) or type(exc).__name__
+    # the message alone: KeyError quotes it, TokenError adds a position tuple
+    plain_text = exc.args and isinstance(exc.args[0], str) and not isinstance(exc, UnicodeError)
+    text = " ".join((exc.args[0] if plain_text else str(exc)).split()) or type(exc).__name__
     if len(text) > _REASON_CHARS:
         text = text[: _REASON_CHARS - 1] + "…"
     return text

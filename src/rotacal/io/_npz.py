@@ -267,13 +267,18 @@ class NpzReader:
                 out[name] = mapped
                 continue
             check = self.integrity(name)
-            with self._zip.open(self._member(name).info) as fp:
-                with warnings.catch_warnings():
+            info = self._member(name).info
+            try:
+                with self._zip.open(info) as fp, warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     out[name] = np.asarray(npformat.read_array(fp, allow_pickle=False))
-                # the header declared exactly the member's size, so the last byte was read
-                # and zipfile compared the CRC
-                check.checked = True
+            except LIBRARY_ERRORS as exc:
+                raise damaged(
+                    self.fname, f"member {info.filename!r} cannot be decompressed ({reason(exc)})"
+                ) from None
+            # the header declared exactly the member's size, so the last byte was read and
+            # zipfile compared the CRC
+            check.checked = True
         return out
 
     def chunks(self, names: list[str], chunk_rows: int) -> Iterator[dict[str, np.ndarray]]:
