@@ -92,10 +92,13 @@ class _Tally:
         self.counts: dict[str, Counter[str]] = {"untyped": Counter(), "printed": Counter()}
         self.examples: dict[str, str] = {}
         self.slowest = (0.0, -1)
+        self.bad_inputs: set[int] = set()  # inputs with at least one untyped exception
 
     def add(self, item: dict[str, Any]) -> None:
         key = item["key"]
         self.counts[item["kind"]][key] += 1
+        if item["kind"] == "untyped":
+            self.bad_inputs.add(item["index"])
         self.examples.setdefault(
             key, f"input {item['index']} ({item['seed']}): {item['text'][:200]}"
         )
@@ -106,7 +109,9 @@ def _run(reader: str, lo: int, hi: int, hang_s: float, tally: _Tally) -> subproc
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
-def _collect(proc: subprocess.Popen[str], reader: str, hi: int, tally: _Tally) -> int | None:
+def _collect(
+    proc: subprocess.Popen[str], reader: str, lo: int, hi: int, tally: _Tally
+) -> int | None:
     """Fold a finished worker's output into ``tally``; return where to resume after a crash."""
     out, err = proc.communicate()
     done = False
@@ -120,9 +125,11 @@ def _collect(proc: subprocess.Popen[str], reader: str, hi: int, tally: _Tally) -
     if done:
         return None
     marks = [ln for ln in err.splitlines() if ln.startswith("at ")]
-    index = int(marks[-1].split()[1]) if marks else -1
-    why = f"hang or crash (process ended with {proc.returncode})"
     detail = " | ".join(ln.strip() for ln in err.splitlines()[-12:] if ln.strip())
+    if not marks:  # the worker failed before its first input: not an input's doing
+        raise SystemExit(f"worker for {reader} {lo}..{hi} failed to start: {detail}")
+    index = int(marks[-1].split()[1])
+    why = f"hang or crash (process ended with {proc.returncode})"
     tally.add(
         {"kind": "untyped", "key": f"all: {why}", "index": index, "seed": "?", "text": detail}
     )
@@ -165,21 +172,24 @@ def main() -> None:
             reader, lo, hi = pending.pop(0)
             running.append((_run(reader, lo, hi, args.hang_s, tallies[reader]), reader, lo, hi))
         proc, reader, lo, hi = running.pop(0)
-        resume = _collect(proc, reader, hi, tallies[reader])
+        resume = _collect(proc, reader, lo, hi, tallies[reader])
         tallies[reader].n += (resume if resume is not None else hi) - lo
         if resume is not None:
             pending.insert(0, (reader, resume, hi))
+        bad = len(tallies[reader].bad_inputs)
+        elapsed = time.perf_counter() - t0
+        print(f"  {reader} {lo}..{hi}: {bad} bad inputs so far ({elapsed:.0f} s)", file=sys.stderr)
     wall = time.perf_counter() - t0
     print(f"fuzz_readers: {args.inputs} damaged inputs per reader, {env_jobs} processes")
     for reader in readers:
         tally = tallies[reader]
-        bad = sum(tally.counts["untyped"].values())
+        bad = len(tally.bad_inputs)
         printed = sum(tally.counts["printed"].values())
         secs, idx = tally.slowest
         print(
-            f"\n{reader}: {tally.n} inputs, {bad} untyped exceptions "
-            f"({1e5 * bad / max(tally.n, 1):.0f} per 10^5), {printed} warnings/log lines; "
-            f"slowest input {idx} ({secs * 1e3:.0f} ms)"
+            f"\n{reader}: {tally.n} inputs, {bad} with an untyped exception "
+            f"({1e5 * bad / max(tally.n, 1):.0f} per 10^5 inputs), {printed} warnings/log "
+            f"lines; slowest input {idx} ({secs * 1e3:.0f} ms)"
         )
         for kind in ("untyped", "printed"):
             for key, count in tally.counts[kind].most_common():
