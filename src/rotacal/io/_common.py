@@ -7,13 +7,18 @@ from __future__ import annotations
 
 import codecs
 import os
+import struct
+import tokenize
+import zipfile
+import zlib
 from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from rotacal.errors import CaptureError, ConfigError
+from rotacal.errors import CaptureError, ConfigError, RotacalError
 
 #: file extension (lower case) -> format name
 FORMATS: dict[str, str] = {
@@ -137,13 +142,6 @@ def check_group_unused(p: Path, group: str | None) -> None:
         )
 
 
-def label(name: str, file_name: str) -> str:
-    """How a column is named in a message: canonical name, and the file's name if mapped."""
-    if name == file_name:
-        return f"column {name!r}"
-    return f"column {name!r} (file column {file_name!r})"
-
-
 def plain(value: Any) -> Any:
     """NumPy scalars/arrays in metadata -> plain Python values."""
     if isinstance(value, bytes):
@@ -159,10 +157,17 @@ def _first_true(mask: np.ndarray) -> int:
     return int(np.argmax(mask))
 
 
-def first_nonfinite(x: np.ndarray, start: int = 0) -> int:
-    """Index of the first NaN/inf in ``x`` at or after ``start`` (blockwise), or -1."""
+def first_nonfinite(
+    x: np.ndarray, start: int = 0, on_block: Callable[[int, int], None] | None = None
+) -> int:
+    """Index of the first NaN/inf in ``x`` at or after ``start`` (blockwise), or -1.
+
+    ``on_block(lo, hi)`` is called for each block before it is scanned (while it is in cache).
+    """
     n = x.shape[0]
     for i in range(start, n, BLOCK):
+        if on_block is not None:
+            on_block(i, min(n, i + BLOCK))
         block = x[i : i + BLOCK]
         ok = np.isfinite(block)
         if not ok.all():
@@ -181,66 +186,6 @@ def trailing_nan_start(x: np.ndarray) -> int:
             return lo + int(block.shape[0] - 1 - np.argmax(nn[::-1])) + 1
         end = lo
     return 0
-
-
-_MAX_EXACT_INT = 2**53
-
-
-def to_float_column(
-    raw: Any,
-    *,
-    fname: str,
-    what: str,
-    locate: Callable[[int], str],
-    ragged: bool = False,
-    offset: int = 0,
-) -> np.ndarray:
-    """Validate one raw column and return it as 1-D float64 (memory-mapped data stays mapped).
-
-    ``what`` names the column in messages; ``locate(i)`` describes absolute row ``i``;
-    ``offset`` is the absolute row of ``raw[0]`` (chunked reading).
-    """
-    arr = raw if isinstance(raw, np.ndarray) else np.asarray(raw)
-    if arr.ndim != 1:
-        raise CaptureError(
-            f"{fname} {what} has shape {arr.shape}; each column must be one 1-D array, "
-            "so split it into one column per channel"
-        )
-    kind = arr.dtype.kind
-    if kind not in "iuf":
-        raise CaptureError(
-            f"{fname} {what} holds {arr.dtype} values, not real numbers; store it as numbers"
-        )
-    if kind in "iu":
-        if arr.size and max(abs(int(arr.min())), abs(int(arr.max()))) > _MAX_EXACT_INT:
-            raise CaptureError(
-                f"{fname} {what} holds integers beyond 2**53 that float64 cannot represent "
-                "exactly; scale them (e.g. ticks to seconds) before saving"
-            )
-        out = arr.astype(np.float64)
-    elif arr.dtype != np.float64 or not arr.dtype.isnative:
-        out = arr.astype(np.float64)
-    else:
-        out = np.asarray(arr)  # a memmap becomes a plain ndarray view of the same mapping
-    if ragged:
-        out = out[: trailing_nan_start(out)]
-    if out.shape[0] == 0:
-        raise CaptureError(f"{fname} {what} is empty; give a capture with data in it")
-    bad = first_nonfinite(out)
-    if bad >= 0:
-        where = locate(offset + bad)
-        hint = (
-            "; only trailing cells may be empty (padding) in a ragged capture"
-            if ragged
-            else "; remove or fix that row"
-        )
-        value = float(out[bad])
-        raise CaptureError(f"{fname} {what} holds {value} at {where}, not a finite number{hint}")
-    return out
-
-
-def row_locator(index: int) -> str:
-    return f"row {index} (0-based)"
 
 
 def check_time(
@@ -288,16 +233,57 @@ def check_time(
             )
 
 
-def equal_lengths(fname: str, lengths: dict[str, int]) -> None:
-    """Without ragged=True every loaded column must have the same length."""
-    if len(set(lengths.values())) > 1:
-        shown = ", ".join(f"{k}: {v}" for k, v in lengths.items())
-        raise CaptureError(
-            f"{fname} columns have different lengths ({shown}); trim them to one length, "
-            "or read multi-head pulse files with ragged=True"
-        )
+# --- damaged files ----------------------------------------------------------------------------
+
+#: What the format libraries (zipfile, zlib, numpy.lib.format, h5py, npTDMS, the codecs) raise on
+#: damaged or truncated bytes. Exactly these become CaptureError: another type is a fault of
+#: rotacal's own code and must surface as one (the fuzz test fails on it).
+LIBRARY_ERRORS: tuple[type[BaseException], ...] = (
+    OSError,
+    ValueError,  # includes UnicodeDecodeError
+    LookupError,  # KeyError, IndexError
+    RuntimeError,  # includes NotImplementedError ("compression method is not supported")
+    EOFError,
+    ArithmeticError,  # OverflowError: a declared size beyond any integer type
+    struct.error,
+    zlib.error,
+    zipfile.BadZipFile,
+    tokenize.TokenError,  # numpy's parser of a damaged .npy header
+    SyntaxError,
+)
+#: what a user can do about a damaged capture
+DAMAGED_FIX = "copy or export the capture again from the recording"
+_REASON_CHARS = 160
 
 
-def chunk_slices(n: int, chunk_rows: int) -> Iterator[tuple[int, int]]:
-    for i in range(0, n, chunk_rows):
-        yield i, min(n, i + chunk_rows)
+def reason(exc: BaseException) -> str:
+    """A library's exception as one short line of text for a message."""
+    # the message alone: KeyError quotes it, TokenError adds a position tuple
+    plain_text = exc.args and isinstance(exc.args[0], str) and not isinstance(exc, UnicodeError)
+    text = " ".join((exc.args[0] if plain_text else str(exc)).split()) or type(exc).__name__
+    if len(text) > _REASON_CHARS:
+        text = text[: _REASON_CHARS - 1] + "…"
+    return text
+
+
+def damaged(fname: str, detail: str) -> CaptureError:
+    """The error for a file whose bytes contradict themselves: what is wrong and what to do."""
+    return CaptureError(f"{fname} is damaged or incomplete: {detail}; {DAMAGED_FIX}")
+
+
+@contextmanager
+def library_errors(fname: str, label: str, where: str = "") -> Iterator[None]:
+    """Turn what a format library raises on bad bytes (LIBRARY_ERRORS) into a CaptureError.
+
+    ``label`` names the format ("HDF5"), ``where`` the part being read ("dataset 'a'").
+    rotacal's own errors pass through unchanged.
+    """
+    try:
+        yield
+    except RotacalError:
+        raise
+    except LIBRARY_ERRORS as exc:
+        part = f" at {where}" if where else ""
+        raise damaged(
+            fname, f"its {label} structure cannot be read{part} ({reason(exc)})"
+        ) from None

@@ -6,6 +6,7 @@ line on the error path, to name the line and column at fault.
 
 from __future__ import annotations
 
+import codecs
 import itertools
 import json
 import math
@@ -17,6 +18,9 @@ from typing import Any
 import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
+
+from ._common import reason
+from ._validate import RAGGED_USE, ColumnInfo
 
 ENCODING = "utf-8-sig"
 #: rows formatted per piece when writing (bounded memory)
@@ -43,8 +47,33 @@ def _empty_to_nan(cell: str) -> float:
     return float(cell) if cell.strip() else math.nan
 
 
+def _first_bad_utf8(path: Path) -> tuple[int, int, int]:
+    """(line, byte offset, byte value) of the first byte of ``path`` that is not UTF-8."""
+    line, offset, tail = 1, 0, b""
+    with open(path, "rb") as fh:
+        while True:
+            block = fh.read(1 << 20)
+            data = tail + block
+            try:
+                _text, used = codecs.utf_8_decode(data, "strict", not block)
+            except UnicodeDecodeError as exc:
+                return line + data.count(b"\n", 0, exc.start), offset + exc.start, data[exc.start]
+            line += data.count(b"\n", 0, used)
+            offset += used
+            tail = data[used:]
+            if not block:
+                return line, offset, 0
+
+
 class CsvReader:
-    """Reader of one CSV capture (header parsed on construction)."""
+    """Reader of one CSV capture (header parsed on construction): text in, float64 columns out.
+
+    What is a parse question stays here (cells per row, cells that are not numbers, text that
+    is not UTF-8, naming the line); every check of the values is in ``_validate``.
+    """
+
+    label = "CSV"
+    noun = "column"
 
     def __init__(self, path: Path) -> None:
         self.path = path
@@ -57,7 +86,22 @@ class CsvReader:
             with open(path, encoding=ENCODING, newline=None) as fh:
                 self._parse_head(fh)
         except UnicodeDecodeError:
-            raise CaptureError(f"{self.fname} is not UTF-8 text; save it as UTF-8 CSV") from None
+            raise self._not_utf8() from None
+
+    def _not_utf8(self) -> CaptureError:
+        line, offset, value = _first_bad_utf8(self.path)
+        return CaptureError(
+            f"{self.fname} line {line} is not UTF-8 text (byte 0x{value:02x} at byte {offset}); "
+            "save the file as UTF-8 CSV"
+        )
+
+    def _lines(self, skip: int) -> Iterator[str]:
+        """The file's text lines after the first ``skip``; bytes that are not UTF-8 are named."""
+        try:
+            with open(self.path, encoding=ENCODING) as fh:
+                yield from itertools.islice(fh, skip, None)
+        except UnicodeDecodeError:
+            raise self._not_utf8() from None
 
     def _parse_head(self, fh: Iterable[str]) -> None:
         header: str | None = None
@@ -93,18 +137,6 @@ class CsvReader:
                 f"{self.fname} header {header[:60]!r} has no commas; rotacal reads "
                 "comma-separated files — save it with ',' between columns"
             )
-        for i, name in enumerate(names):
-            if not name:
-                raise CaptureError(
-                    f"{self.fname} header (line {self.header_lines}) has an empty name in "
-                    f"column {i + 1}; name every column (or remove a trailing comma)"
-                )
-        dup = sorted({n for n in names if names.count(n) > 1})
-        if dup:
-            raise CaptureError(
-                f"{self.fname} header names column {dup[0]!r} more than once; give each column "
-                "its own name"
-            )
         self.names = names
         if self.first_row_cells is not None and self.first_row_cells != len(names):
             raise CaptureError(
@@ -125,9 +157,13 @@ class CsvReader:
         except ValueError:
             self.metadata[key] = value
 
-    # --- lengths -------------------------------------------------------------------------------
+    # --- declarations --------------------------------------------------------------------------
 
-    def length(self, name: str) -> int:
+    def describe(self, name: str) -> ColumnInfo:
+        """A CSV declares no type and no length: both come from reading."""
+        return ColumnInfo(self.noun)
+
+    def row_count(self, name: str) -> int:
         """Number of data rows (every column's length in a file without padding)."""
         if self.first_row_cells is None:
             return 0
@@ -164,11 +200,11 @@ class CsvReader:
                     **kw,
                 )
         except ValueError as exc:
-            with open(self.path, encoding=ENCODING) as fh:
-                lines = itertools.islice(fh, self.header_lines, None)
-                self._diagnose(lines, self.header_lines + 1, idx, ragged)
+            if isinstance(exc, UnicodeDecodeError):
+                raise self._not_utf8() from None
+            self._diagnose(self._lines(self.header_lines), self.header_lines + 1, idx, ragged)
             raise CaptureError(
-                f"{self.fname} could not be parsed as numbers ({exc}); check its data rows"
+                f"{self.fname} could not be parsed as numbers ({reason(exc)}); check its data rows"
             ) from None
         if data.shape[0] == 0:
             raise self._no_data()
@@ -178,46 +214,44 @@ class CsvReader:
 
     def chunks(self, names: list[str], chunk_rows: int) -> Iterator[dict[str, np.ndarray]]:
         idx = [self.names.index(n) for n in names]
-        with open(self.path, encoding=ENCODING) as fh:
-            for _ in range(self.header_lines):
-                next(fh)
-            lineno = self.header_lines + 1
-            while True:
-                # gather chunk_rows data rows (blank and comment lines do not count)
-                pending: list[str] = []
-                have = 0
-                while have < chunk_rows:
-                    piece = list(itertools.islice(fh, chunk_rows - have))
-                    if not piece:
-                        break
-                    pending.extend(piece)
-                    have += len(piece) - sum(1 for s in piece if s[0] in _NOT_DATA)
-                if have == 0:
-                    return
-                # np.loadtxt with usecols ignores extra cells: a shifted row would pass silently
-                commas = len(self.names) - 1
-                if any(x.count(",") != commas for x in pending if x[0] not in _NOT_DATA):
-                    self._diagnose(pending, lineno, idx, ragged=False)
-                try:
-                    with warnings.catch_warnings():
-                        warnings.simplefilter("ignore", UserWarning)
-                        data = np.loadtxt(
-                            pending,
-                            dtype=np.float64,
-                            delimiter=",",
-                            comments="#",
-                            usecols=idx,
-                            ndmin=2,
-                        )
-                except ValueError as exc:
-                    self._diagnose(pending, lineno, idx, ragged=False)
-                    raise CaptureError(
-                        f"{self.fname} could not be parsed as numbers near line {lineno} "
-                        f"({exc}); check its data rows"
-                    ) from None
-                lineno += len(pending)
-                cols = np.ascontiguousarray(data.T)
-                yield {n: cols[k] for k, n in enumerate(names)}
+        lines = self._lines(self.header_lines)
+        lineno = self.header_lines + 1
+        while True:
+            # gather chunk_rows data rows (blank and comment lines do not count)
+            pending: list[str] = []
+            have = 0
+            while have < chunk_rows:
+                piece = list(itertools.islice(lines, chunk_rows - have))
+                if not piece:
+                    break
+                pending.extend(piece)
+                have += len(piece) - sum(1 for s in piece if s[0] in _NOT_DATA)
+            if have == 0:
+                return
+            # np.loadtxt with usecols ignores extra cells: a shifted row would pass silently
+            commas = len(self.names) - 1
+            if any(x.count(",") != commas for x in pending if x[0] not in _NOT_DATA):
+                self._diagnose(pending, lineno, idx, ragged=False)
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", UserWarning)
+                    data = np.loadtxt(
+                        pending,
+                        dtype=np.float64,
+                        delimiter=",",
+                        comments="#",
+                        usecols=idx,
+                        ndmin=2,
+                    )
+            except ValueError as exc:
+                self._diagnose(pending, lineno, idx, ragged=False)
+                raise CaptureError(
+                    f"{self.fname} could not be parsed as numbers near line {lineno} "
+                    f"({reason(exc)}); check its data rows"
+                ) from None
+            lineno += len(pending)
+            cols = np.ascontiguousarray(data.T)
+            yield {n: cols[k] for k, n in enumerate(names)}
 
     def _check_cell_counts(self, idx: list[int], ragged: bool) -> None:
         """Every data row must have as many cells as the header: np.loadtxt with usecols ignores
@@ -237,9 +271,7 @@ class CsvReader:
         rows = int(np.count_nonzero(raw == ord("\n"))) + int(raw[-1] != ord("\n"))
         del raw
         if commas != (len(self.names) - 1) * rows:
-            with open(self.path, encoding=ENCODING) as fh:
-                lines = itertools.islice(fh, self.header_lines, None)
-                self._diagnose(lines, self.header_lines + 1, idx, ragged)
+            self._diagnose(self._lines(self.header_lines), self.header_lines + 1, idx, ragged)
 
     # --- messages ------------------------------------------------------------------------------
 
@@ -267,8 +299,8 @@ class CsvReader:
                     if ragged:
                         continue
                     raise CaptureError(
-                        f"{self.fname} line {ln}, column {col!r} is empty; fill it, or read "
-                        "padded multi-head pulse files with ragged=True"
+                        f"{self.fname} line {ln}, column {col!r} is empty; fill it ({RAGGED_USE} "
+                        "leave trailing cells empty)"
                     )
                 if not _is_number(cell):
                     raise CaptureError(
@@ -278,15 +310,17 @@ class CsvReader:
 
     def locate(self, index: int) -> str:
         """File line of data row ``index`` (0-based), for messages (scans the file)."""
-        with open(self.path, encoding=ENCODING) as fh:
-            k = -1
-            for ln, line in enumerate(fh, start=1):
-                if ln <= self.header_lines or not _content(line):
-                    continue
-                k += 1
-                if k == index:
-                    return f"line {ln} (data row {index + 1})"
+        k = -1
+        for ln, line in enumerate(self._lines(self.header_lines), start=self.header_lines + 1):
+            if not _content(line):
+                continue
+            k += 1
+            if k == index:
+                return f"line {ln} (data row {index + 1})"
         return f"data row {index + 1}"
+
+    def integrity(self, name: str) -> None:
+        return None  # a CSV stores no checksums
 
     def close(self) -> None:
         return None

@@ -1,7 +1,10 @@
 """HDF5 captures: one dataset per column, at the root or under a group (``grp/sub`` allowed).
 
 Contiguous, unfiltered datasets are memory-mapped straight from the file; the others are read
-with h5py (whole, or by slices when chunked).
+with h5py (whole, or by slices when chunked). What a dataset declares (shape, type, where its
+bytes are) is compared with the file before anything is read: storage past the end of the file,
+chunks that were never written (they would read as fill values) and sizes no file of this size
+could hold are refused.
 """
 
 from __future__ import annotations
@@ -16,7 +19,12 @@ import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
 
-from ._common import plain
+from ._common import LIBRARY_ERRORS, damaged, plain, reason
+from ._hdf5_heap import check_global_heaps
+from ._validate import ColumnInfo
+
+#: the most a filter (deflate, LZF, ...) can expand: deflate's ~1032:1 bounds the common ones
+_MAX_RATIO = 1032
 
 
 def _groups_with_datasets(f: h5py.File, limit: int = 12) -> list[str]:
@@ -26,25 +34,27 @@ def _groups_with_datasets(f: h5py.File, limit: int = 12) -> list[str]:
         if isinstance(obj, h5py.Group) and any(isinstance(v, h5py.Dataset) for v in obj.values()):
             found.append(name)
 
-    f.visititems(visit)
+    try:
+        f.visititems(visit)
+    except LIBRARY_ERRORS:  # a damaged part of the file: name what was found before it
+        pass
     return found[:limit]
 
 
 class Hdf5Reader:
-    """Reader of one HDF5 capture."""
+    """Reader of one HDF5 capture: the datasets of one group, their declarations and data."""
+
+    label = "HDF5"
+    noun = "dataset"
 
     def __init__(self, path: Path, group: str | None) -> None:
         self.path = path
         self.fname = path.name
-        try:
-            self._file = h5py.File(path, "r")
-        except OSError as exc:
-            raise CaptureError(
-                f"{self.fname} cannot be read as HDF5 ({exc}); check that the file is complete"
-            ) from None
+        self._size = path.stat().st_size
+        self._file = h5py.File(path, "r")
         try:
             self._open_group(group)
-        except Exception:
+        except BaseException:
             self._file.close()
             raise
 
@@ -69,25 +79,88 @@ class Hdf5Reader:
                 f"{self.fname} has no datasets {at} (groups with datasets: "
                 f"{', '.join(have) or 'none'}); {hint}"
             )
-        self.metadata = {k: plain(v) for k, v in base.attrs.items()}
+        self.metadata = self._attributes(base)
 
-    def _dset(self, name: str) -> h5py.Dataset:
-        d = self._base[name]
-        if d.dtype.names is not None or d.dtype.kind not in "iuf":
-            raise CaptureError(
-                f"{self.fname} dataset {name!r} holds {d.dtype} values, not real numbers; "
-                "store each column as a numeric dataset"
-            )
-        if d.ndim != 1:
-            raise CaptureError(
-                f"{self.fname} dataset {name!r} has shape {d.shape}; each column must be one "
-                "1-D dataset, so split it into one dataset per channel"
-            )
-        return d
+    def _attributes(self, base: h5py.Group) -> dict[str, Any]:
+        """The group's attributes; variable-length ones only after their heaps were checked."""
+        out: dict[str, Any] = {}
+        heaps_checked = False
+        for key in base.attrs:
+            try:
+                needs_heap = base.attrs.get_id(key).dtype.hasobject
+            except TypeError:  # a type h5py cannot represent: not metadata rotacal can show
+                continue
+            if needs_heap and not heaps_checked:
+                check_global_heaps(self.path, self.fname, self._data_extents(base))
+                heaps_checked = True
+            out[key] = plain(base.attrs[key])
+        return out
 
-    def length(self, name: str) -> int:
-        d = self._base[name]
-        return int(d.shape[0]) if d.ndim == 1 else -1
+    def _data_extents(self, base: h5py.Group) -> list[tuple[int, int]]:
+        """(offset, bytes) of the group's contiguous datasets: no heap lies inside them."""
+        out = []
+        for name in self.names:
+            d = base[name]
+            offset = d.id.get_offset()
+            try:
+                nbytes = d.dtype.itemsize * int(np.prod(d.shape or (0,), dtype=np.int64))
+            except (TypeError, ValueError):
+                continue
+            # only extents that agree with the declaration (a damaged size must not hide a heap)
+            if offset is not None and nbytes == d.id.get_storage_size() <= self._size - offset:
+                out.append((int(offset), nbytes))
+        return out
+
+    # --- declarations --------------------------------------------------------------------------
+
+    def _dataset(self, name: str) -> h5py.Dataset:
+        return self._base[name]
+
+    def describe(self, name: str) -> ColumnInfo:
+        d = self._dataset(name)
+        try:
+            dtype = d.dtype
+        except TypeError as exc:  # an HDF5 type with no NumPy equivalent (bitfield, ...)
+            raise CaptureError(
+                f"{self.fname} dataset {name!r} holds a data type rotacal cannot read "
+                f"({reason(exc)}); store each column as numbers"
+            ) from None
+        shape = () if d.shape is None else tuple(int(k) for k in d.shape)  # None: a null space
+        if dtype.kind not in "iuf" or len(shape) != 1 or shape[0] == 0:
+            return ColumnInfo(self.noun, dtype, shape)
+        layout = d.id.get_create_plist().get_layout()
+        stored = int(d.id.get_storage_size())
+        if layout == h5py.h5d.COMPACT:  # the data sit in the dataset's header
+            return ColumnInfo(self.noun, dtype, shape, stored_bytes=stored, max_bytes=self._size)
+        if layout == h5py.h5d.CONTIGUOUS and not d.external:
+            offset = d.id.get_offset()
+            if offset is None:
+                raise damaged(self.fname, f"dataset {name!r} has no data stored (never written)")
+            return ColumnInfo(
+                self.noun, dtype, shape, stored_bytes=stored, max_bytes=self._size - offset
+            )
+        if layout == h5py.h5d.CHUNKED:
+            self._check_chunks(d, name)
+            filtered = d.id.get_create_plist().get_nfilters() > 0
+            bound = min(_MAX_RATIO * stored, _MAX_RATIO * self._size) if filtered else stored
+            return ColumnInfo(self.noun, dtype, shape, max_bytes=bound)
+        return ColumnInfo(self.noun, dtype, shape)  # external or virtual: h5py reads it
+
+    def _check_chunks(self, d: h5py.Dataset, name: str) -> None:
+        """Every chunk the shape needs must be stored: a missing one reads as fill values."""
+        need = -(-int(d.shape[0]) // int(d.chunks[0]))
+        have = int(d.id.get_num_chunks())
+        if have < need:
+            raise damaged(
+                self.fname,
+                f"dataset {name!r} stores {have} of its {need} chunks (the rest would read "
+                "as fill values, not data)",
+            )
+
+    def row_count(self, name: str) -> int:
+        return int(self._dataset(name).shape[0])
+
+    # --- data ----------------------------------------------------------------------------------
 
     def _memmap(self, d: h5py.Dataset) -> np.ndarray | None:
         """A read-only memory map of a contiguous, unfiltered dataset, else None."""
@@ -98,12 +171,16 @@ class Hdf5Reader:
         offset = d.id.get_offset()
         if offset is None:
             return None
+        if offset + d.dtype.itemsize * int(d.shape[0]) > self._size:
+            raise damaged(
+                self.fname, f"dataset {d.name.rsplit('/', 1)[-1]!r} runs past the end of the file"
+            )
         return np.memmap(self.path, dtype=d.dtype, mode="r", offset=offset, shape=d.shape)
 
     def read(self, names: list[str], ragged: bool) -> dict[str, np.ndarray]:
         out: dict[str, np.ndarray] = {}
         for name in names:
-            d = self._dset(name)
+            d = self._dataset(name)
             mm = self._memmap(d)
             out[name] = mm if mm is not None else d[...]
         return out
@@ -111,13 +188,16 @@ class Hdf5Reader:
     def chunks(self, names: list[str], chunk_rows: int) -> Iterator[dict[str, np.ndarray]]:
         sources: dict[str, Any] = {}
         for name in names:
-            d = self._dset(name)
+            d = self._dataset(name)
             mm = self._memmap(d)
             sources[name] = mm if mm is not None else d
-        n = self.length(names[0])
+        n = self.row_count(names[0])
         for lo in range(0, n, chunk_rows):
             hi = min(n, lo + chunk_rows)
             yield {name: np.asarray(src[lo:hi]) for name, src in sources.items()}
+
+    def integrity(self, name: str) -> None:
+        return None  # HDF5 checks its own checksums (metadata, fletcher32 chunks) on reading
 
     def locate(self, index: int) -> str:
         return f"row {index} (0-based)"

@@ -1,15 +1,21 @@
 """NumPy ``.npz`` captures: one array per column.
 
-Members stored without compression (``np.savez``) are memory-mapped straight from the archive;
-compressed members (``np.savez_compressed``) are decompressed whole by :meth:`NpzReader.read`
-and in pieces by :meth:`NpzReader.chunks`.
+Members stored without compression (``np.savez``) are memory-mapped straight from the archive and
+their zip CRC-32 is checked over the mapping in blocks (the data are read once more, but no copy
+is made); compressed members (``np.savez_compressed``) are decompressed by zipfile, which checks
+the CRC itself, whole by :meth:`NpzReader.read` and in pieces by :meth:`NpzReader.chunks`.
+Sizes declared by a member's .npy header are compared with what the archive stores before
+anything is allocated.
 """
 
 from __future__ import annotations
 
+import io
 import json
 import struct
+import warnings
 import zipfile
+import zlib
 from collections.abc import Iterator, Mapping
 from contextlib import ExitStack
 from dataclasses import dataclass
@@ -21,9 +27,15 @@ from numpy.lib import format as npformat
 
 from rotacal.errors import CaptureError
 
-from ._common import NPZ_METADATA_KEY
+from ._common import BLOCK, LIBRARY_ERRORS, NPZ_METADATA_KEY, damaged, reason
+from ._validate import ColumnInfo
 
 _LOCAL_HEADER = struct.Struct("<4s2B4HL2L2H")  # zipfile.structFileHeader
+#: Deflate's largest compression ratio (RFC 1951: 258 bytes from a 2-bit code, ~1032:1); a
+#: compressed member that claims to expand further is damaged
+_MAX_RATIO = 1032
+#: the metadata member holds a short JSON text
+_MAX_METADATA_BYTES = 1 << 24
 
 
 @dataclass
@@ -35,10 +47,12 @@ class _Member:
 
 
 def _read_npy_header(fp: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
-    version = npformat.read_magic(fp)
-    if version == (1, 0):
-        return npformat.read_array_header_1_0(fp)
-    return npformat.read_array_header_2_0(fp)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # numpy's note on headers written by Python 2
+        version = npformat.read_magic(fp)
+        if version == (1, 0):
+            return npformat.read_array_header_1_0(fp)
+        return npformat.read_array_header_2_0(fp)
 
 
 def _read_exact(fp: IO[bytes], nbytes: int) -> bytes:
@@ -52,138 +66,256 @@ def _read_exact(fp: IO[bytes], nbytes: int) -> bytes:
     return b"".join(parts)
 
 
+class _StoredCrc:
+    """The zip CRC-32 of a stored (memory-mapped) member, computed over the mapping in blocks.
+
+    The validator feeds it the rows it scans anyway (:meth:`feed`, in order, while the block is
+    in cache); :meth:`check` adds what was not fed and compares with the zip entry's CRC.
+    """
+
+    def __init__(self, fname: str, member: str, head: bytes, data: np.ndarray, crc: int) -> None:
+        self.fname, self.member, self.data, self.expected = fname, member, data, crc
+        self.crc = zlib.crc32(head)
+        self.done = 0
+        self.checked = False
+
+    def feed(self, lo: int, hi: int) -> None:
+        if lo == self.done and hi > lo:
+            self.crc = zlib.crc32(self.data[lo:hi].data, self.crc)
+            self.done = hi
+
+    def check(self) -> None:
+        if self.checked:
+            return
+        n = self.data.shape[0]
+        for lo in range(self.done, n, BLOCK):
+            self.feed(lo, min(n, lo + BLOCK))
+        if self.crc != self.expected:
+            raise damaged(
+                self.fname,
+                f"member {self.member!r} does not match the CRC-32 recorded in the archive "
+                "(its bytes changed after it was written)",
+            )
+        self.checked = True
+
+
+class _DeflatedCrc:
+    """A compressed member: zipfile checks its CRC-32 when the last byte is decompressed."""
+
+    def __init__(self, reader: NpzReader, info: zipfile.ZipInfo) -> None:
+        self.reader, self.info = reader, info
+        self.checked = False  # set once the whole member went through zipfile
+
+    def feed(self, lo: int, hi: int) -> None:
+        return None
+
+    def check(self) -> None:
+        if self.checked:
+            return
+        try:
+            with self.reader._zip.open(self.info) as fp:
+                while fp.read(1 << 22):
+                    pass
+        except LIBRARY_ERRORS as exc:
+            raise damaged(
+                self.reader.fname,
+                f"member {self.info.filename!r} fails its zip check ({reason(exc)})",
+            ) from None
+        self.checked = True
+
+
 class NpzReader:
-    """Reader of one NPZ capture."""
+    """Reader of one NPZ capture: member names, their .npy declarations and raw arrays."""
+
+    label = "NPZ"
+    noun = "column"
 
     def __init__(self, path: Path) -> None:
         self.path = path
         self.fname = path.name
         self.metadata: dict[str, Any] = {}
-        try:
-            self._zip = zipfile.ZipFile(path)
-        except (zipfile.BadZipFile, OSError) as exc:
-            raise CaptureError(
-                f"{self.fname} cannot be read as NPZ ({exc}); write it again with numpy.savez"
-            ) from None
+        self._size = path.stat().st_size
+        self._zip = zipfile.ZipFile(path)
         self._members: dict[str, _Member] = {}
+        self._mapped_arrays: dict[str, np.ndarray] = {}
+        self._integrity: dict[str, _StoredCrc | _DeflatedCrc] = {}
         try:
-            self._scan()
-        except Exception:
+            infos = [i for i in self._zip.infolist() if i.filename.endswith(".npy")]
+            self._infos = {i.filename[:-4]: i for i in infos}
+            self.names = [i.filename[:-4] for i in infos if i.filename[:-4] != NPZ_METADATA_KEY]
+            if not self.names:
+                raise CaptureError(
+                    f"{self.fname} holds no NumPy arrays (.npy members); an NPZ capture holds "
+                    "one array per column — write it again, or save the capture as CSV"
+                )
+            if NPZ_METADATA_KEY in self._infos:
+                self._read_metadata(self._infos[NPZ_METADATA_KEY])
+        except BaseException:
             self._zip.close()
             raise
 
-    def _scan(self) -> None:
-        for info in self._zip.infolist():
-            if not info.filename.endswith(".npy"):
-                continue
-            key = info.filename[:-4]
-            if key == NPZ_METADATA_KEY:
-                self._read_metadata(info)
-                continue
-            try:
-                with self._zip.open(info) as fp:
-                    shape, _fortran, dtype = _read_npy_header(fp)
-                    offset = fp.tell()
-            except (ValueError, OSError, zipfile.BadZipFile) as exc:
-                raise CaptureError(
-                    f"{self.fname} member {key!r} is not a valid NumPy array ({exc}); "
-                    "write the capture again with numpy.savez"
-                ) from None
-            self._members[key] = _Member(info, tuple(shape), np.dtype(dtype), offset)
-        if not self._members:
-            raise CaptureError(
-                f"{self.fname} holds no NumPy arrays; write one array per column with numpy.savez"
-            )
-        self.names = list(self._members)
+    # --- declarations --------------------------------------------------------------------------
 
-    def _read_metadata(self, info: zipfile.ZipInfo) -> None:
+    def _member(self, name: str) -> _Member:
+        m = self._members.get(name)
+        if m is not None:
+            return m
+        info = self._infos[name]
         try:
             with self._zip.open(info) as fp:
-                text = str(npformat.read_array(fp, allow_pickle=False))
-            meta = json.loads(text)
-        except (ValueError, OSError):
+                shape, _fortran, dtype = _read_npy_header(fp)
+                offset = fp.tell()
+        except LIBRARY_ERRORS as exc:
+            raise damaged(
+                self.fname,
+                f"member {info.filename!r} does not start with a valid NumPy array header "
+                f"({reason(exc)})",
+            ) from None
+        m = _Member(info, tuple(int(k) for k in shape), np.dtype(dtype), offset)
+        self._members[name] = m
+        return m
+
+    def _max_bytes(self, info: zipfile.ZipInfo) -> int:
+        if info.compress_type == zipfile.ZIP_STORED:
+            return self._size
+        return _MAX_RATIO * min(info.compress_size, self._size)
+
+    def describe(self, name: str) -> ColumnInfo:
+        m = self._member(name)
+        return ColumnInfo(
+            self.noun,
+            m.dtype,
+            m.shape,
+            stored_bytes=m.info.file_size - m.data_offset,
+            max_bytes=self._max_bytes(m.info),
+        )
+
+    def row_count(self, name: str) -> int:
+        return self._member(name).shape[0]
+
+    def _read_metadata(self, info: zipfile.ZipInfo) -> None:
+        """The ``__metadata__`` member: JSON text of a dict (anything else is not metadata)."""
+        if info.file_size > min(_MAX_METADATA_BYTES, self._max_bytes(info)):
+            raise damaged(self.fname, f"its metadata member declares {info.file_size} bytes")
+        try:
+            with self._zip.open(info) as fp:
+                raw = _read_exact(fp, info.file_size + 1)  # to the end: zipfile checks the CRC
+            head = io.BytesIO(raw)
+            shape, _fortran, dtype = _read_npy_header(head)
+            count = int(np.prod(shape, dtype=np.int64))
+            if dtype.hasobject or count * dtype.itemsize != len(raw) - head.tell():
+                return
+            arr = np.frombuffer(raw, dtype=dtype, count=count, offset=head.tell())
+        except LIBRARY_ERRORS as exc:
+            raise damaged(
+                self.fname, f"its metadata member {info.filename!r} is unreadable ({reason(exc)})"
+            ) from None
+        try:
+            meta = json.loads(str(arr.reshape(shape)))
+        except ValueError:
             return
         if isinstance(meta, dict):
             self.metadata = meta
 
-    def length(self, name: str) -> int:
-        shape = self._members[name].shape
-        return shape[0] if len(shape) == 1 else -1
+    # --- data ----------------------------------------------------------------------------------
 
-    def _data_start(self, m: _Member) -> int | None:
-        """Absolute file offset of the member's array data when it is stored uncompressed."""
-        if m.info.compress_type != zipfile.ZIP_STORED or m.dtype.hasobject:
-            return None
+    def _member_start(self, m: _Member) -> int:
+        """Absolute file offset of the member's bytes (its .npy header), after the zip header."""
         with open(self.path, "rb") as fh:
             fh.seek(m.info.header_offset)
             raw = fh.read(_LOCAL_HEADER.size)
         if len(raw) != _LOCAL_HEADER.size or raw[:4] != b"PK\x03\x04":
-            return None
+            raise damaged(self.fname, f"the zip header of member {m.info.filename!r} is missing")
         fields = _LOCAL_HEADER.unpack(raw)
-        name_len, extra_len = fields[10], fields[11]
-        start = m.info.header_offset + _LOCAL_HEADER.size + name_len + extra_len + m.data_offset
-        nbytes = int(np.prod(m.shape, dtype=np.int64)) * m.dtype.itemsize
-        if m.info.file_size != m.data_offset + nbytes:
-            return None
-        return start
+        return m.info.header_offset + _LOCAL_HEADER.size + fields[10] + fields[11]
 
-    def _array(self, name: str) -> np.ndarray:
-        m = self._members[name]
-        if m.dtype.hasobject:
-            raise CaptureError(
-                f"{self.fname} member {name!r} holds Python objects, not numbers; "
-                "store each column as a numeric array"
+    def _mapped(self, name: str) -> np.ndarray | None:
+        """A stored member's data as a read-only memory map (None when compressed)."""
+        m = self._member(name)
+        if m.info.compress_type != zipfile.ZIP_STORED:
+            return None
+        if name in self._mapped_arrays:
+            return self._mapped_arrays[name]
+        start = self._member_start(m)
+        if start + m.info.file_size > self._size:
+            raise damaged(
+                self.fname, f"member {m.info.filename!r} runs past the end of the file (truncated)"
             )
-        if len(m.shape) != 1:
-            raise CaptureError(
-                f"{self.fname} column {name!r} has shape {m.shape}; each column must be one "
-                "1-D array, so split it into one column per channel"
-            )
-        start = self._data_start(m)
-        if start is not None:
-            if m.shape[0] == 0:
-                return np.empty(0, dtype=m.dtype)
-            return np.memmap(self.path, dtype=m.dtype, mode="r", offset=start, shape=m.shape)
-        with self._zip.open(m.info) as fp:
-            return np.asarray(npformat.read_array(fp, allow_pickle=False))
+        data_start = start + m.data_offset
+        if m.shape[0] == 0:
+            arr: np.ndarray = np.empty(0, dtype=m.dtype)
+        else:
+            arr = np.memmap(self.path, dtype=m.dtype, mode="r", offset=data_start, shape=m.shape)
+        with open(self.path, "rb") as fh:
+            fh.seek(start)
+            head = fh.read(m.data_offset)
+        self._integrity[name] = _StoredCrc(self.fname, m.info.filename, head, arr, m.info.CRC)
+        self._mapped_arrays[name] = arr
+        return arr
+
+    def integrity(self, name: str) -> _StoredCrc | _DeflatedCrc:
+        """The CRC-32 check of a member (see :class:`_StoredCrc`, :class:`_DeflatedCrc`)."""
+        if name not in self._integrity and self._mapped(name) is None:
+            self._integrity[name] = _DeflatedCrc(self, self._member(name).info)
+        return self._integrity[name]
 
     def read(self, names: list[str], ragged: bool) -> dict[str, np.ndarray]:
-        return {n: self._array(n) for n in names}
+        out: dict[str, np.ndarray] = {}
+        for name in names:
+            mapped = self._mapped(name)
+            if mapped is not None:
+                out[name] = mapped
+                continue
+            check = self.integrity(name)
+            info = self._member(name).info
+            try:
+                with self._zip.open(info) as fp, warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    out[name] = np.asarray(npformat.read_array(fp, allow_pickle=False))
+            except LIBRARY_ERRORS as exc:
+                raise damaged(
+                    self.fname, f"member {info.filename!r} cannot be decompressed ({reason(exc)})"
+                ) from None
+            # the header declared exactly the member's size, so the last byte was read and
+            # zipfile compared the CRC
+            check.checked = True
+        return out
 
     def chunks(self, names: list[str], chunk_rows: int) -> Iterator[dict[str, np.ndarray]]:
-        n = self.length(names[0])
+        n = self.row_count(names[0])
         with ExitStack() as stack:
             sources: dict[str, Any] = {}
             for name in names:
-                m = self._members[name]
-                if self._data_start(m) is not None or len(m.shape) != 1 or m.dtype.hasobject:
-                    sources[name] = self._array(name)  # memory-mapped (or an error)
-                else:
-                    fp = stack.enter_context(self._zip.open(m.info))
-                    _read_npy_header(fp)
-                    sources[name] = fp
+                mapped = self._mapped(name)
+                if mapped is not None:
+                    sources[name] = mapped
+                    continue
+                fp = stack.enter_context(self._zip.open(self._member(name).info))
+                _read_npy_header(fp)
+                sources[name] = fp
             for lo in range(0, n, chunk_rows):
                 hi = min(n, lo + chunk_rows)
                 out: dict[str, np.ndarray] = {}
                 for name, src in sources.items():
                     if isinstance(src, np.ndarray):
                         out[name] = src[lo:hi]
-                    else:
-                        dt = self._members[name].dtype
-                        want = (hi - lo) * dt.itemsize
-                        buf = _read_exact(src, want)
-                        if len(buf) != want:
-                            raise CaptureError(
-                                f"{self.fname} member {name!r} is truncated at row {lo}; "
-                                "write the capture again"
-                            )
-                        out[name] = np.frombuffer(buf, dtype=dt)
+                        continue
+                    dt = self._members[name].dtype
+                    want = (hi - lo) * dt.itemsize
+                    buf = _read_exact(src, want)  # zipfile checks the CRC with the last piece
+                    if len(buf) != want:
+                        raise damaged(self.fname, f"member {name + '.npy'!r} ends at row {lo}")
+                    out[name] = np.frombuffer(buf, dtype=dt)
+                    if hi == n:
+                        self.integrity(name).checked = True
                 yield out
 
     def locate(self, index: int) -> str:
         return f"row {index} (0-based)"
 
     def close(self) -> None:
+        self._integrity.clear()
+        self._mapped_arrays.clear()
         self._zip.close()
 
 

@@ -9,36 +9,35 @@ NaN/inf, empty columns, columns of unequal length.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
 
-from ._common import check_group_unused, equal_lengths, label, open_checked, to_float_column
+from ._common import LIBRARY_ERRORS, check_group_unused, library_errors, open_checked
 from ._csv import CsvReader
 from ._hdf5 import Hdf5Reader
 from ._npz import NpzReader
 from ._tdms import TdmsReader
+from ._validate import (
+    Reader,
+    check_file_names,
+    check_requested_name,
+    declared_length,
+    equal_lengths,
+    label,
+    reading,
+    to_float_column,
+)
 
 PathLike = str | os.PathLike[str]
 MappingArg = Mapping[str, str] | Iterable[str] | None
-
-
-class _Reader(Protocol):
-    fname: str
-    names: list[str]
-    metadata: dict[str, Any]
-
-    def length(self, name: str) -> int: ...
-    def read(self, names: list[str], ragged: bool) -> dict[str, np.ndarray]: ...
-    def chunks(self, names: list[str], chunk_rows: int) -> Iterator[dict[str, np.ndarray]]: ...
-    def locate(self, index: int) -> str: ...
-    def close(self) -> None: ...
 
 
 @dataclass
@@ -76,8 +75,10 @@ class Capture:
             pass
         fname = Path(self.source).name
         if name in self.file_columns:
+            loaded = ", ".join(self.names) or "none"
             raise CaptureError(
-                f"{fname} column {name!r} was not loaded; include it in columns= when reading"
+                f"{fname} column {name!r} is in the file but was not read (read: {loaded}); "
+                f"read the capture again asking for {name!r} too"
             )
         have = ", ".join(self.file_columns or self.names) or "none"
         raise CaptureError(
@@ -106,7 +107,9 @@ def parse_column_mapping(items: Iterable[str] | None) -> dict[str, str]:
     if isinstance(items, str):
         items = [items]
     for item in items:
-        parts = str(item).split("=")
+        if not isinstance(item, str):
+            raise ConfigError(f"--column {item!r} is not text; write it as OLD=NEW, e.g. ch1=a")
+        parts = item.split("=")
         if len(parts) != 2 or not parts[0].strip() or not parts[1].strip():
             raise ConfigError(
                 f"--column {item!r} must be OLD=NEW with two names, e.g. --column ch1=a"
@@ -133,30 +136,49 @@ def _normalise_mapping(mapping: MappingArg) -> dict[str, str]:
     if mapping is None:
         return {}
     if isinstance(mapping, Mapping):
-        out = {str(k): str(v) for k, v in mapping.items()}
-        for k, v in out.items():
-            if not k or not v:
-                raise ConfigError(f"column mapping {k!r}->{v!r} needs two non-empty names")
+        out = {
+            check_requested_name(k, "--column name"): check_requested_name(v, "--column name")
+            for k, v in mapping.items()
+        }
         _check_targets(out)
         return out
     return parse_column_mapping(mapping)
 
 
-def _open_reader(path: PathLike, group: str | None) -> tuple[Path, _Reader]:
+_READERS: dict[str, Any] = {
+    "csv": CsvReader,
+    "npz": NpzReader,
+    "hdf5": Hdf5Reader,
+    "tdms": TdmsReader,
+}
+
+
+def _open_reader(path: PathLike, group: str | None) -> Reader:
+    """Check the file, open its reader and check the names it offers (one path for all)."""
+    if group is not None and not isinstance(group, str):
+        raise ConfigError(f"--group {group!r} is not text; give the group's name")
     p, fmt = open_checked(path)
-    if fmt == "csv":
+    cls = _READERS[fmt]
+    if fmt in ("csv", "npz"):
         check_group_unused(p, group)
-        return p, CsvReader(p)
-    if fmt == "npz":
-        check_group_unused(p, group)
-        return p, NpzReader(p)
-    if fmt == "hdf5":
-        return p, Hdf5Reader(p, group)
-    return p, TdmsReader(p, group)
+    with library_errors(p.name, fmt.upper()):
+        reader: Reader = cls(p) if fmt in ("csv", "npz") else cls(p, group)
+    try:
+        reader.names = check_file_names(reader.fname, reader.names, reader.noun)
+    except BaseException:
+        _close(reader)
+        raise
+    return reader
+
+
+def _close(reader: Reader) -> None:
+    """Close a reader; a damaged file failing to close again changes nothing (all was read)."""
+    with contextlib.suppress(*LIBRARY_ERRORS):
+        reader.close()
 
 
 def _resolve(
-    reader: _Reader, mapping: dict[str, str], columns: Iterable[str] | None
+    reader: Reader, mapping: dict[str, str], columns: Iterable[str] | None
 ) -> tuple[list[str], dict[str, str]]:
     """Apply the mapping; return the canonical names of the file and canonical -> file name."""
     fname = reader.fname
@@ -183,7 +205,9 @@ def _resolve(
         return available, canon
     wanted = [columns] if isinstance(columns, str) else list(columns)
     if not wanted:
-        raise ConfigError("columns= is empty; name the columns to read, or pass None for all")
+        raise ConfigError("no column was named to read; name at least one column")
+    for name in wanted:
+        check_requested_name(name)
     missing = [c for c in dict.fromkeys(wanted) if c not in canon]
     if missing:
         names = ", ".join(repr(m) for m in missing)
@@ -193,6 +217,17 @@ def _resolve(
             f"map one with --column OLD={one}"
         )
     return available, {c: canon[c] for c in dict.fromkeys(wanted)}
+
+
+def _declared(reader: Reader, wanted: dict[str, str]) -> dict[str, int | None]:
+    """Check what the file declares of each wanted column; return the declared lengths."""
+    lengths: dict[str, int | None] = {}
+    for canon, fcol in wanted.items():
+        what = label(canon, fcol, reader.noun)
+        with reading(reader, what):
+            info = reader.describe(fcol)
+        lengths[canon] = declared_length(reader.fname, what, info)
+    return lengths
 
 
 def read_capture(
@@ -231,21 +266,30 @@ def read_capture(
         One line naming the file and the column/row at fault.
     """
     mapped = _normalise_mapping(mapping)
-    p, reader = _open_reader(path, group)
+    reader = _open_reader(path, group)
+    fname = reader.fname
     try:
         available, wanted = _resolve(reader, mapped, columns)
-        raw = reader.read(list(wanted.values()), ragged)
+        _declared(reader, wanted)
+        with reading(reader):
+            raw = reader.read(list(wanted.values()), ragged)
         cols: dict[str, np.ndarray] = {}
         for canon, fcol in wanted.items():
+            what = label(canon, fcol, reader.noun)
+            with reading(reader, what):
+                integrity = reader.integrity(fcol)
             cols[canon] = to_float_column(
                 raw.pop(fcol),
-                fname=p.name,
-                what=label(canon, fcol),
+                fname=fname,
+                what=what,
                 locate=reader.locate,
+                integrity=integrity,
                 ragged=ragged,
             )
+            if integrity is not None:
+                integrity.check()
         if not ragged:
-            equal_lengths(p.name, {k: v.shape[0] for k, v in cols.items()})
+            equal_lengths(fname, {k: v.shape[0] for k, v in cols.items()})
         return Capture(
             columns=cols,
             source=str(path),
@@ -253,7 +297,7 @@ def read_capture(
             file_columns=available,
         )
     finally:
-        reader.close()
+        _close(reader)
 
 
 def _check_chunk_rows(chunk_rows: int) -> int:
@@ -286,22 +330,31 @@ def iter_capture_chunks(
     """
     rows = _check_chunk_rows(chunk_rows)
     mapped = _normalise_mapping(mapping)
-    p, reader = _open_reader(path, group)
+    reader = _open_reader(path, group)
+    fname = reader.fname
     try:
         _available, wanted = _resolve(reader, mapped, columns)
-        fcols = list(wanted.values())
-        if not isinstance(reader, CsvReader):  # CSV: unequal lengths show up as empty cells
-            lengths = {c: reader.length(f) for c, f in wanted.items()}
-            if all(n >= 0 for n in lengths.values()):
-                equal_lengths(p.name, lengths)
+        lengths = _declared(reader, wanted)
+        known = {k: n for k, n in lengths.items() if n is not None}
+        if len(known) == len(lengths):  # CSV: unequal lengths show up as empty cells
+            equal_lengths(fname, known)
+        whats = {canon: label(canon, fcol, reader.noun) for canon, fcol in wanted.items()}
+        with reading(reader):
+            checks = {canon: reader.integrity(fcol) for canon, fcol in wanted.items()}
+            pieces = iter(reader.chunks(list(wanted.values()), rows))
         start = 0
-        for raw in reader.chunks(fcols, rows):
+        while True:
+            with reading(reader):
+                raw = next(pieces, None)
+            if raw is None:
+                break
             out = {
                 canon: to_float_column(
                     raw[fcol],
-                    fname=p.name,
-                    what=label(canon, fcol),
+                    fname=fname,
+                    what=whats[canon],
                     locate=reader.locate,
+                    integrity=checks[canon],
                     offset=start,
                 )
                 for canon, fcol in wanted.items()
@@ -309,9 +362,12 @@ def iter_capture_chunks(
             start += next(iter(out.values())).shape[0]
             yield out
         if start == 0:
-            raise CaptureError(f"{p.name} has no data rows; give a capture with data in it")
+            raise CaptureError(f"{fname} has no data rows; give a capture with data in it")
+        for check in checks.values():
+            if check is not None:
+                check.check()
     finally:
-        reader.close()
+        _close(reader)
 
 
 def capture_length(
@@ -327,15 +383,13 @@ def capture_length(
     bytes, no parsing), which for padded (ragged) CSV files is the longest column's length.
     """
     mapped = _normalise_mapping(mapping)
-    _p, reader = _open_reader(path, group)
+    reader = _open_reader(path, group)
     try:
         _available, wanted = _resolve(reader, mapped, [column])
-        n = reader.length(wanted[column])
-        if n < 0:
-            raise CaptureError(
-                f"{reader.fname} {label(column, wanted[column])} is not 1-D; each column must be "
-                "one 1-D array"
-            )
+        n = _declared(reader, wanted)[column]
+        if n is None:
+            with reading(reader, label(column, wanted[column], reader.noun)):
+                n = reader.row_count(wanted[column])
         return n
     finally:
-        reader.close()
+        _close(reader)

@@ -21,11 +21,11 @@ from .outputs import Writer, write_output
 
 def _check_columns(columns: Mapping[str, Any]) -> dict[str, np.ndarray]:
     if not isinstance(columns, Mapping) or not columns:
-        raise CaptureError("write_capture needs at least one column (a mapping name -> 1-D array)")
+        raise CaptureError("a capture needs at least one column to write (a name and its values)")
     out: dict[str, np.ndarray] = {}
     for name, values in columns.items():
         if not isinstance(name, str) or not name:
-            raise ConfigError(f"column names must be non-empty strings, not {name!r}")
+            raise ConfigError(f"column names must be non-empty text, not {name!r}")
         if name == NPZ_METADATA_KEY:
             raise ConfigError(f"column name {name!r} is reserved for metadata; rename the column")
         arr = np.asarray(values)
@@ -42,7 +42,6 @@ def _check_columns(columns: Mapping[str, Any]) -> dict[str, np.ndarray]:
 
 
 #: How write_capture's messages say "allow replacing" (the API's argument and the CLI's option).
-OVERWRITE_HINT = "overwrite=True (--overwrite)"
 
 
 def write_capture(
@@ -82,7 +81,7 @@ def write_capture(
     """
     p = Path(path)
     writer = capture_writer(p, columns, group=group, metadata=metadata)
-    return write_output(p, writer, label=p.name, overwrite=overwrite, hint=OVERWRITE_HINT)
+    return write_output(p, writer, label=p.name, overwrite=overwrite)
 
 
 def capture_format(path: str | os.PathLike[str], group: str | None = None) -> str:
@@ -95,7 +94,7 @@ def capture_format(path: str | os.PathLike[str], group: str | None = None) -> st
             f"use one of {known_extensions()}"
         )
     if group is not None and fmt in ("csv", "npz"):
-        raise ConfigError(f"group= applies to HDF5 and TDMS files, not to {p.name}; leave it out")
+        raise ConfigError(f"--group applies to HDF5 and TDMS files, not to {p.name}; leave it out")
     return fmt
 
 

@@ -78,14 +78,13 @@ class SimCapture:
             The capture's path.
         """
         from rotacal.io.outputs import Output, write_outputs
-        from rotacal.io.write import OVERWRITE_HINT, capture_writer
+        from rotacal.io.write import capture_writer
 
         path = Path(path)
         truth = json.dumps(to_jsonable(self.truth), indent=2) + "\n"
         write_outputs(
             [Output(path, capture_writer(path, self.columns)), Output(truth_path(path), truth)],
             overwrite=overwrite,
-            hint=OVERWRITE_HINT,
         )
         return path
 

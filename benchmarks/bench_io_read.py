@@ -1,0 +1,153 @@
+"""What reading a capture costs: read_capture against the bare library read, per format.
+
+Writes a capture of N rows (time_s, a, b as float64) as uncompressed NPZ, contiguous HDF5 and
+CSV, then times in child processes (warm page cache, best of ``--repeat``):
+
+- ``read_capture`` (validation included: declared sizes, finiteness, and for NPZ the zip CRC-32
+  of each memory-mapped member),
+- the bare library read of the same columns: ``np.load`` (which also checks the CRC while it
+  copies), h5py ``ds[...]``, ``np.loadtxt``,
+- for NPZ, ``zlib.crc32`` alone over the member bytes (the cost of the integrity check).
+
+With ``--against SRC`` (another checkout's ``src`` folder, e.g. main's) every read_capture is
+timed for both source trees in the same run, alternating, and the columns' SHA-256 are compared
+(the results of valid files must stay bit-identical).
+
+    python benchmarks/bench_io_read.py --rows 1e7
+    python benchmarks/bench_io_read.py --rows 1e7 --against ../main/src
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+FILES = {"npz": "cap.npz", "hdf5": "cap.h5", "csv": "cap.csv"}
+
+
+def _child(kind: str, path: str) -> None:
+    """Time one read in this fresh process; print seconds and the columns' SHA-256 as JSON."""
+    import zipfile
+
+    import h5py
+
+    from rotacal.io import read_capture
+
+    t0 = time.perf_counter()  # imports done: only the read is timed
+    if kind == "read_capture":
+        cols = read_capture(path).columns
+    elif kind == "crc32":
+        with zipfile.ZipFile(path) as zf:
+            infos = zf.infolist()
+        with open(path, "rb") as fh:
+            for info in infos:
+                fh.seek(info.header_offset + 30 + len(info.filename))
+                crc, left = 0, info.compress_size
+                while left > 0:
+                    block = fh.read(min(left, 1 << 24))
+                    crc = zlib.crc32(block, crc)
+                    left -= len(block)
+        cols = {}
+    elif path.endswith(".npz"):
+        with np.load(path) as f:
+            cols = {k: f[k] for k in f.files}
+    elif path.endswith(".h5"):
+        with h5py.File(path, "r") as f:
+            cols = {k: f[k][...] for k in f}
+    else:
+        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        cols = {str(k): np.ascontiguousarray(data[:, k]) for k in range(data.shape[1])}
+    seconds = time.perf_counter() - t0
+    digest = {
+        k: hashlib.sha256(np.ascontiguousarray(v).tobytes()).hexdigest() for k, v in cols.items()
+    }
+    print(json.dumps({"seconds": seconds, "sha256": digest}))
+
+
+def _time(kind: str, path: Path, src: Path) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(src))
+    out = subprocess.run(
+        [sys.executable, __file__, "--child", kind, str(path)],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _write(folder: Path, rows: int) -> dict[str, Path]:
+    sys.path.insert(0, str(SRC))
+    from rotacal.io import write_capture
+
+    rng = np.random.default_rng(7)
+    t = np.arange(rows) / 1e5
+    cols = {"time_s": t, "a": np.cos(2 * np.pi * 3 * t), "b": rng.normal(size=rows)}
+    return {kind: write_capture(folder / name, cols) for kind, name in FILES.items()}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
+    ap.add_argument("--rows", type=float, default=1e7)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--formats", default="npz,hdf5,csv")
+    ap.add_argument("--against", type=Path, default=None, help="another src folder to compare")
+    ap.add_argument("--dir", type=Path, default=None, help="where to write the captures")
+    ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        _child(*args.child)
+        return
+    rows = int(args.rows)
+    folder = Path(tempfile.mkdtemp(prefix="rotacal-bench-io-", dir=args.dir))
+    try:
+        t0 = time.perf_counter()
+        paths = _write(folder, rows)
+        print(f"{rows} rows x 3 float64 columns, written in {time.perf_counter() - t0:.0f} s")
+        for kind in args.formats.split(","):
+            path = paths[kind]
+            trees = {"this tree": SRC} | ({"against": args.against} if args.against else {})
+            best: dict[str, float] = {}
+            digests: dict[str, dict] = {}
+            for _ in range(args.repeat):  # alternate, so that load on the machine hits both
+                for name, src in trees.items():
+                    r = _time("read_capture", path, src)
+                    best[name] = min(best.get(name, np.inf), r["seconds"])
+                    digests[name] = r["sha256"]
+                r = _time("library", path, SRC)
+                best["library"] = min(best.get("library", np.inf), r["seconds"])
+                if kind == "npz":
+                    r = _time("crc32", path, SRC)
+                    best["crc32"] = min(best.get("crc32", np.inf), r["seconds"])
+            size = path.stat().st_size / 1e6
+            line = f"{kind:5s} ({size:.0f} MB): read_capture {best['this tree']:.3f} s"
+            line += f", library read {best['library']:.3f} s"
+            line += f" (ratio {best['this tree'] / best['library']:.2f})"
+            if "crc32" in best:
+                line += f", zlib.crc32 alone {best['crc32']:.3f} s"
+            if args.against:
+                same = digests["this tree"] == digests["against"]
+                line += (
+                    f"; against: {best['against']:.3f} s "
+                    f"(ratio this/against {best['this tree'] / best['against']:.2f}, "
+                    f"columns {'bit-identical' if same else 'DIFFER'})"
+                )
+            print(line, flush=True)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
