@@ -41,9 +41,6 @@ def _check_columns(columns: Mapping[str, Any]) -> dict[str, np.ndarray]:
     return out
 
 
-#: How write_capture's messages say "allow replacing" (the API's argument and the CLI's option).
-
-
 def write_capture(
     path: str | os.PathLike[str],
     columns: Mapping[str, np.ndarray],
