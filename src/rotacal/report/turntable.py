@@ -4,7 +4,8 @@
 sensitivities of the orientation error to each error source (the seed's Figure 8), the allocated
 upper bounds (Table 4), the worst case over all angles (Lemma 1), the Monte Carlo check with the
 full model (Figure 9), what an orientation error does to a multiposition gyro calibration
-(Figures 4–5) and, for the seed's own table, a side-by-side of the paper's numbers and rotacal's.
+(Figures 4–5) and, for the seed's own table, a side-by-side of the paper's numbers and rotacal's
+(:mod:`rotacal.report.turntable_seed001`).
 
 References
 ----------
@@ -28,15 +29,18 @@ from matplotlib.patches import Rectangle
 from matplotlib.ticker import MaxNLocator
 
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
+from rotacal.report.turntable_common import COMP_SYMBOL, is_seed_budget, symbol
+from rotacal.report.turntable_seed001 import (
+    seed_comparison_table,
+    seed_paragraph,
+    table4_worst_case,
+)
 from rotacal.turntable.budget import TurntableBudget
 from rotacal.turntable.model import ARCMIN_PER_RAD, COMPONENTS
 from rotacal.turntable.seed001 import (
-    CHI,
     EQ16_DEG,
     FIGURE8,
     TABLE4_ARCMIN,
-    TABLE4_DIGIT_ARCMIN,
-    is_seed_table,
 )
 
 __all__ = [
@@ -53,19 +57,6 @@ __all__ = [
     "worst_case_table",
 ]
 
-_GREEK = {
-    "phi": "φ",
-    "alpha": "α",
-    "eps": "ε",
-    "epsilon": "ε",
-    "eta": "η",
-    "theta": "θ",
-    "beta": "β",
-    "delta": "δ",
-    "gamma": "γ",
-    "psi": "ψ",
-}
-_COMP_SYMBOL = {"psi": "Δψ", "theta": "Δθ", "gamma": "Δγ"}
 _COMP_COLOR = {"psi": "#1f5f99", "theta": "#2e8b57", "gamma": "#d2691e"}
 _REQ = "#b22222"
 
@@ -74,13 +65,6 @@ def _style(ax: Any) -> None:
     ax.grid(True, color="#e3e7eb", linewidth=0.7)
     ax.set_axisbelow(True)  # grid lines behind bars
     ax.spines[["top", "right"]].set_visible(False)
-
-
-def _symbol(name: str) -> str:
-    """``phi_y1`` → ``Δφy1`` (the seed's Table-2 notation); other names unchanged."""
-    head, _, tail = name.partition("_")
-    greek = _GREEK.get(head.lower())
-    return f"Δ{greek}{tail}" if greek else name
 
 
 def _specs(budget: TurntableBudget) -> dict[str, Any]:
@@ -92,15 +76,10 @@ def _iso(budget: TurntableBudget, name: str) -> str:
     return str(iso) if iso else "—"
 
 
-def _is_seed(budget: TurntableBudget) -> bool:
-    """True when the table's angular errors are the seed's χ (then Table 4 applies)."""
-    return is_seed_table(budget._table) and budget.reproduction is not None
-
-
 def _bar_label(budget: TurntableBudget, name: str) -> str:
     """``Position error of outer axis (Δφy1, EBB)``: label, then symbol and ISO symbol."""
     label = budget.labels.get(name) or name
-    tags = [t for t in (_symbol(name), _iso(budget, name)) if t not in ("—", label)]
+    tags = [t for t in (symbol(name), _iso(budget, name)) if t not in ("—", label)]
     return f"{label} ({', '.join(tags)})" if tags else label
 
 
@@ -135,7 +114,7 @@ def sensitivity_figure(budget: TurntableBudget) -> Figure:
             text = "0" if v == 0.0 else f"{v:.4f}"
             ax.text(v + 0.02 * vmax, yi, text, va="center", ha="left", fontsize=8)
         ax.set_xlim(0, vmax * 1.32)
-        ax.set_title(f"{_COMP_SYMBOL[comp]} ({comp})", fontsize=10)
+        ax.set_title(f"{COMP_SYMBOL[comp]} ({comp})", fontsize=10)
         ax.set_xlabel("mean |∂Δ/∂χ| (rad/rad)")
         _style(ax)
         ax.grid(False, axis="y")
@@ -172,7 +151,7 @@ def allocation_table(budget: TurntableBudget) -> Table:
     ----------
     Seed 001, eqs. (29)–(34) and Table 4.
     """
-    seed = _is_seed(budget)
+    seed = is_seed_budget(budget)
     cols = ["error", "label", "ISO", "lower bound (′)", "allocated upper bound (′)", "set by"]
     if seed:
         cols += ["seed Table 4 (′)", "rotacal / Table 4"]
@@ -184,7 +163,7 @@ def allocation_table(budget: TurntableBudget) -> Table:
         if ub is None:
             lower = spec.lower if spec is not None else 0.0
             row = [
-                _symbol(name),
+                symbol(name),
                 budget.labels.get(name, ""),
                 _iso(budget, name),
                 f"{lower * 1e3:g} mm",
@@ -196,12 +175,12 @@ def allocation_table(budget: TurntableBudget) -> Table:
         else:
             binding = budget.binding.get(name, "")
             row = [
-                _symbol(name),
+                symbol(name),
                 budget.labels.get(name, ""),
                 _iso(budget, name),
                 _f4(budget.lower_bounds_arcmin.get(name, 0.0)),
                 _f4(ub),
-                f"{_COMP_SYMBOL.get(binding, binding)}" if binding else "—",
+                f"{COMP_SYMBOL.get(binding, binding)}" if binding else "—",
             ]
             if seed:
                 t4 = TABLE4_ARCMIN.get(name)
@@ -241,13 +220,13 @@ def worst_case_table(budget: TurntableBudget) -> Table:
         wc = budget.worst_case.get(comp)
         req = budget.requirement_arcmin[comp]
         if not wc:
-            rows.append([_COMP_SYMBOL[comp], _f4(req), "—", "—", "—", "—"])
+            rows.append([COMP_SYMBOL[comp], _f4(req), "—", "—", "—", "—"])
             continue
         lin = wc.get("linear_arcmin")
         full = wc.get("full_arcmin")
         rows.append(
             [
-                _COMP_SYMBOL[comp],
+                COMP_SYMBOL[comp],
                 _f4(req),
                 _f4(None if lin is None else float(lin)),
                 _f4(None if full is None else float(full)),
@@ -293,10 +272,10 @@ def monte_carlo_figure(budget: TurntableBudget) -> Figure:
             ax.axvline(sign * req, color=_REQ, ls="--", lw=1.3)
         ax.set_xlim(-1.2 * req, 1.2 * req)
         ax.set_title(
-            f"{_COMP_SYMBOL[comp]}: max |Δ| = {mc.max_abs_arcmin[comp]:.4f}′ of {req:.4f}′",
+            f"{COMP_SYMBOL[comp]}: max |Δ| = {mc.max_abs_arcmin[comp]:.4f}′ of {req:.4f}′",
             fontsize=9.5,
         )
-        ax.set_xlabel(f"{_COMP_SYMBOL[comp]} (arcmin)")
+        ax.set_xlabel(f"{COMP_SYMBOL[comp]} (arcmin)")
         ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4))
         _style(ax)
     axes[0].set_ylabel("draws per bin")
@@ -314,7 +293,7 @@ def monte_carlo_figure(budget: TurntableBudget) -> Figure:
         f"bound ({mc.signs} signs) and the angles uniform over a turn; orientation error from the "
         "full nonlinear model (seed 001, eqs. (17)–(25)). Red dashed: the requirement ±I. "
         "Max |Δ|: "
-        + ", ".join(f"{_COMP_SYMBOL[c]} {mc.max_abs_arcmin[c]:.4f}′" for c in COMPONENTS)
+        + ", ".join(f"{COMP_SYMBOL[c]} {mc.max_abs_arcmin[c]:.4f}′" for c in COMPONENTS)
         + f" — {within}.",
     )
 
@@ -423,11 +402,11 @@ def calibration_figure(budget: TurntableBudget, *, n: int = 101) -> Figure | Non
         _box(ax, eq, eq, ec="black", lw=1.0, ls=":")
         if show_stated:
             _box(ax, stated[cx], stated[cy], ec="#666", lw=1.2, ls="--")
-        ax.set_xlabel(f"{_COMP_SYMBOL[cx]} (°)")
-        ax.set_ylabel(f"{_COMP_SYMBOL[cy]} (°)")
+        ax.set_xlabel(f"{COMP_SYMBOL[cx]} (°)")
+        ax.set_ylabel(f"{COMP_SYMBOL[cy]} (°)")
         other = next(c for c in COMPONENTS if c not in (cx, cy))
         ax.set_title(
-            f"Δω{axis} over ({_COMP_SYMBOL[cx]}, {_COMP_SYMBOL[cy]}), {_COMP_SYMBOL[other]} = 0",
+            f"Δω{axis} over ({COMP_SYMBOL[cx]}, {COMP_SYMBOL[cy]}), {COMP_SYMBOL[other]} = 0",
             fontsize=10,
         )
         ax.set_aspect("equal")
@@ -525,7 +504,7 @@ def calibration_draws_figure(budget: TurntableBudget) -> Figure | None:
 
 
 # ----------------------------------------------------------------------------------------------
-# 6. Reproducing seed 001
+# 6. The calibration verdict's remedy
 # ----------------------------------------------------------------------------------------------
 
 
@@ -541,216 +520,6 @@ def _remedy(budget: TurntableBudget, wm: float) -> str:
         "the stated orientation requirement is looser than this calibration needs. Give "
         f'[requirement] calibration_deg_h = {wm:g} instead (derivation "calibration-check") and '
         "run the budget again."
-    )
-
-
-def _seed_table4_worst(budget: TurntableBudget) -> dict[str, dict[str, Any]]:
-    """Table 4's bounds under rotacal's Lemma-1 check (arcmin), computed by the budget."""
-    assert budget.reproduction is not None
-    return dict(budget.reproduction["table4_worst_case"])
-
-
-def _pct(value_arcmin: float, req_arcmin: float) -> str:
-    return f"{value_arcmin:.4f}′ ({value_arcmin / req_arcmin * 100:.1f} %)"
-
-
-def _digits(values: Mapping[str, float]) -> str:
-    return ", ".join(f"{_symbol(n)} {values[n]:.4f}′" for n in CHI)
-
-
-def seed_comparison_table(
-    budget: TurntableBudget, *, table4_worst: Mapping[str, Mapping[str, Any]] | None = None
-) -> Table | None:
-    """The seed's printed numbers beside rotacal's, for the seed's own table (else ``None``).
-
-    Rows: eq. (16) and the Earth-rate reading that gives it; Figure 8's two averaged sensitivities;
-    Table 4 and the paper's allocation recomputed (grid constraint, the requirement Table 4
-    implies); this budget's allocation; Table 4's own worst case under rotacal's Lemma 1 check;
-    the Monte Carlo of Figure 9.
-
-    References
-    ----------
-    Seed 001, eq. (16), Figure 8, Table 4, Lemma 1, Figure 9.
-    """
-    if not _is_seed(budget):
-        return None
-    rows: list[list[str]] = []
-    assert budget.reproduction is not None
-    rep = budget.reproduction
-    eq16, scan, t4rep = rep["eq16"], rep["eq16_scan"], rep["table4"]
-    req = budget._requirement
-    fit = (
-        f"; through the drift fit (rotacal's reading of eq. (13), method {req.method!r}) the equal "
-        f"limit is {req.equal_limit_deg:.4f}° ({EQ16_DEG / req.equal_limit_deg:.1f} times "
-        "smaller): the g-sensitive coefficients of Table 1 turn the tilt into gravity errors"
-        if req is not None
-        else ""
-    )
-    rows.append(
-        [
-            "orientation requirement for 0.01 °/h (eq. (16))",
-            f"{EQ16_DEG}° each",
-            f"{eq16['earth_rate_limit_deg']:.5f}° each — the Earth-rate reading alone "
-            f"({eq16['positions']} positions, latitude {eq16['latitude_deg']:g}°); "
-            f"ωm/(√2·Ωe) = {eq16['closed_form_deg']:.5f}°",
-            "eq. (16) is what the Earth-rate reading alone allows (no gravity terms, no fit): "
-            + ("it rounds to the printed value" if eq16["rounds_to_printed"] else "it does NOT")
-            + f". Over latitudes {scan['earth-rate']['latitudes_deg'][0]:g}–"
-            f"{scan['earth-rate']['latitudes_deg'][-1]:g}° and plans "
-            f"{', '.join(scan['earth-rate']['plans'])} that reading gives "
-            f"{scan['earth-rate']['min_deg']:.4f}–{scan['earth-rate']['max_deg']:.4f}°" + fit,
-        ]
-    )
-    sens = budget.sensitivities
-    c_cos = float(sens["psi"]["phi_y1"])
-    c_sin = float(sens["psi"]["alpha_x1"])
-    step, endpoint = budget._table.sensitivity_grid
-    grid = (
-        f"mean over φ = 0°, {step:g}°, …, 360° (both ends) at zero error"
-        if endpoint
-        else f"mean over a turn (every {step:g}°) at zero error"
-    )
-    rows.append(
-        [
-            "averaged sensitivity, |cos φ2| terms (Figure 8: Cψ1, Cψ8, Cγ3, Cγ7)",
-            f"{FIGURE8['cos']:.4f} (also {FIGURE8['cos_alt']:.4f})",
-            f"{c_cos:.4f}",
-            f"{grid}. The paper's 0.6476/0.5365 are exactly the means over 0°, 45°, …, 360° with "
-            "both ends (0° and 360° counted twice — hence cos ≠ sin); its second values are "
-            "consistent with the same partials of the full model at errors of about 3·10⁻³ rad",
-        ]
-    )
-    rows.append(
-        [
-            "averaged sensitivity, |sin φ2| terms (Figure 8: Cψ3, Cψ7, Cγ1, Cγ8)",
-            f"{FIGURE8['sin']:.4f} (also {FIGURE8['sin_alt']:.4f})",
-            f"{c_sin:.4f}",
-            "as above",
-        ]
-    )
-    rounded = {n: round(v, 4) for n, v in t4rep["upper_bounds_arcmin"].items()}
-    same = [n for n in CHI if abs(rounded[n] - TABLE4_ARCMIN[n]) < 0.5 * TABLE4_DIGIT_ARCMIN]
-    off = [_symbol(n) for n in CHI if n not in same]
-    at16 = t4rep["upper_bounds_at_eq16_arcmin"]
-    rows.append(
-        [
-            "allocated upper bounds (Table 4)",
-            _digits(TABLE4_ARCMIN),
-            _digits(t4rep["upper_bounds_arcmin"]),
-            f"the paper's allocation recomputed: eqs. (31)–(34) on the linearised model, the "
-            f"constraint only at φ2 ∈ {{0°, {t4rep['constraint_step_deg']:g}°, 90°}} (the grid of "
-            f"its averaging), Iθ = Δφz2 + Δαz1 of Table 4 = {t4rep['requirement_arcmin']:.2f}′ = "
-            f"{t4rep['requirement_arcmin'] / 60:.3f}° on each component. Rounded to the printed "
-            f"digits {len(same)} of 8 are equal"
-            + (
-                f"; {', '.join(off)} differ by one unit of the last digit, where the paper prints "
-                "unequal values (0.4233–0.4235′, 0.2824–0.2825′) for bounds its own problem makes "
-                "exactly equal"
-                if off
-                else ""
-            )
-            + f". {t4rep['requirement_arcmin'] / 60:.3f}° is eq. (16)'s "
-            f"{eq16['earth_rate_limit_deg']:.5f}° rounded down to 0.001°; with "
-            f"{t4rep['eq16_requirement_arcmin']:.4f}′ itself the bounds are "
-            f"{at16['phi_z2'] / t4rep['upper_bounds_arcmin']['phi_z2']:.3f} times larger "
-            f"(Δφz2 {at16['phi_z2']:.4f}′)",
-        ]
-    )
-    ratios = {
-        n: budget.upper_bounds_arcmin[n] / v  # type: ignore[operator]
-        for n, v in TABLE4_ARCMIN.items()
-    }
-    lo_n = min(ratios, key=ratios.__getitem__)
-    hi_n = max(ratios, key=ratios.__getitem__)
-    rows.append(
-        [
-            "this budget's allocation",
-            "—",
-            _digits({n: float(budget.upper_bounds_arcmin[n] or 0.0) for n in CHI}),
-            f"rotacal / Table 4 from {ratios[lo_n]:.3f} ({_symbol(lo_n)}) to {ratios[hi_n]:.3f} "
-            f"({_symbol(hi_n)}) for the requirement "
-            + ", ".join(
-                f"{_COMP_SYMBOL[c]} {budget.requirement_arcmin[c]:.4g}′" for c in COMPONENTS
-            )
-            + f" ({budget.requirement_source}); constraint at "
-            + (
-                "every angle"
-                if budget.options.get("constraint_angles") == "every"
-                else f"multiples of {budget.options.get('constraint_angles')}°"
-            ),
-        ]
-    )
-    t4 = table4_worst if table4_worst is not None else _seed_table4_worst(budget)
-    reqs = budget.requirement_arcmin
-    rows.append(
-        [
-            "worst case over all angles, full model (Lemma 1)",
-            "≤ requirement (proved for the linear model)",
-            "Table 4 (of "
-            + f"{t4['theta']['requirement_arcmin']:.2f}′): "
-            + ", ".join(
-                f"{_COMP_SYMBOL[c]} {_pct(t4[c]['full_arcmin'], t4[c]['requirement_arcmin'])}"
-                for c in COMPONENTS
-            )
-            + "; this budget: "
-            + ", ".join(
-                f"{_COMP_SYMBOL[c]} {_pct(budget.worst_case[c]['full_arcmin'], reqs[c])}"
-                for c in COMPONENTS
-            ),
-            "percentages of the requirement used by the worst table; above 100 %: the full "
-            "model's second-order terms, which the linear allocation does not see",
-        ]
-    )
-    mc = budget.monte_carlo
-    rows.append(
-        [
-            "Monte Carlo with the full model (Figure 9)",
-            "10,000 runs, all within",
-            f"{mc['runs']:,} runs ({mc['signs']} signs), "
-            + ("all within" if mc["all_within"] else f"{mc['outside']} outside")
-            + "; max |Δ| "
-            + ", ".join(f"{_COMP_SYMBOL[c]} {mc['max_abs_arcmin'][c]:.4f}′" for c in COMPONENTS),
-            "",
-        ]
-    )
-    return Table(
-        ["quantity", "seed 001 (printed)", "rotacal", "note"],
-        rows,
-        caption="Reproducing seed 001 (numbers side by side; no agreement is claimed that the "
-        "numbers do not show)",
-    )
-
-
-def _seed_paragraph(budget: TurntableBudget, t4: Mapping[str, Mapping[str, Any]]) -> str:
-    def unused(wc: Mapping[str, Mapping[str, Any]], c: str, req: float) -> float:
-        return 100.0 * (1.0 - float(wc[c]["full_arcmin"]) / req)
-
-    t4_req = float(t4["psi"]["requirement_arcmin"])
-    return (
-        "What the paper's numbers rest on: eq. (16) allows for the Earth-rate reading alone, and "
-        "Table 4 enforces the constraint only on its 45° grid, for "
-        f"{t4_req / 60:.3f}°. With Table 4's bounds "
-        f"the worst table leaves {unused(t4, 'psi', t4_req):.1f} % of Δψ and "
-        f"{unused(t4, 'gamma', t4_req):.1f} % of Δγ unused and Δθ none: each component's own "
-        "optimum (eqs. (31)–(33)) uses all of its requirement, and a component keeps a margin when, "
-        "for an error it shares with another, eq. (34) takes the other's smaller optimum — Δψ and "
-        "Δγ share four errors, Δθ none." + _paper_reading_text(budget)
-    )
-
-
-def _paper_reading_text(budget: TurntableBudget) -> str:
-    """What tables built to the paper's reading do to the calibration (computed by the budget)."""
-    cal = (budget.reproduction or {}).get("paper_reading_calibration")
-    if not cal:
-        return ""
-    frac = cal["fraction_above_required"]
-    return (
-        f" A lab calibrating to {cal['required_deg_h']:g} °/h needs more than eq. (16): tables "
-        f"built to the paper's reading ({cal['requirement_arcmin']:.4f}′ on the 45° grid) give "
-        f"rate errors of up to {cal['worst_table_rate_error_deg_h']['worst_deg_h']:.4f} °/h "
-        f"through the drift fit, and {frac['x'] * 100:.1f} % (x) and {frac['y'] * 100:.1f} % (y) "
-        f"of {cal['runs']:,} such tables drawn exceed {cal['required_deg_h']:g} °/h. The default "
-        'derivation ("calibration-check") allocates so that no table within the bounds does.'
     )
 
 
@@ -782,7 +551,7 @@ def turntable_section(budget: TurntableBudget, title: str | None = None) -> Sect
     Seed 001, eqs. (7)–(16), (26), (28)–(34), Lemma 1, Tables 2 and 4, Figures 4, 5, 8, 9.
     """
     reqs = budget.requirement_arcmin
-    req_text = ", ".join(f"{_COMP_SYMBOL[c]} ≤ {reqs[c]:.4f}′" for c in COMPONENTS)
+    req_text = ", ".join(f"{COMP_SYMBOL[c]} ≤ {reqs[c]:.4f}′" for c in COMPONENTS)
     n_ang = len(budget._table.angular_error_names)
     n_off = len(budget.error_names) - n_ang
     mc = budget.monte_carlo
@@ -859,13 +628,13 @@ def turntable_section(budget: TurntableBudget, title: str | None = None) -> Sect
                 f"below {p95['x']:.4f} and {p95['y']:.4f} °/h): {verdict}"
             )
             figures.append(draws_fig)
-    t4 = _seed_table4_worst(budget) if _is_seed(budget) else None
+    t4 = table4_worst_case(budget) if is_seed_budget(budget) else None
     seed_tab = seed_comparison_table(budget, table4_worst=t4)
     if seed_tab is not None and t4 is not None:
         tables.append(seed_tab)
         paragraphs.append(
             "Reproducing seed 001. The paper's printed numbers beside rotacal's. "
-            + _seed_paragraph(budget, t4)
+            + seed_paragraph(budget, t4)
         )
     return Section(
         title=title or f"Turntable accuracy budget — {budget.table}",
