@@ -54,6 +54,26 @@ def test_scale_factor(tmp_path):
     one_line_error(run("gyro", "scale-factor", str(path), "--requirement", "nope"), "nope")
 
 
+def test_scale_factor_resolution_basis_and_bandwidth(tmp_path):
+    path, truth = simulated(tmp_path, "gyro-rates", "--samples-per-point", "4000")
+    args = ("gyro", "scale-factor", str(path), "--requirement", "fmvss126", "--output-unit", "V")
+    r = run(*args, "--sample-rate-hz", "100", "--bandwidth-hz", "6")
+    assert r.exit_code == 0, r.output
+    line = next(x for x in r.stdout.splitlines() if "resolution" in x)
+    # the twin's 0.05 °/s per sample, averaged over 8 samples (6.25 Hz of 100 Hz): 0.05/√8
+    noise = truth["sensor"]["noise_std"] / truth["scale_factor"] / 8**0.5
+    value = float(line.split("resolution: ")[1].split(" °/s")[0])
+    assert value == pytest.approx(noise, rel=0.08)
+    assert line.strip().startswith("FAIL resolution") and "set by the noise" in line
+    assert "6.25 Hz (stated 6 Hz: means of 8 samples at 100 Hz)" in line
+    d = json.loads(run(*args, "--json", "-").stdout)["resolution"]
+    assert d["set_by"] == "noise" and d["bandwidth_hz"] is None
+    one_line_error(run(*args, "--bandwidth-hz", "6"), "--bandwidth-hz", "--sample-rate-hz")
+    one_line_error(
+        run(*args, "--sample-rate-hz", "100", "--bandwidth-hz", "80"), "above", "fs/2 = 50 Hz"
+    )
+
+
 def test_triad(tmp_path):
     path, truth = simulated(tmp_path, "gyro-triad", "--outlier-fraction", "0.02")
     r = run("gyro", "triad", str(path), "--json", "-")

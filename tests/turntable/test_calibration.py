@@ -88,6 +88,8 @@ class BruteForce:
             dbeta = beta1 - beta2  # eq. (12)
             if self.method == "coefficients":
                 vec = a_nom @ dbeta
+            elif self.method == "earth-rate":
+                vec = b2p - b2  # the Earth-rate reading alone (eq. (16)'s)
             else:
                 vec = b1 - a_nom @ beta2 - b2p  # eq. (13) as printed
             out[axis] = (dbeta, vec, beta2)

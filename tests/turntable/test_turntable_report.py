@@ -114,18 +114,36 @@ def test_seed_comparison_prints_the_papers_numbers(seed_budget) -> None:
     assert sin_row[1].startswith("0.5365") and sin_row[2] == "0.5365"
     eq16 = next(r for k, r in rows.items() if "eq. (16)" in k)
     assert eq16[1] == "0.027° each"
-    # Over every scanned plan and latitude rotacal's equal limit stays far below the paper's
-    # 0.027°: the table says the gap is unexplained and prints the scanned range.
-    scan = seed_budget.reproduction["eq16_scan"]["coefficients"]
-    assert 0.0 < scan["min_deg"] <= scan["max_deg"] < 0.027 / 2
-    assert f"{scan['max_deg']:.4f}" in eq16[3] and "not explained" in eq16[3]
+    # eq. (16) is the Earth-rate reading alone: ωm/(√2·Ωe), typed here, and the plan's value,
+    # which rounds to the printed 0.027°
+    closed = math.degrees(0.01 / (math.sqrt(2.0) * 15.041067))
+    assert f"ωm/(√2·Ωe) = {closed:.5f}°" in eq16[2]
+    assert eq16[2].startswith("0.0269") and "the Earth-rate reading alone" in eq16[2]
+    assert "it rounds to the printed value" in eq16[3]
+    # the fit's reading stays far below it, over every scanned plan and latitude
+    scan = seed_budget.reproduction["eq16_scan"]
+    assert 0.0 < scan["coefficients"]["max_deg"] < 0.027 / 2
+    assert round(scan["earth-rate"]["min_deg"], 3) == 0.027
+    # Table 4: the paper's allocation recomputed on its grid, and what it rests on
+    t4 = next(r for k, r in rows.items() if "(Table 4)" in k)
+    assert t4[1].startswith("Δφy1 0.4235′, Δφz2 0.7800′")
+    assert "Δφz2 0.7800′" in t4[2] and "Δαx1 0.4234′" in t4[2]
+    assert "Iθ = Δφz2 + Δαz1 of Table 4 = 1.56′ = 0.026°" in t4[3]
+    assert "5 of 8 are equal; Δφy1, Δαx2, Δεy differ by one unit of the last digit" in t4[3]
+    assert "rounded down to 0.001°" in t4[3]
+    # nothing is left "unexplained"
+    text = " ".join(" ".join(r) for r in t.rows) + " ".join(
+        turntable_section(seed_budget).paragraphs
+    )
+    assert "explained" not in text
 
 
 def test_table4_worst_case_matches_the_closed_form(seed_budget) -> None:
     t = seed_comparison_table(seed_budget)
     assert t is not None
     row = next(r for r in t.rows if r[0].startswith("worst case"))
-    table4_part = row[2].split("; rotacal:")[0]
+    table4_part = row[2].split("; this budget:")[0]
+    assert table4_part.startswith("Table 4 (of 1.56′): ")
     got = {
         c: float(re.search(rf"{sym} ([0-9.]+)′", table4_part).group(1))  # type: ignore[union-attr]
         for c, sym in (("psi", "Δψ"), ("theta", "Δθ"), ("gamma", "Δγ"))

@@ -44,12 +44,27 @@ def gyro() -> None:
     help="Check against a named requirement (fmvss126) and say pass/fail with the margin.",
 )
 @click.option("--output-unit", default="", help="Unit of the output column, for the report.")
+@click.option(
+    "--sample-rate-hz",
+    type=float,
+    default=None,
+    help="Sample rate of the output (Hz): the resolution's noise is then stated at fs/2.",
+)
+@click.option(
+    "--bandwidth-hz",
+    type=float,
+    default=None,
+    help="Bandwidth of one reading for the resolution check (Hz, ≤ fs/2; needs "
+    "--sample-rate-hz) [default: the recorded samples' own].",
+)
 @_analysis_options
 def gyro_scale_factor(
     capture: str,
     full_scale_deg_s: float | None,
     requirement: str | None,
     output_unit: str,
+    sample_rate_hz: float | None,
+    bandwidth_hz: float | None,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -68,6 +83,8 @@ def gyro_scale_factor(
             requirement=requirement,
             output_unit=output_unit,
             specs=kw.pop("specs"),
+            sample_rate_hz=sample_rate_hz,
+            bandwidth_hz=bandwidth_hz,
         )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path)

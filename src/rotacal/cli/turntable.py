@@ -36,6 +36,23 @@ _SEED001 = "GyroWheel calibration tests: turntable error analysis and allocation
 @click.option(
     "--json", "json_path", metavar="PATH", help="Write the results as JSON ('-' = stdout)."
 )
+@click.option(
+    "--requirement-derivation",
+    type=click.Choice(["calibration-check", "earth-rate-only"]),
+    default=None,
+    help="How [requirement] calibration_deg_h becomes the orientation requirement: "
+    "'calibration-check' (tables built to the allocation keep the calibration within it) or "
+    "'earth-rate-only' (seed 001's eq. (16), the Earth-rate reading alone). Default: the config's "
+    "[requirement] derivation, else calibration-check.",
+)
+@click.option(
+    "--constraint-angles",
+    metavar="every|DEG",
+    default=None,
+    help="Where the allocation's constraint holds: 'every' angle, or only at multiples of DEG "
+    "(dividing 360; 45 = the paper's grid φ2 ∈ {0°, 45°, 90°}). Default: the config's "
+    "[allocation] constraint_angles, else every.",
+)
 @click.option("--report", "report_path", metavar="PATH.html", help="Write an HTML report.")
 @click.option("--overwrite", is_flag=True, help="Replace existing --json/--report files.")
 def turntable_budget_cmd(
@@ -43,6 +60,8 @@ def turntable_budget_cmd(
     runs: int | None,
     seed: int | None,
     json_path: str | None,
+    requirement_derivation: str | None,
+    constraint_angles: str | None,
     report_path: str | None,
     overwrite: bool,
 ) -> None:
@@ -59,7 +78,12 @@ def turntable_budget_cmd(
     )
     with _sample_progress(runs_total, "Monte Carlo") as advance:
         result = turntable_budget(
-            table, runs=runs, seed=seed, progress=lambda done, _t: advance(done)
+            table,
+            runs=runs,
+            seed=seed,
+            progress=lambda done, _t: advance(done),
+            requirement_derivation=requirement_derivation,
+            constraint_angles=constraint_angles,
         )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path)
@@ -97,6 +121,18 @@ def turntable_budget_cmd(
             + "  ".join(f"{c} {mx[c]:.4g}" for c in ("psi", "theta", "gamma"))
             + ("  — all within" if mc["all_within"] else f"  — {mc['outside']} OUTSIDE")
         )
+        cal = result.calibration
+        if cal is not None:
+            worst = cal["worst_table_rate_error_deg_h"]
+            frac = cal["fraction_above_required"]
+            click.echo(
+                f"calibration to {cal['required_deg_h']:g} °/h ({cal['plan']}): worst table "
+                f"Δωx {max(worst['linear_deg_h']['x'], worst['full_deg_h']['x']):.4g}, "
+                f"Δωy {max(worst['linear_deg_h']['y'], worst['full_deg_h']['y']):.4g} °/h; "
+                f"of {cal['runs']} tables drawn {frac['x'] * 100:.1f} % (x), "
+                f"{frac['y'] * 100:.1f} % (y) above"
+                + ("" if worst["worst_deg_h"] <= cal["required_deg_h"] else " — NOT MET")
+            )
 
 
 @turntable.command("example")

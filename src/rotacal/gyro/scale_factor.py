@@ -60,6 +60,7 @@ import numpy as np
 from scipy import stats
 
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.gyro.resolution import OutputResolution, output_resolution
 from rotacal.gyro.uncertainty import (
     TScale,
     as_specs,
@@ -234,7 +235,9 @@ class ScaleFactorResult(Result):
     ``nonlinearity_percent_fs_bias`` is how much the noise of the point means raises NL (SIMEX,
     %FS; NaN when the noise level is not known apart from the nonlinearity — one sample per
     point) and ``nonlinearity_percent_fs_bias_corrected`` = max(NL − bias, 0). ``decision_with_uncertainty``
-    is the accuracy check judged with the interval (ILAC-G8).
+    is the accuracy check judged with the interval (ILAC-G8). ``resolution`` says what set
+    ``resolution_deg_s`` (the output quantum or the noise of one reading), both numbers and the
+    bandwidth with its source (:class:`~rotacal.gyro.resolution.OutputResolution`).
     """
 
     scale_factor: float
@@ -261,6 +264,7 @@ class ScaleFactorResult(Result):
     nonlinearity_percent_fs_bias: float = math.nan
     nonlinearity_percent_fs_bias_corrected: float = math.nan
     decision_with_uncertainty: DecisionWithU | None = None
+    resolution: OutputResolution | None = None
     _budgets: dict[str, UncertaintyBudget] = dataclasses.field(
         default_factory=dict, repr=False, compare=False
     )
@@ -301,6 +305,12 @@ class ScaleFactorResult(Result):
             ]
         if self.requirement is not None:
             out += self.requirement.lines()
+        elif self.resolution is not None:
+            value = self.resolution.resolution_deg_s
+            out.append(
+                f"resolution    {'—' if value is None else f'{value:.3g} °/s'} "
+                f"({self.resolution.basis})"
+            )
         if self.decision_with_uncertainty is not None:
             out.append(f"  {self.decision_with_uncertainty.line}")
         return out
@@ -670,6 +680,8 @@ def calibrate_scale_factor(
     output_unit: str = "",
     specs: InstrumentSpecs | None = None,
     mc_trials: int = DEFAULT_MC_TRIALS,
+    sample_rate_hz: float | None = None,
+    bandwidth_hz: float | None = None,
 ) -> ScaleFactorResult:
     """Scale factor, bias and nonlinearity of a gyro from a rate-table test.
 
@@ -683,10 +695,11 @@ def calibrate_scale_factor(
     points their mean stops following the rate (local slope below half the median slope by more
     than 5 standard errors), or a point's samples pile up at the column's extreme value (a rail).
 
-    The resolution used by a requirement is the output quantum divided by |S| when the outputs lie
-    visibly on a grid (:func:`output_quantum`), otherwise the largest standard error of a point
-    mean divided by |S| (the smallest rate change this test resolves). Neither replaces the
-    IEEE Std 1431 resolution test with small rate increments.
+    The resolution a requirement judges is the smallest rate change the output resolves
+    (:func:`rotacal.gyro.resolution.output_resolution`): the larger of the output quantum / |S|
+    (when the outputs lie visibly on a grid, :func:`output_quantum`) and the noise of one reading
+    at the stated bandwidth / |S| — neither shrinks with the record's length. It does not replace
+    the IEEE Std 1431 resolution test with small rate increments.
 
     Parameters
     ----------
@@ -711,6 +724,11 @@ def calibrate_scale_factor(
         budgets hold the capture's Type A part only.
     mc_trials : int
         Monte Carlo trials for NL and for validating u(S) and u(V0) (≥ 2000).
+    sample_rate_hz : float or None
+        Sample rate of the output (Hz), for the resolution's noise bandwidth (fs/2 by default).
+    bandwidth_hz : float or None
+        Bandwidth of one reading for the resolution (Hz, ≤ fs/2; needs ``sample_rate_hz``);
+        None: the recorded samples' own.
 
     Returns
     -------
@@ -863,17 +881,16 @@ def calibrate_scale_factor(
         )
 
     q = output_quantum(y, gid)
-    if q is not None:
-        resolution: float | None = q / abs(s)
-        basis = f"output quantum {q:.4g}{unit} / |S|"
-    else:
-        finite_se = se[np.isfinite(se)]
-        if finite_se.size and float(finite_se.max()) > 0:
-            resolution = float(finite_se.max()) / abs(s)
-            basis = "largest standard error of a point mean / |S|"
-        else:
-            resolution = None
-            basis = "not visible"
+    res = output_resolution(
+        y,
+        gid,
+        s,
+        quantum=q,
+        sample_rate_hz=sample_rate_hz,
+        bandwidth_hz=bandwidth_hz,
+        output_unit=output_unit,
+    )
+    resolution, basis = res.resolution_deg_s, res.basis
     notes.append(
         "Unweighted least squares through the point means (seed 004 §4, IEEE Std 952 Annex C); "
         "scale_factor_u and bias_u are the combined standard uncertainties of the budgets: the "
@@ -966,6 +983,7 @@ def calibrate_scale_factor(
         nonlinearity_percent_fs_bias=nl_bias,
         nonlinearity_percent_fs_bias_corrected=nl_corr,
         decision_with_uncertainty=decision,
+        resolution=res,
         _budgets=budgets,
     )
 

@@ -52,6 +52,43 @@ def _accuracy_limit(r: ScaleFactorResult) -> float | None:
     return None
 
 
+def _resolution_rows(r: ScaleFactorResult) -> list[list[str]]:
+    """The resolution, what set it, both limits and the bandwidth with its source."""
+    res = r.resolution
+    if res is None:
+        return [["resolution", f"{_g(r.resolution_deg_s, 3)} °/s ({r.resolution_basis})", "", ""]]
+    unit = f" {r.output_unit}" if r.output_unit else ""
+    q = r.output_quantum
+    noise = res.noise_deg_s
+    bandwidth = (
+        "the recorded samples' (sample rate not given)"
+        if res.bandwidth_hz is None
+        else f"{res.bandwidth_hz:.4g} Hz ({res.bandwidth_source})"
+    )
+    return [
+        [
+            "resolution (smallest rate change resolved)",
+            f"{_g(r.resolution_deg_s, 3)} °/s, set by the "
+            + (res.set_by or "— (neither the quantum nor the noise is visible)"),
+            "",
+            "",
+        ],
+        [
+            "  output quantum / |S|",
+            "not visible" if q is None else f"{_g(res.quantum_deg_s, 3)} °/s ({q:.4g}{unit})",
+            "",
+            "",
+        ],
+        [
+            "  noise of one reading / |S|",
+            "not visible" if noise is None else f"{_g(noise, 3)} °/s rms (largest rate point)",
+            "",
+            "",
+        ],
+        ["  bandwidth of the reading", bandwidth, "", ""],
+    ]
+
+
 def scale_factor_figure(r: ScaleFactorResult) -> Figure:
     """Output against rate with the fitted line (top) and residuals in %FS (bottom)."""
     unit = r.output_unit or "output unit"
@@ -186,12 +223,7 @@ def scale_factor_section(
         ],
         ["full scale FS", f"{r.full_scale_deg_s:g} °/s", "", ""],
         ["rate points / samples", f"{r.n_points} / {r.samples_used}", "", ""],
-        [
-            "resolution (estimate)",
-            f"{_g(r.resolution_deg_s, 3)} °/s ({r.resolution_basis})",
-            "",
-            "",
-        ],
+        *_resolution_rows(r),
     ]
     if not has_truth:
         rows = [row[:3] for row in rows]
@@ -231,8 +263,8 @@ def scale_factor_section(
         if d is not None:
             paragraphs.append(
                 f"Decision rule: {d.rule}. {d.line[0].upper()}{d.line[1:]}. The range and "
-                "resolution checks carry no uncertainty here (set rates and the estimated "
-                "resolution)."
+                "resolution checks carry no uncertainty here (set rates, and the resolution: the "
+                "larger of the output quantum and the noise of one reading, divided by |S|)."
             )
     tables.append(
         Table(

@@ -59,9 +59,12 @@ from rotacal.turntable.model import (
 )
 
 __all__ = [
+    "EVERY_ANGLE",
     "Allocation",
     "MonteCarloCheck",
     "allocate",
+    "check_constraint_angles",
+    "linear_allocation",
     "monte_carlo_check",
     "worst_case",
 ]
@@ -84,6 +87,8 @@ _MAX_VERTEX_ERRORS = 10
 #: Rows per call of the fast model.
 _EVAL_CHUNK = 262_144
 _HIST_BINS = 60
+#: The value of ``constraint_angles`` that enforces the allocation's constraint at every angle.
+EVERY_ANGLE = "every"
 _TWO_PI = 2.0 * math.pi
 
 
@@ -338,6 +343,7 @@ class _LinearMax:
         grid: np.ndarray,
         grid_abs: np.ndarray,
         step: float,
+        refine: bool = True,
     ) -> None:
         self.table = table
         self.component = component
@@ -345,6 +351,9 @@ class _LinearMax:
         self.grid = grid
         self.grid_abs = grid_abs
         self.step = step
+        #: False: the constraint holds on the grid only (the paper's φ2 ∈ {0°, 45°, 90°}), so
+        #: the maxima are the grid's own, not refined between its points.
+        self.refine = refine
 
     def rows(self, angles: np.ndarray) -> np.ndarray:
         c = _coefficients(self.table, np.atleast_2d(angles))
@@ -354,6 +363,9 @@ class _LinearMax:
         """Refined local maxima, largest first: [(value, angles rad)]."""
         vals = self.grid_abs @ x
         out = []
+        if not self.refine:
+            top = _top_peaks(vals, self.grid, 0.0, peaks)
+            return [(float(vals[i]), self.grid[i].copy()) for i in top]
         for idx in _top_peaks(vals, self.grid, self.step, peaks):
             v, a = _refine(lambda a: float(self.rows(a)[0] @ x), self.grid[idx], self.step)
             out.append((max(v, float(vals[idx])), a if v >= vals[idx] else self.grid[idx]))
@@ -408,7 +420,9 @@ def _solve_component(
             "active_angles_deg": [np.degrees(ang_lb).round(9).tolist()],
         }
     lo = np.maximum(xl, 1e-9)
-    coarse = _grid_m(lmax.grid.shape[1], 8)
+    # start from every 45°; on a constraint grid, from the part of it common with every 45°
+    per_axis = 8 if lmax.refine else math.gcd(8, round(_TWO_PI / lmax.step))
+    coarse = _grid_m(lmax.grid.shape[1], per_axis)
     angles = list(coarse)
     rows = lmax.rows(coarse)
     # start: the KKT shape χ_i³ ∝ W_i²/mean|c_i| on top of the lower bounds, halfway to the limit
@@ -723,6 +737,50 @@ def worst_case(
     return _worst_case_arrays(table, ub, req, step, int(max_evaluations))
 
 
+def check_constraint_angles(value: Any, where: str) -> float | None:
+    """Where the allocation's constraint holds: ``None`` for every angle, else a grid step (deg).
+
+    ``value`` is ``None`` or ``"every"`` (every angle) or a number of degrees > 0 that divides 360°
+    into whole steps (45: the paper's grid). ``where`` names the setting in the one-line
+    :class:`~rotacal.errors.ConfigError` (e.g. ``"[allocation] constraint_angles"``).
+    """
+    if value is None or value == EVERY_ANGLE:
+        return None
+    number = value
+    if isinstance(value, str):
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+    ok = not isinstance(number, (bool, np.bool_)) and isinstance(
+        number, (int, float, np.integer, np.floating)
+    )
+    step = float(number) if ok else math.nan
+    count = 360.0 / step if math.isfinite(step) and step > 0 else math.nan
+    if not (math.isfinite(count) and abs(count - round(count)) < 1e-9):
+        shown = str(value).lower() if isinstance(value, bool) else repr(value)
+        raise ConfigError(
+            f"{where} = {shown} must be {EVERY_ANGLE!r} (the constraint at every angle) or a "
+            "step in degrees that divides 360° into whole steps (45: the paper's grid φ2 ∈ "
+            "{0°, 45°, 90°})."
+        )
+    return step
+
+
+def _constraint_grid(n_angles: int, step_deg: float | None) -> tuple[np.ndarray, float] | None:
+    """The angles (rad) of a constraint grid of ``step_deg`` and its step (rad); None: every angle."""
+    step = check_constraint_angles(step_deg, "constraint_step_deg")
+    if step is None:
+        return None
+    per_axis = round(360.0 / step)
+    if n_angles and per_axis**n_angles > _MAX_GRID_POINTS:
+        raise ConfigError(
+            f"constraint_step_deg = {step:g}° gives {per_axis}^{n_angles} constraint angles, more "
+            f"than {_MAX_GRID_POINTS}: use a coarser step or every angle."
+        )
+    return _grid_m(n_angles, per_axis), _TWO_PI / per_axis
+
+
 def _check_step(angle_step_deg: Any) -> float:
     try:
         step = float(angle_step_deg)
@@ -733,60 +791,29 @@ def _check_step(angle_step_deg: Any) -> float:
     return step
 
 
-# ----------------------------------------------------------------------------------- allocation
-def allocate(
-    table: Turntable,
-    requirement: Mapping[str, float] | float | None = None,
-    *,
-    angle_step_deg: float = 1.0,
-    full_model_guard: bool = True,
-    max_evaluations: int = _MAX_FULL_EVALUATIONS,
-) -> Allocation:
-    """Upper bounds of a turntable's errors from its orientation requirement (eqs. (29)–(34)).
+@dataclasses.dataclass
+class _Linear:
+    """The linear allocation of eqs. (31)–(34) and what the rest of :func:`allocate` reuses."""
 
-    One problem per orientation component j (generalised eqs. (31)–(33)): minimise
-    Σ_i W_ji²/χ_i² over the errors j is sensitive to, subject to max over every angle of
-    Σ_i |c_ji(φ)|·χ_i ≤ I_j and χ_i ≥ LB_i; then UB_i = min_j χ*_ji (eq. (34)). Solved by SLSQP with
-    analytic gradients in the scaled variables χ/I_j and an exchange method for the semi-infinite
-    constraint (see the module docstring). With ``full_model_guard`` the full model is checked
-    over the box's sign vertices and, where it exceeds I_j (second-order terms), the bounds of
-    component j's errors are shrunk until it does not; ``per_component`` keeps the linear optimum.
+    names: tuple[str, ...]
+    lower: np.ndarray
+    sensitivities: np.ndarray
+    grid: np.ndarray
+    step: float
+    coef_abs: np.ndarray
+    per_component: dict[str, dict[str, float]]
+    weights: dict[str, dict[str, float]]
+    info: dict[str, Any]
+    notes: list[str]
+    upper: np.ndarray
+    affected: np.ndarray
+    binding: dict[str, str]
 
-    Parameters
-    ----------
-    table : Turntable
-        The table; its ``errors`` give LB_i (rad) and optional weight overrides.
-    requirement : mapping or float, optional
-        I_j (rad) for psi, theta, gamma (or one value for all); default ``table.requirement``.
-    angle_step_deg : float
-        Step of the fine angle grid (deg) on which the worst angle is sought; coarsened for tables
-        of three angles so that the grid stays ≤ 1.5·10⁵ points.
-    full_model_guard : bool
-        Shrink bounds where the full model exceeds a requirement (default True).
-    max_evaluations : int
-        Cap of the full-model enumeration of :func:`worst_case`.
 
-    Returns
-    -------
-    Allocation
-        Upper bounds (rad), the per-component optima, weights, sensitivities, the Lemma 1 worst
-        cases and the optimiser's record.
-
-    Raises
-    ------
-    ConfigError
-        No requirement; a bad requirement or step; a table none of whose errors changes the
-        orientation; lower bounds that alone exceed a requirement at some angle (one line starting
-        with the table's source, naming the component, the angles that component depends on, the
-        value and the largest bounds).
-
-    References
-    ----------
-    Seed 001, §4.1–4.2, eqs. (28)–(34), Lemma 1 (eqs. (35)–(38)), Table 4.
-    """
-    _require_angular(table)
-    req = _requirement(table, requirement)
-    step_deg = _check_step(angle_step_deg)
+def _linear_allocation(
+    table: Turntable, req: dict[str, float], step_deg: float, constraint_step_deg: float | None
+) -> _Linear:
+    """Per-component optima of eqs. (31)–(33) and their eq. (34) minimum (linearised model)."""
     names = tuple(table.angular_error_names)
     specs = {e.name: e for e in table.errors}
     angle_names = tuple(table.angle_names)
@@ -798,6 +825,10 @@ def allocate(
     ).reshape(3, len(names))
     grid, step = _grid(len(angle_names), step_deg, _MAX_GRID_POINTS)
     coef_abs = np.abs(_coefficients(table, grid))
+    constraint = _constraint_grid(len(angle_names), constraint_step_deg)
+    if constraint is not None:
+        c_grid, c_step = constraint
+        c_abs = np.abs(_coefficients(table, c_grid))
     per_axis = round(_TWO_PI / step)
     mesh_abs = coef_abs.reshape((per_axis,) * len(angle_names) + coef_abs.shape[1:])
     reach = coef_abs.max(axis=0)  # (3, n): largest |c_ji| on the grid
@@ -815,7 +846,10 @@ def allocate(
             continue
         w_abs = np.array([_weight(specs[names[i]].weight, sens[j, i], reach[j, i]) for i in cols])
         weights[comp] = {names[i]: float(v) for i, v in zip(cols, w_abs, strict=True)}
-        lmax = _LinearMax(table, j, cols, grid, coef_abs[:, j, :][:, cols], step)
+        if constraint is None:
+            lmax = _LinearMax(table, j, cols, grid, coef_abs[:, j, :][:, cols], step)
+        else:
+            lmax = _LinearMax(table, j, cols, c_grid, c_abs[:, j, :][:, cols], c_step, False)
         try:
             x, info = _solve_component(lmax, w_abs / w_abs.max(), lb[cols] / req[comp])
         except _Infeasible as e:
@@ -846,7 +880,6 @@ def allocate(
     ub = chi_star.min(axis=0)
     bind_idx = chi_star.argmin(axis=0)
     affected = np.isfinite(ub)
-    upper: dict[str, float | None] = {}
     binding: dict[str, str] = {}
     for i, n in enumerate(names):
         if affected[i]:
@@ -856,7 +889,132 @@ def allocate(
         if not affected[i]:
             notes.append(f"{n} has no effect on the orientation: no upper bound.")
 
-    cache = {"grid": grid, "step": step, "coef_abs": coef_abs}
+    return _Linear(
+        names=names,
+        lower=lb,
+        sensitivities=sens,
+        grid=grid,
+        step=step,
+        coef_abs=coef_abs,
+        per_component=per_component,
+        weights=weights,
+        info=comp_info,
+        notes=notes,
+        upper=ub,
+        affected=affected,
+        binding=binding,
+    )
+
+
+def linear_allocation(
+    table: Turntable,
+    requirement: Mapping[str, float] | float | None = None,
+    *,
+    angle_step_deg: float = 1.0,
+    constraint_step_deg: float | None = None,
+) -> dict[str, float | None]:
+    """The upper bounds of eqs. (31)–(34) for the linearised model (26) alone (rad).
+
+    What the paper's allocation is: the per-component optima and their minimum (eq. (34)),
+    without rotacal's full-model guard and worst-case check (:func:`allocate` adds both).
+
+    Parameters
+    ----------
+    table : Turntable
+        The table.
+    requirement : mapping or float, optional
+        I_j (rad) for psi, theta, gamma (or one value for all); default ``table.requirement``.
+    angle_step_deg, constraint_step_deg
+        As in :func:`allocate`.
+
+    Returns
+    -------
+    dict
+        UB_i (rad) per error, ``None`` for errors with no effect on the orientation.
+
+    References
+    ----------
+    Seed 001, §4.2, eqs. (31)–(34), Table 4.
+    """
+    _require_angular(table)
+    req = _requirement(table, requirement)
+    lin = _linear_allocation(table, req, _check_step(angle_step_deg), constraint_step_deg)
+    out: dict[str, float | None] = dict.fromkeys(table.error_names)
+    for i, n in enumerate(lin.names):
+        out[n] = float(lin.upper[i]) if lin.affected[i] else None
+    return out
+
+
+# ----------------------------------------------------------------------------------- allocation
+def allocate(
+    table: Turntable,
+    requirement: Mapping[str, float] | float | None = None,
+    *,
+    angle_step_deg: float = 1.0,
+    full_model_guard: bool = True,
+    max_evaluations: int = _MAX_FULL_EVALUATIONS,
+    constraint_step_deg: float | None = None,
+) -> Allocation:
+    """Upper bounds of a turntable's errors from its orientation requirement (eqs. (29)–(34)).
+
+    One problem per orientation component j (generalised eqs. (31)–(33)): minimise
+    Σ_i W_ji²/χ_i² over the errors j is sensitive to, subject to max over every angle of
+    Σ_i |c_ji(φ)|·χ_i ≤ I_j and χ_i ≥ LB_i; then UB_i = min_j χ*_ji (eq. (34)). Solved by SLSQP with
+    analytic gradients in the scaled variables χ/I_j and an exchange method for the semi-infinite
+    constraint (see the module docstring). With ``full_model_guard`` the full model is checked
+    over the box's sign vertices and, where it exceeds I_j (second-order terms), the bounds of
+    component j's errors are shrunk until it does not; ``per_component`` keeps the linear optimum.
+
+    Parameters
+    ----------
+    table : Turntable
+        The table; its ``errors`` give LB_i (rad) and optional weight overrides.
+    requirement : mapping or float, optional
+        I_j (rad) for psi, theta, gamma (or one value for all); default ``table.requirement``.
+    angle_step_deg : float
+        Step of the fine angle grid (deg) on which the worst angle is sought; coarsened for tables
+        of three angles so that the grid stays ≤ 1.5·10⁵ points.
+    full_model_guard : bool
+        Shrink bounds where the full model exceeds a requirement (default True).
+    max_evaluations : int
+        Cap of the full-model enumeration of :func:`worst_case`.
+    constraint_step_deg : float, optional
+        Enforce the constraint of eqs. (31)–(33) only at the angles that are multiples of this
+        step (deg, dividing 360°), unrefined: 45 is the paper's grid — its constraint on φ2 ∈
+        [0, π/2] (eq. (31)) evaluated at φ2 ∈ {0°, 45°, 90°}, the points of its averaging, which
+        Lemma 1's folding extends to every multiple of 45°; with it, Table 4 comes out (see
+        :mod:`rotacal.turntable.seed001`). ``None`` (default): every angle (a fine grid refined
+        between its points). The worst case reported (Lemma 1 check) and the full-model guard
+        always look at every angle, so a grid allocation that exceeds the requirement between
+        its points is shown (``within``) and, with the guard, shrunk.
+
+    Returns
+    -------
+    Allocation
+        Upper bounds (rad), the per-component optima, weights, sensitivities, the Lemma 1 worst
+        cases and the optimiser's record.
+
+    Raises
+    ------
+    ConfigError
+        No requirement; a bad requirement or step; a table none of whose errors changes the
+        orientation; lower bounds that alone exceed a requirement at some angle (one line starting
+        with the table's source, naming the component, the angles that component depends on, the
+        value and the largest bounds).
+
+    References
+    ----------
+    Seed 001, §4.1–4.2, eqs. (28)–(34), Lemma 1 (eqs. (35)–(38)), Table 4.
+    """
+    _require_angular(table)
+    req = _requirement(table, requirement)
+    step_deg = _check_step(angle_step_deg)
+    lin = _linear_allocation(table, req, step_deg, constraint_step_deg)
+    names, lb, grid, step = lin.names, lin.lower, lin.grid, lin.step
+    per_component, notes, angle_names = lin.per_component, lin.notes, tuple(table.angle_names)
+    ub, affected = lin.upper.copy(), lin.affected
+    upper: dict[str, float | None] = {}
+    cache = {"grid": grid, "step": step, "coef_abs": lin.coef_abs}
     scale = dict.fromkeys(COMPONENTS, 1.0)
     wc = _worst_case_arrays(table, ub, req, step_deg, int(max_evaluations), cache)
     if full_model_guard:
@@ -886,27 +1044,32 @@ def allocate(
             notes.append(f"{n} is a translation: no effect on the orientation, no upper bound.")
     upper = {n: upper[n] for n in table.error_names}
     sensitivities = {
-        c: {n: float(sens[j, i]) for i, n in enumerate(names)} for j, c in enumerate(COMPONENTS)
+        c: {n: float(lin.sensitivities[j, i]) for i, n in enumerate(names)}
+        for j, c in enumerate(COMPONENTS)
     }
+    sens_step, sens_endpoint = table.sensitivity_grid
     optimiser = {
         "method": "SLSQP (analytic gradients, variables χ/I_j) with an exchange method for the "
         "semi-infinite angle constraint",
         "sensitivity_grid": {"step_deg": float(sens_step), "endpoint": bool(sens_endpoint)},
+        "constraint_angles": "every angle"
+        if constraint_step_deg is None
+        else f"multiples of {float(constraint_step_deg):g}° only",
         "grid_step_deg": math.degrees(step),
         "grid_points": int(grid.shape[0]),
-        "components": comp_info,
+        "components": lin.info,
         "full_model_guard": bool(full_model_guard),
         "full_model_scale": scale,
         "notes": notes,
     }
     return Allocation(
         error_names=tuple(table.error_names),
-        units=units,
+        units=_display(table)[0],
         upper_bounds_rad=upper,
         lower_bounds_rad={n: float(v) for n, v in zip(names, lb, strict=True)},
         per_component=per_component,
-        binding=binding,
-        weights=weights,
+        binding=lin.binding,
+        weights=lin.weights,
         sensitivities=sensitivities,
         requirement_rad=req,
         worst_case=wc,

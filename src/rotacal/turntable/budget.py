@@ -5,13 +5,16 @@ and what the allocated table does to a gyro calibration (seed 001, §§2–4).
 description (a TOML file, see :mod:`rotacal.turntable.config`) it
 
 1. takes the orientation requirement as stated, or derives it from a required calibration accuracy
-   of a multiposition drift test (eqs. (7)–(16); only for a table of the seed's geometry);
+   of a multiposition drift test (eqs. (7)–(16); only for a table of the seed's geometry) — by
+   default so that the tables the allocation admits pass the calibration check of step 4, or by
+   the paper's Earth-rate reading of eq. (16) (:mod:`rotacal.turntable.requirement`);
 2. averages the sensitivities (eq. (28)) and allocates upper bounds to the error sources
-   (eqs. (29)–(34)), checking the worst case over all angles (Lemma 1);
+   (eqs. (29)–(34)) — the constraint at every angle, or on the paper's grid — checking the worst
+   case over all angles (Lemma 1);
 3. checks the allocation by Monte Carlo with the full nonlinear model (eqs. (17)–(25));
 4. for a table of the seed's geometry, draws tables within the allocation and computes the
    rate-sensing error of the multiposition calibration run on them (eqs. (7)–(14) with the
-   orientation error of each test position from eq. (23)).
+   orientation error of each test position from eq. (23)), and the worst such table.
 
 References
 ----------
@@ -22,6 +25,7 @@ analysis and turntable error allocation — eqs. (7)–(16), (17)–(34), Lemma 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -29,15 +33,29 @@ from typing import Any
 import numpy as np
 
 from rotacal.errors import ConfigError
-from rotacal.results import Result
+from rotacal.results import Result, with_warnings
 from rotacal.sim.multiposition import DEFAULT_LATITUDE_DEG
-from rotacal.turntable.allocation import Allocation, MonteCarloCheck, allocate, monte_carlo_check
+from rotacal.turntable.allocation import (
+    EVERY_ANGLE,
+    Allocation,
+    MonteCarloCheck,
+    allocate,
+    check_constraint_angles,
+    monte_carlo_check,
+)
 from rotacal.turntable.calibration import (
     OrientationRequirement,
     orientation_requirement,
     rate_sensing_error_from_rotation,
 )
 from rotacal.turntable.model import ARCMIN_PER_RAD, COMPONENTS, Turntable, load_turntable
+from rotacal.turntable.requirement import (
+    DEFAULT_DERIVATION,
+    DerivedRequirement,
+    calibration_worst_case,
+    check_derivation,
+    derive_requirement,
+)
 from rotacal.turntable.seed001 import is_seed_table, reproduce_seed001
 
 __all__ = ["TurntableBudget", "calibration_check", "turntable_budget"]
@@ -54,7 +72,9 @@ class TurntableBudget(Result):
     ``sensitivities`` maps ``psi``/``theta``/``gamma`` to {error: mean |∂Δ/∂χ|} (eq. (28));
     ``upper_bounds_arcmin`` maps each error to its allocated upper bound (eq. (34); ``None`` for
     translations, which cannot change the orientation); ``monte_carlo`` holds ``runs``,
-    ``max_abs_arcmin`` (per component), ``all_within`` and the draw settings.
+    ``max_abs_arcmin`` (per component), ``all_within`` and the draw settings. ``options`` holds
+    the two choices of the budget (``requirement_derivation``, ``constraint_angles``);
+    ``derivation`` how a calibration accuracy became the requirement (``None`` when stated).
     """
 
     table: str
@@ -62,6 +82,8 @@ class TurntableBudget(Result):
     labels: dict[str, str]
     requirement_arcmin: dict[str, float]
     requirement_source: str
+    options: dict[str, Any]
+    derivation: dict[str, Any] | None
     sensitivities: dict[str, dict[str, float]]
     lower_bounds_arcmin: dict[str, float]
     upper_bounds_arcmin: dict[str, float | None]
@@ -196,12 +218,90 @@ def calibration_check(
     return {"x": np.asarray(dwx), "y": np.asarray(dwy)}
 
 
+def _options(
+    table: Turntable, requirement_derivation: str | None, constraint_angles: Any
+) -> tuple[str | None, float | None]:
+    """The derivation (None for a stated requirement) and the constraint step (None: every angle).
+
+    An argument overrides the configuration's ``[requirement] derivation`` and ``[allocation]
+    constraint_angles``; a derivation for a table that states its orientation requirement is a
+    ConfigError.
+    """
+    derivation = None
+    if requirement_derivation is not None:
+        derivation = check_derivation(requirement_derivation, "--requirement-derivation")
+        if table.calibration_requirement_deg_h is None:
+            raise ConfigError(
+                f"--requirement-derivation {derivation} applies to a requirement derived from "
+                "[requirement] calibration_deg_h; this configuration states psi, theta, gamma: "
+                "drop the option or state calibration_deg_h instead."
+            )
+    elif table.calibration_requirement_deg_h is not None:
+        given = table.settings.get("requirement", {}).get("derivation", DEFAULT_DERIVATION)
+        derivation = check_derivation(given, "[requirement] derivation")
+    if constraint_angles is not None:
+        step = check_constraint_angles(constraint_angles, "--constraint-angles")
+    else:
+        given = table.settings.get("allocation", {}).get("constraint_angles", EVERY_ANGLE)
+        step = check_constraint_angles(given, "[allocation] constraint_angles")
+    return derivation, step
+
+
+def _derivation_text(derived: DerivedRequirement) -> str:
+    """How the requirement followed from the calibration accuracy, for ``requirement_source``."""
+    wm = derived.required_deg_h
+    if derived.scale is None:
+        limit = derived.earth_rate.equal_limit_deg if derived.earth_rate is not None else math.nan
+        return (
+            f"derived from a calibration accuracy of {wm:g} °/h by the Earth-rate reading alone: "
+            f"{limit:.5f}° on each component (derivation 'earth-rate-only', seed 001 eq. (16); "
+            "gravity terms and the drift fit are left out)"
+        )
+    return (
+        f"derived from a calibration accuracy of {wm:g} °/h: the box of eqs. (15)–(16) × "
+        f"{derived.scale:.4f}, so that every table within the allocated bounds keeps Δωx and Δωy "
+        f"≤ {wm:g} °/h at every test position (derivation 'calibration-check')"
+    )
+
+
+def _paper_reading_calibration(
+    table: Turntable,
+    reproduction: Mapping[str, Any],
+    required: float,
+    seed: int,
+    cal_settings: Mapping[str, Any],
+) -> dict[str, Any]:
+    """The calibration check of the paper's reading end to end: the grid allocation at eq. (16)'s
+    Earth-rate limit (arcmin bounds from the reproduction), its worst table and its draws."""
+    ub = {
+        n: v / ARCMIN_PER_RAD
+        for n, v in reproduction["table4"]["upper_bounds_at_eq16_arcmin"].items()
+    }
+    lb = {e.name: float(e.lower) for e in table.errors if e.name in ub}
+    p1, p2 = _plan_angles(cal_settings)
+    worst = calibration_worst_case(
+        table, ub, phi1_deg=p1, phi2_deg=p2, latitude_deg=cal_settings["latitude_deg"]
+    )
+    draws = calibration_check(
+        table, ub, lower_bounds_rad=lb, runs=_CALIBRATION_RUNS, seed=seed, **cal_settings
+    )
+    return {
+        "required_deg_h": required,
+        "requirement_arcmin": reproduction["table4"]["eq16_requirement_arcmin"],
+        "worst_table_rate_error_deg_h": worst,
+        "runs": _CALIBRATION_RUNS,
+        "fraction_above_required": {k: float(np.mean(v > required)) for k, v in draws.items()},
+    }
+
+
 def turntable_budget(
     config: Turntable | str | Path,
     *,
     runs: int | None = None,
     seed: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    requirement_derivation: str | None = None,
+    constraint_angles: float | str | None = None,
 ) -> TurntableBudget:
     """Model, sensitivities, allocation, Monte Carlo check and calibration effect of a turntable.
 
@@ -215,6 +315,14 @@ def turntable_budget(
         Seed of the Monte Carlo draws (default: the config's, else 2026).
     progress : callable, optional
         ``progress(done, total)`` during the Monte Carlo.
+    requirement_derivation : {"calibration-check", "earth-rate-only"}, optional
+        How ``[requirement] calibration_deg_h`` becomes the orientation requirement
+        (:mod:`rotacal.turntable.requirement`); default: the config's ``[requirement]
+        derivation``, else ``"calibration-check"``. Refused for a stated requirement.
+    constraint_angles : "every" or float, optional
+        Where the allocation's constraint holds: ``"every"`` angle or a grid step (deg, dividing
+        360°; 45 = the paper's grid); default: the config's ``[allocation] constraint_angles``,
+        else every angle.
 
     Returns
     -------
@@ -230,11 +338,14 @@ def turntable_budget(
     runs = runs if runs is not None else mc_settings.get("runs", 1_000_000)
     seed = seed if seed is not None else mc_settings.get("seed", 2026)
     cal_settings = _calibration_settings(table)
+    derivation, constraint_step = _options(table, requirement_derivation, constraint_angles)
 
     requirement_obj: OrientationRequirement | None = None
+    derived: DerivedRequirement | None = None
     if table.requirement is not None:
         requirement = dict(table.requirement)
         source = "stated in the configuration"
+        alloc = allocate(table, requirement, constraint_step_deg=constraint_step)
     elif table.calibration_requirement_deg_h is not None:
         if not _seed_geometry(table):
             raise ConfigError(
@@ -242,24 +353,25 @@ def turntable_budget(
                 "about z); state [requirement] psi, theta, gamma for this table instead."
             )
         p1, p2 = _plan_angles(cal_settings)
-        requirement_obj = orientation_requirement(
+        derived = derive_requirement(
+            table,
             table.calibration_requirement_deg_h,
+            derivation or DEFAULT_DERIVATION,
             phi1_deg=p1,
             phi2_deg=p2,
             latitude_deg=cal_settings["latitude_deg"],
+            constraint_step_deg=constraint_step,
         )
-        requirement = dict(requirement_obj.limits_rad)
-        source = (
-            f"derived from a calibration accuracy of {table.calibration_requirement_deg_h:g} °/h "
-            "(eqs. 7–16)"
-        )
+        requirement_obj = derived.box
+        requirement = dict(derived.requirement_rad)
+        alloc = derived.allocation
+        source = _derivation_text(derived)
     else:
         raise ConfigError(
             "the configuration states no requirement: add [requirement] psi, theta, gamma or "
             "calibration_deg_h."
         )
 
-    alloc = allocate(table, requirement)
     mc = monte_carlo_check(
         table,
         alloc,
@@ -290,6 +402,17 @@ def turntable_budget(
             seed=seed,
             **cal_settings,
         )
+        worst = (
+            derived.worst
+            if derived is not None
+            else calibration_worst_case(
+                table,
+                alloc.upper_bounds_rad,
+                phi1_deg=plan[0],
+                phi2_deg=plan[1],
+                latitude_deg=cal_settings["latitude_deg"],
+            )
+        )
         calibration = {
             "required_deg_h": required,
             "plan": f"{cal_settings['outer_steps']} outer × {cal_settings['inner_steps']} inner",
@@ -298,17 +421,32 @@ def turntable_budget(
             "max_rate_error_deg_h": {k: float(np.max(v)) for k, v in draws.items()},
             "p95_rate_error_deg_h": {k: float(np.percentile(v, 95)) for k, v in draws.items()},
             "fraction_above_required": {k: float(np.mean(v > required)) for k, v in draws.items()},
+            "worst_table_rate_error_deg_h": worst,
             "orientation_requirement": requirement_obj.to_dict(),
         }
-    reproduction = reproduce_seed001(table, requirement) if is_seed_table(table) else None
+    reproduction = None
+    if is_seed_table(table):
+        p1, p2 = _plan_angles(cal_settings)
+        reproduction = reproduce_seed001(
+            table, phi1_deg=p1, phi2_deg=p2, latitude_deg=cal_settings["latitude_deg"]
+        )
+        if required is not None:
+            reproduction["paper_reading_calibration"] = _paper_reading_calibration(
+                table, reproduction, required, seed, cal_settings
+            )
 
     lower = {n: float(alloc.lower_bounds_rad.get(n, 0.0)) for n in table.angular_error_names}
-    return TurntableBudget(
+    budget = TurntableBudget(
         table=table.name,
         error_names=table.error_names,
         labels={e.name: e.label for e in table.errors},
         requirement_arcmin={c: float(requirement[c]) * ARCMIN_PER_RAD for c in COMPONENTS},
         requirement_source=source,
+        options={
+            "requirement_derivation": derivation,
+            "constraint_angles": EVERY_ANGLE if constraint_step is None else constraint_step,
+        },
+        derivation=None if derived is None else derived.to_dict(),
         sensitivities=alloc.sensitivities,
         lower_bounds_arcmin={k: float(v) * ARCMIN_PER_RAD for k, v in lower.items()},
         upper_bounds_arcmin=_arcmin(alloc.upper_bounds_rad),
@@ -332,3 +470,21 @@ def turntable_budget(
         _calibration_draws=draws,
         _plan_deg=plan,
     )
+    return with_warnings(budget, _calibration_warnings(calibration))
+
+
+def _calibration_warnings(calibration: Mapping[str, Any] | None) -> list[str]:
+    """A warning when tables built to the allocation can exceed the calibration accuracy."""
+    if calibration is None:
+        return []
+    worst = calibration["worst_table_rate_error_deg_h"]["worst_deg_h"]
+    required = calibration["required_deg_h"]
+    if worst <= required:
+        return []
+    frac = calibration["fraction_above_required"]
+    return [
+        f"tables built to this allocation can miss the calibration accuracy of {required:g} °/h: "
+        f"the worst reaches {worst:.4g} °/h, and {frac['x'] * 100:.1f} % (x) and "
+        f"{frac['y'] * 100:.1f} % (y) of {calibration['runs']} tables drawn exceed it; derive the "
+        'requirement from [requirement] calibration_deg_h with derivation "calibration-check".'
+    ]

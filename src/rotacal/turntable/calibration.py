@@ -20,7 +20,11 @@ eqs. (9)–(14):
   deviation Δβ results in the rate-sensing error". The default ``method="coefficients"`` follows the
   text: the rate error the wrong coefficients cause at the test positions, ``Δω_vec = A·Δβ``.
   ``method="eq13"`` evaluates the printed formula with the physical b1, which is
-  ``(A' − A)·β_T`` (the Earth rate drops out);
+  ``(A' − A)·β_T`` (the Earth rate drops out). ``method="earth-rate"`` keeps the Earth-rate
+  reading alone, ``Δω_vec = b2' − b2`` (no gravity terms, no fit): the reading behind the paper's
+  eq. (16) — for equal limits I its worst case over every orientation is √2·Ωe·I (the Earth rate
+  at 45° between two gyro axes), so I = ωm/(√2·Ωe) = 0.02694° for ωm = 0.01 °/h, which the
+  paper prints as 0.027°;
 * eq. (14): the rate-sensing error of the axis is ``‖Δω_vec‖∞`` (°/h).
 
 The nominal A, its least-squares projector and the hat matrix are fixed per plan, and the changes
@@ -71,17 +75,24 @@ __all__ = [
     "orientation_requirement",
     "rate_error_surfaces",
     "rate_error_vectors",
+    "rate_error_vectors_from_rotation",
     "rate_sensing_error",
     "rate_sensing_error_from_rotation",
 ]
 
-#: The two readings of eq. (13) (see the module docstring).
-METHODS = ("coefficients", "eq13")
+#: The readings of eq. (13) (see the module docstring): the text's, the formula as printed, and the
+#: Earth-rate reading alone (eq. (16)'s).
+METHODS = ("coefficients", "eq13", "earth-rate")
 #: Largest |orientation error| accepted (rad, 5.7°): eq. (7) is a small-angle model, and a larger
 #: value is almost always an angle given in degrees or arcmin instead of radians.
 MAX_ORIENTATION_ERROR_RAD = 0.1
 
 _AXES = ("x", "y")
+_METHOD_TEXT = {
+    "coefficients": "(‖A·Δβ‖∞, the rate error the deviated coefficients cause).",
+    "eq13": "(‖(A' − A)·β_T‖∞, seed 001 eq. (13) as printed).",
+    "earth-rate": "(‖b2' − b2‖∞, the Earth-rate reading alone: no gravity terms, no fit).",
+}
 #: The eight corners (±, ±, ±) of a box of orientation errors, in the order of COMPONENTS.
 _CORNERS = np.array(
     [[s1, s2, s3] for s1 in (-1.0, 1.0) for s2 in (-1.0, 1.0) for s3 in (-1.0, 1.0)]
@@ -311,7 +322,12 @@ def _deviations(
         dab = _design_change_times_beta(s, axis, da)
         # b1 − b2 = (b2' − b2) + (A' − A)β_T + Aβ_T, so Δβ = P·[(b2' − b2) + (A' − A)β_T].
         dbeta = (dw[..., k] + dab) @ s.projector[axis].T
-        vec = dab if s.method == "eq13" else dbeta @ s.design[axis].T
+        if s.method == "eq13":
+            vec = dab
+        elif s.method == "earth-rate":
+            vec = dw[..., k]  # b2' − b2: what the axis reads wrong of the Earth rate
+        else:
+            vec = dbeta @ s.design[axis].T
         out[axis] = (dbeta, vec)
     return out
 
@@ -491,7 +507,8 @@ def rate_error_vectors(
     """Rate-sensing error vectors at the test positions (eq. (13), rotacal's reading).
 
     ``method="coefficients"``: ``A·Δβ`` (the error the deviated coefficients cause);
-    ``method="eq13"``: ``b1 − A·β2 − b2' = (A' − A)·β_T`` (the formula as printed).
+    ``method="eq13"``: ``b1 − A·β2 − b2' = (A' − A)·β_T`` (the formula as printed);
+    ``method="earth-rate"``: ``b2' − b2`` (the Earth-rate reading alone).
 
     Parameters
     ----------
@@ -499,7 +516,7 @@ def rate_error_vectors(
         Orientation errors (rad), broadcast together; |error| ≤ 0.1 rad.
     phi1_deg, phi2_deg, latitude_deg, coefficients, earth_rate_deg_h
         As in :func:`rate_sensing_error`.
-    method : {"coefficients", "eq13"}
+    method : {"coefficients", "eq13", "earth-rate"}
         The reading of eq. (13).
 
     Returns
@@ -546,9 +563,10 @@ def rate_sensing_error(
     coefficients : mapping or None
         True drift coefficients β_T, ``{"x": {...}, "y": {...}}`` (deg/h, deg/h/g, deg/h/g²);
         missing axes or names take seed 001 Table 1 values.
-    method : {"coefficients", "eq13"}
+    method : {"coefficients", "eq13", "earth-rate"}
         ``"coefficients"``: ‖A·Δβ‖∞ (the text's meaning); ``"eq13"``: ‖(A' − A)·β_T‖∞ (eq. (13)
-        as printed). See the module docstring.
+        as printed); ``"earth-rate"``: ‖b2' − b2‖∞ (the Earth-rate reading alone, eq. (16)'s).
+        See the module docstring.
     earth_rate_deg_h : float
         Earth rate Ωe (°/h); default sidereal 15.041067.
 
@@ -614,6 +632,23 @@ def rate_sensing_error_from_rotation(
     ----------
     Seed 001, §2.2, eqs. (8)–(14); §3.2, eqs. (23)–(24).
     """
+    return _norms(
+        _rotation_deviations(
+            delta_r, phi1_deg, phi2_deg, latitude_deg, coefficients, method, earth_rate_deg_h
+        )
+    )
+
+
+def _rotation_deviations(
+    delta_r: Any,
+    phi1_deg: Any,
+    phi2_deg: Any,
+    latitude_deg: Any,
+    coefficients: Any,
+    method: Any,
+    earth_rate_deg_h: Any,
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Per axis (Δβ, Δω_vec) for a ΔR per test position, checked (see the public functions)."""
     s = _setup(phi1_deg, phi2_deg, latitude_deg, coefficients, method, earth_rate_deg_h)
     try:
         r = np.asarray(delta_r, dtype=float)
@@ -634,7 +669,41 @@ def rate_sensing_error_from_rotation(
             f"the small orientation errors of seed 001 (≤ {MAX_ORIENTATION_ERROR_RAD} rad): pass "
             "ΔR = R_dᵀ·R_t, not R_t."
         )
-    return _norms(_deviations(s, d, per_position=True))
+    return _deviations(s, d, per_position=True)
+
+
+def rate_error_vectors_from_rotation(
+    delta_r: Any,
+    *,
+    phi1_deg: Any,
+    phi2_deg: Any,
+    latitude_deg: float = DEFAULT_LATITUDE_DEG,
+    coefficients: Mapping[str, Mapping[str, float]] | None = None,
+    method: str = "coefficients",
+    earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Rate-sensing error vectors at the test positions for a ΔR per position (eqs. (8)–(13)).
+
+    The vectors whose ∞-norms :func:`rate_sensing_error_from_rotation` returns (eq. (14)).
+
+    Parameters
+    ----------
+    delta_r, phi1_deg, phi2_deg, latitude_deg, coefficients, method, earth_rate_deg_h
+        As in :func:`rate_sensing_error_from_rotation`.
+
+    Returns
+    -------
+    (dw_x, dw_y) : (ndarray, ndarray)
+        Each of shape ``delta_r.shape[:-3] + (n,)`` (°/h), one value per test position.
+
+    References
+    ----------
+    Seed 001, §2.2, eqs. (8)–(13); §3.2, eqs. (23)–(24).
+    """
+    dev = _rotation_deviations(
+        delta_r, phi1_deg, phi2_deg, latitude_deg, coefficients, method, earth_rate_deg_h
+    )
+    return dev["x"][1], dev["y"][1]
 
 
 # ------------------------------------------------------------------------- the requirement
@@ -751,14 +820,10 @@ def orientation_requirement(
     s = _setup(phi1_deg, phi2_deg, latitude_deg, coefficients, method, earth_rate_deg_h)
     notes: list[str] = [
         f"plan of {s.positions} positions, latitude {s.latitude_deg:g}°, Earth rate "
-        f"{s.earth_rate_deg_h:.8g} °/h; Δω by method {s.method!r} "
-        + (
-            "(‖A·Δβ‖∞, the rate error the deviated coefficients cause)."
-            if s.method == "coefficients"
-            else "(‖(A' − A)·β_T‖∞, seed 001 eq. (13) as printed)."
-        ),
-        "the paper's 0.027° (eq. (16)) states neither its plan nor its latitude and its eq. (13) is "
-        "ambiguous; rotacal's values are not tuned toward it.",
+        f"{s.earth_rate_deg_h:.8g} °/h; Δω by method {s.method!r} " + _METHOD_TEXT[s.method],
+        "the paper's 0.027° (eq. (16)) states neither its plan nor its latitude; it is the Earth-rate "
+        "reading alone (method 'earth-rate'), ωm/(√2·Ωe) = 0.02694°; rotacal's values are not "
+        "tuned toward it.",
     ]
     ones = np.ones(3)
     i_eq, capped_eq = _scale_to_boundary(s, ones, wm)

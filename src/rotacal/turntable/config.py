@@ -14,7 +14,8 @@ mm); the loaded :class:`Turntable` is in rad and m. Example (the seed's table is
     psi = 1.62
     theta = 1.62
     gamma = 1.62
-    # … or instead: calibration_deg_h = 0.01 (derived from a multiposition calibration)
+    # … or instead: calibration_deg_h = 0.01 (derived from a multiposition calibration), with
+    # derivation = "calibration-check" (default) | "earth-rate-only" (seed 001's eq. (16))
 
     [[chain]]                    # a rotary axis about its own y, turning by phi1
     axis = "y"
@@ -41,6 +42,15 @@ mm); the loaded :class:`Turntable` is in rad and m. Example (the seed's table is
     [sensitivity]                # optional: how eq. (28)'s sensitivities are averaged
     step_deg = 45                # grid step (deg), dividing 360 (default 1; 8 for three angles)
     endpoint = true              # count 360° as well as 0° (default false)
+    [allocation]                 # optional: where the constraint of eqs. (31)–(33) holds
+    constraint_angles = "every"  # every angle (default), or a step in degrees dividing 360
+                                 # (45: the paper's grid φ2 ∈ {0°, 45°, 90°})
+
+``[requirement] derivation`` chooses how ``calibration_deg_h`` becomes the orientation requirement
+(:mod:`rotacal.turntable.requirement`): ``"calibration-check"`` (default; the tables the allocation
+admits keep the calibration within that accuracy) or ``"earth-rate-only"`` (the paper's eq. (16)).
+``[allocation] constraint_angles`` chooses where the allocation's constraint holds: at every angle
+(default) or only on a grid (45: the paper's, with which Table 4 comes out).
 
 ``[sensitivity]`` chooses the averaging of the sensitivities (eq. (28)) and so of the allocation
 weights (1/sensitivity): every angle of the table on 0, step, … below 360° by default — the unbiased
@@ -96,6 +106,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = [
+    "ALLOCATION_KEYS",
     "CALIBRATION_KEYS",
     "MONTE_CARLO_KEYS",
     "SEED_TABLE_RESOURCE",
@@ -118,10 +129,11 @@ _TOP_KEYS = (
     "monte_carlo",
     "calibration",
     "sensitivity",
+    "allocation",
 )
 _LINK_KEYS = ("axis", "angle", "rotations", "translations")
 _ERROR_KEYS = ("lower", "iso", "label", "weight")
-_REQUIREMENT_KEYS = (*COMPONENTS, "calibration_deg_h")
+_REQUIREMENT_KEYS = (*COMPONENTS, "calibration_deg_h", "derivation")
 #: Keys of ``[monte_carlo]`` (defaults applied by the consumers: 1 000 000, 2026, "random").
 MONTE_CARLO_KEYS = ("runs", "seed", "signs")
 #: Keys of ``[calibration]`` (defaults applied by the consumers: 45.75, 8, 8).
@@ -129,6 +141,8 @@ CALIBRATION_KEYS = ("latitude_deg", "outer_steps", "inner_steps", "required_deg_
 #: Keys of ``[sensitivity]`` (defaults: a 1° step without the endpoint, see
 #: ``Turntable.sensitivity_grid``).
 SENSITIVITY_KEYS = ("step_deg", "endpoint")
+#: Keys of ``[allocation]`` (default: the constraint at every angle).
+ALLOCATION_KEYS = ("constraint_angles",)
 _SIGNS = ("random", "positive")
 
 
@@ -301,7 +315,7 @@ def parse_turntable(
                 hint = f" (did you mean {near[0]!r}?)" if near else ""
                 raise rd.fail(
                     f"[requirement] has an unknown component {key!r}{hint}; use "
-                    f"{', '.join(COMPONENTS)} (in {units}) or calibration_deg_h."
+                    f"{', '.join(COMPONENTS)} (in {units}) or calibration_deg_h (and derivation)."
                 )
         stated = [c for c in COMPONENTS if c in req]
         if stated and "calibration_deg_h" in req:
@@ -371,6 +385,7 @@ def parse_turntable(
         sens = rd.table(data["sensitivity"], "[sensitivity]")
         rd.keys(sens, SENSITIVITY_KEYS, "[sensitivity]")
         settings["sensitivity"] = dict(sens)  # values checked by Turntable (sensitivity_grid)
+    settings.update(_allocation_options(rd, data))
 
     try:
         return Turntable(
@@ -386,6 +401,41 @@ def parse_turntable(
         )
     except ConfigError as exc:
         raise rd.fail(str(exc)) from None
+
+
+def _allocation_options(rd: _Reader, data: Mapping[str, Any]) -> dict[str, Any]:
+    """``[requirement] derivation`` and ``[allocation]``, checked: the budget's two choices."""
+    from rotacal.turntable.allocation import check_constraint_angles
+    from rotacal.turntable.requirement import check_derivation
+
+    out: dict[str, Any] = {}
+    req = data.get("requirement")
+    if isinstance(req, Mapping) and "derivation" in req:
+        if "calibration_deg_h" not in req:
+            raise rd.fail(
+                "[requirement] derivation applies to calibration_deg_h only; remove it or give "
+                "calibration_deg_h instead of psi, theta, gamma."
+            )
+        try:
+            out["requirement"] = {
+                "derivation": check_derivation(req["derivation"], "[requirement] derivation")
+            }
+        except ConfigError as exc:
+            raise rd.fail(str(exc)) from None
+    if "allocation" in data:
+        alloc = rd.table(data["allocation"], "[allocation]")
+        rd.keys(alloc, ALLOCATION_KEYS, "[allocation]")
+        checked: dict[str, Any] = {}
+        if "constraint_angles" in alloc:
+            try:
+                step = check_constraint_angles(
+                    alloc["constraint_angles"], "[allocation] constraint_angles"
+                )
+            except ConfigError as exc:
+                raise rd.fail(str(exc)) from None
+            checked["constraint_angles"] = "every" if step is None else step
+        out["allocation"] = checked
+    return out
 
 
 def load_turntable(
