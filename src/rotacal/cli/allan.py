@@ -15,6 +15,7 @@ from ._common import (
     _analysis_options,
     _check_outputs,
     _emit_warnings,
+    _names_capture,
     _status,
     _write_json,
     _write_report,
@@ -39,6 +40,7 @@ from ._common import (
     help="τ grid: 'all' computes every cluster size (O(N log² N)).",
 )
 @_analysis_options
+@_names_capture
 def allan_cmd(
     capture: str,
     fs_hz: float | None,

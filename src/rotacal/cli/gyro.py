@@ -17,6 +17,7 @@ from ._common import (
     _analysis_options,
     _check_outputs,
     _emit_warnings,
+    _names_capture,
     _read,
     _status,
     _write_json,
@@ -44,6 +45,7 @@ def gyro() -> None:
 )
 @click.option("--output-unit", default="", help="Unit of the output column, for the report.")
 @_analysis_options
+@_names_capture
 def gyro_scale_factor(
     capture: str,
     full_scale_deg_s: float | None,
@@ -95,6 +97,7 @@ def gyro_scale_factor(
     help="Reject residuals beyond k robust sigmas [default: 5 % family-wise for Gaussian noise].",
 )
 @_analysis_options
+@_names_capture
 def gyro_triad(
     capture: str, reject_k: float | None, columns: Sequence[str], group: str | None, **kw: Any
 ) -> None:
@@ -144,6 +147,7 @@ def gyro_triad(
     "--angle-deg", type=float, default=360.0, show_default=True, help="Angle of each rotation."
 )
 @_analysis_options
+@_names_capture
 def gyro_rotations(
     capture: str,
     sections_path: str,
@@ -221,6 +225,7 @@ def gyro_rotations(
     help="Latitude of the laboratory (or site.latitude_deg in --specs).",
 )
 @_analysis_options
+@_names_capture
 def gyro_multiposition(
     capture: str,
     axis: str,
