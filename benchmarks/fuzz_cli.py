@@ -203,7 +203,7 @@ COMMANDS = (
             ("--reject-k", "1e300", "either"),
             ("--reject-k", "1e-300", "refuse"),
             ("--reject-k", "nan", "refuse"),
-            ("--reject-k", "inf", "refuse"),
+            ("--reject-k", "inf", "either"),  # documented: no rejection
         ),
     ),
     Command(
@@ -253,6 +253,7 @@ COMMANDS = (
             ("--fs-hz", "1e-300", "refuse"),
             ("--fs-hz", "nan", "refuse"),
             ("--fs-hz", "inf", "refuse"),
+            ("--fs-hz", "50", "refuse"),  # contradicts the time_s column (100 Hz)
         ),
     ),
 )
@@ -498,14 +499,17 @@ def build_cases(folder: Path, twins: dict[str, Path]) -> list[Case]:
         for fault, (n, expect) in LENGTH_FAULTS.items():
             cols = {k: v[:n] for k, v in base.items()}
             path = new_path()
+            # a fault of the whole capture: naming the file is enough; for rotations a capture
+            # shorter than the --sections is named by the section that does not fit
+            sections = cmd.name == "gyro rotations" and n > 1
             cases.append(
                 Case(
                     cmd.name,
                     f"truncated: {fault}",
                     expect,
                     _base_args(cmd, path, twins),
-                    (),  # a fault of the whole capture: naming the file is enough
-                    path.name,
+                    ("section",) if sections else (),
+                    None if sections else path.name,
                     _writer(path, cols),
                     cmd.keys,
                 )
@@ -663,7 +667,7 @@ _TOML_FAULTS = (
     ("runs = 1_000_000", "runs = 1_000_000_000_000_000", "refuse", ("runs",)),
     ("seed = 2026", "seed = -1", "refuse", ("seed",)),
     ("seed = 2026", "seed = 1e300", "refuse", ("seed",)),
-    ("seed = 2026", "seed = 100_000_000_000_000_000_000_000", "refuse", ("seed",)),
+    ("seed = 2026", "seed = 100_000_000_000_000_000_000_000", "either", ("seed",)),
     ("required_deg_h = 0.01", "required_deg_h = 0", "refuse", ("required_deg_h",)),
     ("required_deg_h = 0.01", "required_deg_h = 1e300", "refuse", ("required_deg_h",)),
     ("required_deg_h = 0.01", "required_deg_h = 1e-300", "refuse", ("required_deg_h",)),
@@ -673,7 +677,7 @@ _TOML_FAULTS = (
     ("latitude_deg = 45.75", "latitude_deg = nan", "refuse", ("latitude_deg",)),
     ("latitude_deg = 45.75", "latitude_deg = 90", "either", ("latitude_deg",)),
     ("outer_steps = 8", "outer_steps = 0", "refuse", ("outer_steps",)),
-    ("outer_steps = 8", "outer_steps = 1", "refuse", ("outer_steps",)),
+    ("outer_steps = 8", "outer_steps = 1", "refuse", ("outer_steps", "1 outer")),
     ("outer_steps = 8", "outer_steps = 1_000_000_000_000", "refuse", ("outer_steps",)),
     ("inner_steps = 8", "inner_steps = 1e300", "refuse", ("inner_steps",)),
     ("inner_steps = 8", "inner_steps = 1_000_000_000_000", "refuse", ("inner_steps",)),

@@ -79,7 +79,7 @@ def allan_cmd(
     with _status("computing the Allan deviation"):
         result = gyro_noise(
             cap[rate_column],
-            fs_hz=fs_hz if time_s is None else None,
+            fs_hz=fs_hz,
             time_s=time_s,
             unit=unit,
             taus=taus,

@@ -160,6 +160,7 @@ def gyro_rotations(
     """Triad K and bias from rotations through a known angle (Ferraris): ux, uy, uz."""
     from rotacal.gyro import TRIAD_OUTPUT_COLUMNS, calibrate_triad_rotations, ferraris_sections
     from rotacal.io import parse_column_mapping, read_capture
+    from rotacal.signal import check_sampling
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
@@ -186,6 +187,9 @@ def gyro_rotations(
             "--column gyr_x=ux (and uy, uz)"
         )
     if "time_s" in cap.columns:
+        check_sampling(cap["time_s"], "time_s")
+        if cap["time_s"].size < 2:
+            raise CaptureError(f"{Path(capture).name} holds one sample: too short for rotations")
         step = float(np.median(np.diff(cap["time_s"])))
         fs_hz = 1.0 / step if fs_hz is None else fs_hz
     if fs_hz is None:

@@ -22,6 +22,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.signal._checks import TYPICAL_STEPS
+from rotacal.signal._values import check_time_span
 
 __all__ = [
     "HeadPairing",
@@ -150,6 +152,8 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
             f"column '{name}' is not strictly increasing at pulse {i + 1} "
             f"({t[i]:.9g} s then {t[i + 1]:.9g} s); pulse times must be sorted and distinct."
         )
+    typical = float(np.median(dt[:TYPICAL_STEPS]))
+    check_time_span(name, float(t[0]), float(t[-1]), typical, "pulse interval")
     ratio = dt / _local_period(dt)
     long_ = np.flatnonzero(ratio >= MISSING_PULSE_RATIO)
     if long_.size:
@@ -257,6 +261,7 @@ def pair_heads(heads: Sequence[FloatArray], names: Sequence[str] | None = None) 
         raise CaptureError(
             "the heads overlap for fewer than 2 pulses of head_0; record all heads together."
         )
+    _check_not_copies(heads, names)
     j = np.arange(lo, hi)
     delays = np.empty((len(heads), j.size))
     for i, ti in enumerate(heads):
@@ -292,6 +297,26 @@ def pair_heads(heads: Sequence[FloatArray], names: Sequence[str] | None = None) 
         mean_times_s=mean_times,
         notes=tuple(notes),
     )
+
+
+def _check_not_copies(heads: Sequence[FloatArray], names: Sequence[str]) -> None:
+    """Refuse a head whose pulse times are head 0's, shifted by one constant (to rounding).
+
+    Heads at different places on the scale see different lines' errors and their own timing
+    jitter, so their pulse times never differ from head 0's by an exact constant: such a column
+    is head 0's data written twice, and a self-calibration from it would report a perfect scale.
+    """
+    t0 = heads[0]
+    for i in range(1, len(heads)):
+        n = min(t0.size, heads[i].size)
+        shift = heads[i][:n] - t0[:n]
+        rounding = 8.0 * np.spacing(max(abs(float(t0[n - 1])), abs(float(heads[i][n - 1]))))
+        if float(np.ptp(shift)) <= rounding:
+            raise CaptureError(
+                f"column '{names[i]}' is a copy of head_0 (every pulse time head_0's shifted by "
+                f"{float(shift[0]):.6g} s): heads that are copies carry no information about the "
+                "scale; check that each column holds its own head's pulse times."
+            )
 
 
 def pulse_angle_deg(

@@ -45,6 +45,7 @@ from rotacal.gyro.uncertainty import (
     uncertainty_json,
 )
 from rotacal.results import Result, to_jsonable
+from rotacal.signal._values import check_magnitudes, check_not_constant, check_not_copies
 from rotacal.uncertainty.budget import UncertaintyBudget
 from rotacal.uncertainty.gum import Input
 from rotacal.uncertainty.specs import InstrumentSpecs, spec_input, type_a_note
@@ -97,6 +98,20 @@ def _as_triplet(name: str, columns: Sequence[str], values: Any) -> np.ndarray:
             "remove or repair that row."
         )
     return arr
+
+
+def _check_columns(
+    omega: np.ndarray, u: np.ndarray, rate_cols: Sequence[str], out_cols: Sequence[str]
+) -> None:
+    """Refuse magnitudes beyond float64's working range, a constant output and copied columns."""
+    for j, name in enumerate(rate_cols):
+        check_magnitudes(name, omega[:, j], what="a reference rate")
+    for j, name in enumerate(out_cols):
+        check_magnitudes(name, u[:, j], what="a gyro output")
+        check_not_constant(name, u[:, j], "the output does not respond to the rotations")
+    columns = {name: omega[:, j] for j, name in enumerate(rate_cols)}
+    columns.update({name: u[:, j] for j, name in enumerate(out_cols)})
+    check_not_copies(columns, "each column must hold its own axis's reference rate or output")
 
 
 def _design(omega: np.ndarray) -> np.ndarray:
@@ -695,6 +710,7 @@ def calibrate_triad(
             f"the capture has only {n} rows; the 4 coefficients per output need at least "
             f"{_MIN_ROWS} rows (rotations about x, y and z at two or more rates)."
         )
+    _check_columns(omega, uu, rate_cols, out_cols)
     try:
         ns = float(nominal_scale)
     except (TypeError, ValueError):

@@ -56,7 +56,12 @@ def in_working_range(x: np.ndarray) -> bool:
 
 
 def check_magnitudes(
-    name: str, values: Any, *, what: str = "a sensor signal", offset: int = 0
+    name: str,
+    values: Any,
+    *,
+    what: str = "a sensor signal",
+    offset: int = 0,
+    largest: float = LARGEST,
 ) -> None:
     """Refuse NaN/inf and magnitudes outside float64's working range in column ``name``.
 
@@ -70,6 +75,7 @@ def check_magnitudes(
     values : array — the column (1-D).
     what : str — what the column should hold, for the message ("a sensor signal", "pulse times").
     offset : int — index of ``values[0]`` in the whole capture (chunked reading), for the message.
+    largest : float — a tighter bound where the method's arithmetic needs one (angles in sin/cos).
 
     Raises
     ------
@@ -78,7 +84,7 @@ def check_magnitudes(
         value named), or a non-zero column whose largest magnitude is below SMALLEST.
     """
     x = np.asarray(values, dtype=np.float64).reshape(-1)
-    if x.size == 0 or in_working_range(x):
+    if x.size == 0 or (largest == LARGEST and in_working_range(x)):
         return
     if not np.isfinite(x).all():
         i, v = _first_bad(x)
@@ -88,11 +94,16 @@ def check_magnitudes(
         )
     big_i = int(np.argmax(np.abs(x)))
     big = abs(float(x[big_i]))
-    if big > LARGEST:
+    if big > largest:
+        reason = (
+            "their squares overflow float64 arithmetic"
+            if largest == LARGEST
+            else f"float64 arithmetic of the method carries magnitudes up to {largest:g}"
+        )
         raise CaptureError(
             f"column '{name}' holds {float(x[big_i]):.6g} at sample {offset + big_i}: values near "
-            f"1e{int(math.log10(big))} are not {what} (their squares overflow float64 "
-            "arithmetic); check the file and the column's unit."
+            f"1e{int(math.log10(big))} are not {what} ({reason}); check the file and the "
+            "column's unit."
         )
     if 0.0 < big < SMALLEST:
         raise CaptureError(
@@ -153,7 +164,9 @@ def check_not_copies(columns: Mapping[str, Any], why: str) -> None:
                     raise CaptureError(f"column '{name_b}' is {label} of column '{name_a}': {why}.")
 
 
-def check_time_span(name: str, first: float, last: float, step: float) -> None:
+def check_time_span(
+    name: str, first: float, last: float, step: float, interval: str = "sample interval"
+) -> None:
     """Refuse time stamps beyond float64's working range or too coarsely resolved by it.
 
     Parameters
@@ -161,6 +174,7 @@ def check_time_span(name: str, first: float, last: float, step: float) -> None:
     name : str — the time column's name, for the message.
     first, last : float, s — the first and last time stamps of an increasing column.
     step : float, s — the typical sample interval (> 0).
+    interval : str — what ``step`` is, for the message ("pulse interval").
 
     Raises
     ------
@@ -173,14 +187,14 @@ def check_time_span(name: str, first: float, last: float, step: float) -> None:
     if big > LARGEST or 0.0 < big < SMALLEST:
         raise CaptureError(
             f"column '{name}' runs from {first:.6g} s to {last:.6g} s: time stamps near "
-            f"{big:.1e} s are beyond what float64 arithmetic of the fits carries; give the time "
+            f"{big:.1e} s are beyond what float64 arithmetic of the analysis carries; give the time "
             "in seconds since the start of the record."
         )
     spacing = float(np.spacing(big))
     if spacing > TIME_RESOLUTION * step:
         raise CaptureError(
             f"column '{name}': time stamps near {big:.6g} s are resolved only to {spacing:.3g} s "
-            f"in float64, {100 * spacing / step:.3g} % of the sample interval {step:.3g} s; give "
+            f"in float64, {100 * spacing / step:.3g} % of the {interval} {step:.3g} s; give "
             "the time in seconds since the start of the record."
         )
 

@@ -32,6 +32,7 @@ from rotacal.results import Result
 from rotacal.signal._allan_edf import edf_oadev
 from rotacal.signal._allan_fast import direct_sums, second_difference_sums
 from rotacal.signal._checks import as_samples, check_finite
+from rotacal.signal._values import check_magnitudes
 
 __all__ = [
     "ONE_SIGMA",
@@ -493,6 +494,7 @@ def overlapping_adev(
             "supply a longer record."
         )
     check_finite("data", y)
+    check_magnitudes("data", y, what=f"{data_type} data")
     _check_variation(y, data_type)
     x = _phase(y, fs_hz, data_type)
     n_phase = x.size

@@ -53,6 +53,7 @@ from rotacal.encoder.selfcal import (
 )
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
+from rotacal.signal._values import check_setting
 from rotacal.signal.allan import adev_confidence_interval, edf_overlapping_adev
 from rotacal.uncertainty import (
     Constant,
@@ -1159,6 +1160,7 @@ def calibrate_rate(
             raise ConfigError(
                 f"set_rate_deg_s must be finite and non-zero, got {set_rate_deg_s!r}."
             )
+        check_setting("--set-rate-deg-s", set_rate_deg_s, positive=False, unit="deg/s")
     use_all = isinstance(head, str) and head == "all"
     k = 0
     if not use_all:
