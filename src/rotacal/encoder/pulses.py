@@ -27,6 +27,7 @@ from rotacal.signal._values import check_time_span
 
 __all__ = [
     "HeadPairing",
+    "check_heads_not_copies",
     "check_pulse_times",
     "check_pulses_per_rev",
     "head_columns",
@@ -261,7 +262,6 @@ def pair_heads(heads: Sequence[FloatArray], names: Sequence[str] | None = None) 
         raise CaptureError(
             "the heads overlap for fewer than 2 pulses of head_0; record all heads together."
         )
-    _check_not_copies(heads, names)
     j = np.arange(lo, hi)
     delays = np.empty((len(heads), j.size))
     for i, ti in enumerate(heads):
@@ -299,13 +299,24 @@ def pair_heads(heads: Sequence[FloatArray], names: Sequence[str] | None = None) 
     )
 
 
-def _check_not_copies(heads: Sequence[FloatArray], names: Sequence[str]) -> None:
+def check_heads_not_copies(heads: Sequence[FloatArray], names: Sequence[str] | None = None) -> None:
     """Refuse a head whose pulse times are head 0's, shifted by one constant (to rounding).
 
     Heads at different places on the scale see different lines' errors and their own timing
     jitter, so their pulse times never differ from head 0's by an exact constant: such a column
     is head 0's data written twice, and a self-calibration from it would report a perfect scale.
+
+    Parameters
+    ----------
+    heads : sequence of ndarray, s — checked pulse trains (:func:`check_pulse_times`), head 0 first.
+    names : sequence of str, optional — column names for messages (default ``head_<i>``).
+
+    Raises
+    ------
+    CaptureError
+        Naming the head that copies head 0 and the time shift.
     """
+    names = list(names) if names is not None else [f"head_{i}" for i in range(len(heads))]
     t0 = heads[0]
     for i in range(1, len(heads)):
         n = min(t0.size, heads[i].size)

@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.signal import find_peaks
 
 from rotacal.encoder.pulses import (
+    check_heads_not_copies,
     check_pulse_times,
     check_pulses_per_rev,
     head_columns,
@@ -827,6 +828,7 @@ def self_calibrate(
             f"head_0 has {trains[0].size} pulses, less than one revolution of {m}: record at least "
             "one whole revolution (or check --pulses-per-rev)."
         )
+    check_heads_not_copies(trains, names)
     pairing = pair_heads(trains, names)
     revs = pairing.pulses // m
     if revs < 1:

@@ -122,10 +122,12 @@ MAX_POSITION_DEG = 1e9
 
 
 def _check_columns(p1: np.ndarray, p2: np.ndarray, y: np.ndarray) -> None:
-    """Positions and outputs within float64's working range, varying and not copies."""
+    """Positions and outputs within float64's working range, a varying output, no copies.
+
+    An axis that never turns is the plan's business (:func:`_plan_core` names the column).
+    """
     for name, v in (("phi1_deg", p1), ("phi2_deg", p2)):
         check_magnitudes(name, v, what="a table angle", largest=MAX_POSITION_DEG)
-        check_not_constant(name, v, "the drift coefficients need positions about both axes")
     check_magnitudes("output_deg_h", y, what="a gyro output")
     check_not_constant(
         "output_deg_h",
@@ -497,6 +499,8 @@ def _plan_core(
     a = drift_design_matrix(p1, p2, axis=ax_)
     rank, cond, bad, reasons = _analyse(a, names)
     if bad:
+        held = [(n, v) for n, v in (("phi1_deg", p1), ("phi2_deg", p2)) if np.ptp(v) == 0]
+        reasons = [*(f"{n} is {float(v[0]):g}° in every row" for n, v in held), *reasons]
         raise error(
             f"{what} leaves {', '.join(bad)} of the {ax_} axis unidentifiable ({'; '.join(reasons)}; "
             f"rank {rank} of {len(names)}): add or change positions; multiposition_plan() gives a "
