@@ -100,14 +100,21 @@ def _as_triplet(name: str, columns: Sequence[str], values: Any) -> np.ndarray:
     return arr
 
 
-def _check_columns(
+def _check_magnitudes(
     omega: np.ndarray, u: np.ndarray, rate_cols: Sequence[str], out_cols: Sequence[str]
 ) -> None:
-    """Refuse magnitudes beyond float64's working range, a constant output and copied columns."""
+    """Refuse values beyond float64's working range (before any arithmetic on them)."""
     for j, name in enumerate(rate_cols):
         check_magnitudes(name, omega[:, j], what="a reference rate")
     for j, name in enumerate(out_cols):
         check_magnitudes(name, u[:, j], what="a gyro output")
+
+
+def _check_degenerate(
+    omega: np.ndarray, u: np.ndarray, rate_cols: Sequence[str], out_cols: Sequence[str]
+) -> None:
+    """Refuse a constant output and copied columns (after the plan: its message comes first)."""
+    for j, name in enumerate(out_cols):
         check_not_constant(name, u[:, j], "the output does not respond to the rotations")
     columns = {name: omega[:, j] for j, name in enumerate(rate_cols)}
     columns.update({name: u[:, j] for j, name in enumerate(out_cols)})
@@ -710,7 +717,7 @@ def calibrate_triad(
             f"the capture has only {n} rows; the 4 coefficients per output need at least "
             f"{_MIN_ROWS} rows (rotations about x, y and z at two or more rates)."
         )
-    _check_columns(omega, uu, rate_cols, out_cols)
+    _check_magnitudes(omega, uu, rate_cols, out_cols)
     try:
         ns = float(nominal_scale)
     except (TypeError, ValueError):
@@ -755,6 +762,7 @@ def calibrate_triad(
             f"the reference rates in {', '.join(rate_cols)} leave {', '.join(plan.unidentifiable)} "
             f"unidentifiable (rank {plan.rank} of 4): {plan.advice}."
         )
+    _check_degenerate(omega, uu, rate_cols, out_cols)
     pts, inv = _groups(omega)
     _check_saturation(omega, uu, inv, pts.shape[0], out_cols)
 
