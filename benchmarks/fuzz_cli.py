@@ -366,6 +366,13 @@ def make_twins(folder: Path) -> dict[str, Path]:
         if result.exit_code != 0:
             raise RuntimeError(f"could not make the {key} twin: {result.output}")
         paths[key] = path
+    selfcal = folder / "selfcal.json"
+    result = runner.invoke(
+        cli, ["selfcal", str(paths["pulses"]), "--pulses-per-rev", "360", "--json", str(selfcal)]
+    )
+    if result.exit_code != 0:
+        raise RuntimeError(f"could not self-calibrate the pulses twin: {result.output}")
+    paths["selfcal"] = selfcal
     toml = folder / "turntable.toml"
     result = runner.invoke(cli, ["turntable", "example", "--out", str(toml), "--overwrite"])
     if result.exit_code != 0:
@@ -457,6 +464,8 @@ def build_cases(folder: Path, twins: dict[str, Path]) -> list[Case]:
                     keys=cmd.keys,
                 )
             )
+        if cmd.name == "motion encoder":
+            cases += _chunked_cases(cmd, base, twins, new_path)
         for column in base:
             used = column in cmd.columns
             faults = dict(VALUE_FAULTS)
@@ -516,7 +525,123 @@ def build_cases(folder: Path, twins: dict[str, Path]) -> list[Case]:
             )
         cases += _csv_cases(cmd, base, twins, new_path)
     cases += _turntable_cases(twins, new_path)
+    cases += _input_file_cases(twins, new_path)
     return cases
+
+
+def _input_file_cases(twins: dict[str, Path], new_path: Callable[..., Path]) -> list[Case]:
+    """Absurd numbers in the other files a command reads: --selfcal JSON, --correction-from."""
+    out: list[Case] = []
+    selfcal = json.loads(twins["selfcal"].read_text(encoding="utf-8"))
+    edits: list[tuple[str, Callable[[dict[str, Any]], None], str]] = [
+        ("deviation 1e300", lambda d: d["deviation_arcsec"].__setitem__(5, 1e300), "refuse"),
+        ("deviation NaN", lambda d: d["deviation_arcsec"].__setitem__(5, math.nan), "refuse"),
+        (
+            "deviation -Infinity",
+            lambda d: d["deviation_arcsec"].__setitem__(0, -math.inf),
+            "refuse",
+        ),
+        (
+            "deviation of 10 values",
+            lambda d: d.__setitem__("deviation_arcsec", d["deviation_arcsec"][:10]),
+            "refuse",
+        ),
+        ("deviation all zero", lambda d: d.__setitem__("deviation_arcsec", [0.0] * 360), "either"),
+        ("pulses_per_rev 1e300", lambda d: d.__setitem__("pulses_per_rev", 1e300), "refuse"),
+        ("pulses_per_rev NaN", lambda d: d.__setitem__("pulses_per_rev", math.nan), "refuse"),
+        (
+            "first_pulse_time_s inf",
+            lambda d: d.__setitem__("first_pulse_time_s", math.inf),
+            "refuse",
+        ),
+    ]
+    for fault, edit, expect in edits:
+        data = json.loads(json.dumps(selfcal))
+        edit(data)
+        path = new_path(".json")
+        args = [
+            "rate",
+            str(twins["pulses"]),
+            "--pulses-per-rev",
+            "360",
+            "--selfcal",
+            str(path),
+            "--json",
+            "-",
+        ]
+        out.append(
+            Case(
+                "rate",
+                f"--selfcal with {fault}",
+                expect,
+                args,
+                ("self-calibration", "deviation"),
+                None,
+                _text_writer(path, json.dumps(data)),
+                ("mean_rate_deg_s",),
+            )
+        )
+    enc = _load(twins["enc"])
+    for fault, (mutate, column) in {
+        "a constant": (lambda c: {**c, "a": np.full(c["a"].shape, 0.5)}, "a"),
+        "b with one sample 1e300": (lambda c: {**c, "b": _set(_MID, 1e300)(c["b"])}, "b"),
+        "b a copy of a": (lambda c: {**c, "b": c["a"].copy()}, "b"),
+        "a scaled by 1e-300": (lambda c: {**c, "a": c["a"] * 1e-300}, "a"),
+    }.items():
+        path = new_path()
+        args = [
+            "motion",
+            "encoder",
+            str(twins["enc"]),
+            "--lines",
+            "3600",
+            "--correction-from",
+            str(path),
+            "--json",
+            "-",
+        ]
+        out.append(
+            Case(
+                "motion encoder",
+                f"--correction-from with {fault}",
+                "refuse",
+                args,
+                (column,),
+                path.name,
+                _writer(path, mutate(enc)),
+                _MOTION_KEYS,
+            )
+        )
+    return out
+
+
+def _chunked_cases(
+    cmd: Command, base: dict[str, np.ndarray], twins: dict[str, Path], new_path: Callable[..., Path]
+) -> list[Case]:
+    """The encoder's chunked path (``--chunked``) on the faults its own first pass checks."""
+    out = []
+    faults = {
+        "b": ("one sample 1e300", "scaled by 1e-300", "constant 0.5", "one sample NaN"),
+        "time_s": ("time shifted by 1e12", "time scaled by 1e300", "one duplicated time stamp"),
+    }
+    for column, names in faults.items():
+        for fault in names:
+            mutate, expect = {**VALUE_FAULTS, **TIME_FAULTS}[fault]
+            cols = {**base, column: mutate(base[column])}
+            path = new_path()
+            out.append(
+                Case(
+                    cmd.name,
+                    f"--chunked, column {column}: {fault}",
+                    expect,
+                    [*_base_args(cmd, path, twins), "--chunked"],
+                    (column,),
+                    path.name,
+                    _writer(path, cols),
+                    cmd.keys,
+                )
+            )
+    return out
 
 
 def _copy_cases(
