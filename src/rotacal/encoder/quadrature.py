@@ -517,8 +517,10 @@ def fit_quadrature_correction(
     Raises
     ------
     CaptureError
-        Different lengths, non-finite values, clipped or constant signals, signals that are not in
-        quadrature (phase error beyond 45° or amplitude ratio beyond 5), or too short an arc.
+        Different lengths, non-finite values, values beyond float64's working range (|x| > 1e100,
+        or a column all below 1e-100), constant signals, b a copy of a (or of −a), clipped
+        signals, signals that are not in quadrature (phase error beyond 45° or amplitude ratio
+        beyond 5), or too short an arc.
 
     References
     ----------
@@ -1261,7 +1263,8 @@ def demodulate(
     Raises
     ------
     CaptureError
-        Bad capture (lengths, NaN, clipping, not quadrature, time stamps).
+        Bad capture (lengths, NaN, values beyond float64's range, constant or copied signals,
+        clipping, not quadrature, time stamps).
     ConfigError
         Bad ``lines`` or ``hysteresis_subintervals``.
 

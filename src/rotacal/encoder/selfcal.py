@@ -789,9 +789,11 @@ def self_calibrate(
     Raises
     ------
     CaptureError
-        Fewer than 2 heads, bad pulse trains (see :func:`check_pulse_times`), heads that cannot be
-        paired, less than one whole revolution covered by all heads, a pulses_per_rev that does
-        not match the period of the data.
+        Fewer than 2 heads, bad pulse trains (see :func:`check_pulse_times`), a head that is a
+        (time-shifted) copy of head 0 (:func:`~rotacal.encoder.pulses.check_heads_not_copies`:
+        copies carry no information about the scale), heads that cannot be paired, less than one
+        whole revolution covered by all heads, a pulses_per_rev that does not match the period of
+        the data.
 
     References
     ----------

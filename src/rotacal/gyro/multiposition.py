@@ -695,8 +695,10 @@ def calibrate_multiposition(
     Raises
     ------
     CaptureError
-        Non-finite values (naming the rows), fewer than 7 distinct positions, or positions that
-        leave coefficients unidentifiable (naming them).
+        Non-finite values (naming the rows), values beyond float64's working range (angles beyond
+        ±1e9°), a constant output, a column that copies another (or its negative), fewer than 7
+        distinct positions, or positions that leave coefficients unidentifiable (naming them, and
+        an axis that never turns).
     ConfigError
         Latitude outside ±90°, missing, or contradicting ``site.latitude_deg``; an unknown axis.
 

@@ -423,7 +423,9 @@ def calibrate_triad_rotations(
         Bad sections (out of range, overlapping a static with a rotation, axes that do not span
         3-D), neither ``static`` nor ``bias``, a bad setting.
     CaptureError
-        NaN/inf in a section used, a saturated output during a rotation.
+        NaN/inf in a section used; in the sections used, values beyond float64's working range,
+        an output that is constant or copies another (or its negative); a saturated output
+        during a rotation.
 
     References
     ----------

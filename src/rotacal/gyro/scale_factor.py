@@ -679,8 +679,10 @@ def calibrate_scale_factor(
     gives S and V0; δ are the point residuals and NL = 100·max|δ|/(|S|·FS) %FS.
 
     The capture is refused (:class:`~rotacal.errors.CaptureError`) when a set rate is missing, a
-    rate point has no finite output, outputs are NaN (unless ``nan_policy="omit"``), there is only
-    one rate, the output does not change with the rate, or the output saturates: at the outer
+    rate point has no finite output, outputs are NaN (unless ``nan_policy="omit"``), a column holds
+    values beyond float64's working range (|x| > 1e100, or all below 1e-100), there is only one
+    rate, the output copies the set rate (or its negative), the output does not change with the
+    rate, or the output saturates: at the outer
     points their mean stops following the rate (local slope below half the median slope by more
     than 5 standard errors), or a point's samples pile up at the column's extreme value (a rail).
 

@@ -686,8 +686,10 @@ def calibrate_triad(
     Raises
     ------
     CaptureError
-        NaN/inf, fewer than 8 rows, a saturated output, a plan in the capture that leaves
-        coefficients unidentifiable, or more rejected rows than ``max_reject_fraction``.
+        NaN/inf, values beyond float64's working range (|x| > 1e100, or a column all below
+        1e-100), fewer than 8 rows, a plan in the capture that leaves coefficients unidentifiable,
+        a constant output, a column that copies another (or its negative), a saturated output, or
+        more rejected rows than ``max_reject_fraction``.
     ConfigError
         An invalid setting.
 

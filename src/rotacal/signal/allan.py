@@ -469,7 +469,8 @@ def overlapping_adev(
     Raises
     ------
     CaptureError
-        NaN/inf samples, fewer than 10 samples, a constant, stuck or clipped record.
+        NaN/inf samples, values beyond float64's working range (one sample of 1e300 would turn
+        every deviation into inf/NaN), fewer than 10 samples, a constant, stuck or clipped record.
     ConfigError
         fs ≤ 0, an unknown ``taus``/``data_type``/``method``, a τ that the record cannot
         represent (shorter than 1/fs or longer than (N−1)/(2·fs)), a bad confidence or α.
