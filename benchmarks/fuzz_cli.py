@@ -679,14 +679,10 @@ def _copy_cases(
                 variants.append((f"column {b} = -{a}", {**base, b: -base[a]}, (a, b)))
     out = []
     for fault, cols, names in variants:
-        # a copy of a column is degenerate where the two must differ (quadrature pair, heads,
-        # set rate vs output, reference axes); output columns of a triad may legitimately agree
-        # with one another only by accident, never exactly: refuse everywhere
+        # measured columns differ by noise at least: an exact copy (or negative) of another
+        # column is data written twice, and a method fed with it reports a perfect or
+        # meaningless result (identical heads: 0.0″; output = set rate: NL 0)
         expect = "refuse"
-        if cmd.name in ("gyro triad", "gyro rotations") and all(n.startswith("u") for n in names):
-            expect = "either"
-        if cmd.name == "gyro multiposition" and "output_deg_h" not in names:
-            expect = "either"  # phi1 == phi2 (both axes at the same angles) is a valid plan
         path = new_path()
         out.append(
             Case(
