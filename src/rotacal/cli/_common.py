@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import os
 from collections.abc import Callable, Iterator, Sequence
@@ -230,10 +231,33 @@ def _read_heads(path: str, columns: Sequence[str], group: str | None) -> Any:
 
     with _status(f"reading {path}"):
         cap = read_capture(path, mapping=parse_column_mapping(columns), group=group, ragged=True)
-    try:
+    with _naming_file(path):
         return head_columns(cap.columns)
+
+
+@contextlib.contextmanager
+def _naming_file(path: str) -> Iterator[None]:
+    """Put the file's name before a CaptureError raised inside (the API knows arrays, not files)."""
+    try:
+        yield
     except CaptureError as e:
-        raise CaptureError(f"{Path(path).name}: {e}") from None
+        name = Path(path).name
+        if getattr(e, "file_named", False) or name in str(e):
+            raise
+        named = CaptureError(f"{name}: {e}")
+        named.file_named = True  # type: ignore[attr-defined]  # an outer _naming_file keeps it
+        raise named from None
+
+
+def _names_capture(func: F) -> F:
+    """A command decorator: CaptureErrors name the command's CAPTURE (or CONFIG) file."""
+
+    @functools.wraps(func)
+    def command(*args: Any, **kwargs: Any) -> Any:
+        with _naming_file(kwargs["capture"] if "capture" in kwargs else kwargs["config"]):
+            return func(*args, **kwargs)
+
+    return command  # type: ignore[return-value]
 
 
 def _emit_warnings(result: Any) -> None:

@@ -16,6 +16,7 @@ from ._common import (
     _analysis_options,
     _check_outputs,
     _emit_warnings,
+    _names_capture,
     _status,
     _write_json,
     _write_report,
@@ -40,6 +41,7 @@ from ._common import (
     help="τ grid: 'all' computes every cluster size (O(N log² N)).",
 )
 @_analysis_options
+@_names_capture
 def allan_cmd(
     capture: str,
     fs_hz: float | None,
@@ -78,7 +80,7 @@ def allan_cmd(
     with _status("computing the Allan deviation"):
         result = gyro_noise(
             cap[rate_column],
-            fs_hz=fs_hz if time_s is None else None,
+            fs_hz=fs_hz,
             time_s=time_s,
             unit=unit,
             taus=taus,

@@ -18,6 +18,7 @@ from ._common import (
     _analysis_options,
     _check_outputs,
     _emit_warnings,
+    _names_capture,
     _read,
     _status,
     _write_json,
@@ -58,6 +59,7 @@ def gyro() -> None:
     "--sample-rate-hz) [default: the recorded samples' own].",
 )
 @_analysis_options
+@_names_capture
 def gyro_scale_factor(
     capture: str,
     full_scale_deg_s: float | None,
@@ -113,6 +115,7 @@ def gyro_scale_factor(
     help="Reject residuals beyond k robust sigmas [default: 5 % family-wise for Gaussian noise].",
 )
 @_analysis_options
+@_names_capture
 def gyro_triad(
     capture: str, reject_k: float | None, columns: Sequence[str], group: str | None, **kw: Any
 ) -> None:
@@ -162,6 +165,7 @@ def gyro_triad(
     "--angle-deg", type=float, default=360.0, show_default=True, help="Angle of each rotation."
 )
 @_analysis_options
+@_names_capture
 def gyro_rotations(
     capture: str,
     sections_path: str,
@@ -174,6 +178,7 @@ def gyro_rotations(
     """Triad K and bias from rotations through a known angle (Ferraris): ux, uy, uz."""
     from rotacal.gyro import TRIAD_OUTPUT_COLUMNS, calibrate_triad_rotations, ferraris_sections
     from rotacal.io import parse_column_mapping, read_capture
+    from rotacal.signal import check_sampling
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
@@ -200,6 +205,9 @@ def gyro_rotations(
             "--column gyr_x=ux (and uy, uz)"
         )
     if "time_s" in cap.columns:
+        check_sampling(cap["time_s"], "time_s")
+        if cap["time_s"].size < 2:
+            raise CaptureError(f"{Path(capture).name} holds one sample: too short for rotations")
         step = float(np.median(np.diff(cap["time_s"])))
         fs_hz = 1.0 / step if fs_hz is None else fs_hz
     if fs_hz is None:
@@ -239,6 +247,7 @@ def gyro_rotations(
     help="Latitude of the laboratory (or site.latitude_deg in --specs).",
 )
 @_analysis_options
+@_names_capture
 def gyro_multiposition(
     capture: str,
     axis: str,

@@ -17,6 +17,8 @@ from ._common import (
     _analysis_options,
     _check_outputs,
     _emit_warnings,
+    _names_capture,
+    _naming_file,
     _read,
     _sample_progress,
     _status,
@@ -123,6 +125,7 @@ def _print_motion(r: Any) -> None:
     f"[default: chunked above {_IN_MEMORY_MAX_SAMPLES:.0e} samples].",
 )
 @_motion_common
+@_names_capture
 def motion_encoder(
     capture: str,
     lines: int,
@@ -147,7 +150,8 @@ def motion_encoder(
         from rotacal.encoder import fit_quadrature_correction
 
         ref = _read(correction_from, ["a", "b"], columns, group)
-        kw["correction"] = fit_quadrature_correction(ref["a"], ref["b"])
+        with _naming_file(correction_from):
+            kw["correction"] = fit_quadrature_correction(ref["a"], ref["b"])
         if kw["correction"].method != "heydemann":
             raise CaptureError(
                 f"--correction-from {correction_from} covers only part of a signal period too; "
@@ -172,6 +176,7 @@ def motion_encoder(
 @click.argument("capture", type=INPUT_FILE)
 @click.option("--radius-mm", type=float, required=True, help="R: laser spot to table axis (mm).")
 @_motion_common
+@_names_capture
 def motion_lts(
     capture: str, radius_mm: float, columns: Sequence[str], group: str | None, **kw: Any
 ) -> None:
@@ -191,6 +196,7 @@ def motion_lts(
 @motion.command("fog")
 @click.argument("capture", type=INPUT_FILE)
 @_motion_common
+@_names_capture
 def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: Any) -> None:
     """FOG scheme: capture with columns time_s, rate_deg_s; THD of displacement from the rate fit."""
     from rotacal.table import calibrate_fog_motion

@@ -18,6 +18,7 @@ from ._common import (
     _analysis_options,
     _check_outputs,
     _emit_warnings,
+    _names_capture,
     _read_heads,
     _status,
     _write_json,
@@ -41,6 +42,7 @@ _SEED004 = "Kokuyama et al., angular velocity standard with a self-calibratable 
     help="Whether head i lies i·360/n ahead of head 0 in the sense of rotation (forward).",
 )
 @_analysis_options
+@_names_capture
 def selfcal_cmd(
     capture: str,
     pulses_per_rev: int,
@@ -108,6 +110,7 @@ def selfcal_cmd(
 @click.option("--set-rate-deg-s", type=float, default=None, help="Commanded rate, for the bias.")
 @click.option("--no-compensation", is_flag=True, help="Use the nominal pitch only.")
 @_analysis_options
+@_names_capture
 def rate_cmd(
     capture: str,
     pulses_per_rev: int,

@@ -11,6 +11,7 @@ from ._common import (
     INPUT_FILE,
     _check_outputs,
     _emit_warnings,
+    _names_capture,
     _sample_progress,
     _write_json,
     _write_report,
@@ -55,6 +56,7 @@ _SEED001 = "GyroWheel calibration tests: turntable error analysis and allocation
 )
 @click.option("--report", "report_path", metavar="PATH.html", help="Write an HTML report.")
 @click.option("--overwrite", is_flag=True, help="Replace existing --json/--report files.")
+@_names_capture
 def turntable_budget_cmd(
     config: str,
     runs: int | None,

@@ -22,9 +22,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.signal._checks import TYPICAL_STEPS
+from rotacal.signal._values import check_time_span
 
 __all__ = [
     "HeadPairing",
+    "check_heads_not_copies",
     "check_pulse_times",
     "check_pulses_per_rev",
     "head_columns",
@@ -150,6 +153,8 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
             f"column '{name}' is not strictly increasing at pulse {i + 1} "
             f"({t[i]:.9g} s then {t[i + 1]:.9g} s); pulse times must be sorted and distinct."
         )
+    typical = float(np.median(dt[:TYPICAL_STEPS]))
+    check_time_span(name, float(t[0]), float(t[-1]), typical, "pulse interval")
     ratio = dt / _local_period(dt)
     long_ = np.flatnonzero(ratio >= MISSING_PULSE_RATIO)
     if long_.size:
@@ -292,6 +297,37 @@ def pair_heads(heads: Sequence[FloatArray], names: Sequence[str] | None = None) 
         mean_times_s=mean_times,
         notes=tuple(notes),
     )
+
+
+def check_heads_not_copies(heads: Sequence[FloatArray], names: Sequence[str] | None = None) -> None:
+    """Refuse a head whose pulse times are head 0's, shifted by one constant (to rounding).
+
+    Heads at different places on the scale see different lines' errors and their own timing
+    jitter, so their pulse times never differ from head 0's by an exact constant: such a column
+    is head 0's data written twice, and a self-calibration from it would report a perfect scale.
+
+    Parameters
+    ----------
+    heads : sequence of ndarray, s — checked pulse trains (:func:`check_pulse_times`), head 0 first.
+    names : sequence of str, optional — column names for messages (default ``head_<i>``).
+
+    Raises
+    ------
+    CaptureError
+        Naming the head that copies head 0 and the time shift.
+    """
+    names = list(names) if names is not None else [f"head_{i}" for i in range(len(heads))]
+    t0 = heads[0]
+    for i in range(1, len(heads)):
+        n = min(t0.size, heads[i].size)
+        shift = heads[i][:n] - t0[:n]
+        rounding = 8.0 * np.spacing(max(abs(float(t0[n - 1])), abs(float(heads[i][n - 1]))))
+        if float(np.ptp(shift)) <= rounding:
+            raise CaptureError(
+                f"column '{names[i]}' is a copy of head_0 (every pulse time head_0's shifted by "
+                f"{float(shift[0]):.6g} s): heads that are copies carry no information about the "
+                "scale; check that each column holds its own head's pulse times."
+            )
 
 
 def pulse_angle_deg(

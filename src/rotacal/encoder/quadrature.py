@@ -28,6 +28,12 @@ from numpy.typing import ArrayLike, NDArray
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 from rotacal.signal import check_sampling
+from rotacal.signal._values import (
+    check_magnitudes,
+    check_not_constant,
+    check_not_copies,
+    in_working_range,
+)
 
 __all__ = [
     "Demodulation",
@@ -264,10 +270,8 @@ def _as_signal(x: ArrayLike, name: str) -> FloatArray:
 
 
 def _check_finite(x: FloatArray, name: str) -> None:
-    # One cheap pass (a sum); only if it is not finite do we look for the culprits.
-    with np.errstate(over="ignore", invalid="ignore"):
-        total = float(np.sum(x))
-    if math.isfinite(total):
+    # One cheap pass (a sum of squares); only if it is out of range do we look for the culprits.
+    if in_working_range(x):
         return
     bad = np.flatnonzero(~np.isfinite(x))
     if bad.size:
@@ -275,6 +279,7 @@ def _check_finite(x: FloatArray, name: str) -> None:
             f"column '{name}' has {bad.size} non-finite values (NaN or inf), the first at sample "
             f"{int(bad[0])}; remove or interpolate them before demodulating."
         )
+    check_magnitudes(name, x, what="an encoder signal")
 
 
 def _check_pair(a: ArrayLike, b: ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -288,6 +293,15 @@ def _check_pair(a: ArrayLike, b: ArrayLike) -> tuple[FloatArray, FloatArray]:
     _check_finite(aa, "a")
     _check_finite(bb, "b")
     return aa, bb
+
+
+def _check_varies(a: FloatArray, b: FloatArray) -> None:
+    """Refuse a constant signal, or b an exact copy of a (or of −a): no phase can be demodulated."""
+    check_not_constant("a", a, "it carries no encoder signal")
+    check_not_constant("b", b, "it carries no encoder signal")
+    check_not_copies(
+        {"a": a, "b": b}, "a and b must be the two quadrature channels of the encoder (cos and sin)"
+    )
 
 
 def _check_clipping(x: FloatArray, y: FloatArray, name: str) -> None:
@@ -386,6 +400,7 @@ def _fit(aa: FloatArray, bb: FloatArray, max_points: int) -> QuadratureCorrectio
     stride = _stride_for(aa.size, max_points)
     a_s = aa[::stride]
     b_s = bb[::stride]
+    _check_varies(a_s, b_s)
     _check_clipping(a_s, b_s, "a")
     _check_clipping(b_s, a_s, "b")
     ma, mb = float(a_s.mean()), float(b_s.mean())
@@ -502,8 +517,10 @@ def fit_quadrature_correction(
     Raises
     ------
     CaptureError
-        Different lengths, non-finite values, clipped or constant signals, signals that are not in
-        quadrature (phase error beyond 45° or amplitude ratio beyond 5), or too short an arc.
+        Different lengths, non-finite values, values beyond float64's working range (|x| > 1e100,
+        or a column all below 1e-100), constant signals, b a copy of a (or of −a), clipped
+        signals, signals that are not in quadrature (phase error beyond 45° or amplitude ratio
+        beyond 5), or too short an arc.
 
     References
     ----------
@@ -1246,7 +1263,8 @@ def demodulate(
     Raises
     ------
     CaptureError
-        Bad capture (lengths, NaN, clipping, not quadrature, time stamps).
+        Bad capture (lengths, NaN, values beyond float64's range, constant or copied signals,
+        clipping, not quadrature, time stamps).
     ConfigError
         Bad ``lines`` or ``hysteresis_subintervals``.
 
@@ -1262,6 +1280,7 @@ def demodulate(
         correction = _fit(aa, bb, max_points)
     else:
         stride = _stride_for(aa.size, max_points)
+        _check_varies(aa[::stride], bb[::stride])
         _check_clipping(aa[::stride], bb[::stride], "a")
         _check_clipping(bb[::stride], aa[::stride], "b")
     u, v = correct_quadrature(aa, bb, correction)

@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.signal import find_peaks
 
 from rotacal.encoder.pulses import (
+    check_heads_not_copies,
     check_pulse_times,
     check_pulses_per_rev,
     head_columns,
@@ -788,9 +789,11 @@ def self_calibrate(
     Raises
     ------
     CaptureError
-        Fewer than 2 heads, bad pulse trains (see :func:`check_pulse_times`), heads that cannot be
-        paired, less than one whole revolution covered by all heads, a pulses_per_rev that does
-        not match the period of the data.
+        Fewer than 2 heads, bad pulse trains (see :func:`check_pulse_times`), a head that is a
+        (time-shifted) copy of head 0 (:func:`~rotacal.encoder.pulses.check_heads_not_copies`:
+        copies carry no information about the scale), heads that cannot be paired, less than one
+        whole revolution covered by all heads, a pulses_per_rev that does not match the period of
+        the data.
 
     References
     ----------
@@ -827,6 +830,7 @@ def self_calibrate(
             f"head_0 has {trains[0].size} pulses, less than one revolution of {m}: record at least "
             "one whole revolution (or check --pulses-per-rev)."
         )
+    check_heads_not_copies(trains, names)
     pairing = pair_heads(trains, names)
     revs = pairing.pulses // m
     if revs < 1:

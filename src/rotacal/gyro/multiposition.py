@@ -41,6 +41,7 @@ from scipy.linalg import solve_triangular
 
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
+from rotacal.signal._values import check_magnitudes, check_not_constant, check_not_copies
 from rotacal.uncertainty.budget import UncertaintyBudget
 from rotacal.uncertainty.gum import Input, propagate
 from rotacal.uncertainty.specs import TYPE_A_ONLY_NOTE, InstrumentSpecs, spec_distribution
@@ -113,6 +114,30 @@ def _latitude(latitude_deg: Any) -> float:
     if not math.isfinite(lat) or abs(lat) > 90.0:
         raise ConfigError(f"latitude_deg must be between −90 and +90°, got {latitude_deg!r}.")
     return lat
+
+
+#: Largest |position| accepted (deg): float64 resolves it to 1e-7° (a 2e-9 rad error in sin/cos,
+#: nothing against seed 001's 0.01 °/h); beyond it a column holds something other than angles.
+MAX_POSITION_DEG = 1e9
+
+
+def _check_columns(p1: np.ndarray, p2: np.ndarray, y: np.ndarray) -> None:
+    """Positions and outputs within float64's working range, a varying output, no copies.
+
+    An axis that never turns is the plan's business (:func:`_plan_core` names the column).
+    """
+    for name, v in (("phi1_deg", p1), ("phi2_deg", p2)):
+        check_magnitudes(name, v, what="a table angle", largest=MAX_POSITION_DEG)
+    check_magnitudes("output_deg_h", y, what="a gyro output")
+    check_not_constant(
+        "output_deg_h",
+        y,
+        "a gyro's output changes with the Earth rate and gravity from one position to the next",
+    )
+    check_not_copies(
+        {"phi1_deg": p1, "phi2_deg": p2, "output_deg_h": y},
+        "each column must hold its own axis's angles or the gyro's output",
+    )
 
 
 def _angles(phi1_deg: Any, phi2_deg: Any, error: type[Exception]) -> tuple[np.ndarray, np.ndarray]:
@@ -474,6 +499,8 @@ def _plan_core(
     a = drift_design_matrix(p1, p2, axis=ax_)
     rank, cond, bad, reasons = _analyse(a, names)
     if bad:
+        held = [(n, v) for n, v in (("phi1_deg", p1), ("phi2_deg", p2)) if np.ptp(v) == 0]
+        reasons = [*(f"{n} is {float(v[0]):g}° in every row" for n, v in held), *reasons]
         raise error(
             f"{what} leaves {', '.join(bad)} of the {ax_} axis unidentifiable ({'; '.join(reasons)}; "
             f"rank {rank} of {len(names)}): add or change positions; multiposition_plan() gives a "
@@ -668,8 +695,10 @@ def calibrate_multiposition(
     Raises
     ------
     CaptureError
-        Non-finite values (naming the rows), fewer than 7 distinct positions, or positions that
-        leave coefficients unidentifiable (naming them).
+        Non-finite values (naming the rows), values beyond float64's working range (angles beyond
+        ±1e9°), a constant output, a column that copies another (or its negative), fewer than 7
+        distinct positions, or positions that leave coefficients unidentifiable (naming them, and
+        an axis that never turns).
     ConfigError
         Latitude outside ±90°, missing, or contradicting ``site.latitude_deg``; an unknown axis.
 
@@ -717,6 +746,7 @@ def calibrate_multiposition(
             f"column output_deg_h has {bad.size} non-finite value(s) (NaN or inf) at rows "
             f"{_rows(bad)} (counted from 0): remove those rows or re-measure those positions."
         )
+    _check_columns(p1, p2, y)
     plan, _, first, pos_of_row = _plan_core(p1, p2, ax_, CaptureError, "the capture")
     names = _NAMES[ax_]
     w, g = earth_rate_and_gravity(p1, p2, lat, earth_rate_deg_h=we)

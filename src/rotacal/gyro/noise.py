@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 from rotacal.signal import check_sampling
+from rotacal.signal._values import check_magnitudes, check_not_constant, check_setting
 from rotacal.signal.allan import (
     BIAS_INSTABILITY_FACTOR,
     FIT_HALF_DECADES,
@@ -469,17 +470,21 @@ def _noise_budgets(
 
 
 def _sampling_rate(time_s: ArrayLike | None, fs_hz: float | None, n: int) -> float:
-    if time_s is None:
-        if fs_hz is None:
-            raise ConfigError("give the sampling rate (fs_hz, --fs-hz) or a time_s column.")
+    if fs_hz is not None:
         fs = float(fs_hz)
         if not math.isfinite(fs) or fs <= 0:
             raise ConfigError(f"fs_hz must be > 0, got {fs_hz!r}.")
+        check_setting("--fs-hz", fs, unit="Hz")
+    if time_s is None:
+        if fs_hz is None:
+            raise ConfigError("give the sampling rate (fs_hz, --fs-hz) or a time_s column.")
         return fs
     t = np.asarray(time_s, dtype=np.float64)
     if t.shape != (n,):
         raise CaptureError(f"time_s has {t.size} values, the rate column {n}; they must match.")
     check_sampling(t, "time_s")
+    if n < 2:
+        raise CaptureError(f"the record holds {n} sample(s): too short for an Allan deviation.")
     steps = np.diff(t)
     step = float(np.median(steps))
     spread = float(np.max(np.abs(steps - step))) / step
@@ -565,6 +570,10 @@ def gyro_noise(
             f"column '{column}' has {bad.size} NaN/inf value(s), the first at sample {bad[0]}; "
             "the Allan deviation needs a gap-free record."
         )
+    check_magnitudes(column, y, what="a rate signal")
+    check_not_constant(
+        column, y, "the sensor is stuck, or the column is a set value; supply the sensor output"
+    )
     fs = _sampling_rate(time_s, fs_hz, y.size)
     adev = overlapping_adev(y, fs=fs, taus=taus, data_type="rate")
     terms = noise_terms(adev, unit=unit)

@@ -49,6 +49,12 @@ from rotacal.gyro.uncertainty import (
     uncertainty_json,
 )
 from rotacal.results import Result, to_jsonable
+from rotacal.signal._values import (
+    check_magnitudes,
+    check_not_constant,
+    check_not_copies,
+    check_setting,
+)
 from rotacal.uncertainty.budget import UncertaintyBudget
 from rotacal.uncertainty.gum import Input
 from rotacal.uncertainty.specs import (
@@ -241,6 +247,7 @@ def _parse_rotations(
             raise ConfigError(
                 f"rotation {name}: angle_deg must be finite and non-zero, got {ang!r}."
             )
+        check_setting(f"rotation {name}: angle_deg", a, positive=False, unit="deg")
         out.append((name, label, vec, s, e, a))
     if not out:
         raise ConfigError("give at least three rotation sections (about x, y and z).")
@@ -326,9 +333,10 @@ def _check_saturated(rate: np.ndarray, s: int, e: int, name: str, columns: Seque
                 )
 
 
-def _check_finite(
+def _check_sections(
     rate: np.ndarray, ranges: Sequence[tuple[int, int]], columns: Sequence[str]
 ) -> None:
+    """The samples the method uses: finite, within float64's range, varying, not copies."""
     for s, e in ranges:
         seg = rate[s:e]
         bad = ~np.isfinite(seg)
@@ -338,6 +346,14 @@ def _check_finite(
                 f"column {columns[col]} has a non-finite value at row {s + row} (in section "
                 f"[{s}, {e})); remove or repair that sample."
             )
+    used = np.concatenate([rate[s:e] for s, e in ranges])
+    for j, name in enumerate(columns):
+        check_magnitudes(name, used[:, j], what="a gyro output")
+        check_not_constant(name, used[:, j], "the output does not respond to the rotations")
+    check_not_copies(
+        {name: used[:, j] for j, name in enumerate(columns)},
+        "each column must hold its own axis's output",
+    )
 
 
 # ------------------------------------------------------------------------------------ method
@@ -407,7 +423,9 @@ def calibrate_triad_rotations(
         Bad sections (out of range, overlapping a static with a rotation, axes that do not span
         3-D), neither ``static`` nor ``bias``, a bad setting.
     CaptureError
-        NaN/inf in a section used, a saturated output during a rotation.
+        NaN/inf in a section used; in the sections used, values beyond float64's working range,
+        an output that is constant or copies another (or its negative); a saturated output
+        during a rotation.
 
     References
     ----------
@@ -432,6 +450,7 @@ def calibrate_triad_rotations(
         raise ConfigError(f"fs_hz must be a number, got {fs_hz!r}.") from None
     if not math.isfinite(fs) or fs <= 0:
         raise ConfigError(f"fs_hz must be a positive sampling rate (Hz), got {fs_hz!r}.")
+    check_setting("--fs-hz", fs, unit="Hz")
     try:
         ang_u = float(angle_u_deg)
     except (TypeError, ValueError):
@@ -479,7 +498,7 @@ def calibrate_triad_rotations(
             f"the rotations (about {have}) do not span three axes: add a rotation about each of "
             "x, y and z."
         )
-    _check_finite(u, [(s, e) for *_, s, e, _ in rots] + [(s, e) for _, s, e in stats_], cols)
+    _check_sections(u, [(s, e) for *_, s, e, _ in rots] + [(s, e) for _, s, e in stats_], cols)
     for name, _, _, s, e, _ in rots:
         _check_saturated(u, s, e, name, cols)
 

@@ -70,6 +70,7 @@ from rotacal.gyro.uncertainty import (
     validated,
 )
 from rotacal.results import Result, to_jsonable
+from rotacal.signal._values import check_magnitudes, check_not_copies, check_setting
 from rotacal.uncertainty.budget import BudgetRow, UncertaintyBudget
 from rotacal.uncertainty.distributions import Distribution, Normal
 from rotacal.uncertainty.gum import Input, linear_fit_uncertainty, welch_satterthwaite
@@ -690,8 +691,10 @@ def calibrate_scale_factor(
     gives S and V0; δ are the point residuals and NL = 100·max|δ|/(|S|·FS) %FS.
 
     The capture is refused (:class:`~rotacal.errors.CaptureError`) when a set rate is missing, a
-    rate point has no finite output, outputs are NaN (unless ``nan_policy="omit"``), there is only
-    one rate, the output does not change with the rate, or the output saturates: at the outer
+    rate point has no finite output, outputs are NaN (unless ``nan_policy="omit"``), a column holds
+    values beyond float64's working range (|x| > 1e100, or all below 1e-100), there is only one
+    rate, the output copies the set rate (or its negative), the output does not change with the
+    rate, or the output saturates: at the outer
     points their mean stops following the rate (local slope below half the median slope by more
     than 5 standard errors), or a point's samples pile up at the column's extreme value (a rail).
 
@@ -781,6 +784,8 @@ def calibrate_scale_factor(
         if full_scale_deg_s is None
         else _positive("full_scale_deg_s", full_scale_deg_s, "the full scale in °/s")
     )
+    if fs_user is not None:
+        check_setting("--full-scale-deg-s", fs_user, unit="deg/s")
 
     bad_rate = np.flatnonzero(~np.isfinite(rate))
     if bad_rate.size:
@@ -788,6 +793,7 @@ def calibrate_scale_factor(
             f"column rate_deg_s has {bad_rate.size} non-finite value(s) (NaN or inf) at rows "
             f"{_rows(bad_rate)} (counted from 0): every row needs the table's set rate."
         )
+    check_magnitudes("rate_deg_s", rate, what="a set rate")
     gid, rates, spread = _group(rate, tol)
     ng = rates.size
     if ng == 1:
@@ -817,6 +823,11 @@ def calibrate_scale_factor(
             f"{bad_out.size} non-finite output value(s) left out (rows {_rows(bad_out)}, counted "
             "from 0)."
         )
+    check_magnitudes("output", y[ok] if bad_out.size else y, what="a gyro output")
+    check_not_copies(
+        {"rate_deg_s": rate, "output": y},
+        "a DUT's output differs from the set rate by its noise at least; map the DUT's output",
+    )
 
     yz = np.where(ok, y, 0.0)
     means = np.bincount(gid, weights=yz, minlength=ng) / counts

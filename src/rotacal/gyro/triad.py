@@ -45,6 +45,7 @@ from rotacal.gyro.uncertainty import (
     uncertainty_json,
 )
 from rotacal.results import Result, to_jsonable
+from rotacal.signal._values import check_magnitudes, check_not_constant, check_not_copies
 from rotacal.uncertainty.budget import UncertaintyBudget
 from rotacal.uncertainty.gum import Input
 from rotacal.uncertainty.specs import InstrumentSpecs, spec_input, type_a_note
@@ -97,6 +98,27 @@ def _as_triplet(name: str, columns: Sequence[str], values: Any) -> np.ndarray:
             "remove or repair that row."
         )
     return arr
+
+
+def _check_magnitudes(
+    omega: np.ndarray, u: np.ndarray, rate_cols: Sequence[str], out_cols: Sequence[str]
+) -> None:
+    """Refuse values beyond float64's working range (before any arithmetic on them)."""
+    for j, name in enumerate(rate_cols):
+        check_magnitudes(name, omega[:, j], what="a reference rate")
+    for j, name in enumerate(out_cols):
+        check_magnitudes(name, u[:, j], what="a gyro output")
+
+
+def _check_degenerate(
+    omega: np.ndarray, u: np.ndarray, rate_cols: Sequence[str], out_cols: Sequence[str]
+) -> None:
+    """Refuse a constant output and copied columns (after the plan: its message comes first)."""
+    for j, name in enumerate(out_cols):
+        check_not_constant(name, u[:, j], "the output does not respond to the rotations")
+    columns = {name: omega[:, j] for j, name in enumerate(rate_cols)}
+    columns.update({name: u[:, j] for j, name in enumerate(out_cols)})
+    check_not_copies(columns, "each column must hold its own axis's reference rate or output")
 
 
 def _design(omega: np.ndarray) -> np.ndarray:
@@ -664,8 +686,10 @@ def calibrate_triad(
     Raises
     ------
     CaptureError
-        NaN/inf, fewer than 8 rows, a saturated output, a plan in the capture that leaves
-        coefficients unidentifiable, or more rejected rows than ``max_reject_fraction``.
+        NaN/inf, values beyond float64's working range (|x| > 1e100, or a column all below
+        1e-100), fewer than 8 rows, a plan in the capture that leaves coefficients unidentifiable,
+        a constant output, a column that copies another (or its negative), a saturated output, or
+        more rejected rows than ``max_reject_fraction``.
     ConfigError
         An invalid setting.
 
@@ -695,6 +719,7 @@ def calibrate_triad(
             f"the capture has only {n} rows; the 4 coefficients per output need at least "
             f"{_MIN_ROWS} rows (rotations about x, y and z at two or more rates)."
         )
+    _check_magnitudes(omega, uu, rate_cols, out_cols)
     try:
         ns = float(nominal_scale)
     except (TypeError, ValueError):
@@ -739,6 +764,7 @@ def calibrate_triad(
             f"the reference rates in {', '.join(rate_cols)} leave {', '.join(plan.unidentifiable)} "
             f"unidentifiable (rank {plan.rank} of 4): {plan.advice}."
         )
+    _check_degenerate(omega, uu, rate_cols, out_cols)
     pts, inv = _groups(omega)
     _check_saturation(omega, uu, inv, pts.shape[0], out_cols)
 

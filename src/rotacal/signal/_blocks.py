@@ -456,7 +456,9 @@ class HarmonicFitAccumulator:
         n_par = 2 * nh + 1 + (1 if refine_frequency else 0)
         span = self._t_last - self._t_first
         if self._n < n_par + 1 or not span > 0:
-            check_record(self._n, max(span, 1e-300), 1.0 / max(span, 1e-300), 1, n_par)
+            # too few samples: the message names the harmonics; a zero span: one period checked
+            nh_named = nh if self._n < n_par + 1 else 1
+            check_record(self._n, max(span, 1e-300), 1.0 / max(span, 1e-300), nh_named, n_par)
         f0 = self.estimate_frequency() if frequency_hz is None else check_frequency(frequency_hz)
         check_record(self._n, span, f0, nh, n_par)
         t_ref = 0.5 * (self._t_first + self._t_last)

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.signal._values import check_time_span
 
 _EPS = float(np.finfo(np.float64).eps)
 _GRID_CHUNK = 1 << 16
@@ -69,12 +70,14 @@ TYPICAL_STEPS = 100_000
 
 
 def check_sampling(t: np.ndarray, name: str = "time_s", *, max_gap: float = MAX_GAP) -> None:
-    """Raise CaptureError unless ``t`` is finite, strictly increasing and free of gaps.
+    """Raise CaptureError unless ``t`` is finite, strictly increasing, free of gaps and resolved.
 
     A gap — a step longer than ``max_gap`` times the median step — means lost samples (a DAQ
     dropout, a spliced file): phase unwrapping, reversal counting and the FFT start of the fits
     all assume the record is continuous, so a gap would give a silently wrong result. Jitter of
-    the time stamps is fine.
+    the time stamps is fine. Time stamps beyond float64's working range, or so large that float64
+    resolves them to more than 1 % of a sample interval (1e12 s sampled at 2 kHz), are refused
+    too (:func:`rotacal.signal._values.check_time_span`).
 
     Parameters
     ----------
@@ -104,6 +107,7 @@ def check_sampling(t: np.ndarray, name: str = "time_s", *, max_gap: float = MAX_
     if gaps.size:
         i = int(gaps[0])
         raise gap_error(name, i + 1, float(steps[i]), typical)
+    check_time_span(name, float(t[0]), float(t[-1]), typical)
 
 
 def gap_error(name: str, sample: int, step: float, typical: float) -> CaptureError:
@@ -185,7 +189,8 @@ def check_record(n: int, span_s: float, frequency_hz: float, harmonics: int, n_p
     if n < n_params + 1:
         raise CaptureError(
             f"the record holds {n} samples, fewer than the {n_params + 1} needed to fit "
-            f"{n_params} parameters and estimate the residual; supply a longer record."
+            f"{n_params} parameters ({harmonics} harmonics) and estimate the residual; supply a "
+            "longer record or fewer harmonics."
         )
     periods = frequency_hz * span_s * n / (n - 1)
     if periods < MIN_PERIODS:

@@ -32,6 +32,7 @@ from rotacal.results import Result
 from rotacal.signal._allan_edf import edf_oadev
 from rotacal.signal._allan_fast import direct_sums, second_difference_sums
 from rotacal.signal._checks import as_samples, check_finite
+from rotacal.signal._values import check_magnitudes
 
 __all__ = [
     "ONE_SIGMA",
@@ -468,7 +469,8 @@ def overlapping_adev(
     Raises
     ------
     CaptureError
-        NaN/inf samples, fewer than 10 samples, a constant, stuck or clipped record.
+        NaN/inf samples, values beyond float64's working range (one sample of 1e300 would turn
+        every deviation into inf/NaN), fewer than 10 samples, a constant, stuck or clipped record.
     ConfigError
         fs ≤ 0, an unknown ``taus``/``data_type``/``method``, a τ that the record cannot
         represent (shorter than 1/fs or longer than (N−1)/(2·fs)), a bad confidence or α.
@@ -493,6 +495,7 @@ def overlapping_adev(
             "supply a longer record."
         )
     check_finite("data", y)
+    check_magnitudes("data", y, what=f"{data_type} data")
     _check_variation(y, data_type)
     x = _phase(y, fs_hz, data_type)
     n_phase = x.size

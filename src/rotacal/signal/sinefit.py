@@ -223,7 +223,7 @@ def _fit(
     n = ta.size
     n_par = 2 * nh + 1 + (1 if refine else 0)
     if n < n_par + 1:
-        check_record(n, 1.0, 1.0, 1, n_par)  # raises: too few samples
+        check_record(n, 1.0, 1.0, nh, n_par)  # raises: too few samples
     dt_u = uniform_step(ta)
     if dt_u is None:
         check_increasing(ta)

@@ -38,6 +38,7 @@ from rotacal.signal import (
     fit_sine_3p,
     snr_db,
 )
+from rotacal.signal._values import check_magnitudes, check_setting
 from rotacal.table.motion_uncertainty import (
     ReversalDetection,
     comparison_budgets,
@@ -178,6 +179,16 @@ def _check_settings(harmonics: int, periods: int | None) -> None:
         raise ConfigError(f"--periods must be at least 1, got {periods}")
 
 
+def _check_set_values(set_amplitude_deg: float | None, set_frequency_hz: float | None) -> None:
+    """Both set values or neither; each finite, > 0 and within float64's working range."""
+    if set_amplitude_deg is None and set_frequency_hz is None:
+        return
+    if set_amplitude_deg is None or set_frequency_hz is None:
+        raise ConfigError("give both --set-amplitude-deg and --set-frequency-hz, or neither")
+    check_setting("--set-amplitude-deg", set_amplitude_deg, unit="deg")
+    check_setting("--set-frequency-hz", set_frequency_hz, unit="Hz")
+
+
 def _check_samples(t: np.ndarray, name: str, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Shapes, NaN, time order and gaps of a one-signal capture; a constant signal is refused."""
     t = np.asarray(t, dtype=float)
@@ -191,6 +202,7 @@ def _check_samples(t: np.ndarray, name: str, y: np.ndarray) -> tuple[np.ndarray,
     bad = np.flatnonzero(~np.isfinite(y))
     if bad.size:
         raise CaptureError(f"column {name} has a non-finite value (NaN or inf) at sample {bad[0]}")
+    check_magnitudes(name, y)
     check_sampling(t, "time_s")
     if np.ptp(y) == 0:
         raise CaptureError(f"column {name} is constant: the table does not move in this capture")
@@ -256,11 +268,7 @@ def _finish(
     specs: InstrumentSpecs | None = None,
     radius_mm: float | None = None,
 ) -> MotionResult:
-    if set_amplitude_deg is not None or set_frequency_hz is not None:
-        if set_amplitude_deg is None or set_frequency_hz is None:
-            raise ConfigError("give both --set-amplitude-deg and --set-frequency-hz, or neither")
-        if not set_amplitude_deg > 0 or not set_frequency_hz > 0:
-            raise ConfigError("set amplitude and set frequency must both be positive")
+    _check_set_values(set_amplitude_deg, set_frequency_hz)
     unc = motion_budgets(
         scheme=scheme,  # type: ignore[arg-type]
         fit=fit,
@@ -547,6 +555,7 @@ def calibrate_lts_motion(
     _check_settings(harmonics, periods)
     if not radius_mm > 0:
         raise ConfigError(f"--radius-mm must be positive, got {radius_mm}")
+    check_setting("--radius-mm", radius_mm, unit="mm")
     t, d = _check_samples(t, "displacement_mm", displacement_mm)
     reach = float(np.max(np.abs(d)))
     if reach > radius_mm:

@@ -53,6 +53,7 @@ from rotacal.encoder.selfcal import (
 )
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
+from rotacal.signal._values import LARGEST, check_setting
 from rotacal.signal.allan import adev_confidence_interval, edf_overlapping_adev
 from rotacal.uncertainty import (
     Constant,
@@ -414,6 +415,11 @@ def _json_number(d: Mapping[str, Any], key: str, kind: type) -> Any:
         return None
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ConfigError(f"the self-calibration's '{key}' must be a number, got {value!r}.")
+    if not math.isfinite(value) or abs(value) > LARGEST:
+        raise ConfigError(
+            f"the self-calibration's '{key}' = {value!r} is not a usable number (not finite, or "
+            "beyond float64's working range); redo the self-calibration (--selfcal)."
+        )
     if kind is int and float(value) != int(value):
         raise ConfigError(f"the self-calibration's '{key}' must be a whole number, got {value!r}.")
     return kind(value)
@@ -459,6 +465,12 @@ def _as_deviation(selfcal: Any, m: int) -> _Deviation:
         )
     if not np.all(np.isfinite(values)):
         raise ConfigError("the deviation holds a NaN or null; redo the self-calibration.")
+    if values.size and float(np.max(np.abs(values))) > LARGEST:
+        i = int(np.argmax(np.abs(values)))
+        raise ConfigError(
+            f"the deviation holds {values[i]:.6g} arcsec at entry {i}: not a scale deviation "
+            "(beyond float64's working range); redo the self-calibration (--selfcal)."
+        )
     if shifts is not None:
         try:
             shifts = [int(x) for x in shifts]
@@ -1159,6 +1171,7 @@ def calibrate_rate(
             raise ConfigError(
                 f"set_rate_deg_s must be finite and non-zero, got {set_rate_deg_s!r}."
             )
+        check_setting("--set-rate-deg-s", set_rate_deg_s, positive=False, unit="deg/s")
     use_all = isinstance(head, str) and head == "all"
     k = 0
     if not use_all:

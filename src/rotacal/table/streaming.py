@@ -56,9 +56,17 @@ from rotacal.errors import CaptureError, ConfigError
 from rotacal.io import iter_capture_chunks
 from rotacal.signal import HarmonicFitAccumulator, SineFit, fit_harmonics
 from rotacal.signal._checks import MAX_GAP, TYPICAL_STEPS, gap_error
+from rotacal.signal._values import (
+    LARGEST,
+    SMALLEST,
+    check_magnitudes,
+    check_time_span,
+    in_working_range,
+)
 from rotacal.table.motion import (
     _ELLIPSE_POINTS,
     MotionResult,
+    _check_set_values,
     _check_settings,
     _cut,
     _finish,
@@ -180,19 +188,27 @@ def _columns(raw: Any, offset: int) -> dict[str, np.ndarray]:
 
 
 def _pass_check(passes: _Passes) -> int:
-    """Pass 1: sample count, NaN/inf and time order, with the in-memory messages and priority."""
+    """Pass 1: sample count, NaN/inf, magnitudes and time order, with the in-memory messages."""
     counts = dict.fromkeys(_COLUMNS, 0)
     first_bad = dict.fromkeys(_COLUMNS, -1)
     order: tuple[int, Any, Any] | None = None
+    first_t: Any = None
     last_t: Any = None
     typical: float | None = None  # the median time step of the first chunk
     gap: tuple[int, float, float] | None = None
     lengths: list[int] = []
     n = 0
+    # magnitudes of a and b, as the in-memory check_magnitudes: the first value beyond the working
+    # range, and each column's largest |value| (inf once a chunk passes the one-pass test)
+    too_large: CaptureError | None = None
+    peak = {"a": 0.0, "b": 0.0}
     for _, off, cols in passes.run():
         lengths.append(cols["a"].size)
         for name in ("a", "b", "time_s"):
             x = cols[name]
+            if name != "time_s" and in_working_range(x):
+                peak[name] = math.inf
+                continue
             with np.errstate(over="ignore", invalid="ignore"):
                 total = float(np.sum(x))
             if not math.isfinite(total):
@@ -201,6 +217,15 @@ def _pass_check(passes: _Passes) -> int:
                     counts[name] += int(bad.size)
                     if first_bad[name] < 0:
                         first_bad[name] = off + int(bad[0])
+                    continue
+            if name != "time_s" and x.size:
+                chunk_peak = float(np.max(np.abs(x)))
+                peak[name] = max(peak[name], chunk_peak)
+                if chunk_peak > LARGEST and too_large is None:
+                    try:
+                        check_magnitudes(name, x, what="an encoder signal", offset=off)
+                    except CaptureError as exc:
+                        too_large = exc
         t = cols["time_s"]
         if order is None:
             if last_t is not None and t[0] - last_t <= 0:
@@ -218,6 +243,8 @@ def _pass_check(passes: _Passes) -> int:
             g = np.flatnonzero(steps > MAX_GAP * typical)
             if g.size:
                 gap = (off + int(g[0]) + (1 if last_t is None else 0), float(steps[g[0]]), typical)
+        if first_t is None and t.size:
+            first_t = t[0]
         last_t = t[-1]
         n += cols["a"].size
     passes.lengths = lengths
@@ -229,6 +256,11 @@ def _pass_check(passes: _Passes) -> int:
                 f"column '{name}' has {counts[name]} non-finite values (NaN or inf), the first "
                 f"at sample {first_bad[name]}; remove or interpolate them before demodulating."
             )
+    if too_large is not None:
+        raise too_large
+    for name in ("a", "b"):
+        if 0.0 < peak[name] < SMALLEST:
+            check_magnitudes(name, np.array([peak[name]]), what="an encoder signal")
     if order is not None:
         row, before, after = order
         raise CaptureError(
@@ -237,6 +269,8 @@ def _pass_check(passes: _Passes) -> int:
         )
     if gap is not None:
         raise gap_error("time_s", *gap)
+    if typical is not None:
+        check_time_span("time_s", float(first_t), float(last_t), typical)
     return n
 
 
@@ -476,11 +510,7 @@ def calibrate_encoder_motion_chunked(
     if int(lines) != lines or lines < 1:
         raise ConfigError(f"--lines must be a positive whole number, got {lines}")
     with_set = set_amplitude_deg is not None or set_frequency_hz is not None
-    if with_set:
-        if set_amplitude_deg is None or set_frequency_hz is None:
-            raise ConfigError("give both --set-amplitude-deg and --set-frequency-hz, or neither")
-        if not set_amplitude_deg > 0 or not set_frequency_hz > 0:
-            raise ConfigError("set amplitude and set frequency must both be positive")
+    _check_set_values(set_amplitude_deg, set_frequency_hz)
     passes = _Passes(chunks, progress)
     scale = 360.0 / (_TWO_PI * float(lines))
 

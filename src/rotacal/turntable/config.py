@@ -69,7 +69,10 @@ vice versa, an axis letter other than x/y/z, a rotary axis without ``angle``, tw
 angle name, a chain with no error, a negative lower bound or one above 0.1 rad, a non-positive,
 unknown or too large (> 0.1 rad) requirement component, both requirement forms, unknown units,
 a ``[monte_carlo]`` runs or seed that is not an integer (≥ 1, ≥ 0; booleans refused), a
-``[sensitivity]`` step that does not divide 360° or an endpoint that is not true/false.
+``[sensitivity]`` step that does not divide 360° or an endpoint that is not true/false; and, so
+that absurd numbers never reach the budget's arithmetic, any number beyond float64's working
+range (magnitude above 1e100, or below 1e-100 but not 0), more than 10⁹ Monte Carlo runs, fewer
+than 2 or more than 360 calibration steps per axis, or a sensitivity step whose grid exceeds 10⁷ points.
 
 References
 ----------
@@ -88,6 +91,7 @@ from pathlib import Path
 from typing import Any
 
 from rotacal.errors import ConfigError
+from rotacal.signal._values import LARGEST, SMALLEST
 from rotacal.turntable.model import (
     ANGLE_UNITS,
     COMPONENTS,
@@ -144,6 +148,10 @@ SENSITIVITY_KEYS = ("step_deg", "endpoint")
 #: Keys of ``[allocation]`` (default: the constraint at every angle).
 ALLOCATION_KEYS = ("constraint_angles",)
 _SIGNS = ("random", "positive")
+#: Most Monte Carlo draws a file may ask for: 10⁹ take minutes at ≥ 10⁷ draws/s; more is a typo.
+MAX_RUNS = 1_000_000_000
+#: Most points of the sensitivity grid (about 1 µs each): a finer step changes nothing.
+MAX_GRID_POINTS = 10_000_000
 
 
 class _Reader:
@@ -179,17 +187,36 @@ class _Reader:
             raise self.fail(f"{where} must be a number, got {value!r}.")
         if not math.isfinite(value):
             raise self.fail(f"{where} must be finite, got {value!r}.")
+        if abs(value) > LARGEST or 0 < abs(value) < SMALLEST:
+            raise self.fail(
+                f"{where} = {value:g} is beyond what float64 arithmetic of the budget carries "
+                f"(magnitudes from {SMALLEST:g} to {LARGEST:g}, or 0); check the value and its unit."
+            )
         return float(value)
 
-    def integer(self, value: Any, where: str, minimum: int) -> int:
+    def integer(self, value: Any, where: str, minimum: int, maximum: int | None = None) -> int:
         if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
             raise self.fail(f"{where} must be an integer ≥ {minimum}, got {value!r}.")
+        if maximum is not None and value > maximum:
+            raise self.fail(f"{where} must be an integer ≤ {maximum:_}, got {value:_}.")
         return int(value)
 
     def units(self, value: Any, where: str, table: Mapping[str, float]) -> str:
         if value not in table:
             raise self.fail(f"{where} = {value!r} is unknown: use one of {', '.join(table)}.")
         return str(value)
+
+
+def _check_grid_size(reader: _Reader, step_deg: Any, links: tuple[Link, ...]) -> None:
+    """Refuse a [sensitivity] step so fine that the averaging grid exceeds MAX_GRID_POINTS."""
+    step = reader.number(step_deg, "[sensitivity] step_deg")
+    angles = sum(1 for link in links if link.angle is not None)
+    if step > 0 and (360.0 / step) ** angles > MAX_GRID_POINTS:
+        raise reader.fail(
+            f"[sensitivity] step_deg = {step:g} makes a grid of {(360.0 / step) ** angles:.3g} "
+            f"points over {angles} angles (at most {MAX_GRID_POINTS:.0e}: about 10 s); choose a "
+            "coarser step such as 1 or 45."
+        )
 
 
 def _link(reader: _Reader, entry: Any, k: int) -> Link:
@@ -353,7 +380,7 @@ def parse_turntable(
         rd.keys(mc, MONTE_CARLO_KEYS, "[monte_carlo]")
         checked: dict[str, Any] = {}
         if "runs" in mc:
-            checked["runs"] = rd.integer(mc["runs"], "[monte_carlo] runs", 1)
+            checked["runs"] = rd.integer(mc["runs"], "[monte_carlo] runs", 1, MAX_RUNS)
         if "seed" in mc:
             checked["seed"] = rd.integer(mc["seed"], "[monte_carlo] seed", 0)
         if "signs" in mc:
@@ -374,7 +401,8 @@ def parse_turntable(
             checked["latitude_deg"] = lat
         for key in ("outer_steps", "inner_steps"):
             if key in cal:
-                checked[key] = rd.integer(cal[key], f"[calibration] {key}", 1)
+                # one step would hold that axis still: its coefficients cannot be separated
+                checked[key] = rd.integer(cal[key], f"[calibration] {key}", 2, 360)
         if "required_deg_h" in cal:
             accuracy = rd.number(cal["required_deg_h"], "[calibration] required_deg_h")
             if accuracy <= 0:
@@ -385,6 +413,8 @@ def parse_turntable(
         sens = rd.table(data["sensitivity"], "[sensitivity]")
         rd.keys(sens, SENSITIVITY_KEYS, "[sensitivity]")
         settings["sensitivity"] = dict(sens)  # values checked by Turntable (sensitivity_grid)
+        if "step_deg" in sens:
+            _check_grid_size(rd, sens["step_deg"], links)
     settings.update(_allocation_options(rd, data))
 
     try:
