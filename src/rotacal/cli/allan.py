@@ -14,7 +14,9 @@ from ._app import cli
 from ._common import (
     _analysis_options,
     _check_outputs,
+    _clipping_option,
     _emit_warnings,
+    _in_file,
     _status,
     _write_json,
     _write_report,
@@ -38,6 +40,7 @@ from ._common import (
     show_default=True,
     help="τ grid: 'all' computes every cluster size (O(N log² N)).",
 )
+@_clipping_option
 @_analysis_options
 def allan_cmd(
     capture: str,
@@ -74,7 +77,7 @@ def allan_cmd(
     time_s = cap.columns.get("time_s")
     if time_s is None and fs_hz is None:
         raise ConfigError(f"{Path(capture).name} has no time_s column: give --fs-hz")
-    with _status("computing the Allan deviation"):
+    with _status("computing the Allan deviation"), _in_file(capture):
         result = gyro_noise(
             cap[rate_column],
             fs_hz=fs_hz if time_s is None else None,
@@ -83,6 +86,7 @@ def allan_cmd(
             taus=taus,
             column=rate_column,
             specs=kw.pop("specs"),
+            allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))

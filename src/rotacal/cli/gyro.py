@@ -16,7 +16,9 @@ from ._app import cli
 from ._common import (
     _analysis_options,
     _check_outputs,
+    _clipping_option,
     _emit_warnings,
+    _in_file,
     _read,
     _status,
     _write_json,
@@ -43,6 +45,7 @@ def gyro() -> None:
     help="Check against a named requirement (fmvss126) and say pass/fail with the margin.",
 )
 @click.option("--output-unit", default="", help="Unit of the output column, for the report.")
+@_clipping_option
 @_analysis_options
 def gyro_scale_factor(
     capture: str,
@@ -59,7 +62,7 @@ def gyro_scale_factor(
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     cap = _read(capture, ["rate_deg_s", "output"], columns, group)
-    with _status("fitting"):
+    with _status("fitting"), _in_file(capture):
         result = calibrate_scale_factor(
             cap["rate_deg_s"],
             cap["output"],
@@ -67,6 +70,7 @@ def gyro_scale_factor(
             requirement=requirement,
             output_unit=output_unit,
             specs=kw.pop("specs"),
+            allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))
@@ -94,6 +98,7 @@ def gyro_scale_factor(
     default=None,
     help="Reject residuals beyond k robust sigmas [default: 5 % family-wise for Gaussian noise].",
 )
+@_clipping_option
 @_analysis_options
 def gyro_triad(
     capture: str, reject_k: float | None, columns: Sequence[str], group: str | None, **kw: Any
@@ -104,8 +109,13 @@ def gyro_triad(
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     cap = _read(capture, [*RATE_COLUMNS, *TRIAD_OUTPUT_COLUMNS], columns, group)
-    with _status("fitting"):
-        result = calibrate_triad_columns(cap.columns, reject_k=reject_k, specs=kw.pop("specs"))
+    with _status("fitting"), _in_file(capture):
+        result = calibrate_triad_columns(
+            cap.columns,
+            reject_k=reject_k,
+            specs=kw.pop("specs"),
+            allow_clipped=kw.pop("allow_clipped"),
+        )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))
     if report_path:
@@ -143,6 +153,7 @@ def gyro_triad(
 @click.option(
     "--angle-deg", type=float, default=360.0, show_default=True, help="Angle of each rotation."
 )
+@_clipping_option
 @_analysis_options
 def gyro_rotations(
     capture: str,
@@ -187,9 +198,15 @@ def gyro_rotations(
     if fs_hz is None:
         raise ConfigError(f"{Path(capture).name} has no time_s column: give --fs-hz")
     rate = np.column_stack([cap[c] for c in TRIAD_OUTPUT_COLUMNS])
-    with _status("integrating the rotations"):
+    with _status("integrating the rotations"), _in_file(capture):
         result = calibrate_triad_rotations(
-            rate, fs_hz, rotations, static=static, angle_deg=angle_deg, specs=kw.pop("specs")
+            rate,
+            fs_hz,
+            rotations,
+            static=static,
+            angle_deg=angle_deg,
+            specs=kw.pop("specs"),
+            allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))
@@ -220,6 +237,7 @@ def gyro_rotations(
     default=None,
     help="Latitude of the laboratory (or site.latitude_deg in --specs).",
 )
+@_clipping_option
 @_analysis_options
 def gyro_multiposition(
     capture: str,
@@ -235,7 +253,7 @@ def gyro_multiposition(
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     cap = _read(capture, ["phi1_deg", "phi2_deg", "output_deg_h"], columns, group)
-    with _status("fitting"):
+    with _status("fitting"), _in_file(capture):
         result = calibrate_multiposition(
             cap["phi1_deg"],
             cap["phi2_deg"],
@@ -243,6 +261,7 @@ def gyro_multiposition(
             axis=axis,
             latitude_deg=latitude_deg,
             specs=kw.pop("specs"),
+            allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path, (Path(capture),))

@@ -9,6 +9,7 @@ from typing import Any
 import click
 
 from rotacal.errors import CaptureError
+from rotacal.results import with_warnings
 
 from ._app import cli
 from ._common import (
@@ -16,7 +17,9 @@ from ._common import (
     F,
     _analysis_options,
     _check_outputs,
+    _clipping_option,
     _emit_warnings,
+    _in_file,
     _read,
     _refuse_overwrite,
     _sample_progress,
@@ -53,7 +56,7 @@ def _motion_common(func: F) -> F:
     ]
     for option in reversed(options):
         func = option(func)
-    return _analysis_options(func)
+    return _clipping_option(_analysis_options(func))
 
 
 def _finish_motion(
@@ -151,7 +154,10 @@ def motion_encoder(
         from rotacal.encoder import fit_quadrature_correction
 
         ref = _read(correction_from, ["a", "b"], columns, group)
-        kw["correction"] = fit_quadrature_correction(ref["a"], ref["b"])
+        with _in_file(correction_from, "--correction-from"):
+            kw["correction"] = fit_quadrature_correction(
+                ref["a"], ref["b"], allow_clipped=kw["allow_clipped"]
+            )
         if kw["correction"].method != "heydemann":
             raise CaptureError(
                 f"--correction-from {correction_from} covers only part of a signal period too; "
@@ -163,12 +169,16 @@ def motion_encoder(
     if chunked:
         source = encoder_chunks_from_file(capture, mapping=mapping, group=group)
         # the chunked calibration reads the capture in up to six passes
-        with _sample_progress(6 * n, "calibrating (chunked)") as progress:
+        with _sample_progress(6 * n, "calibrating (chunked)") as progress, _in_file(capture):
             result = calibrate_encoder_motion_chunked(source, lines=lines, progress=progress, **kw)
     else:
         cap = _read(capture, ["time_s", "a", "b"], columns, group)
-        with _status("demodulating and fitting"):
+        with _status("demodulating and fitting"), _in_file(capture):
             result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
+    if correction_from is not None:  # a clipped reference analysed with --allow-clipped
+        result = with_warnings(
+            result, (f"--correction-from {correction_from}: {w}" for w in kw["correction"].warnings)
+        )
     _finish_motion(result, capture, json_path, report_path)
 
 
@@ -185,7 +195,7 @@ def motion_lts(
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     cap = _read(capture, ["time_s", "displacement_mm"], columns, group)
-    with _status("fitting"):
+    with _status("fitting"), _in_file(capture):
         result = calibrate_lts_motion(
             cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw
         )
@@ -202,6 +212,6 @@ def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: An
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     cap = _read(capture, ["time_s", "rate_deg_s"], columns, group)
-    with _status("fitting"):
+    with _status("fitting"), _in_file(capture):
         result = calibrate_fog_motion(cap["time_s"], cap["rate_deg_s"], **kw)
     _finish_motion(result, capture, json_path, report_path)
