@@ -182,6 +182,20 @@ def clipped(seed: int) -> Iterator[tuple[str, str, dict[str, Any]]]:
     yield "gyro-noise", "range 2.5 sigma", {"duration_s": 600.0, "range_deg_s": 0.125}
 
 
+def limits(seed: int) -> Iterator[tuple[str, str, dict[str, Any]]]:
+    """Clipping near the stated limits: coarse ADCs, mild overdrive (reported, not required)."""
+    a = _amp(seed, 0.5)
+    for bits in (10, 8):
+        for gain in (1.3, 1.27):
+            yield (
+                "encoder",
+                f"a at {gain} of the ±1.25 range, {bits} bit",
+                {"amplitude_deg": a, "adc_bits": bits, "amplitude_a": gain},
+            )
+    d_amp = 100.0 * math.tan(math.radians(a))
+    yield "lts", "range 99 % of the amplitude", {"amplitude_deg": a, "range_mm": 0.99 * d_amp}
+
+
 def _truth_clipped(cap: Any) -> float:
     """Samples the twin clipped (beyond the range), summed over the analysed columns."""
     t = cap.truth
@@ -314,6 +328,7 @@ def main() -> None:
     print(f"threshold RAIL_RATIO = {RAIL_RATIO:g}")
     fp = run_twins("honest", honest, args.seeds, must_clip=False)
     missed = run_twins("clipped", clipped, args.seeds, must_clip=True)
+    run_twins("near the limits (not counted): clipped", limits, args.seeds, must_clip=True)
     real = run_real(args.data) if args.data.is_dir() else 0
     print("\nspeed of the detector on 10⁷ samples (one run)")
     speed()

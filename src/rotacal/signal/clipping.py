@@ -50,23 +50,33 @@ What the analysis knows refines this (keywords of :func:`find_clipping`):
   rest where the channel peaks, not a rail; a clipped channel sits at its rail while the other one
   sweeps ±sin α of its amplitude.
 * ``rest`` (rows where the sensor is known to be at rest: a gyro's static sections or zero set
-  rate) — the level the output shows at rest is where a one-sided motion starts, not a rail.
-* ``groups`` (rows measured at one set condition: a rate point) — the points, not the column,
-  are then the reference (they may hold any number of samples each, and a noise-free output is
-  flat at every point): within one point the output is a plateau with Gaussian noise, whose top
-  level holds fewer samples than the next one. A point of ≥ 10 samples is clipped when its samples pile up at the extreme (≥ 10 and ≥ 5 % of them,
-  more than 1.5 times the next level inward, its noise resolved in ≥ 6 levels) or sit all at it
-  while the other points span ≥ 4 levels each (their noise shows, a rail has none). This finds a
-  noisy plateau cut by a rail near its mean, which the column's counts miss. On 28 800 simulated
-  Gaussian points (quantum 0.05σ–4σ, 10–5000 samples) the pile test never fired; it finds a rail
-  within ±0.5σ of a point's mean when the quantum is ≤ σ/2.
+  rate) — the level the output shows at rest is where a one-way motion starts, not a rail.
+* ``groups`` (rows measured at one set condition: a rate point) — the points, not the column, are
+  then the reference: they may hold any number of samples each, and a noise-free output is flat
+  at every point. Within a point the output is a plateau with Gaussian noise, whose top level
+  holds fewer samples than the next one. A point of ≥ 10 samples is clipped when its samples pile
+  up at the extreme (≥ 10 and ≥ 5 % of them, more than 1.5 times the next level inward, its noise
+  resolved in ≥ 6 levels) or sit all at it while the other points span ≥ 4 levels each (their
+  noise shows; a rail has none). This finds a noisy plateau cut by a rail near its mean, which
+  the column's counts miss. On 28 800 simulated Gaussian points (quantum 0.05σ–4σ, 10–5000
+  samples) the pile test never fired; it finds a rail within ±0.5σ of a point's mean when the
+  quantum is ≤ σ/2. Points of fewer than 10 samples (per-point means) leave the decision to the
+  column's rule.
 
 Not judged (``None``): a column with fewer than three distinct finite values (a constant column is
-another check's business; a two-level column is digital); non-finite samples are skipped.
+another check's business; a two-level column is digital); non-finite samples are skipped (rows keep
+their numbers). Not applied to pulse timestamps (``selfcal``, ``rate``): a time stamp is not a
+reading with a range. Measured (``benchmarks/bench_clipping.py``): no false call on any twin kind
+(encoder at 8–16 bits, stagnating or moving less than a line; LTS; FOG to 7.7 dB; gyro outputs
+with coarse quanta, repeated rates, rest at an extreme) or on the 159 rate, gyro and frequency
+columns of the real recordings; every clipped twin called, with its share.
+
 Limits: a rail on a signal quantised so coarsely that its own top level holds a comparable share
 (a sine clipped at 95 % of its amplitude: about 8 bits or fewer over the signal's range) is not
 told from quantisation; a noise-free quantised output that stays at its extreme 8 times longer
-than anywhere else, with no rest rows, no groups and no companion to tell, is called clipped.
+than anywhere else, with no rest rows, points or companion to tell, is called clipped; a rail
+that holds fewer samples than 8 times the busiest other value and has no longer runs (a few rows
+of per-point means) is not found.
 """
 
 from __future__ import annotations
