@@ -6,6 +6,7 @@ from __future__ import annotations
 import glob
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -270,16 +271,19 @@ def test_bad_input_gives_one_clear_line():
 @pytest.mark.parametrize(
     ("saturation", "quantum", "point"),
     [
-        ((1.3, 3.7), None, r"\+100 °/s"),  # a flat rail: all samples at the column's maximum
-        ((1.3, 3.7), 0.001, r"\+100 °/s"),
-        ((1.2505, 3.8), None, r"-100 °/s"),  # noise piled up at the lower rail
+        ((1.3, 3.7), None, 100.0),  # a flat rail: all samples at the column's maximum
+        ((1.3, 3.7), 0.001, 100.0),
+        ((1.2505, 3.8), None, -100.0),  # noise piled up at the lower rail
     ],
 )
 def test_saturated_output_is_refused(saturation, quantum, point):
     cap = simulate_gyro_rates(saturation=saturation, quantum=quantum, seed=3)
     assert cap.truth["saturated_rates_deg_s"] or saturation[0] > 1.25
-    with pytest.raises(CaptureError, match=f"rail at the rate point {point}"):
+    with pytest.raises(CaptureError, match="column 'output' is clipped") as exc:
         _fit(cap)
+    # the first sample at the rail belongs to the saturated rate point
+    row = int(re.search(r"from row (\d+)", str(exc.value)).group(1))
+    assert cap.columns["rate_deg_s"][row] == point
 
 
 @pytest.mark.parametrize(("samples", "noise"), [(1, 0.0), (1, 6e-4), (5000, 0.0), (3, 6e-4)])

@@ -216,6 +216,16 @@ def _analysis_options(func: F) -> F:
     return func
 
 
+def _clipping_option(func: F) -> F:
+    """``--allow-clipped`` (every analysis of a sensor output that can clip)."""
+    return click.option(
+        "--allow-clipped",
+        is_flag=True,
+        help="Analyse a capture with samples at the rails (a saturated sensor or ADC) anyway; "
+        "the results name the clipping in their warnings. Refused by default.",
+    )(func)
+
+
 def _read(path: str, needed: list[str], columns: Sequence[str], group: str | None) -> Any:
     from rotacal.io import parse_column_mapping, read_capture
 

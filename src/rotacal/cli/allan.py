@@ -15,6 +15,7 @@ from ._common import (
     INPUT_FILE,
     _analysis_options,
     _check_outputs,
+    _clipping_option,
     _emit_warnings,
     _names_capture,
     _status,
@@ -40,6 +41,7 @@ from ._common import (
     show_default=True,
     help="τ grid: 'all' computes every cluster size (O(N log² N)).",
 )
+@_clipping_option
 @_analysis_options
 @_names_capture
 def allan_cmd(
@@ -86,6 +88,7 @@ def allan_cmd(
             taus=taus,
             column=rate_column,
             specs=kw.pop("specs"),
+            allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path)

@@ -17,6 +17,7 @@ from ._common import (
     INPUT_FILE,
     _analysis_options,
     _check_outputs,
+    _clipping_option,
     _emit_warnings,
     _names_capture,
     _read,
@@ -58,6 +59,7 @@ def gyro() -> None:
     help="Bandwidth of one reading for the resolution check (Hz, ≤ fs/2; needs "
     "--sample-rate-hz) [default: the recorded samples' own].",
 )
+@_clipping_option
 @_analysis_options
 @_names_capture
 def gyro_scale_factor(
@@ -87,6 +89,7 @@ def gyro_scale_factor(
             specs=kw.pop("specs"),
             sample_rate_hz=sample_rate_hz,
             bandwidth_hz=bandwidth_hz,
+            allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path)
@@ -114,6 +117,7 @@ def gyro_scale_factor(
     default=None,
     help="Reject residuals beyond k robust sigmas [default: 5 % family-wise for Gaussian noise].",
 )
+@_clipping_option
 @_analysis_options
 @_names_capture
 def gyro_triad(
@@ -126,7 +130,12 @@ def gyro_triad(
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     cap = _read(capture, [*RATE_COLUMNS, *TRIAD_OUTPUT_COLUMNS], columns, group)
     with _status("fitting"):
-        result = calibrate_triad_columns(cap.columns, reject_k=reject_k, specs=kw.pop("specs"))
+        result = calibrate_triad_columns(
+            cap.columns,
+            reject_k=reject_k,
+            specs=kw.pop("specs"),
+            allow_clipped=kw.pop("allow_clipped"),
+        )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path)
     if report_path:
@@ -164,6 +173,7 @@ def gyro_triad(
 @click.option(
     "--angle-deg", type=float, default=360.0, show_default=True, help="Angle of each rotation."
 )
+@_clipping_option
 @_analysis_options
 @_names_capture
 def gyro_rotations(
@@ -215,7 +225,13 @@ def gyro_rotations(
     rate = np.column_stack([cap[c] for c in TRIAD_OUTPUT_COLUMNS])
     with _status("integrating the rotations"):
         result = calibrate_triad_rotations(
-            rate, fs_hz, rotations, static=static, angle_deg=angle_deg, specs=kw.pop("specs")
+            rate,
+            fs_hz,
+            rotations,
+            static=static,
+            angle_deg=angle_deg,
+            specs=kw.pop("specs"),
+            allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path)
@@ -246,6 +262,7 @@ def gyro_rotations(
     default=None,
     help="Latitude of the laboratory (or site.latitude_deg in --specs).",
 )
+@_clipping_option
 @_analysis_options
 @_names_capture
 def gyro_multiposition(
@@ -270,6 +287,7 @@ def gyro_multiposition(
             axis=axis,
             latitude_deg=latitude_deg,
             specs=kw.pop("specs"),
+            allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path)

@@ -8,6 +8,7 @@ from typing import Any
 import click
 
 from rotacal.errors import CaptureError
+from rotacal.results import with_warnings
 
 from ._app import cli
 from ._common import (
@@ -16,6 +17,7 @@ from ._common import (
     F,
     _analysis_options,
     _check_outputs,
+    _clipping_option,
     _emit_warnings,
     _names_capture,
     _naming_file,
@@ -55,7 +57,7 @@ def _motion_common(func: F) -> F:
     ]
     for option in reversed(options):
         func = option(func)
-    return _analysis_options(func)
+    return _clipping_option(_analysis_options(func))
 
 
 def _finish_motion(
@@ -151,7 +153,9 @@ def motion_encoder(
 
         ref = _read(correction_from, ["a", "b"], columns, group)
         with _naming_file(correction_from):
-            kw["correction"] = fit_quadrature_correction(ref["a"], ref["b"])
+            kw["correction"] = fit_quadrature_correction(
+                ref["a"], ref["b"], allow_clipped=kw["allow_clipped"]
+            )
         if kw["correction"].method != "heydemann":
             raise CaptureError(
                 f"--correction-from {correction_from} covers only part of a signal period too; "
@@ -169,6 +173,10 @@ def motion_encoder(
         cap = _read(capture, ["time_s", "a", "b"], columns, group)
         with _status("demodulating and fitting"):
             result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
+    if correction_from is not None:  # a clipped reference analysed with --allow-clipped
+        result = with_warnings(
+            result, (f"--correction-from {correction_from}: {w}" for w in kw["correction"].warnings)
+        )
     _finish_motion(result, capture, json_path, report_path)
 
 

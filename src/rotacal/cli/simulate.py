@@ -146,6 +146,9 @@ def simulate_encoder(out: str, harmonic_items: Sequence[str], overwrite: bool, *
 @click.option("--radius-mm", type=float, default=None, help="R [100 mm].")
 @click.option("--zero-offset-mm", type=float, default=None, help="Reading at θ = 0 (mm).")
 @click.option("--noise", type=float, default=None, help="Displacement noise, rms (mm).")
+@click.option(
+    "--range-mm", type=float, default=None, help="Sensor range: readings clip at ±R (mm)."
+)
 def simulate_lts(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any) -> None:
     """Laser triangulation capture: time_s, displacement_mm."""
     kw["noise_mm"] = kw.pop("noise")
@@ -157,6 +160,9 @@ def simulate_lts(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw:
 @click.option("--bias-deg-s", type=float, default=None, help="Constant rate bias.")
 @click.option("--noise", type=float, default=None, help="Rate noise, rms (deg/s).")
 @click.option("--snr-db", type=float, default=None, help="Noise set by this SNR instead.")
+@click.option(
+    "--range-deg-s", type=float, default=None, help="Gyro range: the output clips at ±R (deg/s)."
+)
 def simulate_fog(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any) -> None:
     """FOG capture: time_s, rate_deg_s."""
     if kw["snr_db"] is not None and kw["noise"] is not None:

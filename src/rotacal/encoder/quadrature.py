@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rotacal.errors import CaptureError, ConfigError
-from rotacal.results import Result
+from rotacal.results import Result, with_warnings
 from rotacal.signal import check_sampling
 from rotacal.signal._values import (
     check_magnitudes,
@@ -34,6 +34,7 @@ from rotacal.signal._values import (
     check_not_copies,
     in_working_range,
 )
+from rotacal.signal.clipping import check_clipping, find_clipping
 
 __all__ = [
     "Demodulation",
@@ -304,28 +305,17 @@ def _check_varies(a: FloatArray, b: FloatArray) -> None:
     )
 
 
-def _check_clipping(x: FloatArray, y: FloatArray, name: str) -> None:
-    """Raise if ``x`` is pinned at its exact extreme while the other signal still moves.
-
-    ADC quantisation also puts several samples on the extreme code, but only over the small phase
-    range where the signal is within one code of its peak; clipping flattens a whole arc, over
-    which the other signal ``y`` sweeps a large part of its range.
-    """
-    n = x.size
-    y_range = float(np.ptp(y))
-    if y_range <= 0.0:
-        return
-    for level, where in ((float(x.max()), "maximum"), (float(x.min()), "minimum")):
-        pinned = x == level
-        count = int(np.count_nonzero(pinned))
-        if count < max(8, int(0.002 * n)):
-            continue
-        spread = float(np.ptp(y[pinned])) / y_range
-        if spread > 0.2:
-            raise CaptureError(
-                f"column '{name}' is clipped: {100.0 * count / n:.1f} % of the samples sit at "
-                f"exactly its {where} {level:g}; reduce the signal gain or widen the ADC range."
-            )
+def _clipping(aa: FloatArray, bb: FloatArray, allow_clipped: bool) -> tuple[str, ...]:
+    """Refuse a channel at the rails (or return the warnings when allowed): the one detector,
+    each channel judged with the other as its companion (a table at rest where a channel peaks
+    is not a rail)."""
+    return check_clipping(
+        {
+            "a": find_clipping(aa, "a", companion=bb),
+            "b": find_clipping(bb, "b", companion=aa),
+        },
+        allow_clipped=allow_clipped,
+    )
 
 
 def _stride_for(n: int, max_points: int) -> int:
@@ -401,8 +391,6 @@ def _fit(aa: FloatArray, bb: FloatArray, max_points: int) -> QuadratureCorrectio
     a_s = aa[::stride]
     b_s = bb[::stride]
     _check_varies(a_s, b_s)
-    _check_clipping(a_s, b_s, "a")
-    _check_clipping(b_s, a_s, "b")
     ma, mb = float(a_s.mean()), float(b_s.mean())
     sa, sb = float(a_s.std()), float(b_s.std())
     for s, name in ((sa, "a"), (sb, "b")):
@@ -488,7 +476,7 @@ def _fit(aa: FloatArray, bb: FloatArray, max_points: int) -> QuadratureCorrectio
 
 
 def fit_quadrature_correction(
-    a: ArrayLike, b: ArrayLike, *, max_points: int = 1_000_000
+    a: ArrayLike, b: ArrayLike, *, max_points: int = 1_000_000, allow_clipped: bool = False
 ) -> QuadratureCorrection:
     """Fit offsets, amplitudes and phase error of two quadrature signals (Heydemann correction).
 
@@ -508,6 +496,9 @@ def fit_quadrature_correction(
         The two signals (any unit, e.g. V), ``a ≈ cos φ``, ``b ≈ sin φ``.
     max_points : int
         Largest number of samples used in the fit.
+    allow_clipped : bool
+        Fit signals with samples at the rails (:mod:`rotacal.signal.clipping`) anyway, saying so
+        in the result's ``warnings``; refused by default (a clipped arc biases the ellipse).
 
     Returns
     -------
@@ -529,7 +520,8 @@ def fit_quadrature_correction(
     Feng et al. 2023, Sensors 23:4876, §3 (signal preprocessing before the subdivision).
     """
     aa, bb = _check_pair(a, b)
-    return _fit(aa, bb, max_points)
+    clipped = _clipping(aa, bb, allow_clipped)
+    return with_warnings(_fit(aa, bb, max_points), clipped)
 
 
 def correct_quadrature(
@@ -1234,6 +1226,7 @@ def demodulate(
     correction: QuadratureCorrection | None = None,
     hysteresis_subintervals: int | None = None,
     max_points: int = 1_000_000,
+    allow_clipped: bool = False,
 ) -> Demodulation:
     """Angle and reversing moments from a quadrature-encoder capture, in one call.
 
@@ -1254,6 +1247,9 @@ def demodulate(
         See :func:`find_reversals`.
     max_points : int
         Largest number of samples used in the correction fit.
+    allow_clipped : bool
+        Demodulate signals with samples at the rails anyway (their ``warnings`` say so); refused
+        by default. Every sample of both channels is judged (:mod:`rotacal.signal.clipping`).
 
     Returns
     -------
@@ -1276,13 +1272,12 @@ def demodulate(
     _check_lines(lines)
     aa, bb = _check_pair(a, b)
     tt = _check_time(t, aa.size)
+    clipped = _clipping(aa, bb, allow_clipped)
     if correction is None:
         correction = _fit(aa, bb, max_points)
     else:
         stride = _stride_for(aa.size, max_points)
         _check_varies(aa[::stride], bb[::stride])
-        _check_clipping(aa[::stride], bb[::stride], "a")
-        _check_clipping(bb[::stride], aa[::stride], "b")
     u, v = correct_quadrature(aa, bb, correction)
     phase, _ = unwrapped_phase(u, v)
     reversals = find_reversals(tt, u, v, phase, hysteresis_subintervals=hysteresis_subintervals)
@@ -1300,4 +1295,5 @@ def demodulate(
         angle_max_deg=float(theta.max()),
         _angle_deg=theta,
         _time_s=tt,
+        warnings=clipped,
     )

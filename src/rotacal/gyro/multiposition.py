@@ -42,6 +42,7 @@ from scipy.linalg import solve_triangular
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 from rotacal.signal._values import check_magnitudes, check_not_constant, check_not_copies
+from rotacal.signal.clipping import check_clipping
 from rotacal.uncertainty.budget import UncertaintyBudget
 from rotacal.uncertainty.gum import Input, propagate
 from rotacal.uncertainty.specs import TYPE_A_ONLY_NOTE, InstrumentSpecs, spec_distribution
@@ -648,6 +649,7 @@ def calibrate_multiposition(
     latitude_deg: float | None = None,
     earth_rate_deg_h: float = EARTH_RATE_DEG_H,
     specs: InstrumentSpecs | None = None,
+    allow_clipped: bool = False,
 ) -> MultipositionResult:
     """Drift coefficients of one gyro axis from its outputs at several turntable positions, each
     with its uncertainty budget.
@@ -676,6 +678,9 @@ def calibrate_multiposition(
         The lab's instrument specifications. Used: ``site.latitude_deg`` (value and u, deg) and
         ``table.orientation_error_arcsec`` (one distribution for each of Δψ, Δθ, Δγ, arcsec;
         a stated mean is corrected for by eq. (8)); others do not apply. None: Type A only.
+    allow_clipped : bool
+        Fit an output with readings at the rails (:mod:`rotacal.signal.clipping`) anyway
+        (``--allow-clipped``); ``warnings`` name the clipping. Refused by default.
 
     Returns
     -------
@@ -697,8 +702,8 @@ def calibrate_multiposition(
     CaptureError
         Non-finite values (naming the rows), values beyond float64's working range (angles beyond
         ±1e9°), a constant output, a column that copies another (or its negative), fewer than 7
-        distinct positions, or positions that leave coefficients unidentifiable (naming them, and
-        an axis that never turns).
+        distinct positions, positions that leave coefficients unidentifiable (naming them, and
+        an axis that never turns), or an output at its rails.
     ConfigError
         Latitude outside ±90°, missing, or contradicting ``site.latitude_deg``; an unknown axis.
 
@@ -748,6 +753,7 @@ def calibrate_multiposition(
         )
     _check_columns(p1, p2, y)
     plan, _, first, pos_of_row = _plan_core(p1, p2, ax_, CaptureError, "the capture")
+    clipped = check_clipping({"output_deg_h": y}, allow_clipped=allow_clipped, groups=pos_of_row)
     names = _NAMES[ax_]
     w, g = earth_rate_and_gravity(p1, p2, lat, earth_rate_deg_h=we)
     d0 = float(orient_spec.mean) if orient_spec is not None else 0.0
@@ -826,6 +832,7 @@ def calibrate_multiposition(
         _covariance=cov,
         _plot=plot,
         _budgets=budgets,
+        warnings=clipped,
     )
 
 

@@ -42,6 +42,7 @@ from rotacal.signal.allan import (
     noise_terms,
     overlapping_adev,
 )
+from rotacal.signal.clipping import check_clipping
 from rotacal.uncertainty.budget import UncertaintyBudget, uncertainty_keys
 from rotacal.uncertainty.gum import Input, propagate
 from rotacal.uncertainty.specs import TYPE_A_ONLY_NOTE, InstrumentSpecs, spec_input
@@ -510,6 +511,7 @@ def gyro_noise(
     taus: Any = "log",
     column: str = "rate_deg_s",
     specs: InstrumentSpecs | None = None,
+    allow_clipped: bool = False,
 ) -> GyroNoise:
     """Overlapping Allan deviation and IEEE 952 noise terms of a gyro's rate record, each term
     with its uncertainty budget.
@@ -532,6 +534,9 @@ def gyro_noise(
     specs : InstrumentSpecs, optional
         The lab's instrument specifications; ``timebase.relative_error`` (fractional error of the
         DAQ clock, which scales every τ) is used, the others do not apply. None: Type A only.
+    allow_clipped : bool
+        Analyse a record with samples at the rails (:mod:`rotacal.signal.clipping`) anyway
+        (``--allow-clipped``); ``warnings`` name the clipping. Refused by default.
 
     Returns
     -------
@@ -575,7 +580,9 @@ def gyro_noise(
         column, y, "the sensor is stuck, or the column is a set value; supply the sensor output"
     )
     fs = _sampling_rate(time_s, fs_hz, y.size)
-    adev = overlapping_adev(y, fs=fs, taus=taus, data_type="rate")
+    clipped = check_clipping({column: y}, allow_clipped=allow_clipped)
+    # clipping is judged above, under the column's name
+    adev = overlapping_adev(y, fs=fs, taus=taus, data_type="rate", allow_clipped=True)
     terms = noise_terms(adev, unit=unit)
     named = {
         "angle_random_walk": "arw_deg_rt_h",
@@ -615,4 +622,5 @@ def gyro_noise(
         _terms=terms,
         _budgets=budgets,
         _slope_bias=leaks,
+        warnings=clipped,
     )

@@ -55,6 +55,7 @@ from rotacal.signal._values import (
     check_not_copies,
     check_setting,
 )
+from rotacal.signal.clipping import check_clipping
 from rotacal.uncertainty.budget import UncertaintyBudget
 from rotacal.uncertainty.gum import Input
 from rotacal.uncertainty.specs import (
@@ -78,8 +79,6 @@ FERRARIS_ROTATIONS = {"x_rot": "x", "y_rot": "y", "z_rot": "z"}
 
 _AXES = "xyz"
 _MIN_SECTION = 2
-#: Consecutive samples at a section's extreme value that count as a saturated output.
-_SATURATION_RUN = 5
 
 
 @dataclasses.dataclass(frozen=True)
@@ -311,26 +310,27 @@ def ferraris_sections(
 
 
 # ------------------------------------------------------------------------------------ checks
-def _check_saturated(rate: np.ndarray, s: int, e: int, name: str, columns: Sequence[str]) -> None:
-    """A run of ≥ 5 identical samples at a rotation's extreme value, far from rest: clipped."""
-    seg = rate[s:e]
-    rest = np.median(seg, axis=0)
-    swing = float(np.max(np.abs(seg - rest)))
-    for c in range(3):
-        y = seg[:, c]
-        for ext in (float(y.max()), float(y.min())):
-            if swing == 0 or abs(ext - rest[c]) < 0.5 * swing:
-                continue  # only the outputs that carry the rotation can saturate in it
-            hit = np.concatenate([[0], (y == ext).astype(np.int8), [0]])
-            d = np.diff(hit)
-            runs = np.flatnonzero(d == -1) - np.flatnonzero(d == 1)
-            if runs.size and runs.max() >= _SATURATION_RUN:
-                first = s + int(np.flatnonzero(d == 1)[int(runs.argmax())])
-                raise CaptureError(
-                    f"column {columns[c]} stays at {ext:.6g} for {int(runs.max())} samples from "
-                    f"row {first} during rotation {name}: the gyro output is saturated; rotate "
-                    "more slowly or widen the gyro's range."
-                )
+def _clipping(
+    u: np.ndarray,
+    rots: Sequence[tuple],
+    stats_: Sequence[tuple[str, int, int]],
+    columns: Sequence[str],
+    allow_clipped: bool,
+) -> tuple[str, ...]:
+    """The rails of each output over the rows the calibration uses (the one detector of
+    :mod:`rotacal.signal.clipping`); the static sections are where the gyro rests, so the level
+    it shows there is not a rail (a one-way rotation starts from it)."""
+    used = np.zeros(u.shape[0], dtype=bool)
+    rest = np.zeros(u.shape[0], dtype=bool)
+    for *_, s, e, _ in rots:
+        used[s:e] = True
+    for _, s, e in stats_:
+        used[s:e] = rest[s:e] = True
+    return check_clipping(
+        {name: np.where(used, u[:, c], np.nan) for c, name in enumerate(columns)},
+        allow_clipped=allow_clipped,
+        rest=rest if rest.any() else None,
+    )
 
 
 def _check_sections(
@@ -369,6 +369,7 @@ def calibrate_triad_rotations(
     columns: Sequence[str] = TRIAD_OUTPUT_COLUMNS,
     specs: InstrumentSpecs | None = None,
     output_unit: str = "",
+    allow_clipped: bool = False,
 ) -> RotationCalibration:
     """K and b of a gyro triad from rotations through known angles (Ferraris-style).
 
@@ -411,6 +412,9 @@ def calibrate_triad_rotations(
         budgets hold the capture's Type A part (and ``angle_u_deg``).
     output_unit : str
         Name of the output unit, for the budgets and reports.
+    allow_clipped : bool
+        Calibrate from outputs with samples at the rails anyway (``--allow-clipped``);
+        ``warnings`` name the clipping. Refused by default.
 
     Returns
     -------
@@ -424,8 +428,8 @@ def calibrate_triad_rotations(
         3-D), neither ``static`` nor ``bias``, a bad setting.
     CaptureError
         NaN/inf in a section used; in the sections used, values beyond float64's working range,
-        an output that is constant or copies another (or its negative); a saturated output
-        during a rotation.
+        an output that is constant or copies another (or its negative), an output at its rails
+        (:mod:`rotacal.signal.clipping`).
 
     References
     ----------
@@ -499,8 +503,7 @@ def calibrate_triad_rotations(
             "x, y and z."
         )
     _check_sections(u, [(s, e) for *_, s, e, _ in rots] + [(s, e) for _, s, e in stats_], cols)
-    for name, _, _, s, e, _ in rots:
-        _check_saturated(u, s, e, name, cols)
+    clipped = _clipping(u, rots, stats_, cols, allow_clipped)
 
     # --- static sections: bias, noise, spread of the section means
     if stats_:
@@ -636,6 +639,7 @@ def calibrate_triad_rotations(
         output_unit=output_unit,
         _plot=plot,
         _budgets=budgets,
+        warnings=clipped,
     )
 
 

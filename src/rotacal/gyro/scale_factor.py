@@ -71,6 +71,7 @@ from rotacal.gyro.uncertainty import (
 )
 from rotacal.results import Result, to_jsonable
 from rotacal.signal._values import check_magnitudes, check_not_copies, check_setting
+from rotacal.signal.clipping import check_clipping
 from rotacal.uncertainty.budget import BudgetRow, UncertaintyBudget
 from rotacal.uncertainty.distributions import Distribution, Normal
 from rotacal.uncertainty.gum import Input, linear_fit_uncertainty, welch_satterthwaite
@@ -134,13 +135,6 @@ _QUANTUM_SAMPLES = 50_000
 # the median slope, by more than _SAT_SIGMAS standard errors, is a saturated output.
 _SAT_SLOPE_FRACTION = 0.5
 _SAT_SIGMAS = 5.0
-# A rail: the column's extreme value held by ≥ 1 % (and ≥ 3) of a point's samples and by more than
-# twice as many samples as the point's next value below it (a noise tail decreases, a rail piles).
-_RAIL_FRACTION = 0.01
-_RAIL_MIN_COUNT = 3
-# …or every sample of the point (≥ 10) equals it while ≥ 75 % of the other points vary.
-_RAIL_FLAT_MIN = 10
-_RAIL_NOISY_FRACTION = 0.75
 
 
 @dataclasses.dataclass(frozen=True)
@@ -572,47 +566,6 @@ def _group(rate: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray, np.nda
     return gid, rate_mean, spread
 
 
-def _check_rail(
-    y: np.ndarray, gid: np.ndarray, ok: np.ndarray, rates: np.ndarray, std: np.ndarray, unit: str
-) -> None:
-    """Refuse a point clipped at a rail: its samples pile up at the column's extreme value, or
-    they all equal it while the other points show noise (a rail has none)."""
-    yf, gf = y[ok], gid[ok]
-    noisy = np.isfinite(std) & (std > 0)
-    for extreme, word in ((float(yf.max()), "maximum"), (float(yf.min()), "minimum")):
-        at = yf == extreme
-        for g in np.unique(gf[at]):
-            vals = yf[gf == g]
-            k_ext = int(np.count_nonzero(vals == extreme))
-            others_noisy = np.delete(noisy, g)
-            others_n = np.delete(np.isfinite(std), g)
-            if (
-                k_ext == vals.size >= _RAIL_FLAT_MIN
-                and others_n.any()
-                and np.count_nonzero(others_noisy)
-                >= _RAIL_NOISY_FRACTION * np.count_nonzero(others_n)
-            ):
-                raise CaptureError(
-                    f"column output clips at a rail at the rate point {_fmt_rate(rates[g])}: all "
-                    f"{vals.size} of its samples equal the column's {word} {extreme:.6g}{unit} while "
-                    "the other points show noise; drop that rate point or widen the DUT's output "
-                    "range."
-                )
-            if k_ext < max(_RAIL_MIN_COUNT, math.ceil(_RAIL_FRACTION * vals.size)):
-                continue
-            others = vals[vals != extreme]
-            if np.unique(vals).size < 3 or others.size == 0:
-                continue
-            nearest = others.max() if word == "maximum" else others.min()
-            k_next = int(np.count_nonzero(others == nearest))
-            if k_ext > 2 * k_next:
-                raise CaptureError(
-                    f"column output clips at a rail at the rate point {_fmt_rate(rates[g])}: "
-                    f"{k_ext} of its {vals.size} samples sit exactly at the column's {word} "
-                    f"{extreme:.6g}{unit}; drop that rate point or widen the DUT's output range."
-                )
-
-
 def _check_saturation(
     rates: np.ndarray, means: np.ndarray, std: np.ndarray, counts: np.ndarray, unit: str
 ) -> None:
@@ -683,6 +636,7 @@ def calibrate_scale_factor(
     mc_trials: int = DEFAULT_MC_TRIALS,
     sample_rate_hz: float | None = None,
     bandwidth_hz: float | None = None,
+    allow_clipped: bool = False,
 ) -> ScaleFactorResult:
     """Scale factor, bias and nonlinearity of a gyro from a rate-table test.
 
@@ -694,9 +648,10 @@ def calibrate_scale_factor(
     rate point has no finite output, outputs are NaN (unless ``nan_policy="omit"``), a column holds
     values beyond float64's working range (|x| > 1e100, or all below 1e-100), there is only one
     rate, the output copies the set rate (or its negative), the output does not change with the
-    rate, or the output saturates: at the outer
-    points their mean stops following the rate (local slope below half the median slope by more
-    than 5 standard errors), or a point's samples pile up at the column's extreme value (a rail).
+    rate, the output sits at its rails (:mod:`rotacal.signal.clipping`, with the rate points as
+    groups; ``allow_clipped`` analyses it anyway and says so in ``warnings``), or the output
+    saturates: at the outer points their mean stops following the rate (local slope below half
+    the median slope by more than 5 standard errors).
 
     The resolution a requirement judges is the smallest rate change the output resolves
     (:func:`rotacal.gyro.resolution.output_resolution`): the larger of the output quantum / |S|
@@ -732,6 +687,9 @@ def calibrate_scale_factor(
     bandwidth_hz : float or None
         Bandwidth of one reading for the resolution (Hz, ≤ fs/2; needs ``sample_rate_hz``);
         None: the recorded samples' own.
+    allow_clipped : bool
+        Analyse an output with samples at the rails anyway (``--allow-clipped``); the result's
+        ``warnings`` name the clipping. Refused by default.
 
     Returns
     -------
@@ -842,7 +800,11 @@ def calibrate_scale_factor(
             "column output does not change with the set rate (every rate point has the same mean "
             f"{means[0]:.6g}{unit}): check that the right output column is mapped."
         )
-    _check_rail(y, gid, ok, rates, std, unit)
+    # samples at the rails: the one detector, with the rate points as groups and the rows at
+    # zero rate as rest (rotacal.signal.clipping)
+    clipped = check_clipping(
+        {"output": y}, allow_clipped=allow_clipped, groups=gid, rest=rates[gid] == 0
+    )
     _check_saturation(rates, means, std, counts, unit)
 
     # Unweighted least-squares line through the point means (centred for accuracy), against the
@@ -996,6 +958,7 @@ def calibrate_scale_factor(
         decision_with_uncertainty=decision,
         resolution=res,
         _budgets=budgets,
+        warnings=clipped,
     )
 
 

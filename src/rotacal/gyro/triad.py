@@ -46,6 +46,7 @@ from rotacal.gyro.uncertainty import (
 )
 from rotacal.results import Result, to_jsonable
 from rotacal.signal._values import check_magnitudes, check_not_constant, check_not_copies
+from rotacal.signal.clipping import check_clipping
 from rotacal.uncertainty.budget import UncertaintyBudget
 from rotacal.uncertainty.gum import Input
 from rotacal.uncertainty.specs import InstrumentSpecs, spec_input, type_a_note
@@ -578,55 +579,6 @@ def _groups(omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return pts, inv.ravel()
 
 
-def _check_saturation(
-    omega: np.ndarray, u: np.ndarray, inv: np.ndarray, n_groups: int, columns: Sequence[str]
-) -> None:
-    """Refuse an output pinned at its extreme value (a clipped ADC or a saturated gyro).
-
-    An output is saturated when its extreme value (maximum or minimum) occurs in 3 or more rows
-    and either those rows have different reference rates (more than 5 % of the largest rate
-    apart: a linear gyro cannot give one value for both), or, within one rate point, the values
-    pile up at the extreme: more rows sit at it than at the next value inward, or the whole point
-    sits at it while the other points show their noise.
-    """
-    span_ref = max(float(np.max(np.abs(omega))), 1e-300)
-    for c, name in enumerate(columns):
-        y = u[:, c]
-        order = np.lexsort((y, inv))
-        gs, ys = inv[order], y[order]
-        # does the noise show? the interquartile range of most points is > 0 (gross outliers,
-        # a few per point, do not count: they leave the quartiles alone)
-        start = np.searchsorted(gs, np.arange(n_groups))
-        size = np.bincount(gs, minlength=n_groups)
-        ok = size > 0
-        iqr = ys[(start + (3 * size) // 4)[ok]] - ys[(start + size // 4)[ok]]
-        noisy = float(np.mean(iqr > 0)) >= 0.5
-        for ext, word in ((float(y.max()), "maximum"), (float(y.min()), "minimum")):
-            at = np.flatnonzero(y == ext)
-            if at.size < 3:
-                continue
-            spread = float(np.max(np.ptp(omega[at], axis=0)))
-            if spread > 0.05 * span_ref:
-                pinned = True  # different rates give one and the same value: clipped
-            else:
-                g = int(np.bincount(inv[at]).argmax())
-                vals, counts = np.unique(y[inv == g], return_counts=True)
-                if vals.size == 1:
-                    pinned = noisy  # the others show noise, this one does not
-                else:
-                    i = 0 if word == "minimum" else vals.size - 1
-                    j = 1 if word == "minimum" else vals.size - 2
-                    pinned = noisy and vals.size >= 3 and counts[i] > counts[j]
-            if pinned:
-                rates = np.unique(omega[at], axis=0)
-                shown = ", ".join("(" + ", ".join(f"{v:g}" for v in p) + ")" for p in rates[:3])
-                raise CaptureError(
-                    f"column {name} sits at its {word} {ext:.6g} in {at.size} rows (reference "
-                    f"rates {shown} °/s): the output is saturated; lower the test rates or "
-                    "drop those rows."
-                )
-
-
 def calibrate_triad(
     omega_deg_s: Any,
     u: Any,
@@ -638,6 +590,7 @@ def calibrate_triad(
     columns: Sequence[str] = RATE_COLUMNS + TRIAD_OUTPUT_COLUMNS,
     specs: InstrumentSpecs | None = None,
     output_unit: str = "",
+    allow_clipped: bool = False,
 ) -> TriadResult:
     """Scale/misalignment matrix K and bias b of a gyro triad by least squares (seed 003).
 
@@ -663,7 +616,8 @@ def calibrate_triad(
         calibration, u/nominal_scale − ω (°/s).
     output_limits : (float, float) or None
         The output's range (output unit); a row at or beyond either limit is a saturated output
-        and an error. Without it, an output pinned at its extreme value is detected from the data.
+        and an error. Besides, an output at its rails is detected from the data
+        (:mod:`rotacal.signal.clipping`: the rate points as groups, the rows at rest as rest).
     max_reject_fraction : float
         Largest fraction of an output's rows the rule may reject before the capture is refused
         as not following u = K·ω + b (default 0.2).
@@ -676,6 +630,9 @@ def calibrate_triad(
         only.
     output_unit : str
         Name of the output unit, for the budgets and reports.
+    allow_clipped : bool
+        Fit outputs with samples at the rails anyway (``--allow-clipped``); ``warnings`` name the
+        clipping. Refused by default.
 
     Returns
     -------
@@ -766,7 +723,12 @@ def calibrate_triad(
         )
     _check_degenerate(omega, uu, rate_cols, out_cols)
     pts, inv = _groups(omega)
-    _check_saturation(omega, uu, inv, pts.shape[0], out_cols)
+    clipped = check_clipping(
+        {name: uu[:, c] for c, name in enumerate(out_cols)},
+        allow_clipped=allow_clipped,
+        groups=inv,
+        rest=~np.any(omega != 0, axis=1),
+    )
 
     x = _design(omega)
     coef = np.zeros((4, 3))
@@ -918,6 +880,7 @@ def calibrate_triad(
         output_unit=output_unit,
         _plot=plot,
         _budgets=budgets,
+        warnings=clipped,
     )
 
 

@@ -1,5 +1,5 @@
 """rotacal.signal — instrument-independent signal maths: IEEE 1057 sine fits, THD, SNR, Allan
-deviation and IEEE 952 noise terms."""
+deviation and IEEE 952 noise terms, and the detector of clipped (saturated) signals."""
 
 from rotacal.signal._checks import check_sampling
 from rotacal.signal.allan import (
@@ -10,6 +10,13 @@ from rotacal.signal.allan import (
     edf_overlapping_adev,
     noise_terms,
     overlapping_adev,
+)
+from rotacal.signal.clipping import (
+    ClippedSignalError,
+    Clipping,
+    RailDetector,
+    check_clipping,
+    find_clipping,
 )
 from rotacal.signal.sinefit import (
     HarmonicFitAccumulator,
@@ -26,15 +33,20 @@ from rotacal.signal.sinefit import (
 
 __all__ = [
     "AllanDeviation",
+    "ClippedSignalError",
+    "Clipping",
     "HarmonicFitAccumulator",
     "NoiseTerm",
     "NoiseTerms",
+    "RailDetector",
     "SineFit",
     "adev_confidence_interval",
+    "check_clipping",
     "check_sampling",
     "displacement_amplitudes_from_rate",
     "edf_overlapping_adev",
     "estimate_frequency",
+    "find_clipping",
     "fit_harmonics",
     "fit_sine_3p",
     "fit_sine_4p",

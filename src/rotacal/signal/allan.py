@@ -33,6 +33,7 @@ from rotacal.signal._allan_edf import edf_oadev
 from rotacal.signal._allan_fast import direct_sums, second_difference_sums
 from rotacal.signal._checks import as_samples, check_finite
 from rotacal.signal._values import check_magnitudes
+from rotacal.signal.clipping import check_clipping
 
 __all__ = [
     "ONE_SIGMA",
@@ -216,42 +217,19 @@ def _check_alpha(noise_alpha: Any, size: int) -> np.ndarray:
     return arr.astype(np.int64)
 
 
-def _check_variation(y: np.ndarray, data_type: str) -> None:
-    """A constant, stuck or clipped record would give a silently meaningless deviation."""
-    n = y.size
-    if data_type == "rate":
-        lo, hi = float(y.min()), float(y.max())
-        if lo == hi:
-            raise CaptureError(
-                f"the rate record is constant ({hi!r} in all {n} samples): the sensor is stuck or "
-                "saturated, or the column is a set value; supply the sensor output."
-            )
-        limit = max(100, n // 100)
-        for value, name in ((hi, "maximum"), (lo, "minimum")):
-            at_rail = y == value
-            if np.count_nonzero(at_rail) < limit:
-                continue
-            # a finely resolved output (> 16 levels) holding a rail for a long run is clipped;
-            # a coarse-quantized one may legitimately sit on its top level
-            if np.unique(y[:: max(1, n // 100_000)]).size > 16:
-                run, start = _longest_run(at_rail)
-                if run >= limit:
-                    raise CaptureError(
-                        f"the rate record sits at its {name} {value!r} for {run} consecutive "
-                        f"samples from sample {start}: the sensor is saturated or stuck there; "
-                        "remove that stretch or use an unsaturated record."
-                    )
-
-
-def _longest_run(flags: np.ndarray) -> tuple[int, int]:
-    """Length and start of the longest run of True in ``flags``."""
-    if not flags.any():
-        return 0, -1
-    edges = np.diff(np.concatenate(([0], flags.view(np.int8), [0])))
-    starts = np.flatnonzero(edges == 1)
-    ends = np.flatnonzero(edges == -1)
-    k = int(np.argmax(ends - starts))
-    return int(ends[k] - starts[k]), int(starts[k])
+def _check_variation(y: np.ndarray, data_type: str, allow_clipped: bool) -> tuple[str, ...]:
+    """A constant or clipped rate record would give a silently meaningless deviation: refuse a
+    constant one, and one at the rails (:mod:`rotacal.signal.clipping`; the warnings when
+    ``allow_clipped``)."""
+    if data_type != "rate":
+        return ()
+    lo, hi = float(y.min()), float(y.max())
+    if lo == hi:
+        raise CaptureError(
+            f"the rate record is constant ({hi!r} in all {y.size} samples): the sensor is stuck "
+            "or saturated, or the column is a set value; supply the sensor output."
+        )
+    return check_clipping({"data": y}, allow_clipped=allow_clipped)
 
 
 # ====================================================================================== τ lists
@@ -430,6 +408,7 @@ def overlapping_adev(
     confidence: float = ONE_SIGMA,
     noise_alpha: Any = 0,
     method: Literal["auto", "direct"] = "auto",
+    allow_clipped: bool = False,
 ) -> AllanDeviation:
     """Overlapping Allan deviation with equivalent degrees of freedom and confidence intervals.
 
@@ -459,6 +438,9 @@ def overlapping_adev(
     method : "auto" or "direct"
         ``"auto"`` uses the fast all-τ expansion where it is cheaper than the definition;
         ``"direct"`` evaluates every τ by the definition (O(N) per τ).
+    allow_clipped : bool
+        Compute the deviation of a rate record with samples at the rails anyway (``warnings``
+        name the clipping); refused by default.
 
     Returns
     -------
@@ -470,7 +452,8 @@ def overlapping_adev(
     ------
     CaptureError
         NaN/inf samples, values beyond float64's working range (one sample of 1e300 would turn
-        every deviation into inf/NaN), fewer than 10 samples, a constant, stuck or clipped record.
+        every deviation into inf/NaN), fewer than 10 samples, a constant rate record, one at the
+        rails (:mod:`rotacal.signal.clipping`).
     ConfigError
         fs ≤ 0, an unknown ``taus``/``data_type``/``method``, a τ that the record cannot
         represent (shorter than 1/fs or longer than (N−1)/(2·fs)), a bad confidence or α.
@@ -496,7 +479,7 @@ def overlapping_adev(
         )
     check_finite("data", y)
     check_magnitudes("data", y, what=f"{data_type} data")
-    _check_variation(y, data_type)
+    clipped = _check_variation(y, data_type, allow_clipped)
     x = _phase(y, fs_hz, data_type)
     n_phase = x.size
     if not float(np.max(np.abs(x))) > 1e-12 * float(np.max(np.abs(y))):
@@ -540,6 +523,7 @@ def overlapping_adev(
         noise_alpha=alpha_out,
         method="direct" if n_direct == ms.size else "fast",
         notes=tuple(notes),
+        warnings=clipped,
         _n_direct=n_direct,
     )
 

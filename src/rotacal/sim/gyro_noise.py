@@ -51,6 +51,7 @@ def simulate_gyro_noise(
     quantum_deg_s: float | None = None,
     timebase_relative_error: float = 0.0,
     seed: int = 0,
+    range_deg_s: float | None = None,
 ) -> SimCapture:
     """A static gyro record ``time_s, rate_deg_s`` with known noise coefficients.
 
@@ -70,6 +71,9 @@ def simulate_gyro_noise(
         Constant bias (does not change the Allan deviation).
     quantum_deg_s : float, °/s, optional
         Quantise the output to this step.
+    range_deg_s : float, °/s, optional
+        Measuring range: an output beyond ±range_deg_s is reported as ±range_deg_s (a saturated
+        gyro; the truth then holds ``range_deg_s`` and ``clipped_samples``).
     timebase_relative_error : float
         Fractional error e of the DAQ clock that stamps ``time_s``: every recorded time is
         (1 + e) times the true one (a +1e-6 clock makes every time 1 ppm long). The noise
@@ -134,6 +138,13 @@ def simulate_gyro_noise(
         step = _nonneg("quantum_deg_s", quantum_deg_s)
         if step > 0:
             rate = np.round(rate / step) * step
+    clipped: dict[str, Any] = {}
+    if range_deg_s is not None:
+        lim = _nonneg("range_deg_s", range_deg_s)
+        if lim <= 0:
+            raise ConfigError(f"range_deg_s must be > 0 °/s, got {range_deg_s!r}.")
+        clipped = {"range_deg_s": lim, "clipped_samples": int(np.count_nonzero(abs(rate) > lim))}
+        rate = np.clip(rate, -lim, lim)
     truth: dict[str, Any] = {
         "kind": "gyro-noise",
         "arw_deg_rt_h": arw,
@@ -147,6 +158,7 @@ def simulate_gyro_noise(
         "fs_hz": fs,
         "samples": n,
         "seed": seed,
+        **clipped,
     }
     return SimCapture(
         kind="gyro-noise",

@@ -94,7 +94,8 @@ def simulate_gyro_rates(
     quantum : float or None
         Output quantum (output units): values are rounded to ``quantum·round(v/quantum)``.
     saturation : (float, float) or None
-        Output rails (low, high) in output units: the output is clipped to them.
+        Output rails (low, high) in output units: the output is clipped to them (the truth's
+        ``sensor`` then holds ``clipped_samples``, the outputs that were beyond them).
     rate_relative_error : float
         Relative error ε of the table's rate (dimensionless, > −1): the table turns at
         Ω·(1 + ε) while the capture records the set rate Ω (the systematic effect behind the
@@ -197,7 +198,9 @@ def simulate_gyro_rates(
     if q is not None:
         out = q * np.round(out / q)
     saturated: list[float] = []
+    clipped: dict[str, Any] = {}
     if rails is not None:
+        clipped["clipped_samples"] = int(np.count_nonzero((out < rails[0]) | (out > rails[1])))
         out = np.clip(out, rails[0], rails[1])
         beyond = (clean_uniq <= rails[0]) | (clean_uniq >= rails[1])
         saturated = [float(r) for r in uniq[beyond]]
@@ -223,6 +226,7 @@ def simulate_gyro_rates(
             "samples_per_point": counts.tolist(),
             "quantum": q,
             "saturation": None if rails is None else list(rails),
+            **clipped,
             "seed": int(seed),
             "run_order_deg_s": rates,
         },

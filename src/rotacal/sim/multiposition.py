@@ -190,6 +190,7 @@ def simulate_multiposition(
     repeats: int = 4,
     orientation_error_arcsec: Sequence[float] | None = None,
     seed: int = 0,
+    output_limit_deg_h: float | None = None,
 ) -> SimCapture:
     """Torquer outputs (in rate units) of one gyro axis at each turntable position.
 
@@ -215,6 +216,10 @@ def simulate_multiposition(
         x axes (seed 001 §2.2, Fig. 3), the same at every position. None: none.
     seed : int
         Seed of ``numpy.random.default_rng``.
+    output_limit_deg_h : float or None
+        Range of the torquer output (deg/h, > 0): a reading beyond ±output_limit_deg_h is
+        reported as ±output_limit_deg_h (a saturated rebalance loop; the truth's ``sensor`` then
+        holds ``output_limit_deg_h`` and ``clipped_samples``). None: unlimited.
 
     Returns
     -------
@@ -285,6 +290,13 @@ def simulate_multiposition(
     out = np.tile(clean, reps)
     if sigma > 0:
         out = out + np.random.default_rng(seed).normal(0.0, sigma, out.size)
+    sensor: dict[str, Any] = {"noise_deg_h": sigma, "repeats": reps, "seed": int(seed)}
+    if output_limit_deg_h is not None:
+        lim = float(output_limit_deg_h)
+        if not (math.isfinite(lim) and lim > 0):
+            raise ConfigError(f"output_limit_deg_h must be > 0 deg/h, got {output_limit_deg_h!r}.")
+        sensor.update(output_limit_deg_h=lim, clipped_samples=int(np.count_nonzero(abs(out) > lim)))
+        out = np.clip(out, -lim, lim)
     truth: dict[str, Any] = {
         "kind": "multiposition",
         "axis": axis,
@@ -297,7 +309,7 @@ def simulate_multiposition(
         "gravity_components_g": a,
         "orientation_error_arcsec": list(orient),
         "rows": int(out.size),
-        "sensor": {"noise_deg_h": sigma, "repeats": reps, "seed": int(seed)},
+        "sensor": sensor,
     }
     columns = {
         "phi1_deg": np.tile(pos[:, 0], reps),

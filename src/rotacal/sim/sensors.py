@@ -172,6 +172,18 @@ def _truth(
     return truth
 
 
+def _saturate(x: np.ndarray, limit: Any, name: str) -> dict[str, Any]:
+    """Clip ``x`` in place to ±limit (a sensor's range); the truth entries it adds (none if None)."""
+    if limit is None:
+        return {}
+    lim = _finite(name, limit)
+    if lim <= 0:
+        raise ConfigError(f"{name} must be > 0, got {limit!r}.")
+    beyond = int(np.count_nonzero(np.abs(x) > lim))
+    np.clip(x, -lim, lim, out=x)
+    return {name: lim, "clipped_samples": beyond}
+
+
 def _graduation_table(value: Any) -> tuple[np.ndarray, np.ndarray] | None:
     """(angles_deg, errors_arcsec) of an encoder's reading error, checked; None stays None."""
     if value is None:
@@ -356,6 +368,7 @@ def simulate_lts(
     start_s: float = 0.0,
     harmonics: int = 10,
     timebase_relative_error: float = 0.0,
+    range_mm: float | None = None,
 ) -> SimCapture:
     """Laser triangulation sensor reading a reflector at radius R: ``D = R·tan θ + zero + n``.
 
@@ -371,6 +384,10 @@ def simulate_lts(
         Constant displacement offset (mm).
     fs_hz, duration_s, seed, start_s, harmonics, timebase_relative_error
         As in :func:`simulate_encoder`.
+    range_mm : float or None
+        Measuring range of the sensor (mm, > 0): a reading beyond ±range_mm is reported as
+        ±range_mm (a saturated sensor; the truth's ``sensor`` then holds ``range_mm`` and
+        ``clipped_samples``, the readings that were beyond it). None: unlimited.
 
     Returns
     -------
@@ -395,6 +412,7 @@ def simulate_lts(
     d = r * np.tan(np.deg2rad(theta)) + z
     if nmm > 0:
         d += np.random.default_rng(seed).normal(0.0, nmm, t.size)
+    clipped = _saturate(d, range_mm, "range_mm")
     sensor = {
         "radius_mm": r,
         "noise_mm": nmm,
@@ -404,6 +422,7 @@ def simulate_lts(
         "start_s": t0,
         "seed": int(seed),
         "timebase_relative_error": tb,
+        **clipped,
     }
     return SimCapture(
         "lts",
@@ -426,6 +445,7 @@ def simulate_fog(
     harmonics: int = 10,
     scale_factor_error: float = 0.0,
     timebase_relative_error: float = 0.0,
+    range_deg_s: float | None = None,
 ) -> SimCapture:
     """A fibre-optic gyro on the table: ``rate = (1 + s)·dθ/dt + bias + white noise`` (deg/s).
 
@@ -447,6 +467,10 @@ def simulate_fog(
     scale_factor_error : float
         Relative error s of the gyro's scale factor (-): the output is (1 + s) times the true
         rate (the noise σ and the SNR are set on the true rate). |s| < 0.5.
+    range_deg_s : float or None
+        Measuring range of the gyro (deg/s, > 0): an output beyond ±range_deg_s (noise included)
+        is reported as ±range_deg_s (a saturated gyro; the truth's ``sensor`` then holds
+        ``range_deg_s`` and ``clipped_samples``). None: unlimited.
 
     Returns
     -------
@@ -481,6 +505,7 @@ def simulate_fog(
         noise = np.random.default_rng(seed).normal(0.0, sigma, t.size)
         rate += noise
         snr_real = 10.0 * math.log10(p_sig / float(np.mean(noise**2)))
+    clipped = _saturate(rate, range_deg_s, "range_deg_s")
     sensor = {
         "noise_deg_s": sigma,
         "noise_density_deg_s_rt_hz": sigma / math.sqrt(fs / 2.0),
@@ -494,6 +519,7 @@ def simulate_fog(
         "seed": int(seed),
         "scale_factor_error": sf,
         "timebase_relative_error": tb,
+        **clipped,
     }
     return SimCapture(
         "fog",

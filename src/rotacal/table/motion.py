@@ -28,7 +28,7 @@ import numpy as np
 
 from rotacal.encoder import QuadratureCorrection, correct_quadrature, demodulate
 from rotacal.errors import CaptureError, ConfigError
-from rotacal.results import Result
+from rotacal.results import Result, with_warnings
 from rotacal.signal import (
     SineFit,
     check_sampling,
@@ -39,6 +39,7 @@ from rotacal.signal import (
     snr_db,
 )
 from rotacal.signal._values import check_magnitudes, check_setting
+from rotacal.signal.clipping import check_clipping
 from rotacal.table.motion_uncertainty import (
     ReversalDetection,
     comparison_budgets,
@@ -368,6 +369,7 @@ def calibrate_encoder_motion(
     set_frequency_hz: float | None = None,
     correction: QuadratureCorrection | None = None,
     specs: InstrumentSpecs | None = None,
+    allow_clipped: bool = False,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from an optical shaft encoder (the OSE scheme).
 
@@ -386,6 +388,9 @@ def calibrate_encoder_motion(
     correction : QuadratureCorrection, optional — a known correction instead of fitting one.
     specs : InstrumentSpecs, optional — the lab's instrument specifications (Type B inputs:
         ``timebase.relative_error``, ``encoder.graduation_error_arcsec``); None: Type A only.
+    allow_clipped : bool — analyse a capture whose a or b sits at the rails
+        (:mod:`rotacal.signal.clipping`) anyway, naming the clipping in ``warnings``; by default
+        it is refused with a CaptureError.
 
     Returns
     -------
@@ -401,7 +406,15 @@ def calibrate_encoder_motion(
     if int(lines) != lines or lines < 1:
         raise ConfigError(f"--lines must be a positive whole number, got {lines}")
     # demodulate checks the samples (lengths, NaN, time order, clipping, quadrature).
-    demod = demodulate(t, a, b, int(lines), correction=correction, max_points=_ELLIPSE_POINTS)
+    demod = demodulate(
+        t,
+        a,
+        b,
+        int(lines),
+        correction=correction,
+        max_points=_ELLIPSE_POINTS,
+        allow_clipped=allow_clipped,
+    )
     t, a, b = demod.time_s, np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     span = demod.angle_max_deg - demod.angle_min_deg
     first, last, n = _cut(demod.reversals.indices, periods, "encoder capture", span)
@@ -424,7 +437,7 @@ def calibrate_encoder_motion(
         sample_interval_s=float(t[last] - t[first]) / max(last - first, 1),
         capture_start_s=float(t[0]),
     )
-    return _finish(
+    result = _finish(
         scheme="encoder",
         fit=fit,
         displacement_amplitudes=fit.amplitudes,
@@ -443,6 +456,7 @@ def calibrate_encoder_motion(
         detection=detection,
         specs=specs,
     )
+    return with_warnings(result, demod.warnings)
 
 
 def extreme_reversals(
@@ -532,6 +546,7 @@ def calibrate_lts_motion(
     set_amplitude_deg: float | None = None,
     set_frequency_hz: float | None = None,
     specs: InstrumentSpecs | None = None,
+    allow_clipped: bool = False,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from a laser triangulation sensor (the LTS scheme).
 
@@ -546,6 +561,8 @@ def calibrate_lts_motion(
     harmonics, periods, set_amplitude_deg, set_frequency_hz : as `calibrate_encoder_motion`.
     specs : InstrumentSpecs, optional — Type B inputs (``timebase.relative_error``,
         ``lts.radius_mm`` — its value must be ``radius_mm`` —, ``lts.resolution_um``).
+    allow_clipped : bool — analyse a displacement at the sensor's rails anyway (named in
+        ``warnings``); refused by default (:mod:`rotacal.signal.clipping`).
 
     References
     ----------
@@ -557,6 +574,7 @@ def calibrate_lts_motion(
         raise ConfigError(f"--radius-mm must be positive, got {radius_mm}")
     check_setting("--radius-mm", radius_mm, unit="mm")
     t, d = _check_samples(t, "displacement_mm", displacement_mm)
+    clipped = check_clipping({"displacement_mm": d}, allow_clipped=allow_clipped)
     reach = float(np.max(np.abs(d)))
     if reach > radius_mm:
         # beyond 45° eq. (15) is no longer a small-angle sensor reading: a wrong R or unit
@@ -579,7 +597,7 @@ def calibrate_lts_motion(
         capture_start_s=float(t[0]),
         half_window_s=1.0 / (20.0 * fit.frequency_hz),  # extreme_reversals: ±period/20
     )
-    return _finish(
+    result = _finish(
         scheme="lts",
         fit=fit,
         displacement_amplitudes=fit.amplitudes,
@@ -599,6 +617,7 @@ def calibrate_lts_motion(
         specs=specs,
         radius_mm=float(radius_mm),
     )
+    return with_warnings(result, clipped)
 
 
 def _model_zero_crossings(fit: SineFit, t: np.ndarray) -> np.ndarray:
@@ -618,6 +637,7 @@ def calibrate_fog_motion(
     set_amplitude_deg: float | None = None,
     set_frequency_hz: float | None = None,
     specs: InstrumentSpecs | None = None,
+    allow_clipped: bool = False,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from a fibre-optic gyro's rate (the FOG scheme).
 
@@ -636,6 +656,8 @@ def calibrate_fog_motion(
     harmonics, periods, set_amplitude_deg, set_frequency_hz : as `calibrate_encoder_motion`.
     specs : InstrumentSpecs, optional — Type B inputs (``timebase.relative_error``,
         ``fog.scale_factor_relative``).
+    allow_clipped : bool — analyse a rate at the gyro's rails anyway (named in ``warnings``);
+        refused by default (:mod:`rotacal.signal.clipping`).
 
     References
     ----------
@@ -644,6 +666,7 @@ def calibrate_fog_motion(
     """
     _check_settings(harmonics, periods)
     t, w = _check_samples(t, "rate_deg_s", rate_deg_s)
+    clipped = check_clipping({"rate_deg_s": w}, allow_clipped=allow_clipped)
     f_start = estimate_frequency(t, w)
     first_fit = fit_harmonics(t, w, frequency_hz=f_start, harmonics=harmonics)
     rev_times = _model_zero_crossings(first_fit, t)
@@ -675,7 +698,7 @@ def calibrate_fog_motion(
         sample_interval_s=float(t[-1] - t[0]) / max(t.size - 1, 1),
         capture_start_s=float(t[0]),
     )
-    return _finish(
+    result = _finish(
         scheme="fog",
         fit=fit,
         displacement_amplitudes=disp,
@@ -696,6 +719,7 @@ def calibrate_fog_motion(
         detection=detection,
         specs=specs,
     )
+    return with_warnings(result, clipped)
 
 
 def compare_schemes(reference: MotionResult, other: MotionResult) -> SchemeComparison:

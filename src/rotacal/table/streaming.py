@@ -5,7 +5,8 @@
 memory is set by the chunk size, not by the capture's length. The capture is read in passes, each
 a fresh call of ``chunks()``:
 
-1. checks (lengths, NaN/inf, time order across chunks) and the sample count N;
+1. checks (lengths, NaN/inf, time order across chunks, samples at the rails) and the sample
+   count N;
 2. the Heydemann fit on the same even stride as in memory (at most 2·10⁵ points);
 3. signal phase with the cycle count carried from chunk to chunk (:class:`PhaseState`; a
    per-chunk ``np.unwrap`` would lose whole cycles at the boundaries), the subinterval
@@ -54,6 +55,7 @@ from rotacal.encoder import (
 )
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.io import iter_capture_chunks
+from rotacal.results import with_warnings
 from rotacal.signal import HarmonicFitAccumulator, SineFit, fit_harmonics
 from rotacal.signal._checks import MAX_GAP, TYPICAL_STEPS, gap_error
 from rotacal.signal._values import (
@@ -63,6 +65,7 @@ from rotacal.signal._values import (
     check_time_span,
     in_working_range,
 )
+from rotacal.signal.clipping import RailDetector, check_clipping
 from rotacal.table.motion import (
     _ELLIPSE_POINTS,
     MotionResult,
@@ -187,8 +190,10 @@ def _columns(raw: Any, offset: int) -> dict[str, np.ndarray]:
     return out
 
 
-def _pass_check(passes: _Passes) -> int:
-    """Pass 1: sample count, NaN/inf, magnitudes and time order, with the in-memory messages."""
+def _pass_check(passes: _Passes, allow_clipped: bool) -> tuple[int, tuple[str, ...]]:
+    """Pass 1: sample count, NaN/inf, time order and clipping (the rails of a and b, state
+    carried across chunks), with the in-memory messages and priority; the clipping warnings."""
+    rails = {"a": RailDetector("a"), "b": RailDetector("b")}
     counts = dict.fromkeys(_COLUMNS, 0)
     first_bad = dict.fromkeys(_COLUMNS, -1)
     order: tuple[int, Any, Any] | None = None
@@ -247,6 +252,8 @@ def _pass_check(passes: _Passes) -> int:
             first_t = t[0]
         last_t = t[-1]
         n += cols["a"].size
+        rails["a"].add(cols["a"], cols["b"])
+        rails["b"].add(cols["b"], cols["a"])
     passes.lengths = lengths
     if n < _MIN_SAMPLES:
         raise CaptureError(f"column 'a' has {n} samples; at least {_MIN_SAMPLES} are needed.")
@@ -271,7 +278,8 @@ def _pass_check(passes: _Passes) -> int:
         raise gap_error("time_s", *gap)
     if typical is not None:
         check_time_span("time_s", float(first_t), float(last_t), typical)
-    return n
+    found = {name: det.result() for name, det in rails.items()}
+    return n, check_clipping(found, allow_clipped=allow_clipped)
 
 
 def _pass_correction(passes: _Passes, n: int) -> QuadratureCorrection:
@@ -285,7 +293,10 @@ def _pass_correction(passes: _Passes, n: int) -> QuadratureCorrection:
         parts_b.append(np.array(cols["b"][s0::stride]))
     a_s = np.concatenate(parts_a)
     b_s = np.concatenate(parts_b)
-    return fit_quadrature_correction(a_s, b_s, max_points=max(a_s.size, _MIN_SAMPLES))
+    # clipping was judged on every sample in pass 1
+    return fit_quadrature_correction(
+        a_s, b_s, max_points=max(a_s.size, _MIN_SAMPLES), allow_clipped=True
+    )
 
 
 @dataclasses.dataclass
@@ -452,6 +463,7 @@ def calibrate_encoder_motion_chunked(
     correction: QuadratureCorrection | None = None,
     progress: Callable[[int], None] | None = None,
     specs: InstrumentSpecs | None = None,
+    allow_clipped: bool = False,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from an encoder capture read in chunks (flat memory).
 
@@ -485,6 +497,10 @@ def calibrate_encoder_motion_chunked(
         passes (at most 6·N for a capture of N samples; passes 4–6 read only what they need).
     specs : InstrumentSpecs, optional
         The lab's instrument specifications (Type B inputs of the budgets, as in memory).
+    allow_clipped : bool
+        Analyse a capture whose a or b sits at the rails anyway (named in ``warnings``); refused
+        by default. Pass 1 judges every sample (:class:`~rotacal.signal.RailDetector`, state
+        carried across chunks): the same finding, and message, as in memory.
 
     Returns
     -------
@@ -514,7 +530,7 @@ def calibrate_encoder_motion_chunked(
     passes = _Passes(chunks, progress)
     scale = 360.0 / (_TWO_PI * float(lines))
 
-    n = _pass_check(passes)
+    n, clipped = _pass_check(passes, allow_clipped)
     corr = correction if correction is not None else _pass_correction(passes, n)
     demod = _pass_phase(passes, n, corr, scale)
     rev_idx, rev_times = _pass_reversals(passes, n, corr, demod.plan)
@@ -556,7 +572,7 @@ def calibrate_encoder_motion_chunked(
         fit = fit_harmonics(t_seg, th_seg, frequency_hz=f0, harmonics=harmonics)
         plot["t_used"] = t_seg[::seg_step]
         plot["residual_deg"] = th_seg[::seg_step] - fit.evaluate(t_seg[::seg_step])
-        return _result(fit, plot, common, t_seg, th_seg)
+        return with_warnings(_result(fit, plot, common, t_seg, th_seg), clipped)
 
     acc = HarmonicFitAccumulator(f0, harmonics=harmonics)
     acc3 = HarmonicFitAccumulator(set_frequency_hz, harmonics=1) if with_set else None
@@ -604,7 +620,7 @@ def calibrate_encoder_motion_chunked(
         plot["position_error_deg"] = err_dec
         extra.update(position_error_max_deg=worst, position_error_rms_deg=rms)
     result = _result(fit, plot, common, np.array([t_first, t_last]), None)
-    return dataclasses.replace(result, **extra)
+    return with_warnings(dataclasses.replace(result, **extra), clipped)
 
 
 def _result(
