@@ -216,7 +216,7 @@ def test_tdms_cut_off_names_the_byte_that_keeps_the_complete_segments(tmp_path):
     cut.write_bytes(path.read_bytes()[:-100])
     for text in _all_entry_points(cut, ["x"]):
         assert "cut.tdms ends inside segment 2" in text, text
-        assert f"keep the 1 complete segment by cutting the file at byte {first}" in text
+        assert f"keep its 1 complete segment by cutting the file at byte {first}" in text
     kept = tmp_path / "kept.tdms"
     kept.write_bytes(cut.read_bytes()[:first])  # what the message tells the user to do
     np.testing.assert_array_equal(read_capture(kept)["x"], np.arange(50.0))

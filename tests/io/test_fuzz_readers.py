@@ -44,8 +44,8 @@ from rotacal.io import capture_length, iter_capture_chunks, read_capture, write_
 
 #: the readers the benchmark reports on, and the seeds of each
 READERS = ("csv", "npz-stored", "npz-compressed", "hdf5", "tdms")
-EXAMPLES_PER_READER = 750
-FILES_PER_EXAMPLE = 4  # 3000 damaged files per reader
+EXAMPLES_PER_READER = 625
+FILES_PER_EXAMPLE = 4  # 2500 damaged files per reader
 CHUNK_ROWS = 37  # small, so that a column crosses several chunks
 
 

@@ -42,9 +42,9 @@ def check_segments(fh: IO[bytes], fname: str, size: int) -> None:
         fh.seek(pos)
         lead = fh.read(_LEAD_IN)
         cut = (
-            f"; the recording was cut off while it was written — record again, or keep the "
-            f"{count} complete segment{'s' if count != 1 else ''} by cutting the file at byte "
-            f"{pos}"
+            f": the file is cut off (as when a recording stops while it is written) or damaged "
+            f"— record or copy it again, or keep its {count} complete "
+            f"segment{'s' if count != 1 else ''} by cutting the file at byte {pos}"
         )
         if len(lead) < _LEAD_IN:
             raise CaptureError(f"{fname} ends inside the header of segment {count + 1}{cut}")
