@@ -398,9 +398,9 @@ def parse_turntable(
     if "sensitivity" in data:
         sens = rd.table(data["sensitivity"], "[sensitivity]")
         rd.keys(sens, SENSITIVITY_KEYS, "[sensitivity]")
+        settings["sensitivity"] = dict(sens)  # values checked by Turntable (sensitivity_grid)
         if "step_deg" in sens:
             _check_grid_size(rd, sens["step_deg"], links)
-        settings["sensitivity"] = dict(sens)  # values checked by Turntable (sensitivity_grid)
 
     try:
         return Turntable(
