@@ -246,12 +246,13 @@ def _read_heads(path: str, columns: Sequence[str], group: str | None) -> Any:
 
 
 @contextlib.contextmanager
-def _naming_file(path: str) -> Iterator[None]:
-    """Put the file's name before a CaptureError raised inside (the API knows arrays, not files)."""
+def _naming_file(path: str, option: str = "") -> Iterator[None]:
+    """Put the file's name (after ``option`` when it came from one, e.g. ``--correction-from``)
+    before a CaptureError raised inside (the API knows arrays, not files)."""
     try:
         yield
     except CaptureError as e:
-        name = Path(path).name
+        name = f"{option} {path}" if option else Path(path).name
         if getattr(e, "file_named", False) or name in str(e):
             raise
         named = CaptureError(f"{name}: {e}")

@@ -152,7 +152,7 @@ def motion_encoder(
         from rotacal.encoder import fit_quadrature_correction
 
         ref = _read(correction_from, ["a", "b"], columns, group)
-        with _naming_file(correction_from):
+        with _naming_file(correction_from, "--correction-from"):
             kw["correction"] = fit_quadrature_correction(
                 ref["a"], ref["b"], allow_clipped=kw["allow_clipped"]
             )
