@@ -12,6 +12,7 @@ from rotacal.signal.allan import (
     overlapping_adev,
 )
 from rotacal.signal.sinefit import (
+    DriftCheck,
     HarmonicFitAccumulator,
     SineFit,
     displacement_amplitudes_from_rate,
@@ -26,6 +27,7 @@ from rotacal.signal.sinefit import (
 
 __all__ = [
     "AllanDeviation",
+    "DriftCheck",
     "HarmonicFitAccumulator",
     "NoiseTerm",
     "NoiseTerms",
