@@ -145,6 +145,12 @@ def simulate_lts(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw:
 @simulate.command("fog")
 @_motion_sim_options
 @click.option("--bias-deg-s", type=float, default=None, help="Constant rate bias.")
+@click.option(
+    "--bias-drift-deg-s2",
+    type=float,
+    default=None,
+    help="Drift of the rate bias (deg/s per s), e.g. a warm-up [0].",
+)
 @click.option("--noise", type=float, default=None, help="Rate noise, rms (deg/s).")
 @click.option("--snr-db", type=float, default=None, help="Noise set by this SNR instead.")
 def simulate_fog(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any) -> None:

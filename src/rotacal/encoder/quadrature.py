@@ -40,6 +40,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -51,6 +52,7 @@ from rotacal.signal import check_sampling
 
 __all__ = [
     "Demodulation",
+    "HysteresisRule",
     "PhaseState",
     "QuadratureCorrection",
     "ReversalPlan",
@@ -61,6 +63,7 @@ __all__ = [
     "demodulate",
     "find_reversals",
     "fit_quadrature_correction",
+    "hysteresis_stride",
     "intercept_periods",
     "plan_reversals",
     "reversal_point_in_window",
@@ -97,6 +100,18 @@ _COVERAGE_BINS = 720
 
 #: Largest phase step (in 30° subintervals) between samples that is still demodulated.
 _MAX_SAFE_STEP = 5
+
+
+#: Samples a hysteresis rule sees (every N // this-th sample of the capture, at least every one).
+HYSTERESIS_POINTS = 20_000
+
+#: ``(t, φ) → hysteresis in subintervals, or None for the default``: see :func:`demodulate`.
+HysteresisRule = Callable[[FloatArray, FloatArray], "int | None"]
+
+
+def hysteresis_stride(n_samples: int) -> int:
+    """Stride of the samples a hysteresis rule sees: every N // 20 000-th (at least 1)."""
+    return max(1, n_samples // HYSTERESIS_POINTS)
 
 
 class SubdivisionWarning(UserWarning):
@@ -1047,12 +1062,6 @@ def plan_reversals(
     n_cand = int(first_change.size)
     if n_cand == 0:
         return _no_reversals(hyst, n_trans, skipped, max_step)
-    if hysteresis_subintervals is None and n_cand > 1:
-        # 10 % of the largest swing between neighbouring candidates, not of the whole span:
-        # the same for a steady motion (its largest swing is its stroke), but a table that
-        # drifts spans far more than it swings, and a span-based hysteresis would merge its
-        # real reversals.
-        hyst = max(2, round(0.1 * float(np.max(np.abs(np.diff(level))))))
 
     # rotacal's extension: clusters of candidates closer than the hysteresis.
     linked = np.abs(np.diff(level)) < hyst
@@ -1137,10 +1146,10 @@ def find_reversals(
     maximum and the next minimum the motion goes down twice in a row), so a hysteresis of 1 or 2
     links none: every candidate of step 2 is a reversal, which is the paper's odd/even rule of
     eqs. (5)–(6) — with the reversing point of steps 4–5, not the paper's. The default is not
-    that rule: it is 10 % of the largest swing between neighbouring candidates (at least 2),
-    which prunes vibration pairs up to a tenth of the stroke; a table that drifts keeps its
-    reversals because the swing, not the span the drift adds, sets it. (Without candidates, or
-    with one, nothing can be linked and the reported value is 10 % of the span of k, at least 2.)
+    that rule: it is 10 % of the span of k over the capture (at least 2), which prunes vibration
+    pairs up to a tenth of the stroke. A table that drifts spans more than it swings, so the
+    sinusoidal-motion calibration with ``drift=True`` passes 10 % of the span without the drift
+    (:func:`demodulate`'s ``hysteresis_from``).
 
     Parameters
     ----------
@@ -1153,7 +1162,7 @@ def find_reversals(
     hysteresis_subintervals : int, optional
         Smallest difference in level (30° subintervals of the signal period) between a maximum
         and a neighbouring minimum that keeps them apart (step 3); 1 or 2 turns the pruning off.
-        Default: 10 % of the largest swing between neighbouring candidates, at least 2.
+        Default: 10 % of the peak-to-peak of k, at least 2.
 
     Returns
     -------
@@ -1268,6 +1277,7 @@ def demodulate(
     correction: QuadratureCorrection | None = None,
     hysteresis_subintervals: int | None = None,
     max_points: int = 1_000_000,
+    hysteresis_from: HysteresisRule | None = None,
 ) -> Demodulation:
     """Angle and reversing moments from a quadrature-encoder capture, in one call.
 
@@ -1288,6 +1298,10 @@ def demodulate(
         See :func:`find_reversals`.
     max_points : int
         Largest number of samples used in the correction fit.
+    hysteresis_from : callable, optional
+        Without ``hysteresis_subintervals``: a rule ``(t, φ) → hysteresis or None`` called with
+        every :func:`hysteresis_stride`-th sample's time (s) and phase (rad); None keeps the
+        default (the chunked calibration applies the same rule to the same samples).
 
     Returns
     -------
@@ -1317,6 +1331,9 @@ def demodulate(
         _check_clipping(bb[::stride], aa[::stride], "b")
     u, v = correct_quadrature(aa, bb, correction)
     phase, _ = unwrapped_phase(u, v)
+    if hysteresis_subintervals is None and hysteresis_from is not None:
+        step = hysteresis_stride(phase.size)
+        hysteresis_subintervals = hysteresis_from(tt[::step], phase[::step])
     reversals = find_reversals(tt, u, v, phase, hysteresis_subintervals=hysteresis_subintervals)
     del u, v
     theta = phase

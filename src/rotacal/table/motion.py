@@ -41,7 +41,9 @@ from rotacal.signal import (
 from rotacal.table.motion_drift import (
     detrended_angle,
     drift_fields,
+    drift_free_hysteresis,
     drift_note,
+    fit_motion,
     prefit_drift,
     unfitted_drift_warning,
 )
@@ -114,8 +116,7 @@ class MotionResult(Result):
     position_error_max_deg: float | None = None
     position_error_rms_deg: float | None = None
     snr_db: float | None = None
-    # With drift=True (--drift): the fitted drift (rotacal.table.motion_drift; the FOG's
-    # drift_deg_s is its rate offset D0, its rate_drift_deg_s2 the rate's linear term D1).
+    # With drift=True (--drift): the fitted drift, see rotacal.table.motion_drift.drift_fields.
     drift_deg_s: float | None = None
     drift_deg_s_u: float | None = None
     rate_drift_deg_s2: float | None = None
@@ -372,10 +373,7 @@ def _cut(
     if available < 1:
         moved = f" (the angle spans {span_deg:.3g}°)" if span_deg is not None else ""
         if span_deg is not None and net_deg is not None and abs(net_deg) > 0.5 * span_deg:
-            moved = (
-                f" (the angle spans {span_deg:.3g}° and ends {net_deg:+.3g}° from where it "
-                "started: the table drifts more than it swings)"
-            )
+            moved = f"{moved[:-1]} and ends {net_deg:+.3g}° from its start: the table drifts)"
         raise CaptureError(
             f"found {reversal_idx.size} reversing moment(s) in the {what}{moved}: at least 3 are "
             "needed for one whole motion period — record longer, or check that the table moves"
@@ -420,12 +418,11 @@ def calibrate_encoder_motion(
     correction : QuadratureCorrection, optional — a known correction instead of fitting one.
     specs : InstrumentSpecs, optional — the lab's instrument specifications (Type B inputs:
         ``timebase.relative_error``, ``encoder.graduation_error_arcsec``); None: Type A only.
-    drift : bool — fit a linear drift term (deg/s) beside the harmonics and report it as
-        ``drift_deg_s`` (:mod:`rotacal.table.motion_drift`); without it a drift that matters is
-        named in ``warnings``.
-    hysteresis_subintervals : int, optional — the reversal rule's hysteresis in 30° subintervals
-        of the signal period (:func:`~rotacal.encoder.find_reversals`; 1 or 2: the paper's
-        odd/even rule without cluster pruning). Default: 10 % of the largest swing, at least 2.
+    drift : bool — fit a linear drift term beside the harmonics, ``drift_deg_s`` (deg/s; see
+        :mod:`rotacal.table.motion_drift`); without it a drift that matters is in ``warnings``.
+    hysteresis_subintervals : int, optional — the reversal rule's hysteresis (30° subintervals;
+        :func:`~rotacal.encoder.find_reversals`; 1 or 2: the paper's odd/even rule alone). Its
+        default with ``drift``: :func:`~rotacal.table.motion_drift.drift_free_hysteresis`.
 
     Returns
     -------
@@ -449,6 +446,7 @@ def calibrate_encoder_motion(
         correction=correction,
         hysteresis_subintervals=hysteresis_subintervals,
         max_points=_ELLIPSE_POINTS,
+        hysteresis_from=drift_free_hysteresis(harmonics) if drift else None,
     )
     t, a, b = demod.time_s, np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     span = demod.angle_max_deg - demod.angle_min_deg
@@ -458,9 +456,7 @@ def calibrate_encoder_motion(
     )
     seg = slice(first, last + 1)
     f0 = n / (t[last] - t[first])
-    fit = fit_harmonics(
-        t[seg], angle[seg], frequency_hz=f0, harmonics=harmonics, drift=drift, drift_check=not drift
-    )
+    fit = fit_motion(t[seg], angle[seg], f0, harmonics, drift)
     notes = [f"quadrature correction: {demod.correction.method}"]
     step = _plot_stride(t.size)
     plot = {
@@ -604,9 +600,8 @@ def calibrate_lts_motion(
     harmonics, periods, set_amplitude_deg, set_frequency_hz : as `calibrate_encoder_motion`.
     specs : InstrumentSpecs, optional — Type B inputs (``timebase.relative_error``,
         ``lts.radius_mm`` — its value must be ``radius_mm`` —, ``lts.resolution_um``).
-    drift : bool — fit a linear drift term (deg/s) beside the harmonics (``drift_deg_s``); the
-        reversals are then searched with a trigger that follows the drift of a first fit of the
-        whole capture (:func:`extreme_reversals`). See :mod:`rotacal.table.motion_drift`.
+    drift : bool — as `calibrate_encoder_motion`; the reversals' trigger then follows the drift
+        of a first fit of the whole capture (:func:`extreme_reversals`).
 
     References
     ----------
@@ -633,9 +628,7 @@ def calibrate_lts_motion(
     )
     seg = slice(first, last + 1)
     f0 = n / (rev_times[2 * n] - rev_times[0])
-    fit = fit_harmonics(
-        t[seg], angle[seg], frequency_hz=f0, harmonics=harmonics, drift=drift, drift_check=not drift
-    )
+    fit = fit_motion(t[seg], angle[seg], f0, harmonics, drift)
     plot = _displacement_plot(t, angle, seg, fit)
     detection = ReversalDetection(
         method="parabola",
@@ -703,13 +696,9 @@ def calibrate_fog_motion(
     harmonics, periods, set_amplitude_deg, set_frequency_hz : as `calibrate_encoder_motion`.
     specs : InstrumentSpecs, optional — Type B inputs (``timebase.relative_error``,
         ``fog.scale_factor_relative``).
-    drift : bool — fit the rate as ``D0 + D1·(t − t_ref) + harmonics``: a steady table drift is
-        a constant rate, which D0 takes with or without this option (together with the gyro's
-        bias: a rate record cannot split them); D1 takes a rate offset that changes over the
-        record (a drifting bias, or a drift that speeds up), which otherwise reads as distortion.
-        Reports ``drift_deg_s`` = D0 and ``rate_drift_deg_s2`` = D1 (see
-        :mod:`rotacal.table.motion_drift`); both are removed from the reversals (zeros of the
-        fitted rate less D0 + D1·τ) and from the integrated angle of eq. (2).
+    drift : bool — fit the rate as ``D0 + D1·(t − t_ref) + harmonics`` and report D0 (a steady
+        table drift plus the gyro's bias, which D0 takes anyway) as ``drift_deg_s`` and D1 as
+        ``rate_drift_deg_s2`` (:mod:`rotacal.table.motion_drift`).
 
     References
     ----------
@@ -724,14 +713,7 @@ def calibrate_fog_motion(
     rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
     first, last, n = _cut(rev_idx, periods, "FOG capture")
     seg = slice(first, last + 1)
-    fit = fit_harmonics(
-        t[seg],
-        w[seg],
-        frequency_hz=first_fit.frequency_hz,
-        harmonics=harmonics,
-        drift=drift,
-        drift_check=not drift,
-    )
+    fit = fit_motion(t[seg], w[seg], first_fit.frequency_hz, harmonics, drift)
     disp = displacement_amplitudes_from_rate(fit.amplitudes, fit.frequency_hz)
     disp_u = displacement_amplitudes_from_rate(fit.amplitudes_u, fit.frequency_hz)
     tt, ww = t[seg], w[seg]

@@ -57,20 +57,32 @@ from typing import Any
 
 import numpy as np
 
+from rotacal.encoder import HysteresisRule
+from rotacal.errors import CaptureError
 from rotacal.signal import SineFit, displacement_amplitudes_from_rate, fit_harmonics
 
 __all__ = [
     "DRIFT_SIGNIFICANCE",
     "detrended_angle",
     "drift_fields",
+    "drift_free_hysteresis",
     "drift_note",
     "drift_u",
+    "fit_motion",
     "prefit_drift",
     "unfitted_drift_warning",
 ]
 
 #: A drift counts as seen when it is at least this many standard uncertainties from zero.
 DRIFT_SIGNIFICANCE = 5.0
+
+
+def fit_motion(t: np.ndarray, y: np.ndarray, f0: float, harmonics: int, drift: bool) -> SineFit:
+    """The analysis fit of n whole periods (frequency refined from ``f0``, Hz): with the linear
+    term when ``drift``, else with its :class:`~rotacal.signal.DriftCheck`."""
+    return fit_harmonics(
+        t, y, frequency_hz=f0, harmonics=harmonics, drift=drift, drift_check=not drift
+    )
 
 
 def drift_u(fit: SineFit, drift_u_fit: float, residual_rms: float) -> float:
@@ -147,6 +159,28 @@ def prefit_drift(t: np.ndarray, x: np.ndarray, harmonics: int) -> float:
     fit = fit_harmonics(t, x - slope * tau, harmonics=harmonics, drift=True)
     assert fit.drift is not None
     return slope + fit.drift
+
+
+def drift_free_hysteresis(harmonics: int) -> HysteresisRule:
+    """The encoder's reversal hysteresis with ``drift=True``: 10 % of the span of k (30°
+    subintervals of the signal period) once the drift is taken off, at least 2.
+
+    The default of :func:`~rotacal.encoder.find_reversals` is 10 % of the whole span of k, which
+    for a table that drifts grows with the drift until it swallows real swings (2° of drift over
+    a 0.2° stroke: every reversal merged). The rule sees every N // 20 000-th sample
+    (:func:`~rotacal.encoder.demodulate`'s ``hysteresis_from``) and takes the drift off with
+    :func:`prefit_drift`; if that fit fails the default is kept.
+    """
+
+    def rule(t: np.ndarray, phase_rad: np.ndarray) -> int | None:
+        try:
+            slope = prefit_drift(t, phase_rad, harmonics)
+        except CaptureError:
+            return None
+        k = (phase_rad - slope * (t - t[0])) * (6.0 / math.pi)
+        return max(2, round(0.1 * float(np.ptp(k))))
+
+    return rule
 
 
 def _displacement(scheme: str, amplitudes: np.ndarray, frequency_hz: float) -> np.ndarray:

@@ -44,11 +44,13 @@ from typing import Any
 import numpy as np
 
 from rotacal.encoder import (
+    HysteresisRule,
     PhaseState,
     QuadratureCorrection,
     ReversalPlan,
     correct_quadrature,
     fit_quadrature_correction,
+    hysteresis_stride,
     plan_reversals,
     reversal_point_in_window,
     reversal_window,
@@ -57,7 +59,7 @@ from rotacal.encoder import (
 )
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.io import iter_capture_chunks
-from rotacal.signal import HarmonicFitAccumulator, SineFit, fit_harmonics
+from rotacal.signal import HarmonicFitAccumulator, SineFit
 from rotacal.signal._checks import MAX_GAP, TYPICAL_STEPS, gap_error
 from rotacal.table.motion import (
     _ELLIPSE_POINTS,
@@ -67,7 +69,7 @@ from rotacal.table.motion import (
     _finish,
     _plot_stride,
 )
-from rotacal.table.motion_drift import detrended_angle
+from rotacal.table.motion_drift import detrended_angle, drift_free_hysteresis, fit_motion
 from rotacal.table.motion_uncertainty import ReversalDetection
 from rotacal.uncertainty import InstrumentSpecs
 
@@ -276,8 +278,10 @@ def _pass_phase(
     corr: QuadratureCorrection,
     scale: float,
     hysteresis_subintervals: int | None = None,
+    hysteresis_from: HysteresisRule | None = None,
 ) -> _Demod:
-    """Pass 3: phase with the cycle count carried, transitions, chunk-start states, plot copy."""
+    """Pass 3: phase with the cycle count carried, transitions, chunk-start states, plot copy
+    (and the samples a hysteresis rule sees, as in memory)."""
     step = _plot_stride(n)
     state: PhaseState | None = None
     k_prev: float | None = None
@@ -286,6 +290,9 @@ def _pass_phase(
     trans_k: list[np.ndarray] = []
     states: list[PhaseState | None] = []
     dec: dict[str, list[np.ndarray]] = {"t": [], "angle": [], "a": [], "b": []}
+    rule_step = hysteresis_stride(n)
+    rule_t: list[np.ndarray] = []
+    rule_phase: list[np.ndarray] = []
     lo, hi = math.inf, -math.inf
     ends: list[float] = []
     for _, off, cols in passes.run():
@@ -306,6 +313,10 @@ def _pass_phase(
         dec["angle"].append(phase[s0::step] * scale)
         dec["a"].append(np.array(cols["a"][s0::step]))
         dec["b"].append(np.array(cols["b"][s0::step]))
+        if hysteresis_from is not None:
+            r0 = (-off) % rule_step
+            rule_t.append(np.array(cols["time_s"][r0::rule_step]))
+            rule_phase.append(phase[r0::rule_step])
         lo, hi = min(lo, float(phase.min())), max(hi, float(phase.max()))
         ends[:] = [ends[0] if ends else float(phase[0]), float(phase[-1])]
         del phase
@@ -313,6 +324,10 @@ def _pass_phase(
     del trans_idx
     all_k = np.concatenate(trans_k)
     del trans_k
+    if hysteresis_subintervals is None and hysteresis_from is not None:
+        hysteresis_subintervals = hysteresis_from(
+            np.concatenate(rule_t), np.concatenate(rule_phase)
+        )
     plan = plan_reversals(
         all_idx, all_k, k_start, hysteresis_subintervals=hysteresis_subintervals, stacklevel=4
     )
@@ -509,7 +524,14 @@ def calibrate_encoder_motion_chunked(
 
     n = _pass_check(passes)
     corr = correction if correction is not None else _pass_correction(passes, n)
-    demod = _pass_phase(passes, n, corr, scale, hysteresis_subintervals)
+    demod = _pass_phase(
+        passes,
+        n,
+        corr,
+        scale,
+        hysteresis_subintervals,
+        drift_free_hysteresis(harmonics) if drift else None,
+    )
     rev_idx, rev_times = _pass_reversals(passes, n, corr, demod.plan)
     first, last, n_periods = _cut(
         rev_idx, periods, "encoder capture", demod.span_deg, demod.net_deg
@@ -548,14 +570,7 @@ def calibrate_encoder_motion_chunked(
         t_seg = np.concatenate([np.array(p[1]) for p in pieces])
         th_seg = np.concatenate([p[2] for p in pieces])
         del pieces
-        fit = fit_harmonics(
-            t_seg,
-            th_seg,
-            frequency_hz=f0,
-            harmonics=harmonics,
-            drift=drift,
-            drift_check=not drift,
-        )
+        fit = fit_motion(t_seg, th_seg, f0, harmonics, drift)
         plot["t_used"] = t_seg[::seg_step]
         plot["residual_deg"] = th_seg[::seg_step] - fit.evaluate(t_seg[::seg_step])
         return _result(fit, plot, common, t_seg, th_seg)
