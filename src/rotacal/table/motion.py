@@ -43,9 +43,9 @@ from rotacal.table.motion_drift import (
     drift_fields,
     drift_free_hysteresis,
     drift_note,
+    drift_warnings,
     fit_motion,
     prefit_drift,
-    unfitted_drift_warning,
 )
 from rotacal.table.motion_uncertainty import (
     ReversalDetection,
@@ -351,14 +351,7 @@ def _finish(
         **extra,
         **drift_fields(scheme, fit),
     )
-    line = unfitted_drift_warning(
-        scheme,
-        fit,
-        thd_percent_u=budgets["thd_percent"].u,
-        amplitude_relative_u=budgets["amplitude_deg"].u / amp,
-        span_s=float(t_used[-1] - t_used[0]),
-    )
-    return result if line is None else with_warnings(result, [line])
+    return with_warnings(result, drift_warnings(scheme, fit, budgets, t_used[-1] - t_used[0]))
 
 
 def _cut(
@@ -373,7 +366,8 @@ def _cut(
     if available < 1:
         moved = f" (the angle spans {span_deg:.3g}°)" if span_deg is not None else ""
         if span_deg is not None and net_deg is not None and abs(net_deg) > 0.5 * span_deg:
-            moved = f"{moved[:-1]} and ends {net_deg:+.3g}° from its start: the table drifts)"
+            moved = f"{moved[:-1]} and ends {net_deg:+.3g}° from its start: the table drifts, "
+            moved += "rerun with --drift)"
         raise CaptureError(
             f"found {reversal_idx.size} reversing moment(s) in the {what}{moved}: at least 3 are "
             "needed for one whole motion period — record longer, or check that the table moves"
@@ -451,9 +445,8 @@ def calibrate_encoder_motion(
     t, a, b = demod.time_s, np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     span = demod.angle_max_deg - demod.angle_min_deg
     angle = demod.angle_deg
-    first, last, n = _cut(
-        demod.reversals.indices, periods, "encoder capture", span, float(angle[-1] - angle[0])
-    )
+    net = None if drift else float(angle[-1] - angle[0])  # for the hint of _cut's error
+    first, last, n = _cut(demod.reversals.indices, periods, "encoder capture", span, net)
     seg = slice(first, last + 1)
     f0 = n / (t[last] - t[first])
     fit = fit_motion(t[seg], angle[seg], f0, harmonics, drift)
@@ -623,9 +616,8 @@ def calibrate_lts_motion(
     trend = prefit_drift(t, angle, harmonics) if drift else 0.0
     rev_times = extreme_reversals(t, angle, drift=trend)
     rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
-    first, last, n = _cut(
-        rev_idx, periods, "LTS capture", float(np.ptp(angle)), float(angle[-1] - angle[0])
-    )
+    net = None if drift else float(angle[-1] - angle[0])
+    first, last, n = _cut(rev_idx, periods, "LTS capture", float(np.ptp(angle)), net)
     seg = slice(first, last + 1)
     f0 = n / (rev_times[2 * n] - rev_times[0])
     fit = fit_motion(t[seg], angle[seg], f0, harmonics, drift)

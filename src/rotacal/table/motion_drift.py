@@ -53,6 +53,7 @@ IEEE Std 1057-2017, §4.1.3 (sine fitting; the linear term is rotacal's extensio
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -60,6 +61,7 @@ import numpy as np
 from rotacal.encoder import HysteresisRule
 from rotacal.errors import CaptureError
 from rotacal.signal import SineFit, displacement_amplitudes_from_rate, fit_harmonics
+from rotacal.uncertainty import UncertaintyBudget
 
 __all__ = [
     "DRIFT_SIGNIFICANCE",
@@ -68,6 +70,7 @@ __all__ = [
     "drift_free_hysteresis",
     "drift_note",
     "drift_u",
+    "drift_warnings",
     "fit_motion",
     "prefit_drift",
     "unfitted_drift_warning",
@@ -191,6 +194,21 @@ def _displacement(scheme: str, amplitudes: np.ndarray, frequency_hz: float) -> n
 
 def _thd(a: np.ndarray) -> float:
     return 100.0 * math.sqrt(float(a[1:] @ a[1:])) / float(a[0])
+
+
+def drift_warnings(
+    scheme: str, fit: SineFit, budgets: Mapping[str, UncertaintyBudget], span_s: float
+) -> list[str]:
+    """The :func:`unfitted_drift_warning` of a result (its THD and amplitude budgets), if any."""
+    amp = budgets["amplitude_deg"]
+    line = unfitted_drift_warning(
+        scheme,
+        fit,
+        thd_percent_u=budgets["thd_percent"].u,
+        amplitude_relative_u=amp.u / amp.value,
+        span_s=float(span_s),
+    )
+    return [] if line is None else [line]
 
 
 def unfitted_drift_warning(

@@ -534,7 +534,7 @@ def calibrate_encoder_motion_chunked(
     )
     rev_idx, rev_times = _pass_reversals(passes, n, corr, demod.plan)
     first, last, n_periods = _cut(
-        rev_idx, periods, "encoder capture", demod.span_deg, demod.net_deg
+        rev_idx, periods, "encoder capture", demod.span_deg, None if drift else demod.net_deg
     )
     t_first, t_last = rev_times[0], rev_times[2 * n_periods]
     f0 = n_periods / (t_last - t_first)
