@@ -187,6 +187,7 @@ def test_vibration_excluded_from_truth() -> None:
         ({"amplitude_deg": 1.0, "frequency_hz": 1.0, "backlash_deg": 1.5}, "backlash_deg"),
         ({"amplitude_deg": 1.0, "frequency_hz": 1.0, "creep_deg": -1}, "creep_deg"),
         ({"amplitude_deg": 1.0, "frequency_hz": 1.0, "vibration_deg": 0.1}, "vibration_hz"),
+        ({"amplitude_deg": 1.0, "frequency_hz": 1.0, "drift_deg_s": math.inf}, "drift_deg_s"),
         (
             {"amplitude_deg": 1.0, "frequency_hz": 1.0, "creep_deg": 0.01, "creep_time_s": 0.7},
             "creep_time_s",
@@ -210,3 +211,38 @@ def test_large_creep_overruns_and_truth_follows() -> None:
     assert np.all(rev > np.array([T / 4, 3 * T / 4]) + 1e-4)  # later than the command's
     r = m.rate_deg_s(np.concatenate([rev - 1e-6, rev + 1e-6]))
     assert np.all(r[:2] * r[2:] < 0)  # the velocity changes sign there
+
+
+def test_drift_adds_a_ramp_that_the_harmonic_truth_leaves_out() -> None:
+    d = 0.004
+    base = distorted()
+    m = distorted(drift_deg_s=d)
+    t = np.linspace(-0.3, 3.1, 40001)
+    np.testing.assert_allclose(m.angle_deg(t) - base.angle_deg(t), d * t, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(m.rate_deg_s(t) - base.rate_deg_s(t), d, rtol=0, atol=1e-13)
+    tr, tb = m.truth(0.0, 3.0), base.truth(0.0, 3.0)
+    assert tr["harmonic_amplitudes_deg"] == tb["harmonic_amplitudes_deg"]
+    assert tr["thd_percent"] == tb["thd_percent"]
+    assert tr["drift_deg_s"] == d and tb["drift_deg_s"] == 0.0
+    assert tr["motion"]["drift_deg_s"] == d
+    json.dumps(tr, allow_nan=False)
+
+
+def test_reversals_of_a_drifting_sine_follow_the_closed_form() -> None:
+    """θ = A·sin(ωt) + d·t reverses where cos(ωt) = −d/(Aω): the maxima come earlier and the
+    minima later than the quarter periods, the swings no longer half a period apart."""
+    a, f, d = 0.2, 1.7, 0.5
+    m = SineMotion(a, f, drift_deg_s=d)
+    w = 2 * math.pi * f
+    c = math.acos(-d / (a * w))
+    k = np.arange(-3, 12)
+    want = np.sort(np.concatenate([(c + 2 * math.pi * k) / w, (-c + 2 * math.pi * k) / w]))
+    want = want[(want >= 0.0) & (want <= 4.0)]
+    got = np.asarray(m.truth(0.0, 4.0)["reversal_times_s"])
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    assert not np.allclose(np.diff(got), 0.5 / f, atol=1e-3)
+
+
+def test_drift_faster_than_the_motion_leaves_no_reversal() -> None:
+    m = SineMotion(0.1, 2.0, drift_deg_s=1.3 * 0.1 * 2 * math.pi * 2.0)
+    assert m.truth(0.0, 3.0)["reversal_times_s"] == []

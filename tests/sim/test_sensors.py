@@ -32,7 +32,7 @@ def test_encoder_clean_phase_equals_angle() -> None:
     phi = 2 * math.pi * lines * MOTION.angle_deg(t) / 360.0
     err = np.angle(np.exp(1j * (np.arctan2(b, a) - phi)))  # difference mod 2π
     assert np.max(np.abs(err)) < 1e-9
-    # θ increases when b leads a: on a rising stretch, the demodulated phase increases
+    # θ increases when a leads b: on a rising stretch, the demodulated phase increases
     up = MOTION.rate_deg_s(t) > 0
     dphi = np.diff(np.unwrap(np.arctan2(b, a)))
     assert np.all(dphi[up[:-1] & up[1:]] > 0)
@@ -89,6 +89,14 @@ def test_fog_noise_free_is_the_rate() -> None:
     cap = simulate_fog(MOTION, bias_deg_s=-0.2)
     t = cap.columns["time_s"]
     np.testing.assert_allclose(cap.columns["rate_deg_s"], MOTION.rate_deg_s(t) - 0.2, atol=0)
+
+
+def test_fog_bias_drift_is_a_ramp_from_the_first_sample() -> None:
+    cap = simulate_fog(MOTION, bias_deg_s=-0.2, bias_drift_deg_s2=0.003, start_s=1.5)
+    t = cap.columns["time_s"]
+    want = MOTION.rate_deg_s(t) - 0.2 + 0.003 * (t - 1.5)
+    np.testing.assert_allclose(cap.columns["rate_deg_s"], want, rtol=0, atol=1e-13)
+    assert cap.truth["sensor"]["bias_drift_deg_s2"] == 0.003
 
 
 @pytest.mark.parametrize(

@@ -54,6 +54,15 @@ def _motion_common(func: F) -> F:
         click.option(
             "--set-frequency-hz", type=float, default=None, help="Set frequency of the table (Hz)."
         ),
+        click.option(
+            "--drift",
+            is_flag=True,
+            help="Fit a linear drift term beside the harmonics, so that a slow drift of the table "
+            "does not count as distortion; reports drift_deg_s (deg/s). For the FOG, whose rate "
+            "offset already holds a steady drift (with the gyro's bias), it fits the rate's own "
+            "linear change as well (rate_drift_deg_s2). Without it a drift that matters is named "
+            "in the warnings.",
+        ),
     ]
     for option in reversed(options):
         func = option(func)
@@ -100,6 +109,15 @@ def _print_motion(r: Any) -> None:
     )
     if r.snr_db is not None:
         click.echo(f"SNR               {r.snr_db:.2f} dB")
+    if r.drift_deg_s is not None:
+        click.echo(
+            f"drift             {r.drift_deg_s:.6g} deg/s  (u = {r.drift_deg_s_u:.2g} deg/s)"
+        )
+    if r.rate_drift_deg_s2 is not None:
+        click.echo(
+            f"rate drift        {r.rate_drift_deg_s2:.6g} deg/s^2  "
+            f"(u = {r.rate_drift_deg_s2_u:.2g} deg/s^2)"
+        )
     for note in r.notes:
         click.echo(f"note              {note}")
     if r.set_amplitude_deg is not None:
@@ -119,6 +137,16 @@ def _print_motion(r: Any) -> None:
     default=None,
     help="Fit the Heydemann correction on this capture (time_s, a, b with more motion, same "
     "encoder and electronics) instead of on CAPTURE: for motions shorter than a signal period.",
+)
+@click.option(
+    "--hysteresis",
+    "hysteresis_subintervals",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Reversal rule's hysteresis, in 30° subintervals of the signal period: neighbouring "
+    "reversal candidates whose levels differ by less are merged (a vibration near a reversal), "
+    "an odd cluster counting as one reversal. 1 or 2 merges none: the paper's odd/even rule "
+    "alone. [default: 10 % of the largest swing between candidates, at least 2]",
 )
 @click.option(
     "--chunked/--in-memory",

@@ -76,6 +76,14 @@ def _motion_sim_options(func: F) -> F:
         click.option("--vibration-deg", type=float, default=0.0, show_default=True),
         click.option("--vibration-hz", type=float, default=0.0, show_default=True),
         click.option(
+            "--drift-deg-s",
+            type=float,
+            default=0.0,
+            show_default=True,
+            help="Steady drift of the table (deg/s), added to the angle as drift·t; not part of "
+            "the true harmonics and THD (truth key drift_deg_s).",
+        ),
+        click.option(
             "--duration-s",
             type=float,
             default=None,
@@ -113,6 +121,7 @@ def _sim_motion(kind: str, harmonic_items: Sequence[str], kw: dict[str, Any]) ->
         backlash_deg=kw.pop("backlash_deg"),
         vibration_deg=kw.pop("vibration_deg"),
         vibration_hz=kw.pop("vibration_hz"),
+        drift_deg_s=kw.pop("drift_deg_s"),
     )
     options = {k: v for k, v in kw.items() if v is not None}
     return sim.simulate(kind, motion=motion_, **options)
@@ -158,6 +167,12 @@ def simulate_lts(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw:
 @simulate.command("fog")
 @_motion_sim_options
 @click.option("--bias-deg-s", type=float, default=None, help="Constant rate bias.")
+@click.option(
+    "--bias-drift-deg-s2",
+    type=float,
+    default=None,
+    help="Drift of the rate bias (deg/s per s), e.g. a warm-up [0].",
+)
 @click.option("--noise", type=float, default=None, help="Rate noise, rms (deg/s).")
 @click.option("--snr-db", type=float, default=None, help="Noise set by this SNR instead.")
 @click.option(

@@ -12,6 +12,7 @@ from rotacal.encoder.pulses import (
 )
 from rotacal.encoder.quadrature import (
     Demodulation,
+    HysteresisRule,
     PhaseState,
     QuadratureCorrection,
     ReversalPlan,
@@ -22,6 +23,7 @@ from rotacal.encoder.quadrature import (
     demodulate,
     find_reversals,
     fit_quadrature_correction,
+    hysteresis_stride,
     intercept_periods,
     plan_reversals,
     reversal_point_in_window,
@@ -42,6 +44,7 @@ from rotacal.encoder.selfcal import (
 __all__ = [
     "Demodulation",
     "HeadPairing",
+    "HysteresisRule",
     "PhaseState",
     "QuadratureCorrection",
     "ReversalPlan",
@@ -56,6 +59,7 @@ __all__ = [
     "fit_quadrature_correction",
     "head_columns",
     "head_shifts",
+    "hysteresis_stride",
     "intercept_periods",
     "pair_heads",
     "plan_reversals",

@@ -8,9 +8,29 @@ moment is pinned to one sample (eqs. (7)–(8)), and n whole motion periods are 
 reversals (§3.3).
 
 Conventions (INTERFACE.md): ``a ≈ cos φ``, ``b ≈ sin φ``, ``φ = 2π·lines·θ/360`` with θ the table
-angle in degrees; θ increases when ``b`` leads ``a``. Subinterval labels here increase with θ
-(label = k mod 12 + 1, k = ⌊φ/(π/6)⌋); the paper numbers them the other way round for its own
-direction sign (its eq. (3)), which does not matter to the algorithm: it only uses changes of trend.
+angle in degrees; θ increases when ``a`` leads ``b`` by a quarter signal period (``b = sin φ``
+reaches its peak a quarter period after ``a = cos φ`` while φ grows), and φ = arctan2(b, a).
+Subinterval labels here increase with θ (label = k mod 12 + 1, k = ⌊φ/(π/6)⌋); the paper numbers
+them the other way round for its own direction sign (its eq. (3)), which does not matter to the
+algorithm: it only uses changes of trend.
+
+Where rotacal departs from its sources in the subdivision (eqs. (3)–(4)):
+
+- *From Ye et al. (2020)*, whose linearisation subdivision the seed uses for its twelve
+  subintervals and for θ (§3.1, §3.3): rotacal does not linearise. It takes the phase
+  ``φ = arctan2(v, u)`` of the Heydemann-corrected signals in float64 (the arctangent method the
+  seed lists among the traditional ones), unwrapped by counting whole cycles; its error is the
+  rounding of arctan2 and whatever the Heydemann model leaves, not the residual of a piecewise
+  linearisation with its compensation (Ye et al. report ≈ 3·10⁻⁵° of a signal period). The twelve
+  subintervals are the 30° sectors of that phase, ``k = ⌊φ/(π/6)⌋``, not sectors chosen by which
+  signal (or phase-shifted copy) is in its linear section.
+- *From Feng et al. (2023)*: (1) the labels count up with θ (their eq. (3) counts down for
+  Sdir = 1); (2) k is a continuous count, not a label modulo 12, so a sample that jumps over
+  subintervals (sampling too slow) is seen: a :class:`SubdivisionWarning` above one subinterval,
+  an error from five (150°), where the paper assumes every subinterval is visited; (3) the
+  signals are corrected (Heydemann 1981) before the subdivision, which the paper leaves to
+  "preprocessing"; (4) for the reversing moments see :func:`find_reversals` (which visit holds
+  the reversal, the cluster pruning by hysteresis and the window of eqs. (7)–(8)).
 
 Everything is whole-array NumPy; the only Python loops run over reversals (a few hundred).
 """
@@ -20,6 +40,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -38,6 +59,7 @@ from rotacal.signal.clipping import check_clipping, find_clipping
 
 __all__ = [
     "Demodulation",
+    "HysteresisRule",
     "PhaseState",
     "QuadratureCorrection",
     "ReversalPlan",
@@ -48,6 +70,7 @@ __all__ = [
     "demodulate",
     "find_reversals",
     "fit_quadrature_correction",
+    "hysteresis_stride",
     "intercept_periods",
     "plan_reversals",
     "reversal_point_in_window",
@@ -84,6 +107,18 @@ _COVERAGE_BINS = 720
 
 #: Largest phase step (in 30° subintervals) between samples that is still demodulated.
 _MAX_SAFE_STEP = 5
+
+
+#: Samples a hysteresis rule sees (every N // this-th sample of the capture, at least every one).
+HYSTERESIS_POINTS = 20_000
+
+#: ``(t, φ) → hysteresis in subintervals, or None for the default``: see :func:`demodulate`.
+HysteresisRule = Callable[[FloatArray, FloatArray], "int | None"]
+
+
+def hysteresis_stride(n_samples: int) -> int:
+    """Stride of the samples a hysteresis rule sees: every N // 20 000-th (at least 1)."""
+    return max(1, n_samples // HYSTERESIS_POINTS)
 
 
 class SubdivisionWarning(UserWarning):
@@ -1088,18 +1123,42 @@ def find_reversals(
     1. Subinterval count ``k = ⌊φ/(π/6)⌋``; a transition is a sample where k changes, its
        direction the sign of the change (eqs. (3)–(4)).
     2. A trend change is a transition whose direction differs from the previous one. A run of an
-       even number of consecutive trend changes holds no reversal (eq. (5)); an odd run holds one,
-       in its middle subinterval visit (eq. (6)).
+       even number of consecutive trend changes holds no reversal (eq. (5)); an odd run holds one
+       (eq. (6)): a *candidate*, a maximum of θ if the direction before the run was increasing,
+       else a minimum. Its *level* is the extreme k of the run's turning visits (the highest for
+       a maximum, the lowest for a minimum).
     3. *rotacal's extension* (not in the paper): a vibration superposed on the motion near a
        reversal moves it back and forth by more than one subinterval, so the candidates of step 2
-       come in extra max/min pairs. The same odd/even idea is applied one level up: neighbouring
-       candidates (which alternate max/min) whose excursion is below ``hysteresis_subintervals``
-       form a cluster; a cluster of an odd number of candidates is one reversal (its middle
-       candidate), an even number none. ``hysteresis_subintervals=1`` gives the paper's rule.
-    4. In the reversing subinterval ``[Sub⁻, Sub⁺]`` the sums ``qu``, ``qv`` of eqs. (7)–(8) pick
-       the signal that changes most; the reversing moment Chp is its minimum if q < 0 and its
-       maximum if q > 0 (each signal is monotonic in φ inside a 30° subinterval, so its extreme
-       there is the extreme of φ).
+       come in extra max/min pairs. Neighbouring candidates (which alternate max/min) whose levels
+       differ by less than ``hysteresis_subintervals`` are linked into a cluster; a cluster of an
+       odd number of candidates is one reversal, of the kind of its first candidate, an even
+       number none.
+    4. Where the reversal lies: for a single candidate, the window ``[Sub⁻, Sub⁺]`` runs from the
+       first to the last of its turning visits that sit at its level (in eq. (6)'s
+       {4,5,6,7,8,7,8,7,6,5} that is 8-7-8, the two visits of 8 and the 7 between them); for a
+       cluster, the windows of its first and last candidate (both of the cluster's kind).
+    5. In each window the sums ``qu``, ``qv`` of eqs. (7)–(8), with the samples just outside
+       ``[Sub⁻, Sub⁺]`` as endpoints (:func:`reversal_window`), pick the signal that changes
+       most; Chp is its minimum if q < 0 and its maximum if q > 0 (each signal is monotonic in φ
+       within a subinterval, so its extreme is the extreme of φ there). A single candidate's
+       reversing moment is its Chp; a cluster's is the sample midway between the Chp of its
+       first and last candidate (the cluster straddles the reversal symmetrically).
+
+    How this differs from the paper's literal rule, also with the pruning off: the paper takes
+    the *middle* turning visit of an odd run as the reversing subinterval (eq. (6): the second
+    7) and searches eqs. (7)–(8) between that visit's own endpoints; rotacal searches the visits
+    at the run's extreme level, where θ is extreme (in the example the paper's 7 lies in the dip
+    between the two visits of 8), with one sample more on each side (:func:`reversal_window`).
+    :func:`reversing_subintervals` gives the paper's middle visits exactly.
+
+    The hysteresis. Neighbouring candidates always differ by at least 2 subintervals (between a
+    maximum and the next minimum the motion goes down twice in a row), so a hysteresis of 1 or 2
+    links none: every candidate of step 2 is a reversal, which is the paper's odd/even rule of
+    eqs. (5)–(6) — with the reversing point of steps 4–5, not the paper's. The default is not
+    that rule: it is 10 % of the span of k over the capture (at least 2), which prunes vibration
+    pairs up to a tenth of the stroke. A table that drifts spans more than it swings, so the
+    sinusoidal-motion calibration with ``drift=True`` passes 10 % of the span without the drift
+    (:func:`demodulate`'s ``hysteresis_from``).
 
     Parameters
     ----------
@@ -1110,7 +1169,8 @@ def find_reversals(
     phase_rad : array_like
         Unwrapped phase φ (rad) from :func:`unwrapped_phase`.
     hysteresis_subintervals : int, optional
-        Smallest excursion between a maximum and a minimum that counts as motion (subintervals).
+        Smallest difference in level (30° subintervals of the signal period) between a maximum
+        and a neighbouring minimum that keeps them apart (step 3); 1 or 2 turns the pruning off.
         Default: 10 % of the peak-to-peak of k, at least 2.
 
     Returns
@@ -1227,6 +1287,7 @@ def demodulate(
     hysteresis_subintervals: int | None = None,
     max_points: int = 1_000_000,
     allow_clipped: bool = False,
+    hysteresis_from: HysteresisRule | None = None,
 ) -> Demodulation:
     """Angle and reversing moments from a quadrature-encoder capture, in one call.
 
@@ -1250,6 +1311,10 @@ def demodulate(
     allow_clipped : bool
         Demodulate signals with samples at the rails anyway (their ``warnings`` say so); refused
         by default. Every sample of both channels is judged (:mod:`rotacal.signal.clipping`).
+    hysteresis_from : callable, optional
+        Without ``hysteresis_subintervals``: a rule ``(t, φ) → hysteresis or None`` called with
+        every :func:`hysteresis_stride`-th sample's time (s) and phase (rad); None keeps the
+        default (the chunked calibration applies the same rule to the same samples).
 
     Returns
     -------
@@ -1280,6 +1345,9 @@ def demodulate(
         _check_varies(aa[::stride], bb[::stride])
     u, v = correct_quadrature(aa, bb, correction)
     phase, _ = unwrapped_phase(u, v)
+    if hysteresis_subintervals is None and hysteresis_from is not None:
+        step = hysteresis_stride(phase.size)
+        hysteresis_subintervals = hysteresis_from(tt[::step], phase[::step])
     reversals = find_reversals(tt, u, v, phase, hysteresis_subintervals=hysteresis_subintervals)
     del u, v
     theta = phase

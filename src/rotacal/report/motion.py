@@ -291,6 +291,17 @@ def motion_section(r: MotionResult, title: str | None = None, *, figures: bool =
     ]
     if r.snr_db is not None:
         rows.append(["SNR of the rate signal", f"{r.snr_db:.2f} dB", ""])
+    if r.drift_deg_s is not None:  # --drift (rotacal.table.motion_drift)
+        what = "rate offset D0 (drift + gyro bias)" if r.scheme == "fog" else "drift (fitted)"
+        rows.append([what, f"{r.drift_deg_s:.6g} °/s", f"{r.drift_deg_s_u:.2g} °/s"])
+    if r.rate_drift_deg_s2 is not None:
+        rows.append(
+            [
+                "rate drift D1 (fitted)",
+                f"{r.rate_drift_deg_s2:.6g} °/s²",
+                f"{r.rate_drift_deg_s2_u:.2g} °/s²",
+            ]
+        )
     tables = [
         Table(
             ["quantity", "value", "standard uncertainty u (see the budgets)"],

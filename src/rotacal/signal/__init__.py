@@ -19,6 +19,7 @@ from rotacal.signal.clipping import (
     find_clipping,
 )
 from rotacal.signal.sinefit import (
+    DriftCheck,
     HarmonicFitAccumulator,
     SineFit,
     displacement_amplitudes_from_rate,
@@ -35,6 +36,7 @@ __all__ = [
     "AllanDeviation",
     "ClippedSignalError",
     "Clipping",
+    "DriftCheck",
     "HarmonicFitAccumulator",
     "NoiseTerm",
     "NoiseTerms",

@@ -32,7 +32,7 @@ from rotacal.signal._checks import (
 )
 from rotacal.signal._freq import estimate_frequency_unchecked
 from rotacal.signal._normal import solve_normal
-from rotacal.signal._result import SineFit, build_sine_fit
+from rotacal.signal._result import SineFit, build_drift_check, build_sine_fit
 
 _X_PLAN = 0.25  # planned largest in-block phase (rad) of harmonic 2H at 1.25·f
 _F_MARGIN = 1.25
@@ -420,6 +420,8 @@ class HarmonicFitAccumulator:
         *,
         max_iter: int = 50,
         rtol: float = 1e-12,
+        drift: bool = False,
+        drift_check: bool = False,
     ) -> SineFit:
         """Fit ``C + Σ_h a_h cos(2πhf(t−t_ref)) + b_h sin(...)`` to every sample added.
 
@@ -433,6 +435,12 @@ class HarmonicFitAccumulator:
         refine_frequency : bool
             Fit f as well (variable-projection Gauss–Newton).
         max_iter, rtol : iteration limit and relative step size (of f) that ends it.
+        drift : bool
+            Fit a linear term ``D·(t − t_ref)`` beside the harmonics (see :func:`fit_harmonics`);
+            the block moments hold what it needs, so the chunks are added as without it.
+        drift_check : bool
+            Without ``drift``: refit with the drift term at the final frequency as well
+            (``SineFit.drift_check``), at the cost of one more solve of the normal equations.
 
         Returns
         -------
@@ -453,7 +461,7 @@ class HarmonicFitAccumulator:
             raise ConfigError(f"rtol must be a positive number; got {rtol!r}.")
         if self._n == 0 or self._t_last is None:
             raise CaptureError("no samples were added to the HarmonicFitAccumulator.")
-        n_par = 2 * nh + 1 + (1 if refine_frequency else 0)
+        n_par = 2 * nh + 1 + (1 if refine_frequency else 0) + (1 if drift else 0)
         span = self._t_last - self._t_first
         if self._n < n_par + 1 or not span > 0:
             # too few samples: the message names the harmonics; a zero span: one period checked
@@ -471,16 +479,30 @@ class HarmonicFitAccumulator:
             refine=refine_frequency,
             max_iter=int(max_iter),
             rtol=float(rtol),
+            drift=bool(drift),
+            drift_check=bool(drift_check),
         )
+        check = None
+        if sol.check is not None:
+            p_d, rss_d, inv_d = sol.check
+            check = build_drift_check(
+                params=p_d,
+                offset=self._y0 + float(p_d[0]),
+                rss=rss_d,
+                n_samples=self._n,
+                cov_unit=inv_d,
+            )
         return build_sine_fit(
             frequency_hz=sol.frequency_hz,
             offset=self._y0 + float(sol.params[0]),
             cos_coefs=sol.params[1 : nh + 1],
-            sin_coefs=sol.params[nh + 1 :],
+            sin_coefs=sol.params[nh + 1 : 2 * nh + 1],
             t_ref_s=t_ref,
             rss=sol.rss,
             n_samples=self._n,
             iterations=sol.iterations,
             cov_unit=sol.cov_unit,
             refined=refine_frequency,
+            drift=float(sol.params[-1]) if drift else None,
+            drift_check=check,
         )

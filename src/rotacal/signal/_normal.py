@@ -40,10 +40,44 @@ class NormalFit:
     """Solution of the normal equations at the final frequency."""
 
     frequency_hz: float
-    params: np.ndarray  # [C', a_1..a_H, b_1..b_H] (C' relative to the centring constant)
+    params: np.ndarray  # [C', a_1..a_H, b_1..b_H(, D)] (C' relative to the centring constant)
     rss: float
     iterations: int
-    cov_unit: np.ndarray  # (JᵀJ)⁻¹, parameter order [C', a, b(, f)]
+    cov_unit: np.ndarray  # (JᵀJ)⁻¹, parameter order [C', a, b(, D)(, f)]
+    # drift_check: the linear refit [C', a, b, D] at the final frequency, its RSS and (ΦᵀΦ)⁻¹
+    check: tuple[np.ndarray, float, np.ndarray] | None = None
+
+
+#: Accepted steps in a row that lower the residual by no more than rounding, after which a
+#: refinement that has not met its step tolerance is taken to sit at the minimum.
+STALL_STEPS = 3
+
+
+class StallWatch:
+    """Tells a refinement stuck at the minimum within rounding from one that is still moving.
+
+    Gauss–Newton ignores the residual's curvature, so with a large residual (a record holding
+    something the model cannot fit, such as a drift fitted without its term) it can overshoot
+    and circle the minimum of the residual, its steps never falling below the step tolerance.
+    Every step it then takes is accepted only because the residual stays within rounding of
+    the lowest: the frequency is at the minimum as well as float64 can tell. A step counts as
+    such when it changes the residual by at most 16·``rss_tol`` either way (the residual from the
+    normal equations, ``yᵀy − bᵀp``, carries more rounding than the step test's ``rss_tol``).
+    Used only where the refinement would otherwise have failed (its results elsewhere unchanged).
+    """
+
+    def __init__(self, rss_tol: float) -> None:
+        self._tol = 16.0 * rss_tol
+        self._flat = 0
+
+    def step(self, rss_before: float, rss_after: float) -> None:
+        """Record an accepted step."""
+        self._flat = self._flat + 1 if abs(rss_before - rss_after) <= self._tol else 0
+
+    @property
+    def at_minimum(self) -> bool:
+        """The last STALL_STEPS accepted steps all stayed within rounding of the residual."""
+        return self._flat >= STALL_STEPS
 
 
 def solve_spd(a: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
@@ -106,19 +140,46 @@ def solve_normal(
     refine: bool,
     max_iter: int,
     rtol: float,
+    drift: bool = False,
+    drift_check: bool = False,
 ) -> NormalFit:
-    """Fit ``C + Σ a_h cos + b_h sin`` (and f when ``refine``) from exponential sums."""
+    """Fit ``C + Σ a_h cos + b_h sin`` (and f when ``refine``) from exponential sums.
+
+    With ``drift`` the model has the column τ = t − t_ref as well (parameter D after the b_h):
+    its products with the other columns come from the sums with p = 1 and 2, which the frequency
+    derivative uses too (``Re(τ·e^{j·0})``: coefficients c_0 = 1 at p = 1). With ``drift_check``
+    (a fit without drift) the same system with τ is solved once more at the final frequency.
+    """
     cmat = _column_coefs(nh)
+    e0 = np.zeros((1, nh + 1), dtype=np.complex128)
+    e0[0, 0] = 1.0
+    n_lin = 2 * nh + 1 + (1 if drift else 0)
+
+    def with_drift_column(
+        gram: np.ndarray, rhs: np.ndarray, s: np.ndarray, y: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The normal equations with the column τ appended (needs the sums with p = 1, 2)."""
+        hank1, toep1 = _hankel_toeplitz(s[1], nh)
+        g_pt = _inner(cmat, e0, hank1, toep1)[:, 0]
+        m = gram.shape[0]
+        out = np.empty((m + 1, m + 1))
+        out[:m, :m] = gram
+        out[:m, m] = g_pt
+        out[m, :m] = g_pt
+        out[m, m] = float(np.real(s[2][0]))
+        return out, np.append(rhs, float(np.real(y[1][0])))
 
     def linear(f: float) -> _Linear:
-        s, y = sums(2.0 * math.pi * f, refine)
+        s, y = sums(2.0 * math.pi * f, refine or drift)
         hank, toep = _hankel_toeplitz(s[0], nh)
         gram = _inner(cmat, cmat, hank, toep)
         rhs = np.real(cmat @ y[0])
+        if drift:
+            gram, rhs = with_drift_column(gram, rhs, s, y)
         p, _, cond = solve_spd(gram, rhs)
         if not cond < MAX_COND:
             raise CaptureError(
-                f"the {2 * nh + 1}-parameter sine fit at {f:.6g} Hz is ill-conditioned "
+                f"the {n_lin}-parameter sine fit at {f:.6g} Hz is ill-conditioned "
                 f"(condition number {cond:.3g}); supply a longer record (≥ ~1.5 periods) or "
                 "fewer harmonics."
             )
@@ -127,7 +188,7 @@ def solve_normal(
 
     def full_system(lin: _Linear) -> tuple[np.ndarray, np.ndarray]:
         a = lin.p[1 : nh + 1]
-        b = lin.p[nh + 1 :]
+        b = lin.p[nh + 1 : 2 * nh + 1]
         cd = np.zeros(nh + 1, dtype=np.complex128)
         h = np.arange(1, nh + 1)
         cd[1:] = 2.0 * math.pi * h * (b + 1j * a)
@@ -136,12 +197,17 @@ def solve_normal(
         g_pd = _inner(cmat, cd[None, :], hank1, toep1)[:, 0]
         g_dd = float(_inner(cd[None, :], cd[None, :], hank2, toep2)[0, 0])
         dty = float(np.real(cd @ lin.y[1]))
-        jtj = np.empty((2 * nh + 2, 2 * nh + 2))
+        phi_y = np.real(cmat @ lin.y[0])
+        if drift:  # the drift column τ (p = 1) against ∂model/∂f (p = 1): sums with p = 2
+            g_pd = np.append(g_pd, float(_inner(e0, cd[None, :], hank2, toep2)[0, 0]))
+            phi_y = np.append(phi_y, float(np.real(lin.y[1][0])))
+        m = lin.gram.shape[0]
+        jtj = np.empty((m + 1, m + 1))
         jtj[:-1, :-1] = lin.gram
         jtj[:-1, -1] = g_pd
         jtj[-1, :-1] = g_pd
         jtj[-1, -1] = g_dd
-        phi_r = np.real(cmat @ lin.y[0]) - lin.gram @ lin.p
+        phi_r = phi_y - lin.gram @ lin.p
         jtr = np.append(phi_r, dty - float(g_pd @ lin.p))
         return jtj, jtr
 
@@ -149,6 +215,7 @@ def solve_normal(
     iterations = 0
     if refine:
         rss_tol = 64.0 * _EPS * max(yy, 0.0) + 1e-300
+        stall = StallWatch(rss_tol)
         converged = False
         for _ in range(max_iter):
             iterations += 1
@@ -173,11 +240,12 @@ def solve_normal(
             if new is None:  # no step lowers the residual: at the minimum within rounding
                 converged = True
                 break
+            stall.step(lin.rss, new.rss)
             lin = new
             if abs(lam * df) <= rtol * abs(lin.f):
                 converged = True
                 break
-        if not converged:
+        if not converged and not stall.at_minimum:
             raise CaptureError(
                 f"the frequency refinement did not converge in {max_iter} iterations (last "
                 f"f = {lin.f:.9g} Hz); check that the record holds one dominant sine, or raise "
@@ -187,4 +255,10 @@ def solve_normal(
         _, cov_unit, _ = solve_spd(jtj, np.zeros(jtj.shape[0]))
     else:
         _, cov_unit, _ = solve_spd(lin.gram, np.zeros(lin.gram.shape[0]))
-    return NormalFit(lin.f, lin.p, lin.rss, iterations, cov_unit)
+    check = None
+    if drift_check and not drift:
+        s_d, y_d = (lin.s, lin.y) if refine else sums(2.0 * math.pi * lin.f, True)
+        gram_d, rhs_d = with_drift_column(lin.gram, np.real(cmat @ y_d[0]), s_d, y_d)
+        p_d, inv_d, _ = solve_spd(gram_d, rhs_d)
+        check = (p_d, yy - float(rhs_d @ p_d), inv_d)
+    return NormalFit(lin.f, lin.p, lin.rss, iterations, cov_unit, check)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -36,6 +37,13 @@ class SineFit(Result):
     amplitudes_u : standard uncertainty of A_h (unit of y) from the residual variance, assuming
         white noise; includes the correlation with f when f was fitted.
     frequency_u_hz : standard uncertainty of f (Hz), idem; 0 when f was fixed.
+    offset_u : standard uncertainty of C (unit of y), idem.
+    drift : the linear term D of a fit with drift, ``y ≈ C + D·(t − t_ref) + Σ_h …`` (unit of y
+        per s); None when the model has no drift term (the IEEE 1057 model).
+    drift_u : standard uncertainty of D (unit of y per s), as ``amplitudes_u``; None without drift.
+    drift_check : the same data refitted with a drift term at the fitted frequency (a fit without
+        drift asked for it with ``drift_check=True``), to judge whether an unfitted drift matters;
+        None otherwise.
     """
 
     frequency_hz: float
@@ -50,11 +58,26 @@ class SineFit(Result):
     iterations: int
     amplitudes_u: np.ndarray
     frequency_u_hz: float
+    offset_u: float = math.nan
+    drift: float | None = None
+    drift_u: float | None = None
+    drift_check: DriftCheck | None = dataclasses.field(default=None, repr=False)
 
     @property
     def harmonics(self) -> int:
         """Number of harmonics H in the model (1 = the fundamental only)."""
         return int(self.amplitudes.size)
+
+    @property
+    def n_parameters(self) -> int:
+        """Parameters of the refined model: offset, H pairs, frequency (and the drift term)."""
+        return 2 * self.harmonics + 2 + (0 if self.drift is None else 1)
+
+    def periodic(self) -> SineFit:
+        """The same fit without its drift term (itself when it has none): the periodic model."""
+        if self.drift is None:
+            return self
+        return dataclasses.replace(self, drift=None, drift_u=None)
 
     def evaluate(self, t: Any) -> np.ndarray:
         """The fitted model at times ``t`` (s), in the unit of y; same shape as ``t``."""
@@ -63,6 +86,13 @@ class SineFit(Result):
     def evaluate_derivative(self, t: Any) -> np.ndarray:
         """The time derivative of the fitted model at ``t`` (s), in unit of y per second."""
         return self._series(t, derivative=True)
+
+    def trend(self, t: Any) -> np.ndarray:
+        """The model's non-periodic part at ``t`` (s): ``C + D·(t − t_ref)``, or C without drift."""
+        ta = np.asarray(t, dtype=np.float64)
+        if self.drift is None:
+            return np.full(ta.shape, self.offset)
+        return self.offset + self.drift * (ta - self.t_ref_s)
 
     def _series(self, t: Any, *, derivative: bool) -> np.ndarray:
         ta = np.asarray(t, dtype=np.float64)
@@ -81,7 +111,32 @@ class SineFit(Result):
         for s in range(0, flat.size, _EVAL_CHUNK):
             e = min(flat.size, s + _EVAL_CHUNK)
             out[s:e] = harmonic_series(w * (flat[s:e] - self.t_ref_s), ca, cb, const)
+            if self.drift is not None:
+                out[s:e] += self.drift if derivative else self.drift * (flat[s:e] - self.t_ref_s)
         return out.reshape(ta.shape)
+
+
+@dataclass(frozen=True)
+class DriftCheck:
+    """A fit refitted with a linear drift term at the same frequency (see ``drift_check``).
+
+    Attributes
+    ----------
+    drift, drift_u : the drift D and its standard uncertainty (unit of y per s).
+    offset : C of the refit (unit of y).
+    amplitudes, amplitudes_u : A_h and u(A_h) of the refit (unit of y), h = 1..H.
+    cos_coefs, sin_coefs : a_h, b_h of the refit (unit of y).
+    residual_rms : rms of y − refit (unit of y).
+    """
+
+    drift: float
+    drift_u: float
+    offset: float
+    amplitudes: np.ndarray
+    amplitudes_u: np.ndarray
+    cos_coefs: np.ndarray
+    sin_coefs: np.ndarray
+    residual_rms: float
 
 
 def harmonic_series(theta: np.ndarray, ca: np.ndarray, cb: np.ndarray, const: float) -> np.ndarray:
@@ -117,16 +172,19 @@ def build_sine_fit(
     iterations: int,
     cov_unit: np.ndarray,
     refined: bool,
+    drift: float | None = None,
+    drift_check: DriftCheck | None = None,
 ) -> SineFit:
     """Assemble a :class:`SineFit` from the fitted coefficients.
 
-    ``cov_unit`` is ``(JᵀJ)⁻¹`` in the parameter order ``[C, a_1..a_H, b_1..b_H(, f)]``; it is
-    scaled by the residual variance ``s² = RSS/(N − p)`` (IEEE Std 1057-2017, §4.1.3).
+    ``cov_unit`` is ``(JᵀJ)⁻¹`` in the parameter order ``[C, a_1..a_H, b_1..b_H(, D)(, f)]``
+    (D when ``drift`` is given); it is scaled by the residual variance ``s² = RSS/(N − p)``
+    (IEEE Std 1057-2017, §4.1.3).
     """
     a = np.asarray(cos_coefs, dtype=np.float64)
     b = np.asarray(sin_coefs, dtype=np.float64)
     nh = a.size
-    n_par = 2 * nh + 1 + (1 if refined else 0)
+    n_par = 2 * nh + 1 + (1 if refined else 0) + (0 if drift is None else 1)
     rss = max(float(rss), 0.0)
     s2 = rss / (n_samples - n_par)
     cov = s2 * cov_unit
@@ -141,6 +199,12 @@ def build_sine_fit(
     var_amp = np.where(amp > 0, var_amp, 0.5 * (vaa + vbb))
     amp_u = np.sqrt(np.maximum(var_amp, 0.0))
     f_u = math.sqrt(max(float(cov[-1, -1]), 0.0)) if refined else 0.0
+    extra: dict[str, Any] = {}
+    if drift is not None:
+        i_d = 2 * nh + 1
+        extra.update(drift=float(drift), drift_u=math.sqrt(max(float(cov[i_d, i_d]), 0.0)))
+    if drift_check is not None:
+        extra.update(drift_check=drift_check)
     return SineFit(
         frequency_hz=float(frequency_hz),
         offset=float(offset),
@@ -154,4 +218,43 @@ def build_sine_fit(
         iterations=int(iterations),
         amplitudes_u=amp_u,
         frequency_u_hz=f_u,
+        offset_u=math.sqrt(max(float(cov[0, 0]), 0.0)),
+        **extra,
+    )
+
+
+def build_drift_check(
+    *,
+    params: np.ndarray,
+    offset: float,
+    rss: float,
+    n_samples: int,
+    cov_unit: np.ndarray,
+) -> DriftCheck:
+    """Assemble a :class:`DriftCheck` from a linear refit ``[C, a_1..a_H, b_1..b_H, D]`` at a fixed
+    frequency: ``cov_unit`` = (ΦᵀΦ)⁻¹ of that refit, scaled by ``s² = RSS/(N − 2H − 2)``."""
+    nh = (params.size - 2) // 2
+    fit = build_sine_fit(
+        frequency_hz=1.0,
+        offset=offset,
+        cos_coefs=params[1 : nh + 1],
+        sin_coefs=params[nh + 1 : 2 * nh + 1],
+        t_ref_s=0.0,
+        rss=rss,
+        n_samples=n_samples,
+        iterations=0,
+        cov_unit=cov_unit,
+        refined=False,
+        drift=float(params[-1]),
+    )
+    assert fit.drift is not None and fit.drift_u is not None
+    return DriftCheck(
+        drift=fit.drift,
+        drift_u=fit.drift_u,
+        offset=fit.offset,
+        amplitudes=fit.amplitudes,
+        amplitudes_u=fit.amplitudes_u,
+        cos_coefs=fit.cos_coefs,
+        sin_coefs=fit.sin_coefs,
+        residual_rms=fit.residual_rms,
     )

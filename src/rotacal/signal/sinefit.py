@@ -34,10 +34,17 @@ from rotacal.signal._checks import (
     uniform_step,
 )
 from rotacal.signal._freq import estimate_frequency_unchecked
-from rotacal.signal._normal import MAX_COND
-from rotacal.signal._result import SineFit, build_sine_fit, harmonic_series
+from rotacal.signal._normal import MAX_COND, StallWatch
+from rotacal.signal._result import (
+    DriftCheck,
+    SineFit,
+    build_drift_check,
+    build_sine_fit,
+    harmonic_series,
+)
 
 __all__ = [
+    "DriftCheck",
     "HarmonicFitAccumulator",
     "SineFit",
     "displacement_amplitudes_from_rate",
@@ -90,11 +97,15 @@ def estimate_frequency(t: Any, y: Any) -> float:
 
 
 # ---------------------------------------------------------------------------- direct (QR) solver
-def _design(tau: np.ndarray, f: float, nh: int) -> np.ndarray:
+def _design(tau: np.ndarray, f: float, nh: int, drift: bool = False) -> np.ndarray:
+    """Columns ``[1, cos(hωτ)…, sin(hωτ)…]`` and, with ``drift``, ``τ`` last."""
     th = 2.0 * math.pi * f * tau
     h = np.arange(1, nh + 1, dtype=np.float64)
     ang = np.outer(th, h)
-    return np.hstack([np.ones((tau.size, 1)), np.cos(ang), np.sin(ang)])
+    cols = [np.ones((tau.size, 1)), np.cos(ang), np.sin(ang)]
+    if drift:
+        cols.append(tau[:, None])
+    return np.hstack(cols)
 
 
 def _scaled_lstsq(a: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, float]:
@@ -122,19 +133,22 @@ def _fit_direct(
     refine: bool,
     max_iter: int,
     rtol: float,
+    drift: bool = False,
+    drift_check: bool = False,
 ) -> SineFit:
     t_ref = 0.5 * (float(t[0]) + float(t[-1]))
     tau = t - t_ref
     y0 = float(np.mean(y))
     yc = y - y0
     h = np.arange(1, nh + 1, dtype=np.float64)
+    n_lin = 2 * nh + 1 + (1 if drift else 0)
 
     def linear(f: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-        a = _design(tau, f, nh)
+        a = _design(tau, f, nh, drift)
         p, cond = _scaled_lstsq(a, yc)
         if not cond * cond < MAX_COND:
             raise CaptureError(
-                f"the {2 * nh + 1}-parameter sine fit at {f:.6g} Hz is ill-conditioned "
+                f"the {n_lin}-parameter sine fit at {f:.6g} Hz is ill-conditioned "
                 f"(condition number {cond:.3g}); supply a longer record or fewer harmonics."
             )
         r = yc - a @ p
@@ -142,7 +156,7 @@ def _fit_direct(
 
     def jacobian(a: np.ndarray, p: np.ndarray, f: float) -> np.ndarray:
         ang = np.outer(2.0 * math.pi * f * tau, h)
-        ca, cb = p[1 : nh + 1], p[nh + 1 :]
+        ca, cb = p[1 : nh + 1], p[nh + 1 : 2 * nh + 1]
         dcol = 2.0 * math.pi * tau * ((np.cos(ang) * cb - np.sin(ang) * ca) @ h)
         return np.hstack([a, dcol[:, None]])
 
@@ -151,6 +165,7 @@ def _fit_direct(
     iterations = 0
     if refine:
         rss_tol = 64.0 * _EPS * float(yc @ yc) + 1e-300
+        stall = StallWatch(rss_tol)
         converged = False
         for _ in range(max_iter):
             iterations += 1
@@ -169,6 +184,7 @@ def _fit_direct(
                 if f_try > 0:
                     cand = linear(f_try)
                     if cand[3] <= rss + rss_tol:
+                        stall.step(rss, cand[3])
                         f = f_try
                         a, p, r, rss = cand
                         accepted = True
@@ -177,7 +193,7 @@ def _fit_direct(
             if not accepted or abs(lam * df) <= rtol * abs(f):
                 converged = True
                 break
-        if not converged:
+        if not converged and not stall.at_minimum:
             raise CaptureError(
                 f"the frequency refinement did not converge in {max_iter} iterations (last "
                 f"f = {f:.9g} Hz); check that the record holds one dominant sine, or raise "
@@ -186,17 +202,31 @@ def _fit_direct(
         cov_unit = _unit_covariance(jacobian(a, p, f))
     else:
         cov_unit = _unit_covariance(a)
+    check = None
+    if drift_check and not drift:
+        a_d = np.hstack([a, tau[:, None]])
+        p_d, _ = _scaled_lstsq(a_d, yc)
+        r_d = yc - a_d @ p_d
+        check = build_drift_check(
+            params=p_d,
+            offset=y0 + float(p_d[0]),
+            rss=float(r_d @ r_d),
+            n_samples=t.size,
+            cov_unit=_unit_covariance(a_d),
+        )
     return build_sine_fit(
         frequency_hz=f,
         offset=y0 + float(p[0]),
         cos_coefs=p[1 : nh + 1],
-        sin_coefs=p[nh + 1 :],
+        sin_coefs=p[nh + 1 : 2 * nh + 1],
         t_ref_s=t_ref,
         rss=rss,
         n_samples=t.size,
         iterations=iterations,
         cov_unit=cov_unit,
         refined=refine,
+        drift=float(p[-1]) if drift else None,
+        drift_check=check,
     )
 
 
@@ -210,6 +240,8 @@ def _fit(
     max_iter: int,
     rtol: float,
     method: str,
+    drift: bool = False,
+    drift_check: bool = False,
 ) -> SineFit:
     nh = check_harmonics(nh)
     if method not in ("auto", "direct", "blocks"):
@@ -221,7 +253,7 @@ def _fit(
     f_given = None if frequency_hz is None else check_frequency(frequency_hz)
     ta, ya = as_pair(t, y)
     n = ta.size
-    n_par = 2 * nh + 1 + (1 if refine else 0)
+    n_par = 2 * nh + 1 + (1 if refine else 0) + (1 if drift else 0)
     if n < n_par + 1:
         check_record(n, 1.0, 1.0, nh, n_par)  # raises: too few samples
     dt_u = uniform_step(ta)
@@ -237,10 +269,20 @@ def _fit(
         short = periods < _SHORT_PERIODS and n * (2 * nh + 2) <= _DIRECT_MAX_ELEMENTS
         method = "direct" if (small or short) else "blocks"
     if method == "direct":
-        return _fit_direct(ta, ya, f0, nh, refine, int(max_iter), float(rtol))
+        return _fit_direct(
+            ta, ya, f0, nh, refine, int(max_iter), float(rtol), bool(drift), bool(drift_check)
+        )
     acc = HarmonicFitAccumulator(f0, harmonics=nh)
     acc._add(ta, ya, uniform_dt=dt_u, y_checked=True)
-    return acc.fit(f0, nh, refine, max_iter=int(max_iter), rtol=float(rtol))
+    return acc.fit(
+        f0,
+        nh,
+        refine,
+        max_iter=int(max_iter),
+        rtol=float(rtol),
+        drift=bool(drift),
+        drift_check=bool(drift_check),
+    )
 
 
 def fit_sine_3p(t: Any, y: Any, frequency_hz: float, *, method: Method = "auto") -> SineFit:
@@ -320,11 +362,20 @@ def fit_harmonics(
     max_iter: int = 50,
     rtol: float = 1e-12,
     method: Method = "auto",
+    drift: bool = False,
+    drift_check: bool = False,
 ) -> SineFit:
     """Multi-harmonic sine fit with the fundamental frequency refined.
 
     Fits ``y ≈ C + Σ_{h=1}^{H} a_h cos(2πhf(t − t_ref)) + b_h sin(2πhf(t − t_ref))`` (Feng et al.
     2023, eq. (9)); with ``refine_frequency`` f is a parameter too (the IEEE 1057 iterative fit).
+
+    With ``drift`` the model gains a linear term, ``y ≈ C + D·(t − t_ref) + Σ_h …`` (rotacal's
+    extension of eq. (9), not in the seed or IEEE 1057): a slow drift of y is then fitted as D
+    instead of leaking into the harmonics. Over n whole periods a ramp D·τ projects onto the
+    sine terms as ``b_h = −2D·(−1)^{hn}/(2πhf)``, so without the term a drift reads as harmonic
+    distortion; with it the b_h carry slightly more noise (their correlation with τ is
+    ``6/(πhn)²`` in r²).
 
     Parameters
     ----------
@@ -342,6 +393,12 @@ def fit_harmonics(
     max_iter, rtol : iteration limit and relative frequency step that ends it.
     method : {'auto', 'direct', 'blocks'}
         Solver: explicit QR (small or short records), block moments (large records), or auto.
+    drift : bool
+        Fit the linear term D (``SineFit.drift``, unit of y per s, and ``drift_u``).
+    drift_check : bool
+        Without ``drift``: also refit with D at the final frequency (``SineFit.drift_check``),
+        to judge an unfitted drift; one more linear solve (no pass over the samples for the
+        block solver, whose sums hold τ already).
 
     Returns
     -------
@@ -353,7 +410,9 @@ def fit_harmonics(
     IEEE Std 1057-2017, §4.1.3 (multi-harmonic least-squares sine fit);
     Feng et al. 2023, Sensors 23:4876, eqs. (9)–(10).
     """
-    return _fit(t, y, frequency_hz, harmonics, refine_frequency, max_iter, rtol, method)
+    return _fit(
+        t, y, frequency_hz, harmonics, refine_frequency, max_iter, rtol, method, drift, drift_check
+    )
 
 
 # ---------------------------------------------------------------------------- figures of merit
@@ -463,7 +522,8 @@ def displacement_amplitudes_from_rate(rate_amplitudes: Any, frequency_hz: float)
 def snr_db(y: Any, fit: SineFit, t: Any) -> float:
     """Signal-to-noise ratio of a fit: ``10·log10(mean((model − C)²)/mean((y − model)²))`` (dB).
 
-    The signal is the fitted model without its constant term; the noise is the residual.
+    The signal is the fitted model without its constant term (and without its drift term, for a
+    fit with drift: only the harmonics); the noise is the residual.
 
     Parameters
     ----------
@@ -496,6 +556,8 @@ def snr_db(y: Any, fit: SineFit, t: Any) -> float:
         e = min(ta.size, s + step)
         ac = harmonic_series(w * (ta[s:e] - fit.t_ref_s), fit.cos_coefs, fit.sin_coefs, 0.0)
         r = ya[s:e] - fit.offset - ac
+        if fit.drift is not None:
+            r -= fit.drift * (ta[s:e] - fit.t_ref_s)
         sig += float(ac @ ac)
         noise += float(r @ r)
     if sig == 0.0:

@@ -34,6 +34,13 @@ assumed to be in its settled periodic state from t = -∞, so nothing depends on
 
 Vibration (``vibration_deg``, ``vibration_hz``) is a separate sine added to the angle: it is part of
 what the sensors see but not of the periodic motion whose truth is reported.
+
+Drift (``drift_deg_s`` = d) is a slow, steady turn of the table added to the angle, ``d·t`` (t in s
+from the time origin t = 0), so the rate carries the constant d. It is not part of the periodic
+motion (its harmonics and THD are the truth without it), but it is part of the motion: the
+reversing moments are the zeros of the whole vibration-free rate, periodic part plus d (with drift
+a maximum and the next minimum are no longer half a period apart, and for |d| above the periodic
+rate's peaks there are none). The truth reports d as ``drift_deg_s``.
 """
 
 from __future__ import annotations
@@ -124,6 +131,9 @@ class SineMotion:
         Superposed vibration ``vibration_deg·sin(2π·vibration_hz·t + vibration_phase_rad)``.
     creep_time_s : float or None
         Duration X of the creep lag (s); None gives 0.1/f.
+    drift_deg_s : float
+        Steady drift d of the table (deg/s): ``d·t`` is added to the angle (see the module
+        docstring).
 
     References
     ----------
@@ -143,6 +153,7 @@ class SineMotion:
     vibration_hz: float = 0.0
     vibration_phase_rad: float = 0.0
     creep_time_s: float | None = None
+    drift_deg_s: float = 0.0
 
     # ------------------------------------------------------------------ validation
     def __post_init__(self) -> None:
@@ -173,7 +184,7 @@ class SineMotion:
                 _finite(f"harmonics[{hi}] phase", psi),
             )
         object.__setattr__(self, "harmonics", dict(sorted(harm.items())))
-        for name in ("amplitude_deg", "frequency_hz", "phase_rad", "offset_deg"):
+        for name in ("amplitude_deg", "frequency_hz", "phase_rad", "offset_deg", "drift_deg_s"):
             object.__setattr__(self, name, _finite(name, getattr(self, name)))
         for name in (
             "stagnation_s",
@@ -431,6 +442,8 @@ class SineMotion:
         y, _ = self._evaluate(t, rate=False)
         if self.vibration_deg > 0:
             y = y + self._vibration(t)
+        if self.drift_deg_s != 0.0:
+            y = y + self.drift_deg_s * t
         return y
 
     def rate_deg_s(self, t: Any) -> np.ndarray:
@@ -444,17 +457,25 @@ class SineMotion:
         assert r is not None
         if self.vibration_deg > 0:
             r = r + self._vibration_rate(t)
+        if self.drift_deg_s != 0.0:
+            r = r + self.drift_deg_s
         return r
 
     def angle_no_vibration_deg(self, t: Any) -> np.ndarray:
-        """The periodic (vibration-free) part of θ(t) (deg), whose truth :meth:`truth` reports."""
+        """The periodic part of θ(t) (deg), without vibration and drift: what :meth:`truth`'s
+        harmonics and THD describe."""
         return self._evaluate(np.asarray(t, dtype=float), rate=False)[0]
 
     def rate_no_vibration_deg_s(self, t: Any) -> np.ndarray:
-        """The periodic (vibration-free) part of dθ/dt (deg/s)."""
+        """The periodic part of dθ/dt (deg/s), without vibration and drift."""
         r = self._evaluate(np.asarray(t, dtype=float), rate=True)[1]
         assert r is not None
         return r
+
+    def _reversal_rate(self, t: Any) -> np.ndarray:
+        """The vibration-free rate whose zeros are the reversing moments: periodic part plus drift."""
+        r = self.rate_no_vibration_deg_s(t)
+        return r + self.drift_deg_s if self.drift_deg_s != 0.0 else r
 
     # ------------------------------------------------------------------ truth
     def harmonic_truth(self, harmonics: int = 10, *, points: int = TRUTH_FFT_POINTS) -> dict:
@@ -491,14 +512,14 @@ class SineMotion:
         """Reversing moments of the vibration-free motion in [0, T) (s), ascending."""
         T = self.period_s
         t = np.linspace(-0.25 * T, 1.25 * T, int(1.5 * SCAN_POINTS) + 1)
-        r = self.rate_no_vibration_deg_s(t)
+        r = self._reversal_rate(t)
         sg = np.sign(r)
         nz = np.flatnonzero(sg != 0)
         ch = np.flatnonzero(sg[nz][1:] != sg[nz][:-1])
         out = []
 
         def rate1(x: float) -> float:
-            return float(self.rate_no_vibration_deg_s(np.array([x]))[0])
+            return float(self._reversal_rate(np.array([x]))[0])
 
         for i in ch:
             ia, ib = nz[i], nz[i + 1]
@@ -527,7 +548,8 @@ class SineMotion:
     def reversal_times_s(self, t_start: float, t_stop: float) -> np.ndarray:
         """Every reversing moment (zero of the vibration-free velocity) in [t_start, t_stop] (s).
 
-        Found once per period by a dense sign scan of :meth:`rate_no_vibration_deg_s`
+        Found once per period by a dense sign scan of the vibration-free rate (periodic part plus
+        drift; periodic, so one period serves all)
         (``SCAN_POINTS`` per period) and ``scipy.optimize.brentq``; a dwell (velocity exactly
         zero over an interval, from stagnation or backlash) counts once, at its middle.
         """
@@ -556,7 +578,8 @@ class SineMotion:
             ``frequency_hz``, ``thd_percent`` (eq. (1), h = 2..N), ``harmonic_amplitudes_deg``
             (h = 1..N), ``harmonic_phases_rad``, ``mean_deg``,
             ``angular_acceleration_amplitude_deg_s2`` = A₁(2πf)², ``reversal_times_s``,
-            ``periods`` (span × f), ``t_start_s``, ``t_stop_s``, ``motion`` (the settings).
+            ``periods`` (span × f), ``t_start_s``, ``t_stop_s``, ``drift_deg_s`` (the drift d,
+            deg/s, not in the harmonics), ``motion`` (the settings).
 
         References
         ----------
@@ -582,6 +605,7 @@ class SineMotion:
             "periods": (t_stop - t_start) * self.frequency_hz,
             "t_start_s": t_start,
             "t_stop_s": t_stop,
+            "drift_deg_s": float(self.drift_deg_s),
             "harmonics": int(harmonics),
             "motion": self.to_dict(),
         }

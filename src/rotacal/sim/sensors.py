@@ -231,7 +231,8 @@ def simulate_encoder(
     """Analog quadrature signals of an optical shaft encoder on the table.
 
     ``φ = 2π·lines·θ/360`` (θ in deg), ``a = offset_a + amplitude_a·cos φ + n_a``,
-    ``b = offset_b + amplitude_b·sin(φ + phase_error_rad) + n_b`` (so θ increases when b leads a),
+    ``b = offset_b + amplitude_b·sin(φ + phase_error_rad) + n_b`` (so θ increases when a leads b:
+    b = sin φ peaks a quarter signal period after a = cos φ while φ grows),
     with independent white Gaussian noise of ``noise_rms`` (signal units) on each channel. With
     ``adc_bits`` the signals are clipped to ``adc_range`` and quantised mid-rise to 2**adc_bits
     codes (value = low + (code + ½)·LSB).
@@ -446,8 +447,10 @@ def simulate_fog(
     scale_factor_error: float = 0.0,
     timebase_relative_error: float = 0.0,
     range_deg_s: float | None = None,
+    bias_drift_deg_s2: float = 0.0,
 ) -> SimCapture:
-    """A fibre-optic gyro on the table: ``rate = (1 + s)·dθ/dt + bias + white noise`` (deg/s).
+    """A fibre-optic gyro on the table: ``rate = (1 + s)·dθ/dt + bias + r·(t − t₀) + white noise``
+    (deg/s), r the bias's drift and t₀ the first sample's time.
 
     Parameters
     ----------
@@ -471,6 +474,10 @@ def simulate_fog(
         Measuring range of the gyro (deg/s, > 0): an output beyond ±range_deg_s (noise included)
         is reported as ±range_deg_s (a saturated gyro; the truth's ``sensor`` then holds
         ``range_deg_s`` and ``clipped_samples``). None: unlimited.
+    bias_drift_deg_s2 : float
+        Drift r of the gyro's bias (deg/s per s), e.g. a warm-up: the bias is ``bias_deg_s`` at
+        the first sample and changes linearly. A table drift (``SineMotion.drift_deg_s``) adds
+        a constant to the rate instead.
 
     Returns
     -------
@@ -484,6 +491,7 @@ def simulate_fog(
     """
     motion = _check_motion(motion)
     bias = _finite("bias_deg_s", bias_deg_s)
+    bias_drift = _finite("bias_drift_deg_s2", bias_drift_deg_s2)
     sigma = _nonneg("noise_deg_s", noise_deg_s)
     sf = _finite("scale_factor_error", scale_factor_error)
     if not abs(sf) < 0.5:
@@ -500,6 +508,8 @@ def simulate_fog(
             raise ConfigError("give either snr_db or noise_deg_s for the FOG, not both.")
         sigma = math.sqrt(p_sig / 10.0 ** (snr / 10.0))
     rate = (1.0 + sf) * clean + bias
+    if bias_drift != 0.0:
+        rate += bias_drift * (t - t0)
     snr_real: float | None = None
     if sigma > 0:
         noise = np.random.default_rng(seed).normal(0.0, sigma, t.size)
@@ -510,6 +520,7 @@ def simulate_fog(
         "noise_deg_s": sigma,
         "noise_density_deg_s_rt_hz": sigma / math.sqrt(fs / 2.0),
         "bias_deg_s": bias,
+        "bias_drift_deg_s2": bias_drift,
         "snr_db": None if sigma == 0 else 10.0 * math.log10(p_sig / sigma**2),
         "snr_db_requested": None if snr_db is None else float(snr_db),
         "snr_db_realised": snr_real,

@@ -40,6 +40,15 @@ from rotacal.signal import (
 )
 from rotacal.signal._values import check_magnitudes, check_setting
 from rotacal.signal.clipping import check_clipping
+from rotacal.table.motion_drift import (
+    detrended_angle,
+    drift_fields,
+    drift_free_hysteresis,
+    drift_note,
+    drift_warnings,
+    fit_motion,
+    prefit_drift,
+)
 from rotacal.table.motion_uncertainty import (
     ReversalDetection,
     comparison_budgets,
@@ -68,6 +77,10 @@ _OPTIONAL_KEYS = (
     "position_error_max_deg",
     "position_error_rms_deg",
     "snr_db",
+    "drift_deg_s",
+    "drift_deg_s_u",
+    "rate_drift_deg_s2",
+    "rate_drift_deg_s2_u",
 )
 _PLOT_POINTS = 20_000
 #: Samples (evenly strided) for the Heydemann ellipse fit: parameter noise ~σ/√(2·10⁵), negligible.
@@ -105,6 +118,11 @@ class MotionResult(Result):
     position_error_max_deg: float | None = None
     position_error_rms_deg: float | None = None
     snr_db: float | None = None
+    # With drift=True (--drift): the fitted drift, see rotacal.table.motion_drift.drift_fields.
+    drift_deg_s: float | None = None
+    drift_deg_s_u: float | None = None
+    rate_drift_deg_s2: float | None = None
+    rate_drift_deg_s2_u: float | None = None
     # THD near zero (see rotacal.table.motion_uncertainty.thd_uncertainty), in %: the noise bias
     # of the plain THD (Monte Carlo) and the bias-corrected THD (noise power removed); the 95 %
     # interval for the true THD is the budget's (JSON ``thd_percent_interval``).
@@ -270,6 +288,9 @@ def _finish(
     radius_mm: float | None = None,
 ) -> MotionResult:
     _check_set_values(set_amplitude_deg, set_frequency_hz)
+    note = drift_note(scheme, fit)
+    if note is not None:
+        notes = [*notes, note]
     unc = motion_budgets(
         scheme=scheme,  # type: ignore[arg-type]
         fit=fit,
@@ -300,6 +321,8 @@ def _finish(
             if unc.timebase_error != 0.0:  # eq. (2) in true time (the set frequency is true)
                 t0 = float(detection.capture_start_s)
                 t_true = t0 + (t_used - t0) / (1.0 + unc.timebase_error)
+            if scheme != "fog":  # the FOG's angle is integrated from the rate less its trend
+                angle_used = detrended_angle(fit, t_used, angle_used)
             err = position_error(t_true, angle_used, set_amplitude_deg, set_frequency_hz)
             extra.update(
                 position_error_max_deg=float(np.max(np.abs(err))),
@@ -307,7 +330,7 @@ def _finish(
             )
             step = _plot_stride(err.size)
             plot["position_error_deg"] = err[::step]
-    return MotionResult(
+    result = MotionResult(
         scheme=scheme,
         amplitude_deg=amp,
         frequency_hz=freq,
@@ -335,16 +358,25 @@ def _finish(
         _plot=plot,
         _budgets=budgets,
         **extra,
+        **drift_fields(scheme, fit),
     )
+    return with_warnings(result, drift_warnings(scheme, fit, budgets, t_used[-1] - t_used[0]))
 
 
 def _cut(
-    reversal_idx: np.ndarray, periods: int | None, what: str, span_deg: float | None = None
+    reversal_idx: np.ndarray,
+    periods: int | None,
+    what: str,
+    span_deg: float | None = None,
+    net_deg: float | None = None,
 ) -> tuple[int, int, int]:
     """First and last sample of n whole periods bounded by 2n+1 reversals (seed 000, §3.3)."""
     available = (reversal_idx.size - 1) // 2
     if available < 1:
         moved = f" (the angle spans {span_deg:.3g}°)" if span_deg is not None else ""
+        if span_deg is not None and net_deg is not None and abs(net_deg) > 0.5 * span_deg:
+            moved = f"{moved[:-1]} and ends {net_deg:+.3g}° from its start: the table drifts, "
+            moved += "rerun with --drift)"
         raise CaptureError(
             f"found {reversal_idx.size} reversing moment(s) in the {what}{moved}: at least 3 are "
             "needed for one whole motion period — record longer, or check that the table moves"
@@ -370,6 +402,8 @@ def calibrate_encoder_motion(
     correction: QuadratureCorrection | None = None,
     specs: InstrumentSpecs | None = None,
     allow_clipped: bool = False,
+    drift: bool = False,
+    hysteresis_subintervals: int | None = None,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from an optical shaft encoder (the OSE scheme).
 
@@ -391,6 +425,11 @@ def calibrate_encoder_motion(
     allow_clipped : bool — analyse a capture whose a or b sits at the rails
         (:mod:`rotacal.signal.clipping`) anyway, naming the clipping in ``warnings``; by default
         it is refused with a CaptureError.
+    drift : bool — fit a linear drift term beside the harmonics, ``drift_deg_s`` (deg/s; see
+        :mod:`rotacal.table.motion_drift`); without it a drift that matters is in ``warnings``.
+    hysteresis_subintervals : int, optional — the reversal rule's hysteresis (30° subintervals;
+        :func:`~rotacal.encoder.find_reversals`; 1 or 2: the paper's odd/even rule alone). Its
+        default with ``drift``: :func:`~rotacal.table.motion_drift.drift_free_hysteresis`.
 
     Returns
     -------
@@ -412,16 +451,19 @@ def calibrate_encoder_motion(
         b,
         int(lines),
         correction=correction,
+        hysteresis_subintervals=hysteresis_subintervals,
         max_points=_ELLIPSE_POINTS,
         allow_clipped=allow_clipped,
+        hysteresis_from=drift_free_hysteresis(harmonics) if drift else None,
     )
     t, a, b = demod.time_s, np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     span = demod.angle_max_deg - demod.angle_min_deg
-    first, last, n = _cut(demod.reversals.indices, periods, "encoder capture", span)
     angle = demod.angle_deg
+    net = None if drift else float(angle[-1] - angle[0])  # for the hint of _cut's error
+    first, last, n = _cut(demod.reversals.indices, periods, "encoder capture", span, net)
     seg = slice(first, last + 1)
     f0 = n / (t[last] - t[first])
-    fit = fit_harmonics(t[seg], angle[seg], frequency_hz=f0, harmonics=harmonics)
+    fit = fit_motion(t[seg], angle[seg], f0, harmonics, drift)
     notes = [f"quadrature correction: {demod.correction.method}"]
     step = _plot_stride(t.size)
     plot = {
@@ -460,7 +502,7 @@ def calibrate_encoder_motion(
 
 
 def extreme_reversals(
-    t: np.ndarray, x: np.ndarray, *, hysteresis: float | None = None
+    t: np.ndarray, x: np.ndarray, *, hysteresis: float | None = None, drift: float = 0.0
 ) -> np.ndarray:
     """Reversing moments of a displacement signal by its extreme values.
 
@@ -468,13 +510,17 @@ def extreme_reversals(
     (Feng et al. 2023, §5). Each swing of the signal above or below its mid level is found with a
     Schmitt trigger (hysteresis ``hysteresis``, default 10 % of the 2–98 % range, so noise cannot
     start a swing); the extreme of each complete swing is then refined by a least-squares parabola
-    through the samples within ±1/20 of a period, which averages the noise down.
+    through the samples within ±1/20 of a period, which averages the noise down. With ``drift``
+    the trigger (its mid level, range and hysteresis) works on ``x − drift·(t − t₀)``, so that a
+    drifting signal still crosses its mid level every swing; the extremes are those of x itself
+    (a drifting table reverses where its rate, drift included, is zero).
 
     Parameters
     ----------
     t : array, s
     x : array — displacement in any unit.
     hysteresis : float, optional — in the unit of x.
+    drift : float — the signal's drift (unit of x per s), e.g. from a fit with a linear term.
 
     Returns
     -------
@@ -484,12 +530,13 @@ def extreme_reversals(
     ----------
     Feng et al. (2023), Sensors 23:4876, §5 (reversals of the LTS signal by extreme values).
     """
-    lo, hi = np.percentile(x, [2.0, 98.0])
+    xt = x if drift == 0.0 else x - drift * (t - t[0])  # what the trigger sees
+    lo, hi = np.percentile(xt, [2.0, 98.0])
     mid = 0.5 * (lo + hi)
     h = 0.1 * (hi - lo) if hysteresis is None else float(hysteresis)
     if not hi - lo > 0:
         raise CaptureError("the signal does not move: no reversing moments can be found")
-    state = np.where(x > mid + h, 1, np.where(x < mid - h, -1, 0)).astype(np.int8)
+    state = np.where(xt > mid + h, 1, np.where(xt < mid - h, -1, 0)).astype(np.int8)
     set_at = np.flatnonzero(state)
     if set_at.size == 0:
         return np.empty(0)
@@ -547,6 +594,7 @@ def calibrate_lts_motion(
     set_frequency_hz: float | None = None,
     specs: InstrumentSpecs | None = None,
     allow_clipped: bool = False,
+    drift: bool = False,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from a laser triangulation sensor (the LTS scheme).
 
@@ -563,6 +611,8 @@ def calibrate_lts_motion(
         ``lts.radius_mm`` — its value must be ``radius_mm`` —, ``lts.resolution_um``).
     allow_clipped : bool — analyse a displacement at the sensor's rails anyway (named in
         ``warnings``); refused by default (:mod:`rotacal.signal.clipping`).
+    drift : bool — as `calibrate_encoder_motion`; the reversals' trigger then follows the drift
+        of a first fit of the whole capture (:func:`extreme_reversals`).
 
     References
     ----------
@@ -583,12 +633,14 @@ def calibrate_lts_motion(
             "--radius-mm and that D is in mm, measured from the table's zero position"
         )
     angle = np.degrees(np.arctan(d / radius_mm))
-    rev_times = extreme_reversals(t, angle)
+    trend = prefit_drift(t, angle, harmonics) if drift else 0.0
+    rev_times = extreme_reversals(t, angle, drift=trend)
     rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
-    first, last, n = _cut(rev_idx, periods, "LTS capture", float(np.ptp(angle)))
+    net = None if drift else float(angle[-1] - angle[0])
+    first, last, n = _cut(rev_idx, periods, "LTS capture", float(np.ptp(angle)), net)
     seg = slice(first, last + 1)
     f0 = n / (rev_times[2 * n] - rev_times[0])
-    fit = fit_harmonics(t[seg], angle[seg], frequency_hz=f0, harmonics=harmonics)
+    fit = fit_motion(t[seg], angle[seg], f0, harmonics, drift)
     plot = _displacement_plot(t, angle, seg, fit)
     detection = ReversalDetection(
         method="parabola",
@@ -622,7 +674,8 @@ def calibrate_lts_motion(
 
 def _model_zero_crossings(fit: SineFit, t: np.ndarray) -> np.ndarray:
     """Times where the fitted rate model crosses zero: the reversing moments of the motion."""
-    rate = fit.evaluate(t) - fit.offset  # D0 is the gyro's bias (eq. 9), not motion
+    # D0 is the gyro's bias (eq. 9), not motion; so is a fitted drift D0 + D1·τ
+    rate = fit.evaluate(t) - (fit.offset if fit.drift is None else fit.trend(t))
     i = np.flatnonzero(np.signbit(rate[:-1]) != np.signbit(rate[1:]))
     r0, r1 = rate[i], rate[i + 1]
     return np.asarray(t[i] + (t[i + 1] - t[i]) * r0 / (r0 - r1))
@@ -638,6 +691,7 @@ def calibrate_fog_motion(
     set_frequency_hz: float | None = None,
     specs: InstrumentSpecs | None = None,
     allow_clipped: bool = False,
+    drift: bool = False,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from a fibre-optic gyro's rate (the FOG scheme).
 
@@ -658,6 +712,9 @@ def calibrate_fog_motion(
         ``fog.scale_factor_relative``).
     allow_clipped : bool — analyse a rate at the gyro's rails anyway (named in ``warnings``);
         refused by default (:mod:`rotacal.signal.clipping`).
+    drift : bool — fit the rate as ``D0 + D1·(t − t_ref) + harmonics`` and report D0 (a steady
+        table drift plus the gyro's bias, which D0 takes anyway) as ``drift_deg_s`` and D1 as
+        ``rate_drift_deg_s2`` (:mod:`rotacal.table.motion_drift`).
 
     References
     ----------
@@ -668,18 +725,21 @@ def calibrate_fog_motion(
     t, w = _check_samples(t, "rate_deg_s", rate_deg_s)
     clipped = check_clipping({"rate_deg_s": w}, allow_clipped=allow_clipped)
     f_start = estimate_frequency(t, w)
-    first_fit = fit_harmonics(t, w, frequency_hz=f_start, harmonics=harmonics)
+    first_fit = fit_harmonics(t, w, frequency_hz=f_start, harmonics=harmonics, drift=drift)
     rev_times = _model_zero_crossings(first_fit, t)
     rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
     first, last, n = _cut(rev_idx, periods, "FOG capture")
     seg = slice(first, last + 1)
-    fit = fit_harmonics(t[seg], w[seg], frequency_hz=first_fit.frequency_hz, harmonics=harmonics)
+    fit = fit_motion(t[seg], w[seg], first_fit.frequency_hz, harmonics, drift)
     disp = displacement_amplitudes_from_rate(fit.amplitudes, fit.frequency_hz)
     disp_u = displacement_amplitudes_from_rate(fit.amplitudes_u, fit.frequency_hz)
     tt, ww = t[seg], w[seg]
-    angle = np.concatenate(
-        ([0.0], np.cumsum(0.5 * (ww[1:] + ww[:-1] - 2 * fit.offset) * np.diff(tt)))
-    )
+    if fit.drift is None:
+        rate_sum = ww[1:] + ww[:-1] - 2 * fit.offset
+    else:
+        motion_rate = ww - fit.trend(tt)
+        rate_sum = motion_rate[1:] + motion_rate[:-1]
+    angle = np.concatenate(([0.0], np.cumsum(0.5 * rate_sum * np.diff(tt))))
     angle -= angle.mean()
     snr = snr_db(ww, fit, tt)
     step = _plot_stride(t.size)

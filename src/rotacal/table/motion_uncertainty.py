@@ -45,6 +45,10 @@ value and u, and a note says so.
   ``u² = s²(1 + 2H)/(N·κ²) + (τ·u(f)/f)²``), and the timebase: ``t = t₀ + (t_stamp − t₀)/(1 + e)``,
   ``∂t/∂e ≈ −(t − t₀)``.
 
+A fit with a linear drift term (``drift=True``, :mod:`rotacal.table.motion_drift`) enters every
+budget as it stands: its harmonic amplitudes and their u (the covariance includes the drift
+column), ν = N − (2H + 3), and the curvature and rate slopes of its periodic part.
+
 Why the interval is built for the true value: the earlier evaluation drew each harmonic about the
 already-biased measured amplitudes, which gives the spread of a re-measurement shifted up by the
 bias a second time; on the FOG twin at 20 dB its interval held a true THD of 0 in 0 of 20 runs.
@@ -122,8 +126,9 @@ _TIMEBASE = ("timebase.relative_error",)
 
 # ------------------------------------------------------------------------------ small helpers
 def _fit_dof(fit: SineFit) -> float:
-    """ν = N − p of a refined multi-harmonic fit (p = 2H + 2: offset, H pairs, frequency)."""
-    return float(max(fit.n_samples - (2 * fit.harmonics + 2), 1))
+    """ν = N − p of a refined multi-harmonic fit (p = 2H + 2: offset, H pairs, frequency; one
+    more with a drift term)."""
+    return float(max(fit.n_samples - fit.n_parameters, 1))
 
 
 def _fit_sigma(fit: SineFit) -> float:
@@ -133,19 +138,20 @@ def _fit_sigma(fit: SineFit) -> float:
 
 
 def _second_derivative(fit: SineFit, t: np.ndarray) -> np.ndarray:
-    """d²y/dt² of the fitted model (unit of y per s²): coefficients −(hω)²·(a_h, b_h)."""
+    """d²y/dt² of the fitted model (unit of y per s²): coefficients −(hω)²·(a_h, b_h) (a drift
+    term has none)."""
     w = 2.0 * math.pi * fit.frequency_hz
     hw2 = (w * np.arange(1, fit.harmonics + 1)) ** 2
     d2 = dataclasses.replace(
-        fit, offset=0.0, cos_coefs=-hw2 * fit.cos_coefs, sin_coefs=-hw2 * fit.sin_coefs
+        fit.periodic(), offset=0.0, cos_coefs=-hw2 * fit.cos_coefs, sin_coefs=-hw2 * fit.sin_coefs
     )
     return np.asarray(d2.evaluate(t))
 
 
 def _one_period(fit: SineFit, points: int = 4096) -> tuple[np.ndarray, np.ndarray]:
-    """(τ, model) over one period of the fundamental, uniformly (τ from t_ref, s)."""
+    """(τ, periodic model) over one period of the fundamental, uniformly (τ from t_ref, s)."""
     tau = np.arange(points) / (points * fit.frequency_hz)
-    return tau, np.asarray(fit.evaluate(fit.t_ref_s + tau))
+    return tau, np.asarray(fit.periodic().evaluate(fit.t_ref_s + tau))
 
 
 def _stated_mean(specs: InstrumentSpecs | None, key: str) -> float:
@@ -378,7 +384,7 @@ def reversal_time_u_rate_zero(fit: SineFit, times_s: Any) -> np.ndarray:
     Feng et al. 2023, Sensors 23:4876, eqs. (9)–(10); IEEE Std 1057-2017 §4.1.3; GUM eq. (10).
     """
     t = np.atleast_1d(np.asarray(times_s, dtype=float))
-    kappa = np.abs(np.asarray(fit.evaluate_derivative(t)))
+    kappa = np.abs(np.asarray(fit.periodic().evaluate_derivative(t)))
     kappa = np.where(kappa > 0, kappa, np.nan)
     s = _fit_sigma(fit)
     var_noise = s * s * (1 + 2 * fit.harmonics) / fit.n_samples / kappa**2
@@ -401,7 +407,7 @@ def _reversal_budget(
     dt = det.sample_interval_s
     if det.method == "rate_zero":
         u_r = reversal_time_u_rate_zero(fit, times)
-        kappa = np.abs(np.asarray(fit.evaluate_derivative(times)))
+        kappa = np.abs(np.asarray(fit.periodic().evaluate_derivative(times)))
         how = (
             f"zero crossings of the {fit.harmonics}-harmonic rate fit, s = {s:.3g} °/s over "
             f"N = {fit.n_samples}"

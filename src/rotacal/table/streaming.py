@@ -15,8 +15,10 @@ a fresh call of ``chunks()``:
    as in memory, :func:`~rotacal.encoder.plan_reversals`);
 4. the signals in each reversing subinterval (eqs. (7)–(8)) and the time of each reversal;
 5. the n whole periods between 2n+1 reversals fed to :class:`HarmonicFitAccumulator` (normal
-   equations accumulated over chunks; θ recomputed from the saved phase state), with the
-   three-parameter fit at the set frequency accumulated beside it;
+   equations accumulated over chunks; θ recomputed from the saved phase state; a drift term,
+   when asked for, comes from the same block moments), with the three-parameter fit at the set
+   frequency accumulated beside it — with a drift term, on θ less the fitted drift in a pass of
+   its own after the fit;
 6. with set values, the angular position error (eq. (2)), its maximum and rms.
 
 Passes 4–6 stop reading after the last sample they need. What grows with the capture is only
@@ -33,6 +35,7 @@ IEEE Std 1057-2017, §4.1.3 (sine fitting).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import mmap
 import os
@@ -42,11 +45,13 @@ from typing import Any
 import numpy as np
 
 from rotacal.encoder import (
+    HysteresisRule,
     PhaseState,
     QuadratureCorrection,
     ReversalPlan,
     correct_quadrature,
     fit_quadrature_correction,
+    hysteresis_stride,
     plan_reversals,
     reversal_point_in_window,
     reversal_window,
@@ -56,7 +61,7 @@ from rotacal.encoder import (
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.io import iter_capture_chunks
 from rotacal.results import with_warnings
-from rotacal.signal import HarmonicFitAccumulator, SineFit, fit_harmonics
+from rotacal.signal import HarmonicFitAccumulator, SineFit
 from rotacal.signal._checks import MAX_GAP, TYPICAL_STEPS, gap_error
 from rotacal.signal._values import (
     LARGEST,
@@ -75,6 +80,7 @@ from rotacal.table.motion import (
     _finish,
     _plot_stride,
 )
+from rotacal.table.motion_drift import detrended_angle, drift_free_hysteresis, fit_motion
 from rotacal.table.motion_uncertainty import ReversalDetection
 from rotacal.uncertainty import InstrumentSpecs
 
@@ -308,10 +314,19 @@ class _Demod:
     plot_a: np.ndarray
     plot_b: np.ndarray
     span_deg: float  # max θ − min θ over the capture
+    net_deg: float  # last θ − first θ
 
 
-def _pass_phase(passes: _Passes, n: int, corr: QuadratureCorrection, scale: float) -> _Demod:
-    """Pass 3: phase with the cycle count carried, transitions, chunk-start states, plot copy."""
+def _pass_phase(
+    passes: _Passes,
+    n: int,
+    corr: QuadratureCorrection,
+    scale: float,
+    hysteresis_subintervals: int | None = None,
+    hysteresis_from: HysteresisRule | None = None,
+) -> _Demod:
+    """Pass 3: phase with the cycle count carried, transitions, chunk-start states, plot copy
+    (and the samples a hysteresis rule sees, as in memory)."""
     step = _plot_stride(n)
     state: PhaseState | None = None
     k_prev: float | None = None
@@ -320,7 +335,11 @@ def _pass_phase(passes: _Passes, n: int, corr: QuadratureCorrection, scale: floa
     trans_k: list[np.ndarray] = []
     states: list[PhaseState | None] = []
     dec: dict[str, list[np.ndarray]] = {"t": [], "angle": [], "a": [], "b": []}
+    rule_step = hysteresis_stride(n)
+    rule_t: list[np.ndarray] = []
+    rule_phase: list[np.ndarray] = []
     lo, hi = math.inf, -math.inf
+    ends: list[float] = []
     for _, off, cols in passes.run():
         states.append(state)
         u, v = correct_quadrature(cols["a"], cols["b"], corr)
@@ -339,13 +358,24 @@ def _pass_phase(passes: _Passes, n: int, corr: QuadratureCorrection, scale: floa
         dec["angle"].append(phase[s0::step] * scale)
         dec["a"].append(np.array(cols["a"][s0::step]))
         dec["b"].append(np.array(cols["b"][s0::step]))
+        if hysteresis_from is not None:
+            r0 = (-off) % rule_step
+            rule_t.append(np.array(cols["time_s"][r0::rule_step]))
+            rule_phase.append(phase[r0::rule_step])
         lo, hi = min(lo, float(phase.min())), max(hi, float(phase.max()))
+        ends[:] = [ends[0] if ends else float(phase[0]), float(phase[-1])]
         del phase
     all_idx = np.concatenate(trans_idx)
     del trans_idx
     all_k = np.concatenate(trans_k)
     del trans_k
-    plan = plan_reversals(all_idx, all_k, k_start, stacklevel=4)
+    if hysteresis_subintervals is None and hysteresis_from is not None:
+        hysteresis_subintervals = hysteresis_from(
+            np.concatenate(rule_t), np.concatenate(rule_phase)
+        )
+    plan = plan_reversals(
+        all_idx, all_k, k_start, hysteresis_subintervals=hysteresis_subintervals, stacklevel=4
+    )
     return _Demod(
         plan=plan,
         states=states,
@@ -354,6 +384,7 @@ def _pass_phase(passes: _Passes, n: int, corr: QuadratureCorrection, scale: floa
         plot_a=np.concatenate(dec["a"]),
         plot_b=np.concatenate(dec["b"]),
         span_deg=(hi - lo) * scale,
+        net_deg=(ends[-1] - ends[0]) * scale,
     )
 
 
@@ -464,6 +495,8 @@ def calibrate_encoder_motion_chunked(
     progress: Callable[[int], None] | None = None,
     specs: InstrumentSpecs | None = None,
     allow_clipped: bool = False,
+    drift: bool = False,
+    hysteresis_subintervals: int | None = None,
 ) -> MotionResult:
     """Sinusoidal-motion calibration from an encoder capture read in chunks (flat memory).
 
@@ -501,6 +534,11 @@ def calibrate_encoder_motion_chunked(
         Analyse a capture whose a or b sits at the rails anyway (named in ``warnings``); refused
         by default. Pass 1 judges every sample (:class:`~rotacal.signal.RailDetector`, state
         carried across chunks): the same finding, and message, as in memory.
+    drift : bool
+        Fit a linear drift term beside the harmonics (``drift_deg_s``), as in memory; with set
+        values this costs one more pass (the three-parameter fit of eq. (2) on θ less the drift).
+    hysteresis_subintervals : int, optional
+        The reversal rule's hysteresis (subintervals), as in memory.
 
     Returns
     -------
@@ -532,9 +570,18 @@ def calibrate_encoder_motion_chunked(
 
     n, clipped = _pass_check(passes, allow_clipped)
     corr = correction if correction is not None else _pass_correction(passes, n)
-    demod = _pass_phase(passes, n, corr, scale)
+    demod = _pass_phase(
+        passes,
+        n,
+        corr,
+        scale,
+        hysteresis_subintervals,
+        drift_free_hysteresis(harmonics) if drift else None,
+    )
     rev_idx, rev_times = _pass_reversals(passes, n, corr, demod.plan)
-    first, last, n_periods = _cut(rev_idx, periods, "encoder capture", demod.span_deg)
+    first, last, n_periods = _cut(
+        rev_idx, periods, "encoder capture", demod.span_deg, None if drift else demod.net_deg
+    )
     t_first, t_last = rev_times[0], rev_times[2 * n_periods]
     f0 = n_periods / (t_last - t_first)
     n_seg = last + 1 - first
@@ -569,53 +616,39 @@ def calibrate_encoder_motion_chunked(
         t_seg = np.concatenate([np.array(p[1]) for p in pieces])
         th_seg = np.concatenate([p[2] for p in pieces])
         del pieces
-        fit = fit_harmonics(t_seg, th_seg, frequency_hz=f0, harmonics=harmonics)
+        fit = fit_motion(t_seg, th_seg, f0, harmonics, drift)
         plot["t_used"] = t_seg[::seg_step]
         plot["residual_deg"] = th_seg[::seg_step] - fit.evaluate(t_seg[::seg_step])
         return with_warnings(_result(fit, plot, common, t_seg, th_seg), clipped)
 
     acc = HarmonicFitAccumulator(f0, harmonics=harmonics)
-    acc3 = HarmonicFitAccumulator(set_frequency_hz, harmonics=1) if with_set else None
-    held: list[tuple[np.ndarray, np.ndarray]] = []
-    n_held = 0
+    # with a drift term, eq. (2)'s fit waits for the drift (a pass of its own, below)
+    acc3 = HarmonicFitAccumulator(set_frequency_hz, harmonics=1) if with_set and not drift else None
     dec_t: list[np.ndarray] = []
     dec_th: list[np.ndarray] = []
 
-    def add(t_piece: np.ndarray, th_piece: np.ndarray) -> None:
-        acc.add(t_piece, th_piece)
-        if acc3 is not None:
-            acc3.add(t_piece, th_piece)
+    def tap() -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+        """The segment's pieces, keeping decimated copies for the figures on the way."""
+        for g0, t_piece, th_piece in _segment(passes, demod.states, corr, scale, first, last):
+            dec_t.append(_decimate(g0, first, seg_step, t_piece))
+            dec_th.append(_decimate(g0, first, seg_step, th_piece))
+            yield g0, t_piece, th_piece
 
-    for g0, t_piece, th_piece in _segment(passes, demod.states, corr, scale, first, last):
-        dec_t.append(_decimate(g0, first, seg_step, t_piece))
-        dec_th.append(_decimate(g0, first, seg_step, th_piece))
-        if n_held < _FIRST_ADD_SAMPLES:
-            held.append((np.array(t_piece), th_piece))
-            n_held += t_piece.size
-            if n_held >= _FIRST_ADD_SAMPLES:
-                add(np.concatenate([h[0] for h in held]), np.concatenate([h[1] for h in held]))
-                held = []
-        else:
-            add(t_piece, th_piece)
-    if held:
-        add(np.concatenate([h[0] for h in held]), np.concatenate([h[1] for h in held]))
-    fit = acc.fit(f0, harmonics, True, max_iter=50, rtol=1e-12)
+    _accumulate([acc] if acc3 is None else [acc, acc3], tap())
+    fit = acc.fit(f0, harmonics, True, max_iter=50, rtol=1e-12, drift=drift, drift_check=not drift)
     t_dec = np.concatenate(dec_t)
     plot["t_used"] = t_dec
     plot["residual_deg"] = np.concatenate(dec_th) - fit.evaluate(t_dec)
     extra: dict[str, Any] = {"samples_used": n_seg}
-    if acc3 is not None and set_amplitude_deg is not None and set_frequency_hz is not None:
+    if with_set and set_amplitude_deg is not None and set_frequency_hz is not None:
+        segment = functools.partial(_segment, passes, demod.states, corr, scale, first, last)
+        if acc3 is None:  # drift fitted: eq. (2) on θ less the drift, its fit in a pass of its own
+            segment = functools.partial(_detrended, segment, fit)
+            acc3 = HarmonicFitAccumulator(set_frequency_hz, harmonics=1)
+            _accumulate([acc3], segment())
         fit3 = acc3.fit(set_frequency_hz, 1, False, max_iter=1, rtol=1e-12)
         worst, rms, err_dec = _position_error_pass(
-            passes,
-            demod.states,
-            corr,
-            scale,
-            first,
-            last,
-            fit3,
-            set_amplitude_deg,
-            set_frequency_hz,
+            segment, first, last, fit3, set_amplitude_deg, set_frequency_hz
         )
         plot["position_error_deg"] = err_dec
         extra.update(position_error_max_deg=worst, position_error_rms_deg=rms)
@@ -651,11 +684,41 @@ def _result(
     )
 
 
+def _detrended(
+    segment: Callable[[], Iterator[tuple[int, np.ndarray, np.ndarray]]], fit: SineFit
+) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+    """The pieces of ``segment()`` with θ less the fitted drift (``detrended_angle``)."""
+    for g0, t_piece, th_piece in segment():
+        yield g0, t_piece, detrended_angle(fit, t_piece, th_piece)
+
+
+def _accumulate(
+    accs: list[HarmonicFitAccumulator], pieces: Iterator[tuple[int, np.ndarray, np.ndarray]]
+) -> None:
+    """Feed the pieces to each accumulator, the first 2¹⁶ samples as one piece (the in-memory
+    fit takes its working offset from them)."""
+
+    def add(t_piece: np.ndarray, th_piece: np.ndarray) -> None:
+        for acc in accs:
+            acc.add(t_piece, th_piece)
+
+    held: list[tuple[np.ndarray, np.ndarray]] = []
+    n_held = 0
+    for _, t_piece, th_piece in pieces:
+        if n_held < _FIRST_ADD_SAMPLES:
+            held.append((np.array(t_piece), th_piece))
+            n_held += t_piece.size
+            if n_held >= _FIRST_ADD_SAMPLES:
+                add(np.concatenate([h[0] for h in held]), np.concatenate([h[1] for h in held]))
+                held = []
+        else:
+            add(t_piece, th_piece)
+    if held:
+        add(np.concatenate([h[0] for h in held]), np.concatenate([h[1] for h in held]))
+
+
 def _position_error_pass(
-    passes: _Passes,
-    states: list[PhaseState | None],
-    corr: QuadratureCorrection,
-    scale: float,
+    segment: Callable[[], Iterator[tuple[int, np.ndarray, np.ndarray]]],
     first: int,
     last: int,
     fit3: SineFit,
@@ -668,7 +731,7 @@ def _position_error_pass(
     worst = 0.0
     total = 0.0
     dec: list[np.ndarray] = []
-    for g0, t_piece, th_piece in _segment(passes, states, corr, scale, first, last):
+    for g0, t_piece, th_piece in segment():
         ideal = fit3.offset + set_amplitude_deg * np.sin(
             2 * np.pi * set_frequency_hz * (t_piece - fit3.t_ref_s) + phase0
         )
