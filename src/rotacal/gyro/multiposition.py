@@ -495,7 +495,7 @@ def _plan_core(
     if first.size < len(names):
         raise error(
             f"{what} has {first.size} distinct turntable position(s): the {len(names)} drift "
-            f"coefficients of the {ax_} axis need at least {len(names)} (use multiposition_plan())."
+            f"coefficients of the {ax_} axis need at least {len(names)}: turn both axes in 45° steps (8 × 8 positions)."
         )
     a = drift_design_matrix(p1, p2, axis=ax_)
     rank, cond, bad, reasons = _analyse(a, names)
@@ -504,8 +504,8 @@ def _plan_core(
         reasons = [*(f"{n} is {float(v[0]):g}° in every row" for n, v in held), *reasons]
         raise error(
             f"{what} leaves {', '.join(bad)} of the {ax_} axis unidentifiable ({'; '.join(reasons)}; "
-            f"rank {rank} of {len(names)}): add or change positions; multiposition_plan() gives a "
-            "plan that identifies all seven."
+            f"rank {rank} of {len(names)}): add or change positions: both axes in 45° steps "
+            "(8 × 8 positions) identify all seven."
         )
     a1 = a[first]
     u = np.sqrt(np.diag(np.linalg.inv(a1.T @ a1)))
@@ -789,7 +789,7 @@ def calibrate_multiposition(
     if plan.condition_number > 100:
         notes.append(
             f"the design is poorly conditioned (condition number {plan.condition_number:.3g}): "
-            "small errors in the outputs are strongly amplified; prefer multiposition_plan()."
+            "small errors in the outputs are strongly amplified; prefer both axes in 45° steps (8 × 8 positions)."
         )
     budgets: dict[str, UncertaintyBudget] = {}
     if dof > 0:

@@ -775,7 +775,7 @@ def calibrate_scale_factor(
         if nan_policy == "raise":
             raise CaptureError(
                 f"column output has {bad_out.size} non-finite value(s) (NaN or inf) at rows "
-                f"{_rows(bad_out)} (counted from 0): remove those rows or pass nan_policy='omit'."
+                f"{_rows(bad_out)} (counted from 0): remove those rows from the capture."
             )
         notes.append(
             f"{bad_out.size} non-finite output value(s) left out (rows {_rows(bad_out)}, counted "

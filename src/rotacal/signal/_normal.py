@@ -225,7 +225,7 @@ def solve_normal(
             if not (math.isfinite(df) and cond < MAX_COND):
                 raise CaptureError(
                     f"the frequency refinement at {lin.f:.6g} Hz is ill-conditioned; supply a "
-                    "longer record or give frequency_hz and fit without refinement."
+                    "longer record (more periods of the motion)."
                 )
             lam = 1.0
             new = None

@@ -175,7 +175,7 @@ def _fit_direct(
             if not (math.isfinite(df) and cond * cond < MAX_COND):
                 raise CaptureError(
                     f"the frequency refinement at {f:.6g} Hz is ill-conditioned; supply a longer "
-                    "record or give frequency_hz and fit without refinement."
+                    "record (more periods of the motion)."
                 )
             lam = 1.0
             accepted = False
