@@ -127,7 +127,7 @@ def test_drift_free_hysteresis_keeps_the_reversals_of_a_drifting_table() -> None
     truth = np.asarray(cap.truth["reversal_times_s"])
     assert truth.size == 12
     assert len(demodulate(t, a, b, LINES).reversals) < truth.size
-    rule = drift_free_hysteresis(10)
+    rule = drift_free_hysteresis()
     d = demodulate(t, a, b, LINES, hysteresis_from=rule)
     assert len(d.reversals) == truth.size
     assert np.max(np.abs(d.reversals.times_s - truth)) < 2e-3

@@ -21,7 +21,7 @@ Where rotacal departs from its sources in the subdivision (eqs. (3)–(4)):
   ``φ = arctan2(v, u)`` of the Heydemann-corrected signals in float64 (the arctangent method the
   seed lists among the traditional ones), unwrapped by counting whole cycles; its error is the
   rounding of arctan2 and whatever the Heydemann model leaves, not the residual of a piecewise
-  linearisation with its compensation (Ye et al. report ≈ 3·10⁻⁵° of a signal period). The twelve
+  linearisation with its compensation (Ye et al. state < 3.2·10⁻⁵° of the 360° signal period). The twelve
   subintervals are the 30° sectors of that phase, ``k = ⌊φ/(π/6)⌋``, not sectors chosen by which
   signal (or phase-shifted copy) is in its linear section.
 - *From Feng et al. (2023)*: (1) the labels count up with θ (their eq. (3) counts down for

@@ -454,7 +454,7 @@ def calibrate_encoder_motion(
         hysteresis_subintervals=hysteresis_subintervals,
         max_points=_ELLIPSE_POINTS,
         allow_clipped=allow_clipped,
-        hysteresis_from=drift_free_hysteresis(harmonics) if drift else None,
+        hysteresis_from=drift_free_hysteresis() if drift else None,
     )
     t, a, b = demod.time_s, np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     span = demod.angle_max_deg - demod.angle_min_deg

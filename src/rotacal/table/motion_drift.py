@@ -59,7 +59,7 @@ from typing import Any
 import numpy as np
 
 from rotacal.encoder import HysteresisRule
-from rotacal.errors import CaptureError
+from rotacal.errors import CaptureError, ConfigError
 from rotacal.signal import SineFit, displacement_amplitudes_from_rate, fit_harmonics
 from rotacal.uncertainty import UncertaintyBudget
 
@@ -164,7 +164,13 @@ def prefit_drift(t: np.ndarray, x: np.ndarray, harmonics: int) -> float:
     return slope + fit.drift
 
 
-def drift_free_hysteresis(harmonics: int) -> HysteresisRule:
+#: Harmonics of the fit that takes the drift off for the hysteresis (a tenth of the stroke, in
+#: whole subintervals, needs no more; three keep the fit cheap and valid down to ~7 samples per
+#: period of the rule's 20 000).
+_HYSTERESIS_HARMONICS = 3
+
+
+def drift_free_hysteresis() -> HysteresisRule:
     """The encoder's reversal hysteresis with ``drift=True``: 10 % of the span of k (30°
     subintervals of the signal period) once the drift is taken off, at least 2.
 
@@ -172,13 +178,13 @@ def drift_free_hysteresis(harmonics: int) -> HysteresisRule:
     for a table that drifts grows with the drift until it swallows real swings (2° of drift over
     a 0.2° stroke: every reversal merged). The rule sees every N // 20 000-th sample
     (:func:`~rotacal.encoder.demodulate`'s ``hysteresis_from``) and takes the drift off with
-    :func:`prefit_drift`; if that fit fails the default is kept.
+    :func:`prefit_drift` (three harmonics); if that fit cannot be made the default is kept.
     """
 
     def rule(t: np.ndarray, phase_rad: np.ndarray) -> int | None:
         try:
-            slope = prefit_drift(t, phase_rad, harmonics)
-        except CaptureError:
+            slope = prefit_drift(t, phase_rad, _HYSTERESIS_HARMONICS)
+        except (CaptureError, ConfigError):
             return None
         k = (phase_rad - slope * (t - t[0])) * (6.0 / math.pi)
         return max(2, round(0.1 * float(np.ptp(k))))

@@ -576,7 +576,7 @@ def calibrate_encoder_motion_chunked(
         corr,
         scale,
         hysteresis_subintervals,
-        drift_free_hysteresis(harmonics) if drift else None,
+        drift_free_hysteresis() if drift else None,
     )
     rev_idx, rev_times = _pass_reversals(passes, n, corr, demod.plan)
     first, last, n_periods = _cut(
