@@ -8,7 +8,12 @@ a residual so large that the frequency refinement circles its minimum. ``drift=T
 adds the linear term to the fit (:func:`~rotacal.signal.fit_harmonics`), so everything taken
 from the fit — harmonics, THD and its Monte Carlo budget, amplitude, frequency, the curvature at
 the reversals — is that of the periodic part; the position error of eq. (2) is taken on the
-angle with the fitted drift removed.
+angle with the fitted drift removed. The reversing moments stay those of the table's real
+motion, drift included (where its rate is zero): with a steady drift a maximum and the next
+minimum are no longer half a period apart, but successive maxima still are one period apart, so
+2n+1 reversals still bound n whole periods (§3.3). What changes is how they are found when the
+drift is large against the stroke: the encoder's hysteresis is taken without the drift
+(:func:`drift_free_hysteresis`) and the LTS's trigger follows it (:func:`prefit_drift`).
 
 What drift means per scheme:
 
@@ -136,9 +141,9 @@ def drift_note(scheme: str, fit: SineFit) -> str | None:
         return None
     if scheme == "fog":
         return (
-            f"drift fitted (--drift): the rate offset D0 = {fit.offset:.6g} deg/s is the table's "
-            "drift plus the gyro's bias (a rate record cannot split them), and the rate changes "
-            f"by D1 = {fit.drift:.4g} deg/s² over the record; both removed from the motion"
+            "drift fitted (--drift): the rate offset D0 (drift_deg_s) is the table's drift plus "
+            "the gyro's bias, which a rate record cannot split; it changes by "
+            f"D1 = {fit.drift:.4g} deg/s per second; both removed from the motion"
         )
     return f"drift fitted (--drift): {fit.drift:.6g} deg/s, removed from the motion"
 
