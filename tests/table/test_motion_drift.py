@@ -12,6 +12,7 @@ import pytest
 
 import rotacal.table.streaming as streaming
 from rotacal import sim
+from rotacal.errors import CaptureError
 from rotacal.table import (
     calibrate_encoder_motion,
     calibrate_encoder_motion_chunked,
@@ -163,3 +164,19 @@ def test_chunked_with_drift_equals_in_memory(monkeypatch):
     truth = motion.truth(r0.analysis_start_s, r0.analysis_stop_s)
     assert abs(r0.thd_percent - truth["thd_percent"]) < BAR["encoder"]
     assert abs(r0.drift_deg_s - truth["drift_deg_s"]) <= 2 * r0.drift_deg_s_u
+
+
+def test_a_drift_that_breaks_the_fit_is_named_in_the_error():
+    """Over one period an unfitted ramp pulls the frequency away until the refinement diverges
+    (0.005° on a 0.5° motion): the error says a drift term makes the fit converge."""
+    motion = sim.SineMotion(0.5, 2.0, harmonics={3: (0.02, 0.3)}, drift_deg_s=0.01)
+    c = sim.simulate_encoder(motion, duration_s=0.8, noise_rms=0.003).columns
+    with pytest.raises(CaptureError) as err:
+        calibrate_encoder_motion(c["time_s"], c["a"], c["b"], lines=36000)
+    msg = str(err.value)
+    assert "rerun with --drift" in msg and "drifts by 0.01 deg/s" in msg and "\n" not in msg
+    r = calibrate_encoder_motion(c["time_s"], c["a"], c["b"], lines=36000, drift=True)
+    truth = motion.truth(r.analysis_start_s, r.analysis_stop_s)
+    assert r.periods_used == 1
+    assert abs(r.thd_percent - truth["thd_percent"]) < BAR["encoder"]
+    assert abs(r.drift_deg_s - 0.01) <= 2 * r.drift_deg_s_u

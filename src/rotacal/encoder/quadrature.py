@@ -21,9 +21,9 @@ Where rotacal departs from its sources in the subdivision (eqs. (3)–(4)):
   ``φ = arctan2(v, u)`` of the Heydemann-corrected signals in float64 (the arctangent method the
   seed lists among the traditional ones), unwrapped by counting whole cycles; its error is the
   rounding of arctan2 and whatever the Heydemann model leaves, not the residual of a piecewise
-  linearisation with its compensation (Ye et al. state < 3.2·10⁻⁵° of the 360° signal period). The twelve
-  subintervals are the 30° sectors of that phase, ``k = ⌊φ/(π/6)⌋``, not sectors chosen by which
-  signal (or phase-shifted copy) is in its linear section.
+  linearisation with its compensation (Ye et al. state < 3.2·10⁻⁵° of the 360° signal
+  period). The twelve subintervals are the 30° sectors of that phase, ``k = ⌊φ/(π/6)⌋``, not
+  sectors chosen by which signal (or phase-shifted copy) is in its linear section.
 - *From Feng et al. (2023)*: (1) the labels count up with θ (their eq. (3) counts down for
   Sdir = 1); (2) k is a continuous count, not a label modulo 12, so a sample that jumps over
   subintervals (sampling too slow) is seen: a :class:`SubdivisionWarning` above one subinterval,
@@ -1139,10 +1139,15 @@ def find_reversals(
        cluster, the windows of its first and last candidate (both of the cluster's kind).
     5. In each window the sums ``qu``, ``qv`` of eqs. (7)–(8), with the samples just outside
        ``[Sub⁻, Sub⁺]`` as endpoints (:func:`reversal_window`), pick the signal that changes
-       most; Chp is its minimum if q < 0 and its maximum if q > 0 (each signal is monotonic in φ
-       within a subinterval, so its extreme is the extreme of φ there). A single candidate's
-       reversing moment is its Chp; a cluster's is the sample midway between the Chp of its
-       first and last candidate (the cluster straddles the reversal symmetrically).
+       most; Chp is its minimum if q < 0 and its maximum if q > 0. Within a run of trend changes
+       k alternates between two neighbouring levels, so a window spans at most 60° of φ, over
+       which at least one signal is monotonic in φ (the one that changes most, unless the other
+       is near its own extreme), and then its extreme is that of φ. The
+       sign of q is set against the endpoints, which lie in the neighbouring level: when most of
+       a long window sits in that level too, q can point to the dip instead (2 of 977 reversals
+       of a noisy synthetic capture with a vibration faster than the motion). A single
+       candidate's reversing moment is its Chp; a cluster's is the sample midway between the
+       Chp of its first and last candidate (the cluster straddles the reversal symmetrically).
 
     How this differs from the paper's literal rule, also with the pruning off: the paper takes
     the *middle* turning visit of an odd run as the reversing subinterval (eq. (6): the second

@@ -730,7 +730,7 @@ def calibrate_fog_motion(
     rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
     first, last, n = _cut(rev_idx, periods, "FOG capture")
     seg = slice(first, last + 1)
-    fit = fit_motion(t[seg], w[seg], first_fit.frequency_hz, harmonics, drift)
+    fit = fit_motion(t[seg], w[seg], first_fit.frequency_hz, harmonics, drift, rate=True)
     disp = displacement_amplitudes_from_rate(fit.amplitudes, fit.frequency_hz)
     disp_u = displacement_amplitudes_from_rate(fit.amplitudes_u, fit.frequency_hz)
     tt, ww = t[seg], w[seg]

@@ -8,7 +8,12 @@ a residual so large that the frequency refinement circles its minimum. ``drift=T
 adds the linear term to the fit (:func:`~rotacal.signal.fit_harmonics`), so everything taken
 from the fit — harmonics, THD and its Monte Carlo budget, amplitude, frequency, the curvature at
 the reversals — is that of the periodic part; the position error of eq. (2) is taken on the
-angle with the fitted drift removed.
+angle with the fitted drift removed. The reversing moments stay those of the table's real
+motion, drift included (where its rate is zero): with a steady drift a maximum and the next
+minimum are no longer half a period apart, but successive maxima still are one period apart, so
+2n+1 reversals still bound n whole periods (§3.3). What changes is how they are found when the
+drift is large against the stroke: the encoder's hysteresis is taken without the drift
+(:func:`drift_free_hysteresis`) and the LTS's trigger follows it (:func:`prefit_drift`).
 
 What drift means per scheme:
 
@@ -53,7 +58,7 @@ IEEE Std 1057-2017, §4.1.3 (sine fitting; the linear term is rotacal's extensio
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -71,6 +76,7 @@ __all__ = [
     "drift_note",
     "drift_u",
     "drift_warnings",
+    "explained_fit",
     "fit_motion",
     "prefit_drift",
     "unfitted_drift_warning",
@@ -80,12 +86,43 @@ __all__ = [
 DRIFT_SIGNIFICANCE = 5.0
 
 
-def fit_motion(t: np.ndarray, y: np.ndarray, f0: float, harmonics: int, drift: bool) -> SineFit:
+def fit_motion(
+    t: np.ndarray, y: np.ndarray, f0: float, harmonics: int, drift: bool, rate: bool = False
+) -> SineFit:
     """The analysis fit of n whole periods (frequency refined from ``f0``, Hz): with the linear
-    term when ``drift``, else with its :class:`~rotacal.signal.DriftCheck`."""
-    return fit_harmonics(
-        t, y, frequency_hz=f0, harmonics=harmonics, drift=drift, drift_check=not drift
-    )
+    term when ``drift``, else with its :class:`~rotacal.signal.DriftCheck` (and
+    :func:`explained_fit`'s error when only the fit with the term converges)."""
+
+    def fit(with_term: bool) -> SineFit:
+        return fit_harmonics(
+            t, y, frequency_hz=f0, harmonics=harmonics, drift=with_term, drift_check=not with_term
+        )
+
+    return explained_fit(fit, drift, rate)
+
+
+def explained_fit(fit: Callable[[bool], SineFit], drift: bool, rate: bool = False) -> SineFit:
+    """``fit(drift)``; when a fit without the linear term fails and one with it converges, a
+    :class:`~rotacal.errors.CaptureError` that names the drift and asks for --drift.
+
+    A drift the model lacks can make the fit fail, not only distort it: over one or two periods
+    the ramp pulls the frequency away and the refinement diverges. ``rate``: y is a rate (the
+    FOG), whose linear term is the rate's drift (deg/s²).
+    """
+    try:
+        return fit(drift)
+    except CaptureError as exc:
+        if drift:
+            raise
+        try:
+            with_term = fit(True)
+        except CaptureError:
+            raise exc from None
+        what = "the rate drifts by {:.3g} deg/s²" if rate else "the table drifts by {:.3g} deg/s"
+        raise CaptureError(
+            f"{str(exc).split(';')[0]}, but with a linear drift term the fit converges: "
+            f"{what.format(with_term.drift)} over the analysed periods — rerun with --drift"
+        ) from None
 
 
 def drift_u(fit: SineFit, drift_u_fit: float, residual_rms: float) -> float:
@@ -136,9 +173,9 @@ def drift_note(scheme: str, fit: SineFit) -> str | None:
         return None
     if scheme == "fog":
         return (
-            f"drift fitted (--drift): the rate offset D0 = {fit.offset:.6g} deg/s is the table's "
-            "drift plus the gyro's bias (a rate record cannot split them), and the rate changes "
-            f"by D1 = {fit.drift:.4g} deg/s² over the record; both removed from the motion"
+            "drift fitted (--drift): the rate offset D0 (drift_deg_s) is the table's drift plus "
+            "the gyro's bias, which a rate record cannot split; it changes by "
+            f"D1 = {fit.drift:.4g} deg/s per second; both removed from the motion"
         )
     return f"drift fitted (--drift): {fit.drift:.6g} deg/s, removed from the motion"
 

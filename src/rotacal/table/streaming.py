@@ -80,7 +80,12 @@ from rotacal.table.motion import (
     _finish,
     _plot_stride,
 )
-from rotacal.table.motion_drift import detrended_angle, drift_free_hysteresis, fit_motion
+from rotacal.table.motion_drift import (
+    detrended_angle,
+    drift_free_hysteresis,
+    explained_fit,
+    fit_motion,
+)
 from rotacal.table.motion_uncertainty import ReversalDetection
 from rotacal.uncertainty import InstrumentSpecs
 
@@ -635,7 +640,12 @@ def calibrate_encoder_motion_chunked(
             yield g0, t_piece, th_piece
 
     _accumulate([acc] if acc3 is None else [acc, acc3], tap())
-    fit = acc.fit(f0, harmonics, True, max_iter=50, rtol=1e-12, drift=drift, drift_check=not drift)
+    fit = explained_fit(
+        lambda with_term: acc.fit(
+            f0, harmonics, True, max_iter=50, rtol=1e-12, drift=with_term, drift_check=not with_term
+        ),
+        drift,
+    )
     t_dec = np.concatenate(dec_t)
     plot["t_used"] = t_dec
     plot["residual_deg"] = np.concatenate(dec_th) - fit.evaluate(t_dec)
