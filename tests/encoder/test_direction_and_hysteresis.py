@@ -131,6 +131,8 @@ def test_drift_free_hysteresis_keeps_the_reversals_of_a_drifting_table() -> None
     d = demodulate(t, a, b, LINES, hysteresis_from=rule)
     assert len(d.reversals) == truth.size
     assert np.max(np.abs(d.reversals.times_s - truth)) < 2e-3
-    # the rule's value: 10 % of the stroke in subintervals (the twin's peak-to-peak, no drift)
-    stroke = np.ptp(m.angle_no_vibration_deg(np.linspace(0, 0.2, 20001)))
-    assert d.reversals.hysteresis_subintervals == pytest.approx(0.1 * stroke * LINES / 30, abs=1)
+    # the rule's value: about 10 % of the stroke (the twin's peak-to-peak without the drift, in
+    # subintervals; the straight line that takes the drift off leaves a part of a stroke), far
+    # below 10 % of the span
+    stroke = np.ptp(m.angle_no_vibration_deg(np.linspace(0, 0.2, 20001))) * LINES / 30
+    assert 0.08 * stroke <= d.reversals.hysteresis_subintervals <= 0.15 * stroke
