@@ -11,7 +11,7 @@ simulate``, the TOML examples, the files of ``rotacal demo`` — goes through :f
    folder this process may not write in (asked of the kernel with the effective ids, so read-only
    file systems and access control lists count, and root is not refused where it may write).
 2. Each file is written to a hidden temporary file in its destination folder
-   (``.NAME.XXXXXXXX.tmp``), flushed to disk, and only then given its name. Without ``overwrite``
+   (``.NAME.<random>.tmp``), flushed to disk, and only then given its name. Without ``overwrite``
    by a hard link (where a file system has none, ``renameat2(RENAME_NOREPLACE)``), which fails if
    the name exists: of several processes writing one name exactly one succeeds, and the others get
    one line saying so. With ``overwrite`` by an atomic rename over the old file. A reader sees the
