@@ -14,6 +14,8 @@ import click
 
 from rotacal.errors import CaptureError, ConfigError
 
+from ._reading import current_read_options, reading_options
+
 if TYPE_CHECKING:
     from rotacal.io.outputs import InputFile
 
@@ -211,6 +213,7 @@ def _analysis_options(func: F) -> F:
             "'rotacal specs example').",
         ),
     ]
+    func = reading_options(func)
     for option in reversed(options):
         func = option(func)
     return func
@@ -231,7 +234,11 @@ def _read(path: str, needed: list[str], columns: Sequence[str], group: str | Non
 
     with _status(f"reading {path}"):
         return read_capture(
-            path, columns=needed, mapping=parse_column_mapping(columns), group=group
+            path,
+            columns=needed,
+            mapping=parse_column_mapping(columns),
+            group=group,
+            read_options=current_read_options(),
         )
 
 
@@ -240,7 +247,13 @@ def _read_heads(path: str, columns: Sequence[str], group: str | None) -> Any:
     from rotacal.io import parse_column_mapping, read_capture
 
     with _status(f"reading {path}"):
-        cap = read_capture(path, mapping=parse_column_mapping(columns), group=group, ragged=True)
+        cap = read_capture(
+            path,
+            mapping=parse_column_mapping(columns),
+            group=group,
+            ragged=True,
+            read_options=current_read_options(),
+        )
     with _naming_file(path):
         return head_columns(cap.columns)
 

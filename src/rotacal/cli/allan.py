@@ -22,6 +22,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
+from ._reading import current_read_options
 
 
 @cli.command("allan")
@@ -70,7 +71,13 @@ def allan_cmd(
     rate_column = names[0] if names else "rate_deg_s"
     mapping = parse_column_mapping(mappings)
     with _status(f"reading {capture}"):
-        cap = read_capture(capture, mapping=mapping, group=group, columns=None)
+        cap = read_capture(
+            capture,
+            mapping=mapping,
+            group=group,
+            columns=None,
+            read_options=current_read_options(),
+        )
     if rate_column not in cap.columns:
         raise CaptureError(
             f"{Path(capture).name} has no column {rate_column!r} (it has "

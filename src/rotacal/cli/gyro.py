@@ -25,6 +25,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
+from ._reading import current_read_options
 
 
 @cli.group()
@@ -207,7 +208,12 @@ def gyro_rotations(
     else:
         rotations, static = ferraris_sections(spec)
     with _status(f"reading {capture}"):
-        cap = read_capture(capture, mapping=parse_column_mapping(columns), group=group)
+        cap = read_capture(
+            capture,
+            mapping=parse_column_mapping(columns),
+            group=group,
+            read_options=current_read_options(),
+        )
     missing = [c for c in TRIAD_OUTPUT_COLUMNS if c not in cap.columns]
     if missing:
         raise CaptureError(

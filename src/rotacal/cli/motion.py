@@ -27,6 +27,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
+from ._reading import current_read_options
 
 
 @cli.group()
@@ -189,7 +190,9 @@ def motion_encoder(
                 f"--correction-from {correction_from} covers only part of a signal period too; "
                 "record the reference with the table turning through several signal periods"
             )
-    n = capture_length(capture, "a", mapping=mapping, group=group)
+    n = capture_length(
+        capture, "a", mapping=mapping, group=group, read_options=current_read_options()
+    )
     if chunked is None:
         chunked = n > _IN_MEMORY_MAX_SAMPLES
     if chunked:

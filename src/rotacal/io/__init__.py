@@ -11,11 +11,13 @@ from .capture import (
     parse_column_mapping,
     read_capture,
 )
+from .read_options import ReadOptions
 from .write import write_capture
 
 __all__ = [
     "FORMATS",
     "Capture",
+    "ReadOptions",
     "capture_length",
     "check_time",
     "iter_capture_chunks",

@@ -35,6 +35,7 @@ from ._validate import (
     reading,
     to_float_column,
 )
+from .read_options import ReadOptions
 
 PathLike = str | os.PathLike[str]
 MappingArg = Mapping[str, str] | Iterable[str] | None
@@ -153,11 +154,19 @@ _READERS: dict[str, Any] = {
 }
 
 
-def _open_reader(path: PathLike, group: str | None) -> Reader:
-    """Check the file, open its reader and check the names it offers (one path for all)."""
+def _open_reader(
+    path: PathLike, group: str | None, read_options: ReadOptions | None = None
+) -> Reader:
+    """Check the file, open its reader and check the names it offers (one path for all).
+
+    ``read_options`` (delimiter, decimal mark, names of a headerless file) apply to text captures.
+    """
     if group is not None and not isinstance(group, str):
         raise ConfigError(f"--group {group!r} is not text; give the group's name")
     p, fmt = open_checked(path)
+    if read_options is not None and not read_options.is_default:
+        # TODO(issue 13, readers): delimiter sniffing, decimal comma, headerless files
+        raise ConfigError(f"{p.name}: --delimiter/--decimal/--names are not supported yet")
     cls = _READERS[fmt]
     if fmt in ("csv", "npz"):
         check_group_unused(p, group)
@@ -237,6 +246,7 @@ def read_capture(
     mapping: MappingArg = None,
     group: str | None = None,
     ragged: bool = False,
+    read_options: ReadOptions | None = None,
 ) -> Capture:
     """Read a capture file into a :class:`Capture` of validated float64 columns.
 
@@ -266,7 +276,7 @@ def read_capture(
         One line naming the file and the column/row at fault.
     """
     mapped = _normalise_mapping(mapping)
-    reader = _open_reader(path, group)
+    reader = _open_reader(path, group, read_options)
     fname = reader.fname
     try:
         available, wanted = _resolve(reader, mapped, columns)
@@ -315,6 +325,7 @@ def iter_capture_chunks(
     chunk_rows: int = 1_000_000,
     mapping: MappingArg = None,
     group: str | None = None,
+    read_options: ReadOptions | None = None,
 ) -> Iterator[dict[str, np.ndarray]]:
     """Stream a capture in chunks of at most ``chunk_rows`` rows with bounded memory.
 
@@ -330,7 +341,7 @@ def iter_capture_chunks(
     """
     rows = _check_chunk_rows(chunk_rows)
     mapped = _normalise_mapping(mapping)
-    reader = _open_reader(path, group)
+    reader = _open_reader(path, group, read_options)
     fname = reader.fname
     try:
         _available, wanted = _resolve(reader, mapped, columns)
@@ -376,6 +387,7 @@ def capture_length(
     *,
     mapping: MappingArg = None,
     group: str | None = None,
+    read_options: ReadOptions | None = None,
 ) -> int:
     """Number of rows of ``column`` (canonical name), without reading the data where possible.
 
@@ -383,7 +395,7 @@ def capture_length(
     bytes, no parsing), which for padded (ragged) CSV files is the longest column's length.
     """
     mapped = _normalise_mapping(mapping)
-    reader = _open_reader(path, group)
+    reader = _open_reader(path, group, read_options)
     try:
         _available, wanted = _resolve(reader, mapped, [column])
         n = _declared(reader, wanted)[column]
