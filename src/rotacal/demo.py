@@ -7,12 +7,17 @@ encoder on a table turning at 300 °/s, self-calibrated over 10 revolutions, and
 stability and s(φ); gyro calibrations (scale factor, triad, rotations, multiposition drift, noise);
 and the error budget of seed 001's two-axis turntable (allocation and a 10⁶-draw Monte Carlo
 check). It writes ``DIR/report.html`` (each result beside the twin's truth and the
-papers' numbers) plus one JSON per analysis.
+papers' numbers) plus one JSON per analysis (each with ``warnings`` and ``provenance``).
+
+Every file is made in memory first and written at the end, all together or none
+(:func:`rotacal.io.outputs.write_outputs`): a demo that fails leaves no file, and a file of an
+earlier demo (or one the user edited) is replaced only with ``overwrite``.
 """
 
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -20,7 +25,8 @@ from typing import Any
 import numpy as np
 
 from rotacal import sim
-from rotacal.io.outputs import write_output
+from rotacal.io.outputs import Output, write_outputs
+from rotacal.provenance import provenance_record
 from rotacal.results import to_jsonable
 from rotacal.table import (
     MotionResult,
@@ -30,14 +36,53 @@ from rotacal.table import (
     compare_schemes,
 )
 
-__all__ = ["demo_steps", "run_demo"]
+__all__ = ["demo_files", "demo_steps", "run_demo"]
 
 _NAMES = {"encoder": "OSE", "lts": "LTS", "fog": "FOG"}
 
 
-def _save(path: Path, text: str) -> None:
-    """Write one file of the demo's folder: whole or not at all, replacing an older demo's."""
-    write_output(path, text, overwrite=True)
+#: The files of the demo's folder besides one JSON per scenario and scheme (``_motion_file``).
+_FIXED_FILES = (
+    "selfcal.json",
+    "rate.json",
+    "gyro_scale_factor.json",
+    "gyro_triad.json",
+    "gyro_multiposition.json",
+    "gyro_rotations.json",
+    "allan.json",
+    "turntable_budget.json",
+    "summary.json",
+    "report.html",
+)
+
+
+def _motion_file(scenario: dict[str, Any], kind: str) -> str:
+    return f"motion_{scenario['name']}_{kind}.json"
+
+
+def demo_files() -> list[str]:
+    """The names of every file `run_demo` writes into its folder (known before it runs)."""
+    motion = [
+        _motion_file(sc, kind)
+        for sc in sim.table1_scenarios()
+        for kind in (sc["paper_sensors"][0], "fog")
+    ]
+    return motion + list(_FIXED_FILES)
+
+
+class _Files:
+    """The demo's files, made in memory and written together at the end."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self.outputs: list[Output] = []
+        # no wall-clock time: two demos give byte-identical JSONs
+        self.provenance = provenance_record("demo", {"out": os.fspath(folder)})
+
+    def json(self, name: str, data: dict[str, Any], indent: int | None = 2) -> None:
+        """A JSON result of the demo, with ``warnings`` and ``provenance`` as every result has."""
+        data = {**data, "warnings": data.get("warnings", []), "provenance": self.provenance}
+        self.outputs.append(Output(self.folder / name, json.dumps(data, indent=indent) + "\n"))
 
 
 def demo_steps() -> int:
@@ -45,7 +90,7 @@ def demo_steps() -> int:
     return 2 * len(sim.table1_scenarios()) + 4
 
 
-def _rate_standard(out: Path) -> tuple[list[Any], dict[str, Any]]:
+def _rate_standard(files: _Files) -> tuple[list[Any], dict[str, Any]]:
     """The seed-004 facility on the twin: self-calibration, rate stability, s(φ)."""
     from rotacal.report.html import Section, Table
     from rotacal.report.pulses import rate_section, selfcal_section
@@ -65,8 +110,8 @@ def _rate_standard(out: Path) -> tuple[list[Any], dict[str, Any]]:
     rate = calibrate_rate(heads, pulses_per_rev=18000, set_rate_deg_s=300.0)
     selfcal = rate.selfcal
     assert selfcal is not None  # several heads: calibrate_rate self-calibrates the capture
-    _save(out / "selfcal.json", json.dumps(selfcal.to_dict()) + "\n")
-    _save(out / "rate.json", json.dumps(rate.to_dict(), indent=2) + "\n")
+    files.json("selfcal.json", selfcal.to_dict(), indent=None)
+    files.json("rate.json", rate.to_dict())
     truth = capture.truth
     err = selfcal.deviation_arcsec - np.asarray(truth["deviation_detectable_arcsec"])
     err_rms = float(np.sqrt(np.mean(err**2)))
@@ -171,7 +216,7 @@ def _truth_table(
     return Table(cols, rows, caption="rotacal against the twin's truth (over the analysed periods)")
 
 
-def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
+def _gyros(files: _Files) -> tuple[list[Any], dict[str, Any]]:
     """Gyro calibrations on the twin: scale factor vs FMVSS 126, a 3-axis triad, drift coefficients."""
     from rotacal.gyro import (
         calibrate_multiposition,
@@ -225,7 +270,7 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
         ("gyro_rotations", rot),
         ("allan", noise),
     ):
-        _save(out / f"{name}.json", json.dumps(result.to_dict(), indent=2) + "\n")
+        files.json(f"{name}.json", result.to_dict())
     k_err = np.abs(
         np.asarray(triad.scale_misalignment) - np.asarray(triad_cap.truth["scale_misalignment"])
     ).max()
@@ -277,13 +322,13 @@ def _gyros(out: Path) -> tuple[list[Any], dict[str, Any]]:
     return sections, summary
 
 
-def _turntable(out: Path) -> tuple[list[Any], dict[str, Any]]:
+def _turntable(files: _Files) -> tuple[list[Any], dict[str, Any]]:
     """Seed 001's two-axis turntable: sensitivities, allocation, 10⁶-draw Monte Carlo check."""
     from rotacal.report.turntable import turntable_section
     from rotacal.turntable import seed_table, turntable_budget
 
     budget = turntable_budget(seed_table(), runs=1_000_000)
-    _save(out / "turntable_budget.json", json.dumps(budget.to_dict(), indent=2) + "\n")
+    files.json("turntable_budget.json", budget.to_dict())
     summary = {
         "upper_bounds_arcmin": budget.upper_bounds_arcmin,
         "monte_carlo": budget.monte_carlo,
@@ -292,14 +337,20 @@ def _turntable(out: Path) -> tuple[list[Any], dict[str, Any]]:
     return [turntable_section(budget)], summary
 
 
-def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> Path:
-    """Simulate, analyse and report the Table 1 campaign; returns the path of ``report.html``."""
-    from rotacal.report.html import Report, Section, write_html
+def run_demo(
+    out: Path, progress: Callable[[str], None] | None = None, *, overwrite: bool = False
+) -> list[Path]:
+    """Simulate, analyse and report the Table 1 campaign into the folder ``out``.
+
+    Every file (:func:`demo_files`) is written at the end, all or none; an existing one is
+    replaced only with ``overwrite`` (ConfigError otherwise). Returns the paths written, in order.
+    """
+    from rotacal.report.html import Report, Section, render_html
     from rotacal.report.motion import comparison_section, motion_figures, motion_section
 
     step = progress or (lambda label: None)
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    files = _Files(out)
     rows = []
     paper = []
     scenario_sections = []
@@ -314,8 +365,7 @@ def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> Path:
             results.append(result)
             t = capture.columns["time_s"]
             true_reversals.append(len(sc["motion"].truth(t[0], t[-1])["reversal_times_s"]))
-            name = f"motion_{sc['name']}_{kind}.json"
-            _save(out / name, json.dumps(result.to_dict(), indent=2) + "\n")
+            files.json(_motion_file(sc, kind), result.to_dict())
             step(f"{sc['name']} by {_NAMES[kind]}")
         truth = sc["motion"].truth(results[0].analysis_start_s, results[0].analysis_stop_s)
         comparison = compare_schemes(results[0], results[1])
@@ -336,13 +386,13 @@ def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> Path:
             f for f in motion_figures(results[1]) if "position" not in f.title.lower()
         ]
         scenario_sections += [primary_section, fog_section]
-    rate_sections, summary["rate_standard"] = _rate_standard(out)
+    rate_sections, summary["rate_standard"] = _rate_standard(files)
     step("multi-head encoder: self-calibration and rate")
-    gyro_sections, summary["gyros"] = _gyros(out)
+    gyro_sections, summary["gyros"] = _gyros(files)
     step("gyros: scale factor, triad, multiposition")
-    turntable_sections, summary["turntable"] = _turntable(out)
+    turntable_sections, summary["turntable"] = _turntable(files)
     step("turntable: error allocation and Monte Carlo")
-    _save(out / "summary.json", json.dumps(to_jsonable(summary), indent=2) + "\n")
+    files.json("summary.json", to_jsonable(summary))
     intro = Section(
         title="What this is",
         paragraphs=[
@@ -371,6 +421,10 @@ def run_demo(out: Path, progress: Callable[[str], None] | None = None) -> Path:
         ],
         inputs={"captures": "simulated (rotacal.sim.table1_scenarios)", "output folder": str(out)},
     )
-    path = write_html(report, out / "report.html", overwrite=True)
+    files.outputs.append(Output(out / "report.html", render_html(report)))
+    assert [Path(o.path).name for o in files.outputs] == demo_files(), "demo_files is stale"
+    written = write_outputs(
+        files.outputs, overwrite=overwrite, make_folders=True, hint="--overwrite"
+    )
     step("report")
-    return path
+    return written

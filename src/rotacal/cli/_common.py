@@ -103,6 +103,8 @@ class _InputFileType(click.Path):
             name = param.opts[0] if isinstance(param, click.Option) else param.human_readable_name
             text = os.fsdecode(path)
             ctx.meta.setdefault(_INPUTS_KEY, []).append(InputFile(text, f"{name} {text}"))
+            # the path as given, for the provenance (a callback may turn the value into more)
+            ctx.meta.setdefault(_INPUT_PATHS_KEY, {}).setdefault(param.name, []).append(text)
         return path
 
 
@@ -110,6 +112,8 @@ class _InputFileType(click.Path):
 INPUT_FILE = _InputFileType()
 _INPUTS_KEY = "rotacal.inputs"
 _OVERWRITE_KEY = "rotacal.overwrite"
+_JSON_TO_STDOUT_KEY = "rotacal.json_to_stdout"
+_INPUT_PATHS_KEY = "rotacal.input_paths"
 
 
 def _declared_inputs() -> tuple[InputFile, ...]:
@@ -123,21 +127,55 @@ def _overwrite_given() -> bool:
     return bool(ctx.meta.get(_OVERWRITE_KEY, False)) if ctx is not None else False
 
 
+#: The extensions a ``--report`` may have (the report is HTML) and a ``--json`` may have.
+REPORT_EXTENSIONS = (".html", ".htm")
+JSON_EXTENSIONS = (".json",)
+
+
+def _check_extensions(json_path: str | None, report_path: str | None) -> None:
+    """Refuse an output whose name says another format than rotacal writes into it."""
+    json_ext = Path(json_path).suffix.lower() if json_path not in (None, "-") else None
+    report_ext = Path(report_path).suffix.lower() if report_path is not None else None
+    if json_ext in REPORT_EXTENSIONS and report_ext in JSON_EXTENSIONS:
+        raise ConfigError(
+            f"--json {json_path} and --report {report_path} look swapped: --json writes JSON "
+            "(name it .json) and --report writes HTML (name it .html)"
+        )
+    if report_ext is not None and report_ext not in REPORT_EXTENSIONS:
+        if report_ext == ".pdf":
+            raise ConfigError(
+                f"--report {report_path}: the report is HTML, and PDF certificates are not "
+                "available yet (they will come from 'rotacal certify'); name the report .html "
+                "(a browser prints it to PDF)"
+            )
+        raise ConfigError(
+            f"--report {report_path}: the report is HTML; give a name ending in .html or .htm"
+        )
+    if json_ext is not None and json_ext not in JSON_EXTENSIONS:
+        raise ConfigError(
+            f"--json {json_path}: the results are JSON; give a name ending in .json "
+            "(or '-' for the terminal)"
+        )
+
+
 def _check_outputs(json_path: str | None, report_path: str | None, overwrite: bool) -> None:
     """The pre-flight, before any analysis: refuse outputs that cannot or may not be written.
 
-    Refused: an output naming an input of the command (always), an existing file (unless
-    --overwrite), --json and --report naming one file, a folder, a path under a regular file, a
-    folder without write permission, a dangling symbolic link. Remembers ``overwrite`` for the
-    writes.
+    Refused: a --report not named .html/.htm and a --json not named .json (or '-'), an output
+    naming an input of the command (always), an existing file (unless --overwrite), --json and
+    --report naming one file, a folder, a path under a regular file, a folder without write
+    permission, a dangling symbolic link. Remembers ``overwrite`` and whether the JSON goes to
+    stdout for the writes.
     """
     from rotacal.io.outputs import check_outputs
 
     if report_path == "-":
         raise ConfigError("--report needs a file name (the report is HTML, not for stdout)")
+    _check_extensions(json_path, report_path)
     ctx = click.get_current_context(silent=True)
     if ctx is not None:
         ctx.meta[_OVERWRITE_KEY] = overwrite
+        ctx.meta[_JSON_TO_STDOUT_KEY] = json_path == "-"
     targets = [
         (target, f"{option} {target}")
         for option, target in (("--json", json_path), ("--report", report_path))
@@ -146,12 +184,37 @@ def _check_outputs(json_path: str | None, report_path: str | None, overwrite: bo
     check_outputs(targets, overwrite=overwrite, inputs=_declared_inputs(), make_folders=True)
 
 
+def _wrote(path: str | os.PathLike[str]) -> None:
+    """Say on stderr that an output file is complete: one ``wrote PATH`` line per file.
+
+    Every command calls it once for each file it wrote, after the file got its name (never for
+    ``--json -``). stdout stays for results.
+    """
+    click.echo(f"wrote {os.fspath(path)}", err=True)
+
+
+def _summary_wanted() -> bool:
+    """Whether the command prints its summary on stdout: unless the JSON goes there."""
+    ctx = click.get_current_context(silent=True)
+    return not (ctx is not None and ctx.meta.get(_JSON_TO_STDOUT_KEY, False))
+
+
 def _write_json(data: Any, target: str | None) -> None:
+    """Write a result's JSON (``data``: its ``to_dict()``) with ``warnings`` and ``provenance``.
+
+    ``provenance`` (INTERFACE.md "Every result") is added here, where the command is known: the
+    result objects of the Python API stay free of it.
+    """
     if target is None:
         return
     from rotacal.io.outputs import write_output
     from rotacal.results import to_jsonable
 
+    from ._provenance import provenance
+
+    data = dict(data)
+    data.setdefault("warnings", [])
+    data["provenance"] = provenance()
     text = json.dumps(to_jsonable(data), indent=2, allow_nan=False)
     if target == "-":
         click.echo(text)
@@ -164,6 +227,7 @@ def _write_json(data: Any, target: str | None) -> None:
         inputs=_declared_inputs(),
         make_folders=True,
     )
+    _wrote(target)
 
 
 def _load_specs_option(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
@@ -317,3 +381,4 @@ def _write_report(
             inputs=_declared_inputs(),
             label=f"--report {report_path}",
         )
+    _wrote(report_path)

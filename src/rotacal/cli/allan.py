@@ -19,9 +19,11 @@ from ._common import (
     _emit_warnings,
     _names_capture,
     _status,
+    _summary_wanted,
     _write_json,
     _write_report,
 )
+from ._format import quantity_of
 from ._reading import current_read_options
 
 
@@ -98,7 +100,8 @@ def allan_cmd(
             allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path)
+    data = result.to_dict()
+    _write_json(data, json_path)
     if report_path:
         from rotacal.report.noise import noise_section
 
@@ -110,15 +113,15 @@ def allan_cmd(
             report_path,
             warnings=result.warnings,
         )
-    if json_path is None and report_path is None:
-        for label, value, u in (
-            ("angle random walk", result.arw_deg_rt_h, "deg/rt-h"),
-            ("bias instability", result.bias_instability_deg_h, "deg/h"),
-            ("rate random walk", result.rrw_deg_h_rt_h, "deg/h/rt-h"),
-            ("quantization", result.quantization_deg, "deg"),
-            ("rate ramp", result.rate_ramp_deg_h2, "deg/h^2"),
+    if _summary_wanted():
+        for label, key, unit in (
+            ("angle random walk", "arw_deg_rt_h", "deg/rt-h"),
+            ("bias instability", "bias_instability_deg_h", "deg/h"),
+            ("rate random walk", "rrw_deg_h_rt_h", "deg/h/rt-h"),
+            ("quantization", "quantization_deg", "deg"),
+            ("rate ramp", "rate_ramp_deg_h2", "deg/h^2"),
         ):
-            text = "not seen" if value is None else f"{value:.4g} {u}"
+            text = "not seen" if data.get(key) is None else quantity_of(data, key, unit, digits=4)
             click.echo(f"{label:<18} {text}")
         for note in result.notes:
             click.echo(f"note               {note}")

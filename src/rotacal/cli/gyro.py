@@ -22,9 +22,11 @@ from ._common import (
     _names_capture,
     _read,
     _status,
+    _summary_wanted,
     _write_json,
     _write_report,
 )
+from ._format import elements_of, format_plain, quantity_of
 from ._reading import current_read_options
 
 
@@ -93,7 +95,8 @@ def gyro_scale_factor(
             allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path)
+    data = result.to_dict()
+    _write_json(data, json_path)
     if report_path:
         from rotacal.report.gyro_scale import scale_factor_section
 
@@ -105,9 +108,29 @@ def gyro_scale_factor(
             report_path,
             warnings=result.warnings,
         )
-    if json_path is None and report_path is None:
-        for line in result.summary_lines():
+    if _summary_wanted():
+        _print_scale_factor(result, data)
+
+
+def _print_scale_factor(result: Any, data: dict[str, Any]) -> None:
+    unit = result.output_unit or "output unit"
+    click.echo(f"scale factor S    {quantity_of(data, 'scale_factor', f'{unit}/(deg/s)')}")
+    click.echo(f"bias V0           {quantity_of(data, 'bias', unit)}")
+    click.echo(
+        f"nonlinearity NL   {quantity_of(data, 'nonlinearity_percent_fs', '%FS', digits=4)} "
+        f"(FS {result.full_scale_deg_s:g} deg/s, {result.n_points} rate points)"
+    )
+    corrected = result.nonlinearity_percent_fs_bias_corrected
+    if np.isfinite(corrected):
+        click.echo(f"NL bias-corrected {format_plain(corrected, '%FS', digits=4)}")
+    if result.requirement is not None:
+        for line in result.requirement.lines():
             click.echo(line)
+    elif result.resolution is not None:
+        value = format_plain(result.resolution.resolution_deg_s, "deg/s", digits=3)
+        click.echo(f"resolution        {value} ({result.resolution.basis})")
+    if result.decision_with_uncertainty is not None:
+        click.echo(f"  {result.decision_with_uncertainty.line}")
 
 
 @gyro.command("triad")
@@ -138,7 +161,8 @@ def gyro_triad(
             allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path)
+    data = result.to_dict()
+    _write_json(data, json_path)
     if report_path:
         from rotacal.report.triad import triad_section
 
@@ -150,14 +174,23 @@ def gyro_triad(
             report_path,
             warnings=result.warnings,
         )
-    if json_path is None and report_path is None:
-        k = np.asarray(result.scale_misalignment)
-        click.echo("K (output per deg/s):")
-        for row in k:
-            click.echo("   " + "  ".join(f"{x:+.6f}" for x in row))
-        click.echo("bias              " + "  ".join(f"{x:+.5g}" for x in result.bias))
+    if _summary_wanted():
+        _print_triad(result, data)
         click.echo(f"outliers rejected {result.outliers_rejected}")
-        click.echo("residual rms      " + "  ".join(f"{x:.3g}" for x in result.residual_rms))
+        click.echo(
+            "residual rms      "
+            + "   ".join(format_plain(x, digits=3) for x in result.residual_rms)
+        )
+
+
+def _print_triad(result: Any, data: dict[str, Any]) -> None:
+    """K (3 × 3) and the bias (3), each element with its U: the lines of triad and rotations."""
+    unit = result.output_unit or "output unit"
+    click.echo(f"K ({unit} per deg/s), rows x, y, z:")
+    for row in range(3):
+        line = elements_of(data, "scale_misalignment", [(row, col) for col in range(3)])
+        click.echo(f"   {line}")
+    click.echo(f"bias              {elements_of(data, 'bias', [(i,) for i in range(3)], unit)}")
 
 
 @gyro.command("rotations")
@@ -240,7 +273,8 @@ def gyro_rotations(
             allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path)
+    data = result.to_dict()
+    _write_json(data, json_path)
     if report_path:
         from rotacal.report.triad import rotations_section
 
@@ -252,11 +286,8 @@ def gyro_rotations(
             report_path,
             warnings=result.warnings,
         )
-    if json_path is None and report_path is None:
-        click.echo("K (output per deg/s):")
-        for row in np.asarray(result.scale_misalignment):
-            click.echo("   " + "  ".join(f"{x:+.6f}" for x in row))
-        click.echo("bias              " + "  ".join(f"{x:+.5g}" for x in result.bias))
+    if _summary_wanted():
+        _print_triad(result, data)
 
 
 @gyro.command("multiposition")
@@ -296,7 +327,8 @@ def gyro_multiposition(
             allow_clipped=kw.pop("allow_clipped"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path)
+    data = result.to_dict()
+    _write_json(data, json_path)
     if report_path:
         from rotacal.report.multiposition import multiposition_section
 
@@ -308,7 +340,19 @@ def gyro_multiposition(
             report_path,
             warnings=result.warnings,
         )
-    if json_path is None and report_path is None:
-        for name, value in result.drift_coefficients.items():
-            u = result.drift_coefficients_u[name]
-            click.echo(f"{name:<5} {value:+.6f} ± {u:.2g}")
+    if _summary_wanted():
+        units = data.get("drift_coefficient_units", {})
+        for name in result.drift_coefficients:
+            coefficient = _drift_coefficient(data, name)
+            click.echo(f"{name:<5} {quantity_of(coefficient, name, units.get(name, ''))}")
+
+
+def _drift_coefficient(data: dict[str, Any], name: str) -> dict[str, Any]:
+    """One drift coefficient of a multiposition result in the keys the formatter reads."""
+    k = data.get("k", {}).get("drift_coefficients", {})
+    return {
+        name: data["drift_coefficients"][name],
+        f"{name}_U": data.get("drift_coefficients_U", {}).get(name),
+        "k": {name: k.get(name)},
+        "coverage_probability": data.get("coverage_probability"),
+    }

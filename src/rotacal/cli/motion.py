@@ -24,9 +24,11 @@ from ._common import (
     _read,
     _sample_progress,
     _status,
+    _summary_wanted,
     _write_json,
     _write_report,
 )
+from ._format import format_plain, quantity_of
 from ._reading import current_read_options
 
 
@@ -81,7 +83,8 @@ def _finish_motion(
                 err=True,
             )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path)
+    data = result.to_dict()
+    _write_json(data, json_path)
     if report_path:
         from rotacal.report.motion import motion_section
 
@@ -93,39 +96,38 @@ def _finish_motion(
             report_path,
             warnings=result.warnings,
         )
-    if json_path is None and report_path is None:
-        _print_motion(result)
+    if _summary_wanted():
+        _print_motion(result, data)
 
 
-def _print_motion(r: Any) -> None:
+def _print_motion(r: Any, data: dict[str, Any]) -> None:
     click.echo(f"scheme            {r.scheme}")
-    click.echo(f"amplitude         {r.amplitude_deg:.7g} deg")
-    click.echo(f"frequency         {r.frequency_hz:.9g} Hz")
-    click.echo(f"ang. acceleration {r.angular_acceleration_amplitude_deg_s2:.6g} deg/s^2")
+    click.echo(f"amplitude         {quantity_of(data, 'amplitude_deg', 'deg')}")
+    click.echo(f"frequency         {quantity_of(data, 'frequency_hz', 'Hz', digits=9)}")
     click.echo(
-        f"THD               {r.thd_percent:.4f} %  (u = {r.thd_percent_u:.2g} %, h = 2..{r.harmonics})"
+        f"ang. acceleration {quantity_of(data, 'angular_acceleration_amplitude_deg_s2', 'deg/s^2')}"
     )
+    click.echo(f"THD               {quantity_of(data, 'thd_percent', '%')}  (h = 2..{r.harmonics})")
     click.echo(
         f"periods used      {r.periods_used}  ({r.reversal_times_s.size} reversing moments found)"
     )
     if r.snr_db is not None:
-        click.echo(f"SNR               {r.snr_db:.2f} dB")
+        click.echo(f"SNR               {format_plain(r.snr_db, 'dB', digits=4)}")
     if r.drift_deg_s is not None:
-        click.echo(
-            f"drift             {r.drift_deg_s:.6g} deg/s  (u = {r.drift_deg_s_u:.2g} deg/s)"
-        )
+        click.echo(f"drift             {quantity_of(data, 'drift_deg_s', 'deg/s')}")
     if r.rate_drift_deg_s2 is not None:
-        click.echo(
-            f"rate drift        {r.rate_drift_deg_s2:.6g} deg/s^2  "
-            f"(u = {r.rate_drift_deg_s2_u:.2g} deg/s^2)"
-        )
+        click.echo(f"rate drift        {quantity_of(data, 'rate_drift_deg_s2', 'deg/s^2')}")
     for note in r.notes:
         click.echo(f"note              {note}")
     if r.set_amplitude_deg is not None:
-        click.echo(f"amplitude error   {r.amplitude_error_percent:+.4f} %")
-        click.echo(f"frequency error   {r.frequency_error_percent:+.5f} %")
+        click.echo(f"amplitude error   {quantity_of(data, 'amplitude_error_percent', '%')}")
+        click.echo(f"frequency error   {quantity_of(data, 'frequency_error_percent', '%')}")
         click.echo(
-            f"position error    max {r.position_error_max_deg:.4g} deg, rms {r.position_error_rms_deg:.4g} deg"
+            f"ang. accel. error {quantity_of(data, 'angular_acceleration_error_percent', '%')}"
+        )
+        click.echo(
+            f"position error    max {format_plain(r.position_error_max_deg, 'deg', digits=4)}, "
+            f"rms {format_plain(r.position_error_rms_deg, 'deg', digits=4)}"
         )
 
 

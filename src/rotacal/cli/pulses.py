@@ -21,9 +21,11 @@ from ._common import (
     _names_capture,
     _read_heads,
     _status,
+    _summary_wanted,
     _write_json,
     _write_report,
 )
+from ._format import element_of, format_plain, quantity_of
 
 _PULSES_PER_REV = click.option(
     "--pulses-per-rev", type=int, required=True, help="m: pulses per revolution of one head."
@@ -65,7 +67,8 @@ def selfcal_cmd(
             specs=kw.pop("specs"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path)
+    data = result.to_dict()
+    _write_json(data, json_path)
     if report_path:
         from rotacal.report.pulses import selfcal_section
 
@@ -77,14 +80,16 @@ def selfcal_cmd(
             report_path,
             warnings=result.warnings,
         )
-    if json_path is None and report_path is None:
+    if _summary_wanted():
         click.echo(f"heads x pulses/rev    {result.heads} x {result.pulses_per_rev}")
         click.echo(f"revolutions averaged  {result.revolutions_used}")
-        click.echo(f"deviation p-p         {result.deviation_pp_arcsec:.4g} arcsec")
-        click.echo(f"deviation rms         {result.deviation_rms_arcsec:.4g} arcsec")
+        click.echo(f"deviation p-p         {quantity_of(data, 'deviation_pp_arcsec', 'arcsec')}")
+        click.echo(f"deviation rms         {quantity_of(data, 'deviation_rms_arcsec', 'arcsec')}")
         if result.repeatability_rms_arcsec is not None:
-            click.echo(f"repeatability rms     {result.repeatability_rms_arcsec:.3g} arcsec")
-        click.echo(f"closure residual rms  {result.closure_residual_rms_arcsec:.3g} arcsec")
+            repeatability = format_plain(result.repeatability_rms_arcsec, "arcsec", digits=3)
+            click.echo(f"repeatability rms     {repeatability}")
+        closure = format_plain(result.closure_residual_rms_arcsec, "arcsec", digits=3)
+        click.echo(f"closure residual rms  {closure}")
         click.echo(f"note                  {result.undetectable_harmonics_note}")
         for note in result.notes:
             click.echo(f"note                  {note}")
@@ -153,7 +158,8 @@ def rate_cmd(
             specs=kw.pop("specs"),
         )
     _emit_warnings(result)
-    _write_json(result.to_dict(), json_path)
+    data = result.to_dict()
+    _write_json(data, json_path)
     if report_path:
         from rotacal.report.pulses import rate_section, selfcal_section
 
@@ -168,24 +174,47 @@ def rate_cmd(
             report_path,
             warnings=result.warnings,
         )
-    if json_path is None and report_path is None:
-        click.echo(f"mean rate          {result.mean_rate_deg_s:.7f} deg/s ({result.head})")
-        if result.rate_bias_percent is not None:
-            click.echo(
-                f"bias               {result.rate_bias_deg_s:+.3g} deg/s "
-                f"({result.rate_bias_percent:+.3g} %)"
-            )
+    if _summary_wanted():
+        _print_rate(result, data)
+
+
+def _print_rate(result: Any, data: dict[str, Any]) -> None:
+    mean_rate = quantity_of(data, "mean_rate_deg_s", "deg/s", digits=10)
+    click.echo(f"mean rate          {mean_rate} ({result.head})")
+    if result.rate_bias_percent is not None:
         click.echo(
-            f"rate deviation     rms {result.rate_deviation_rms_percent:.3g} %, "
-            f"peak {result.rate_deviation_peak_percent:.3g} %"
-            + (" (compensated)" if result.compensated else "")
+            f"bias               {quantity_of(data, 'rate_bias_deg_s', 'deg/s')} "
+            f"({quantity_of(data, 'rate_bias_percent', '%')})"
         )
-        for phi, s in zip(result.allan_angle_deg, result.allan_relative, strict=True):
-            if (
-                abs(math.log10(phi)) < 0.04
-                or abs(math.log10(phi / 10)) < 0.04
-                or abs(math.log10(phi / 360)) < 0.01
-            ):
-                click.echo(f"s({phi:.4g} deg)".ljust(19) + f"{100 * s:.3g} %")
-        for note in result.notes:
-            click.echo(f"note               {note}")
+    compensated = " (compensated)" if result.compensated else ""
+    click.echo(
+        f"rate deviation rms {quantity_of(data, 'rate_deviation_rms_percent', '%')}{compensated}"
+    )
+    click.echo(
+        f"rate deviation max {quantity_of(data, 'rate_deviation_peak_percent', '%')}{compensated}"
+    )
+    for i, phi in enumerate(result.allan_angle_deg):
+        if (
+            abs(math.log10(phi)) < 0.04
+            or abs(math.log10(phi / 10)) < 0.04
+            or abs(math.log10(phi / 360)) < 0.01
+        ):
+            s_phi = element_of(_percent_of(data, "allan_relative"), "allan_relative", (i,), "%")
+            click.echo(f"s({phi:.4g} deg)".ljust(19) + s_phi)
+    for note in result.notes:
+        click.echo(f"note               {note}")
+
+
+def _percent_of(data: dict[str, Any], key: str) -> dict[str, Any]:
+    """The keys of a relative quantity (a fraction) of ``data`` in percent, for the terminal."""
+
+    def scaled(x: Any) -> Any:
+        if isinstance(x, list):
+            return [scaled(v) for v in x]
+        return None if x is None else 100.0 * x
+
+    out = dict(data)
+    for name in (key, f"{key}_U", f"{key}_interval"):
+        if name in data:
+            out[name] = scaled(data[name])
+    return out

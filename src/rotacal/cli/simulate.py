@@ -16,6 +16,7 @@ from ._app import cli
 from ._common import (
     F,
     _progress,
+    _wrote,
 )
 
 
@@ -128,8 +129,11 @@ def _sim_motion(kind: str, harmonic_items: Sequence[str], kw: dict[str, Any]) ->
 
 
 def _sim_write(capture: Any, out: str, overwrite: bool) -> None:
-    path = capture.write(out, overwrite=overwrite)
-    click.echo(f"wrote {path} and {path}.truth.json", err=True)
+    from rotacal.sim.sensors import truth_path
+
+    capture.write(out, overwrite=overwrite)
+    _wrote(out)
+    _wrote(truth_path(out))
 
 
 @simulate.command("encoder")
@@ -307,12 +311,24 @@ def simulate_multiposition_cmd(out: str, overwrite: bool, **kw: Any) -> None:
 @click.option(
     "--out", "out", default="rotacal-demo", show_default=True, type=click.Path(file_okay=False)
 )
-def demo(out: str) -> None:
+@click.option(
+    "--overwrite",
+    is_flag=True,
+    help="Replace the files of an earlier demo in the folder (refused without it).",
+)
+def demo(out: str, overwrite: bool) -> None:
     """Simulate a calibration campaign on the digital twin, analyse it, write DIR/report.html."""
-    from rotacal.demo import demo_steps, run_demo
-    from rotacal.io.outputs import check_folder
+    from rotacal.demo import demo_files, demo_steps, run_demo
+    from rotacal.io.outputs import check_folder, check_outputs
 
     check_folder(out, label=f"--out {out}")
+    # before the campaign (a minute of work): every file it will write may be written
+    check_outputs(
+        [(Path(out) / name, str(Path(out) / name)) for name in demo_files()],
+        overwrite=overwrite,
+        make_folders=True,
+    )
     with _progress(demo_steps(), "demo") as advance:
-        report = run_demo(Path(out), progress=advance)
-    click.echo(f"wrote {report}")
+        written = run_demo(Path(out), progress=advance, overwrite=overwrite)
+    for path in written:
+        _wrote(path)

@@ -13,8 +13,10 @@ from ._common import (
     _emit_warnings,
     _names_capture,
     _sample_progress,
+    _summary_wanted,
     _write_json,
     _write_report,
+    _wrote,
 )
 
 
@@ -100,7 +102,7 @@ def turntable_budget_cmd(
             report_path,
             warnings=result.warnings,
         )
-    if json_path is None and report_path is None:
+    if _summary_wanted():
         req = result.requirement_arcmin
         click.echo(
             "requirement (arcmin)  "
@@ -146,7 +148,7 @@ def turntable_example(out: str, overwrite: bool) -> None:
     from rotacal.turntable import seed_table_toml
 
     write_output(out, seed_table_toml(), label=f"--out {out}", overwrite=overwrite)
-    click.echo(f"wrote {out}")
+    _wrote(out)
 
 
 # ----------------------------------------------------------------------------------------------- specs
@@ -164,4 +166,4 @@ def specs_example(out: str, overwrite: bool) -> None:
     from rotacal.uncertainty.specs import example_specs_toml
 
     write_output(out, example_specs_toml(), label=f"--out {out}", overwrite=overwrite)
-    click.echo(f"wrote {out}")
+    _wrote(out)

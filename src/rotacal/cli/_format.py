@@ -1,0 +1,184 @@
+"""How every command shows a measured quantity on the terminal: one style, rounded as ILAC-P14 says.
+
+A quantity with an expanded uncertainty U reads ``value ± U unit (k = 1.96, p = 95 %)``: U kept to
+two significant digits and the value rounded to the same decimal place (ILAC-P14:09/2020 §5.4, by
+:func:`rotacal.uncertainty.round_ilac`), k with two decimals, p in percent. A quantity whose
+coverage interval is not centred on it (a THD, a peak-to-peak near zero) reads ``value unit, true
+value in [lo, hi] unit (p = 95 %)``. A quantity without an uncertainty reads ``value unit`` — never
+a bare standard uncertainty. The JSON keeps full precision; only the terminal is rounded.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from rotacal.uncertainty import round_ilac
+
+#: Significant digits of a value shown without an uncertainty.
+PLAIN_DIGITS = 6
+#: What the terminal shows for a quantity the analysis could not determine.
+NOT_DETERMINED = "—"
+
+
+def _finite(x: Any) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _unit(unit: str) -> str:
+    return f" {unit}" if unit else ""
+
+
+def coverage(k: float, p: float | None) -> str:
+    """``(k = 1.96, p = 95 %)`` — k with two decimals, p in percent (as few digits as it needs)."""
+    p_text = "" if p is None else f", p = {format(round(100.0 * p, 2), 'g')} %"
+    return f"(k = {k:.2f}{p_text})"
+
+
+def format_plain(value: Any, unit: str = "", *, digits: int = PLAIN_DIGITS) -> str:
+    """A value without an uncertainty: ``digits`` significant digits and the unit."""
+    if not _finite(value):
+        return NOT_DETERMINED
+    return f"{float(value):.{digits}g}{_unit(unit)}"
+
+
+def format_quantity(
+    value: Any,
+    unit: str = "",
+    *,
+    U: Any = None,
+    k: Any = None,
+    p: float | None = None,
+    interval: Sequence[float] | None = None,
+    digits: int = PLAIN_DIGITS,
+) -> str:
+    """One measured quantity as the terminal shows it (the module's docstring gives the layout).
+
+    Parameters
+    ----------
+    value : float
+        The result, in ``unit`` (None or non-finite: shown as not determined).
+    unit : str
+        Its unit as shown (``"deg"``, ``"%"``, ``"arcsec"``; empty for none).
+    U : float, optional
+        Expanded uncertainty, in ``unit``. Missing, zero or non-finite: the value is shown alone.
+    k : float, optional
+        Coverage factor of ``U``.
+    p : float, optional
+        Coverage probability (a fraction, e.g. 0.95).
+    interval : (float, float), optional
+        The coverage interval for the true value when it is not ``value ± U``; U is then half its
+        width and sets the decimal place of the value and the limits.
+    digits : int
+        Significant digits of a value shown without an uncertainty.
+
+    References
+    ----------
+    ILAC-P14:09/2020, §5.2–5.4 (U with k and p, at most two significant digits, the value rounded
+    to the same place); JCGM 100:2008 (GUM), §7.2.4 (reporting U, k and p).
+    """
+    if not _finite(value):
+        return NOT_DETERMINED
+    if not (_finite(U) and U > 0):
+        return format_plain(value, unit, digits=digits)
+    value_text, u_text = round_ilac(float(value), float(U))
+    if interval is not None and all(_finite(x) for x in interval):
+        decimals = len(u_text.split(".")[1]) if "." in u_text else 0
+        low, high = (float(x) for x in interval)
+        if low <= 0.0 <= float(value):  # a bounded quantity (a THD, an rms) is not negative
+            low = max(low, 0.0)
+        lo, hi = f"{low:.{decimals}f}", f"{high:.{decimals}f}"
+        p_text = "" if p is None else f" (p = {format(round(100.0 * p, 2), 'g')} %)"
+        return f"{value_text}{_unit(unit)}, true value in [{lo}, {hi}]{_unit(unit)}{p_text}"
+    suffix = f" {coverage(float(k), p)}" if _finite(k) else ""
+    return f"{value_text} ± {u_text}{_unit(unit)}{suffix}"
+
+
+def quantity_of(
+    data: Mapping[str, Any], key: str, unit: str = "", *, digits: int = PLAIN_DIGITS
+) -> str:
+    """``format_quantity`` of the JSON key ``key`` of a result's ``to_dict()``.
+
+    Takes ``key``, ``key_U``, ``key_interval``, ``k[key]`` (or a number ``k``) and
+    ``coverage_probability`` from ``data``: the keys every result with uncertainty budgets has.
+    """
+    k = data.get("k")
+    return format_quantity(
+        data.get(key),
+        unit,
+        U=data.get(f"{key}_U"),
+        k=k.get(key) if isinstance(k, Mapping) else k,
+        p=data.get("coverage_probability"),
+        interval=data.get(f"{key}_interval"),
+        digits=digits,
+    )
+
+
+def element_of(
+    data: Mapping[str, Any],
+    key: str,
+    index: tuple[int, ...],
+    unit: str = "",
+    *,
+    digits: int = PLAIN_DIGITS,
+) -> str:
+    """``format_quantity`` of one element (``index``) of an array quantity ``key`` of a result."""
+
+    k = data.get("k")
+    return format_quantity(
+        _pick(data.get(key), index),
+        unit,
+        U=_pick(data.get(f"{key}_U"), index),
+        k=_pick(k.get(key), index) if isinstance(k, Mapping) else k,
+        p=data.get("coverage_probability"),
+        interval=_pick(data.get(f"{key}_interval"), index),
+        digits=digits,
+    )
+
+
+def elements_of(
+    data: Mapping[str, Any],
+    key: str,
+    indices: Sequence[tuple[int, ...]],
+    unit: str = "",
+    *,
+    digits: int = PLAIN_DIGITS,
+    sep: str = "   ",
+) -> str:
+    """Several elements of an array quantity on one line (a row of a matrix, a vector).
+
+    Each reads ``value ± U``; when they share one coverage factor (as shown, two decimals) the unit
+    and ``(k = …, p = …)`` are said once at the end, otherwise after each element.
+    """
+    k = data.get("k")
+    ks = k.get(key) if isinstance(k, Mapping) else k
+    values, us = data.get(key), data.get(f"{key}_U")
+
+    def factor(i: tuple[int, ...]) -> Any:
+        return _pick(ks, i) if isinstance(ks, Sequence) else ks
+
+    stated = [i for i in indices if _finite(_pick(us, i)) and _pick(us, i) > 0]
+    if not stated:
+        return sep.join(format_plain(_pick(values, i), digits=digits) for i in indices) + _unit(
+            unit
+        )
+    factors = {f"{float(factor(i)):.2f}" if _finite(factor(i)) else "" for i in stated}
+    intervals = data.get(f"{key}_interval")
+    if len(factors) != 1 or any(_pick(intervals, i) is not None for i in indices):
+        return sep.join(element_of(data, key, i, unit, digits=digits) for i in indices)
+    text = sep.join(
+        format_quantity(_pick(values, i), U=_pick(us, i), digits=digits) for i in indices
+    )
+    k_shared = factor(stated[0])
+    if not _finite(k_shared) or not all(_finite(_pick(values, i)) for i in indices):
+        return text + _unit(unit)
+    return f"{text}{_unit(unit)} {coverage(float(k_shared), data.get('coverage_probability'))}"
+
+
+def _pick(x: Any, index: tuple[int, ...]) -> Any:
+    for i in index:
+        if not isinstance(x, Sequence) or isinstance(x, str) or i >= len(x):
+            return None
+        x = x[i]
+    return x
