@@ -158,6 +158,12 @@ def _check_extensions(json_path: str | None, report_path: str | None) -> None:
         )
 
 
+def _check_toml_output(out: str) -> None:
+    """Refuse a ``--out`` for a TOML example not named ``.toml`` (commands read it by that name)."""
+    if Path(out).suffix.lower() != ".toml":
+        raise ConfigError(f"--out {out}: the example is TOML; give a name ending in .toml")
+
+
 def _check_outputs(json_path: str | None, report_path: str | None, overwrite: bool) -> None:
     """The pre-flight, before any analysis: refuse outputs that cannot or may not be written.
 
@@ -171,7 +177,6 @@ def _check_outputs(json_path: str | None, report_path: str | None, overwrite: bo
 
     if report_path == "-":
         raise ConfigError("--report needs a file name (the report is HTML, not for stdout)")
-    _check_extensions(json_path, report_path)
     ctx = click.get_current_context(silent=True)
     if ctx is not None:
         ctx.meta[_OVERWRITE_KEY] = overwrite
@@ -181,7 +186,9 @@ def _check_outputs(json_path: str | None, report_path: str | None, overwrite: bo
         for option, target in (("--json", json_path), ("--report", report_path))
         if target is not None and target != "-"
     ]
+    # an output that would replace an input is named first: the worst of the mistakes
     check_outputs(targets, overwrite=overwrite, inputs=_declared_inputs(), make_folders=True)
+    _check_extensions(json_path, report_path)
 
 
 def _wrote(path: str | os.PathLike[str]) -> None:

@@ -9,7 +9,7 @@ import click
 
 from rotacal.provenance import provenance_record
 
-from ._common import _INPUT_PATHS_KEY, _declared_inputs
+from ._common import _INPUT_PATHS_KEY
 
 #: Parameters that say where the results go, not how they were obtained: not in ``options``.
 OUTPUT_PARAMETERS = frozenset({"json_path", "report_path", "overwrite"})
@@ -59,11 +59,14 @@ def command_options(ctx: click.Context) -> dict[str, Any]:
     return out
 
 
+def input_paths(ctx: click.Context) -> list[str]:
+    """The files the command read, in the order its parameters are declared (the capture first),
+    whatever the order on the command line."""
+    paths = ctx.meta.get(_INPUT_PATHS_KEY, {})
+    return [path for param in ctx.command.params for path in paths.get(param.name, ())]
+
+
 def provenance() -> dict[str, Any]:
     """The ``provenance`` of the running command (INTERFACE.md "Every result")."""
     ctx = click.get_current_context()
-    return provenance_record(
-        command_name(ctx),
-        command_options(ctx),
-        [source.path for source in _declared_inputs()],
-    )
+    return provenance_record(command_name(ctx), command_options(ctx), input_paths(ctx))

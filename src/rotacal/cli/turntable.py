@@ -10,6 +10,7 @@ from ._app import cli
 from ._common import (
     INPUT_FILE,
     _check_outputs,
+    _check_toml_output,
     _emit_warnings,
     _names_capture,
     _sample_progress,
@@ -147,6 +148,7 @@ def turntable_example(out: str, overwrite: bool) -> None:
     from rotacal.io.outputs import write_output
     from rotacal.turntable import seed_table_toml
 
+    _check_toml_output(out)
     write_output(out, seed_table_toml(), label=f"--out {out}", overwrite=overwrite)
     _wrote(out)
 
@@ -165,5 +167,6 @@ def specs_example(out: str, overwrite: bool) -> None:
     from rotacal.io.outputs import write_output
     from rotacal.uncertainty.specs import example_specs_toml
 
+    _check_toml_output(out)
     write_output(out, example_specs_toml(), label=f"--out {out}", overwrite=overwrite)
     _wrote(out)
