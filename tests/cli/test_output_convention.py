@@ -211,7 +211,9 @@ def test_demo_refuses_to_replace_an_earlier_demo_or_an_edited_file(tmp_path, nam
     out = tmp_path / "demo"
     out.mkdir()
     (out / name).write_text("edited by the user\n")
-    one_line_error(run("demo", "--out", str(out)), f"{out / name} already exists", "--overwrite")
+    one_line_error(
+        run("demo", "--out", str(out)), f"--out {out} already holds {name}", "--overwrite"
+    )
     assert [p.name for p in out.iterdir()] == [name]
     assert (out / name).read_text() == "edited by the user\n"
 

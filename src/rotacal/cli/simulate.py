@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -322,9 +323,17 @@ def demo(out: str, overwrite: bool) -> None:
     from rotacal.io.outputs import check_folder, check_outputs
 
     check_folder(out, label=f"--out {out}")
-    # before the campaign (a minute of work): every file it will write may be written
+    # before the campaign (minutes of work): every file it will write may be written
+    names = demo_files()
+    existing = [name for name in names if os.path.lexists(Path(out) / name)]
+    if existing and not overwrite:
+        more = f" and {len(existing) - 1} more of its files" if len(existing) > 1 else ""
+        raise ConfigError(
+            f"--out {out} already holds {existing[0]}{more} (an earlier demo's, or edited); "
+            "choose another folder or pass --overwrite to replace them"
+        )
     check_outputs(
-        [(Path(out) / name, str(Path(out) / name)) for name in demo_files()],
+        [(Path(out) / name, str(Path(out) / name)) for name in names],
         overwrite=overwrite,
         make_folders=True,
     )
