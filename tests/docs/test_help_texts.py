@@ -8,7 +8,9 @@ command is typed, say what every option means, and spell out the abbreviations o
 from __future__ import annotations
 
 import re
+import shlex
 from collections.abc import Iterator
+from pathlib import Path
 
 import click
 import pytest
@@ -104,3 +106,33 @@ def test_abbreviations_are_spelled_out_where_used(path: str) -> None:
     for short, long in _SPELLED_OUT.items():
         if re.search(rf"\b{short}\b", text):
             assert long in flat, f"'{path} --help' uses {short} without spelling out '{long}'"
+
+
+def _example_commands(text: str) -> list[list[str]]:
+    """The example block's commands as argument lists (continuations joined, comments dropped)."""
+    block = re.search(r"^  Examples?:\n((?:    .*\n?)+)", text, flags=re.MULTILINE)
+    assert block
+    joined = block.group(1).replace("\\\n", " ")
+    return [shlex.split(line, comments=True) for line in joined.splitlines() if line.strip()]
+
+
+@pytest.mark.parametrize("path", sorted(COMMANDS))
+def test_the_examples_parse_as_commands_with_their_options(
+    path: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Each example names an existing command and only options it has, with valid values (it is
+    parsed as the CLI parses it, not run)."""
+    monkeypatch.chdir(tmp_path)
+    Path("lab.toml").write_text("", encoding="utf-8")  # the --specs file an example names
+    for argv in _example_commands(_help(path)):
+        if argv[1:] == ["COMMAND", "--help"]:
+            continue
+        command: click.Command = cli
+        words = argv[1:]
+        while isinstance(command, click.Group):
+            assert words and words[0] in command.commands, f"'{path}': no command {argv}"
+            command, words = command.commands[words[0]], words[1:]
+        try:
+            command.make_context(" ".join(argv[:1]), words)
+        except click.UsageError as e:
+            pytest.fail(f"'{path} --help': the example {shlex.join(argv)!r} does not parse: {e}")
