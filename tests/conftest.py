@@ -16,7 +16,8 @@ from typing import Any  # noqa: E402
 
 import pytest  # noqa: E402
 
-#: The project's shared folder of real recordings (never copied into the repository).
+#: The project's shared folder of real recordings (never copied into the repository): the folder
+#: named by the environment variable ROTACAL_SHARED_DATA, else shared/data beside the repository.
 SHARED_DATA = Path(
     os.environ.get("ROTACAL_SHARED_DATA", Path(__file__).resolve().parents[2] / "shared" / "data")
 )
@@ -32,7 +33,10 @@ def shared_data() -> Callable[..., Path]:
     def need(*parts: str) -> Path:
         path = SHARED_DATA.joinpath(*parts)
         if not path.exists():
-            pytest.skip(f"real data {path} is absent (the shared data folder is not here)")
+            pytest.skip(
+                f"real data {path} is absent (the shared recordings are not on this machine; "
+                "set ROTACAL_SHARED_DATA to their folder)"
+            )
         return path
 
     return need

@@ -18,6 +18,8 @@ import numpy as np
 
 from rotacal.errors import RotacalError
 
+from ._help import example
+
 F = TypeVar("F", bound=Callable[..., Any])
 
 
@@ -73,12 +75,22 @@ def _one_line(e: BaseException) -> str:
     return " ".join(str(e).split()) or type(e).__name__
 
 
-@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(
+    cls=_Group,
+    context_settings={"help_option_names": ["-h", "--help"]},
+    epilog=example(
+        "rotacal demo                                  # a campaign on the twin",
+        "rotacal simulate encoder --out run.npz        # a capture and its truth",
+        "rotacal motion encoder run.npz --lines 36000  # calibrate from it",
+        "rotacal COMMAND --help                        # options, an example",
+    ),
+)
 @click.version_option(package_name="rotacal")
 def cli() -> None:
     """rotacal — calibration of rotary tables and the gyroscopes tested on them.
 
-    Start with `rotacal demo`, then point an analysis command at your own capture.
+    Start with `rotacal demo`, then point an analysis command at your own capture (CSV, text,
+    NPZ, HDF5 or NI TDMS). Bad input ends with exit code 2 and one line naming the fault.
     """
 
 

@@ -24,12 +24,21 @@ from ._common import (
     _write_report,
 )
 from ._format import quantity_of
+from ._help import example
 from ._reading import current_read_options
 
 
-@cli.command("allan")
+@cli.command(
+    "allan",
+    epilog=example(
+        "rotacal allan static.npz --report noise.html",
+        "rotacal allan gyro.csv --column gyro_z --fs-hz 100 --taus all",
+    ),
+)
 @click.argument("capture", type=INPUT_FILE)
-@click.option("--fs-hz", type=float, default=None, help="Sampling rate, when there is no time_s.")
+@click.option(
+    "--fs-hz", type=float, default=None, help="Sampling rate (Hz), when there is no time_s column."
+)
 @click.option(
     "--unit",
     type=click.Choice(["deg/s", "rad/s", "deg/h", "other"]),
@@ -56,8 +65,10 @@ def allan_cmd(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """Overlapping Allan deviation and IEEE 952 noise terms of a rate column.
+    """Allan deviation and noise terms of a gyro's rate.
 
+    The overlapping Allan deviation over τ and the noise terms of IEEE Std 952-1997 Annex C
+    (angle random walk, bias instability, rate random walk, quantization, rate ramp).
     --column NAME picks the rate column (default rate_deg_s); --column OLD=NEW maps names as
     everywhere else. A time_s column, when present, gives the sampling rate.
     """

@@ -27,15 +27,28 @@ from ._common import (
     _write_report,
 )
 from ._format import elements_of, format_plain, quantity_of
+from ._help import example
 from ._reading import current_read_options
 
 
-@cli.group()
+@cli.group(
+    epilog=example(
+        "rotacal gyro scale-factor rates.csv --requirement fmvss126",
+        "rotacal gyro triad triad.h5 --json k.json",
+        "rotacal gyro multiposition mp.csv --axis x --latitude-deg 45.75",
+    )
+)
 def gyro() -> None:
     """Gyroscope calibrations on the table (seeds 004, 003, 001)."""
 
 
-@gyro.command("scale-factor")
+@gyro.command(
+    "scale-factor",
+    epilog=example(
+        "rotacal gyro scale-factor rates.csv --requirement fmvss126 --report sf.html",
+        "rotacal gyro scale-factor daq.csv --column table=rate_deg_s --column gyro=output",
+    ),
+)
 @click.argument("capture", type=INPUT_FILE)
 @click.option(
     "--full-scale-deg-s",
@@ -48,7 +61,11 @@ def gyro() -> None:
     default=None,
     help="Check against a named requirement (fmvss126) and say pass/fail with the margin.",
 )
-@click.option("--output-unit", default="", help="Unit of the output column, for the report.")
+@click.option(
+    "--output-unit",
+    default="",
+    help="Unit of the output column (e.g. V), for the printed results and the report.",
+)
 @click.option(
     "--sample-rate-hz",
     type=float,
@@ -76,7 +93,12 @@ def gyro_scale_factor(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """Scale factor, bias, nonlinearity %FS: capture with rate_deg_s (set rate), output."""
+    """Scale factor, bias and nonlinearity (%FS) of a gyro.
+
+    Columns rate_deg_s (the table's set rate) and output (the gyro's, in its own unit); the
+    rows of each set rate are averaged and V(Ω) = S·Ω + V0 is fitted by least squares
+    (seed 004, §4). FS is the full scale, the largest |set rate| unless given.
+    """
     from rotacal.gyro import calibrate_scale_factor
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
@@ -133,7 +155,10 @@ def _print_scale_factor(result: Any, data: dict[str, Any]) -> None:
         click.echo(f"  {result.decision_with_uncertainty.line}")
 
 
-@gyro.command("triad")
+@gyro.command(
+    "triad",
+    epilog=example("rotacal gyro triad triad.h5 --json k.json"),
+)
 @click.argument("capture", type=INPUT_FILE)
 @click.option(
     "--reject-k",
@@ -147,7 +172,11 @@ def _print_scale_factor(result: Any, data: dict[str, Any]) -> None:
 def gyro_triad(
     capture: str, reject_k: float | None, columns: Sequence[str], group: str | None, **kw: Any
 ) -> None:
-    """3-axis K and bias with outlier rejection: wx_deg_s, wy_deg_s, wz_deg_s, ux, uy, uz."""
+    """Three-axis scale/misalignment and bias (seed 003).
+
+    Columns wx_deg_s, wy_deg_s, wz_deg_s (the reference rate in the gyro's nominal axes) and
+    ux, uy, uz (its raw outputs): u = K·ω + b by least squares, with outlier rejection.
+    """
     from rotacal.gyro import RATE_COLUMNS, TRIAD_OUTPUT_COLUMNS, calibrate_triad_columns
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
@@ -193,7 +222,14 @@ def _print_triad(result: Any, data: dict[str, Any]) -> None:
     click.echo(f"bias              {elements_of(data, 'bias', [(i,) for i in range(3)], unit)}")
 
 
-@gyro.command("rotations")
+@gyro.command(
+    "rotations",
+    epilog=example(
+        "rotacal gyro rotations rot.csv --sections rot.csv.truth.json",
+        "rotacal gyro rotations session.csv --sections session_list.json --fs-hz 102.4 "
+        "--column gyr_x=ux --column gyr_y=uy --column gyr_z=uz",
+    ),
+)
 @click.argument("capture", type=INPUT_FILE)
 @click.option(
     "--sections",
@@ -219,7 +255,11 @@ def gyro_rotations(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """Triad K and bias from rotations through a known angle (Ferraris): ux, uy, uz."""
+    """Triad from rotations through a known angle (Ferraris).
+
+    Columns ux, uy, uz (and time_s, or --fs-hz): the outputs integrated over each rotation
+    give K and the bias of a three-axis gyro.
+    """
     from rotacal.gyro import TRIAD_OUTPUT_COLUMNS, calibrate_triad_rotations, ferraris_sections
     from rotacal.io import parse_column_mapping, read_capture
     from rotacal.signal import check_sampling
@@ -290,14 +330,22 @@ def gyro_rotations(
         _print_triad(result, data)
 
 
-@gyro.command("multiposition")
+@gyro.command(
+    "multiposition",
+    epilog=example("rotacal gyro multiposition mp.csv --axis x --latitude-deg 45.75"),
+)
 @click.argument("capture", type=INPUT_FILE)
-@click.option("--axis", type=click.Choice(["x", "y"]), required=True, help="Gyro axis.")
+@click.option(
+    "--axis",
+    type=click.Choice(["x", "y"]),
+    required=True,
+    help="Input axis of the gyro on the turntable.",
+)
 @click.option(
     "--latitude-deg",
     type=float,
     default=None,
-    help="Latitude of the laboratory (or site.latitude_deg in --specs).",
+    help="Latitude of the laboratory (deg) (or site.latitude_deg in --specs).",
 )
 @_clipping_option
 @_analysis_options
@@ -310,7 +358,12 @@ def gyro_multiposition(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """Drift coefficients: phi1_deg, phi2_deg, output_deg_h (seed 001, eqs. 1–6)."""
+    """Drift coefficients by multiposition (seed 001).
+
+    Columns phi1_deg (outer axis), phi2_deg (inner axis) and output_deg_h: the drift
+    coefficients by least squares with the Earth rate and gravity at each position
+    (seed 001, eqs. 1–6).
+    """
     from rotacal.gyro import calibrate_multiposition
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")

@@ -29,12 +29,24 @@ from ._common import (
     _write_report,
 )
 from ._format import format_plain, quantity_of
+from ._help import example
 from ._reading import current_read_options
 
 
-@cli.group()
+@cli.group(
+    epilog=example(
+        "rotacal motion encoder run.npz --lines 36000 --set-amplitude-deg 0.5 --set-frequency-hz 2",
+        "rotacal motion lts lts.csv --radius-mm 100",
+        "rotacal motion fog fog.h5 --json fog.json",
+    )
+)
 def motion() -> None:
-    """Sinusoidal-motion calibration of a rotary table (Feng et al. 2023)."""
+    """Sinusoidal-motion calibration of a table (seed 000).
+
+    Amplitude, frequency, angular acceleration, THD (IEEE Std 1057 sine fit) and their errors
+    against the set values, from an optical shaft encoder (OSE), a laser triangulation sensor
+    (LTS) or a fibre-optic gyro (FOG) on the table (Feng et al. 2023, Sensors 23:4876).
+    """
 
 
 def _motion_common(func: F) -> F:
@@ -43,10 +55,13 @@ def _motion_common(func: F) -> F:
             "--harmonics",
             default=10,
             show_default=True,
-            help="N_H: highest harmonic in fit and THD.",
+            help="N_H: highest harmonic in the fit and the THD.",
         ),
         click.option(
-            "--periods", type=int, default=None, help="Whole periods to analyse [default: all]."
+            "--periods",
+            type=int,
+            default=None,
+            help="Whole periods of the motion to analyse [default: all].",
         ),
         click.option(
             "--set-amplitude-deg",
@@ -61,7 +76,8 @@ def _motion_common(func: F) -> F:
             "--drift",
             is_flag=True,
             help="Fit a linear drift term beside the harmonics, so that a slow drift of the table "
-            "does not count as distortion; reports drift_deg_s (deg/s). For the FOG, whose rate "
+            "does not count as distortion; reports drift_deg_s (deg/s). For the fibre-optic gyro (FOG), "
+            "whose rate "
             "offset already holds a steady drift (with the gyro's bias), it fits the rate's own "
             "linear change as well (rate_drift_deg_s2). Without it a drift that matters is named "
             "in the warnings.",
@@ -131,7 +147,13 @@ def _print_motion(r: Any, data: dict[str, Any]) -> None:
         )
 
 
-@motion.command("encoder")
+@motion.command(
+    "encoder",
+    epilog=example(
+        "rotacal motion encoder run.npz --lines 36000 --set-amplitude-deg 0.5 "
+        "--set-frequency-hz 2 --json result.json --report run.html"
+    ),
+)
 @click.argument("capture", type=INPUT_FILE)
 @click.option("--lines", type=int, required=True, help="Encoder lines per revolution (e.g. 36000).")
 @click.option(
@@ -168,7 +190,11 @@ def motion_encoder(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """OSE scheme: capture with columns time_s, a, b (quadrature signals)."""
+    """Optical shaft encoder (OSE) scheme: columns time_s, a, b.
+
+    a and b are the encoder's analog quadrature signals (a ≈ cos φ, b ≈ sin φ, φ = 2π·lines·θ/360);
+    the angle comes from their subintervals and the reversing moments (seed 000, eqs. 3–8).
+    """
     from rotacal.io import capture_length, parse_column_mapping
     from rotacal.table import (
         calibrate_encoder_motion,
@@ -213,7 +239,10 @@ def motion_encoder(
     _finish_motion(result, capture, json_path, report_path)
 
 
-@motion.command("lts")
+@motion.command(
+    "lts",
+    epilog=example("rotacal motion lts lts.csv --radius-mm 100 --set-amplitude-deg 0.1"),
+)
 @click.argument("capture", type=INPUT_FILE)
 @click.option("--radius-mm", type=float, required=True, help="R: laser spot to table axis (mm).")
 @_motion_common
@@ -221,7 +250,11 @@ def motion_encoder(
 def motion_lts(
     capture: str, radius_mm: float, columns: Sequence[str], group: str | None, **kw: Any
 ) -> None:
-    """LTS scheme: capture with columns time_s, displacement_mm; θ = arctan(D/R)."""
+    """Laser triangulation sensor (LTS) scheme: time_s, displacement_mm.
+
+    The angle is θ = arctan(D/R) for the displacement D of a reflector at radius R on the table
+    (seed 000, eq. 15).
+    """
     from rotacal.table import calibrate_lts_motion
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
@@ -234,12 +267,22 @@ def motion_lts(
     _finish_motion(result, capture, json_path, report_path)
 
 
-@motion.command("fog")
+@motion.command(
+    "fog",
+    epilog=example(
+        "rotacal motion fog fog.h5 --json fog.json",
+        "rotacal motion fog daq.csv --column t=time_s --column gyro_z=rate_deg_s",
+    ),
+)
 @click.argument("capture", type=INPUT_FILE)
 @_motion_common
 @_names_capture
 def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: Any) -> None:
-    """FOG scheme: capture with columns time_s, rate_deg_s; THD of displacement from the rate fit."""
+    """Fibre-optic gyro (FOG) scheme: columns time_s, rate_deg_s.
+
+    The gyro's rate is fitted with the harmonics of the motion; THD and amplitude are those of
+    the angular displacement it implies, with the signal-to-noise ratio (seed 000, eqs. 9–14).
+    """
     from rotacal.table import calibrate_fog_motion
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")

@@ -26,6 +26,7 @@ from ._common import (
     _write_report,
 )
 from ._format import element_of, format_plain, quantity_of
+from ._help import example
 
 _PULSES_PER_REV = click.option(
     "--pulses-per-rev", type=int, required=True, help="m: pulses per revolution of one head."
@@ -33,7 +34,10 @@ _PULSES_PER_REV = click.option(
 _SEED004 = "Kokuyama et al., angular velocity standard with a self-calibratable encoder (seed 004)"
 
 
-@cli.command("selfcal")
+@cli.command(
+    "selfcal",
+    epilog=example("rotacal selfcal heads.h5 --pulses-per-rev 18000 --json selfcal.json"),
+)
 @click.argument("capture", type=INPUT_FILE)
 @_PULSES_PER_REV
 @click.option(
@@ -53,7 +57,12 @@ def selfcal_cmd(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """Scale deviation of a multi-head encoder (columns head_0 … head_{n-1}: pulse times, s)."""
+    """Scale deviation of a multi-head encoder (seed 004).
+
+    Columns head_0 … head_{n-1}: the pulse times (s) of each head. The equal-division-averaged
+    method compares the heads at the same instant; harmonics that are multiples of n stay
+    undetectable, as the result says.
+    """
     from rotacal.encoder.selfcal import self_calibrate
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
@@ -95,7 +104,12 @@ def selfcal_cmd(
             click.echo(f"note                  {note}")
 
 
-@cli.command("rate")
+@cli.command(
+    "rate",
+    epilog=example(
+        "rotacal rate heads.h5 --pulses-per-rev 18000 --selfcal selfcal.json --set-rate-deg-s 300"
+    ),
+)
 @click.argument("capture", type=INPUT_FILE)
 @_PULSES_PER_REV
 @click.option(
@@ -112,8 +126,15 @@ def selfcal_cmd(
 @click.option(
     "--average", type=int, default=10, show_default=True, help="Pulse intervals per rate point."
 )
-@click.option("--set-rate-deg-s", type=float, default=None, help="Commanded rate, for the bias.")
-@click.option("--no-compensation", is_flag=True, help="Use the nominal pitch only.")
+@click.option(
+    "--set-rate-deg-s",
+    type=float,
+    default=None,
+    help="Commanded rate of the table (deg/s), for the bias.",
+)
+@click.option(
+    "--no-compensation", is_flag=True, help="Use the nominal pitch only (no self-calibration)."
+)
 @_analysis_options
 @_names_capture
 def rate_cmd(
@@ -128,7 +149,11 @@ def rate_cmd(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """Angular velocity from pulse timing: mean, bias, stability, root Allan variance vs angle."""
+    """Table rate from pulse timing: mean, stability, s(φ).
+
+    Columns head_0 … head_{n-1} (pulse times, s): the angular velocity, its bias against the
+    set rate, its stability and the root Allan variance versus angle s(φ) (seed 004).
+    """
     from rotacal.table.rate import calibrate_rate
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")

@@ -19,11 +19,23 @@ from ._common import (
     _progress,
     _wrote,
 )
+from ._help import example
 
 
-@cli.group()
+@cli.group(
+    short_help="Write a synthetic capture with its truth beside it.",
+    epilog=example(
+        "rotacal simulate encoder --out run.npz",
+        "rotacal simulate gyro-rates --out rates.csv --noise-std 0.001",
+    ),
+)
 def simulate() -> None:
-    """Write a synthetic capture of a kind, with its truth beside it (FILE.truth.json)."""
+    """Write a synthetic capture of a kind, with its truth beside it (FILE.truth.json).
+
+    The digital twin: the table's motion and the sensor that reads it are modelled, and the
+    true values of everything an analysis reports go into FILE.truth.json, so that a result can
+    be checked against them.
+    """
 
 
 def _sim_common(func: F) -> F:
@@ -40,8 +52,16 @@ def _sim_common(func: F) -> F:
             type=click.Path(dir_okay=False),
             help="Capture file to write (.csv, .npz, .h5, .tdms).",
         ),
-        click.option("--seed", type=int, default=0, show_default=True),
-        click.option("--overwrite", is_flag=True, help="Replace FILE if it exists."),
+        click.option(
+            "--seed",
+            type=int,
+            default=0,
+            show_default=True,
+            help="Seed of the random noise: the same seed writes the same capture.",
+        ),
+        click.option(
+            "--overwrite", is_flag=True, help="Replace FILE and FILE.truth.json if they exist."
+        ),
     ]
     for option in reversed(options):
         checked = option(checked)
@@ -63,20 +83,63 @@ def _check_sim_outputs(out: str, overwrite: bool) -> None:
 
 def _motion_sim_options(func: F) -> F:
     options = [
-        click.option("--amplitude-deg", type=float, default=0.5, show_default=True),
-        click.option("--frequency-hz", type=float, default=2.0, show_default=True),
+        click.option(
+            "--amplitude-deg",
+            type=float,
+            default=0.5,
+            show_default=True,
+            help="Amplitude of the table's sinusoidal motion (deg).",
+        ),
+        click.option(
+            "--frequency-hz",
+            type=float,
+            default=2.0,
+            show_default=True,
+            help="Frequency of the motion (Hz).",
+        ),
         click.option(
             "--harmonic",
             "harmonic_items",
             multiple=True,
             metavar="H:REL[:PHASE]",
-            help="Add harmonic H with amplitude REL×fundamental (and phase, rad). Repeatable.",
+            help="Add harmonic H with amplitude REL×fundamental (REL without unit, 0.03 = 3 %) "
+            "and phase PHASE (rad). Repeatable.",
         ),
-        click.option("--stagnation-s", type=float, default=0.0, show_default=True),
-        click.option("--creep-deg", type=float, default=0.0, show_default=True),
-        click.option("--backlash-deg", type=float, default=0.0, show_default=True),
-        click.option("--vibration-deg", type=float, default=0.0, show_default=True),
-        click.option("--vibration-hz", type=float, default=0.0, show_default=True),
+        click.option(
+            "--stagnation-s",
+            type=float,
+            default=0.0,
+            show_default=True,
+            help="Dwell of the table at each reversal (s).",
+        ),
+        click.option(
+            "--creep-deg",
+            type=float,
+            default=0.0,
+            show_default=True,
+            help="Peak creep lag after each reversal (deg).",
+        ),
+        click.option(
+            "--backlash-deg",
+            type=float,
+            default=0.0,
+            show_default=True,
+            help="Width of the play (dead band) in the drive (deg).",
+        ),
+        click.option(
+            "--vibration-deg",
+            type=float,
+            default=0.0,
+            show_default=True,
+            help="Amplitude of a vibration added to the motion (deg).",
+        ),
+        click.option(
+            "--vibration-hz",
+            type=float,
+            default=0.0,
+            show_default=True,
+            help="Frequency of that vibration (Hz).",
+        ),
         click.option(
             "--drift-deg-s",
             type=float,
@@ -89,10 +152,15 @@ def _motion_sim_options(func: F) -> F:
             "--duration-s",
             type=float,
             default=None,
-            help="Length of the capture [default: ~6 periods].",
+            help="Length of the capture (s) [default: about 6 periods of the motion; 40⅛ for "
+            "the fibre-optic gyro].",
         ),
         click.option(
-            "--fs-hz", type=float, default=None, help="Sample rate [default: per sensor]."
+            "--fs-hz",
+            type=float,
+            default=None,
+            help="Sample rate (Hz) [default: encoder 50 000, laser triangulation 10 000, "
+            "fibre-optic gyro 2000].",
         ),
     ]
     for option in reversed(options):
@@ -137,17 +205,42 @@ def _sim_write(capture: Any, out: str, overwrite: bool) -> None:
     _wrote(truth_path(out))
 
 
-@simulate.command("encoder")
+@simulate.command(
+    "encoder",
+    epilog=example(
+        "rotacal simulate encoder --amplitude-deg 0.5 --frequency-hz 2 --harmonic 2:0.03 "
+        "--out run.npz"
+    ),
+)
 @_motion_sim_options
-@click.option("--lines", type=int, default=None, help="Lines per revolution [36000].")
+@click.option("--lines", type=int, default=None, help="Encoder lines per revolution [36000].")
 @click.option("--offset-a", type=float, default=None, help="Offset of a (signal units).")
 @click.option("--offset-b", type=float, default=None, help="Offset of b (signal units).")
-@click.option("--gain-ratio", type=float, default=None, help="Amplitude of b over a.")
-@click.option("--phase-error-deg", type=float, default=None, help="Quadrature error (deg).")
-@click.option("--adc-bits", type=int, default=None, help="Quantise to this many bits.")
+@click.option(
+    "--gain-ratio",
+    type=float,
+    default=None,
+    help="Amplitude of b over that of a (ratio, 1 = matched).",
+)
+@click.option(
+    "--phase-error-deg",
+    type=float,
+    default=None,
+    help="Quadrature error of b: its phase beyond 90° (deg).",
+)
+@click.option(
+    "--adc-bits",
+    type=int,
+    default=None,
+    help="Quantise a and b to this many ADC bits over ±1.25 signal units.",
+)
 @click.option("--noise", type=float, default=None, help="Signal noise, rms (signal units).")
 def simulate_encoder(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any) -> None:
-    """Quadrature encoder capture: time_s, a, b."""
+    """Optical shaft encoder (OSE) capture: time_s, a, b.
+
+    The analog quadrature signals a ≈ cos φ, b ≈ sin φ of an encoder on the table, with the
+    offsets, gain ratio, quadrature error, noise and ADC quantisation asked for.
+    """
     kw["amplitude_b"] = kw.pop("gain_ratio")
     kw["noise_rms"] = kw.pop("noise")
     phase = kw.pop("phase_error_deg")
@@ -155,70 +248,160 @@ def simulate_encoder(out: str, harmonic_items: Sequence[str], overwrite: bool, *
     _sim_write(_sim_motion("encoder", harmonic_items, kw), out, overwrite)
 
 
-@simulate.command("lts")
+@simulate.command(
+    "lts",
+    epilog=example("rotacal simulate lts --amplitude-deg 0.1 --radius-mm 100 --out lts.csv"),
+)
 @_motion_sim_options
-@click.option("--radius-mm", type=float, default=None, help="R [100 mm].")
-@click.option("--zero-offset-mm", type=float, default=None, help="Reading at θ = 0 (mm).")
-@click.option("--noise", type=float, default=None, help="Displacement noise, rms (mm).")
+@click.option(
+    "--radius-mm",
+    type=float,
+    default=None,
+    help="R: distance of the laser spot from the table axis (mm) [100].",
+)
+@click.option(
+    "--zero-offset-mm", type=float, default=None, help="Reading of the sensor at θ = 0 (mm) [0]."
+)
+@click.option("--noise", type=float, default=None, help="Displacement noise, rms (mm) [3e-5].")
 @click.option(
     "--range-mm", type=float, default=None, help="Sensor range: readings clip at ±R (mm)."
 )
 def simulate_lts(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any) -> None:
-    """Laser triangulation capture: time_s, displacement_mm."""
+    """Laser triangulation sensor (LTS) capture.
+
+    Columns time_s and displacement_mm: the sensor reads a reflector at radius R on the table: D = R·tan θ + zero offset + noise.
+    """
     kw["noise_mm"] = kw.pop("noise")
     _sim_write(_sim_motion("lts", harmonic_items, kw), out, overwrite)
 
 
-@simulate.command("fog")
+@simulate.command(
+    "fog",
+    epilog=example("rotacal simulate fog --snr-db 30 --out fog.h5"),
+)
 @_motion_sim_options
-@click.option("--bias-deg-s", type=float, default=None, help="Constant rate bias.")
+@click.option(
+    "--bias-deg-s", type=float, default=None, help="Constant rate bias of the gyro (deg/s) [0]."
+)
 @click.option(
     "--bias-drift-deg-s2",
     type=float,
     default=None,
     help="Drift of the rate bias (deg/s per s), e.g. a warm-up [0].",
 )
-@click.option("--noise", type=float, default=None, help="Rate noise, rms (deg/s).")
-@click.option("--snr-db", type=float, default=None, help="Noise set by this SNR instead.")
+@click.option("--noise", type=float, default=None, help="Rate noise, rms per sample (deg/s) [0].")
+@click.option(
+    "--snr-db",
+    type=float,
+    default=None,
+    help="Set the rate noise by this signal-to-noise ratio (dB) instead of --noise.",
+)
 @click.option(
     "--range-deg-s", type=float, default=None, help="Gyro range: the output clips at ±R (deg/s)."
 )
 def simulate_fog(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any) -> None:
-    """FOG capture: time_s, rate_deg_s."""
+    """Fibre-optic gyro (FOG) capture: time_s, rate_deg_s.
+
+    The gyro on the table reads its rate: dθ/dt + bias + drift·t + white noise (deg/s).
+    """
     if kw["snr_db"] is not None and kw["noise"] is not None:
         raise ConfigError("give --noise or --snr-db, not both")
     kw["noise_deg_s"] = kw.pop("noise")
     _sim_write(_sim_motion("fog", harmonic_items, kw), out, overwrite)
 
 
-@simulate.command("pulses")
+@simulate.command(
+    "pulses",
+    epilog=example(
+        "rotacal simulate pulses --heads 12 --pulses-per-rev 18000 --rate-deg-s 300 --out heads.h5"
+    ),
+)
 @_sim_common
-@click.option("--heads", type=int, default=12, show_default=True, help="n read heads.")
-@click.option("--pulses-per-rev", type=int, default=18000, show_default=True, help="m lines.")
-@click.option("--rate-deg-s", type=float, default=300.0, show_default=True, help="Set rate.")
-@click.option("--revolutions", type=float, default=3.0, show_default=True)
+@click.option(
+    "--heads",
+    type=int,
+    default=12,
+    show_default=True,
+    help="n: read heads, equally spaced (head 0 the reference).",
+)
+@click.option(
+    "--pulses-per-rev",
+    type=int,
+    default=18000,
+    show_default=True,
+    help="m: lines of the scale, pulses per revolution of one head.",
+)
+@click.option(
+    "--rate-deg-s",
+    type=float,
+    default=300.0,
+    show_default=True,
+    help="Set rate of the table (deg/s).",
+)
+@click.option(
+    "--revolutions",
+    type=float,
+    default=3.0,
+    show_default=True,
+    help="Length of the record in revolutions of the table.",
+)
 @click.option(
     "--harmonic",
     "harmonic_items",
     multiple=True,
     metavar="ORDER:ARCSEC[:PHASE]",
-    help="Scale deviation harmonic (order 1 = eccentricity) [default: the twin's set]. Repeatable.",
+    help="Scale deviation harmonic of ORDER (1 = eccentricity) with amplitude ARCSEC (arcsec) "
+    "and phase PHASE (rad) [default: the twin's set]. Repeatable.",
 )
-@click.option("--graduation-noise-arcsec", type=float, default=0.03, show_default=True)
-@click.option("--head-placement-arcsec", type=float, default=5.0, show_default=True)
-@click.option("--rate-bias-percent", type=float, default=0.0, show_default=True)
-@click.option("--rate-fluctuation-percent", type=float, default=0.01, show_default=True)
-@click.option("--jitter-s", type=float, default=1e-9, show_default=True)
+@click.option(
+    "--graduation-noise-arcsec",
+    type=float,
+    default=0.03,
+    show_default=True,
+    help="Random error of each line of the scale, standard deviation (arcsec).",
+)
+@click.option(
+    "--head-placement-arcsec",
+    type=float,
+    default=5.0,
+    show_default=True,
+    help="Placement error of heads 1 … n-1 from i·360/n, standard deviation (arcsec).",
+)
+@click.option(
+    "--rate-bias-percent",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="Mean error of the table's rate against the set rate (%).",
+)
+@click.option(
+    "--rate-fluctuation-percent",
+    type=float,
+    default=0.01,
+    show_default=True,
+    help="Fluctuation of the table's rate, rms (% of the rate).",
+)
+@click.option(
+    "--jitter-s",
+    type=float,
+    default=1e-9,
+    show_default=True,
+    help="Timing jitter of each pulse edge, standard deviation (s).",
+)
 @click.option(
     "--start-spread-s",
     type=float,
     default=None,
-    help="Heads start late / stop early by up to this (s) [5 % of a revolution].",
+    help="Heads start late and stop early by up to this (s) [5 % of a revolution].",
 )
 def simulate_pulses_cmd(
     out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any
 ) -> None:
-    """Multi-head encoder: pulse times head_0 … head_{n-1} (seed 004)."""
+    """Multi-head encoder's pulse times (seed 004).
+
+    Columns head_0 … head_{n-1}: a self-calibratable encoder with n heads on a table turning at a constant rate: each column
+    holds the times (s) of the successive pulse edges seen by one head.
+    """
     from rotacal.sim.pulses import simulate_pulses
 
     if harmonic_items:
@@ -237,70 +420,133 @@ def simulate_pulses_cmd(
     _sim_write(simulate_pulses(**kw), out, overwrite)
 
 
-@simulate.command("gyro-rates")
+@simulate.command(
+    "gyro-rates",
+    epilog=example("rotacal simulate gyro-rates --scale-factor 0.0125 --bias 2.5 --out rates.csv"),
+)
 @_sim_common
-@click.option("--scale-factor", type=float, default=None, help="S, output per deg/s [0.0125].")
-@click.option("--bias", type=float, default=None, help="V0, output at rest [2.5].")
-@click.option("--noise-std", type=float, default=None, help="Output noise, rms.")
-@click.option("--samples-per-point", type=int, default=None, help="Samples at each set rate.")
-@click.option("--quantum", type=float, default=None, help="Output quantisation step.")
+@click.option(
+    "--scale-factor",
+    type=float,
+    default=None,
+    help="S: output per deg/s (output unit per deg/s) [0.0125].",
+)
+@click.option("--bias", type=float, default=None, help="V0: output at rest (output unit) [2.5].")
+@click.option(
+    "--noise-std", type=float, default=None, help="Output noise, rms (output unit) [6.25e-4]."
+)
+@click.option(
+    "--samples-per-point", type=int, default=None, help="Samples at each set rate [5000]."
+)
+@click.option(
+    "--quantum", type=float, default=None, help="Output quantisation step (output unit) [none]."
+)
 def simulate_gyro_rates_cmd(out: str, overwrite: bool, **kw: Any) -> None:
-    """Single-axis gyro on a rate table: rate_deg_s, output (seed 004 §4)."""
+    """Single-axis gyro on a rate table (seed 004 §4).
+
+    Columns rate_deg_s and output: rows of set rate (deg/s) and gyro output at eleven set rates from -100 to +100 deg/s,
+    with a known scale factor, bias and nonlinearity.
+    """
     from rotacal.sim import simulate_gyro_rates
 
     options = {k: v for k, v in kw.items() if v is not None}
     _sim_write(simulate_gyro_rates(**options), out, overwrite)
 
 
-@simulate.command("gyro-triad")
+@simulate.command(
+    "gyro-triad",
+    epilog=example("rotacal simulate gyro-triad --outlier-fraction 0.01 --out triad.h5"),
+)
 @_sim_common
-@click.option("--noise-std", type=float, default=None, help="Output noise, rms (deg/s).")
-@click.option("--samples-per-point", type=int, default=None, help="Samples at each rate.")
-@click.option("--outlier-fraction", type=float, default=None, help="Share of gross outliers (0…1).")
+@click.option("--noise-std", type=float, default=None, help="Output noise, rms (deg/s) [0.1].")
+@click.option("--samples-per-point", type=int, default=None, help="Samples at each rate [500].")
+@click.option(
+    "--outlier-fraction",
+    type=float,
+    default=None,
+    help="Share of samples that are gross outliers (0…1, without unit) [0].",
+)
 def simulate_gyro_triad_cmd(out: str, overwrite: bool, **kw: Any) -> None:
-    """3-axis gyro, rotations about each axis at several rates: wx/wy/wz_deg_s, ux/uy/uz."""
+    """Three-axis gyro turned about each axis at several rates.
+
+    Columns wx_deg_s, wy_deg_s, wz_deg_s (reference rate) and ux, uy, uz (raw outputs), with a
+    known scale/misalignment matrix and bias (seed 003).
+    """
     from rotacal.sim import simulate_gyro_triad
 
     options = {k: v for k, v in kw.items() if v is not None}
     _sim_write(simulate_gyro_triad(**options), out, overwrite)
 
 
-@simulate.command("gyro-noise")
+@simulate.command(
+    "gyro-noise",
+    epilog=example(
+        "rotacal simulate gyro-noise --duration-s 3600 --arw-deg-rt-h 0.3 --out static.npz"
+    ),
+)
 @_sim_common
-@click.option("--duration-s", type=float, default=None, help="Record length [3600 s].")
-@click.option("--fs-hz", type=float, default=None, help="Sampling rate [100 Hz].")
-@click.option("--arw-deg-rt-h", type=float, default=None, help="Angle random walk [0.3].")
-@click.option("--bias-instability-deg-h", type=float, default=None, help="Bias instability [3].")
-@click.option("--rrw-deg-h-rt-h", type=float, default=None, help="Rate random walk [0].")
+@click.option("--duration-s", type=float, default=None, help="Record length (s) [3600].")
+@click.option("--fs-hz", type=float, default=None, help="Sampling rate (Hz) [100].")
+@click.option("--arw-deg-rt-h", type=float, default=None, help="Angle random walk (deg/√h) [0.3].")
+@click.option(
+    "--bias-instability-deg-h", type=float, default=None, help="Bias instability (deg/h) [3]."
+)
+@click.option("--rrw-deg-h-rt-h", type=float, default=None, help="Rate random walk (deg/h/√h) [0].")
 def simulate_gyro_noise_cmd(out: str, overwrite: bool, **kw: Any) -> None:
-    """A gyro at rest with known IEEE 952 noise terms: time_s, rate_deg_s."""
+    """A gyro at rest with known noise terms: time_s, rate_deg_s.
+
+    White rate noise (angle random walk), bias instability and rate random walk as named in
+    IEEE Std 952-1997, for `rotacal allan`.
+    """
     from rotacal.sim import simulate_gyro_noise
 
     options = {k: v for k, v in kw.items() if v is not None}
     _sim_write(simulate_gyro_noise(**options), out, overwrite)
 
 
-@simulate.command("gyro-rotations")
+@simulate.command(
+    "gyro-rotations",
+    epilog=example("rotacal simulate gyro-rotations --out rot.csv"),
+)
 @_sim_common
-@click.option("--angle-deg", type=float, default=None, help="Angle of each rotation [360].")
-@click.option("--noise-std", type=float, default=None, help="Output noise, rms.")
-@click.option("--fs-hz", type=float, default=None, help="Sampling rate [100 Hz].")
+@click.option("--angle-deg", type=float, default=None, help="Angle of each rotation (deg) [360].")
+@click.option("--noise-std", type=float, default=None, help="Output noise, rms (deg/s) [0.05].")
+@click.option("--fs-hz", type=float, default=None, help="Sampling rate (Hz) [100].")
 def simulate_gyro_rotations_cmd(out: str, overwrite: bool, **kw: Any) -> None:
-    """Ferraris-style recording: rest, 360° about x, y, z: time_s, ux, uy, uz (sections in truth)."""
+    """Rotations through a known angle about x, y, z (Ferraris).
+
+    Columns time_s, ux, uy, uz: rest, then 360° about each axis; the sample ranges of the
+    rotations are in FILE.truth.json, which `rotacal gyro rotations --sections` reads.
+    """
     from rotacal.sim import simulate_gyro_rotations
 
     options = {k: v for k, v in kw.items() if v is not None}
     _sim_write(simulate_gyro_rotations(**options), out, overwrite)
 
 
-@simulate.command("multiposition")
+@simulate.command(
+    "multiposition",
+    epilog=example("rotacal simulate multiposition --axis x --latitude-deg 45.75 --out mp.csv"),
+)
 @_sim_common
-@click.option("--axis", type=click.Choice(["x", "y"]), default="x", show_default=True)
-@click.option("--latitude-deg", type=float, default=None, help="Latitude [45.75].")
-@click.option("--noise-deg-h", type=float, default=None, help="Output noise, rms (deg/h).")
-@click.option("--repeats", type=int, default=None, help="Readings per position.")
+@click.option(
+    "--axis",
+    type=click.Choice(["x", "y"]),
+    default="x",
+    show_default=True,
+    help="Input axis of the gyro on the turntable.",
+)
+@click.option(
+    "--latitude-deg", type=float, default=None, help="Latitude of the laboratory (deg) [45.75]."
+)
+@click.option("--noise-deg-h", type=float, default=None, help="Output noise, rms (deg/h) [0.005].")
+@click.option("--repeats", type=int, default=None, help="Readings per position [4].")
 def simulate_multiposition_cmd(out: str, overwrite: bool, **kw: Any) -> None:
-    """Gyro torquer output at turntable positions: phi1_deg, phi2_deg, output_deg_h (seed 001)."""
+    """Gyro torquer output at turntable positions (seed 001).
+
+    Columns phi1_deg (outer axis), phi2_deg (inner axis) and output_deg_h, with known drift
+    coefficients under Earth rate and gravity.
+    """
     from rotacal.sim import simulate_multiposition
 
     options = {k: v for k, v in kw.items() if v is not None}
@@ -308,9 +554,17 @@ def simulate_multiposition_cmd(out: str, overwrite: bool, **kw: Any) -> None:
 
 
 # ------------------------------------------------------------------------------------------------ demo
-@cli.command()
+@cli.command(
+    short_help="Simulate, analyse and report a whole campaign.",
+    epilog=example("rotacal demo", "rotacal demo --out first-look"),
+)
 @click.option(
-    "--out", "out", default="rotacal-demo", show_default=True, type=click.Path(file_okay=False)
+    "--out",
+    "out",
+    default="rotacal-demo",
+    show_default=True,
+    type=click.Path(file_okay=False),
+    help="Folder for report.html and the JSON of every analysis.",
 )
 @click.option(
     "--overwrite",
@@ -318,7 +572,12 @@ def simulate_multiposition_cmd(out: str, overwrite: bool, **kw: Any) -> None:
     help="Replace the files of an earlier demo in the folder (refused without it).",
 )
 def demo(out: str, overwrite: bool) -> None:
-    """Simulate a calibration campaign on the digital twin, analyse it, write DIR/report.html."""
+    """Simulate a calibration campaign on the digital twin, analyse it, write DIR/report.html.
+
+    The twin makes captures of the paper's five motion scenarios, a multi-head encoder, gyros
+    and a turntable; each is analysed as the commands do, and DIR gets the report and one JSON
+    per analysis.
+    """
     from rotacal.demo import demo_files, demo_steps, run_demo
     from rotacal.io.outputs import check_folder, check_outputs
 

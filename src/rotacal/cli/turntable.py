@@ -19,17 +19,34 @@ from ._common import (
     _write_report,
     _wrote,
 )
+from ._help import example
 
 
-@cli.group("turntable")
+@cli.group(
+    "turntable",
+    epilog=example(
+        "rotacal turntable example --out table.toml",
+        "rotacal turntable budget table.toml --report budget.html",
+    ),
+)
 def turntable() -> None:
-    """Turntable geometric errors: model, sensitivities, allocation, Monte Carlo (seed 001)."""
+    """Turntable geometric error budget (seed 001).
+
+    The error model of a serial turntable by homogeneous transforms, its sensitivities, the
+    allocation of tolerances to the error sources and a Monte Carlo check.
+    """
 
 
 _SEED001 = "GyroWheel calibration tests: turntable error analysis and allocation (seed 001)"
 
 
-@turntable.command("budget")
+@turntable.command(
+    "budget",
+    epilog=example(
+        "rotacal turntable budget table.toml --json budget.json --report budget.html",
+        "rotacal turntable budget table.toml --runs 20000 --constraint-angles 45",
+    ),
+)
 @click.argument("config", type=INPUT_FILE)
 @click.option(
     "--runs", type=int, default=None, help="Monte Carlo draws (default: config, else 10⁶)."
@@ -70,8 +87,11 @@ def turntable_budget_cmd(
     report_path: str | None,
     overwrite: bool,
 ) -> None:
-    """Allocate accuracy to a turntable's error sources and check it (CONFIG.toml: see
-    'rotacal turntable example')."""
+    """Allocate a turntable's accuracy to its error sources.
+
+    CONFIG.toml describes the table (see 'rotacal turntable example'): the sensitivities, the
+    tolerance of each error source, the worst case and a Monte Carlo check of it.
+    """
     from rotacal.turntable import load_turntable, turntable_budget
 
     _check_outputs(json_path, report_path, overwrite)
@@ -140,11 +160,17 @@ def turntable_budget_cmd(
             )
 
 
-@turntable.command("example")
+@turntable.command(
+    "example",
+    epilog=example("rotacal turntable example --out table.toml"),
+)
 @click.option("--out", required=True, metavar="FILE.toml", help="Where to write the example.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing file.")
 def turntable_example(out: str, overwrite: bool) -> None:
-    """Write the seed's two-axis table as a commented TOML to start a configuration from."""
+    """Write the paper's two-axis table as commented TOML.
+
+    A configuration to start from for `rotacal turntable budget` (seed 001's table).
+    """
     from rotacal.io.outputs import write_output
     from rotacal.turntable import seed_table_toml
 
@@ -154,16 +180,33 @@ def turntable_example(out: str, overwrite: bool) -> None:
 
 
 # ----------------------------------------------------------------------------------------------- specs
-@cli.group("specs")
+@cli.group(
+    "specs",
+    epilog=example(
+        "rotacal specs example --out lab.toml",
+        "rotacal motion encoder run.npz --lines 36000 --specs lab.toml",
+    ),
+)
 def specs_group() -> None:
-    """Instrument specifications: the Type B inputs of the uncertainty budgets (--specs)."""
+    """Instrument specifications for --specs (Type B).
+
+    What a capture cannot tell — the encoder's graduation accuracy, the laser triangulation
+    sensor's radius, the DAQ timebase, the table's set-rate accuracy, the latitude — each with
+    its distribution, as the Type B inputs of the uncertainty budgets.
+    """
 
 
-@specs_group.command("example")
+@specs_group.command(
+    "example",
+    epilog=example("rotacal specs example --out lab.toml"),
+)
 @click.option("--out", required=True, metavar="FILE.toml", help="Where to write the example.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing file.")
 def specs_example(out: str, overwrite: bool) -> None:
-    """Write a commented specifications file with every entry rotacal's budgets use."""
+    """Write a commented specifications file.
+
+    Every entry rotacal's uncertainty budgets use, to edit to your instruments.
+    """
     from rotacal.io.outputs import write_output
     from rotacal.uncertainty.specs import example_specs_toml
 
