@@ -25,6 +25,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
+from ._rate_files import rate_file_options, read_rate_rows
 from ._reading import current_read_options
 
 
@@ -35,6 +36,8 @@ def gyro() -> None:
 
 @gyro.command("scale-factor")
 @click.argument("capture", type=INPUT_FILE)
+@click.argument("more_captures", nargs=-1, type=INPUT_FILE, metavar="[CAPTURE]...")
+@rate_file_options
 @click.option(
     "--full-scale-deg-s",
     type=float,
@@ -65,6 +68,8 @@ def gyro() -> None:
 @_names_capture
 def gyro_scale_factor(
     capture: str,
+    more_captures: tuple[str, ...],
+    rate_files: dict[str, Any],
     full_scale_deg_s: float | None,
     requirement: str | None,
     output_unit: str,
@@ -79,11 +84,11 @@ def gyro_scale_factor(
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    cap = _read(capture, ["rate_deg_s", "output"], columns, group)
+    rate, output = read_rate_rows([capture, *more_captures], columns, group, rate_files)
     with _status("fitting"):
         result = calibrate_scale_factor(
-            cap["rate_deg_s"],
-            cap["output"],
+            rate,
+            output,
             full_scale_deg_s=full_scale_deg_s,
             requirement=requirement,
             output_unit=output_unit,
