@@ -137,6 +137,14 @@ def sniff_layout(fname: str, rows: Sequence[str], options: ReadOptions) -> TextL
         chosen = (delimiter, decimal)
     delimiter, decimal = chosen
     cells = [c.strip().strip('"').strip() for c in split_cells(rows[0], delimiter)]
+    if options.delimiter is not None and len(cells) == 1:
+        other = max(_POINT_ORDER, key=lambda d: len(split_cells(rows[0], d)))
+        if len(split_cells(rows[0], other)) > 1:
+            raise ConfigError(
+                f"--delimiter {separator_name(delimiter)} does not separate the cells of {fname}: "
+                f"its first row {rows[0][:50]!r} is split by {separator_name(other)}; give that, "
+                "or leave --delimiter out"
+            )
     if options.names is not None:
         if header:
             raise ConfigError(
