@@ -8,6 +8,7 @@ the line and the column, or the option at fault.
 from __future__ import annotations
 
 import gzip
+import re
 from pathlib import Path
 
 import numpy as np
@@ -76,7 +77,9 @@ def test_decimal_comma_is_recognised_and_can_be_given(tmp_path, delimiter):
 def test_given_separator_wins(tmp_path):
     path = _write(tmp_path / "cap.dat", _text("\t"))
     _check_reads_back(path, ReadOptions(delimiter="\t"))
-    with pytest.raises(ConfigError, match="--delimiter ';' does not separate the cells of cap.dat"):
+    with pytest.raises(
+        ConfigError, match=re.escape("--delimiter ';' does not separate the cells of cap.dat")
+    ):
         read_capture(path, read_options=ReadOptions(delimiter=";"), columns=["time_s"])
 
 
@@ -101,16 +104,18 @@ def test_crlf_and_leading_blanks_one_column(tmp_path):
 
 def test_option_faults_are_one_line_config_errors(tmp_path):
     path = _write(tmp_path / "cap.dat", _text("\t", header=False))
-    with pytest.raises(ConfigError, match="--names gives 2 names but cap.dat has 3 columns"):
+    with pytest.raises(
+        ConfigError, match=re.escape("--names gives 2 names but cap.dat has 3 columns")
+    ):
         read_capture(path, read_options=ReadOptions(names=("a", "b")))
     head = _write(tmp_path / "head.csv", _text(","))
-    with pytest.raises(ConfigError, match="head.csv starts with one"):
+    with pytest.raises(ConfigError, match=re.escape("head.csv starts with one")):
         read_capture(head, read_options=ReadOptions(names=("a", "b", "c")))
-    with pytest.raises(ConfigError, match="--decimal , cannot go with --delimiter ,"):
+    with pytest.raises(ConfigError, match=re.escape("--decimal , cannot go with --delimiter ,")):
         ReadOptions(delimiter=",", decimal=",")
-    with pytest.raises(ConfigError, match="more than once"):
+    with pytest.raises(ConfigError, match=re.escape("more than once")):
         ReadOptions(names=("a", "a"))
-    with pytest.raises(ConfigError, match="--delimiter '|'"):
+    with pytest.raises(ConfigError, match=re.escape("--delimiter '|'")):
         delimiter_from_word("|")
     assert [delimiter_from_word(w) for w in ("tab", "\\t", "space", "whitespace", ";")] == [
         "\t",
@@ -120,7 +125,7 @@ def test_option_faults_are_one_line_config_errors(tmp_path):
         ";",
     ]
     np.savez(tmp_path / "c.npz", a=np.zeros(3))
-    with pytest.raises(ConfigError, match="apply to text captures, not to c.npz"):
+    with pytest.raises(ConfigError, match=re.escape("apply to text captures, not to c.npz")):
         read_capture(tmp_path / "c.npz", read_options=ReadOptions(delimiter=";"))
 
 
@@ -129,12 +134,16 @@ def test_bad_cells_are_named_by_line_and_column(tmp_path, delimiter):
     sep = "   " if delimiter == " " else delimiter
     text = f"t{sep}x\n0{sep}1\n1{sep}oops\n2{sep}3\n"
     path = _write(tmp_path / "bad.dat", text)
-    with pytest.raises(CaptureError, match="bad.dat line 3, column 'x': 'oops' is not a number"):
+    with pytest.raises(
+        CaptureError, match=re.escape("bad.dat line 3, column 'x': 'oops' is not a number")
+    ):
         read_capture(path)
-    with pytest.raises(CaptureError, match="bad.dat line 3, column 'x'"):
+    with pytest.raises(CaptureError, match=re.escape("bad.dat line 3, column 'x'")):
         list(iter_capture_chunks(path, ["x"], chunk_rows=1))
     extra = _write(tmp_path / "extra.dat", f"t{sep}x\n0{sep}1\n1{sep}2{sep}9\n")
-    with pytest.raises(CaptureError, match="extra.dat line 3 has 3 cells but the header names 2"):
+    with pytest.raises(
+        CaptureError, match=re.escape("extra.dat line 3 has 3 cells but the header names 2")
+    ):
         read_capture(extra, columns=["x"])
 
 
@@ -147,17 +156,17 @@ def test_a_decimal_comma_among_points_gets_a_hint(tmp_path):
 def test_gzip_and_mat_files(tmp_path):
     fake = tmp_path / "x.csv.gz"
     fake.write_text("t,a\n1,2\n")
-    with pytest.raises(CaptureError, match="x.csv.gz is not gzip-compressed"):
+    with pytest.raises(CaptureError, match=re.escape("x.csv.gz is not gzip-compressed")):
         read_capture(fake)
-    with pytest.raises(CaptureError, match="gzip-compressed text captures"):
+    with pytest.raises(CaptureError, match=re.escape("gzip-compressed text captures")):
         read_capture(_write(tmp_path / "y.npz.gz", "1\n"))
     cut = tmp_path / "cut.csv.gz"
     cut.write_bytes(gzip.compress(_text(",").encode())[:-30])
-    with pytest.raises(CaptureError, match="cut.csv.gz"):
+    with pytest.raises(CaptureError, match=re.escape("cut.csv.gz")):
         read_capture(cut)
     matlab = tmp_path / "m.mat"
     matlab.write_bytes(b"MATLAB 5.0 MAT-file, Platform: GLNXA64" + bytes(200))
-    with pytest.raises(CaptureError, match="m.mat is a binary MATLAB MAT-file.*CSV"):
+    with pytest.raises(CaptureError, match=r"m\.mat is a binary MATLAB MAT-file.*CSV"):
         read_capture(matlab)
     _check_reads_back(_write(tmp_path / "ascii.mat", _text(" ")))
     with pytest.raises(CaptureError, match=r"unknown capture extension '.xlsx'.*\.dat"):
