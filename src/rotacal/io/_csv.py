@@ -33,8 +33,9 @@ ENCODING = "utf-8-sig"
 _WRITE_ROWS = 100_000
 #: characters of text turned from decimal comma to point at once
 _TEXT_BLOCK = 1 << 23
-#: byte values of blanks (the cells of a blank-separated row are the runs of other bytes)
-_BLANKS = np.array([ord(" "), ord("\t"), ord("\r"), ord("\n")], dtype=np.uint8)
+#: bytes up to the space are blanks (tab, CR, LF, space …; as str.split() sees them): the cells
+#: of a blank-separated row are the runs of other bytes
+_BLANK_MAX = ord(" ")
 
 
 _NOT_DATA = "#\r\n"  # first characters of lines np.loadtxt skips (comment, empty line)
@@ -316,7 +317,7 @@ class CsvReader:
         blank_before = True
         for raw in _blocks_after(self.path, self.header_lines):
             if d == " ":
-                filled = ~np.isin(raw, _BLANKS)
+                filled = raw > _BLANK_MAX
                 cells += int(np.count_nonzero(filled[1:] & ~filled[:-1]))
                 cells += int(filled[0] and blank_before)
                 blank_before = not filled[-1]
