@@ -6,26 +6,14 @@ import json
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from rotacal.cli import cli
 from rotacal.errors import ConfigError
 from rotacal.gyro import calibrate_scale_factor
 from rotacal.gyro.rate_sets import set_rate_from_name
 
+from .test_gyro_cli import one_line_error, run
+
 RATES = (10, 30, 60, 90, 120)
-
-
-def run(*args: str):
-    return CliRunner().invoke(cli, list(args), prog_name="rotacal")
-
-
-def one_line_error(result, *needles):
-    assert result.exit_code == 2, result.output
-    err = result.stderr.strip()
-    assert err.count("\n") == 0 and "Traceback" not in result.output, err
-    for n in needles:
-        assert n.lower() in err.lower(), err
 
 
 @pytest.mark.parametrize(
