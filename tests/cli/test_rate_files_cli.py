@@ -90,6 +90,7 @@ def test_rate_file_faults_are_one_line(tmp_path):
     table.write_text("file,rate\np10.dat,ten\n")
     one_line_error(run(*base, "--rates", str(table)), "line 2", "'ten' is not a rate")
     one_line_error(run(*base, "--rest-from", str(turn)), "--rest-from", "--rate-from-name")
+    one_line_error(run(*base), "p10.dat has no column 'rate_deg_s'", "--rate-from-name or --rates")
     one_line_error(run(*base[:3], "--rate-from-name", "--names", "a,b"), "--names gives 2 names")
 
 

@@ -7,15 +7,16 @@ only its ``output`` is read; ``--rest-from`` runs that start and end at rest add
 
 from __future__ import annotations
 
+import contextlib
 import functools
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
 import click
 import numpy as np
 
-from rotacal.errors import ConfigError
+from rotacal.errors import CaptureError, ConfigError
 
 from ._common import INPUT_FILE, _naming_file, _read
 
@@ -79,6 +80,19 @@ def rate_file_options(func: F) -> F:
     return wrapped
 
 
+@contextlib.contextmanager
+def _hint_rate_options(files: int) -> Iterator[None]:
+    """Several captures without a rate_deg_s column: say how to give each file's set rate."""
+    try:
+        yield
+    except CaptureError as e:
+        if files < 2 or "'rate_deg_s'" not in str(e):
+            raise
+        raise CaptureError(
+            f"{e}; or, when each file holds one set rate, give it with --rate-from-name or --rates"
+        ) from None
+
+
 def _output_of(path: str, columns: Sequence[str], group: str | None) -> np.ndarray:
     with _naming_file(path):
         return np.asarray(_read(path, ["output"], columns, group)["output"])
@@ -102,7 +116,7 @@ def read_rate_rows(
             )
         rows = []
         for path in captures:
-            with _naming_file(path):
+            with _naming_file(path), _hint_rate_options(len(captures)):
                 cap = _read(path, ["rate_deg_s", "output"], columns, group)
             rows.append((np.asarray(cap["rate_deg_s"]), np.asarray(cap["output"])))
         return np.concatenate([r for r, _ in rows]), np.concatenate([o for _, o in rows])

@@ -36,7 +36,7 @@ def gyro() -> None:
 
 @gyro.command("scale-factor")
 @click.argument("capture", type=INPUT_FILE)
-@click.argument("more_captures", nargs=-1, type=INPUT_FILE, metavar="[CAPTURE]...")
+@click.argument("more_captures", nargs=-1, type=INPUT_FILE)
 @rate_file_options
 @click.option(
     "--full-scale-deg-s",

@@ -31,7 +31,7 @@ _RATE_NAME = re.compile(
     re.IGNORECASE,
 )
 _NEGATIVE = {"-", "m", "neg", "minus"}
-NAME_FORMS = "p10, m10, +10, -10.5, 10dps (p/m: plus/minus)"
+NAME_FORMS = "p10, m10 (p/m: plus/minus), +10, -10.5, 10dps"
 
 
 def set_rate_from_name(path: str | Path) -> float:

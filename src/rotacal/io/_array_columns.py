@@ -113,7 +113,13 @@ class ArrayColumns:
         Raises CaptureError for a subscript beyond the array's columns or on a 1-D array.
         """
         if name in self._not_columns:
-            check_declared(self.fname, label(name, name, self.noun), self.inner.describe(name))
+            info = self.inner.describe(name)
+            if info.shape == ():
+                raise CaptureError(
+                    f"{self.fname} {self.noun} {name!r} holds one value, not a column of samples; "
+                    "name a column that holds the recording"
+                )
+            check_declared(self.fname, label(name, name, self.noun), info)
         parts = split_subscript(name)
         if parts is None or name in self._parts:
             return name
