@@ -219,3 +219,24 @@ def test_allantools_one_column_text_and_gzip(shared_data, path, points):
     assert cap.names == ["col_1"] and cap["col_1"].size == points
     chunked = np.concatenate([c["col_1"] for c in iter_capture_chunks(file, ["col_1"])])
     assert chunked.tobytes() == cap["col_1"].tobytes()
+
+
+def test_a_column_of_labels_is_left_out_and_named_when_asked_for(tmp_path):
+    path = _write(tmp_path / "lab.csv", "part,t,x\nx_a,0,1.5\nx_a,1,2.5\ny_p,2,3.5\n")
+    cap = read_capture(path)
+    assert cap.names == ["t", "x"] and cap["x"].tolist() == [1.5, 2.5, 3.5]
+    with pytest.raises(
+        CaptureError, match=re.escape("lab.csv column 'part' holds text ('x_a' on line 2)")
+    ):
+        read_capture(path, columns=["part"])
+    assert capture_length(path, "x") == 3
+
+
+def test_imucal_annotated_session_with_its_section_labels(shared_data):
+    path = shared_data("imucal", "example_data") / "annotated_session.csv"
+    cap = read_capture(path)
+    assert "part" not in cap.names
+    assert cap.names == ["samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"]
+    # raw counts (the data README): whole numbers, as imucal's own reader gives them
+    assert np.all(cap["gyr_x"] == np.round(cap["gyr_x"]))
+    assert cap["samples"][:2].tolist() == [1028.0, 1029.0]  # the file's first two rows

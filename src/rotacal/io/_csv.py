@@ -170,6 +170,30 @@ class CsvReader:
                 f"{self.fname} line {self.first_row_line} has {self.first_row_cells} cells but "
                 f"the header names {len(self.names)} columns; make every row match the header"
             )
+        self._find_text_columns(rows[first:], lines[first:])
+
+    def _find_text_columns(self, rows: list[str], lines: list[int]) -> None:
+        """Columns whose sampled cells are all words (labels such as a section's name) are not
+        offered as columns of numbers, so that reading every column works; asked for by name,
+        they are named as text (:meth:`normalise`)."""
+        self.text_columns: dict[str, str] = {}
+        split = [split_cells(r, self.layout.delimiter) for r in rows]
+        if not split or any(len(cells) != len(self.names) for cells in split):
+            return
+        for i, name in enumerate(self.names):
+            cells = [c[i].strip() for c in split]
+            if all(c and not is_number(c, self.layout.decimal) for c in cells):
+                self.text_columns[name] = f"{cells[0][:30]!r} on line {lines[0]}"
+        self.names = [n for n in self.names if n not in self.text_columns]
+
+    def normalise(self, name: str) -> str:
+        """A column asked for by name; a column of text is refused naming what it holds."""
+        if name in self.text_columns:
+            raise CaptureError(
+                f"{self.fname} column {name!r} holds text ({self.text_columns[name]}), not "
+                "numbers; name a column of numbers"
+            )
+        return name
 
     def _comment(self, stripped: str) -> None:
         """'# key: value' comment lines carry metadata (value JSON where it parses)."""
@@ -240,7 +264,7 @@ class CsvReader:
     def read(self, names: list[str], ragged: bool) -> dict[str, np.ndarray]:
         if self.first_row_cells is None:
             raise self._no_data()
-        idx = [self.names.index(n) for n in names]
+        idx = [self.layout.names.index(n) for n in names]
         self._check_cell_counts(idx, ragged)
         kw: dict[str, Any] = {"converters": _empty_to_nan} if ragged else {}
         try:
@@ -270,10 +294,10 @@ class CsvReader:
         return len(line.split()) if d == " " else line.count(d) + 1
 
     def chunks(self, names: list[str], chunk_rows: int) -> Iterator[dict[str, np.ndarray]]:
-        idx = [self.names.index(n) for n in names]
+        idx = [self.layout.names.index(n) for n in names]
         lines = self._lines(self.header_lines)
         lineno = self.header_lines + 1
-        ncols = len(self.names)
+        ncols = len(self.layout.names)
         while True:
             # gather chunk_rows data rows (blank and comment lines do not count)
             pending: list[str] = []
@@ -310,7 +334,7 @@ class CsvReader:
         of separators (or, for blank-separated rows, of cell starts) and newlines over the raw
         bytes; the slow line-by-line diagnosis runs only when the counts disagree (it also
         forgives blank and comment lines)."""
-        ncols = len(self.names)
+        ncols = len(self.layout.names)
         d = self.layout.delimiter
         cells = rows = 0
         last = ord("\n")
@@ -334,7 +358,7 @@ class CsvReader:
 
     def _diagnose(self, lines: Iterable[str], lineno: int, idx: list[int], ragged: bool) -> None:
         """Find the first cell np.loadtxt rejected and raise a CaptureError naming it."""
-        ncols = len(self.names)
+        ncols = len(self.layout.names)
         d, decimal = self.layout.delimiter, self.layout.decimal
         against = "the header names" if self.layout.has_header else "the first row has"
         for ln, line in enumerate(lines, start=lineno):
@@ -356,7 +380,7 @@ class CsvReader:
                 )
             for i in idx:
                 cell = cells[i].strip()
-                col = self.names[i]
+                col = self.layout.names[i]
                 if not cell:
                     if ragged:
                         continue

@@ -214,11 +214,12 @@ def _resolve(
     """Apply the mapping; return the canonical names of the file and canonical -> file name."""
     fname = reader.fname
     have = reader.names
-    if isinstance(reader, ArrayColumns):  # data[:,-1] -> data[:,5]
-        mapping = {reader.normalise(old): new for old, new in mapping.items()}
+    normalise = getattr(reader, "normalise", None)  # data[:,-1] -> data[:,5]; text columns
+    if normalise is not None:
+        mapping = {normalise(old): new for old, new in mapping.items()}
         if columns is not None:
             wanted_raw = [columns] if isinstance(columns, str) else list(columns)
-            columns = [reader.normalise(c) if isinstance(c, str) else c for c in wanted_raw]
+            columns = [normalise(c) if isinstance(c, str) else c for c in wanted_raw]
     for old in mapping:
         if old not in have:
             raise CaptureError(
