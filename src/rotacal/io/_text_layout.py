@@ -9,8 +9,10 @@ Sniffing order (the first that fits wins): a given ``--delimiter``/``--decimal``
 candidates; then tab, ``;``, ``,``, blanks with the decimal point, then tab, ``;``, blanks with the
 decimal comma. A candidate fits when every sampled row splits into the same number of cells (the
 header, when there is one, too) and every data cell is a number. A file with one cell per row is
-one column. When no candidate fits, the separator that splits the first row into the most cells
-is kept, so that the reader names the row and cell at fault.
+one column, read as blank-separated; its decimal comma is not sniffed (rows "1,5" fit two
+comma-separated columns as well): that takes ``--decimal ,``. When no candidate fits, the
+separator that splits the first row into the most cells is kept, so that the reader names the row
+and cell at fault.
 """
 
 from __future__ import annotations
