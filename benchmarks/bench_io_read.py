@@ -10,12 +10,19 @@ CSV, then times in child processes (warm page cache, best of ``--repeat``):
 - for NPZ, ``zlib.crc32`` alone over the member bytes, and ``read_capture`` with the CRC check
   switched off in the same process, alternating with it on (the cost of the integrity check).
 
+The same numbers are also written as the text layouts labs' DAQs produce — tab separated without
+a header (``tab``), blank separated (``blanks``), semicolon separated with a decimal comma
+(``comma``) and gzip-compressed CSV (``gz``) — and ``read_capture`` (which sniffs each layout) is
+timed on them beside the CSV: the ratio to the CSV's ``read_capture`` in the same run, and whether
+the columns are bit-identical to the CSV's.
+
 With ``--against SRC`` (another checkout's ``src`` folder, e.g. main's) every read_capture is
 timed for both source trees in the same run, alternating, and the columns' SHA-256 are compared
 (the results of valid files must stay bit-identical).
 
     python benchmarks/bench_io_read.py --rows 1e7
     python benchmarks/bench_io_read.py --rows 1e7 --against ../main/src
+    python benchmarks/bench_io_read.py --rows 1e6 --formats csv,tab,blanks,comma,gz
 """
 
 from __future__ import annotations
@@ -36,6 +43,15 @@ import numpy as np
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 FILES = {"npz": "cap.npz", "hdf5": "cap.h5", "csv": "cap.csv"}
+#: text layouts derived from the CSV: file name, and how a CSV line becomes one of theirs
+TEXT_LAYOUTS = {
+    "tab": "cap_tab.dat",
+    "blanks": "cap_blanks.txt",
+    "comma": "cap_comma.csv",
+    "gz": "cap.csv.gz",
+}
+#: np.loadtxt's own read of each layout (the decimal comma has none: the CSV's stands in)
+_LOADTXT = {".dat": "\t", ".txt": None, ".gz": ","}
 
 
 def _child(kind: str, path: str) -> None:
@@ -71,8 +87,13 @@ def _child(kind: str, path: str) -> None:
         with h5py.File(path, "r") as f:
             cols = {k: f[k][...] for k in f}
     else:
-        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        plain = path.replace("cap_comma.csv", "cap.csv")
+        skip = 0 if path.endswith(".dat") else 1
+        delimiter = _LOADTXT.get(Path(plain).suffix, ",")
+        data = np.loadtxt(plain, delimiter=delimiter, skiprows=skip, ndmin=2)
         cols = {str(k): np.ascontiguousarray(data[:, k]) for k in range(data.shape[1])}
+    if kind == "read_capture":  # by position: the layouts name their columns differently
+        cols = {str(k): v for k, v in enumerate(cols.values())}
     seconds = time.perf_counter() - t0
     digest = {
         k: hashlib.sha256(np.ascontiguousarray(v).tobytes()).hexdigest() for k, v in cols.items()
@@ -117,7 +138,32 @@ def _write(folder: Path, rows: int) -> dict[str, Path]:
     rng = np.random.default_rng(7)
     t = np.arange(rows) / 1e5
     cols = {"time_s": t, "a": np.cos(2 * np.pi * 3 * t), "b": rng.normal(size=rows)}
-    return {kind: write_capture(folder / name, cols) for kind, name in FILES.items()}
+    paths = {kind: write_capture(folder / name, cols) for kind, name in FILES.items()}
+    return paths | _text_layouts(paths["csv"], folder)
+
+
+def _text_layouts(csv: Path, folder: Path) -> dict[str, Path]:
+    """The CSV rewritten as each of TEXT_LAYOUTS, block by block (C string methods)."""
+    import gzip
+
+    out = {kind: folder / name for kind, name in TEXT_LAYOUTS.items()}
+    with (
+        open(csv, encoding="utf-8") as src,
+        open(out["tab"], "w", encoding="utf-8") as tab,
+        open(out["blanks"], "w", encoding="utf-8") as blanks,
+        open(out["comma"], "w", encoding="utf-8") as comma,
+        gzip.open(out["gz"], "wt", encoding="utf-8", compresslevel=1) as gz,
+    ):
+        header = src.readline()
+        blanks.write(header.replace(",", " "))
+        comma.write(header.replace(",", ";"))
+        gz.write(header)
+        while block := "".join(src.readlines(1 << 24)):
+            tab.write(block.replace(",", "\t"))
+            blanks.write(block.replace(",", "  "))
+            comma.write(block.replace(",", ";").replace(".", ","))
+            gz.write(block)
+    return out
 
 
 def main() -> None:
@@ -138,6 +184,7 @@ def main() -> None:
         t0 = time.perf_counter()
         paths = _write(folder, rows)
         print(f"{rows} rows x 3 float64 columns, written in {time.perf_counter() - t0:.0f} s")
+        csv_digest: dict = {}
         for kind in args.formats.split(","):
             path = paths[kind]
             trees = {"this tree": SRC} | ({"against": args.against} if args.against else {})
@@ -150,6 +197,10 @@ def main() -> None:
                     digests[name] = r["sha256"]
                 r = _time("library", path, SRC)
                 best["library"] = min(best.get("library", np.inf), r["seconds"])
+                if kind in TEXT_LAYOUTS:  # the CSV again, alternating: the same machine load
+                    r = _time("read_capture", paths["csv"], SRC)
+                    best["csv"] = min(best.get("csv", np.inf), r["seconds"])
+                    csv_digest = r["sha256"]
                 if kind == "npz":
                     r = _time("crc32", path, SRC)
                     best["crc32"] = min(best.get("crc32", np.inf), r["seconds"])
@@ -165,6 +216,13 @@ def main() -> None:
                     f", zlib.crc32 alone {best['crc32']:.3f} s; in one process read_capture "
                     f"{best['crc on']:.3f} s with the CRC check, {best['crc off']:.3f} s without "
                     f"(ratio {best['crc on'] / best['crc off']:.2f})"
+                )
+            if kind in TEXT_LAYOUTS:
+                same = digests["this tree"] == csv_digest
+                line += (
+                    f"; the CSV's read_capture, alternating with it: {best['csv']:.3f} s, ratio "
+                    f"{best['this tree'] / best['csv']:.2f}, columns "
+                    f"{'bit-identical to the CSV' if same else 'DIFFER from the CSV'}"
                 )
             if args.against:
                 same = digests["this tree"] == digests["against"]

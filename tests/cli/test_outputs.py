@@ -63,7 +63,7 @@ EXPECTED_INPUTS = {
     ("allan",): {"capture", "specs"},
     ("gyro", "multiposition"): {"capture", "specs"},
     ("gyro", "rotations"): {"capture", "sections_path", "specs"},
-    ("gyro", "scale-factor"): {"capture", "specs"},
+    ("gyro", "scale-factor"): {"capture", "more_captures", "rates_path", "rest_from", "specs"},
     ("gyro", "triad"): {"capture", "specs"},
     ("motion", "encoder"): {"capture", "correction_from", "specs"},
     ("motion", "fog"): {"capture", "specs"},
@@ -90,6 +90,9 @@ FILES = {
     "capture": "cap.npz",
     "config": "table.toml",
     "correction_from": "ref.npz",
+    "more_captures": "more.npz",
+    "rates_path": "rates.csv",
+    "rest_from": "rest.npz",
     "selfcal_path": "sc.json",
     "sections_path": "sec.json",
     "specs": "specs.toml",
@@ -117,9 +120,11 @@ def given(tmp_path: Path) -> dict[str, Path]:
 
 def _argv(path: tuple[str, ...], files: dict[str, Path]) -> list[str]:
     argv = [*path, *REQUIRED.get(path, [])]
+    arguments = 0
     for p in _inputs(path):
         if isinstance(p, click.Argument):
-            argv.insert(len(path), str(files[p.name or ""]))
+            argv.insert(len(path) + arguments, str(files[p.name or ""]))
+            arguments += 1
         else:
             argv += [p.opts[0], str(files[p.name or ""])]
     return argv

@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 import click
 
 from rotacal.io import ReadOptions
+from rotacal.io.read_options import delimiter_from_word
 
 F = TypeVar("F", bound=Callable[..., Any])
 _META_KEY = "rotacal.read_options"
@@ -36,7 +37,7 @@ def reading_options(func: F) -> F:
         decimal = kwargs.pop("decimal")
         names = kwargs.pop("names")
         options = ReadOptions(
-            delimiter=delimiter,
+            delimiter=delimiter_from_word(delimiter),
             decimal=decimal,
             names=tuple(n.strip() for n in names.split(",")) if names else None,
         )
@@ -48,21 +49,23 @@ def reading_options(func: F) -> F:
             "--delimiter",
             default=None,
             metavar="CHAR",
-            help="Cell separator of a text capture: ',' ';' 'tab' or 'space' "
-            "(default: sniffed among them).",
+            help="Cell separator of a text capture: ',' ';' 'tab' or 'space' (any run of "
+            "blanks) [default: sniffed among them].",
         ),
         click.option(
             "--decimal",
             type=click.Choice([".", ","]),
             default=".",
             show_default=True,
-            help="Decimal mark of a text capture.",
+            help="Decimal mark of a text capture (a ';', tab or blank separated file whose "
+            "numbers use ',' is recognised by itself).",
         ),
         click.option(
             "--names",
             default=None,
             metavar="A,B,C",
-            help="Column names of a text capture without a header row, in file order.",
+            help="Column names of a text capture without a header row, in file order "
+            "[default: col_1, col_2, …].",
         ),
     ]
     wrapped: Any = command

@@ -28,6 +28,7 @@ from ._common import (
 )
 from ._format import elements_of, format_plain, quantity_of
 from ._help import example
+from ._rate_files import rate_file_options, read_rate_rows
 from ._reading import current_read_options
 
 
@@ -47,9 +48,13 @@ def gyro() -> None:
     epilog=example(
         "rotacal gyro scale-factor rates.csv --requirement fmvss126 --report sf.html",
         "rotacal gyro scale-factor daq.csv --column table=rate_deg_s --column gyro=output",
+        "rotacal gyro scale-factor p10.dat m10.dat p30.dat m30.dat --rate-from-name "
+        "--column col_5=output",
     ),
 )
 @click.argument("capture", type=INPUT_FILE)
+@click.argument("more_captures", nargs=-1, type=INPUT_FILE)
+@rate_file_options
 @click.option(
     "--full-scale-deg-s",
     type=float,
@@ -84,6 +89,8 @@ def gyro() -> None:
 @_names_capture
 def gyro_scale_factor(
     capture: str,
+    more_captures: tuple[str, ...],
+    rate_files: dict[str, Any],
     full_scale_deg_s: float | None,
     requirement: str | None,
     output_unit: str,
@@ -97,17 +104,19 @@ def gyro_scale_factor(
 
     Columns rate_deg_s (the table's set rate) and output (the gyro's, in its own unit); the
     rows of each set rate are averaged and V(Ω) = S·Ω + V0 is fitted by least squares
-    (seed 004, §4). FS is the full scale, the largest |set rate| unless given.
+    (seed 004, §4). FS is the full scale, the largest |set rate| unless given. A test kept as
+    one file per set rate takes the rate of each file from its name (--rate-from-name) or from a
+    table (--rates).
     """
     from rotacal.gyro import calibrate_scale_factor
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    cap = _read(capture, ["rate_deg_s", "output"], columns, group)
+    rate, output = read_rate_rows([capture, *more_captures], columns, group, rate_files)
     with _status("fitting"):
         result = calibrate_scale_factor(
-            cap["rate_deg_s"],
-            cap["output"],
+            rate,
+            output,
             full_scale_deg_s=full_scale_deg_s,
             requirement=requirement,
             output_unit=output_unit,

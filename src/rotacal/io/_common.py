@@ -6,6 +6,7 @@ Nothing here is public; :mod:`rotacal.io` re-exports what users need.
 from __future__ import annotations
 
 import codecs
+import gzip
 import os
 import struct
 import tokenize
@@ -29,6 +30,11 @@ FORMATS: dict[str, str] = {
     ".hdf5": "hdf5",
     ".tdms": "tdms",
 }
+#: text captures rotacal reads but does not write (read like .csv, the separator sniffed); .mat
+#: covers the ASCII files some programs save under that name (imu_tk's xsens_gyro.mat)
+_READ_ONLY_TEXT = (".dat", ".tsv", ".mat")
+#: text capture extensions that may carry a further ``.gz`` (read through gzip)
+_GZIP_INNER = (".csv", ".txt", ".dat", ".tsv")
 _FORMAT_LABEL = {"csv": "CSV", "npz": "NPZ", "hdf5": "HDF5", "tdms": "TDMS"}
 _SNIFF_LABEL = {
     "csv": "CSV text",
@@ -49,19 +55,55 @@ NPZ_METADATA_KEY = "__metadata__"
 
 
 def known_extensions() -> str:
-    """The recognised capture extensions, as text for messages."""
+    """The recognised capture extensions (written and read), as text for messages."""
     return ", ".join(FORMATS)
+
+
+def _readable_extensions() -> str:
+    return ", ".join([*FORMATS, *_READ_ONLY_TEXT, ".csv.gz", ".txt.gz", ".dat.gz"])
+
+
+def is_gzip(path: Path) -> bool:
+    """A text capture compressed with gzip (``name.csv.gz``, ``name.txt.gz`` …)."""
+    return path.suffix.lower() == ".gz"
 
 
 def format_of(path: Path) -> str:
     """Format name from the file extension; unknown extension -> CaptureError."""
-    fmt = FORMATS.get(path.suffix.lower())
+    suffix = path.suffix.lower()
+    if suffix == ".gz":
+        inner = Path(path.stem).suffix.lower()
+        if inner in _GZIP_INNER:
+            return "csv"
+        raise CaptureError(
+            f"{path.name}: rotacal reads gzip-compressed text captures "
+            f"({', '.join(i + '.gz' for i in _GZIP_INNER)}), not {inner or 'this'!s} files — "
+            "decompress it, or name it after its content (e.g. data.csv.gz)"
+        )
+    fmt = FORMATS.get(suffix) or ("csv" if suffix in _READ_ONLY_TEXT else None)
     if fmt is None:
         raise CaptureError(
             f"{path.name} has an unknown capture extension {path.suffix or '(none)'!r}; "
-            f"rotacal reads {known_extensions()} — rename or convert the file"
+            f"rotacal reads {_readable_extensions()} — rename or convert the file"
         )
     return fmt
+
+
+def _gunzipped_head(path: Path, nbytes: int = 4096) -> bytes:
+    """The first bytes of a gzip file's content (what was compressed), for sniffing."""
+    try:
+        with gzip.open(path, "rb") as fh:
+            return fh.read(nbytes)
+    except (OSError, EOFError, zlib.error) as exc:
+        raise damaged(path.name, f"its gzip stream cannot be read ({reason(exc)})") from None
+
+
+def _matlab_binary(p: Path, head: bytes) -> CaptureError:
+    version = head[:19].decode("ascii", "replace").replace("MAT-file", "").strip()
+    return CaptureError(
+        f"{p.name} is a binary MATLAB MAT-file ({version}), which rotacal cannot read; in MATLAB "
+        "save the data as CSV (writematrix) or as HDF5 (save -v7.3, then rename the file .h5)"
+    )
 
 
 def sniff(head: bytes) -> str:
@@ -118,6 +160,16 @@ def open_checked(path: str | os.PathLike[str]) -> tuple[Path, str]:
         raise CaptureError(f"{p.name} cannot be read ({reason}); check the file") from None
     if not head:
         raise CaptureError(f"{p.name} is empty; give a capture that holds data")
+    if is_gzip(p):
+        if not head.startswith(b"\x1f\x8b"):
+            raise CaptureError(
+                f"{p.name} is not gzip-compressed although it is named .gz; rename it without .gz"
+            )
+        head = _gunzipped_head(p)
+        if not head:
+            raise CaptureError(f"{p.name} is empty once decompressed; give a capture with data")
+    elif p.suffix.lower() == ".mat" and head.startswith(b"MATLAB"):
+        raise _matlab_binary(p, head)
     kind = sniff(head)
     if kind == "binary" and fmt == "hdf5" and _hdf5_with_userblock(p):
         kind = "hdf5"

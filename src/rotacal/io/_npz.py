@@ -20,7 +20,7 @@ from collections.abc import Iterator, Mapping
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, Literal
 
 import numpy as np
 from numpy.lib import format as npformat
@@ -44,6 +44,12 @@ class _Member:
     shape: tuple[int, ...]
     dtype: np.dtype[Any]
     data_offset: int  # bytes from the start of the member's .npy to its data
+    fortran: bool = False  # a 2-D array stored column by column
+
+    @property
+    def row_items(self) -> int:
+        """Values per row: 1 for a column, K for an (N, K) array."""
+        return int(np.prod(self.shape[1:], dtype=np.int64)) if len(self.shape) > 1 else 1
 
 
 def _read_npy_header(fp: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
@@ -163,7 +169,7 @@ class NpzReader:
         info = self._infos[name]
         try:
             with self._zip.open(info) as fp:
-                shape, _fortran, dtype = _read_npy_header(fp)
+                shape, fortran, dtype = _read_npy_header(fp)
                 offset = fp.tell()
         except LIBRARY_ERRORS as exc:
             raise damaged(
@@ -171,7 +177,7 @@ class NpzReader:
                 f"member {info.filename!r} does not start with a valid NumPy array header "
                 f"({reason(exc)})",
             ) from None
-        m = _Member(info, tuple(int(k) for k in shape), np.dtype(dtype), offset)
+        m = _Member(info, tuple(int(k) for k in shape), np.dtype(dtype), offset, bool(fortran))
         self._members[name] = m
         return m
 
@@ -245,11 +251,18 @@ class NpzReader:
         if m.shape[0] == 0:
             arr: np.ndarray = np.empty(0, dtype=m.dtype)
         else:
-            arr = np.memmap(self.path, dtype=m.dtype, mode="r", offset=data_start, shape=m.shape)
+            order: Literal["C", "F"] = "F" if m.fortran and len(m.shape) > 1 else "C"
+            arr = np.memmap(
+                self.path, dtype=m.dtype, mode="r", offset=data_start, shape=m.shape, order=order
+            )
         with open(self.path, "rb") as fh:
             fh.seek(start)
             head = fh.read(m.data_offset)
-        self._integrity[name] = _StoredCrc(self.fname, m.info.filename, head, arr, m.info.CRC)
+        # the CRC runs over the bytes in file order: a 2-D array's, flat
+        in_file_order = arr.ravel(order="K") if arr.ndim > 1 else arr
+        self._integrity[name] = _StoredCrc(
+            self.fname, m.info.filename, head, in_file_order, m.info.CRC
+        )
         self._mapped_arrays[name] = arr
         return arr
 
@@ -290,6 +303,9 @@ class NpzReader:
                 if mapped is not None:
                     sources[name] = mapped
                     continue
+                if self._member(name).fortran and len(self._member(name).shape) > 1:
+                    sources[name] = self.read([name], False)[name]  # no rows to stream
+                    continue
                 fp = stack.enter_context(self._zip.open(self._member(name).info))
                 _read_npy_header(fp)
                 sources[name] = fp
@@ -300,12 +316,12 @@ class NpzReader:
                     if isinstance(src, np.ndarray):
                         out[name] = src[lo:hi]
                         continue
-                    dt = self._members[name].dtype
-                    want = (hi - lo) * dt.itemsize
+                    m = self._members[name]
+                    want = (hi - lo) * m.row_items * m.dtype.itemsize
                     buf = _read_exact(src, want)  # zipfile checks the CRC with the last piece
                     if len(buf) != want:
                         raise damaged(self.fname, f"member {name + '.npy'!r} ends at row {lo}")
-                    out[name] = np.frombuffer(buf, dtype=dt)
+                    out[name] = np.frombuffer(buf, dtype=m.dtype).reshape((hi - lo, *m.shape[1:]))
                     if hi == n:
                         self.integrity(name).checked = True
                 yield out

@@ -20,6 +20,7 @@ import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
 
+from ._array_columns import ArrayColumns, split_subscript
 from ._common import LIBRARY_ERRORS, check_group_unused, library_errors, open_checked
 from ._csv import CsvReader
 from ._hdf5 import Hdf5Reader
@@ -93,8 +94,19 @@ class Capture:
         return max((c.shape[0] for c in self.columns.values()), default=0)
 
 
+def _file_side_first(old: str, new: str) -> tuple[str, str]:
+    """``NAME=ARRAY[:,K]`` (INTERFACE.md's spelling) -> ``ARRAY[:,K]=NAME``: the side with the
+    column subscript is the file's."""
+    if split_subscript(new) is not None and split_subscript(old) is None:
+        return new, old
+    return old, new
+
+
 def parse_column_mapping(items: Iterable[str] | None) -> dict[str, str]:
     """Parse ``--column OLD=NEW`` items into ``{OLD: NEW}``.
+
+    A column of a 2-D array may be written either way round: ``data[:,0]=rate_deg_s`` or
+    ``rate_deg_s=data[:,0]`` (the side with the subscript is the file's).
 
     Raises
     ------
@@ -115,7 +127,7 @@ def parse_column_mapping(items: Iterable[str] | None) -> dict[str, str]:
             raise ConfigError(
                 f"--column {item!r} must be OLD=NEW with two names, e.g. --column ch1=a"
             )
-        old, new = parts[0].strip(), parts[1].strip()
+        old, new = _file_side_first(parts[0].strip(), parts[1].strip())
         if old in out:
             raise ConfigError(f"--column maps {old!r} twice ({out[old]!r} and {new!r}); keep one")
         out[old] = new
@@ -137,10 +149,12 @@ def _normalise_mapping(mapping: MappingArg) -> dict[str, str]:
     if mapping is None:
         return {}
     if isinstance(mapping, Mapping):
-        out = {
-            check_requested_name(k, "--column name"): check_requested_name(v, "--column name")
+        out = dict(
+            _file_side_first(
+                check_requested_name(k, "--column name"), check_requested_name(v, "--column name")
+            )
             for k, v in mapping.items()
-        }
+        )
         _check_targets(out)
         return out
     return parse_column_mapping(mapping)
@@ -164,15 +178,23 @@ def _open_reader(
     if group is not None and not isinstance(group, str):
         raise ConfigError(f"--group {group!r} is not text; give the group's name")
     p, fmt = open_checked(path)
-    if read_options is not None and not read_options.is_default:
-        # TODO(issue 13, readers): delimiter sniffing, decimal comma, headerless files
-        raise ConfigError(f"{p.name}: --delimiter/--decimal/--names are not supported yet")
+    if fmt != "csv" and read_options is not None and not read_options.is_default:
+        raise ConfigError(
+            f"--delimiter, --decimal and --names apply to text captures, not to {p.name} "
+            f"({fmt.upper()}, whose columns are named in the file); leave them out"
+        )
     cls = _READERS[fmt]
     if fmt in ("csv", "npz"):
         check_group_unused(p, group)
     with library_errors(p.name, fmt.upper()):
-        reader: Reader = cls(p) if fmt in ("csv", "npz") else cls(p, group)
+        if fmt == "csv":
+            reader: Reader = CsvReader(p, read_options)
+        else:
+            reader = cls(p) if fmt == "npz" else cls(p, group)
     try:
+        if fmt in ("npz", "hdf5"):
+            with library_errors(p.name, fmt.upper()):
+                reader = ArrayColumns(reader)
         reader.names = check_file_names(reader.fname, reader.names, reader.noun)
     except BaseException:
         _close(reader)
@@ -192,6 +214,12 @@ def _resolve(
     """Apply the mapping; return the canonical names of the file and canonical -> file name."""
     fname = reader.fname
     have = reader.names
+    normalise = getattr(reader, "normalise", None)  # data[:,-1] -> data[:,5]; text columns
+    if normalise is not None:
+        mapping = {normalise(old): new for old, new in mapping.items()}
+        if columns is not None:
+            wanted_raw = [columns] if isinstance(columns, str) else list(columns)
+            columns = [normalise(c) if isinstance(c, str) else c for c in wanted_raw]
     for old in mapping:
         if old not in have:
             raise CaptureError(

@@ -1,0 +1,97 @@
+"""docs/real-data.md runs as written: every ``$ rotacal …`` line, and every ``expect`` holds.
+
+The commands run in bash (their globs and ``$(…)`` as a reader's shell runs them) in a fresh
+folder, with ``ROTACAL_SHARED_DATA`` pointing at the real recordings and ``rotacal`` this checkout.
+Each ``<!-- expect FILE: KEY = VALUE ± TOL; … -->`` line names a JSON file a command wrote and
+the reference values the document states next to it (from the data's README or the program that
+made the data). A section whose recordings are absent is skipped by the ``shared_data`` fixture.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import rotacal
+
+from ..conftest import SHARED_DATA
+
+DOC = Path(__file__).resolve().parents[2] / "docs" / "real-data.md"
+_BLOCK = re.compile(r"```console\n(.*?)```", re.S)
+_EXPECT = re.compile(r"<!-- expect (\S+): (.*?) -->")
+_CHECK = re.compile(
+    r"^(?P<key>[a-z_]+)(?:\[(?P<index>\d+)\])? = (?P<value>\S+)(?: ± (?P<tol>\S+))?$"
+)
+
+
+def _sections() -> list[tuple[str, str]]:
+    """(title, text) of each '## ' section of the document."""
+    parts = re.split(r"^## ", DOC.read_text(encoding="utf-8"), flags=re.M)[1:]
+    return [(p.split("\n", 1)[0], p) for p in parts]
+
+
+def _commands(text: str) -> list[str]:
+    """The ``$ `` lines of the console blocks, continuation lines joined."""
+    out = []
+    for block in _BLOCK.findall(text):
+        joined = re.sub(r"\\\n\s*", "", block)
+        out += [line[2:] for line in joined.splitlines() if line.startswith("$ ")]
+    return out
+
+
+SECTIONS = _sections()
+
+
+def test_every_set_of_the_shared_folder_has_a_section():
+    titles = " ".join(t for t, _ in SECTIONS)
+    for folder in (
+        "xinli_turntable",
+        "imucal",
+        "imu_tk",
+        "imudata_smac",
+        "imu_utils",
+        "allantools",
+    ):
+        assert folder in titles, folder
+    # every set whose data rotacal can read has a command and a checked reference value
+    for title, text in SECTIONS:
+        if not title.startswith("imu_utils"):
+            assert _commands(text) and _EXPECT.search(text), title
+
+
+@pytest.mark.parametrize(
+    ("title", "text"), [s for s in SECTIONS if _commands(s[1])], ids=lambda v: v.split()[0]
+)
+def test_section_commands_run_and_match_the_references(title, text, tmp_path, shared_data):
+    shared_data(title.split()[0])  # skips, saying why, when the recordings are absent
+    src = str(Path(rotacal.__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": src, "ROTACAL_SHARED_DATA": str(SHARED_DATA)}
+    prelude = f'rotacal() {{ "{sys.executable}" -m rotacal "$@"; }}\n'
+    for command in _commands(text):
+        done = subprocess.run(
+            ["bash", "-c", prelude + command],
+            cwd=tmp_path,
+            env=env,
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        assert done.returncode == 0, f"{command}\n{done.stderr}"
+    expects = _EXPECT.findall(text)
+    assert expects, title
+    for file, checks in expects:
+        result = json.loads((tmp_path / file).read_text())
+        for check in checks.split("; "):
+            m = _CHECK.match(check.strip())
+            assert m, check
+            value = result[m["key"]]
+            if m["index"] is not None:
+                value = value[int(m["index"])]
+            tol = float(m["tol"] or 0)
+            assert abs(value - float(m["value"])) <= tol, (file, check, value)
