@@ -96,6 +96,11 @@ def test_time_that_steps_back_is_reported():
     r = inspect_columns({"time_s": t})
     assert r.time_increasing is False
     assert any("does not increase at 1 step(s)" in w and "row 41" in w for w in r.warnings)
+    t[5] = np.nan  # rows keep their numbers around a NaN time stamp
+    chunked = Inspector(["time_s"])
+    for lo in range(0, t.size, 30):
+        chunked.add({"time_s": t[lo : lo + 30]})
+    assert any("at 1 step(s), the first at row 41" in w for w in chunked.result().warnings)
 
 
 def test_constant_column_is_a_warning():

@@ -67,10 +67,10 @@ class ColumnStats:
         # steps between consecutive samples, the first one from the previous chunk's last
         steps = np.diff(x, prepend=self.last)
         self.repeated += int(np.count_nonzero(steps == 0.0))
-        size = np.abs(steps)
-        moved = size[np.isfinite(size) & (size > 0.0)]
-        if moved.size:
-            self.smallest_step = min(self.smallest_step, float(moved.min()))
+        size = np.abs(steps)  # NaN steps fail "> 0" and are left out
+        self.smallest_step = min(
+            self.smallest_step, float(np.min(size, where=size > 0.0, initial=math.inf))
+        )
         if self.increasing:
             rising = steps[1:] > 0.0 if self.samples == 0 else steps > 0.0
             self.increasing = bool(rising.all())
@@ -125,25 +125,27 @@ class TimeStats:
 
     def add(self, t: np.ndarray) -> None:
         """Feed the next time stamps (1-D float64, s)."""
-        rows = np.flatnonzero(np.isfinite(t)) + self.rows
+        base = self.rows
         self.rows += t.size
-        tf = t if rows.size == t.size else t[np.isfinite(t)]
+        finite = np.isfinite(t)
+        all_finite = bool(finite.all())
+        tf = t if all_finite else t[finite]
         if tf.size == 0:
             return
         if math.isnan(self.first):
             self.first = float(tf[0])
-            rows, tf_prev = rows[1:], tf
-            steps = np.diff(tf)
+            tf_prev, skip = tf, 1  # step k ends at finite sample k + 1
         else:
-            tf_prev = np.concatenate(([self.last], tf))
-            steps = np.diff(tf_prev)
+            tf_prev, skip = np.concatenate(([self.last], tf)), 0
+        steps = np.diff(tf_prev)
         self.last = float(tf[-1])
         if steps.size == 0:
             return
         back = steps <= 0.0
         if back.any():
             if self.first_backward is None:
-                self.first_backward = int(rows[int(np.argmax(back))])
+                k = int(np.argmax(back)) + skip  # index among the finite samples of the chunk
+                self.first_backward = base + (k if all_finite else int(np.flatnonzero(finite)[k]))
             self.backward += int(np.count_nonzero(back))
         forward = steps[~back]
         if self.typical is None:
