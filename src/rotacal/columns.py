@@ -1,16 +1,22 @@
 """The canonical columns each analysis command reads (INTERFACE.md, "Captures"): the one table.
 
 The CLI reads a capture's columns by these names and ``rotacal inspect`` tells from them which
-commands a file fits, so a command and the first look at a file never disagree.
+commands a file fits, so a command and the first look at a file never disagree. No imports of
+the methods here: every layer may use the names, and ``rotacal --help`` stays quick.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Iterable
 
-from rotacal.encoder.pulses import _HEAD_NAME as HEAD_NAME  # head_0 … head_{n-1}
-from rotacal.gyro.triad import RATE_COLUMNS, TRIAD_OUTPUT_COLUMNS
+#: Pulse-timestamp columns of a multi-head encoder: head_0 … head_{n-1}.
+HEAD_NAME = re.compile(r"^head_(\d+)$")
+#: Reference rates of the "3-axis gyro test" capture, in the DUT's nominal axes (deg/s).
+RATE_COLUMNS = ("wx_deg_s", "wy_deg_s", "wz_deg_s")
+#: Raw outputs of the "3-axis gyro test" capture (and of rotations through a known angle).
+TRIAD_OUTPUT_COLUMNS = ("ux", "uy", "uz")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -44,9 +50,7 @@ class CommandColumns:
 MOTION_ENCODER = CommandColumns("motion encoder", ("time_s", "a", "b"))
 MOTION_LTS = CommandColumns("motion lts", ("time_s", "displacement_mm"))
 MOTION_FOG = CommandColumns("motion fog", ("time_s", "rate_deg_s"))
-GYRO_SCALE_FACTOR = CommandColumns(
-    "gyro scale-factor", ("rate_deg_s", "output"), ("time_s", "temperature_c")
-)
+GYRO_SCALE_FACTOR = CommandColumns("gyro scale-factor", ("rate_deg_s", "output"))
 GYRO_TRIAD = CommandColumns("gyro triad", RATE_COLUMNS + TRIAD_OUTPUT_COLUMNS)
 GYRO_ROTATIONS = CommandColumns("gyro rotations", TRIAD_OUTPUT_COLUMNS, ("time_s",))
 GYRO_MULTIPOSITION = CommandColumns("gyro multiposition", ("phi1_deg", "phi2_deg", "output_deg_h"))

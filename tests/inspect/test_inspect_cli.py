@@ -9,6 +9,7 @@ import pytest
 from click.testing import CliRunner
 
 from rotacal.cli import cli
+from rotacal.columns import COMMANDS
 from rotacal.io import write_capture
 
 
@@ -126,3 +127,31 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path):
     path = write_capture(tmp_path / "c.csv", {"x": np.arange(3.0)})
     bad_map = run("inspect", str(path), "--column", "y=time_s")
     assert bad_map.exit_code == 2 and "has no column 'y' to map" in bad_map.stderr
+
+
+#: options each command needs besides its capture (values that pass the option checks)
+COMMAND_OPTIONS = {
+    "motion encoder": ["--lines", "100"],
+    "motion lts": ["--radius-mm", "100"],
+    "gyro multiposition": ["--axis", "x", "--latitude-deg", "45"],
+}
+
+
+@pytest.mark.parametrize(
+    "spec", [c for c in COMMANDS if c.required], ids=lambda c: c.command.replace(" ", "-")
+)
+def test_each_command_reads_the_columns_of_the_table(tmp_path, spec):
+    """The table that tells inspect's fits is what the commands read: a capture with all of
+    the required columns but one is refused, naming that one."""
+    rng = np.random.default_rng(6)
+    missing, *rest = spec.required
+    kept = {c: rng.normal(size=50) for c in (*rest, "other")}
+    path = write_capture(tmp_path / "c.csv", kept)
+    options = COMMAND_OPTIONS.get(spec.command, [])
+    if spec.command == "gyro rotations":
+        sections = tmp_path / "sections.json"
+        sections.write_text('{"rotations": {"x": [0, 10]}}')
+        options = ["--sections", str(sections)]
+    result = run(*spec.command.split(), str(path), *options)
+    assert result.exit_code == 2, result.output
+    assert f"no column {missing!r}" in result.stderr
