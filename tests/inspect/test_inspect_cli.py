@@ -155,3 +155,15 @@ def test_each_command_reads_the_columns_of_the_table(tmp_path, spec):
     result = run(*spec.command.split(), str(path), *options)
     assert result.exit_code == 2, result.output
     assert f"no column {missing!r}" in result.stderr
+
+
+def test_report_shows_the_columns_and_the_gaps(tmp_path):
+    t = np.delete(np.arange(2_000) * 0.01, np.arange(500, 520))
+    path = write_capture(tmp_path / "gappy.csv", {"time_s": t, "rate_deg_s": np.sin(t)})
+    report = tmp_path / "look.html"
+    result = run("inspect", str(path), "--report", str(report))
+    assert result.exit_code == 0, result.output
+    html = report.read_text()
+    assert "rate_deg_s" in html and "smallest non-zero step" in html
+    assert f"{t[499]:.9g}" in html and ">20<" in html  # the gap and its 20 missing samples
+    assert "1 gap(s)" in html
