@@ -10,7 +10,7 @@ from typing import Any
 import click
 import numpy as np
 
-from rotacal.columns import GYRO_MULTIPOSITION, GYRO_SCALE_FACTOR, GYRO_TRIAD
+from rotacal.columns import GYRO_MULTIPOSITION, GYRO_TRIAD
 from rotacal.errors import CaptureError, ConfigError
 
 from ._app import cli
@@ -80,7 +80,7 @@ def gyro_scale_factor(
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    cap = _read(capture, list(GYRO_SCALE_FACTOR.required), columns, group)
+    cap = _read(capture, ["rate_deg_s", "output"], columns, group)
     with _status("fitting"):
         result = calibrate_scale_factor(
             cap["rate_deg_s"],
