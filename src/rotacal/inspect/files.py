@@ -133,6 +133,11 @@ def _parses_as_json(path: Path, size: int) -> bool:
     return True
 
 
+def _article(label: str) -> str:
+    """ "a" or "an" before a format's letters as they are spoken (an NPZ, an HDF5, a CSV)."""
+    return "an" if label[0] in "AEFHILMNORSX" else "a"
+
+
 def _layout(
     path: Path, mapping: dict[str, str], group: str | None, options: ReadOptions | None
 ) -> tuple[list[str], dict[str, int | None], str, dict[str, object]]:
@@ -230,7 +235,7 @@ def inspect_capture(
             raise whole from None
     return inspector.result(
         str(path),
-        description=f"{p.name} is a {label} capture of {len(names)} column(s)",
+        description=f"{p.name} is {_article(label)} {label} capture of {len(names)} column(s)",
         format=label,
         unreadable=unreadable,
         metadata=metadata,
