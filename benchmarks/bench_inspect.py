@@ -8,10 +8,10 @@ processes, one case each:
   the baseline;
 - ``inspect``: ``inspect_capture`` (streams in chunks of ``CHUNK_ROWS`` rows).
 
-It prints each child's wall time and peak RSS (its own VmHWM), the
-ratios inspect/read, and the ratio of inspect's peak at N and at N/10 (flat memory ⇒ ≈ 1). Pages
-of a memory-mapped file count into RSS while they are mapped; they are page cache, not allocated
-memory. The files go to ``--dir`` (default: a temporary folder) and are removed after.
+It prints each child's wall time and peak RSS (its own VmHWM), the ratios inspect/read, and the
+ratio of inspect's peak at N and at N/10 (flat memory ⇒ ≈ 1; meaningful when N/10 exceeds
+``rotacal.inspect.files.CHUNK_ROWS``, 262 144 rows, so both sizes stream). Pages of a memory-mapped
+file count into RSS while they are mapped; they are page cache, not allocated memory. The files go to ``--dir`` (default: a temporary folder) and are removed after.
 
     python benchmarks/bench_inspect.py                  # N = 1e7 (NPZ), 2e6 (CSV)
     python benchmarks/bench_inspect.py --rows 1e6 --csv-rows 2e5   # quicker

@@ -89,7 +89,7 @@ class Inspector:
         return InspectResult(
             path=path,
             kind="capture",
-            description=description,
+            description=description or f"{len(columns)} column(s) of numbers",
             format=format,
             rows=max((c.samples for c in columns.values()), default=0),
             columns=columns,

@@ -23,8 +23,8 @@ class ColumnSummary:
         (:func:`rotacal.signal.clipping.find_clipping`); 0 when none is found.
     smallest_step : float or None — the smallest non-zero difference between consecutive
         finite samples: the column's resolution (ADC or output quantum) when it is quantised.
-    increasing : bool — every value is finite and larger than the one before it (a time or
-        sample-counter column).
+    increasing : bool — two or more values, each finite and larger than the one before it (a
+        time or sample-counter column).
     first_nonfinite_row : int or None — row (from 0) of the first NaN or inf.
     """
 

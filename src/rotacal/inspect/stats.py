@@ -90,7 +90,7 @@ class ColumnStats:
             repeated_fraction=self.repeated / self.samples if self.samples else 0.0,
             clipped_fraction=clip.share if clip is not None else 0.0,
             smallest_step=self.smallest_step if math.isfinite(self.smallest_step) else None,
-            increasing=self.increasing and self.samples > 0,
+            increasing=self.increasing and self.samples > 1,
             first_nonfinite_row=self.first_nonfinite,
         )
 
