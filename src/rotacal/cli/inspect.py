@@ -44,9 +44,9 @@ def inspect_cmd(
     group: str | None,
     overwrite: bool,
 ) -> None:
-    """A first look at CAPTURE: its columns, sampling, gaps and the commands it fits.
+    """First look at a file before any analysis.
 
-    For each column: samples, range, NaN and inf, the share of repeated and of clipped samples,
+    What CAPTURE holds, and which analysis commands it fits. For each column: samples, range, NaN and inf, the share of repeated and of clipped samples,
     the smallest step (the resolution of a quantised output) and whether it increases. For the
     time column (time_s): sampling rate, jitter of the interval, duration and gaps. Then the
     analysis commands whose columns the file has, --column mappings its names suggest, and
