@@ -140,14 +140,20 @@ def _article(label: str) -> str:
 
 def _layout(
     path: Path, mapping: dict[str, str], group: str | None, options: ReadOptions | None
-) -> tuple[list[str], dict[str, int | None], str, dict[str, object]]:
-    """Column names (after mapping), their declared lengths, the format and the metadata —
-    from the file's declarations, without reading its data."""
+) -> tuple[list[str], dict[str, int | None], str, dict[str, object], dict[str, str]]:
+    """Column names (after mapping), their declared lengths, the format, the metadata and the
+    columns the reader left out as text (labels) — from the file's head, without its data."""
     reader = _open_reader(path, group, options)
     try:
         names, wanted = _resolve_names(reader, mapping, None)
         lengths = _declared(reader, wanted)
-        return names, lengths, reader.label, dict(reader.metadata)
+        # a text reader that recognises label columns leaves them out of its names
+        labels = getattr(reader, "text_columns", None) or {}
+        text = {
+            name: f"column {name!r} holds text ({where}), not numbers"
+            for name, where in labels.items()
+        }
+        return names, lengths, reader.label, dict(reader.metadata), text
     finally:
         _close(reader)
 
@@ -219,7 +225,7 @@ def inspect_capture(
     if answer is not None:
         return answer
     mapped = _normalise_mapping(mapping)
-    names, lengths, label, metadata = _layout(p, mapped, group, read_options)
+    names, lengths, label, metadata, text = _layout(p, mapped, group, read_options)
     known = [n for n in lengths.values() if n is not None]
     ragged = len(known) == len(lengths) and len(set(known)) > 1
     read = {"mapping": mapped, "group": group, "read_options": read_options}
@@ -233,11 +239,12 @@ def inspect_capture(
         unreadable = _feed_one_by_one(inspector, p, names, ragged, read)
         if len(unreadable) == len(names):
             raise whole from None
+    count = len(names) + len(text)
     return inspector.result(
         str(path),
-        description=f"{p.name} is {_article(label)} {label} capture of {len(names)} column(s)",
+        description=f"{p.name} is {_article(label)} {label} capture of {count} column(s)",
         format=label,
-        unreadable=unreadable,
+        unreadable={**text, **unreadable},
         metadata=metadata,
     )
 
