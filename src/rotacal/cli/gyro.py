@@ -10,7 +10,7 @@ from typing import Any
 import click
 import numpy as np
 
-from rotacal.columns import GYRO_MULTIPOSITION, GYRO_TRIAD
+from rotacal.columns import GYRO_MULTIPOSITION
 from rotacal.errors import CaptureError, ConfigError
 
 from ._app import cli
@@ -126,11 +126,11 @@ def gyro_triad(
     capture: str, reject_k: float | None, columns: Sequence[str], group: str | None, **kw: Any
 ) -> None:
     """3-axis K and bias with outlier rejection: wx_deg_s, wy_deg_s, wz_deg_s, ux, uy, uz."""
-    from rotacal.gyro import calibrate_triad_columns
+    from rotacal.gyro import RATE_COLUMNS, TRIAD_OUTPUT_COLUMNS, calibrate_triad_columns
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    cap = _read(capture, list(GYRO_TRIAD.required), columns, group)
+    cap = _read(capture, [*RATE_COLUMNS, *TRIAD_OUTPUT_COLUMNS], columns, group)
     with _status("fitting"):
         result = calibrate_triad_columns(
             cap.columns,
