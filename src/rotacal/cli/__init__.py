@@ -7,7 +7,7 @@ traceback.
 
 from rotacal.errors import CaptureError
 
-from . import allan, gyro, motion, pulses, simulate, turntable  # noqa: F401  (registers commands)
+from . import allan, gyro, inspect, motion, pulses, simulate, turntable  # noqa: F401  (registers)
 from ._app import cli, main
 
 __all__ = ["CaptureError", "cli", "main"]

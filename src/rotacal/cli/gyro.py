@@ -10,6 +10,7 @@ from typing import Any
 import click
 import numpy as np
 
+from rotacal.columns import GYRO_MULTIPOSITION
 from rotacal.errors import CaptureError, ConfigError
 
 from ._app import cli
@@ -377,7 +378,7 @@ def gyro_multiposition(
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    cap = _read(capture, ["phi1_deg", "phi2_deg", "output_deg_h"], columns, group)
+    cap = _read(capture, list(GYRO_MULTIPOSITION.required), columns, group)
     with _status("fitting"):
         result = calibrate_multiposition(
             cap["phi1_deg"],

@@ -7,6 +7,7 @@ from typing import Any
 
 import click
 
+from rotacal.columns import MOTION_ENCODER, MOTION_FOG, MOTION_LTS
 from rotacal.errors import CaptureError
 from rotacal.results import with_warnings
 
@@ -229,7 +230,7 @@ def motion_encoder(
         with _sample_progress(6 * n, "calibrating (chunked)") as progress:
             result = calibrate_encoder_motion_chunked(source, lines=lines, progress=progress, **kw)
     else:
-        cap = _read(capture, ["time_s", "a", "b"], columns, group)
+        cap = _read(capture, list(MOTION_ENCODER.required), columns, group)
         with _status("demodulating and fitting"):
             result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
     if correction_from is not None:  # a clipped reference analysed with --allow-clipped
@@ -259,7 +260,7 @@ def motion_lts(
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    cap = _read(capture, ["time_s", "displacement_mm"], columns, group)
+    cap = _read(capture, list(MOTION_LTS.required), columns, group)
     with _status("fitting"):
         result = calibrate_lts_motion(
             cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw
@@ -287,7 +288,7 @@ def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: An
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    cap = _read(capture, ["time_s", "rate_deg_s"], columns, group)
+    cap = _read(capture, list(MOTION_FOG.required), columns, group)
     with _status("fitting"):
         result = calibrate_fog_motion(cap["time_s"], cap["rate_deg_s"], **kw)
     _finish_motion(result, capture, json_path, report_path)

@@ -14,13 +14,13 @@ in :mod:`rotacal.encoder.selfcal`.
 from __future__ import annotations
 
 import dataclasses
-import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rotacal.columns import HEAD_NAME as _HEAD_NAME
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.signal._checks import TYPICAL_STEPS
 from rotacal.signal._values import check_time_span
@@ -46,7 +46,6 @@ MISSING_PULSE_RATIO = 1.5
 EXTRA_PULSE_RATIO = 0.75
 #: Intervals per block when estimating the local pulse period (robust to slow rate changes).
 _PERIOD_BLOCK = 64
-_HEAD_NAME = re.compile(r"^head_(\d+)$")
 
 
 def check_pulses_per_rev(pulses_per_rev: Any) -> int:

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from rotacal.columns import RATE_COLUMNS, TRIAD_OUTPUT_COLUMNS
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.uncertainty import (
     as_specs,
@@ -65,9 +66,6 @@ __all__ = [
     "triad_plan_check",
 ]
 
-#: Canonical columns of the "3-axis gyro test" capture (INTERFACE.md).
-RATE_COLUMNS = ("wx_deg_s", "wy_deg_s", "wz_deg_s")
-TRIAD_OUTPUT_COLUMNS = ("ux", "uy", "uz")
 #: The rates of seed 003, Table 2 (°/s).
 SEED_RATES_DEG_S = (6.0, 18.0, 30.0, 60.0, 90.0)
 

@@ -194,12 +194,14 @@ def to_float_column(
     integrity: Integrity | None = None,
     ragged: bool = False,
     offset: int = 0,
+    allow_nonfinite: bool = False,
 ) -> np.ndarray:
     """Validate one raw column and return it as 1-D float64 (memory-mapped data stays mapped).
 
     ``what`` names the column in messages; ``locate(i)`` describes absolute row ``i``;
     ``offset`` is the absolute row of ``raw[0]`` (chunks). ``integrity`` is fed the rows as
     they are scanned, and checked before a NaN/inf is blamed on the data rather than on damage.
+    ``allow_nonfinite`` keeps NaN/inf values (``rotacal inspect`` counts them) instead of refusing.
     """
     arr = raw if isinstance(raw, np.ndarray) else np.asarray(raw)
     check_declared(fname, what, ColumnInfo("column", arr.dtype, arr.shape))
@@ -220,7 +222,7 @@ def to_float_column(
     if out.shape[0] == 0:
         raise CaptureError(f"{fname} {what} is empty; give a capture with data in it")
     feed = None if integrity is None else (lambda lo, hi: integrity.feed(offset + lo, offset + hi))
-    bad = first_nonfinite(out, on_block=feed)
+    bad = -1 if allow_nonfinite else first_nonfinite(out, on_block=feed)
     if bad >= 0:
         if integrity is not None:
             integrity.check()

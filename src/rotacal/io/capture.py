@@ -275,6 +275,7 @@ def read_capture(
     group: str | None = None,
     ragged: bool = False,
     read_options: ReadOptions | None = None,
+    allow_nonfinite: bool = False,
 ) -> Capture:
     """Read a capture file into a :class:`Capture` of validated float64 columns.
 
@@ -292,6 +293,8 @@ def read_capture(
     ragged : bool
         Allow columns of different lengths (multi-head pulse files); trailing empty CSV cells
         and trailing NaNs are padding and dropped per column.
+    allow_nonfinite : bool
+        Keep NaN/inf values instead of refusing them (a first look at a file counts them).
 
     Returns
     -------
@@ -323,6 +326,7 @@ def read_capture(
                 locate=reader.locate,
                 integrity=integrity,
                 ragged=ragged,
+                allow_nonfinite=allow_nonfinite,
             )
             if integrity is not None:
                 integrity.check()
@@ -354,6 +358,7 @@ def iter_capture_chunks(
     mapping: MappingArg = None,
     group: str | None = None,
     read_options: ReadOptions | None = None,
+    allow_nonfinite: bool = False,
 ) -> Iterator[dict[str, np.ndarray]]:
     """Stream a capture in chunks of at most ``chunk_rows`` rows with bounded memory.
 
@@ -361,7 +366,7 @@ def iter_capture_chunks(
     views of a memory map). Concatenating the chunks gives what :func:`read_capture` returns.
     Columns must have equal lengths. Each chunk is validated like :func:`read_capture` (row
     numbers in messages count from the start of the file). The file is checked and opened on the
-    first ``next()``.
+    first ``next()``. ``allow_nonfinite`` keeps NaN/inf values instead of refusing them.
 
     Raises
     ------
@@ -395,6 +400,7 @@ def iter_capture_chunks(
                     locate=reader.locate,
                     integrity=checks[canon],
                     offset=start,
+                    allow_nonfinite=allow_nonfinite,
                 )
                 for canon, fcol in wanted.items()
             }
