@@ -83,6 +83,7 @@ def captures(tmp_path_factory) -> dict[str, Path]:
 #: How each analysis command runs on the small captures: (capture kind, further arguments).
 ANALYSES: dict[tuple[str, ...], tuple[str, list[str]]] = {
     ("allan",): ("gyro-noise", []),
+    ("inspect",): ("fog", []),
     ("gyro", "multiposition"): ("multiposition", ["--axis", "x", "--latitude-deg", "45.75"]),
     ("gyro", "rotations"): ("gyro-rotations", ["--sections", "{gyro-rotations}.truth.json"]),
     ("gyro", "scale-factor"): ("gyro-rates", []),
@@ -305,6 +306,12 @@ def test_provenance_of_an_analysis(captures, tmp_path):
     assert prov["inputs"] == [_record(capture), _record(specs)]
     assert prov["options"] == {
         "capture": str(capture),
+        "more_captures": [],
+        "rate-from-name": False,
+        "rates": None,
+        "rest-from": [],
+        "rest-band-deg-s": 0.5,
+        "rest-guard-samples": 3,
         "full-scale-deg-s": 100.0,
         "requirement": None,
         "output-unit": "",

@@ -99,10 +99,7 @@ def test_the_parser_joins_continuations_and_drops_comments() -> None:
 
 
 def _analysis_commands(command: click.Command, path: tuple[str, ...]) -> list[str]:
-    """The commands that analyse a file: those with a CAPTURE or CONFIG argument.
-
-    ``inspect`` (a first look at a file, not an analysis) is left to "Your own captures".
-    """
+    """The commands that read a file: those with a CAPTURE or CONFIG argument."""
     if isinstance(command, click.Group):
         return [
             found
@@ -117,7 +114,7 @@ def test_the_tour_covers_every_analysis_and_writes_nothing_twice() -> None:
     commands, snippets = tour()
     words = [shlex.split(command, comments=True) for _, command in commands]
     ran = {" ".join(w[1:3]) for w in words} | {w[1] for w in words}
-    analyses = [path for path in _analysis_commands(cli, ()) if path != "inspect"]
+    analyses = _analysis_commands(cli, ())
     assert "motion encoder" in analyses and "turntable budget" in analyses  # the walk works
     for needed in analyses:
         assert needed in ran, f"the README tour does not show 'rotacal {needed}'"
