@@ -60,6 +60,7 @@ def _inputs(path: tuple[str, ...]) -> list[click.Parameter]:
 
 #: Every file a command reads, by command (the parameter names).
 EXPECTED_INPUTS = {
+    ("inspect",): {"capture"},
     ("allan",): {"capture", "specs"},
     ("gyro", "multiposition"): {"capture", "specs"},
     ("gyro", "rotations"): {"capture", "sections_path", "specs"},
