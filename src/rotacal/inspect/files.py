@@ -135,7 +135,7 @@ def _parses_as_json(path: Path, size: int) -> bool:
 
 def _article(label: str) -> str:
     """ "a" or "an" before a format's letters as they are spoken (an NPZ, an HDF5, a CSV)."""
-    return "an" if label[0] in "AEFHILMNORSX" else "a"
+    return "an" if label[0] in "AEFHILMNORSXaeiou" else "a"
 
 
 def _layout(
@@ -153,7 +153,9 @@ def _layout(
             name: f"column {name!r} holds text ({where}), not numbers"
             for name, where in labels.items()
         }
-        return names, lengths, reader.label, dict(reader.metadata), text
+        layout = getattr(reader, "layout", None)  # a text capture says how it was parsed
+        label = layout.description if layout is not None else reader.label
+        return names, lengths, label, dict(reader.metadata), text
     finally:
         _close(reader)
 

@@ -79,6 +79,16 @@ class TextLayout:
     decimal_sniffed: bool = False
 
     @property
+    def description(self) -> str:
+        """The layout in words, e.g. "text (tab separated, decimal comma, no header row)"."""
+        separator = {",": "comma", ";": "semicolon", "\t": "tab", " ": "blank"}[self.delimiter]
+        parts = [f"{separator} separated"]
+        if self.decimal == ",":
+            parts.append("decimal comma")
+        parts.append("header row" if self.has_header else "no header row")
+        return f"text ({', '.join(parts)})"
+
+    @property
     def numpy_delimiter(self) -> str | None:
         """The ``delimiter`` argument of ``np.loadtxt`` (None: runs of blanks)."""
         return None if self.delimiter == " " else self.delimiter
