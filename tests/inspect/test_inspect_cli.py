@@ -51,7 +51,7 @@ def test_terminal_summary_and_warning_lines(tmp_path):
     result = run("inspect", str(path))
     assert result.exit_code == 0, result.output
     out = result.stdout.splitlines()
-    assert out[0] == "log.csv is a CSV capture of 2 column(s)"
+    assert out[0] == "log.csv is a text capture (comma separated, header row) of 2 column(s)"
     assert out[1].split() == list(
         ("column", "samples", "min", "max", "NaN", "inf", "repeated", "clipped", "step")
     )

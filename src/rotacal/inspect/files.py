@@ -135,14 +135,21 @@ def _parses_as_json(path: Path, size: int) -> bool:
 
 def _article(label: str) -> str:
     """ "a" or "an" before a format's letters as they are spoken (an NPZ, an HDF5, a CSV)."""
-    return "an" if label[0] in "AEFHILMNORSXaeiou" else "a"
+    return "an" if label[0] in "AEFHILMNORSX" else "a"
+
+
+def _how_parsed(reader: object) -> str:
+    """ " (tab separated, no header row)" for a text capture (its sniffed layout), else ""."""
+    layout = getattr(reader, "layout", None)
+    return f" ({layout.description})" if layout is not None else ""
 
 
 def _layout(
     path: Path, mapping: dict[str, str], group: str | None, options: ReadOptions | None
-) -> tuple[list[str], dict[str, int | None], str, dict[str, object], dict[str, str]]:
-    """Column names (after mapping), their declared lengths, the format, the metadata and the
-    columns the reader left out as text (labels) — from the file's head, without its data."""
+) -> tuple[list[str], dict[str, int | None], str, dict[str, object], dict[str, str], str]:
+    """Column names (after mapping), their declared lengths, the format, the metadata, the
+    columns the reader left out as text (labels) and how a text file was parsed — from the
+    file's head, without its data."""
     reader = _open_reader(path, group, options)
     try:
         names, wanted = _resolve_names(reader, mapping, None)
@@ -153,9 +160,7 @@ def _layout(
             name: f"column {name!r} holds text ({where}), not numbers"
             for name, where in labels.items()
         }
-        layout = getattr(reader, "layout", None)  # a text capture says how it was parsed
-        label = layout.description if layout is not None else reader.label
-        return names, lengths, label, dict(reader.metadata), text
+        return names, lengths, reader.label, dict(reader.metadata), text, _how_parsed(reader)
     finally:
         _close(reader)
 
@@ -227,7 +232,7 @@ def inspect_capture(
     if answer is not None:
         return answer
     mapped = _normalise_mapping(mapping)
-    names, lengths, label, metadata, text = _layout(p, mapped, group, read_options)
+    names, lengths, label, metadata, text, parsed = _layout(p, mapped, group, read_options)
     known = [n for n in lengths.values() if n is not None]
     ragged = len(known) == len(lengths) and len(set(known)) > 1
     read = {"mapping": mapped, "group": group, "read_options": read_options}
@@ -244,7 +249,11 @@ def inspect_capture(
     count = len(names) + len(text)
     return inspector.result(
         str(path),
-        description=f"{p.name} is {_article(label)} {label} capture of {count} column(s)",
+        description=(
+            f"{p.name} is a text capture ({parsed}) of {count} column(s)"
+            if parsed
+            else f"{p.name} is {_article(label)} {label} capture of {count} column(s)"
+        ),
         format=label,
         unreadable={**text, **unreadable},
         metadata=metadata,

@@ -80,13 +80,13 @@ class TextLayout:
 
     @property
     def description(self) -> str:
-        """The layout in words, e.g. "text (tab separated, decimal comma, no header row)"."""
+        """The layout in words, e.g. "tab separated, decimal comma, no header row"."""
         separator = {",": "comma", ";": "semicolon", "\t": "tab", " ": "blank"}[self.delimiter]
         parts = [f"{separator} separated"]
         if self.decimal == ",":
             parts.append("decimal comma")
         parts.append("header row" if self.has_header else "no header row")
-        return f"text ({', '.join(parts)})"
+        return ", ".join(parts)
 
     @property
     def numpy_delimiter(self) -> str | None:
