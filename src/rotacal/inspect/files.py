@@ -139,9 +139,9 @@ def _article(label: str) -> str:
 
 
 def _how_parsed(reader: object) -> str:
-    """ " (tab separated, no header row)" for a text capture (its sniffed layout), else ""."""
+    """How a text capture was parsed ("tab separated, no header row"); "" for other formats."""
     layout = getattr(reader, "layout", None)
-    return f" ({layout.description})" if layout is not None else ""
+    return layout.description if layout is not None else ""
 
 
 def _layout(
