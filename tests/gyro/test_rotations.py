@@ -92,10 +92,10 @@ def test_more_rotations_by_least_squares_and_oblique_axes() -> None:
     b = simulate_gyro_rotations(K=K_TRUE, bias=B_TRUE, noise_std=0.0, angle_deg=-720.0)
     rate = np.vstack([_rate(a), _rate(b)])
     n = len(a)
-    rots = [(ax, *a.truth["rotations"][ax]) for ax in "xyz"]
+    rots = [(ax, *a.truth["rotations"][ax], 360.0) for ax in "xyz"]
     rots += [(ax, s + n, e + n, -720.0) for ax, (s, e) in b.truth["rotations"].items()]
     # an oblique rotation: the same turn about z labelled by its vector
-    rots.append(((0.0, 0.0, 2.0), *a.truth["rotations"]["z"]))
+    rots.append(((0.0, 0.0, 2.0), *a.truth["rotations"]["z"], 360.0))
     static = a.truth["static"] + [[s + n, e + n] for s, e in b.truth["static"]]
     r = calibrate_triad_rotations(rate, fs, rots, static=static)
     np.testing.assert_allclose(r.scale_misalignment, K_TRUE, atol=1e-12)
