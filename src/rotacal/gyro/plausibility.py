@@ -19,8 +19,11 @@ from rotacal.signal.plausibility import (
 )
 
 __all__ = [
+    "FALLING_SLOPE",
     "NONLINEARITY_LIMIT_PERCENT_FS",
     "REST_LIMIT",
+    "allan_warnings",
+    "multiposition_warnings",
     "negative_diagonal_warnings",
     "rotation_warnings",
     "scale_factor_warnings",
@@ -32,6 +35,9 @@ NONLINEARITY_LIMIT_PERCENT_FS = 10.0
 #: Rate at a rotation section's first or last sample, relative to its peak, beyond which the
 #: section does not start or end at rest.
 REST_LIMIT = 0.05
+#: Log-log slope of σ(τ) at the longest τ below which the Allan deviation still falls (white
+#: rate noise is −½, a flat bias-instability floor 0).
+FALLING_SLOPE = -0.25
 #: Degree of the smooth curve the scale-factor points must follow (S(1 + k₂Ω + k₃Ω²)).
 _SMOOTH_DEGREE = 3
 
@@ -231,3 +237,63 @@ def rotation_warnings(
         if line is not None:
             out.append(line)
     return out
+
+
+def allan_warnings(
+    *, bias_instability: float | None, local_slope: np.ndarray, tau_s: np.ndarray
+) -> list[str]:
+    """Warning of a rate record too short to show the bias instability.
+
+    IEEE Std 952 Annex C reads B on the flat part of σ(τ); when no flat part was found and the
+    curve still falls at the longest τ (log-log slope below :data:`FALLING_SLOPE`), the record
+    ends before the floor and B is not reported.
+
+    Parameters
+    ----------
+    bias_instability : float or None
+        B as found (°/h), None when not seen.
+    local_slope, tau_s : ndarray
+        Log-log slope of σ(τ) and the τ it was taken at (s).
+
+    References
+    ----------
+    IEEE Std 952-1997, Annex C, Table C.1 and Fig. C.2 (the slopes of σ(τ)).
+    """
+    slopes = np.asarray(local_slope, dtype=float)
+    taus = np.asarray(tau_s, dtype=float)
+    if bias_instability is not None or slopes.size == 0 or not slopes[-1] < FALLING_SLOPE:
+        return []
+    return [
+        f"no bias instability: the Allan deviation still falls at the longest τ, {taus[-1]:.4g} s "
+        f"(slope {slopes[-1]:+.2f}, limit {FALLING_SLOPE:+.2f}) — the record is too short to "
+        "reach the flat floor; record several times longer (τ up to a tenth of the record)"
+    ]
+
+
+def multiposition_warnings(residuals: np.ndarray, position: np.ndarray, n_params: int) -> list[str]:
+    """Lack of fit of the multiposition drift model, where positions hold repeated readings.
+
+    The lack-of-fit F test (:func:`rotacal.signal.plausibility.replicate_lack_of_fit`) of the
+    position means about the 7-coefficient model against the repeats' pure error.
+
+    Parameters
+    ----------
+    residuals : ndarray (N,)
+        Output minus model, one per reading (deg/h).
+    position : ndarray (N,) of int
+        The position of each reading.
+    n_params : int
+        Coefficients fitted.
+
+    References
+    ----------
+    Seed 001 eqs. (1)–(6) (the model); NIST/SEMATECH e-Handbook (2012) §4.4.4.3.
+    """
+    line = lack_of_fit_warning(
+        "the drift model through the positions",
+        replicate_lack_of_fit(residuals, position, n_params),
+        "the position means scatter about the model more than their repeats do — a term the "
+        "model lacks (a g-sensitivity of another axis, temperature), a wrong --latitude-deg or "
+        "--axis, or positions other than the angles recorded; check the position list",
+    )
+    return [] if line is None else [line]

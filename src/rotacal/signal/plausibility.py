@@ -206,9 +206,10 @@ def lack_of_fit_warning(what: str, test: FitTest | None, cause: str) -> str | No
     """
     if test is None or not test.lack_of_fit:
         return None
+    p = f"p = {test.p_value:.2g}" if test.p_value >= 1e-16 else "p < 1e-16"
     return (
         f"lack of fit: {what} leaves residuals {test.birge_ratio:.3g} times their expected "
-        f"scatter ({test.statistic} {test.reduced_chi2:.3g}, ν = {test.dof}, p = {test.p_value:.2g} "
+        f"scatter ({test.statistic} {test.reduced_chi2:.3g}, ν = {test.dof}, {p} "
         f"< {LACK_OF_FIT_P:g}): {cause}"
     )
 

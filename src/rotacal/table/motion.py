@@ -367,6 +367,7 @@ def _finish(
         amplitude_deg=amp,
         frequency_hz=freq,
         harmonics=int(displacement_amplitudes.size),
+        fundamental=float(fit.amplitudes[0]),
         residual=None if residual is None else np.asarray(residual, dtype=float),
         residual_unit="deg/s" if "residual_deg_s" in plot else "deg",
         set_amplitude_deg=set_amplitude_deg,

@@ -5,8 +5,12 @@ Two findings turn into ``warnings`` of :class:`~rotacal.table.MotionResult`:
 * set values the measurement contradicts — an amplitude or frequency off by a factor near a power
   of ten, of two or of 180/π, or by more than 20 % (:func:`rotacal.signal.plausibility.
   set_value_warning`): a line count, a radius, a gyro unit or a time unit given wrong;
-* lack of fit — the fit's residual far above the sample-to-sample noise: motion the harmonics do
-  not explain (a vibration, stick-slip, a changing frequency, harmonics beyond ``--harmonics``).
+* lack of fit — the fit's residual far above the sample-to-sample noise (more than
+  :data:`RESIDUAL_NOISE_LIMIT` times) and large enough to matter (more than
+  :data:`RESIDUAL_AMPLITUDE_LIMIT` of the fitted fundamental, five times the 0.02 pp THD accuracy
+  bar): motion the harmonics do not explain (a vibration, stick-slip, a changing frequency,
+  harmonics beyond ``--harmonics``). A table's small stagnation and creep at the reversals (seed
+  000 Table 1) stay below it.
 
 Both run on what every path of the analysis has (the fit, the decimated residual kept for the
 figures), so the chunked encoder path (:mod:`rotacal.table.streaming`) gets them too.
@@ -20,10 +24,18 @@ import numpy as np
 
 from rotacal.signal.plausibility import set_value_warning
 
-__all__ = ["RESIDUAL_NOISE_LIMIT", "motion_warnings", "residual_to_noise_ratio"]
+__all__ = [
+    "RESIDUAL_AMPLITUDE_LIMIT",
+    "RESIDUAL_NOISE_LIMIT",
+    "motion_warnings",
+    "residual_to_noise_ratio",
+]
 
 #: Residual rms over the white noise beyond which the harmonics do not explain the data.
 RESIDUAL_NOISE_LIMIT = 3.0
+#: Residual rms over the fitted fundamental's amplitude below which a lack of fit is too small to
+#: matter (0.1 %).
+RESIDUAL_AMPLITUDE_LIMIT = 1e-3
 #: Fewest residual samples the ratio is judged on.
 _MIN_RESIDUALS = 50
 
@@ -75,6 +87,7 @@ def motion_warnings(
     amplitude_deg: float,
     frequency_hz: float,
     harmonics: int,
+    fundamental: float,
     residual: np.ndarray | None,
     residual_unit: str,
     set_amplitude_deg: float | None,
@@ -89,6 +102,8 @@ def motion_warnings(
         Measured displacement amplitude (deg) and frequency (Hz).
     harmonics : int
         Harmonics fitted.
+    fundamental : float
+        Amplitude of the fitted fundamental (unit of ``residual``).
     residual : ndarray or None
         The fit's residual, decimated evenly (deg, or deg/s for the FOG).
     residual_unit : str
@@ -119,12 +134,14 @@ def motion_warnings(
             out.append(line)
     if residual is not None:
         ratio = residual_to_noise_ratio(residual)
-        if ratio > RESIDUAL_NOISE_LIMIT:
-            rms = float(np.sqrt(np.mean(np.square(residual - np.mean(residual)))))
+        rms = float(np.sqrt(np.mean(np.square(residual - np.mean(residual)))))
+        share = rms / abs(fundamental) if fundamental else math.inf
+        if ratio > RESIDUAL_NOISE_LIMIT and share > RESIDUAL_AMPLITUDE_LIMIT:
             out.append(
                 f"lack of fit: the residual of the {harmonics}-harmonic fit ({rms:.3g} "
-                f"{residual_unit} rms) is {ratio:.3g} times the sample-to-sample noise (limit "
-                f"{RESIDUAL_NOISE_LIMIT:g}): motion the harmonics do not explain — a vibration, "
+                f"{residual_unit} rms, {100 * share:.3g} % of the fundamental) is {ratio:.3g} "
+                f"times the sample-to-sample noise (limits {RESIDUAL_NOISE_LIMIT:g} and "
+                f"{100 * RESIDUAL_AMPLITUDE_LIMIT:g} %): motion the harmonics do not explain — a vibration, "
                 "stick-slip, a frequency that changes, or harmonics above --harmonics; look at "
                 "the residual in the report"
             )
