@@ -277,7 +277,12 @@ def simulate_gyro_noise_cmd(out: str, overwrite: bool, **kw: Any) -> None:
 
 @simulate.command("gyro-rotations")
 @_sim_common
-@click.option("--angle-deg", type=float, default=None, help="Angle of each rotation [360].")
+@click.option(
+    "--angle-deg",
+    type=float,
+    default=None,
+    help="Angle of each rotation, right-hand rule [-360: clockwise, the Ferraris protocol].",
+)
 @click.option("--noise-std", type=float, default=None, help="Output noise, rms.")
 @click.option("--fs-hz", type=float, default=None, help="Sampling rate [100 Hz].")
 def simulate_gyro_rotations_cmd(out: str, overwrite: bool, **kw: Any) -> None:
