@@ -22,6 +22,7 @@ __all__ = [
     "FALLING_SLOPE",
     "NONLINEARITY_LIMIT_PERCENT_FS",
     "REST_LIMIT",
+    "SCATTER_LIMIT_PERCENT_FS",
     "allan_warnings",
     "multiposition_warnings",
     "negative_diagonal_warnings",
@@ -38,6 +39,11 @@ REST_LIMIT = 0.05
 #: Log-log slope of σ(τ) at the longest τ below which the Allan deviation still falls (white
 #: rate noise is −½, a flat bias-instability floor 0).
 FALLING_SLOPE = -0.25
+#: rms scatter of the rate points about a smooth cubic below which a lack of fit is too small to
+#: matter (%FS): a tenth of the 0.5 %FS nonlinearity limits of yaw-rate sensors. The points' Type
+#: A u (s/√n) assumes independent samples and is small for a correlated (real) gyro output: the
+#: real XinLi rate table's 11 points scatter 22 u but 0.016 %FS about the cubic.
+SCATTER_LIMIT_PERCENT_FS = 0.05
 #: Degree of the smooth curve the scale-factor points must follow (S(1 + k₂Ω + k₃Ω²)).
 _SMOOTH_DEGREE = 3
 
@@ -69,7 +75,11 @@ def negative_diagonal_warnings(kmat: np.ndarray, columns: Sequence[str], check: 
 
 
 def triad_fit_warnings(
-    fit_residual: np.ndarray, groups: np.ndarray, keep: np.ndarray, columns: Sequence[str]
+    fit_residual: np.ndarray,
+    groups: np.ndarray,
+    keep: np.ndarray,
+    columns: Sequence[str],
+    quanta: Sequence[float] = (0.0, 0.0, 0.0),
 ) -> list[str]:
     """The lack-of-fit F test of u = K·ω + b, per output, on the rows kept.
 
@@ -83,6 +93,9 @@ def triad_fit_warnings(
         Rows kept by the outlier rejection, per output.
     columns : sequence of 3 str
         The output columns, for the message.
+    quanta : sequence of 3 float
+        Output step of each channel (0 when not quantised): its rounding q²/12 biases each point
+        mean beyond the repeats' scatter.
 
     References
     ----------
@@ -91,7 +104,7 @@ def triad_fit_warnings(
     out = []
     for c in range(3):
         kc = keep[:, c]
-        test = replicate_lack_of_fit(fit_residual[kc, c], groups[kc], 4)
+        test = replicate_lack_of_fit(fit_residual[kc, c], groups[kc], 4, quanta[c] ** 2 / 12.0)
         line = lack_of_fit_warning(
             f"u = K·ω + b for {columns[c]}",
             test,
@@ -113,6 +126,7 @@ def scale_factor_warnings(
     point_u: np.ndarray | None,
     full_scale_deg_s: float,
     output_unit: str,
+    quantum: float | None = None,
 ) -> list[str]:
     """Warnings of a single-axis scale-factor test (seed 004 §4).
 
@@ -120,7 +134,8 @@ def scale_factor_warnings(
     * a nonlinearity beyond :data:`NONLINEARITY_LIMIT_PERCENT_FS`;
     * lack of fit: the point residuals about the line scatter about a smooth cubic (the
       nonlinearity a gyro has) more than the points' Type A uncertainties explain — the χ² test
-      of :func:`rotacal.signal.plausibility.chi_square_test`, ν = points − 4.
+      of :func:`rotacal.signal.plausibility.chi_square_test`, ν = points − 4 — by more than
+      :data:`SCATTER_LIMIT_PERCENT_FS` rms.
 
     Parameters
     ----------
@@ -136,6 +151,8 @@ def scale_factor_warnings(
         FS (°/s).
     output_unit : str
         For the message.
+    quantum : float or None
+        Output step (output unit): its rounding q²/12 adds to each point mean's variance.
     """
     out = []
     unit = f" {output_unit}" if output_unit else ""
@@ -154,7 +171,8 @@ def scale_factor_warnings(
             "that is not the gyro's; check the rate points and the columns"
         )
     rates = np.asarray(rates_deg_s, dtype=float)
-    u = None if point_u is None else np.asarray(point_u, dtype=float)
+    rounding = 0.0 if quantum is None else quantum**2 / 12.0
+    u = None if point_u is None else np.sqrt(np.asarray(point_u, dtype=float) ** 2 + rounding)
     if (
         u is not None
         and rates.size > _SMOOTH_DEGREE + 1
@@ -164,11 +182,15 @@ def scale_factor_warnings(
         x = rates / full_scale_deg_s
         coef = np.polyfit(x, residuals, _SMOOTH_DEGREE, w=1.0 / u)
         smooth = residuals - np.polyval(coef, x)
+        scatter = 100.0 * float(np.sqrt(np.mean(smooth**2))) / abs(scale_factor * full_scale_deg_s)
         test = chi_square_test(smooth, u, rates.size - _SMOOTH_DEGREE - 1)
+        if not scatter > SCATTER_LIMIT_PERCENT_FS:
+            test = None
         line = lack_of_fit_warning(
             "a smooth cubic through the residuals of the rate points",
             test,
-            "a point scatters beyond its repeatability — a set rate the table did not reach, "
+            f"the points scatter {scatter:.3g} %FS rms about it (limit "
+            f"{SCATTER_LIMIT_PERCENT_FS:g} %FS) — a set rate the table did not reach, "
             f"drift between the points, or a disturbed point (largest: "
             f"{_worst_point(rates, smooth, u)}); repeat that point",
         )

@@ -969,6 +969,7 @@ def calibrate_scale_factor(
                 point_u=u_pt,
                 full_scale_deg_s=fs,
                 output_unit=output_unit,
+                quantum=q,
             ),
         ),
     )

@@ -886,7 +886,9 @@ def calibrate_triad(
             *negative_diagonal_warnings(
                 kmat, out_cols, "the reference rates wx/wy/wz_deg_s have the other sign"
             ),
-            *triad_fit_warnings(fit_res, inv, keep, out_cols),
+            *triad_fit_warnings(
+                fit_res, inv, keep, out_cols, [_quantum(uu[:, c]) for c in range(3)]
+            ),
         ),
     )
 

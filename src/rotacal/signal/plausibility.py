@@ -214,13 +214,17 @@ def lack_of_fit_warning(what: str, test: FitTest | None, cause: str) -> str | No
     )
 
 
-def replicate_lack_of_fit(residuals: Any, groups: Any, n_params: int) -> FitTest | None:
+def replicate_lack_of_fit(
+    residuals: Any, groups: Any, n_params: int, extra_variance: float = 0.0
+) -> FitTest | None:
     """The lack-of-fit F test of a least-squares fit whose points hold replicates.
 
     With m points (``groups``), N samples and p fitted parameters, the residual sum of squares
     splits into the pure error SS_pe = ΣΣ(r_ij − r̄_i)² (ν = N − m) and the lack of fit
     SS_lof = Σ n_i·r̄_i² (ν = m − p); F = (SS_lof/(m − p))/(SS_pe/(N − m)) follows F(m − p, N − m)
-    when the model holds.
+    when the model holds. An ``extra_variance`` v that each point mean carries beyond its repeats
+    (the rounding q²/12 of a quantised output, the same at every sample of a point) weighs each
+    point by s²/(s²/n_i + v) instead of n_i: F = Σ r̄_i²/(s²/n_i + v)/(m − p), s² = SS_pe/(N − m).
 
     Parameters
     ----------
@@ -230,6 +234,8 @@ def replicate_lack_of_fit(residuals: Any, groups: Any, n_params: int) -> FitTest
         The point each sample belongs to (0 … m − 1).
     n_params : int
         Parameters fitted.
+    extra_variance : float
+        Variance of each point mean beyond its repeats' scatter (unit of ``residuals`` squared).
 
     Returns
     -------
@@ -253,9 +259,9 @@ def replicate_lack_of_fit(residuals: Any, groups: Any, n_params: int) -> FitTest
     if df_lof < 1 or df_pe < 1:
         return None
     means = np.bincount(g, r)[present] / counts[present]
-    ss_lof = float(np.sum(counts[present] * means**2))
     ss_pe = float(np.sum((r - (np.bincount(g, r) / np.maximum(counts, 1.0))[g]) ** 2))
     if not ss_pe > 0:
         return None
-    f = (ss_lof / df_lof) / (ss_pe / df_pe)
+    s2 = ss_pe / df_pe
+    f = float(np.sum(means**2 / (s2 / counts[present] + max(extra_variance, 0.0)))) / df_lof
     return FitTest(f * df_lof, df_lof, float(stats.f.sf(f, df_lof, df_pe)), "F")

@@ -361,7 +361,9 @@ def _finish(
         **extra,
         **drift_fields(scheme, fit),
     )
-    residual = plot.get("residual_deg", plot.get("residual_deg_s"))
+    drift = drift_warnings(scheme, fit, budgets, t_used[-1] - t_used[0])
+    # an unfitted drift is the lack of fit already named: no second line for it
+    residual = None if drift else plot.get("residual_deg", plot.get("residual_deg_s"))
     plausibility = motion_warnings(
         scheme,
         amplitude_deg=amp,
@@ -373,7 +375,6 @@ def _finish(
         set_amplitude_deg=set_amplitude_deg,
         set_frequency_hz=set_frequency_hz,
     )
-    drift = drift_warnings(scheme, fit, budgets, t_used[-1] - t_used[0])
     return with_warnings(result, [*drift, *plausibility])
 
 
