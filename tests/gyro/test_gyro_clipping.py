@@ -93,7 +93,9 @@ def test_a_gyro_output_at_its_rails_is_refused_then_allowed(make, run, column):
     found = sum(rail.samples for c in exc.value.clippings for rail in c.rails)
     assert beyond <= found <= 1.5 * beyond + 1
     r = run(cap, allow_clipped=True)
-    assert [w.split("; analysed anyway")[0] for w in r.warnings] == [
+    # outputs held at the rails also leave the model (rotacal.gyro.plausibility): lack of fit
+    clipping = [w for w in r.warnings if not w.startswith("lack of fit:")]
+    assert [w.split("; analysed anyway")[0] for w in clipping] == [
         c.describe() for c in exc.value.clippings
     ]
     assert _share(msg) > 0
@@ -113,7 +115,10 @@ HONEST = [
 @pytest.mark.parametrize(("make", "run"), HONEST)
 @pytest.mark.parametrize("seed", range(3))
 def test_unclipped_gyro_twins_say_nothing(make, run, seed):
-    assert run(make(seed)).warnings == ()
+    warnings = run(make(seed)).warnings
+    if run is _noise:  # 600 s is too short to show the bias instability, and says so
+        warnings = tuple(w for w in warnings if not w.startswith("no bias instability"))
+    assert warnings == ()
 
 
 # ----------------------------------------------------------------------------- real recordings

@@ -223,7 +223,7 @@ def test_rotation_budget_matches_the_hand_derived_integrals() -> None:
         table__set_angle_arcsec={"distribution": "rectangular", "half_width": a_ang},
         timebase__relative_error={"distribution": "rectangular", "half_width": a_t},
     )
-    r = calibrate_triad_rotations(rate, fs, rotations, static=static, specs=specs)
+    r = calibrate_triad_rotations(rate, fs, rotations, static=static, specs=specs, angle_deg=360.0)
     np.testing.assert_allclose(r.scale_misalignment, k_true, atol=1e-12)
     noise = d * math.sqrt(4 * n_s / (4 * n_s - 4))  # pooled about each section's mean
     u_theta = noise * math.sqrt(n_r) / fs  # (output unit·s)
@@ -264,7 +264,7 @@ def test_rotation_angle_uncertainty_once_and_stated_means_correct_k() -> None:
         )
     # a DAQ clock 1e-4 long: the twin's integrals read 1e-4 large when the angles are 1e-4 large
     eps = 1e-4
-    cap = simulate_gyro_rotations(noise_std=0.0, angle_error_deg=360.0 * eps, seed=1)
+    cap = simulate_gyro_rotations(noise_std=0.0, angle_error_deg=-360.0 * eps, seed=1)
     t = cap.truth
     specs = _specs(timebase__relative_error={"distribution": "normal", "value": eps, "u": 1e-7})
     r = calibrate_triad_rotations(_rot_rate(cap), 100.0, t["rotations"], static=t["static"])
@@ -622,7 +622,7 @@ def test_twins_apply_the_drawn_systematic_errors() -> None:
     k = np.asarray(tri.truth["scale_misalignment"])
     u = omega * (1 + eps) @ k.T + np.asarray(tri.truth["bias"])
     np.testing.assert_allclose(np.column_stack([c["ux"], c["uy"], c["uz"]]), u, rtol=1e-13)
-    rot = simulate_gyro_rotations(noise_std=0.0, angle_error_deg=[0.1, -0.2, 0.3])
+    rot = simulate_gyro_rotations(noise_std=0.0, angle_deg=360.0, angle_error_deg=[0.1, -0.2, 0.3])
     kinv = np.linalg.inv(np.asarray(rot.truth["scale_misalignment"]))
     w = (_rot_rate(rot) - np.asarray(rot.truth["bias"])) @ kinv.T
     for j, ax in enumerate("xyz"):

@@ -92,10 +92,10 @@ def test_more_rotations_by_least_squares_and_oblique_axes() -> None:
     b = simulate_gyro_rotations(K=K_TRUE, bias=B_TRUE, noise_std=0.0, angle_deg=-720.0)
     rate = np.vstack([_rate(a), _rate(b)])
     n = len(a)
-    rots = [(ax, *a.truth["rotations"][ax]) for ax in "xyz"]
+    rots = [(ax, *a.truth["rotations"][ax], 360.0) for ax in "xyz"]
     rots += [(ax, s + n, e + n, -720.0) for ax, (s, e) in b.truth["rotations"].items()]
     # an oblique rotation: the same turn about z labelled by its vector
-    rots.append(((0.0, 0.0, 2.0), *a.truth["rotations"]["z"]))
+    rots.append(((0.0, 0.0, 2.0), *a.truth["rotations"]["z"], 360.0))
     static = a.truth["static"] + [[s + n, e + n] for s, e in b.truth["static"]]
     r = calibrate_triad_rotations(rate, fs, rots, static=static)
     np.testing.assert_allclose(r.scale_misalignment, K_TRUE, atol=1e-12)
@@ -245,3 +245,69 @@ def test_real_recordings_agree_with_imucal(name, load, fs, ref_file, shared_data
     np.testing.assert_allclose(r2.scale_misalignment, k_imucal, rtol=0, atol=1e-10 * scale)
     np.testing.assert_allclose(r2.scale_factors, np.diag(ref["K_g"]), rtol=1e-10)
     np.testing.assert_allclose(r2.sensitive_axes, ref["R_g"], atol=1e-10)
+
+
+# ------------------------------------------------------------------------------------ plausibility
+def test_default_angle_is_the_ferraris_clockwise_turn_and_a_wrong_sign_warns() -> None:
+    cap = simulate_gyro_rotations(K=K_TRUE, bias=B_TRUE, noise_std=0.05)
+    assert cap.truth["angle_deg"] == -360.0
+    t = cap.truth
+    r = calibrate_triad_rotations(_rate(cap), 100.0, t["rotations"], static=t["static"])
+    assert r.warnings == ()
+    np.testing.assert_allclose(r.scale_misalignment, K_TRUE, atol=5e-3)
+    # the same recording taken as counter-clockwise turns: K flips sign, and each axis is named
+    flipped = calibrate_triad_rotations(
+        _rate(cap), 100.0, t["rotations"], static=t["static"], angle_deg=360.0
+    )
+    np.testing.assert_allclose(flipped.scale_misalignment, -r.scale_misalignment, rtol=1e-12)
+    assert len(flipped.warnings) == 3
+    for axis, line in zip("xyz", flipped.warnings, strict=True):
+        assert f"K_{axis}{axis} = -" in line and "--angle-deg" in line
+
+
+def test_a_section_cut_while_turning_warns() -> None:
+    cap = simulate_gyro_rotations(K=K_TRUE, bias=B_TRUE, noise_std=0.05)
+    t = cap.truth
+    s, e = t["motion"]["y"]
+    cut = {**t["rotations"], "y": [s + (e - s) // 4, e + 10]}  # starts a quarter into the turn
+    r = calibrate_triad_rotations(_rate(cap), 100.0, cut, static=t["static"])
+    assert len(r.warnings) == 1
+    assert "about y" in r.warnings[0] and "starts while turning" in r.warnings[0]
+
+
+def test_rotations_that_disagree_are_a_lack_of_fit() -> None:
+    """Six rotations, one of them 3° short of the angle set: χ² of the angle residuals."""
+    a = simulate_gyro_rotations(K=K_TRUE, bias=B_TRUE, noise_std=0.05, seed=1)
+    b = simulate_gyro_rotations(K=K_TRUE, bias=B_TRUE, noise_std=0.05, seed=2)
+    short = simulate_gyro_rotations(
+        K=K_TRUE, bias=B_TRUE, noise_std=0.05, seed=2, angle_error_deg=(0.0, 0.0, 3.0)
+    )
+    n = len(a)
+
+    def both(second):
+        rate = np.vstack([_rate(a), _rate(second)])
+        rots = [(ax, *a.truth["rotations"][ax]) for ax in "xyz"]
+        rots += [(ax, s + n, e + n) for ax, (s, e) in second.truth["rotations"].items()]
+        static = a.truth["static"] + [[s + n, e + n] for s, e in second.truth["static"]]
+        return calibrate_triad_rotations(rate, 100.0, rots, static=static)
+
+    assert both(b).warnings == ()
+    bad = both(short).warnings
+    assert len(bad) == 1 and bad[0].startswith("lack of fit: K·φ through the rotations")
+
+
+def test_real_recording_with_the_default_convention_agrees_with_imucal(shared_data) -> None:
+    """imucal's own recording, its convention by default: K_g, b_g and R_g as imucal prints
+    them, to the g-sensitivity term imucal removes and rotacal does not (< 1 u)."""
+    imucal = shared_data("imucal")
+    gyr, _, rotations, static = _load_session_102(imucal)
+    ref = _imucal_reference(imucal / "example_ferraris_session_cal_computed_imucal2.6.0.json")
+    r = calibrate_triad_rotations(gyr, 102.4, rotations, static=static)
+    assert r.warnings == ()
+    assert np.all(np.diag(r.scale_misalignment) > 0)
+    np.testing.assert_allclose(r.scale_factors, np.diag(ref["K_g"]), rtol=5e-5)
+    assert np.all(np.abs(r.scale_factors - np.diag(ref["K_g"])) < np.diag(r.scale_misalignment_u))
+    np.testing.assert_allclose(r.bias, ref["b_g"], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(r.sensitive_axes, ref["R_g"], atol=1e-4)
+    mis_imucal = np.degrees(np.arccos(np.abs(np.diag(ref["R_g"]))))
+    np.testing.assert_allclose(r.misalignment_deg, mis_imucal, atol=5e-3)

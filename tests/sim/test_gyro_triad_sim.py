@@ -156,7 +156,8 @@ def test_rotation_twin_model_and_settings() -> None:
     u = np.column_stack([cap.columns[c] for c in OUT_COLS])
     s, e = cap.truth["motion"]["y"]
     mid = (s + e) // 2
-    rate_y = 2 * 360.0 / 2.0 * np.sin(np.pi * (mid - s) / (e - s)) ** 2
+    assert cap.truth["angle_deg"] == -360.0  # the Ferraris protocol's clockwise turn
+    rate_y = 2 * -360.0 / 2.0 * np.sin(np.pi * (mid - s) / (e - s)) ** 2
     np.testing.assert_allclose(u[mid], k @ np.array([0.0, rate_y, 0.0]) + np.array(DEFAULT_BIAS))
     assert len(cap) == 4 * 150 + 3 * 100
     for kw in ({"angle_deg": 0.0}, {"rotation_s": 0.01}, {"static_s": 0.5, "margin_s": 0.5}):

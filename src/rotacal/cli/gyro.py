@@ -251,7 +251,13 @@ def _print_triad(result: Any, data: dict[str, Any]) -> None:
 )
 @click.option("--fs-hz", type=float, default=None, help="Sampling rate, when there is no time_s.")
 @click.option(
-    "--angle-deg", type=float, default=360.0, show_default=True, help="Angle of each rotation."
+    "--angle-deg",
+    type=float,
+    default=None,
+    help="Set angle of each rotation in degrees, right-hand rule about the DUT's axis: -360 is "
+    "one clockwise turn seen from the tip of the +axis (the Ferraris protocol, imucal's "
+    "convention; the gyro reads negative), +360 one counter-clockwise turn. "
+    "[default: the sections file's angle_deg, else -360]",
 )
 @_clipping_option
 @_analysis_options
@@ -260,7 +266,7 @@ def gyro_rotations(
     capture: str,
     sections_path: str,
     fs_hz: float | None,
-    angle_deg: float,
+    angle_deg: float | None,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -271,6 +277,7 @@ def gyro_rotations(
     give K and the bias of a three-axis gyro.
     """
     from rotacal.gyro import TRIAD_OUTPUT_COLUMNS, calibrate_triad_rotations, ferraris_sections
+    from rotacal.gyro.rotations import FERRARIS_ANGLE_DEG
     from rotacal.io import parse_column_mapping, read_capture
     from rotacal.signal import check_sampling
 
@@ -290,6 +297,13 @@ def gyro_rotations(
         rotations, static = spec["rotations"], spec.get("static")
     else:
         rotations, static = ferraris_sections(spec)
+    if angle_deg is None:  # a twin's truth file states the angle it turned through
+        angle_deg = spec.get("angle_deg", FERRARIS_ANGLE_DEG)
+        if isinstance(angle_deg, bool) or not isinstance(angle_deg, (int, float)):
+            raise ConfigError(
+                f"--sections {sections_path}: angle_deg must be a number of degrees, got "
+                f"{angle_deg!r}; fix it or give --angle-deg"
+            )
     with _status(f"reading {capture}"):
         cap = read_capture(
             capture,

@@ -509,7 +509,12 @@ def simulate_gyro_noise_cmd(out: str, overwrite: bool, **kw: Any) -> None:
     epilog=example("rotacal simulate gyro-rotations --out rot.csv"),
 )
 @_sim_common
-@click.option("--angle-deg", type=float, default=None, help="Angle of each rotation (deg) [360].")
+@click.option(
+    "--angle-deg",
+    type=float,
+    default=None,
+    help="Angle of each rotation (deg), right-hand rule [-360: clockwise, the Ferraris protocol].",
+)
 @click.option("--noise-std", type=float, default=None, help="Output noise, rms (deg/s) [0.05].")
 @click.option("--fs-hz", type=float, default=None, help="Sampling rate (Hz) [100].")
 def simulate_gyro_rotations_cmd(out: str, overwrite: bool, **kw: Any) -> None:

@@ -46,6 +46,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.signal import find_peaks
 
+from rotacal.encoder.plausibility import selfcal_warnings
 from rotacal.encoder.pulses import (
     check_heads_not_copies,
     check_pulse_times,
@@ -962,6 +963,13 @@ def self_calibrate(
         _noise=noise,
         _point_budget=point,
         _budgets=budgets,
+        warnings=tuple(
+            selfcal_warnings(
+                closure_residual_rms_arcsec=closure_rms,
+                repeatability_rms_arcsec=rep_rms,
+                heads=n,
+            )
+        ),
     )
 
 

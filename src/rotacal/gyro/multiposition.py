@@ -40,6 +40,7 @@ import numpy as np
 from scipy.linalg import solve_triangular
 
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.gyro.plausibility import multiposition_warnings
 from rotacal.results import Result
 from rotacal.signal._values import check_magnitudes, check_not_constant, check_not_copies
 from rotacal.signal.clipping import check_clipping
@@ -832,7 +833,10 @@ def calibrate_multiposition(
         _covariance=cov,
         _plot=plot,
         _budgets=budgets,
-        warnings=clipped,
+        warnings=(
+            *clipped,
+            *multiposition_warnings(resid, pos_of_row, p),
+        ),
     )
 
 

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.gyro.plausibility import allan_warnings
 from rotacal.results import Result
 from rotacal.signal import check_sampling
 from rotacal.signal._values import check_magnitudes, check_not_constant, check_setting
@@ -622,5 +623,12 @@ def gyro_noise(
         _terms=terms,
         _budgets=budgets,
         _slope_bias=leaks,
-        warnings=clipped,
+        warnings=(
+            *clipped,
+            *allan_warnings(
+                bias_instability=values["bias_instability_deg_h"],
+                local_slope=terms.local_slope,
+                tau_s=terms.slope_tau_s,
+            ),
+        ),
     )

@@ -11,9 +11,14 @@ integrated outputs, Φ: 3×m true angle vectors in deg). With three rotations ab
 is Θ·Φ⁻¹, the Ferraris/imucal solution; more rotations (both directions, repeats) are combined by
 least squares.
 
-Conventions (and how they map onto imucal's): angles follow the right-hand rule about the named
-axis of the DUT, so a rotation that makes a correctly signed gyro read negative (imucal's
-"clockwise", its default ``expected_angle=-360``) has ``angle_deg=-360``. K here equals imucal's
+Conventions (imucal's, the common one): angles follow the right-hand rule about the named axis
+of the DUT — a positive angle turns counter-clockwise seen from the tip of the +axis, and a
+correctly signed gyro reads positive during it. The Ferraris protocol (Ferraris et al. 1995;
+imucal's guide and its ``FerrarisCalibration(expected_angle=-360)``) turns each axis clockwise
+seen from that tip, the gyro reading negative: hence the default ``angle_deg=-360``; give +360
+for counter-clockwise turns. A turn done the other way, or an axis mounted reversed, flips the
+sign of that column or row of K: a negative diagonal element is named in ``warnings``
+(:func:`rotacal.gyro.plausibility.negative_diagonal_warnings`). K here equals imucal's
 ``K_g @ R_g``; :attr:`RotationCalibration.scale_factors` and ``sensitive_axes`` are its ``K_g``
 diagonal and ``R_g``. imucal also removes a g-sensitivity term ``K_ga·a`` (accelerometer-derived)
 from the rate before integrating; pass that per-sample offset as ``bias`` (n, 3) to do the same.
@@ -37,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.gyro.plausibility import negative_diagonal_warnings, rotation_warnings
 from rotacal.gyro.triad import (
     TRIAD_OUTPUT_COLUMNS,
     apply_triad_calibration,
@@ -66,6 +72,7 @@ from rotacal.uncertainty.specs import (
 )
 
 __all__ = [
+    "FERRARIS_ANGLE_DEG",
     "FERRARIS_ROTATIONS",
     "FERRARIS_STATIC",
     "RotationCalibration",
@@ -76,6 +83,9 @@ __all__ = [
 #: Section names of a Ferraris recording (imucal's): six static positions and three rotations.
 FERRARIS_STATIC = ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a")
 FERRARIS_ROTATIONS = {"x_rot": "x", "y_rot": "y", "z_rot": "z"}
+#: Set angle of a Ferraris rotation (deg, right-hand rule): one clockwise turn seen from the tip
+#: of the +axis, as imucal's protocol does it (its ``expected_angle=-360``).
+FERRARIS_ANGLE_DEG = -360.0
 
 _AXES = "xyz"
 _MIN_SECTION = 2
@@ -364,7 +374,7 @@ def calibrate_triad_rotations(
     *,
     static: Any = None,
     bias: Any = None,
-    angle_deg: float = 360.0,
+    angle_deg: float = FERRARIS_ANGLE_DEG,
     angle_u_deg: float = 0.0,
     columns: Sequence[str] = TRIAD_OUTPUT_COLUMNS,
     specs: InstrumentSpecs | None = None,
@@ -397,7 +407,9 @@ def calibrate_triad_rotations(
         sample (for example b + K_ga·a with the g-sensitivity and the calibrated acceleration).
     angle_deg : float
         Set angle of each rotation given without its own (deg, right-hand rule about the named
-        axis; −360 for imucal's "clockwise" recordings).
+        axis). Default −360: one clockwise turn seen from the tip of the +axis, the Ferraris
+        protocol as imucal records it (the gyro reads negative); +360 for a counter-clockwise
+        turn.
     angle_u_deg : float
         Standard uncertainty of each realised rotation angle (deg, normal, independent between
         rotations), for the uncertainties; leave it 0 when ``specs`` states
@@ -639,8 +651,31 @@ def calibrate_triad_rotations(
         output_unit=output_unit,
         _plot=plot,
         _budgets=budgets,
-        warnings=clipped,
+        warnings=(
+            *clipped,
+            *negative_diagonal_warnings(
+                kmat,
+                cols,
+                "the turn went the other way: --angle-deg is −360 for a clockwise turn seen from "
+                "the tip of the +axis (the Ferraris protocol), +360 for a counter-clockwise one",
+            ),
+            *rotation_warnings(
+                u,
+                offset,
+                [(label, s, e) for _, label, _, s, e, _ in rots],
+                resid,
+                _angle_u(noise, kmat, [e - s for *_, s, e, _ in rots], fs),
+            ),
+        ),
     )
+
+
+def _angle_u(noise: np.ndarray, kmat: np.ndarray, samples: Sequence[int], fs: float) -> np.ndarray:
+    """White-noise standard uncertainty (deg) of each rotation's measured angle vector K⁻¹·Θ:
+    Θ_c of a section of N samples scatters by σ_c·√N/fs (output unit·s)."""
+    kinv = np.linalg.inv(kmat)
+    cov_unit = (kinv * noise[None, :] ** 2) @ kinv.T  # K⁻¹·diag(σ²)·K⁻ᵀ per (sample/fs)²
+    return np.array([np.sqrt(np.diag(cov_unit) * n) / fs for n in samples])
 
 
 def _rotation_budgets(

@@ -60,6 +60,7 @@ import numpy as np
 from scipy import stats
 
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.gyro.plausibility import scale_factor_warnings
 from rotacal.gyro.resolution import OutputResolution, output_resolution
 from rotacal.gyro.uncertainty import (
     TScale,
@@ -958,7 +959,19 @@ def calibrate_scale_factor(
         decision_with_uncertainty=decision,
         resolution=res,
         _budgets=budgets,
-        warnings=clipped,
+        warnings=(
+            *clipped,
+            *scale_factor_warnings(
+                scale_factor=s,
+                nonlinearity_percent_fs=nl,
+                rates_deg_s=rates,
+                residuals=resid,
+                point_u=u_pt,
+                full_scale_deg_s=fs,
+                output_unit=output_unit,
+                quantum=q,
+            ),
+        ),
     )
 
 

@@ -39,6 +39,7 @@ from scipy import stats
 
 from rotacal.columns import RATE_COLUMNS, TRIAD_OUTPUT_COLUMNS
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.gyro.plausibility import negative_diagonal_warnings, triad_fit_warnings
 from rotacal.gyro.uncertainty import (
     as_specs,
     element_key,
@@ -878,7 +879,15 @@ def calibrate_triad(
         output_unit=output_unit,
         _plot=plot,
         _budgets=budgets,
-        warnings=clipped,
+        warnings=(
+            *clipped,
+            *negative_diagonal_warnings(
+                kmat, out_cols, "the reference rates wx/wy/wz_deg_s have the other sign"
+            ),
+            *triad_fit_warnings(
+                fit_res, inv, keep, out_cols, [_quantum(uu[:, c]) for c in range(3)]
+            ),
+        ),
     )
 
 

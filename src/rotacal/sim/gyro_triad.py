@@ -249,7 +249,7 @@ def simulate_gyro_rotations(
     *,
     K: Any = None,
     bias: Any = None,
-    angle_deg: float = 360.0,
+    angle_deg: float = -360.0,
     rotation_s: float = 4.0,
     static_s: float = 5.0,
     margin_s: float = 0.5,
@@ -272,7 +272,9 @@ def simulate_gyro_rotations(
         True scale/misalignment matrix (output unit per °/s) and bias (output unit); None: the
         defaults of :func:`simulate_gyro_triad`.
     angle_deg : float
-        Rotation angle (deg), non-zero.
+        Rotation angle (deg, right-hand rule about the axis), non-zero. Default −360: one
+        clockwise turn seen from the tip of the +axis, as the Ferraris protocol does it (imucal's
+        ``expected_angle=-360``) and as ``calibrate_triad_rotations`` assumes by default.
     rotation_s : float
         Duration of each rotation (s).
     static_s : float

@@ -49,6 +49,7 @@ from rotacal.table.motion_drift import (
     fit_motion,
     prefit_drift,
 )
+from rotacal.table.motion_plausibility import motion_warnings
 from rotacal.table.motion_uncertainty import (
     ReversalDetection,
     comparison_budgets,
@@ -360,7 +361,21 @@ def _finish(
         **extra,
         **drift_fields(scheme, fit),
     )
-    return with_warnings(result, drift_warnings(scheme, fit, budgets, t_used[-1] - t_used[0]))
+    drift = drift_warnings(scheme, fit, budgets, t_used[-1] - t_used[0])
+    # an unfitted drift is the lack of fit already named: no second line for it
+    residual = None if drift else plot.get("residual_deg", plot.get("residual_deg_s"))
+    plausibility = motion_warnings(
+        scheme,
+        amplitude_deg=amp,
+        frequency_hz=freq,
+        harmonics=int(displacement_amplitudes.size),
+        fundamental=float(fit.amplitudes[0]),
+        residual=None if residual is None else np.asarray(residual, dtype=float),
+        residual_unit="deg/s" if "residual_deg_s" in plot else "deg",
+        set_amplitude_deg=set_amplitude_deg,
+        set_frequency_hz=set_frequency_hz,
+    )
+    return with_warnings(result, [*drift, *plausibility])
 
 
 def _cut(

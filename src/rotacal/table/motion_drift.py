@@ -86,6 +86,11 @@ __all__ = [
 DRIFT_SIGNIFICANCE = 5.0
 
 
+#: Changes of THD (pp) and relative amplitude below which fitting a drift moves only rounding.
+_ROUNDING_THD_PP = 1e-9
+_ROUNDING_RELATIVE = 1e-11
+
+
 def fit_motion(
     t: np.ndarray, y: np.ndarray, f0: float, harmonics: int, drift: bool, rate: bool = False
 ) -> SineFit:
@@ -280,7 +285,11 @@ def unfitted_drift_warning(
     a_drift = _displacement(scheme, check.amplitudes, f)
     d_thd = _thd(a_drift) - _thd(a_now)
     d_amp = float(a_drift[0] / a_now[0] - 1.0)
-    if not (abs(d_thd) > thd_percent_u or abs(d_amp) > amplitude_relative_u):
+    # a noise-free capture has u ≈ 0: moves at the rounding level of the sums are no drift
+    if not (
+        abs(d_thd) > max(thd_percent_u, _ROUNDING_THD_PP)
+        or abs(d_amp) > max(amplitude_relative_u, _ROUNDING_RELATIVE)
+    ):
         return None
     moves = (
         f"fitting it moves the THD by {d_thd:+.3g} pp (its u is {thd_percent_u:.2g} pp) and the "

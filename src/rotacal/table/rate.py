@@ -55,6 +55,7 @@ from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 from rotacal.signal._values import LARGEST, check_setting
 from rotacal.signal.allan import adev_confidence_interval, edf_overlapping_adev
+from rotacal.table.rate_plausibility import rate_warnings
 from rotacal.uncertainty import (
     Constant,
     Input,
@@ -1393,4 +1394,12 @@ def calibrate_rate(
         allan_relative_interval=[[float(lo), float(hi)] for lo, hi in zip(a_lo, a_hi, strict=True)],
         allan_noise_alpha=[int(x) for x in a_alpha],
         _budgets=budgets,
+        warnings=tuple(
+            rate_warnings(
+                mean_rate_deg_s=float(mean_rate),
+                set_rate_deg_s=set_rate,
+                time_s=t_avg,
+                deviation_percent=dev_pct,
+            )
+        ),
     )

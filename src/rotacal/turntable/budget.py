@@ -49,6 +49,7 @@ from rotacal.turntable.calibration import (
     rate_sensing_error_from_rotation,
 )
 from rotacal.turntable.model import ARCMIN_PER_RAD, COMPONENTS, Turntable, load_turntable
+from rotacal.turntable.plausibility import budget_warnings
 from rotacal.turntable.requirement import (
     DEFAULT_DERIVATION,
     DerivedRequirement,
@@ -470,7 +471,14 @@ def turntable_budget(
         _calibration_draws=draws,
         _plan_deg=plan,
     )
-    return with_warnings(budget, _calibration_warnings(calibration))
+    checks = budget_warnings(
+        allocation_within=bool(alloc.within),
+        runs=int(mc.runs),
+        outside=int(mc.outside),
+        max_abs_arcmin=dict(mc.max_abs_arcmin),
+        requirement_arcmin=budget.requirement_arcmin,
+    )
+    return with_warnings(budget, [*_calibration_warnings(calibration), *checks])
 
 
 def _calibration_warnings(calibration: Mapping[str, Any] | None) -> list[str]:

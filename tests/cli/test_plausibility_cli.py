@@ -1,0 +1,154 @@
+"""Plausibility warnings from the command line: every twin's defaults say nothing; faults speak."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from rotacal.cli import cli
+
+
+def run(*args: str):
+    return CliRunner().invoke(cli, list(args), prog_name="rotacal")
+
+
+def simulated(tmp_path: Path, kind: str) -> tuple[str, dict]:
+    path = tmp_path / f"{kind}.npz"
+    r = run("simulate", kind, "--out", str(path))
+    assert r.exit_code == 0, r.output
+    return str(path), json.loads(Path(f"{path}.truth.json").read_text())
+
+
+def _analysis(kind: str, path: str, truth: dict) -> list[str]:
+    """The analysis command of a twin of ``kind``, with the set values its truth states."""
+    motion = truth.get("motion", {})
+    sensor = truth.get("sensor", {})
+    sets = [
+        "--set-amplitude-deg",
+        str(motion.get("amplitude_deg")),
+        "--set-frequency-hz",
+        str(motion.get("frequency_hz")),
+    ]
+    return {
+        "encoder": ["motion", "encoder", path, "--lines", str(sensor.get("lines")), *sets],
+        "lts": ["motion", "lts", path, "--radius-mm", str(sensor.get("radius_mm")), *sets],
+        "fog": ["motion", "fog", path, *sets],
+        "pulses": ["selfcal", path, "--pulses-per-rev", str(truth.get("pulses_per_rev"))],
+        "gyro-rates": ["gyro", "scale-factor", path],
+        "gyro-triad": ["gyro", "triad", path],
+        "gyro-noise": ["allan", path, "--column", "rate_deg_s"],
+        "gyro-rotations": ["gyro", "rotations", path, "--sections", f"{path}.truth.json"],
+        "multiposition": [
+            "gyro",
+            "multiposition",
+            path,
+            "--axis",
+            str(truth.get("axis")),
+            "--latitude-deg",
+            str(truth.get("latitude_deg")),
+        ],
+    }[kind]
+
+
+KINDS = [
+    "encoder",
+    "lts",
+    "fog",
+    "pulses",
+    "gyro-rates",
+    "gyro-triad",
+    "gyro-noise",
+    "gyro-rotations",
+    "multiposition",
+]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_every_twin_with_defaults_is_warning_free(tmp_path, kind) -> None:
+    path, truth = simulated(tmp_path, kind)
+    r = run(*_analysis(kind, path, truth), "--json", "-")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["warnings"] == []
+    assert "warning" not in r.stderr
+
+
+def test_rate_of_the_pulse_twin_is_warning_free(tmp_path) -> None:
+    path, truth = simulated(tmp_path, "pulses")
+    rate = truth.get("rate_deg_s", 300.0)
+    r = run("rate", path, "--pulses-per-rev", "18000", "--set-rate-deg-s", str(rate), "--json", "-")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["warnings"] == []
+
+
+def test_turntable_example_budget_is_warning_free(tmp_path) -> None:
+    config = tmp_path / "table.toml"
+    assert run("turntable", "example", "--out", str(config)).exit_code == 0
+    r = run("turntable", "budget", str(config), "--runs", "20000", "--json", "-")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["warnings"] == []
+
+
+def test_the_issues_encoder_with_a_tenth_of_its_lines_warns_on_stderr(tmp_path) -> None:
+    path, truth = simulated(tmp_path, "encoder")
+    args = _analysis("encoder", path, truth)
+    args[args.index("--lines") + 1] = "3600"
+    r = run(*args, "--json", "-")
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout)
+    assert d["amplitude_error_percent"] == pytest.approx(900.0, rel=1e-3)
+    (line,) = d["warnings"]
+    assert "--lines" in line and "×10" in line
+    assert f"rotacal: warning: {line}" in r.stderr
+
+
+def _imucal_args(data: Path, *extra: str) -> list[str]:
+    ex = data / "example_data"
+    return [
+        "gyro",
+        "rotations",
+        str(ex / "example_ferraris_session.csv"),
+        "--sections",
+        str(ex / "example_ferraris_session_list.json"),
+        "--fs-hz",
+        "102.4",
+        "--column",
+        "gyr_x=ux",
+        "--column",
+        "gyr_y=uy",
+        "--column",
+        "gyr_z=uz",
+        "--json",
+        "-",
+        *extra,
+    ]
+
+
+def test_imucals_recording_with_defaults_gives_imucals_positive_diagonal(shared_data) -> None:
+    data = shared_data("imucal")
+    ref = json.loads((data / "example_ferraris_session_cal_computed_imucal2.6.0.json").read_text())
+    r = run(*_imucal_args(data))
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout)
+    assert d["warnings"] == []
+    np.testing.assert_allclose(d["scale_factors"], np.diag(ref["K_g"]), rtol=5e-5)
+    assert np.all(np.diag(d["scale_misalignment"]) > 0)
+    # the other sense of turning: every diagonal element negative, each named on stderr
+    r = run(*_imucal_args(data, "--angle-deg", "360"))
+    assert r.exit_code == 0, r.output
+    warnings = json.loads(r.stdout)["warnings"]
+    assert len(warnings) == 3 and all("--angle-deg" in w for w in warnings)
+    assert r.stderr.count("rotacal: warning: K_") == 3
+
+
+def test_demo_is_warning_free(tmp_path) -> None:
+    out = tmp_path / "demo"
+    r = run("demo", "--out", str(out))
+    assert r.exit_code == 0, r.output
+    results = sorted(p for p in out.glob("*.json") if p.name != "summary.json")  # not a result
+    assert len(results) >= 10
+    for path in results:
+        assert json.loads(path.read_text())["warnings"] == [], path.name
