@@ -135,30 +135,3 @@ def test_rotations_from_the_twin_and_imucal(tmp_path):
     bad = tmp_path / "s.json"
     bad.write_text('{"x_rot": [1, 2]}')
     one_line_error(run("gyro", "rotations", str(path), "--sections", str(bad)), "lacks")
-
-
-def test_rotations_on_imucals_real_recording(tmp_path, shared_data):
-    data = shared_data("imucal")
-    ex = data / "example_data"
-    r = run(
-        "gyro",
-        "rotations",
-        str(ex / "example_ferraris_session.csv"),
-        "--sections",
-        str(ex / "example_ferraris_session_list.json"),
-        "--fs-hz",
-        "102.4",
-        "--column",
-        "gyr_x=ux",
-        "--column",
-        "gyr_y=uy",
-        "--column",
-        "gyr_z=uz",
-        "--angle-deg",
-        "-360",
-        "--json",
-        "-",
-    )
-    assert r.exit_code == 0, r.output
-    ref = json.loads((data / "example_ferraris_session_cal_computed_imucal2.6.0.json").read_text())
-    assert np.allclose(json.loads(r.stdout)["bias"], ref["b_g"], rtol=1e-12, atol=0)

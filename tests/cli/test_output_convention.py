@@ -9,10 +9,8 @@ from __future__ import annotations
 
 import hashlib
 import json
-from collections.abc import Iterator
 from pathlib import Path
 
-import click
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -23,17 +21,11 @@ from rotacal.demo import demo_files
 from rotacal.io.outputs import Output, write_outputs
 from rotacal.uncertainty.specs import example_specs_toml
 
+from .test_outputs import _commands
+
 
 def run(*args: str):
     return CliRunner().invoke(cli, list(args), prog_name="rotacal")
-
-
-def _commands(group: click.Group, prefix: tuple[str, ...] = ()) -> Iterator[tuple[str, ...]]:
-    for name, cmd in sorted(group.commands.items()):
-        if isinstance(cmd, click.Group):
-            yield from _commands(cmd, (*prefix, name))
-        else:
-            yield (*prefix, name)
 
 
 def wrote_lines(result) -> list[str]:

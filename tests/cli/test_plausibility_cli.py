@@ -135,6 +135,7 @@ def test_imucals_recording_with_defaults_gives_imucals_positive_diagonal(shared_
     d = json.loads(r.stdout)
     assert d["warnings"] == []
     np.testing.assert_allclose(d["scale_factors"], np.diag(ref["K_g"]), rtol=5e-5)
+    np.testing.assert_allclose(d["bias"], ref["b_g"], rtol=1e-12, atol=0)
     assert np.all(np.diag(d["scale_misalignment"]) > 0)
     # the other sense of turning: every diagonal element negative, each named on stderr
     r = run(*_imucal_args(data, "--angle-deg", "360"))
