@@ -149,6 +149,13 @@ def test_demo_is_warning_free(tmp_path) -> None:
     out = tmp_path / "demo"
     r = run("demo", "--out", str(out))
     assert r.exit_code == 0, r.output
+    # the real campaign (test_output_convention checks the CLI's part with a stand-in): the files
+    # it names are those it wrote, each with one line
+    from rotacal.demo import demo_files
+
+    assert sorted(p.name for p in out.iterdir()) == sorted(demo_files())
+    wrote = [line for line in r.stderr.splitlines() if line.startswith("wrote ")]
+    assert wrote == [f"wrote {out / name}" for name in demo_files()]
     results = sorted(p for p in out.glob("*.json") if p.name != "summary.json")  # not a result
     assert len(results) >= 10
     for path in results:
