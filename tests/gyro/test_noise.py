@@ -94,3 +94,51 @@ def test_cli_allan(tmp_path):
     assert bad.exit_code == 2 and "gyro_q" in bad.stderr and bad.stderr.count("\n") == 1
     nofs = CliRunner().invoke(cli, ["allan", str(path), "--column", "gyro_z"])
     assert nofs.exit_code == 2 and "--fs-hz" in nofs.stderr
+
+
+def _stable32_sigmas(path: Path) -> dict[float, float]:
+    """τ (s) → the overlapping Allan deviation a Stable32 table prints (its 'Sigma' column)."""
+    rows = [line.split() for line in path.read_text().splitlines() if line.strip()[:1].isdigit()]
+    return {float(r[1]): float(r[5]) for r in rows}
+
+
+def test_angle_record_gives_the_deviation_of_its_rate():
+    """The differenced angle is the rate again: the same deviation to rounding."""
+    rng = np.random.default_rng(3)
+    rate = rng.normal(0.0, 0.05, 50_000) + 0.01
+    angle = np.concatenate([[12.5], 12.5 + np.cumsum(rate) / 100.0])  # deg, at 100 Hz
+    from rotacal.gyro import gyro_noise_from_angle
+
+    from_angle = gyro_noise_from_angle(angle, fs_hz=100.0, taus="octave")
+    from_rate = gyro_noise(rate, fs_hz=100.0, taus="octave")
+    np.testing.assert_allclose(from_angle.adev_deg_s, from_rate.adev_deg_s, rtol=1e-9)
+    assert from_angle.samples == rate.size and "differenced" in from_angle.notes[0]
+    with pytest.raises(CaptureError, match="too short"):
+        gyro_noise_from_angle([1.0, 2.0], fs_hz=1.0)
+
+
+@pytest.mark.parametrize(
+    ("data", "reference"),
+    [
+        ("phasedat/PHASE.DAT", "phasedat/phase_dat_oadev_octave.txt"),
+        ("gps/gps_1pps_phase_data.txt.gz", "gps/stable32_OADEV_octave.txt"),
+    ],
+)
+def test_cli_angle_input_matches_stable32_on_phase_records(data, reference, shared_data, tmp_path):
+    """Phase (time error) records read with --angle: Stable32's printed deviations, 5 digits."""
+    folder = shared_data("allantools", "tests")
+    out = tmp_path / "a.json"
+    r = CliRunner().invoke(
+        cli,
+        ["allan", str(folder / data), "--column", "col_1", "--fs-hz", "1", "--unit", "other"]
+        + ["--taus", "octave", "--angle", "--json", str(out)],
+    )
+    assert r.exit_code == 0, r.output
+    got = json.loads(out.read_text())
+    expected = _stable32_sigmas(folder / reference)
+    compared = 0
+    for tau, adev in zip(got["tau_s"], got["adev_deg_s"], strict=True):
+        if tau in expected:
+            assert adev == pytest.approx(expected[tau], rel=6e-5), tau
+            compared += 1
+    assert compared >= 8

@@ -33,6 +33,7 @@ from ._reading import current_read_options
     epilog=example(
         "rotacal allan static.npz --report noise.html",
         "rotacal allan gyro.csv --column gyro_z --fs-hz 100 --taus all",
+        "rotacal allan rlg.csv --column angle_deg --angle",
     ),
 )
 @click.argument("capture", type=INPUT_FILE)
@@ -53,6 +54,13 @@ from ._reading import current_read_options
     show_default=True,
     help="τ grid: 'all' computes every cluster size (O(N log² N)).",
 )
+@click.option(
+    "--angle",
+    "is_angle",
+    is_flag=True,
+    help="The column holds an angle, the rate's integral (deg for --unit deg/s; an integrating "
+    "gyro's output, or phase data with --unit other); it is differenced to a rate.",
+)
 @_clipping_option
 @_analysis_options
 @_names_capture
@@ -61,6 +69,7 @@ def allan_cmd(
     fs_hz: float | None,
     unit: str,
     taus: str,
+    is_angle: bool,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -70,9 +79,10 @@ def allan_cmd(
     The overlapping Allan deviation over τ and the noise terms of IEEE Std 952-1997 Annex C
     (angle random walk, bias instability, rate random walk, quantization, rate ramp).
     --column NAME picks the rate column (default rate_deg_s); --column OLD=NEW maps names as
-    everywhere else. A time_s column, when present, gives the sampling rate.
+    everywhere else. A time_s column, when present, gives the sampling rate. With --angle the
+    column is an angle record (an integrating gyro, or phase data), differenced to a rate.
     """
-    from rotacal.gyro.noise import gyro_noise
+    from rotacal.gyro.noise import gyro_noise, gyro_noise_from_angle
     from rotacal.io import parse_column_mapping, read_capture
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
@@ -100,7 +110,7 @@ def allan_cmd(
     if time_s is None and fs_hz is None:
         raise ConfigError(f"{Path(capture).name} has no time_s column: give --fs-hz")
     with _status("computing the Allan deviation"):
-        result = gyro_noise(
+        result = (gyro_noise_from_angle if is_angle else gyro_noise)(
             cap[rate_column],
             fs_hz=fs_hz,
             time_s=time_s,

@@ -13,7 +13,7 @@ from rotacal.gyro.multiposition import (
     earth_rate_and_gravity,
     multiposition_plan,
 )
-from rotacal.gyro.noise import GyroNoise, gyro_noise
+from rotacal.gyro.noise import GyroNoise, gyro_noise, gyro_noise_from_angle
 from rotacal.gyro.rotations import (
     RotationCalibration,
     calibrate_triad_rotations,
@@ -65,6 +65,7 @@ __all__ = [
     "evaluate_requirement",
     "ferraris_sections",
     "gyro_noise",
+    "gyro_noise_from_angle",
     "multiposition_plan",
     "resolve_requirement",
     "triad_plan",

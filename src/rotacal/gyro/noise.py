@@ -632,3 +632,61 @@ def gyro_noise(
             ),
         ),
     )
+
+
+def gyro_noise_from_angle(
+    angle: ArrayLike,
+    *,
+    fs_hz: float | None = None,
+    time_s: ArrayLike | None = None,
+    column: str = "angle_deg",
+    **options: Any,
+) -> GyroNoise:
+    """:func:`gyro_noise` of a record of angle (or phase) samples instead of rate samples.
+
+    An integrating gyro (a ring-laser gyro's or an angle readout's counts), or frequency-
+    stability phase data (time error), gives the running integral of the rate. The N angle samples
+    θ_i are differenced to N − 1 rate samples ω_i = (θ_{i+1} − θ_i)·fs; their running integral is
+    θ_i − θ_0, so the overlapping Allan deviation is that of the angle record as phase data
+    (IEEE Std 952-1997 Annex C; NIST SP 1065 §5.2.4, phase form), to rounding.
+
+    Parameters
+    ----------
+    angle : array_like
+        Angle samples in the unit of the rate's integral: ° for ``unit="deg/s"``, rad for
+        "rad/s", or the column's own (time error in s for phase data, with ``unit="other"``).
+    fs_hz : float, Hz, optional
+        Sampling rate; or give ``time_s``.
+    time_s : array_like, s, optional
+        Sample times of the angles (equally spaced; gaps are refused).
+    column : str
+        The column's name, for messages and the report.
+    **options
+        ``unit``, ``taus``, ``specs``, ``allow_clipped`` as for :func:`gyro_noise`.
+
+    Returns
+    -------
+    GyroNoise
+        As :func:`gyro_noise`, with a note that the rate was differenced from the angle.
+    """
+    theta = np.asarray(angle, dtype=np.float64)
+    if theta.ndim != 1:
+        raise CaptureError(f"column '{column}' must be 1-D, got shape {theta.shape}.")
+    bad = np.flatnonzero(~np.isfinite(theta))
+    if bad.size:
+        raise CaptureError(
+            f"column '{column}' has {bad.size} NaN/inf value(s), the first at sample {bad[0]}; "
+            "the Allan deviation needs a gap-free record."
+        )
+    if theta.size < 3:
+        raise CaptureError(
+            f"column '{column}' holds {theta.size} angle sample(s): too short for an Allan "
+            "deviation."
+        )
+    fs = _sampling_rate(time_s, fs_hz, theta.size)
+    result = gyro_noise(np.diff(theta) * fs, fs_hz=fs, column=column, **options)
+    note = (
+        f"the rate is the angle column '{column}' differenced ({theta.size} angle samples, "
+        f"{theta.size - 1} rate samples)"
+    )
+    return dataclasses.replace(result, notes=[note, *result.notes])
