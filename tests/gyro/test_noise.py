@@ -128,11 +128,8 @@ def test_cli_angle_input_matches_stable32_on_phase_records(data, reference, shar
     """Phase (time error) records read with --angle: Stable32's printed deviations, 5 digits."""
     folder = shared_data("allantools", "tests")
     out = tmp_path / "a.json"
-    r = CliRunner().invoke(
-        cli,
-        ["allan", str(folder / data), "--column", "col_1", "--fs-hz", "1", "--unit", "other"]
-        + ["--taus", "octave", "--angle", "--json", str(out)],
-    )
+    args = ["--column", "col_1", "--fs-hz", "1", "--unit", "other", "--taus", "octave"]
+    r = CliRunner().invoke(cli, ["allan", str(folder / data), *args, "--angle", "--json", str(out)])
     assert r.exit_code == 0, r.output
     got = json.loads(out.read_text())
     expected = _stable32_sigmas(folder / reference)
