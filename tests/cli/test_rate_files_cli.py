@@ -33,7 +33,9 @@ def test_rate_from_name(name, rate):
     assert set_rate_from_name(name) == rate
 
 
-@pytest.mark.parametrize("name", ["p10_1turn.dat", "run3.csv", "p.dat", "10x.dat", "p10m.dat"])
+@pytest.mark.parametrize(
+    "name", ["p10_1turn.dat", "run3.csv", "p.dat", "10x.dat", "p10m.dat", "p-10.dat", "m-10.dat"]
+)
 def test_a_name_without_a_rate_is_refused(name):
     with pytest.raises(ConfigError, match=f"{name}: its name does not state a set rate"):
         set_rate_from_name(name)
@@ -92,6 +94,8 @@ def test_rate_file_faults_are_one_line(tmp_path):
     one_line_error(run(*base, "--rest-from", str(turn)), "--rest-from", "--rate-from-name")
     one_line_error(run(*base), "p10.dat has no column 'rate_deg_s'", "--rate-from-name or --rates")
     one_line_error(run(*base[:3], "--rate-from-name", "--names", "a,b"), "--names gives 2 names")
+    # a file given twice would count its samples twice
+    one_line_error(run(*base, base[3], "--rate-from-name"), f"{base[3]} is given twice")
 
 
 def _xinli_args(shared_data):

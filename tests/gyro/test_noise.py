@@ -139,3 +139,19 @@ def test_cli_angle_input_matches_stable32_on_phase_records(data, reference, shar
             assert adev == pytest.approx(expected[tau], rel=6e-5), tau
             compared += 1
     assert compared >= 8
+
+
+def test_angle_that_wraps_around_a_turn_is_refused():
+    """An encoder angle kept modulo 360°: differenced as it is, each wrap is a −360° rate spike."""
+    from rotacal.gyro import gyro_noise_from_angle
+
+    rng = np.random.default_rng(5)
+    angle = np.cumsum(10.0 + rng.normal(0.0, 0.1, 20_000)) / 100.0  # 10 °/s at 100 Hz: 2000°
+    with pytest.raises(
+        CaptureError, match=r"jumps by -359\.9\d* deg from sample \d+ to \d+ \(5 such.*unwrap"
+    ):
+        gyro_noise_from_angle(np.mod(angle, 360.0), fs_hz=100.0)
+    unwrapped = gyro_noise_from_angle(angle, fs_hz=100.0)
+    assert unwrapped.samples == angle.size - 1
+    with pytest.raises(ConfigError, match="--unit deg/s"):
+        gyro_noise_from_angle(angle, fs_hz=100.0, unit="deg/h")

@@ -167,3 +167,14 @@ def test_report_shows_the_columns_and_the_gaps(tmp_path):
     assert "rate_deg_s" in html and "smallest non-zero step" in html
     assert f"{t[499]:.9g}" in html and ">20<" in html  # the gap and its 20 missing samples
     assert "1 gap(s)" in html
+
+
+def test_a_capture_without_a_column_of_numbers_is_answered(tmp_path):
+    """Labels only (a thousands mark makes '1.234,5' text): named, not a refusal."""
+    path = tmp_path / "thousands.csv"
+    path.write_text("time_s;rate\n0,0;1.234,5\n0,1;1.234,6\n")
+    r = CliRunner().invoke(cli, ["inspect", str(path), "--json", "-"])
+    assert r.exit_code == 0, r.output
+    found = json.loads(r.stdout)
+    assert found["kind"] == "no-numbers" and found["fits"] == []
+    assert "column 'rate' holds text ('1.234,5' on line 2)" in found["description"]

@@ -102,6 +102,22 @@ def test_crlf_and_leading_blanks_one_column(tmp_path):
     assert cap.names == ["col_1"] and cap["col_1"].tobytes() == x.tobytes()
 
 
+def test_headerless_decimal_comma_pairs_are_refused_until_told(tmp_path):
+    """ "0,2945" is one number with a decimal comma or two whole numbers: never guessed."""
+    x = np.round(_RNG.normal(size=ROWS), 4)
+    path = tmp_path / "rate.txt"
+    path.write_text("\n".join(f"{v:.4f}".replace(".", ",") for v in x) + "\n")
+    with pytest.raises(ConfigError, match=r"rate\.txt: rows like .* give --decimal , \(one col"):
+        read_capture(path)
+    one = read_capture(path, read_options=ReadOptions(decimal=","))
+    np.testing.assert_array_equal(one["col_1"], x)
+    two = read_capture(path, read_options=ReadOptions(delimiter=","))
+    np.testing.assert_array_equal(two["col_1"], np.trunc(x) + 0.0 * x)  # the whole parts
+    # a header, or a row that is not a pair of whole numbers, settles it: read as before
+    path.write_text("n,m\n1,2\n3,4\n")
+    assert read_capture(path).file_columns == ["n", "m"]
+
+
 def test_option_faults_are_one_line_config_errors(tmp_path):
     path = _write(tmp_path / "cap.dat", _text("\t", header=False))
     with pytest.raises(

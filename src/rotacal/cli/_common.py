@@ -338,6 +338,7 @@ def _naming_file(path: str, option: str = "") -> Iterator[None]:
     except CaptureError as e:
         name = f"{option} {path}" if option else Path(path).name
         if getattr(e, "file_named", False) or name in str(e):
+            e.file_named = True  # type: ignore[attr-defined]  # an outer _naming_file keeps it
             raise
         named = CaptureError(f"{name}: {e}")
         named.file_named = True  # type: ignore[attr-defined]  # an outer _naming_file keeps it
@@ -345,10 +346,15 @@ def _naming_file(path: str, option: str = "") -> Iterator[None]:
 
 
 def _names_capture(func: F) -> F:
-    """A command decorator: CaptureErrors name the command's CAPTURE (or CONFIG) file."""
+    """A command decorator: CaptureErrors name the command's CAPTURE (or CONFIG) file.
+
+    A command given several captures (``more_captures``) names the file at fault where it reads
+    it; an error about the whole set names none of them."""
 
     @functools.wraps(func)
     def command(*args: Any, **kwargs: Any) -> Any:
+        if kwargs.get("more_captures"):
+            return func(*args, **kwargs)
         with _naming_file(kwargs["capture"] if "capture" in kwargs else kwargs["config"]):
             return func(*args, **kwargs)
 

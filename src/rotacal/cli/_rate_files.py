@@ -98,6 +98,19 @@ def _output_of(path: str, columns: Sequence[str], group: str | None) -> np.ndarr
         return np.asarray(_read(path, ["output"], columns, group)["output"])
 
 
+def _refuse_repeats(paths: Sequence[str]) -> None:
+    """A file given twice would count its samples twice and shrink the stated uncertainty."""
+    seen: dict[Path, str] = {}
+    for path in paths:
+        key = Path(path).resolve()
+        if key in seen:
+            again = f" (as {seen[key]})" if seen[key] != path else ""
+            raise ConfigError(
+                f"{path} is given twice{again}: its samples would count twice; give each file once"
+            )
+        seen[key] = path
+
+
 def read_rate_rows(
     captures: Sequence[str],
     columns: Sequence[str],
@@ -107,6 +120,7 @@ def read_rate_rows(
     """The (set rate in °/s, output) rows of the captures, as the scale-factor analysis takes."""
     from rotacal.gyro.rate_sets import read_rates_table, rest_samples, set_rates
 
+    _refuse_repeats([*captures, *rate_files["rest_from"]])
     by_file = rate_files["rate_from_name"] or rate_files["rates_path"] is not None
     if not by_file:
         if rate_files["rest_from"]:

@@ -83,7 +83,8 @@ def allan_cmd(
     column is an angle record (an integrating gyro, or phase data), differenced to a rate.
     """
     from rotacal.gyro.noise import gyro_noise, gyro_noise_from_angle
-    from rotacal.io import parse_column_mapping, read_capture
+    from rotacal.io import capture_columns, parse_column_mapping, read_capture
+    from rotacal.io._common import name_list
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
@@ -93,18 +94,22 @@ def allan_cmd(
         raise ConfigError(f"--column names one rate column; got {', '.join(names)}")
     rate_column = names[0] if names else "rate_deg_s"
     mapping = parse_column_mapping(mappings)
+    read_options = current_read_options()
+    available = capture_columns(capture, mapping=mapping, group=group, read_options=read_options)
+    if rate_column not in available:
+        raise CaptureError(
+            f"{Path(capture).name} has no column {rate_column!r} (it has "
+            f"{name_list(available)}); name the rate column with --column NAME"
+        )
+    # only the columns the analysis uses: other arrays of the file may have other lengths
+    wanted = [rate_column, *(["time_s"] if "time_s" in available else [])]
     with _status(f"reading {capture}"):
         cap = read_capture(
             capture,
+            columns=list(dict.fromkeys(wanted)),
             mapping=mapping,
             group=group,
-            columns=None,
-            read_options=current_read_options(),
-        )
-    if rate_column not in cap.columns:
-        raise CaptureError(
-            f"{Path(capture).name} has no column {rate_column!r} (it has "
-            f"{', '.join(cap.file_columns)}); name the rate column with --column NAME"
+            read_options=read_options,
         )
     time_s = cap.columns.get("time_s")
     if time_s is None and fs_hz is None:

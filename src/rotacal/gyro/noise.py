@@ -662,7 +662,16 @@ def gyro_noise_from_angle(
     column : str
         The column's name, for messages and the report.
     **options
-        ``unit``, ``taus``, ``specs``, ``allow_clipped`` as for :func:`gyro_noise`.
+        ``unit`` ("deg/s": angle in °, "rad/s": angle in rad, "other": the column's own unit per
+        s), ``taus``, ``specs``, ``allow_clipped`` as for :func:`gyro_noise`.
+
+    Raises
+    ------
+    CaptureError
+        An angle in ° or rad that steps by half a turn or more between two samples (an angle
+        kept modulo 360°, or motion the sampling does not resolve); NaN/inf; fewer than 3 samples.
+    ConfigError
+        ``unit="deg/h"`` (the differenced rate is per second).
 
     Returns
     -------
@@ -683,8 +692,28 @@ def gyro_noise_from_angle(
             f"column '{column}' holds {theta.size} angle sample(s): too short for an Allan "
             "deviation."
         )
+    unit = options.get("unit", "deg/s")
+    if unit == "deg/h":
+        raise ConfigError(
+            f"column '{column}' is an angle (--angle): its rate comes out per second; give "
+            "--unit deg/s (angle in deg) or rad/s (angle in rad)"
+        )
     fs = _sampling_rate(time_s, fs_hz, theta.size)
-    result = gyro_noise(np.diff(theta) * fs, fs_hz=fs, column=column, **options)
+    steps = np.diff(theta)
+    half_turn = {"deg/s": 180.0, "rad/s": math.pi}.get(unit)
+    if half_turn is not None:
+        # a step of half a turn or more between samples is a wrap-around (an angle kept modulo
+        # a turn) or motion the sampling cannot resolve: either way the rate would be wrong
+        jumps = np.flatnonzero(np.abs(steps) >= half_turn)
+        if jumps.size:
+            i = int(jumps[0])
+            raise CaptureError(
+                f"column '{column}' jumps by {steps[i]:+.6g} {unit.split('/')[0]} from sample "
+                f"{i} to {i + 1} ({jumps.size} such step(s)): an angle that wraps around a turn "
+                "(unwrap it, e.g. count whole turns, before the analysis) or motion faster than "
+                "the sampling resolves"
+            )
+    result = gyro_noise(steps * fs, fs_hz=fs, column=column, **options)
     note = (
         f"the rate is the angle column '{column}' differenced ({theta.size} angle samples, "
         f"{theta.size - 1} rate samples)"

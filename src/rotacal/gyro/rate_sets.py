@@ -23,10 +23,11 @@ import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
 
-#: file-name stems that state a set rate: an optional sign (+, -, p = plus, m = minus, pos, neg,
-#: plus, minus), a number, an optional unit (dps, deg_s, degps); nothing else
+#: file-name stems that state a set rate: an optional sign (+, -, or p = plus, m = minus, pos, neg,
+#: plus, minus with an optional "_" after it), a number, an optional unit (dps, deg_s, degps);
+#: nothing else ("p-10" names no rate: its two signs disagree)
 _RATE_NAME = re.compile(
-    r"^(?P<sign>[+-]|p|m|pos|neg|plus|minus)?[_-]?(?P<value>\d+(?:\.\d+)?)"
+    r"^(?:(?P<sign>[+-])|(?P<word>p|m|pos|neg|plus|minus)_?)?(?P<value>\d+(?:\.\d+)?)"
     r"(?:[_-]?(?:dps|deg_?s|degps|deg-s))?$",
     re.IGNORECASE,
 )
@@ -55,7 +56,8 @@ def set_rate_from_name(path: str | Path) -> float:
             "that starts and ends at rest can give the 0 °/s point with --rest-from)"
         )
     value = float(m.group("value"))
-    return -value if (m.group("sign") or "").lower() in _NEGATIVE else value
+    sign = (m.group("sign") or m.group("word") or "").lower()
+    return -value if sign in _NEGATIVE else value
 
 
 def read_rates_table(path: str | Path) -> dict[str, float]:

@@ -233,6 +233,14 @@ def inspect_capture(
         return answer
     mapped = _normalise_mapping(mapping)
     names, lengths, label, metadata, text, parsed = _layout(p, mapped, group, read_options)
+    if not names:  # e.g. only labels, complex or object arrays, numbers with thousands marks
+        skipped = f" ({'; '.join(text.values())})" if text else ""
+        what = f"text ({parsed})" if parsed else label
+        return _not_a_capture(
+            p,
+            "no-numbers",
+            f"{_article(what)} {what} file without a column of numbers{skipped}; {_NO_FIT}",
+        )
     known = [n for n in lengths.values() if n is not None]
     ragged = len(known) == len(lengths) and len(set(known)) > 1
     read = {"mapping": mapped, "group": group, "read_options": read_options}

@@ -61,7 +61,8 @@ class InspectResult(Result):
     path : str — the file as given.
     kind : str — ``"capture"`` for a table of numbers rotacal reads; otherwise what the file is
         (``"json"``, ``"markdown"``, ``"yaml"``, ``"text"``, ``"text-table"`` — numbers in a
-        file whose extension no command reads —, ``"binary"``, ``"empty"``).
+        file whose extension no command reads —, ``"no-numbers"`` — a capture format with no
+        column of numbers —, ``"binary"``, ``"empty"``).
     description : str — the same in words, with what to do about it.
     format : str or None — the capture format (``"CSV"``, ``"NPZ"``, ``"HDF5"``, ``"TDMS"``).
     rows : int — the longest column's length (0 for a file that is not a capture).

@@ -6,6 +6,7 @@ See the "Captures (input files)" section of INTERFACE.md for the contract.
 from ._common import FORMATS, check_time
 from .capture import (
     Capture,
+    capture_columns,
     capture_length,
     iter_capture_chunks,
     parse_column_mapping,
@@ -18,6 +19,7 @@ __all__ = [
     "FORMATS",
     "Capture",
     "ReadOptions",
+    "capture_columns",
     "capture_length",
     "check_time",
     "iter_capture_chunks",

@@ -308,6 +308,14 @@ DAMAGED_FIX = "copy or export the capture again from the recording"
 _REASON_CHARS = 160
 
 
+def name_list(names: Sequence[str], most: int = 12) -> str:
+    """Names for a message: the first ``most`` and how many in all (a (3, N) array has N)."""
+    if not names:
+        return "none"
+    shown = ", ".join(names[:most])
+    return shown if len(names) <= most else f"{shown} … ({len(names)} in all)"
+
+
 def reason(exc: BaseException) -> str:
     """A library's exception as one short line of text for a message."""
     # the message alone: KeyError quotes it, TokenError adds a position tuple

@@ -10,7 +10,8 @@ candidates; then tab, ``;``, ``,``, blanks with the decimal point, then tab, ``;
 decimal comma. A candidate fits when every sampled row splits into the same number of cells (the
 header, when there is one, too) and every data cell is a number. A file with one cell per row is
 one column, read as blank-separated; its decimal comma is not sniffed (rows "1,5" fit two
-comma-separated columns as well): that takes ``--decimal ,``. When no candidate fits, the
+comma-separated columns as well): that takes ``--decimal ,``, and a headerless file whose every
+sampled row is such a pair is refused until ``--decimal ,`` or ``--delimiter ,`` says which. When no candidate fits, the
 separator that splits the first row into the most cells is kept, so that the reader names the row
 and cell at fault.
 """
@@ -18,6 +19,7 @@ and cell at fault.
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Sequence
 
 from rotacal.errors import CaptureError, ConfigError
@@ -121,6 +123,26 @@ def _first_row_is_header(first: str, delimiter: str, decimal: str) -> bool:
     return not all(is_number(c.strip(), decimal) for c in split_cells(first, delimiter))
 
 
+_WHOLE = re.compile(r"[+-]?\d+")
+_DIGITS = re.compile(r"\d+")
+
+
+def _check_comma_ambiguity(fname: str, rows: Sequence[str], options: ReadOptions) -> None:
+    """Refuse headerless rows like "0,2945" that read either as one column with a decimal comma or
+    as two columns of whole numbers: guessing wrong would silently give other numbers."""
+    if options.delimiter is not None:
+        return
+    for row in rows:
+        cells = [c.strip() for c in row.split(",")]
+        if len(cells) != 2 or not _WHOLE.fullmatch(cells[0]) or not _DIGITS.fullmatch(cells[1]):
+            return
+    raise ConfigError(
+        f"{fname}: rows like {rows[0].strip()!r} read as one column with a decimal comma or as "
+        "two columns of whole numbers; give --decimal , (one column) or --delimiter , (two "
+        "columns)"
+    )
+
+
 def sniff_layout(fname: str, rows: Sequence[str], options: ReadOptions) -> TextLayout:
     """Decide the layout from the first non-comment rows (comments and newlines removed).
 
@@ -148,6 +170,8 @@ def sniff_layout(fname: str, rows: Sequence[str], options: ReadOptions) -> TextL
         header = _first_row_is_header(rows[0], delimiter, decimal)
         chosen = (delimiter, decimal)
     delimiter, decimal = chosen
+    if (delimiter, decimal, header) == (",", ".", False):
+        _check_comma_ambiguity(fname, rows, options)
     cells = [c.strip().strip('"').strip() for c in split_cells(rows[0], delimiter)]
     if options.delimiter is not None and len(cells) == 1:
         other = max(_POINT_ORDER, key=lambda d: len(split_cells(rows[0], d)))

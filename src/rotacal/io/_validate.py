@@ -24,7 +24,7 @@ import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
 
-from ._common import damaged, first_nonfinite, library_errors, trailing_nan_start
+from ._common import damaged, first_nonfinite, library_errors, name_list, trailing_nan_start
 
 _MAX_EXACT_INT = 2**53
 #: what the message tells a user to do about a column that holds several channels
@@ -240,7 +240,7 @@ def to_float_column(
 def equal_lengths(fname: str, lengths: dict[str, int]) -> None:
     """Without ``ragged`` every loaded column must have the same length."""
     if len(set(lengths.values())) > 1:
-        shown = ", ".join(f"{k}: {v}" for k, v in lengths.items())
+        shown = name_list([f"{k}: {v}" for k, v in lengths.items()])
         raise CaptureError(
             f"{fname} columns have different lengths ({shown}); trim them to one length "
             f"({RAGGED_USE} differ)"

@@ -21,7 +21,13 @@ import numpy as np
 from rotacal.errors import CaptureError, ConfigError
 
 from ._array_columns import ArrayColumns, split_subscript
-from ._common import LIBRARY_ERRORS, check_group_unused, library_errors, open_checked
+from ._common import (
+    LIBRARY_ERRORS,
+    check_group_unused,
+    library_errors,
+    name_list,
+    open_checked,
+)
 from ._csv import CsvReader
 from ._hdf5 import Hdf5Reader
 from ._npz import NpzReader
@@ -82,7 +88,7 @@ class Capture:
                 f"{fname} column {name!r} is in the file but was not read (read: {loaded}); "
                 f"read the capture again asking for {name!r} too"
             )
-        have = ", ".join(self.file_columns or self.names) or "none"
+        have = name_list(self.file_columns or self.names)
         raise CaptureError(
             f"{fname} has no column {name!r} (it has: {have}); map one with --column OLD={name}"
         )
@@ -223,7 +229,7 @@ def _resolve(
     for old in mapping:
         if old not in have:
             raise CaptureError(
-                f"{fname} has no column {old!r} to map (it has: {', '.join(have)}); "
+                f"{fname} has no column {old!r} to map (it has: {name_list(have)}); "
                 f"fix --column {old}={mapping[old]}"
             )
     canon: dict[str, str] = {}
@@ -250,7 +256,7 @@ def _resolve(
         names = ", ".join(repr(m) for m in missing)
         one = missing[0]
         raise CaptureError(
-            f"{fname} has no column {names} (it has: {', '.join(available)}); "
+            f"{fname} has no column {names} (it has: {name_list(available)}); "
             f"map one with --column OLD={one}"
         )
     return available, {c: canon[c] for c in dict.fromkeys(wanted)}
@@ -265,6 +271,23 @@ def _declared(reader: Reader, wanted: dict[str, str]) -> dict[str, int | None]:
             info = reader.describe(fcol)
         lengths[canon] = declared_length(reader.fname, what, info)
     return lengths
+
+
+def capture_columns(
+    path: PathLike,
+    *,
+    mapping: MappingArg = None,
+    group: str | None = None,
+    read_options: ReadOptions | None = None,
+) -> list[str]:
+    """The canonical names (after ``mapping``) of the columns a capture offers, from its header
+    alone: no data is read. Arguments as for :func:`read_capture`."""
+    reader = _open_reader(path, group, read_options)
+    try:
+        available, _ = _resolve(reader, _normalise_mapping(mapping), None)
+        return available
+    finally:
+        _close(reader)
 
 
 def read_capture(
