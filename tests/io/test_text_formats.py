@@ -118,6 +118,13 @@ def test_headerless_decimal_comma_pairs_are_refused_until_told(tmp_path):
     assert read_capture(path).file_columns == ["n", "m"]
 
 
+def test_an_indented_comment_line_is_named(tmp_path):
+    path = tmp_path / "ic.csv"
+    path.write_text("time_s,x\n0,1\n  # a note\n0.01,2\n")
+    with pytest.raises(CaptureError, match=r"ic\.csv line 3 is a comment that does not start"):
+        read_capture(path)
+
+
 def test_option_faults_are_one_line_config_errors(tmp_path):
     path = _write(tmp_path / "cap.dat", _text("\t", header=False))
     with pytest.raises(

@@ -368,6 +368,11 @@ class CsvReader:
             if not content.strip():
                 if d == " ":
                     continue  # np.loadtxt skips a line of blanks when blanks separate cells
+                if line.strip().startswith("#"):
+                    raise CaptureError(
+                        f"{self.fname} line {ln} is a comment that does not start the line; "
+                        "remove the blanks before its '#'"
+                    )
                 raise CaptureError(
                     f"{self.fname} line {ln} holds only spaces; delete it or make it a data row"
                 )
