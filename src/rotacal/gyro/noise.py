@@ -471,6 +471,20 @@ def _noise_budgets(
     return budgets, leaks
 
 
+def _gap_free_record(values: ArrayLike, column: str) -> np.ndarray:
+    """The column as a 1-D float64 array, refused when not 1-D or holding NaN/inf."""
+    y = np.asarray(values, dtype=np.float64)
+    if y.ndim != 1:
+        raise CaptureError(f"column '{column}' must be 1-D, got shape {y.shape}.")
+    bad = np.flatnonzero(~np.isfinite(y))
+    if bad.size:
+        raise CaptureError(
+            f"column '{column}' has {bad.size} NaN/inf value(s), the first at sample {bad[0]}; "
+            "the Allan deviation needs a gap-free record."
+        )
+    return y
+
+
 def _sampling_rate(time_s: ArrayLike | None, fs_hz: float | None, n: int) -> float:
     if fs_hz is not None:
         fs = float(fs_hz)
@@ -567,15 +581,7 @@ def gyro_noise(
     IEEE Std 1139 / NIST SP 1065 (overlapping ADEV; §5.3 edf and χ² intervals); JCGM 100:2008
     (GUM) §4.2, §4.3, §5.1.2, G.4 (budgets, ν_eff, k).
     """
-    y = np.asarray(rate, dtype=np.float64)
-    if y.ndim != 1:
-        raise CaptureError(f"column '{column}' must be 1-D, got shape {y.shape}.")
-    bad = np.flatnonzero(~np.isfinite(y))
-    if bad.size:
-        raise CaptureError(
-            f"column '{column}' has {bad.size} NaN/inf value(s), the first at sample {bad[0]}; "
-            "the Allan deviation needs a gap-free record."
-        )
+    y = _gap_free_record(rate, column)
     check_magnitudes(column, y, what="a rate signal")
     check_not_constant(
         column, y, "the sensor is stuck, or the column is a set value; supply the sensor output"
@@ -678,15 +684,7 @@ def gyro_noise_from_angle(
     GyroNoise
         As :func:`gyro_noise`, with a note that the rate was differenced from the angle.
     """
-    theta = np.asarray(angle, dtype=np.float64)
-    if theta.ndim != 1:
-        raise CaptureError(f"column '{column}' must be 1-D, got shape {theta.shape}.")
-    bad = np.flatnonzero(~np.isfinite(theta))
-    if bad.size:
-        raise CaptureError(
-            f"column '{column}' has {bad.size} NaN/inf value(s), the first at sample {bad[0]}; "
-            "the Allan deviation needs a gap-free record."
-        )
+    theta = _gap_free_record(angle, column)
     if theta.size < 3:
         raise CaptureError(
             f"column '{column}' holds {theta.size} angle sample(s): too short for an Allan "
