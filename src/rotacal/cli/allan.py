@@ -23,7 +23,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
-from ._format import quantity_of
+from rotacal.numbers import quantity_of
 from ._help import example
 from ._reading import current_read_options
 

@@ -27,7 +27,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
-from ._format import elements_of, format_plain, quantity_of
+from rotacal.numbers import elements_of, format_plain, quantity_of
 from ._help import example
 from ._rate_files import rate_file_options, read_rate_rows
 from ._reading import current_read_options

@@ -25,7 +25,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
-from ._format import element_of, format_plain, quantity_of
+from rotacal.numbers import element_of, format_plain, quantity_of
 from ._help import example
 
 _PULSES_PER_REV = click.option(

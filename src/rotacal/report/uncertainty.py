@@ -1,18 +1,106 @@
-"""Uncertainty budgets in reports: one table per measurand, results rounded as ILAC-P14 asks.
+"""Results and uncertainty budgets in reports, rounded as ILAC-P14 asks, named by the glossary.
 
-Every calibration's report section calls :func:`budget_tables` with the budgets of its result and
-adds :func:`results_table` — the certificate's lines (value ± U, k, p) — above them.
+Every calibration's report section puts :func:`budget_results` — each budget's quantity as
+value ± U with k and p — into its ``results`` (the report's summary at the top) and
+:func:`budget_details` — one GUM budget table per measurand — into its folded ``details``.
+:func:`result_row` states any other result the same way.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 from rotacal.errors import ConfigError
-from rotacal.report.html import Table
+from rotacal.glossary import GLOSSARY
+from rotacal.numbers import coverage, format_quantity
+from rotacal.report.html import ResultRow, Table
 from rotacal.uncertainty.budget import UncertaintyBudget
 
-__all__ = ["budget_table", "budget_tables", "results_table"]
+__all__ = [
+    "budget_details",
+    "budget_results",
+    "budget_table",
+    "budget_tables",
+    "plain_name",
+    "result_row",
+    "results_table",
+]
+
+
+def plain_name(key: str) -> str:
+    """The glossary's name of a JSON key (:mod:`rotacal.glossary`); the key itself if it has none
+    (the report tests fail on any key that reaches a reader)."""
+    term = GLOSSARY.get(key)
+    return term.name if term is not None else key
+
+
+def result_row(
+    quantity: str,
+    value: Any,
+    unit: str = "",
+    *,
+    U: Any = None,
+    k: Any = None,
+    p: float | None = None,
+    interval: Any = None,
+    limit: str = "",
+    passed: bool | None = None,
+    note: str = "",
+) -> ResultRow:
+    """One result for a report's summary: value ± U unit (ILAC-P14 rounding, SI prefixes), k, p.
+
+    ``quantity`` is the plain name (or a glossary key); ``U`` the expanded uncertainty in ``unit``
+    (None: a value without uncertainty, e.g. a count); ``interval`` a coverage interval that is
+    not centred on the value (a THD near zero).
+    """
+    has_u = U is not None and isinstance(U, (int, float)) and U == U and U > 0
+    return ResultRow(
+        quantity=plain_name(quantity),
+        value=format_quantity(value, unit, U=U, p=p, interval=interval, si_prefix=True),
+        coverage=coverage(float(k), p).strip("()") if has_u and k is not None else "",
+        limit=limit,
+        passed=passed,
+        note=note,
+    )
+
+
+def budget_results(
+    budgets: Mapping[str, UncertaintyBudget],
+    *,
+    names: Mapping[str, str] | None = None,
+    notes: Mapping[str, str] | None = None,
+) -> list[ResultRow]:
+    """The summary rows of a result's budgets: each quantity as value ± U (k, p) in its unit.
+
+    ``names`` overrides the glossary's name of a key (e.g. to add an axis); ``notes`` adds a
+    remark under a name. A biased, bounded quantity (a THD) states its coverage interval.
+
+    References
+    ----------
+    JCGM 100:2008 (GUM) §7.2.4; ILAC-P14:09/2020 §5.2–5.4.
+    """
+    rows = []
+    for key, b in budgets.items():
+        name = (names or {}).get(key) or plain_name(b.quantity if b.quantity in GLOSSARY else key)
+        rows.append(
+            result_row(
+                name,
+                b.value,
+                b.unit,
+                U=b.U,
+                k=b.k,
+                p=b.p,
+                interval=b.interval,
+                note=(notes or {}).get(key, ""),
+            )
+        )
+    return rows
+
+
+def budget_details(budgets: Mapping[str, UncertaintyBudget]) -> list[Table]:
+    """One folded GUM budget table per measurand (:func:`budget_table`), for a section's details."""
+    return [budget_table(b) for b in budgets.values()]
 
 
 #: ν_eff at or above this is shown as ∞ (a t-factor no longer differs from the normal one).
@@ -56,7 +144,7 @@ def results_table(budgets: Mapping[str, UncertaintyBudget], caption: str = "") -
             cell_u = f"[{lo:.{decimals}f}, {hi:.{decimals}f}]{unit}"
         rows.append(
             [
-                b.quantity,
+                plain_name(b.quantity),
                 f"{value}{unit}",
                 cell_u,
                 f"{b.k:.3g}",
@@ -86,6 +174,7 @@ def budget_table(budget: UncertaintyBudget) -> Table:
     JCGM 100:2008 (GUM) §7.2.7 and Table H.1.
     """
     header, rows = budget.table()
+    name = plain_name(budget.quantity)
     for row in rows:  # the dof column: ν ≥ 10⁶ is ∞ for a reader
         try:
             row[-1] = _nu_text(float(row[-1]))
@@ -100,18 +189,22 @@ def budget_table(budget: UncertaintyBudget) -> Table:
             " Monte Carlo budget: the contributions and shares are first-order estimates shown "
             "for orientation; they need not add up to u, and a share may exceed 100 %."
         )
-    try:
-        statement = budget.statement()
-    except ConfigError:
-        statement = f"{budget.quantity} = {budget.value:.6g} {budget.unit}".strip()
+    statement = format_quantity(
+        budget.value,
+        budget.unit,
+        U=budget.U,
+        k=budget.k,
+        p=budget.p,
+        interval=budget.interval,
+        si_prefix=True,
+    )
+    statement = f"{name[:1].upper()}{name[1:]}: {statement}"
     notes = f" {' '.join(budget.notes)}" if budget.notes else ""
     return Table(
         header,
         rows,
-        caption=(
-            f"Uncertainty budget of {budget.quantity} ({budget.method}): {statement}."
-            f"{orientation}{notes}"
-        ),
+        caption=f"Uncertainty budget of the {name} ({budget.method})",
+        note=f"{statement}.{orientation}{notes}",
     )
 
 

@@ -159,7 +159,12 @@ class BudgetRow:
 
 
 def _fmt(x: float, spec: str) -> str:
-    return _DASH if not math.isfinite(x) and not math.isinf(x) else format(x, spec)
+    """``x`` with the significant digits of ``spec`` (``".3g"``), in fixed notation (no E)."""
+    from rotacal.numbers import fixed  # numbers rounds with round_ilac from this module
+
+    if math.isinf(x):
+        return "∞" if x > 0 else "−∞"
+    return _DASH if not math.isfinite(x) else fixed(x, int(spec.strip(".g")))
 
 
 def _with_unit(text: str, unit: str) -> str:

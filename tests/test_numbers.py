@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from rotacal.cli._format import (
+from rotacal.numbers import (
     NOT_DETERMINED,
     element_of,
     elements_of,

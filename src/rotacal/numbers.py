@@ -1,11 +1,19 @@
-"""How every command shows a measured quantity on the terminal: one style, rounded as ILAC-P14 says.
+"""How rotacal writes a number for a person — on the terminal, in a report, on a certificate.
+
+One style, rounded as ILAC-P14 says, in fixed notation (never ``1.2e-05``):
 
 A quantity with an expanded uncertainty U reads ``value ± U unit (k = 1.96, p = 95 %)``: U kept to
 two significant digits and the value rounded to the same decimal place (ILAC-P14:09/2020 §5.4, by
 :func:`rotacal.uncertainty.round_ilac`), k with two decimals, p in percent. A quantity whose
 coverage interval is not centred on it (a THD, a peak-to-peak near zero) reads ``value unit, true
 value in [lo, hi] unit (p = 95 %)``. A quantity without an uncertainty reads ``value unit`` — never
-a bare standard uncertainty. The JSON keeps full precision; only the terminal is rounded.
+a bare standard uncertainty. The JSON keeps full precision; only what a person reads is rounded.
+
+A number is written in fixed notation with the digits it needs; one too small or too large for that
+(below 10⁻⁴ or from 10⁹ on, where fixed notation would bury its digits in zeros) is written with a
+power of ten, ``1.23 × 10⁻⁷``, as the SI Brochure (9th ed., §5.4.4) writes it — never E notation.
+:func:`si_scaled` moves a quantity in an SI unit to the prefix that keeps its digits readable
+(0.0012 s → 1.2 ms).
 """
 
 from __future__ import annotations
@@ -36,11 +44,65 @@ def coverage(k: float, p: float | None) -> str:
     return f"(k = {k:.2f}{p_text})"
 
 
-def format_plain(value: Any, unit: str = "", *, digits: int = PLAIN_DIGITS) -> str:
-    """A value without an uncertainty: ``digits`` significant digits and the unit."""
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+#: Fixed notation is used for magnitudes in [FIXED_MIN, FIXED_MAX); a power of ten outside.
+FIXED_MIN, FIXED_MAX = 1e-4, 1e9
+
+
+def fixed(value: Any, digits: int = PLAIN_DIGITS) -> str:
+    """``value`` with ``digits`` significant digits in fixed notation, no exponent.
+
+    Trailing zeros after the decimal point are dropped (``2.50000`` → ``2.5``): a value without an
+    uncertainty states no resolution. Magnitudes outside [10⁻⁴, 10⁹) are written ``m × 10ⁿ``.
+    """
     if not _finite(value):
         return NOT_DETERMINED
-    return f"{float(value):.{digits}g}{_unit(unit)}"
+    x = float(value)
+    if x == 0.0:
+        return "0"
+    exponent = math.floor(math.log10(abs(x)))
+    if not FIXED_MIN <= abs(x) < FIXED_MAX:
+        mantissa = f"{x / 10.0**exponent:.{max(digits - 1, 0)}f}"
+        if float(mantissa) in (10.0, -10.0):  # 9.9999… rounded up
+            exponent += 1
+            mantissa = f"{x / 10.0**exponent:.{max(digits - 1, 0)}f}"
+        if "." in mantissa:
+            mantissa = mantissa.rstrip("0").rstrip(".")
+        return f"{mantissa} × 10{str(exponent).translate(_SUPERSCRIPT)}"
+    text = f"{x:.{max(digits - 1 - exponent, 0)}f}"
+    if "." in text:
+        text = text.rstrip("0").rstrip(".")
+    return "0" if text in ("-0", "") else text
+
+
+#: SI units that take a prefix (the unit as rotacal writes it). Degrees, arcsec, % and ppm do not.
+SI_UNITS = frozenset({"s", "Hz", "V", "A", "m", "W", "Ω", "rad", "rad/s"})
+_PREFIXES = ((1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"))
+
+
+def si_scaled(value: float, unit: str, *, also: Sequence[float] = ()) -> tuple[float, str, float]:
+    """The SI prefix that writes ``value`` (in ``unit``) with 1 to 3 digits before the point.
+
+    Returns ``(factor, prefixed unit, value / factor)``; divide any companion (U, an interval, the
+    values in ``also``) by ``factor`` too. Units outside :data:`SI_UNITS`, and values already
+    between 0.01 and 10 000 in their unit, are left as they are (factor 1): a prefix helps a reader
+    only where the plain unit needs many zeros.
+    """
+    x = abs(float(value)) if _finite(value) else 0.0
+    if unit not in SI_UNITS or x == 0.0 or 1e-2 <= x < 1e4:
+        return 1.0, unit, float(value) if _finite(value) else value
+    for factor, prefix in _PREFIXES:
+        if x >= factor:
+            return factor, prefix + unit, float(value) / factor
+    factor, prefix = _PREFIXES[-1]
+    return factor, prefix + unit, float(value) / factor
+
+
+def format_plain(value: Any, unit: str = "", *, digits: int = PLAIN_DIGITS) -> str:
+    """A value without an uncertainty: ``digits`` significant digits in fixed notation, the unit."""
+    if not _finite(value):
+        return NOT_DETERMINED
+    return f"{fixed(value, digits)}{_unit(unit)}"
 
 
 def format_quantity(
@@ -52,8 +114,9 @@ def format_quantity(
     p: float | None = None,
     interval: Sequence[float] | None = None,
     digits: int = PLAIN_DIGITS,
+    si_prefix: bool = False,
 ) -> str:
-    """One measured quantity as the terminal shows it (the module's docstring gives the layout).
+    """One measured quantity as a person reads it (the module's docstring gives the layout).
 
     Parameters
     ----------
@@ -72,6 +135,9 @@ def format_quantity(
         width and sets the decimal place of the value and the limits.
     digits : int
         Significant digits of a value shown without an uncertainty.
+    si_prefix : bool
+        Write a quantity in an SI unit with the prefix :func:`si_scaled` picks (reports do; the
+        terminal keeps the unit the command states).
 
     References
     ----------
@@ -80,6 +146,11 @@ def format_quantity(
     """
     if not _finite(value):
         return NOT_DETERMINED
+    if si_prefix:
+        factor, unit, value = si_scaled(float(value), unit)
+        U = float(U) / factor if _finite(U) else U
+        if interval is not None and all(_finite(x) for x in interval):
+            interval = [float(x) / factor for x in interval]
     if not (_finite(U) and U > 0):
         return format_plain(value, unit, digits=digits)
     value_text, u_text = round_ilac(float(value), float(U))

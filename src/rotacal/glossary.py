@@ -1,0 +1,226 @@
+"""The plain names of rotacal's quantities: one glossary for reports, certificates and the docs.
+
+A result's JSON keeps its keys (``angular_acceleration_amplitude_deg_s2``); a person reads
+"angular-acceleration amplitude" in °/s². :data:`GLOSSARY` maps each key that a report or a
+certificate shows to a :class:`Term`: its name in plain words, the unit it is stated in, a symbol
+where the literature has one, and one sentence of meaning. The HTML reports, the PDF certificate
+and the documentation's list of JSON keys all read it, so a quantity has one name everywhere.
+
+Keys of array quantities name the array (``harmonic_amplitudes_deg``); a report adds the index.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+__all__ = ["GLOSSARY", "Term", "term", "unit_of"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Term:
+    """How a quantity reads for a person.
+
+    Attributes
+    ----------
+    name : str
+        Plain words, starting lower-case unless a proper noun or an abbreviation starts it
+        ("angular-acceleration amplitude", "THD").
+    unit : str
+        The unit the JSON value is in, as printed ("°/s²", "%", "arcsec"; empty: none).
+    meaning : str
+        One sentence: what the quantity is and, where it helps, how it is defined.
+    symbol : str
+        The symbol of the literature, where there is one ("A", "THD", "K").
+    """
+
+    name: str
+    unit: str
+    meaning: str
+    symbol: str = ""
+
+
+def _t(name: str, unit: str, meaning: str, symbol: str = "") -> Term:
+    return Term(name=name, unit=unit, meaning=meaning, symbol=symbol)
+
+
+#: Every quantity a report or certificate names, by its JSON key.
+GLOSSARY: dict[str, Term] = {
+    # --- sinusoidal motion (Feng et al. 2023) ---
+    "amplitude_deg": _t(
+        "amplitude of the angular displacement",
+        "°",
+        "Amplitude of the fundamental of the fitted angular displacement.",
+        "A",
+    ),
+    "frequency_hz": _t("frequency", "Hz", "Frequency of the fundamental of the motion.", "f"),
+    "angular_acceleration_amplitude_deg_s2": _t(
+        "angular-acceleration amplitude",
+        "°/s²",
+        "Amplitude of the angular acceleration of the fundamental, A·(2πf)².",
+        "α",
+    ),
+    "thd_percent": _t(
+        "total harmonic distortion",
+        "%",
+        "Root-sum-square of the harmonic amplitudes 2…N of the angular displacement over the "
+        "fundamental's (IEEE Std 1057 sine fitting; Feng et al. 2023, eq. 1).",
+        "THD",
+    ),
+    "harmonic_amplitudes_deg": _t(
+        "harmonic amplitudes", "°", "Amplitude of each harmonic h = 1…N of the displacement."
+    ),
+    "reversal_times_s": _t(
+        "reversing moments",
+        "s",
+        "Times at which the table's motion reverses (Feng et al. 2023, eqs. 7–8).",
+    ),
+    "periods_used": _t("periods analysed", "", "Whole periods of motion the fit uses."),
+    "amplitude_error_percent": _t(
+        "amplitude error", "%", "Measured amplitude against the set amplitude."
+    ),
+    "frequency_error_percent": _t(
+        "frequency error", "%", "Measured frequency against the set frequency."
+    ),
+    "angular_acceleration_error_percent": _t(
+        "angular-acceleration amplitude error",
+        "%",
+        "Measured angular-acceleration amplitude against the one of the set motion.",
+    ),
+    "position_error_max_deg": _t(
+        "angular position error, largest",
+        "°",
+        "Largest |measured − ideal| displacement over the analysed periods "
+        "(Feng et al. 2023, eq. 2).",
+    ),
+    "position_error_rms_deg": _t(
+        "angular position error, rms",
+        "°",
+        "Root-mean-square of measured − ideal displacement (Feng et al. 2023, eq. 2).",
+    ),
+    "snr_db": _t(
+        "signal-to-noise ratio",
+        "dB",
+        "Power of the fitted rate signal without its constant term over the residual's.",
+        "SNR",
+    ),
+    "residual_rms_deg": _t(
+        "fit residual, rms", "°", "Root-mean-square of measurement minus the harmonic fit."
+    ),
+    "drift_deg_s": _t("drift", "°/s", "Linear drift of the displacement fitted beside the motion."),
+    "rate_drift_deg_s2": _t("rate drift", "°/s²", "Linear drift of the rate (FOG scheme)."),
+    "thd_difference_percent": _t(
+        "THD difference of two schemes",
+        "pp",
+        "THD by the combined scheme minus THD by the FOG, in percentage points.",
+    ),
+    "amplitude_difference_percent": _t(
+        "amplitude difference of two schemes", "%", "Relative difference of the two amplitudes."
+    ),
+    "frequency_difference_percent": _t(
+        "frequency difference of two schemes", "%", "Relative difference of the two frequencies."
+    ),
+    # --- angular-velocity standard (Kokuyama et al. 2015) ---
+    "deviation_arcsec": _t(
+        "scale deviation",
+        "arcsec",
+        "Angle deviation of the encoder's graduation at each pulse of head 0, zero mean.",
+    ),
+    "deviation_pp_arcsec": _t(
+        "scale deviation, peak-to-peak", "arcsec", "Largest minus smallest scale deviation."
+    ),
+    "deviation_rms_arcsec": _t("scale deviation, rms", "arcsec", "Rms of the scale deviation."),
+    "mean_rate_deg_s": _t("mean rate", "°/s", "Angular velocity averaged over whole revolutions."),
+    "rate_bias_deg_s": _t("rate bias", "°/s", "Mean rate minus the set rate."),
+    "rate_bias_percent": _t("rate bias", "%", "Mean rate against the set rate, relative."),
+    "rate_deviation_rms_percent": _t(
+        "rate fluctuation, rms", "%", "Rms of the rate's deviation from its mean, relative."
+    ),
+    "rate_deviation_peak_percent": _t(
+        "rate fluctuation, largest", "%", "Largest |deviation| of the rate from its mean, relative."
+    ),
+    "allan_angle_deg": _t(
+        "rotation angles of the Allan analysis",
+        "°",
+        "Angles φ over which the rate's root Allan variance s(φ) is evaluated.",
+        "φ",
+    ),
+    "allan_relative": _t(
+        "relative root Allan variance",
+        "",
+        "Root Allan variance of the rate over the angle φ, relative to the mean rate "
+        "(Kokuyama et al. 2015, §5).",
+        "s(φ)",
+    ),
+    # --- gyroscopes ---
+    "scale_factor": _t(
+        "scale factor",
+        "output unit per °/s",
+        "Slope of the least-squares line of the gyro's output against the table's rate.",
+        "S",
+    ),
+    "bias": _t("bias", "output unit", "Output at zero rate (intercept of the line).", "B"),
+    "nonlinearity_percent_fs": _t(
+        "nonlinearity",
+        "% FS",
+        "Largest deviation from the line over the full-scale output, 100·max|δ|/(|S|·FS).",
+    ),
+    "full_scale_deg_s": _t("full scale", "°/s", "Full-scale rate of the nonlinearity.", "FS"),
+    "scale_misalignment": _t(
+        "scale and misalignment matrix",
+        "",
+        "K in u = K·ω + b: the diagonal holds the scale factors, the off-diagonal terms the "
+        "cross-axis sensitivities.",
+        "K",
+    ),
+    "residual_rms": _t(
+        "fit residual, rms", "output unit", "Rms of the outputs minus the calibrated model."
+    ),
+    "drift_coefficients": _t(
+        "drift coefficients",
+        "°/h, °/h/g, °/h/g²",
+        "The gyro's g-independent, g-sensitive and g²-sensitive drift terms.",
+        "D",
+    ),
+    "arw_deg_rt_h": _t(
+        "angle random walk",
+        "°/√h",
+        "White rate noise, read off the Allan deviation's −½ slope at τ = 1 s (IEEE Std 952).",
+        "N",
+    ),
+    "bias_instability_deg_h": _t(
+        "bias instability",
+        "°/h",
+        "Flicker floor of the Allan deviation divided by 0.664 (IEEE Std 952).",
+        "B",
+    ),
+    "rrw_deg_h_rt_h": _t(
+        "rate random walk",
+        "°/h/√h",
+        "Random walk of the rate, read off the Allan deviation's +½ slope (IEEE Std 952).",
+        "K",
+    ),
+    "rate_ramp_deg_h2": _t(
+        "rate ramp", "°/h²", "Steady change of the rate, off the Allan deviation's +1 slope.", "R"
+    ),
+    "quantization_deg": _t(
+        "quantization noise", "°", "Angle quantization, off the Allan deviation's −1 slope.", "Q"
+    ),
+}
+
+
+def term(key: str) -> Term:
+    """The :class:`Term` of a JSON key (a trailing ``_u``/``_U`` names the same quantity).
+
+    Raises
+    ------
+    KeyError
+        When the glossary has no entry: every quantity a report shows must have one (the tests
+        render every report and look for keys that reach the reader).
+    """
+    base = key[:-2] if key.endswith(("_u", "_U")) else key
+    return GLOSSARY[base]
+
+
+def unit_of(key: str) -> str:
+    """The unit of a JSON key's value, as printed."""
+    return term(key).unit

@@ -1,0 +1,216 @@
+"""The publications rotacal's methods come from, cited as a reader expects: author, year and title.
+
+Reports, certificates and the documentation cite a method by :func:`cite` ("Feng et al. (2023)")
+and list the full entries (:meth:`Reference.full`) at the end; never by a file name of ours. Where
+our copy of a paper does not give its authors, the venue stands in their place, and the full entry
+says so.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterable
+
+__all__ = ["REFERENCES", "Reference", "cite", "reference_list"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Reference:
+    """One publication.
+
+    Attributes
+    ----------
+    key : str
+        The short key rotacal's code uses (``"feng2023"``).
+    authors : str
+        Authors as printed ("Feng R., Yan J., …"); empty when our copy does not give them.
+    short_authors : str
+        How the citation names them ("Feng et al."); the venue or body when there are none.
+    year : str
+        Year of publication ("" when our copy does not give it).
+    title : str
+        Title.
+    venue : str
+        Journal, proceedings or publisher, with volume and pages.
+    doi : str
+        DOI, where there is one.
+    """
+
+    key: str
+    authors: str
+    short_authors: str
+    year: str
+    title: str
+    venue: str
+    doi: str = ""
+
+    def short(self) -> str:
+        """The citation in running text: ``Feng et al. (2023)``."""
+        return f"{self.short_authors} ({self.year})" if self.year else self.short_authors
+
+    def full(self) -> str:
+        """The entry of a references list: authors (year). Title. Venue. doi."""
+        who = self.authors or self.short_authors
+        year = f" ({self.year})" if self.year else ""
+        doi = f" doi:{self.doi}" if self.doi else ""
+        return f"{who}{year}. {self.title}. {self.venue}.{doi}"
+
+
+def _r(
+    key: str, authors: str, short: str, year: str, title: str, venue: str, doi: str = ""
+) -> Reference:
+    return Reference(key, authors, short, year, title, venue, doi)
+
+
+#: Every publication a report or a docstring of rotacal cites, by key.
+REFERENCES: dict[str, Reference] = {
+    r.key: r
+    for r in (
+        _r(
+            "feng2023",
+            "Feng R., Yan J., Wu Y., Yu N., Yin X.",
+            "Feng et al.",
+            "2023",
+            "Methods for comprehensive calibration of a low-frequency angular acceleration "
+            "rotary table",
+            "Sensors 23(10), 4876",
+            "10.3390/s23104876",
+        ),
+        _r(
+            "gyrowheel",
+            "",
+            "Int. J. Aerospace Eng., GyroWheel study",
+            "",
+            "Error analysis for GyroWheel calibration tests and error allocation of the test "
+            "turntable (authors and year not given in our copy)",
+            "International Journal of Aerospace Engineering (Hindawi), article 6524782",
+        ),
+        _r(
+            "robot2023",
+            "",
+            "IEEE A&E Systems Magazine",
+            "2023",
+            "Calibration method of MEMS gyroscopes using a robot manipulator (authors not given "
+            "in our copy)",
+            "IEEE Aerospace and Electronic Systems Magazine, March 2023, pp. 20–27",
+        ),
+        _r(
+            "kokuyama2015",
+            "Kokuyama W., Watanabe T., Nozato H., Ota A.",
+            "Kokuyama et al.",
+            "2015",
+            "Development of angular velocity calibration facility using self-calibratable rotary "
+            "encoder",
+            "Proceedings of the XXI IMEKO World Congress, Prague",
+        ),
+        _r(
+            "ieee1057",
+            "",
+            "IEEE Std 1057",
+            "2017",
+            "IEEE standard for digitizing waveform recorders",
+            "IEEE Std 1057-2017, §4.1.4 (sine-wave fitting)",
+        ),
+        _r(
+            "ieee952",
+            "",
+            "IEEE Std 952",
+            "2020",
+            "IEEE standard specification format guide and test procedure for single-axis "
+            "interferometric fiber optic gyros",
+            "IEEE Std 952-2020, Annex C (Allan variance)",
+        ),
+        _r(
+            "ieee1431",
+            "",
+            "IEEE Std 1431",
+            "2004",
+            "IEEE standard specification format guide and test procedure for Coriolis vibratory "
+            "gyros",
+            "IEEE Std 1431-2004",
+        ),
+        _r(
+            "gum",
+            "",
+            "JCGM 100",
+            "2008",
+            "Evaluation of measurement data — Guide to the expression of uncertainty in "
+            "measurement (GUM)",
+            "Joint Committee for Guides in Metrology, JCGM 100:2008",
+        ),
+        _r(
+            "gum_s1",
+            "",
+            "JCGM 101",
+            "2008",
+            "Evaluation of measurement data — Supplement 1 to the GUM: propagation of "
+            "distributions using a Monte Carlo method",
+            "Joint Committee for Guides in Metrology, JCGM 101:2008",
+        ),
+        _r(
+            "ilac_p14",
+            "",
+            "ILAC-P14",
+            "2020",
+            "ILAC policy for measurement uncertainty in calibration",
+            "ILAC-P14:09/2020",
+        ),
+        _r(
+            "ilac_g8",
+            "",
+            "ILAC-G8",
+            "2019",
+            "Guidelines on decision rules and statements of conformity",
+            "ILAC-G8:09/2019",
+        ),
+        _r(
+            "fmvss126",
+            "",
+            "FMVSS 126",
+            "2007",
+            "Electronic stability control systems",
+            "US Federal Motor Vehicle Safety Standard No. 126, 49 CFR 571.126",
+        ),
+        _r(
+            "heydemann1981",
+            "Heydemann P. L. M.",
+            "Heydemann",
+            "1981",
+            "Determination and correction of quadrature fringe measurement errors in "
+            "interferometers",
+            "Applied Optics 20(19), 3382–3384",
+            "10.1364/AO.20.003382",
+        ),
+        _r(
+            "ferraris1995",
+            "Ferraris F., Grimaldi U., Parvis M.",
+            "Ferraris et al.",
+            "1995",
+            "Procedure for effortless in-field calibration of three-axis rate gyros and "
+            "accelerometers",
+            "Sensors and Materials 7(5), 311–330",
+        ),
+        _r(
+            "iso230_7",
+            "",
+            "ISO 230-7",
+            "2015",
+            "Test code for machine tools — Part 7: Geometric accuracy of axes of rotation",
+            "ISO 230-7:2015",
+        ),
+    )
+}
+
+
+def cite(key: str) -> str:
+    """The in-text citation of a reference key: ``cite("feng2023")`` → ``Feng et al. (2023)``."""
+    return REFERENCES[key].short()
+
+
+def reference_list(keys: Iterable[str]) -> list[Reference]:
+    """The references of ``keys`` (each once, in order of first citation), for a references list."""
+    seen: dict[str, Reference] = {}
+    for key in keys:
+        if key not in seen:
+            seen[key] = REFERENCES[key]
+    return list(seen.values())
