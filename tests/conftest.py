@@ -92,3 +92,56 @@ def bound_by_permissions() -> Callable[..., Any]:
         return child(argv)
 
     return run
+
+
+@pytest.fixture(scope="session")
+def demo_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any]:
+    """``rotacal demo`` run once per test session (it takes about a minute): its folder and the
+    CliRunner result. Tests that use it carry ``@pytest.mark.xdist_group("demo")`` so that, with
+    ``--dist loadgroup``, they all run in the one worker that ran it."""
+    from click.testing import CliRunner
+
+    from rotacal.cli import cli
+
+    out = tmp_path_factory.mktemp("demo") / "demo"
+    result = CliRunner().invoke(cli, ["demo", "--out", str(out)], prog_name="rotacal")
+    assert result.exit_code == 0, result.output
+    return out, result
+
+
+def _analysis_args(kind: str, path: str, truth: dict[str, Any]) -> list[str]:
+    """The analysis command of a twin of ``kind``, with the set values its truth states."""
+    motion = truth.get("motion", {})
+    sensor = truth.get("sensor", {})
+    sets = [
+        "--set-amplitude-deg",
+        str(motion.get("amplitude_deg")),
+        "--set-frequency-hz",
+        str(motion.get("frequency_hz")),
+    ]
+    return {
+        "encoder": ["motion", "encoder", path, "--lines", str(sensor.get("lines")), *sets],
+        "lts": ["motion", "lts", path, "--radius-mm", str(sensor.get("radius_mm")), *sets],
+        "fog": ["motion", "fog", path, *sets],
+        "pulses": ["selfcal", path, "--pulses-per-rev", str(truth.get("pulses_per_rev"))],
+        "gyro-rates": ["gyro", "scale-factor", path],
+        "gyro-triad": ["gyro", "triad", path],
+        "gyro-noise": ["allan", path, "--column", "rate_deg_s"],
+        "gyro-rotations": ["gyro", "rotations", path, "--sections", f"{path}.truth.json"],
+        "multiposition": [
+            "gyro",
+            "multiposition",
+            path,
+            "--axis",
+            str(truth.get("axis")),
+            "--latitude-deg",
+            str(truth.get("latitude_deg")),
+        ],
+    }[kind]
+
+
+@pytest.fixture(scope="session")
+def analysis_args() -> Callable[[str, str, dict[str, Any]], list[str]]:
+    """``analysis_args(kind, path, truth)``: the arguments of the command that analyses a twin
+    of ``kind`` (``rotacal simulate KIND``) at ``path``, with the set values its truth states."""
+    return _analysis_args

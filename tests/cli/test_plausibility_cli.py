@@ -23,37 +23,6 @@ def simulated(tmp_path: Path, kind: str) -> tuple[str, dict]:
     return str(path), json.loads(Path(f"{path}.truth.json").read_text())
 
 
-def _analysis(kind: str, path: str, truth: dict) -> list[str]:
-    """The analysis command of a twin of ``kind``, with the set values its truth states."""
-    motion = truth.get("motion", {})
-    sensor = truth.get("sensor", {})
-    sets = [
-        "--set-amplitude-deg",
-        str(motion.get("amplitude_deg")),
-        "--set-frequency-hz",
-        str(motion.get("frequency_hz")),
-    ]
-    return {
-        "encoder": ["motion", "encoder", path, "--lines", str(sensor.get("lines")), *sets],
-        "lts": ["motion", "lts", path, "--radius-mm", str(sensor.get("radius_mm")), *sets],
-        "fog": ["motion", "fog", path, *sets],
-        "pulses": ["selfcal", path, "--pulses-per-rev", str(truth.get("pulses_per_rev"))],
-        "gyro-rates": ["gyro", "scale-factor", path],
-        "gyro-triad": ["gyro", "triad", path],
-        "gyro-noise": ["allan", path, "--column", "rate_deg_s"],
-        "gyro-rotations": ["gyro", "rotations", path, "--sections", f"{path}.truth.json"],
-        "multiposition": [
-            "gyro",
-            "multiposition",
-            path,
-            "--axis",
-            str(truth.get("axis")),
-            "--latitude-deg",
-            str(truth.get("latitude_deg")),
-        ],
-    }[kind]
-
-
 KINDS = [
     "encoder",
     "lts",
@@ -68,9 +37,9 @@ KINDS = [
 
 
 @pytest.mark.parametrize("kind", KINDS)
-def test_every_twin_with_defaults_is_warning_free(tmp_path, kind) -> None:
+def test_every_twin_with_defaults_is_warning_free(tmp_path, kind, analysis_args) -> None:
     path, truth = simulated(tmp_path, kind)
-    r = run(*_analysis(kind, path, truth), "--json", "-")
+    r = run(*analysis_args(kind, path, truth), "--json", "-")
     assert r.exit_code == 0, r.output
     assert json.loads(r.stdout)["warnings"] == []
     assert "warning" not in r.stderr
@@ -92,9 +61,11 @@ def test_turntable_example_budget_is_warning_free(tmp_path) -> None:
     assert json.loads(r.stdout)["warnings"] == []
 
 
-def test_the_issues_encoder_with_a_tenth_of_its_lines_warns_on_stderr(tmp_path) -> None:
+def test_the_issues_encoder_with_a_tenth_of_its_lines_warns_on_stderr(
+    tmp_path, analysis_args
+) -> None:
     path, truth = simulated(tmp_path, "encoder")
-    args = _analysis("encoder", path, truth)
+    args = analysis_args("encoder", path, truth)
     args[args.index("--lines") + 1] = "3600"
     r = run(*args, "--json", "-")
     assert r.exit_code == 0, r.output
@@ -145,15 +116,15 @@ def test_imucals_recording_with_defaults_gives_imucals_positive_diagonal(shared_
     assert r.stderr.count("rotacal: warning: K_") == 3
 
 
-def test_demo_is_warning_free(tmp_path) -> None:
-    out = tmp_path / "demo"
-    r = run("demo", "--out", str(out))
-    assert r.exit_code == 0, r.output
+@pytest.mark.xdist_group("demo")
+def test_demo_is_warning_free(demo_run) -> None:
+    out, r = demo_run  # the session's one demo (tests/conftest.py), shared with tests/report
     # the real campaign (test_output_convention checks the CLI's part with a stand-in): the files
     # it names are those it wrote, each with one line
     from rotacal.demo import demo_files
 
-    assert sorted(p.name for p in out.iterdir()) == sorted(demo_files())
+    written = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
+    assert written == sorted(demo_files())
     wrote = [line for line in r.stderr.splitlines() if line.startswith("wrote ")]
     assert wrote == [f"wrote {out / name}" for name in demo_files()]
     results = sorted(p for p in out.glob("*.json") if p.name != "summary.json")  # not a result

@@ -379,8 +379,10 @@ def _write_report(
         return
     from rotacal.report.html import Report, write_html
 
+    # the title names the analysis and what it analysed: a printed page must say which capture
+    named = Path(capture).name if capture and "," not in capture else capture
     report = Report(
-        title=title,
+        title=f"{title}: {named}" if named else title,
         subtitle=subtitle,
         sections=sections,
         inputs={"capture": capture},

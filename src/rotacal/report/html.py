@@ -121,6 +121,8 @@ class Report:
     links: list[Link] = dataclasses.field(default_factory=list)
     #: references cited by the report's own text (the sections add theirs)
     references: list[str] = dataclasses.field(default_factory=list)
+    #: the index page this report belongs to (relative href; empty: none), linked at the top
+    home: str = ""
 
 
 #: Colours of the palette a figure is reduced to (adaptive; line plots need far fewer).
@@ -201,10 +203,14 @@ _CSS = """
  }
 """
 
-#: Opens every folded section before printing, so that paper shows the budgets too.
+#: Opens every folded section before printing, so that paper shows the budgets too: on the
+#: browser's print event and when the print medium applies (a PDF printer, print preview).
 _PRINT_SCRIPT = (
-    "window.addEventListener('beforeprint',function(){"
-    "document.querySelectorAll('details').forEach(function(d){d.open=true;});});"
+    "(function(){function o(){document.querySelectorAll('details')"
+    ".forEach(function(d){d.open=true;});}"
+    "window.addEventListener('beforeprint',o);"
+    "var m=window.matchMedia&&window.matchMedia('print');"
+    "if(m){m.addEventListener('change',function(e){if(e.matches)o();});}})();"
 )
 
 _TEMPLATE = jinja2.Template(
@@ -212,8 +218,8 @@ _TEMPLATE = jinja2.Template(
 <html lang="en"><head><meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <title>{{ report.title }}</title>
-<style>{{ css }}</style>
-<script>{{ script }}</script></head><body>
+<style>{{ css|safe }}</style>
+<script>{{ script|safe }}</script></head><body>
 {%- macro table(t, cls="", caption=True) %}
 <div class="table-wrap"><table{% if cls %} class="{{ cls }}"{% endif %}>
 {%- if caption and t.caption %}<caption>{{ t.caption }}</caption>{% endif %}
@@ -222,38 +228,15 @@ _TEMPLATE = jinja2.Template(
 {% endfor %}</tbody></table></div>
 {%- if t.note %}<p class="note">{{ t.note }}</p>{% endif %}
 {%- endmacro %}
-{%- macro results_rows(rows) %}
+{%- macro results_rows(rows, limits) %}
 {%- for r in rows %}<tr><td class="k">{{ r.quantity }}{% if r.note %}<span class="remark">{{ r.note }}</span>{% endif %}</td>
 <td class="v">{{ r.value }}</td><td>{{ r.coverage }}</td>
 {%- if limits %}<td>{{ r.limit }}</td><td>{% if r.passed is true %}<span class="pass">pass</span>{% elif r.passed is false %}<span class="fail">fail</span>{% endif %}</td>{% endif %}</tr>
 {% endfor %}
 {%- endmacro %}
-<header>
-<h1>{{ report.title }}</h1>
-{% if report.subtitle %}<p class="subtitle">{{ report.subtitle }}</p>{% endif %}
-</header>
-{% if report.warnings %}<div class="warnings" role="note"><h2>Warnings — read these before using the results</h2>
-<ul>{% for w in report.warnings %}<li>{{ w }}</li>{% endfor %}</ul></div>{% endif %}
-{% if report.links %}<section><h2>Reports</h2><ul class="links">
-{% for l in report.links %}<li><a href="{{ l.href }}">{{ l.title }}</a>
-{% if l.description %}<div>{{ l.description }}</div>{% endif %}
-{% if l.results %}<div class="table-wrap"><table class="summary"><tbody>{{ results_rows(l.results) }}</tbody></table></div>{% endif %}
-</li>{% endfor %}</ul></section>{% endif %}
-{% if summary_groups %}<section><h2 id="summary">Summary</h2>
-<div class="table-wrap"><table class="summary">
-<thead><tr><th class="k">quantity</th><th>value ± U</th><th>coverage</th>
-{%- if limits %}<th>limit</th><th>verdict</th>{% endif %}</tr></thead><tbody>
-{% for title, rows in summary_groups %}
-{%- if summary_groups|length > 1 %}<tr class="group"><th colspan="{{ 5 if limits else 3 }}">{{ title }}</th></tr>{% endif %}
-{{ results_rows(rows) }}
-{%- endfor %}</tbody></table></div>
-<p class="note">U is the expanded uncertainty for the coverage probability p with the coverage factor k; U is rounded to two significant digits and the value to the same decimal place (ILAC-P14).</p>
-</section>{% endif %}
-{% if report.sections|length > 2 %}<nav>{% for s in report.sections %}
-<a href="#{{ s.anchor or 's' ~ loop.index }}">{{ s.title }}</a>{% endfor %}</nav>{% endif %}
-{% for s in report.sections %}
-<section class="analysis">
-<h2 id="{{ s.anchor or 's' ~ loop.index }}">{{ s.title }}</h2>
+{%- macro section(s, index, cls) %}
+<section class="{{ cls }}">
+<h2 id="{{ s.anchor or 's' ~ index }}">{{ s.title }}</h2>
 {% for p in s.paragraphs %}<p>{{ p }}</p>{% endfor %}
 {% for f in s.figures %}<figure><img alt="{{ f.title }}" src="data:image/png;base64,{{ f.png_base64 }}"
 {%- if f.width %} width="{{ f.width }}" height="{{ f.height }}"{% endif %}>
@@ -262,7 +245,35 @@ _TEMPLATE = jinja2.Template(
 {% for t in s.details %}<details><summary>{{ t.caption or "Details" }}</summary>
 {{ table(t, caption=False) }}</details>{% endfor %}
 </section>
-{% endfor %}
+{%- endmacro %}
+<header>
+{% if report.home %}<nav class="home"><a href="{{ report.home }}">← all reports</a></nav>{% endif %}
+<h1>{{ report.title }}</h1>
+{% if report.subtitle %}<p class="subtitle">{{ report.subtitle }}</p>{% endif %}
+</header>
+{% if report.warnings %}<div class="warnings" role="note"><h2>Warnings — read these before using the results</h2>
+<ul>{% for w in report.warnings %}<li>{{ w }}</li>{% endfor %}</ul></div>{% endif %}
+{% if report.links %}{% for s in report.sections %}{{ section(s, loop.index, "intro") }}{% endfor %}
+<section><h2 id="reports">Reports</h2><ul class="links">
+{% for l in report.links %}<li><a href="{{ l.href }}">{{ l.title }}</a>
+{% if l.description %}<div>{{ l.description }}</div>{% endif %}
+{% if l.results %}<div class="table-wrap"><table class="summary"><tbody>{{ results_rows(l.results, l.results|selectattr("passed", "ne", none)|list or l.results|selectattr("limit")|list) }}</tbody></table></div>{% endif %}
+</li>{% endfor %}</ul></section>{% endif %}
+{% if summary_groups %}<section><h2 id="summary">Summary</h2>
+<div class="table-wrap"><table class="summary">
+<thead><tr><th class="k">quantity</th><th>value ± U</th><th>coverage</th>
+{%- if limits %}<th>limit</th><th>verdict</th>{% endif %}</tr></thead><tbody>
+{% for title, rows in summary_groups %}
+{%- if summary_groups|length > 1 %}<tr class="group"><th colspan="{{ 5 if limits else 3 }}">{{ title }}</th></tr>{% endif %}
+{{ results_rows(rows, limits) }}
+{%- endfor %}</tbody></table></div>
+<p class="note">U is the expanded uncertainty for the coverage probability p with the coverage factor k; U is rounded to two significant digits and the value to the same decimal place (ILAC-P14).</p>
+</section>{% endif %}
+{% if not report.links %}
+{% if report.sections|length > 2 %}<nav class="contents" aria-label="Contents">{% for s in report.sections %}
+<a href="#{{ s.anchor or 's' ~ loop.index }}">{{ s.title }}</a>{% endfor %}</nav>{% endif %}
+{% for s in report.sections %}{{ section(s, loop.index, "analysis") }}{% endfor %}
+{% endif %}
 <section><h2 id="about">About this report</h2>
 <div class="table-wrap"><table class="meta">
  <tr><th class="k">rotacal</th><td>{{ version }}</td></tr>

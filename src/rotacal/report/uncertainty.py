@@ -13,7 +13,7 @@ from typing import Any
 
 from rotacal.errors import ConfigError
 from rotacal.glossary import GLOSSARY
-from rotacal.numbers import coverage, format_quantity
+from rotacal.numbers import coverage, fixed, format_quantity
 from rotacal.report.html import ResultRow, Table
 from rotacal.uncertainty.budget import UncertaintyBudget
 
@@ -108,7 +108,8 @@ NU_INFINITE = 1e6
 
 
 def _nu_text(nu: float) -> str:
-    return "∞" if not nu < NU_INFINITE else f"{nu:.3g}"
+    """ν_eff to three significant digits in fixed notation (67 967 → 68000); ∞ from 10⁶ on."""
+    return "∞" if not nu < NU_INFINITE else fixed(nu, 3)
 
 
 def _is_monte_carlo(b: UncertaintyBudget) -> bool:
@@ -119,7 +120,7 @@ def _rounded(b: UncertaintyBudget) -> tuple[str, str]:
     try:
         return b.rounded()
     except ConfigError:  # U = 0 or not finite: state the plain value, no ±
-        return f"{b.value:.6g}", "—"
+        return fixed(b.value), "—"
 
 
 def results_table(budgets: Mapping[str, UncertaintyBudget], caption: str = "") -> Table:
@@ -147,10 +148,10 @@ def results_table(budgets: Mapping[str, UncertaintyBudget], caption: str = "") -
                 plain_name(b.quantity),
                 f"{value}{unit}",
                 cell_u,
-                f"{b.k:.3g}",
+                fixed(b.k, 3),
                 f"{100 * b.p:g} %",
                 nu,
-                f"{b.u:.3g}{unit}",
+                f"{fixed(b.u, 3)}{unit}",
                 b.method,
             ]
         )
@@ -199,7 +200,8 @@ def budget_table(budget: UncertaintyBudget) -> Table:
         si_prefix=True,
     )
     statement = f"{name[:1].upper()}{name[1:]}: {statement}"
-    notes = f" {' '.join(budget.notes)}" if budget.notes else ""
+    # the notes are the JSON's words; a reader sees the GUM's subscript (t_p → tₚ)
+    notes = f" {' '.join(budget.notes)}".replace("t_p(", "tₚ(") if budget.notes else ""
     return Table(
         header,
         rows,

@@ -1,0 +1,116 @@
+"""Every report as a reader's browser shows it: headless chromium at a phone's width and in print.
+
+Each page must load with no console error and no network request (it is one self-contained file:
+its figures are data URIs), every image must decode, the page must not scroll sideways at 420 px
+(tables scroll inside themselves), and in print every folded section must open.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from rotacal.demo import demo_files
+
+#: Every page the demo writes (index and per-analysis reports), relative to its folder.
+DEMO_PAGES = [name for name in demo_files() if name.endswith(".html")]
+PHONE = {"width": 420, "height": 900}
+
+
+def look_at(browser: Any, path: Path) -> dict[str, Any]:
+    """What a reader's browser finds on the page ``path``: console errors, requests beyond the
+    file itself, the page's width at 420 px, images that did not load, folded sections left
+    closed in print, the count of printed pages."""
+    url = path.resolve().as_uri()
+    context = browser.new_context(viewport=PHONE, java_script_enabled=True)
+    page = context.new_page()
+    requests: list[str] = []
+    errors: list[str] = []
+
+    def route(r: Any) -> None:
+        if r.request.url == url or r.request.url.startswith("data:"):
+            r.continue_()
+        else:
+            requests.append(r.request.url)
+            r.abort()
+
+    page.route("**/*", route)
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(url, wait_until="load")
+    found = {
+        "scroll_width": page.evaluate("document.documentElement.scrollWidth"),
+        "broken_images": page.evaluate(
+            "Array.from(document.images).filter(i => !(i.complete && i.naturalWidth > 0))"
+            ".map(i => i.alt)"
+        ),
+        "images": page.evaluate("document.images.length"),
+        "details": page.evaluate("document.querySelectorAll('details').length"),
+    }
+    page.emulate_media(media="print")
+    found["closed_in_print"] = page.evaluate(
+        "Array.from(document.querySelectorAll('details')).filter(d => !d.open).length"
+    )
+    found["errors"] = errors
+    found["requests"] = requests
+    context.close()
+    return found
+
+
+def assert_readable(found: dict[str, Any]) -> None:
+    assert found["errors"] == [], f"console errors: {found['errors']}"
+    assert found["requests"] == [], f"network requests: {found['requests']}"
+    assert found["scroll_width"] <= PHONE["width"], "the page scrolls sideways at 420 px"
+    assert found["broken_images"] == [], f"images that did not load: {found['broken_images']}"
+    assert found["closed_in_print"] == 0, "folded sections stay closed in print"
+
+
+@pytest.mark.xdist_group("demo")
+@pytest.mark.parametrize("name", DEMO_PAGES)
+def test_every_demo_page_reads_in_a_browser(browser, demo_folder, name) -> None:
+    found = look_at(browser, demo_folder / name)
+    assert_readable(found)
+    if name != "report.html":  # an analysis shows its figures; the index only links
+        assert found["images"] > 0 or "comparison" in name
+
+
+@pytest.mark.xdist_group("demo")
+def test_the_index_links_every_report_and_only_those(demo_folder) -> None:
+    import re
+
+    html = (demo_folder / "report.html").read_text()
+    hrefs = re.findall(r'<a href="([^"#]+)"', html)
+    assert sorted(hrefs) == sorted(n for n in DEMO_PAGES if n != "report.html")
+    for name in hrefs:  # each report links back to the index
+        assert '<a href="../report.html">' in (demo_folder / name).read_text(), name
+
+
+def test_every_commands_report_reads_in_a_browser(browser, cli_reports) -> None:
+    assert len(cli_reports) == 12  # motion ×3, selfcal, rate, inspect, gyro ×4, allan, turntable
+    for command, path in cli_reports.items():
+        found = look_at(browser, path)
+        try:
+            assert_readable(found)
+        except AssertionError as exc:
+            raise AssertionError(f"{command}: {exc}") from None
+
+
+def test_the_checks_catch_a_page_that_breaks_them(browser, tmp_path) -> None:
+    """The browser checks can fail: a wide table outside a scroller, a missing image, a fetch."""
+    from rotacal.report.html import Report, Section, Table, render_html
+
+    html = render_html(Report("t", sections=[Section("s", tables=[Table(["a"], [["x"]])])]))
+    broken = html.replace(
+        "</body>",
+        '<div style="width:900px">wide</div><img src="missing.png" alt="gone">'
+        "<script>console.error('boom')</script></body>",
+    )
+    path = tmp_path / "broken.html"
+    path.write_text(broken)
+    found = look_at(browser, path)
+    assert found["scroll_width"] > PHONE["width"]
+    assert found["broken_images"] == ["gone"]
+    assert any("boom" in e for e in found["errors"])
+    assert any(r.endswith("missing.png") for r in found["requests"])
