@@ -56,6 +56,7 @@ def run_demo(src: Path, out: Path) -> None:
 
 def baseline_source(folder: Path) -> Path:
     """The package of ``BASELINE_COMMIT`` extracted into ``folder`` (no worktree, no checkout)."""
+    folder.mkdir(parents=True, exist_ok=True)
     archive = subprocess.run(
         ["git", "-C", str(REPO), "archive", BASELINE_COMMIT, "src"],
         check=True,

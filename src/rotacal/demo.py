@@ -198,7 +198,7 @@ def _rate_standard(files: _Files) -> tuple[_Page, dict[str, Any]]:
         b = budgets.get(key)
         if b is None:
             return format_plain(value, "")
-        return format_quantity(b.value, b.unit, U=b.U, k=b.k, p=b.p, interval=b.interval)
+        return format_quantity(b.value, b.unit, U=b.U, p=b.p, interval=b.interval)
 
     table = Table(
         ["quantity", "rotacal", "twin's truth", paper],
@@ -245,6 +245,7 @@ def _rate_standard(files: _Files) -> tuple[_Page, dict[str, Any]]:
             ],
         ],
         caption=f"Against the twin's truth and {paper}'s figures",
+        note="rotacal's results ± their expanded uncertainty U for p = 95 % (k in the summary).",
     )
     intro = Section(
         title="The twin's angular-velocity standard",
@@ -303,11 +304,11 @@ def _analyse(kind: str, capture: sim.SimCapture, scenario: dict[str, Any]) -> Mo
 
 
 def _with_u(r: MotionResult, key: str, value: float, unit: str) -> str:
-    """A motion result with its U (or interval), as the summary states it."""
+    """A motion result with its U (or interval); k is in the summary, p in the table's note."""
     b = r._budgets.get(key)
     if b is None:
         return format_plain(value, unit, digits=7)
-    return format_quantity(b.value, unit, U=b.U, k=b.k, p=b.p, interval=b.interval)
+    return format_quantity(b.value, unit, U=b.U, p=b.p, interval=b.interval)
 
 
 def _truth_table(
@@ -332,8 +333,9 @@ def _truth_table(
         cols,
         rows,
         caption="rotacal against the twin's truth (over the analysed periods)",
-        note="Each measured value with its expanded uncertainty U (for the THD the coverage "
-        "interval for the true value): a truth outside it would be a failure of the method.",
+        note="Each measured value ± its expanded uncertainty U for p = 95 % (for the THD the "
+        "95 % coverage interval for the true value): a truth outside it would be a failure of "
+        "the method.",
     )
 
 
@@ -643,7 +645,7 @@ def _scenario_page(
             f"By {_NAMES[primary]} and FOG on the same run ({cite('feng2023')}, Table 1)",
             sections,
         ),
-        f"{label}: amplitude, frequency and THD by {_NAMES[primary]} and by FOG.",
+        f"Amplitude, frequency and THD by {_NAMES[primary]} and by FOG on the same run.",
         _headline(
             results[0]._budgets,
             ["amplitude_deg", "thd_percent"],
