@@ -122,3 +122,16 @@ def test_the_text_checks_find_the_old_reports_faults() -> None:
         "<td>k = 2.00, p = 95 %</td></tr></table>"
     )
     assert faults(fixed) == []
+
+
+def test_budget_text_is_rewritten_for_a_reader_without_changing_a_number() -> None:
+    """The JSON's words of a budget (``edf 6.797e+04``) in fixed notation, same digits, same sign."""
+    from rotacal.report.uncertainty import readable
+
+    assert readable("χ², edf 6.797e+04 (white)") == "χ², edf 67970 (white)"
+    assert readable("bias +6.8e-05 and -1.6e-07 pp") == "bias +6.8 × 10⁻⁵ and -1.6 × 10⁻⁷ pp"
+    assert readable("τ = 1.16e+03 s; k = t_p(ν)") == "τ = 1160 s; k = tₚ(ν)"
+    assert readable("1.2 output unit/(°/s), 3 output units") == (
+        "1.2 output units/(°/s), 3 output units"
+    )
+    assert readable("head_5 2.1430190 … 2.1430220") == "head_5 2.1430190 … 2.1430220"

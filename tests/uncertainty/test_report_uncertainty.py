@@ -52,10 +52,10 @@ def test_monte_carlo_shares_are_labelled_first_order():
     tab = budget_table(mc)
     assert "share (first order, for orientation)" in tab.columns
     assert "share" not in tab.columns
-    assert "may exceed 100 %" in tab.caption
+    assert "may exceed 100 %" in tab.note
     assert tab.rows[0][tab.columns.index("share (first order, for orientation)")] == "103.0 %"
     gum = budget_table(_budget(method="GUM"))
-    assert "share" in gum.columns and "for orientation" not in gum.caption
+    assert "share" in gum.columns and "for orientation" not in gum.note
 
 
 def test_an_interval_is_stated_instead_of_plus_minus_u():
@@ -71,7 +71,7 @@ def test_an_interval_is_stated_instead_of_plus_minus_u():
     res = results_table({"thd_percent": b})
     cell = res.rows[0][res.columns.index("U (or interval)")]
     assert cell == "[0.0000, 0.0176] V"  # clipped at the bound 0, decimals of U (0.0088)
-    assert "interval" in budget_table(b).caption
+    assert "true value in [0.0000, 0.0176] V" in budget_table(b).note
     plain = results_table({"y": _budget(dof_eff=math.inf)})
     assert plain.rows[0][plain.columns.index("U (or interval)")] == "0.020 V"
     assert len(budget_tables({"a": b, "b": _budget()})) == 3

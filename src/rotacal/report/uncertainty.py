@@ -8,6 +8,7 @@ value ± U with k and p — into its ``results`` (the report's summary at the to
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -23,6 +24,7 @@ __all__ = [
     "budget_table",
     "budget_tables",
     "plain_name",
+    "readable",
     "result_row",
     "results_table",
 ]
@@ -57,7 +59,7 @@ def result_row(
     has_u = U is not None and isinstance(U, (int, float)) and U == U and U > 0
     return ResultRow(
         quantity=plain_name(quantity),
-        value=format_quantity(value, unit, U=U, p=p, interval=interval, si_prefix=True),
+        value=readable(format_quantity(value, unit, U=U, p=p, interval=interval, si_prefix=True)),
         coverage=coverage(float(k), p).strip("()") if has_u and k is not None else "",
         limit=limit,
         passed=passed,
@@ -96,6 +98,26 @@ def budget_results(
             )
         )
     return rows
+
+
+_E_NUMBER = re.compile(r"(?<![\w.])([-+]?)(\d+(?:\.(\d+))?)[eE]([-+]?\d+)\b")
+_PLACEHOLDER_UNIT = re.compile(r"\boutput unit\b(?!s)")
+
+
+def readable(text: str) -> str:
+    """Text of a budget (sources, distributions, notes: the JSON's words) as a report shows it.
+
+    A number in E notation (``6.797e+04``) is rewritten in fixed notation with its significant
+    digits (``67970``; :func:`rotacal.numbers.fixed`), the GUM's ``t_p`` gets its subscript, and
+    the unit of a result whose output unit the user did not give reads "output units".
+    """
+
+    def fixed_number(m: re.Match[str]) -> str:
+        digits = len(m.group(2).replace(".", "").lstrip("0")) or 1
+        return ("+" if m.group(1) == "+" else "") + fixed(float(m.group(0)), digits)
+
+    text = _E_NUMBER.sub(fixed_number, text).replace("t_p(", "tₚ(")
+    return _PLACEHOLDER_UNIT.sub("output units", text)
 
 
 def budget_details(budgets: Mapping[str, UncertaintyBudget]) -> list[Table]:
@@ -181,6 +203,7 @@ def budget_table(budget: UncertaintyBudget) -> Table:
             row[-1] = _nu_text(float(row[-1]))
         except ValueError:
             pass
+    rows = [[readable(cell) for cell in row] for row in rows]
     orientation = ""
     if _is_monte_carlo(budget) and "share" in header:
         # the rows' c·u are first-order estimates beside a Monte Carlo interval: need not add up
@@ -199,9 +222,8 @@ def budget_table(budget: UncertaintyBudget) -> Table:
         interval=budget.interval,
         si_prefix=True,
     )
-    statement = f"{name[:1].upper()}{name[1:]}: {statement}"
-    # the notes are the JSON's words; a reader sees the GUM's subscript (t_p → tₚ)
-    notes = f" {' '.join(budget.notes)}".replace("t_p(", "tₚ(") if budget.notes else ""
+    statement = readable(f"{name[:1].upper()}{name[1:]}: {statement}")
+    notes = readable(f" {' '.join(budget.notes)}") if budget.notes else ""
     return Table(
         header,
         rows,
