@@ -188,10 +188,9 @@ _CSS = """
  nav { margin: 1em 0; } nav a { margin-right: 1em; display: inline-block; }
  .warnings { border: 2px solid #b8860b; background: #fff8e1; padding: 0.4em 1em; margin: 1em 0; }
  .warnings h2 { margin: 0.3em 0; font-size: 1.05em; color: #7a5200; border: none; }
- ul.links { list-style: none; padding: 0; display: grid; gap: 0.4em 1.6em;
-            grid-template-columns: repeat(auto-fill, minmax(min(100%, 31em), 1fr)); }
- ul.links > li { margin: 0 0 1em; min-width: 0; }
- ul.links table.summary { font-size: 0.85em; }
+ ul.links { list-style: none; padding: 0; } ul.links > li { margin: 0 0 1.2em; }
+ ul.links table.summary { font-size: 0.88em; margin-top: 0.3em; }
+ table.summary td.v + td { white-space: nowrap; }
  ul.links a { font-weight: 600; font-size: 1.05em; }
  ol.references li { margin-bottom: 0.3em; }
  @media (max-width: 600px) { body { padding: 0 0.6em; } th, td { padding: 0.25em 0.4em; } }
