@@ -13,7 +13,7 @@ from typing import Any
 
 from rotacal.errors import ConfigError
 from rotacal.glossary import GLOSSARY
-from rotacal.numbers import coverage, format_quantity
+from rotacal.numbers import coverage, fixed, format_quantity
 from rotacal.report.html import ResultRow, Table
 from rotacal.uncertainty.budget import UncertaintyBudget
 
@@ -108,7 +108,7 @@ NU_INFINITE = 1e6
 
 
 def _nu_text(nu: float) -> str:
-    return "∞" if not nu < NU_INFINITE else f"{nu:.3g}"
+    return "∞" if not nu < NU_INFINITE else fixed(nu, 3)
 
 
 def _is_monte_carlo(b: UncertaintyBudget) -> bool:
