@@ -644,6 +644,12 @@ def test_chunked_path_gives_the_in_memory_budgets(monkeypatch):
     for key, b0 in r0._budgets.items():
         assert r._budgets[key].u == pytest.approx(b0.u, rel=1e-4), key
         assert r._budgets[key].value == pytest.approx(b0.value, rel=1e-9, abs=1e-12), key
+    # the report's table of harmonics: the same U per harmonic on both paths
+    harmonics = [
+        next(t for t in motion_section(x, figures=False).tables if "Harmonic" in t.caption).rows
+        for x in (r0, r)
+    ]
+    assert [row[1] for row in harmonics[0]] == [row[1] for row in harmonics[1]]
 
 
 def test_bad_specifications_are_one_line_config_errors():

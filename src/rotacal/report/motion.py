@@ -399,7 +399,7 @@ def _harmonics_table(r: MotionResult) -> Table:
         )
     fog = " (displacement, from the rate fit)" if r.scheme == "fog" else ""
     return Table(
-        ["h", "A_h ± U (°)", "A_h / A_1 ± U (%)", "remark"],
+        ["h", "Aₕ ± U (°)", "Aₕ / A₁ ± U (%)", "remark"],
         rows,
         caption=f"Harmonic amplitudes of the angular displacement{fog}",
         note=f"U for k = {k:.2f}, p = 95 %. h = 1: the amplitude's full budget; h ≥ 2: the fit's "
@@ -475,6 +475,13 @@ def _paragraphs(r: MotionResult) -> list[str]:
                 "A linear drift was fitted beside the motion (--drift) and removed from it; it "
                 "is stated with the results."
             )
+        elif note.startswith("θ = arctan(D/R)"):
+            radius = note.split("R =", 1)[1].strip()
+            text.append(
+                "The angle is θ = arctan(D/R) of the displacement D the laser triangulation sensor "
+                f"reads at the radius R = {radius} from the table's axis ({cite('feng2023')}, "
+                "eq. 15)."
+            )
         else:
             text.append(_plain_text(note))
     return text
@@ -545,14 +552,15 @@ def comparison_section(
         if has_truth:
             row.append(fixed(truth["thd_percent"], 4) if truth else "—")
         if paper is not None:
-            row += [fixed(paper[i][0], 3), fixed(paper[i][1], 3), fixed(paper[i][2], 3)]
+            # as the paper prints them: two decimals
+            row += [f"{paper[i][0]:.2f}", f"{paper[i][1]:.2f}", f"{paper[i][2]:+.2f}"]
         body.append(row)
         names = {key: f"{label}: {plain_name(key)}" for key in c._budgets}
         thd_only = {k: b for k, b in c._budgets.items() if k == "thd_difference_percent"}
         rest = {k: b for k, b in c._budgets.items() if k != "thd_difference_percent"}
         results += budget_results(thd_only, names=names)
         others += [[r.quantity, r.value, r.coverage] for r in budget_results(rest, names=names)]
-        for t in budget_details(c._budgets):
+        for t in budget_details(thd_only):
             t.caption = f"{label}: {t.caption[:1].lower()}{t.caption[1:]}"
             budgets.append(_plain_table(t))
     details = (
