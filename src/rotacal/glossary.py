@@ -119,6 +119,31 @@ GLOSSARY: dict[str, Term] = {
     "frequency_difference_percent": _t(
         "frequency difference of two schemes", "%", "Relative difference of the two frequencies."
     ),
+    "thd_percent_bias": _t(
+        "noise bias of the THD",
+        "pp",
+        "How far noise pushes the plain THD up at the bias-corrected THD (Monte Carlo).",
+    ),
+    "thd_percent_bias_corrected": _t(
+        "THD, bias-corrected",
+        "%",
+        "The THD with the noise power of the fitted harmonics removed.",
+    ),
+    "thd_reference_percent": _t(
+        "THD by the combined scheme", "%", "THD of the run by the encoder or the LTS."
+    ),
+    "thd_other_percent": _t("THD by the FOG", "%", "THD of the same run by the fibre-optic gyro."),
+    "set_amplitude_deg": _t(
+        "set amplitude", "°", "Amplitude the table was set to; the reference of the errors."
+    ),
+    "set_frequency_hz": _t(
+        "set frequency", "Hz", "Frequency the table was set to; the reference of the errors."
+    ),
+    "samples_used": _t("samples analysed", "", "Samples in the whole periods the fit uses."),
+    "harmonics": _t("harmonics fitted", "", "Number N of harmonics of the multi-harmonic fit."),
+    "offset_deg": _t("mean displacement", "°", "Constant term of the fitted displacement."),
+    "analysis_start_s": _t("start of the analysed span", "s", "First reversing moment used."),
+    "analysis_stop_s": _t("end of the analysed span", "s", "Last reversing moment used."),
     # --- angular-velocity standard (Kokuyama et al. 2015) ---
     "deviation_arcsec": _t(
         "scale deviation",

@@ -96,7 +96,8 @@ def test_motion_encoder_json_has_the_interface_keys_and_matches_truth(encoder_ca
     assert d["thd_percent"] == pytest.approx(truth["thd_percent"], abs=0.02)
     assert len(d["harmonic_amplitudes_deg"]) == 10
     html = rep.read_text()
-    assert html.count("data:image/png;base64,") >= 5 and "<script" not in html
+    assert html.count("data:image/png;base64,") >= 5 and "<script src" not in html
+    assert "Diagnostics, not results" in html and "Feng et al. (2023)" in html
 
 
 def test_motion_json_to_stdout(encoder_capture):

@@ -19,6 +19,7 @@ from rotacal import sim
 from rotacal.errors import ConfigError
 from rotacal.report.html import Report, render_html
 from rotacal.report.motion import comparison_section, motion_section
+from rotacal.report.uncertainty import plain_name
 from rotacal.table import (
     calibrate_encoder_motion,
     calibrate_encoder_motion_chunked,
@@ -418,10 +419,17 @@ def test_thd_interval_covers_the_true_thd(kind, thd_percent):
 
 # ------------------------------------------------------------------------------ honesty
 def _honesty(kind, motion, sensor, *, n, specs=None, draw=None, nominal_radius=100.0):
-    """Run the twin n times; return {quantity: (std/mean u, lower bound, upper bound)}."""
+    """Run the twin n times; return {quantity: (std/mean u, lower bound, upper bound)}.
+
+    Without drawn systematic effects (``draw``) also the harmonics above the fundamental that
+    the motion has: their U in the report's table is the fit's Type A u (``_plot``).
+    """
     rng = np.random.default_rng(2024)
     errs = {k: [] for k in ALL_KEYS if k != "reversal_times_s"}
     us = {k: [] for k in errs}
+    orders = [h for h, (rel, _) in motion.harmonics.items() if rel > 0] if draw is None else []
+    for h in orders:
+        errs[f"harmonic {h}"], us[f"harmonic {h}"] = [], []
     rev_e, rev_u = [], []
     for i in range(n):
         opts = {**sensor, "seed": 100 + i, "start_s": float(rng.uniform(0.0, 0.01))}
@@ -431,8 +439,15 @@ def _honesty(kind, motion, sensor, *, n, specs=None, draw=None, nominal_radius=1
         r = _calibrate(kind, cap.columns, specs, radius_mm=nominal_radius)
         truth = motion.truth(r.analysis_start_s, r.analysis_stop_s)
         for k in errs:
-            errs[k].append(getattr(r, k) - truth[k])
-            us[k].append(r._budgets[k].u)
+            if k.startswith("harmonic "):
+                h = int(k.split()[1])
+                errs[k].append(
+                    r.harmonic_amplitudes_deg[h - 1] - truth["harmonic_amplitudes_deg"][h - 1]
+                )
+                us[k].append(r._plot["harmonic_amplitudes_u_deg"][h - 1])
+            else:
+                errs[k].append(getattr(r, k) - truth[k])
+                us[k].append(r._budgets[k].u)
         e = _nearest(r.reversal_times_s, cap.truth["reversal_times_s"])
         u = r._budgets["reversal_times_s"].u
         if kind == "fog":  # the zero crossings of one fitted model are correlated: one per run
@@ -629,6 +644,12 @@ def test_chunked_path_gives_the_in_memory_budgets(monkeypatch):
     for key, b0 in r0._budgets.items():
         assert r._budgets[key].u == pytest.approx(b0.u, rel=1e-4), key
         assert r._budgets[key].value == pytest.approx(b0.value, rel=1e-9, abs=1e-12), key
+    # the report's table of harmonics: the same U per harmonic on both paths
+    harmonics = [
+        next(t for t in motion_section(x, figures=False).tables if "Harmonic" in t.caption).rows
+        for x in (r0, r)
+    ]
+    assert [row[1] for row in harmonics[0]] == [row[1] for row in harmonics[1]]
 
 
 def test_bad_specifications_are_one_line_config_errors():
@@ -710,19 +731,21 @@ def test_report_shows_the_budget_tables_without_nan():
     f = sim.simulate_fog(DISTORTED, snr_db=20.0, seed=0).columns
     rf = calibrate_fog_motion(f["time_s"], f["rate_deg_s"])
     sec = motion_section(r, figures=False)
-    captions = [t.caption for t in sec.tables]
+    captions = [t.caption for t in sec.details]
     for key in r._budgets:
-        assert any(cap.startswith(f"Uncertainty budget of {key} ") for cap in captions), key
+        name = plain_name(key)
+        assert any(cap.startswith(f"Uncertainty budget of the {name} (") for cap in captions), key
     cmp = comparison_section([("run", compare_schemes(r, rf), None)])
     text = render_html(Report("t", sections=[sec, motion_section(rf, figures=False), cmp]))
     assert "nan" not in text.lower()
-    assert "0.50000 ° ± 0.00022 °" in text  # ILAC-P14: U to two digits, value to the same place
+    assert "0.50000 ± 0.00022 °" in text  # ILAC-P14: U to two digits, value to the same place
 
 
 def test_report_states_one_thing_about_a_thd_near_zero():
     """A pure sine on the FOG: the budget states the interval for the true THD (not plain ± U),
-    the results rows show the same interval — as an upper limit when the measured power is
-    consistent with noise — and the bias-corrected value lies in it. Two runs: one of each."""
+    the summary's one THD row shows the same interval — called an upper limit when the measured
+    power is consistent with noise — and the bias-corrected value lies in it. Two runs: one of
+    each."""
     kinds = set()
     for seed in (0, 3):
         f = sim.simulate_fog(PURE, snr_db=20.0, fs_hz=2000.0, duration_s=10.125 / 2, seed=seed)
@@ -732,13 +755,13 @@ def test_report_states_one_thing_about_a_thd_near_zero():
         assert lo <= r.thd_percent_bias_corrected <= hi
         statement = b.statement()
         assert "the true value lies in [" in statement and "±" not in statement
-        text = render_html(Report("t", sections=[motion_section(r, figures=False)]))
+        section = motion_section(r, figures=False)
+        (row,) = (x for x in section.results if x.quantity == "total harmonic distortion")
         _, u_str = b.rounded()
         dec = len(u_str.split(".")[1])
-        if lo == 0.0:
-            assert f"[0, {hi:.{dec}f}] % (consistent with noise" in text
-        else:
-            assert f"[{lo:.{dec}f}, {hi:.{dec}f}] %" in text
+        assert f"true value in [{max(lo, 0.0):.{dec}f}, {hi:.{dec}f}] %" in row.value
+        assert ("consistent with noise" in row.note) == (lo == 0.0)
+        text = render_html(Report("t", sections=[section]))
         assert "nan" not in text.lower()
         kinds.add(lo == 0.0)
     assert kinds == {True, False}

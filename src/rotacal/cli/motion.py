@@ -9,6 +9,7 @@ import click
 
 from rotacal.columns import MOTION_ENCODER, MOTION_FOG, MOTION_LTS
 from rotacal.errors import CaptureError
+from rotacal.numbers import format_plain, quantity_of
 from rotacal.results import with_warnings
 
 from ._app import cli
@@ -29,7 +30,6 @@ from ._common import (
     _write_json,
     _write_report,
 )
-from rotacal.numbers import format_plain, quantity_of
 from ._help import example
 from ._reading import current_read_options
 
@@ -103,11 +103,12 @@ def _finish_motion(
     data = result.to_dict()
     _write_json(data, json_path)
     if report_path:
+        from rotacal.references import cite
         from rotacal.report.motion import motion_section
 
         _write_report(
             "Sinusoidal-motion calibration",
-            "Feng et al. (2023), Sensors 23:4876 — IEEE Std 1057 sine fitting",
+            f"The methods of {cite('feng2023')}, with the sine fit of {cite('ieee1057')}",
             [motion_section(result)],
             capture_path,
             report_path,

@@ -53,6 +53,7 @@ from rotacal.table.motion_plausibility import motion_warnings
 from rotacal.table.motion_uncertainty import (
     ReversalDetection,
     comparison_budgets,
+    fit_dof,
     motion_budgets,
 )
 from rotacal.uncertainty import InstrumentSpecs, UncertaintyBudget, uncertainty_keys
@@ -163,6 +164,11 @@ class SchemeComparison(Result):
     snr_db: float | None
     _budgets: dict[str, UncertaintyBudget] = dataclasses.field(
         default_factory=dict, repr=False, compare=False
+    )
+    # For reports only (not in JSON): the two THDs' budgets (reference, other), by which a
+    # report states each THD with its interval.
+    _thd_budgets: tuple[UncertaintyBudget, UncertaintyBudget] | None = dataclasses.field(
+        default=None, repr=False, compare=False
     )
 
     def to_dict(self) -> dict[str, Any]:
@@ -305,6 +311,9 @@ def _finish(
         radius_mm=radius_mm,
     )
     budgets = unc.budgets
+    # for the report's table of harmonics: each A_h's u (the fit's, Type A) and its ν
+    plot["harmonic_amplitudes_u_deg"] = unc.amplitudes_u_deg
+    plot["fit_dof"] = fit_dof(fit)
     # One truth: every reported value is its budget's (corrected for stated systematic effects).
     amp = budgets["amplitude_deg"].value
     freq = budgets["frequency_hz"].value
@@ -834,4 +843,5 @@ def compare_schemes(reference: MotionResult, other: MotionResult) -> SchemeCompa
         / reference.frequency_hz,
         snr_db=other.snr_db if other.snr_db is not None else reference.snr_db,
         _budgets=budgets,
+        _thd_budgets=(reference._budgets["thd_percent"], other._budgets["thd_percent"]),
     )

@@ -92,6 +92,7 @@ __all__ = [
     "ReversalDetection",
     "ThdUncertainty",
     "comparison_budgets",
+    "fit_dof",
     "motion_budgets",
     "parabola_vertex_bias",
     "reversal_time_u_argmax",
@@ -125,7 +126,7 @@ _TIMEBASE = ("timebase.relative_error",)
 
 
 # ------------------------------------------------------------------------------ small helpers
-def _fit_dof(fit: SineFit) -> float:
+def fit_dof(fit: SineFit) -> float:
     """ν = N − p of a refined multi-harmonic fit (p = 2H + 2: offset, H pairs, frequency; one
     more with a drift term)."""
     return float(max(fit.n_samples - fit.n_parameters, 1))
@@ -134,7 +135,7 @@ def _fit_dof(fit: SineFit) -> float:
 def _fit_sigma(fit: SineFit) -> float:
     """s = √(RSS/(N − p)), the residual's standard deviation (unit of the fitted signal)."""
     n = fit.n_samples
-    return float(fit.residual_rms * math.sqrt(n / _fit_dof(fit)))
+    return float(fit.residual_rms * math.sqrt(n / fit_dof(fit)))
 
 
 def _second_derivative(fit: SineFit, t: np.ndarray) -> np.ndarray:
@@ -402,7 +403,7 @@ def _reversal_budget(
     ``reversal_times`` are already corrected for a stated timebase mean (true time)."""
     times = np.asarray(reversal_times, dtype=float)
     fit = det.fit
-    dof = _fit_dof(fit)
+    dof = fit_dof(fit)
     s = _fit_sigma(fit)
     dt = det.sample_interval_s
     if det.method == "rate_zero":
@@ -954,7 +955,7 @@ def motion_budgets(
     Feng et al. 2023, Sensors 23:4876, eqs. (1), (2), (7)–(8), (9)–(15); JCGM 100:2008 §3.2.4,
     §5, G.4; JCGM 101:2008 §7–8.
     """
-    dof = _fit_dof(fit)
+    dof = fit_dof(fit)
     f_fit = float(fit.frequency_hz)
     n_text = f"Type A: multi-harmonic fit, N = {fit.n_samples}, ν = N − {2 * fit.harmonics + 2}"
     a_fit = np.asarray(displacement_amplitudes, dtype=float)
