@@ -12,6 +12,7 @@ import numpy as np
 
 from rotacal.columns import GYRO_MULTIPOSITION
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.numbers import elements_of, format_plain, quantity_of
 
 from ._app import cli
 from ._common import (
@@ -27,7 +28,6 @@ from ._common import (
     _write_json,
     _write_report,
 )
-from rotacal.numbers import elements_of, format_plain, quantity_of
 from ._help import example
 from ._rate_files import rate_file_options, read_rate_rows
 from ._reading import current_read_options

@@ -11,6 +11,7 @@ from typing import Any
 import click
 
 from rotacal.errors import ConfigError
+from rotacal.numbers import element_of, format_plain, quantity_of
 
 from ._app import cli
 from ._common import (
@@ -25,7 +26,6 @@ from ._common import (
     _write_json,
     _write_report,
 )
-from rotacal.numbers import element_of, format_plain, quantity_of
 from ._help import example
 
 _PULSES_PER_REV = click.option(
