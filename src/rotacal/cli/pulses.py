@@ -31,7 +31,7 @@ from ._help import example
 _PULSES_PER_REV = click.option(
     "--pulses-per-rev", type=int, required=True, help="m: pulses per revolution of one head."
 )
-_SEED004 = "Kokuyama et al., angular velocity standard with a self-calibratable encoder (seed 004)"
+_SEED004 = "Kokuyama et al. (2015): angular-velocity standard with a self-calibratable encoder"
 
 
 @cli.command(
