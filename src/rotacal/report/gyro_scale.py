@@ -198,11 +198,7 @@ def _requirement_rows(r: ScaleFactorResult) -> list[ResultRow]:
                 limit=limit,
                 passed=c.passed,
                 note="no uncertainty: "
-                + (
-                    "the set rates"
-                    if c.quantity == "range"
-                    else "the larger of the output's step and one reading's noise, over |S|"
-                ),
+                + ("the set rates" if c.quantity == "range" else "a bound, not a measurement"),
             )
         )
     return rows
@@ -225,8 +221,11 @@ def scale_factor_section(
         "bias": "bias V0",
         "nonlinearity_percent_fs": "nonlinearity NL",
     }
-    results = readable_rows(budget_results(r._budgets, names=names))
-    results += _requirement_rows(r)
+    judged = _requirement_rows(r)
+    budgets = dict(r._budgets)
+    if any(row.quantity.startswith("nonlinearity") for row in judged):
+        budgets.pop("nonlinearity_percent_fs", None)  # stated once, with its limit and verdict
+    results = readable_rows(budget_results(budgets, names=names)) + judged
     tables = []
     if truth is not None:
         tables.append(

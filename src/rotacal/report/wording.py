@@ -31,6 +31,9 @@ _E_NUMBER = re.compile(r"(?<![\w.])([-+]?\d+(?:\.\d+)?[eE][-+]?\d+)(?!\w)(?!\.\d
 #: The papers as the analyses' notes name them (the JSON keeps the notes as they are).
 _SEEDS = {"000": "feng2023", "001": "gyrowheel", "003": "robot2023", "004": "kokuyama2015"}
 _SEED = re.compile(r"\b(?:the )?seed (00[0134])(?:'s)?\b")
+#: Functions and fields an analysis's notes name, in words.
+_FIELDS = {"timing_jitter": "the timing-noise estimate"}
+_FIELD = re.compile(r"\b(" + "|".join(_FIELDS) + r")\b")
 #: A triad's bias symbol b_x as the budgets name it.
 _BIAS_SYMBOL = re.compile(r"\bb_([xyz])\b")
 _KEY_U = re.compile(r"\b([a-z][a-z0-9]*(?:_[a-z0-9]+)*)_u\b")
@@ -67,6 +70,7 @@ def readable(text: str) -> str:
     text = _E_NUMBER.sub(plain, text)
     text = _SEED.sub(lambda m: cite(_SEEDS[m.group(1)]), text)
     text = _KEY_U.sub(key_u, text)
+    text = _FIELD.sub(lambda m: _FIELDS[m.group(1)], text)
     text = text.replace("^2", "²")
     text = _BIAS_SYMBOL.sub(r"b(\1)", text)
     return _NO_UNIT.sub("output units", _HEAD.sub(r"head \1", text))
