@@ -15,7 +15,12 @@ from rotacal.numbers import fixed
 from rotacal.references import cite
 from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
 from rotacal.report.uncertainty import budget_details, budget_results, result_row
-from rotacal.report.wording import diagnostics_table, readable, readable_rows, readable_tables
+from rotacal.report.wording import (
+    diagnostics_table,
+    paragraph,
+    readable_rows,
+    readable_tables,
+)
 
 __all__ = ["scale_factor_figure", "scale_factor_section"]
 
@@ -262,10 +267,10 @@ def scale_factor_section(
     paragraphs = [
         f"Unweighted least-squares line of the gyro's output against the set rate "
         f"({cite('kokuyama2015')}, §4); NL is the largest residual in % of full scale.",
-        *(readable(n) for n in r.notes),
+        *(paragraph(n) for n in r.notes),
     ]
     if r.requirement is not None:
-        paragraphs.append(readable(r.requirement.note))
+        paragraphs.append(paragraph(r.requirement.note))
     tables.append(
         Table(
             [

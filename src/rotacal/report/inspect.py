@@ -6,7 +6,7 @@ from rotacal.inspect.result import InspectResult
 from rotacal.inspect.text import HEADINGS, column_rows, fits_line, sampling_line, suggestion_line
 from rotacal.numbers import fixed
 from rotacal.report.html import Section, Table
-from rotacal.report.wording import readable, readable_tables
+from rotacal.report.wording import paragraph, readable_tables
 
 __all__ = ["inspect_section"]
 
@@ -51,6 +51,6 @@ def inspect_section(result: InspectResult) -> Section:
             )
     return Section(
         title="First look",
-        paragraphs=[readable(p) for p in paragraphs],
+        paragraphs=[paragraph(p) for p in paragraphs],
         tables=readable_tables(tables),
     )

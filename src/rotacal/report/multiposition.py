@@ -16,7 +16,12 @@ from rotacal.numbers import fixed
 from rotacal.references import cite
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
 from rotacal.report.uncertainty import budget_details, budget_results
-from rotacal.report.wording import diagnostics_table, readable, readable_rows, readable_tables
+from rotacal.report.wording import (
+    diagnostics_table,
+    paragraph,
+    readable_rows,
+    readable_tables,
+)
 
 __all__ = ["multiposition_figure", "multiposition_section"]
 
@@ -137,7 +142,7 @@ def multiposition_section(
             "fit's residual variance s²·(AᵀA)⁻¹ (Type A) and, where the lab states them, the "
             "latitude and the turntable's orientation error (eqs. 7–11), with sensitivities from "
             "the derivative of the least-squares solution.",
-            *(readable(n) for n in r.notes),
+            *(paragraph(n) for n in r.notes),
         ],
         tables=tables,
         figures=[multiposition_figure(r)] if figures else [],

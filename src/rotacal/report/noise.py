@@ -13,7 +13,7 @@ from rotacal.numbers import fixed, format_plain, format_quantity
 from rotacal.references import cite
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
 from rotacal.report.uncertainty import budget_details, budget_results
-from rotacal.report.wording import readable, readable_rows, readable_tables
+from rotacal.report.wording import paragraph, readable_rows, readable_tables
 
 __all__ = ["noise_section"]
 
@@ -98,7 +98,7 @@ def noise_section(r: GyroNoise, title: str = "Gyro noise") -> Section:
         note="The intervals are IEEE Std 952 C.4's rule of thumb (diagnostics, not results); the "
         "summary states each term with the U of its budget.",
     )
-    paragraphs = [readable(n) for n in r.notes]
+    paragraphs = [paragraph(n) for n in r.notes]
     if r._budgets:
         paragraphs.append(
             "Uncertainty budgets: each term's Type A standard uncertainty is the ±1σ χ² interval "

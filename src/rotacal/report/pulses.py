@@ -20,7 +20,7 @@ from rotacal.references import cite
 from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
 from rotacal.report.motion import _style
 from rotacal.report.uncertainty import budget_details, budget_results, budget_table, result_row
-from rotacal.report.wording import diagnostics_table, readable, readable_tables
+from rotacal.report.wording import diagnostics_table, paragraph, readable_tables
 from rotacal.table.rate import RateResult
 from rotacal.uncertainty import UncertaintyBudget
 
@@ -225,7 +225,7 @@ def selfcal_section(r: SelfCalibration, title: str = "Self-calibration of the en
             f"Equal-division averaging of {r.heads} read heads ({cite('kokuyama2015')}, §3). "
             + r.undetectable_harmonics_note[:1].upper()
             + r.undetectable_harmonics_note[1:],
-            *(readable(n) for n in r.notes),
+            *(paragraph(n) for n in r.notes),
         ],
         tables=[_head_table(r), diagnostics],
         figures=figures,
@@ -447,7 +447,7 @@ def rate_section(r: RateResult, title: str = "Constant-rate stability") -> Secti
         paragraphs=[
             f"Rate from the pulse times of one head ({cite('kokuyama2015')}, §4–5)"
             + (", compensated with the self-calibrated scale deviation." if r.compensated else "."),
-            *(readable(n) for n in r.notes),
+            *(paragraph(n) for n in r.notes),
         ],
         tables=tables,
         figures=[_rate_figure(r), _allan_figure(r)],

@@ -18,7 +18,12 @@ from rotacal.numbers import element_of, fixed
 from rotacal.references import cite
 from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
 from rotacal.report.uncertainty import budget_details, result_row
-from rotacal.report.wording import diagnostics_table, readable, readable_rows, readable_tables
+from rotacal.report.wording import (
+    diagnostics_table,
+    paragraph,
+    readable_rows,
+    readable_tables,
+)
 
 __all__ = ["rotations_figures", "rotations_section", "triad_figures", "triad_section"]
 
@@ -309,7 +314,7 @@ def triad_section(r: TriadResult, title: str | None = None, *, figures: bool = T
         "Uncertainties: the least-squares covariance (Type A) and, when stated, the table's "
         "set-rate error (Type B); |K_i| and the misalignment propagate the covariance of row i "
         f"(GUM law of propagation; the split K = diag(s)·R of {cite('ferraris1995')}).",
-        *(readable(n) for n in r.notes),
+        *(paragraph(n) for n in r.notes),
     ]
     return Section(
         title=title or "3-axis gyro calibration",
@@ -431,7 +436,7 @@ def rotations_section(
         f"of the static means), {fixed(r.angle_u_deg * 3600, 3)}″ on each realised angle, and the DAQ "
         "timebase when stated; one budget per element of K and b below."
     ]
-    paragraphs += [readable(n) for n in r.notes]
+    paragraphs += [paragraph(n) for n in r.notes]
     return Section(
         title=title or "Gyro triad from rotations through known angles",
         paragraphs=paragraphs,

@@ -22,7 +22,14 @@ from rotacal.numbers import fixed
 from rotacal.references import cite
 from rotacal.report.html import ResultRow, Table
 
-__all__ = ["DIAGNOSTICS", "diagnostics_table", "readable", "readable_rows", "readable_tables"]
+__all__ = [
+    "DIAGNOSTICS",
+    "diagnostics_table",
+    "paragraph",
+    "readable",
+    "readable_rows",
+    "readable_tables",
+]
 
 #: The caption every diagnostics table starts with.
 DIAGNOSTICS = "Diagnostics, not results"
@@ -74,6 +81,12 @@ def readable(text: str) -> str:
     text = text.replace("^2", "²")
     text = _BIAS_SYMBOL.sub(r"b(\1)", text)
     return _NO_UNIT.sub("output units", _HEAD.sub(r"head \1", text))
+
+
+def paragraph(text: str) -> str:
+    """:func:`readable` of an analysis's note, starting with a capital as a paragraph does."""
+    text = readable(text)
+    return text[:1].upper() + text[1:]
 
 
 def readable_tables(tables: Iterable[Table]) -> list[Table]:
