@@ -20,7 +20,7 @@ from rotacal.references import cite
 from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
 from rotacal.report.motion import _style
 from rotacal.report.uncertainty import budget_details, budget_results, budget_table, result_row
-from rotacal.report.wording import diagnostics_table, paragraph, readable_tables
+from rotacal.report.wording import diagnostics_table, paragraph, readable_rows, readable_tables
 from rotacal.table.rate import RateResult
 from rotacal.uncertainty import UncertaintyBudget
 
@@ -185,7 +185,7 @@ def _bias_text(bias: float | None, corrected: float | None) -> str:
 def selfcal_section(r: SelfCalibration, title: str = "Self-calibration of the encoder") -> Section:
     """Results (peak-to-peak and rms with their coverage intervals, the curve's U), head
     placement with U, diagnostics, the three figures, and the budgets folded."""
-    results = budget_results(r.budgets)
+    results = readable_rows(budget_results(r.budgets))
     if r.point_budget is not None:
         results.append(_point_row(r.point_budget))
     diagnostics = diagnostics_table(
@@ -405,7 +405,9 @@ def _stability_row(r: RateResult) -> ResultRow | None:
 
 def rate_section(r: RateResult, title: str = "Constant-rate stability") -> Section:
     """Mean rate, bias and the rate's fluctuation with their U, s(φ) with its interval, figures."""
-    results = budget_results(r.budgets)
+    results = readable_rows(
+        budget_results(r.budgets, names={"rate_bias_percent": "rate bias, relative"})
+    )
     stability = _stability_row(r)
     if stability is not None:
         results.append(stability)

@@ -41,6 +41,8 @@ _SEED = re.compile(r"\b(?:the )?seed (00[0134])(?:'s)?\b")
 #: Functions and fields an analysis's notes name, in words.
 _FIELDS = {"timing_jitter": "the timing-noise estimate"}
 _FIELD = re.compile(r"\b(" + "|".join(_FIELDS) + r")\b")
+#: A rate unit as the JSON writes it (deg/s, deg/h/g): the degree sign on the page.
+_DEG_PER = re.compile(r"\bdeg/")
 #: A triad's bias symbol b_x as the budgets name it.
 _BIAS_SYMBOL = re.compile(r"\bb_([xyz])\b")
 _KEY_U = re.compile(r"\b([a-z][a-z0-9]*(?:_[a-z0-9]+)*)_u\b")
@@ -63,7 +65,8 @@ def _significant(text: str) -> int:
 def readable(text: str) -> str:
     """``text`` with E-notation numbers in fixed notation (same significant digits), head column
     names (``head_3``) as words ("head 3"), "seed 004" by its author and year, ``<key>_u`` of a
-    glossary key as u(plain name), and "output unit" (no unit given) as "output units"."""
+    glossary key as u(plain name), "deg/" as "°/", and "output unit" (no unit given) as "output
+    units"."""
 
     def plain(m: re.Match[str]) -> str:
         number = m.group(1)
@@ -78,7 +81,7 @@ def readable(text: str) -> str:
     text = _SEED.sub(lambda m: cite(_SEEDS[m.group(1)]), text)
     text = _KEY_U.sub(key_u, text)
     text = _FIELD.sub(lambda m: _FIELDS[m.group(1)], text)
-    text = text.replace("^2", "²")
+    text = _DEG_PER.sub("°/", text.replace("^2", "²"))
     text = _BIAS_SYMBOL.sub(r"b(\1)", text)
     return _NO_UNIT.sub("output units", _HEAD.sub(r"head \1", text))
 
