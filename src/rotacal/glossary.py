@@ -179,11 +179,11 @@ GLOSSARY: dict[str, Term] = {
     # --- gyroscopes ---
     "scale_factor": _t(
         "scale factor",
-        "output unit per °/s",
+        "output units per °/s",
         "Slope of the least-squares line of the gyro's output against the table's rate.",
         "S",
     ),
-    "bias": _t("bias", "output unit", "Output at zero rate (intercept of the line).", "B"),
+    "bias": _t("bias", "output units", "Output at zero rate (intercept of the line).", "B"),
     "nonlinearity_percent_fs": _t(
         "nonlinearity",
         "% FS",
@@ -198,7 +198,7 @@ GLOSSARY: dict[str, Term] = {
         "K",
     ),
     "residual_rms": _t(
-        "fit residual, rms", "output unit", "Rms of the outputs minus the calibrated model."
+        "fit residual, rms", "output units", "Rms of the outputs minus the calibrated model."
     ),
     "drift_coefficients": _t(
         "drift coefficients",
@@ -229,6 +229,61 @@ GLOSSARY: dict[str, Term] = {
     ),
     "quantization_deg": _t(
         "quantization noise", "°", "Angle quantization, off the Allan deviation's −1 slope.", "Q"
+    ),
+    # --- encoder self-calibration, gyro triad, rate standard (Kokuyama et al. 2015; Ferraris
+    # et al. 1995) ---
+    "head_offsets_arcsec": _t(
+        "head placement errors",
+        "arcsec",
+        "Each read head's position against its nominal i·360/n, modulo one pitch; head 0 is the "
+        "reference.",
+    ),
+    "repeatability_rms_arcsec": _t(
+        "repeatability, rms",
+        "arcsec",
+        "Rms of each revolution's deviation curve minus the mean curve.",
+    ),
+    "repeatability_pp_arcsec": _t(
+        "repeatability, peak-to-peak",
+        "arcsec",
+        "Largest peak-to-peak of a revolution's curve minus the mean curve.",
+    ),
+    "closure_residual_rms_arcsec": _t(
+        "closure residual, rms",
+        "arcsec",
+        "Rms of what the fitted deviation leaves unexplained in the head differences.",
+    ),
+    "revolutions_used": _t("revolutions averaged", "", "Whole revolutions the curve averages."),
+    "harmonic_amplitudes_arcsec": _t(
+        "harmonic amplitudes of the scale deviation",
+        "arcsec",
+        "Amplitude of each Fourier order (per revolution) of the scale deviation.",
+    ),
+    "timing_jitter_s": _t(
+        "timing noise of the pulses", "s", "Type A noise of one pulse time, from the pulse times."
+    ),
+    "scale_factors": _t(
+        "scale factor |K_i|",
+        "output units per °/s",
+        "Length of row i of K: the sensitivity of gyro i along its own sensitive axis.",
+        "|K_i|",
+    ),
+    "misalignment_deg": _t(
+        "misalignment",
+        "°",
+        "Angle between gyro i's sensitive axis (row i of K) and its nominal axis.",
+        "θ_i",
+    ),
+    "fit_residual_rms": _t(
+        "fit residual, rms", "output units", "Rms of u − (K·ω + b) per output over its kept rows."
+    ),
+    "residual_rms_before": _t(
+        "residual before calibration, rms",
+        "°/s",
+        "Rms of the raw outputs at face value minus the reference rates.",
+    ),
+    "outliers_rejected": _t(
+        "rows with a rejected output", "", "Rows with at least one output rejected as anomalous."
     ),
 }
 

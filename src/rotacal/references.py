@@ -198,6 +198,15 @@ REFERENCES: dict[str, Reference] = {
             "Test code for machine tools — Part 7: Geometric accuracy of axes of rotation",
             "ISO 230-7:2015",
         ),
+        # --- stability variances (the Allan variance's uncertainty) ---
+        _r(
+            "greenhall2003",
+            "Greenhall C. A., Riley W. J.",
+            "Greenhall and Riley",
+            "2003",
+            "Uncertainty of stability variances based on finite differences",
+            "Proc. 35th Annual Precise Time and Time Interval (PTTI) Meeting, 267–280",
+        ),
     )
 }
 

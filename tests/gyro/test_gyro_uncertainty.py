@@ -369,7 +369,8 @@ def test_json_keys_of_every_quantity() -> None:
         assert np.asarray(d["bias_u"]).shape == (3,) and np.asarray(d["bias_U"]).shape == (3,)
         assert np.asarray(d["k"]["scale_misalignment"]).shape == (3, 3)
         assert np.asarray(d["k"]["bias"]).shape == (3,)
-        assert set(d["k"]) == {"scale_misalignment", "bias"}
+        axes = {"scale_factors", "misalignment_deg"} if res is triad else set()
+        assert set(d["k"]) == {"scale_misalignment", "bias"} | axes
         assert len(d["uncertainty_budgets"]) == 12
         assert "scale_misalignment[2][0]" in d["uncertainty_budgets"]
         np.testing.assert_array_less(d["scale_misalignment_u"], d["scale_misalignment_U"])
@@ -659,8 +660,9 @@ def test_reports_show_the_budgets_without_nan(tmp_path) -> None:
     ]
     text = write_html(Report("budgets", sections=sections), tmp_path / "r.html").read_text()
     assert not re.search(r"\bnan\b", text, flags=re.IGNORECASE)
-    captions = [t.caption for s in sections for t in s.tables]
-    assert sum(c.startswith("Uncertainty budget of") for c in captions) == 3 + 12 + 12
-    assert "Uncertainty budget of nonlinearity NL (Monte Carlo)" in text
-    assert "PASS WITH U" in text and "V/(°/s)" in text
+    captions = [t.caption for s in sections for t in s.details]
+    # scale factor: S, V0, NL; triad: K, b and |K_i|, θ_i; rotations: K, b
+    assert sum(c.startswith("Uncertainty budget of") for c in captions) == 3 + 12 + 6 + 12
+    assert "Uncertainty budget of the nonlinearity NL (Monte Carlo)" in text
+    assert "pass with U" in text and "V/(°/s)" in text
     assert "table.set_angle_arcsec" in text and "timebase.relative_error" in text

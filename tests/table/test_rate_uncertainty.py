@@ -502,9 +502,9 @@ def test_report_shows_the_budgets(full, tmp_path):
         tmp_path / "r.html",
     )
     text = path.read_text(encoding="utf-8")
-    for name in ("mean_rate_deg_s", "rate_bias_percent", "rate_deviation_rms_percent"):
-        assert f"Uncertainty budget of {name}" in text
-    assert "Uncertainty budget of deviation_pp_arcsec" in text
+    for name in ("mean rate", "rate bias", "rate fluctuation, rms"):
+        assert f"Uncertainty budget of the {name}" in text
+    assert "Uncertainty budget of the scale deviation, peak-to-peak" in text
     assert "each point of the deviation curve" in text
-    assert "relative root Allan variance with its uncertainty".lower() in text.lower()
+    assert "relative root Allan variance with its 95 % interval".lower() in text.lower()
     assert ">nan<" not in text.lower() and " nan " not in text.lower()

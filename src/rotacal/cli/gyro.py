@@ -12,6 +12,7 @@ import numpy as np
 
 from rotacal.columns import GYRO_MULTIPOSITION
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.numbers import elements_of, format_plain, quantity_of
 
 from ._app import cli
 from ._common import (
@@ -27,7 +28,6 @@ from ._common import (
     _write_json,
     _write_report,
 )
-from rotacal.numbers import elements_of, format_plain, quantity_of
 from ._help import example
 from ._rate_files import rate_file_options, read_rate_rows
 from ._reading import current_read_options
@@ -134,7 +134,7 @@ def gyro_scale_factor(
 
         _write_report(
             "Gyro scale factor and nonlinearity",
-            "Kokuyama et al. (seed 004), §4: V(Ω) = S·Ω + V0 + δ(Ω), NL = max|δ|/FS",
+            "Kokuyama et al. (2015), §4: V(Ω) = S·Ω + V0 + δ(Ω), NL = max|δ|/FS",
             [scale_factor_section(result)],
             capture,
             report_path,
@@ -207,7 +207,7 @@ def gyro_triad(
 
         _write_report(
             "3-axis gyro calibration",
-            "Modified six-position method (seed 003): u = K·ω + b by least squares",
+            "Modified six-position method (IEEE A&E Systems Magazine 2023): u = K·ω + b by least squares",
             [triad_section(result)],
             capture,
             report_path,
@@ -411,7 +411,7 @@ def gyro_multiposition(
 
         _write_report(
             "Multiposition calibration of drift coefficients",
-            "Seed 001, eqs. (1)–(6): Earth rate and gravity at each turntable position",
+            "GyroWheel study, eqs. (1)–(6): Earth rate and gravity at each turntable position",
             [multiposition_section(result)],
             capture,
             report_path,

@@ -11,6 +11,7 @@ from typing import Any
 import click
 
 from rotacal.errors import ConfigError
+from rotacal.numbers import element_of, format_plain, quantity_of
 
 from ._app import cli
 from ._common import (
@@ -25,13 +26,12 @@ from ._common import (
     _write_json,
     _write_report,
 )
-from rotacal.numbers import element_of, format_plain, quantity_of
 from ._help import example
 
 _PULSES_PER_REV = click.option(
     "--pulses-per-rev", type=int, required=True, help="m: pulses per revolution of one head."
 )
-_SEED004 = "Kokuyama et al., angular velocity standard with a self-calibratable encoder (seed 004)"
+_SEED004 = "Kokuyama et al. (2015): angular-velocity standard with a self-calibratable encoder"
 
 
 @cli.command(

@@ -60,6 +60,7 @@ from rotacal.uncertainty import (
     Input,
     InstrumentSpecs,
     UncertaintyBudget,
+    coverage_factor,
     propagate,
     uncertainty_keys,
 )
@@ -241,6 +242,12 @@ class SelfCalibration(Result):
         changes within a pitch, head misnumbering).
     head_offsets_arcsec : list of float, arcsec
         Each head's placement against its nominal i·360/n, modulo one pitch.
+    head_offsets_arcsec_u : list of float or None, arcsec
+        Standard uncertainty of each placement (Type A): the spread over the whole revolutions of
+        that revolution's mean head difference, s/√R, as the curve's u is made from the
+        revolutions; 0 for head 0 (the reference, by definition). None with one revolution.
+    head_offsets_dof : float or None
+        Degrees of freedom of ``head_offsets_arcsec_u``: R − 1.
     harmonic_amplitudes_arcsec : list of float, arcsec
         Amplitude of orders 1 … min(m/2, 100) of the deviation.
     rotation : str
@@ -288,6 +295,8 @@ class SelfCalibration(Result):
     _per_revolution_arcsec: FloatArray = dataclasses.field(repr=False)
     _head_differences_arcsec: FloatArray = dataclasses.field(repr=False)
     _spectrum_arcsec: FloatArray = dataclasses.field(repr=False)
+    head_offsets_arcsec_u: list[float] | None = None
+    head_offsets_dof: float | None = None
     _noise: DeviationNoise | None = dataclasses.field(repr=False, default=None)
     _point_budget: UncertaintyBudget | None = dataclasses.field(repr=False, default=None)
     _budgets: dict[str, UncertaintyBudget] = dataclasses.field(repr=False, default_factory=dict)
@@ -306,7 +315,25 @@ class SelfCalibration(Result):
             out["uncertainty_budgets"]["deviation_arcsec"] = pb.to_dict()
             if out["coverage_probability"] is None:
                 out["coverage_probability"] = pb.p
+        out["head_offsets_arcsec_U"] = self.head_offsets_arcsec_U
+        if self.head_offsets_arcsec_U is not None:
+            out["k"]["head_offsets_arcsec"] = self.head_offsets_k
         return out
+
+    @property
+    def head_offsets_k(self) -> float | None:
+        """Coverage factor of the placements' U: t_95(R − 1) (GUM G.3.2); None with one revolution."""
+        if self.head_offsets_dof is None:
+            return None
+        return coverage_factor(self.head_offsets_dof, 0.95)
+
+    @property
+    def head_offsets_arcsec_U(self) -> list[float] | None:
+        """Expanded uncertainty of each head placement (arcsec, p = 95 %), None with one revolution."""
+        k = self.head_offsets_k
+        if k is None or self.head_offsets_arcsec_u is None:
+            return None
+        return [k * u for u in self.head_offsets_arcsec_u]
 
     @property
     def budgets(self) -> dict[str, UncertaintyBudget]:
@@ -931,6 +958,7 @@ def self_calibrate(
         placed = -placed
     head_off = (placed - nominal + pitch_arcsec / 2) % pitch_arcsec - pitch_arcsec / 2
     head_off[0] = 0.0
+    offsets_u, offsets_dof = _head_offsets_u(used)
     return SelfCalibration(
         deviation_arcsec=deviation,
         heads=n,
@@ -957,6 +985,8 @@ def self_calibrate(
         last_pulse_time_s=float(trains[0][-1]),
         head0_pulses=int(trains[0].size),
         notes=notes,
+        head_offsets_arcsec_u=offsets_u,
+        head_offsets_dof=offsets_dof,
         _per_revolution_arcsec=per_rev,
         _head_differences_arcsec=angle_diff,
         _spectrum_arcsec=amp,
@@ -971,6 +1001,22 @@ def self_calibrate(
             )
         ),
     )
+
+
+def _head_offsets_u(used: FloatArray) -> tuple[list[float] | None, float | None]:
+    """Type A standard uncertainty (arcsec) of each head's placement and its degrees of freedom.
+
+    ``used`` holds the head differences (arcsec) of heads 1 … n−1 against head 0 over R whole
+    revolutions, shape (R, n−1, m). Over a whole revolution the scale deviation averages out, so
+    each revolution's mean difference is one reading of the placement; u = s/√R with s their
+    standard deviation, ν = R − 1 (GUM §4.2.2–4.2.3). Head 0 is the reference: u = 0.
+    """
+    revs = used.shape[0]
+    if revs < 2:
+        return None, None
+    per_rev = used.mean(axis=2)  # (R, n−1)
+    u = per_rev.std(axis=0, ddof=1) / math.sqrt(revs)
+    return [0.0, *(float(x) for x in u)], float(revs - 1)
 
 
 def _bias(summaries: Mapping[str, Any], key: str, corrected: bool = False) -> float | None:

@@ -42,6 +42,7 @@ from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.plausibility import negative_diagonal_warnings, triad_fit_warnings
 from rotacal.gyro.uncertainty import (
     as_specs,
+    axis_budgets,
     element_key,
     linear_gum,
     uncertainty_json,
@@ -499,6 +500,14 @@ class TriadResult(Result):
     _budgets: dict[str, UncertaintyBudget] = dataclasses.field(
         default_factory=dict, repr=False, compare=False
     )
+    _axis_budgets: dict[str, UncertaintyBudget] = dataclasses.field(
+        default_factory=dict, repr=False, compare=False
+    )
+
+    @property
+    def axis_budgets(self) -> dict[str, UncertaintyBudget]:
+        """Budgets of ``scale_factors[i]`` and ``misalignment_deg[i]`` (:func:`axis_budgets`)."""
+        return dict(self._axis_budgets)
 
     def calibrate(self, u: Any) -> np.ndarray:
         """ω̂ = K⁻¹(u − b) (°/s) for raw outputs ``u`` (n, 3) — seed 003, eq. (7)."""
@@ -510,6 +519,14 @@ class TriadResult(Result):
         if self._budgets:
             keys = uncertainty_json(self._budgets, {"scale_misalignment": (3, 3), "bias": (3,)})
             out.update(to_jsonable(keys))
+        if self._axis_budgets:  # new keys only: the budgets of K and b above stay as they were
+            axes = uncertainty_json(
+                self._axis_budgets, {"scale_factors": (3,), "misalignment_deg": (3,)}
+            )
+            for name in ("scale_factors", "misalignment_deg"):
+                out[f"{name}_u"] = axes[f"{name}_u"]
+                out[f"{name}_U"] = axes[f"{name}_U"]
+                out["k"][name] = axes["k"][name]
         return out
 
 
@@ -777,6 +794,11 @@ def calibrate_triad(
         [[budgets[element_key("scale_misalignment", (i, j))].u for j in range(3)] for i in range(3)]
     )
     u_b = np.array([budgets[element_key("bias", (i,))].u for i in range(3)])
+    unit_k = f"{output_unit or 'output units'}/(°/s)"
+    rows_kept = np.count_nonzero(keep, axis=0)
+    axis_u = axis_budgets(
+        k_fit, [c[:3, :3] for c in cov], [float(n - 4) for n in rows_kept], eps_in, unit_k, out_cols
+    )
 
     fitted = x @ coef
     fit_res = uu - fitted
@@ -879,6 +901,7 @@ def calibrate_triad(
         output_unit=output_unit,
         _plot=plot,
         _budgets=budgets,
+        _axis_budgets=axis_u,
         warnings=(
             *clipped,
             *negative_diagonal_warnings(

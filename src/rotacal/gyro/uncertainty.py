@@ -45,6 +45,7 @@ __all__ = [
     "COVERAGE_PROBABILITY",
     "TScale",
     "as_specs",
+    "axis_budgets",
     "element_key",
     "linear_gum",
     "monte_carlo_budget",
@@ -268,6 +269,104 @@ class TScale(Distribution):
 
     def describe(self) -> str:
         return f"√(ν/χ²_ν), ν = {self.dof:g}"
+
+
+def _axis_gradients(row: np.ndarray, i: int) -> tuple[float, np.ndarray, float, np.ndarray]:
+    """|k| and the misalignment θ (rad) of the sensitivity row ``row`` of gyro ``i``, with their
+    gradients with respect to the row's elements.
+
+    θ = atan2(r, |k_i|) with r = √(Σ_{j≠i} k_j²): the same angle as arccos(|k_i|/|k|), written so
+    that its derivative stays finite at small angles.
+    """
+    norm = float(np.linalg.norm(row))
+    a = abs(float(row[i]))
+    off = row.copy()
+    off[i] = 0.0
+    r = float(np.linalg.norm(off))
+    grad_norm = row / norm
+    grad_theta = np.zeros(3)
+    if r > 0.0:
+        grad_theta = a * off / (r * norm**2)
+    grad_theta[i] = -r * math.copysign(1.0, float(row[i])) / norm**2
+    return norm, grad_norm, math.atan2(r, a), grad_theta
+
+
+def axis_budgets(
+    k_fit: np.ndarray,
+    row_covariances: Sequence[np.ndarray],
+    dofs: Sequence[float],
+    eps_in: Input | None,
+    unit_k: str,
+    out_names: Sequence[str],
+) -> dict[str, UncertaintyBudget]:
+    """GUM budgets of each gyro's scale factor |K_i| and misalignment angle from a fitted K.
+
+    Row i of K is gyro i's sensitivity vector; its length is the scale factor and its angle to
+    the nominal axis i the misalignment (Ferraris et al. 1995, eq. 12;
+    :func:`rotacal.gyro.triad.decompose_scale_misalignment`). With K = K₀/(1 + ε):
+    |K_i| = |K₀_i|/(1 + ε) and the angle does not depend on ε.
+
+    Parameters
+    ----------
+    k_fit : ndarray (3, 3)
+        K₀ fitted against the set rates (``unit_k``).
+    row_covariances : sequence of ndarray (3, 3)
+        Covariance of row i of K₀ from the least squares (``unit_k``²).
+    dofs : sequence of float
+        Degrees of freedom of each row's covariance (rows kept − 4).
+    eps_in : Input or None
+        The table's relative set-rate error ε (Type B), when stated.
+    unit_k : str
+        Unit of K (output unit per °/s).
+    out_names : sequence of str
+        The output columns, for the budgets' wording.
+
+    Returns
+    -------
+    dict
+        ``scale_factors[i]`` (``unit_k``) and ``misalignment_deg[i]`` (°) by
+        :func:`element_key`. The row's correlated elements enter as one Type A input each:
+        u² = gᵀ·C·g, g the gradient of |k| or θ with respect to the row (GUM §5.2.2 eq. (13)).
+        Near θ = 0 the angle is bounded at zero and its first-order u does not describe the
+        bias; the budget's notes say so when θ < 2u.
+
+    References
+    ----------
+    JCGM 100:2008 (GUM) §5.1.2 eq. (10), §5.2.2 eq. (13) (correlated inputs), G.4.1 (ν_eff);
+    Ferraris F., Grimaldi U., Parvis M. (1995), Sensors and Materials 7(5):311–330, eq. (12).
+    """
+    eps = 0.0 if eps_in is None else eps_in.value
+    budgets: dict[str, UncertaintyBudget] = {}
+    for i in range(3):
+        norm0, g_norm, theta, g_theta = _axis_gradients(np.asarray(k_fit[i], dtype=float), i)
+        cov = np.asarray(row_covariances[i], dtype=float)
+        origin = f"Type A: least squares of column {out_names[i]} (covariance of the row)"
+        u_norm = math.sqrt(max(float(g_norm @ cov @ g_norm), 0.0))
+        u_theta = math.degrees(math.sqrt(max(float(g_theta @ cov @ g_theta), 0.0)))
+        n_in = Input(
+            f"|K₀_{i}| of row {out_names[i]}", norm0, u_norm, dofs[i], "normal", unit_k, origin
+        )
+        inputs, sens = [n_in], [1.0 / (1.0 + eps)]
+        if eps_in is not None:
+            inputs.append(eps_in)
+            sens.append(-norm0 / (1.0 + eps) ** 2)
+        name = f"scale factor |K| of {out_names[i]}"
+        budgets[element_key("scale_factors", (i,))] = linear_gum(
+            name, unit_k, norm0 / (1.0 + eps), inputs, sens
+        ).budget(0)
+        angle = math.degrees(theta)
+        t_in = Input(f"θ of row {out_names[i]}", angle, u_theta, dofs[i], "normal", "°", origin)
+        b = linear_gum(f"misalignment of {out_names[i]}", "°", angle, [t_in], [1.0]).budget(0)
+        notes = ["A relative set-rate error scales the whole row and leaves the angle unchanged."]
+        if angle < 2.0 * u_theta:
+            notes.append(
+                "The angle is within 2u of zero: an angle cannot be negative, so the value is "
+                "biased upward and ± U is only a first-order statement."
+            )
+        budgets[element_key("misalignment_deg", (i,))] = dataclasses.replace(
+            b, notes=b.notes + tuple(notes)
+        )
+    return budgets
 
 
 def element_key(name: str, index: tuple[int, ...]) -> str:

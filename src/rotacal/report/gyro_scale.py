@@ -1,4 +1,4 @@
-"""Report section and figure for the gyro scale factor and nonlinearity (seed 004, §4)."""
+"""Report section and figure for the gyro scale factor and nonlinearity (Kokuyama et al. 2015, §4)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,16 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from rotacal.gyro.scale_factor import ScaleFactorResult
-from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
-from rotacal.report.uncertainty import budget_tables
+from rotacal.numbers import fixed
+from rotacal.references import cite
+from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
+from rotacal.report.uncertainty import budget_details, budget_results, result_row
+from rotacal.report.wording import (
+    diagnostics_table,
+    paragraph,
+    readable_rows,
+    readable_tables,
+)
 
 __all__ = ["scale_factor_figure", "scale_factor_section"]
 
@@ -25,22 +33,12 @@ def _style(ax: Any) -> None:
 
 
 def _g(x: float | None, digits: int = 6) -> str:
-    if x is None or not np.isfinite(x):
-        return "—"
-    return f"{x:.{digits}g}"
+    return fixed(x, digits) if x is not None else "—"
 
 
-def _interval(r: ScaleFactorResult) -> str:
-    """The 95 % interval for the true NL, rounded to the decimal place of U (ILAC-P14 §5.4)."""
-    b = r._budgets.get("nonlinearity_percent_fs")
-    if b is None or b.interval is None:
-        return "—"
-    if b.U <= 0:
-        return f"[{b.interval[0]:.4g}, {b.interval[1]:.4g}] %FS"
-    _, u_str = b.rounded()
-    decimals = len(u_str.split(".")[1]) if "." in u_str else 0
-    lo, hi = b.interval
-    return f"[{lo:.{decimals}f}, {hi:.{decimals}f}] %FS"
+def _unit(r: ScaleFactorResult) -> str:
+    """The output unit the user gave, or "output units" in words."""
+    return r.output_unit or "output units"
 
 
 def _accuracy_limit(r: ScaleFactorResult) -> float | None:
@@ -56,42 +54,37 @@ def _resolution_rows(r: ScaleFactorResult) -> list[list[str]]:
     """The resolution, what set it, both limits and the bandwidth with its source."""
     res = r.resolution
     if res is None:
-        return [["resolution", f"{_g(r.resolution_deg_s, 3)} °/s ({r.resolution_basis})", "", ""]]
-    unit = f" {r.output_unit}" if r.output_unit else ""
+        return [["resolution", f"{_g(r.resolution_deg_s, 3)} °/s ({r.resolution_basis})"]]
     q = r.output_quantum
     noise = res.noise_deg_s
     bandwidth = (
         "the recorded samples' (sample rate not given)"
         if res.bandwidth_hz is None
-        else f"{res.bandwidth_hz:.4g} Hz ({res.bandwidth_source})"
+        else f"{_g(res.bandwidth_hz, 4)} Hz ({res.bandwidth_source})"
     )
     return [
         [
             "resolution (smallest rate change resolved)",
             f"{_g(r.resolution_deg_s, 3)} °/s, set by the "
             + (res.set_by or "— (neither the quantum nor the noise is visible)"),
-            "",
-            "",
         ],
         [
-            "  output quantum / |S|",
-            "not visible" if q is None else f"{_g(res.quantum_deg_s, 3)} °/s ({q:.4g}{unit})",
-            "",
-            "",
+            "output quantum / |S|",
+            "not visible"
+            if q is None
+            else f"{_g(res.quantum_deg_s, 3)} °/s ({_g(q, 4)} {_unit(r)})",
         ],
         [
-            "  noise of one reading / |S|",
+            "noise of one reading / |S|",
             "not visible" if noise is None else f"{_g(noise, 3)} °/s rms (largest rate point)",
-            "",
-            "",
         ],
-        ["  bandwidth of the reading", bandwidth, "", ""],
+        ["bandwidth of the reading", bandwidth],
     ]
 
 
 def scale_factor_figure(r: ScaleFactorResult) -> Figure:
     """Output against rate with the fitted line (top) and residuals in %FS (bottom)."""
-    unit = r.output_unit or "output unit"
+    unit = _unit(r)
     rates = np.asarray(r.rates_deg_s)
     means = np.array([p.mean for p in r.points])
     se_pct = (
@@ -109,8 +102,8 @@ def scale_factor_figure(r: ScaleFactorResult) -> Figure:
         r.scale_factor * xx + r.bias,
         color=_C["fit"],
         lw=1.3,
-        label=f"least-squares line: S = {r.scale_factor:.7g} {unit}/(°/s), "
-        f"V0 = {r.bias:.5g} {unit}",
+        label=f"least-squares line: S = {_g(r.scale_factor, 7)} {unit}/(°/s), "
+        f"V0 = {_g(r.bias, 5)} {unit}",
     )
     ax1.plot(rates, means, "o", ms=5, color=_C["pt"], label=f"point means ({r.n_points} rates)")
     ax1.set_ylabel(f"output ({unit})")
@@ -118,7 +111,7 @@ def scale_factor_figure(r: ScaleFactorResult) -> Figure:
     _style(ax1)
 
     nl = r.nonlinearity_percent_fs
-    ax2.axhspan(-nl, nl, color=_C["band"], zorder=0, label=f"±NL = ±{nl:.3g} %FS")
+    ax2.axhspan(-nl, nl, color=_C["band"], zorder=0, label=f"±NL = ±{_g(nl, 3)} % FS")
     lim = _accuracy_limit(r)
     if lim is not None:
         for sgn in (1, -1):
@@ -127,7 +120,7 @@ def scale_factor_figure(r: ScaleFactorResult) -> Figure:
                 color=_C["limit"],
                 ls="--",
                 lw=1.1,
-                label=f"requirement ±{lim:g} %FS ({r.requirement.title})"
+                label=f"requirement ±{_g(lim)} % FS ({r.requirement.title})"
                 if sgn == 1 and r.requirement is not None
                 else None,
             )
@@ -145,7 +138,7 @@ def scale_factor_figure(r: ScaleFactorResult) -> Figure:
     )
     worst = int(np.argmax(np.abs(r.residuals_percent_fs)))
     ax2.annotate(
-        f"max |δ| = {abs(r.residuals_percent_fs[worst]):.3g} %FS",
+        f"max |δ| = {_g(abs(r.residuals_percent_fs[worst]), 3)} % FS",
         (rates[worst], r.residuals_percent_fs[worst]),
         xytext=(0, 12 if r.residuals_percent_fs[worst] >= 0 else -16),
         textcoords="offset points",
@@ -155,7 +148,7 @@ def scale_factor_figure(r: ScaleFactorResult) -> Figure:
     top = max(nl, lim or 0.0) * 1.45
     ax2.set_ylim(-top, top)
     ax2.set_xlabel("set rate Ω (°/s)")
-    ax2.set_ylabel(f"residual (% of FS = {r.full_scale_deg_s:g} °/s)")
+    ax2.set_ylabel(f"residual (% of FS = {_g(r.full_scale_deg_s)} °/s)")
     ax2.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncols=3, frameon=False)
     _style(ax2)
     fig.align_ylabels((ax1, ax2))
@@ -163,10 +156,57 @@ def scale_factor_figure(r: ScaleFactorResult) -> Figure:
     return figure_from_matplotlib(
         fig,
         "Output against rate, and the residuals of the straight line",
-        "Top: the mean output of each rate point and the unweighted least-squares line "
-        "V = S·Ω + V0 (seed 004 §4). Bottom: residuals δ in % of full scale (δ/(|S|·FS)); the band "
-        "is ±NL, the dashed lines the requirement's accuracy limit.",
+        f"Top: point means and the least-squares line V = S·Ω + V0 ({cite('kokuyama2015')}, §4). "
+        "Bottom: residuals in % of full scale; band ±NL, dashed: the requirement.",
     )
+
+
+def _requirement_rows(r: ScaleFactorResult) -> list[ResultRow]:
+    """One summary row per check of the requirement, with its limit and verdict.
+
+    The accuracy check is judged with the uncertainty of NL (ILAC-G8: a pass when the whole 95 %
+    interval lies below the limit, inconclusive when the limit lies within it); range and
+    resolution carry no uncertainty (set rates; the larger of the output quantum and one
+    reading's noise, divided by |S|).
+    """
+    v = r.requirement
+    if v is None:
+        return []
+    d = r.decision_with_uncertainty
+    b = r._budgets.get("nonlinearity_percent_fs")
+    rows = []
+    for c in v.checks:
+        unit = "°/s" if c.unit == "deg/s" else "% FS"
+        limit = f"{'±' if c.quantity == 'range' else '< '}{_g(c.limit)} {unit} ({v.title})"
+        if c.quantity == "accuracy" and d is not None and b is not None:
+            passed = {"pass with U": True, "fail with U": False}.get(d.verdict)
+            rows.append(
+                result_row(
+                    "nonlinearity against the requirement",
+                    b.value,
+                    "% FS",
+                    U=b.U,
+                    k=b.k,
+                    p=b.p,
+                    interval=b.interval,
+                    limit=limit,
+                    passed=passed,
+                    note=f"{d.verdict} ({cite('ilac_g8')})",
+                )
+            )
+            continue
+        rows.append(
+            result_row(
+                f"{c.quantity} against the requirement",
+                c.value,
+                unit if c.quantity != "range" else "°/s",
+                limit=limit,
+                passed=c.passed,
+                note="no uncertainty: "
+                + ("the set rates" if c.quantity == "range" else "a bound, not a measurement"),
+            )
+        )
+    return rows
 
 
 def scale_factor_section(
@@ -176,127 +216,97 @@ def scale_factor_section(
     figures: bool = True,
     truth: dict[str, Any] | None = None,
 ) -> Section:
-    """A report section: results, pass/fail lines, the table of points and the figure.
+    """A report section: results with U, the requirement's verdicts, the rate points, the figure.
 
-    ``truth`` (a twin's truth dict) adds the true values beside the results.
+    ``truth`` (a twin's truth dict) adds the true values in a table beside the results.
     """
-    unit = r.output_unit or "output unit"
-    has_truth = truth is not None
-    cols = ["quantity", "value", "standard uncertainty"] + (["twin truth"] if has_truth else [])
-    rows = [
-        [
-            "scale factor S",
-            f"{r.scale_factor:.8g} {unit}/(°/s)",
-            _g(r.scale_factor_u, 3),
-            _g(truth["ls_scale_factor"], 8) if truth else "",
-        ],
-        [
-            "bias V0",
-            f"{r.bias:.6g} {unit}",
-            _g(r.bias_u, 3),
-            _g(truth["ls_bias"], 6) if truth else "",
-        ],
-        [
-            "nonlinearity NL",
-            f"{r.nonlinearity_percent_fs:.4g} %FS",
-            _g(r._budgets["nonlinearity_percent_fs"].u, 3) if r._budgets else "",
-            _g(truth["nonlinearity_percent_fs"], 4) if truth else "",
-        ],
-        [
-            "true NL, 95 % interval",
-            _interval(r),
-            "",
-            "",
-        ],
-        [
-            "NL bias-corrected",
-            (
-                f"{_g(r.nonlinearity_percent_fs_bias_corrected, 4)} %FS "
-                f"(noise bias {_g(r.nonlinearity_percent_fs_bias, 2)} %FS)"
-                if np.isfinite(r.nonlinearity_percent_fs_bias)
-                else "— (noise level not known apart from the NL: not corrected)"
-                if "nonlinearity_percent_fs" in r._budgets
-                else "—"
-            ),
-            "",
-            "",
-        ],
-        ["full scale FS", f"{r.full_scale_deg_s:g} °/s", "", ""],
-        ["rate points / samples", f"{r.n_points} / {r.samples_used}", "", ""],
-        *_resolution_rows(r),
-    ]
-    if not has_truth:
-        rows = [row[:3] for row in rows]
-    tables = [Table(cols, rows, caption="Scale factor and nonlinearity")]
-    paragraphs = list(r.notes)
-    if r.requirement is not None:
-        v = r.requirement
-        verdict = {True: "PASS", False: "FAIL", None: "NOT ASSESSED"}
-        d = r.decision_with_uncertainty
-
-        def with_u(quantity: str) -> str:
-            if quantity == "accuracy" and d is not None:
-                if d.interval is not None:
-                    return f"{d.verdict.upper()} (true NL in {_interval(r)})"
-                return f"{d.verdict.upper()} (NL ± U = {d.value:.4g} ± {d.U:.2g} %FS)"
-            return "— (no U)"
-
+    unit = _unit(r)
+    names = {
+        "scale_factor": "scale factor S",
+        "bias": "bias V0",
+        "nonlinearity_percent_fs": "nonlinearity NL",
+    }
+    judged = _requirement_rows(r)
+    budgets = dict(r._budgets)
+    if any(row.quantity.startswith("nonlinearity") for row in judged):
+        budgets.pop("nonlinearity_percent_fs", None)  # stated once, with its limit and verdict
+    results = readable_rows(budget_results(budgets, names=names)) + judged
+    tables = []
+    if truth is not None:
         tables.append(
             Table(
-                ["check", "limit", "measured", "margin", "verdict", "verdict with U (ILAC-G8)"],
+                ["quantity", "measured", "twin truth"],
                 [
+                    ["scale factor S", _g(r.scale_factor, 8), _g(truth["ls_scale_factor"], 8)],
+                    ["bias V0", _g(r.bias, 6), _g(truth["ls_bias"], 6)],
                     [
-                        c.quantity,
-                        f"{'±' if c.quantity == 'range' else '< '}{c.limit:g} "
-                        f"{'°/s' if c.unit == 'deg/s' else '%FS'}",
-                        _g(c.value, 4),
-                        _g(c.margin, 3),
-                        verdict[c.passed],
-                        with_u(c.quantity),
-                    ]
-                    for c in v.checks
+                        "nonlinearity NL (% FS)",
+                        _g(r.nonlinearity_percent_fs, 4),
+                        _g(truth["nonlinearity_percent_fs"], 4),
+                    ],
                 ],
-                caption=f"Requirement: {v.title} — {verdict[v.passed]} ({v.source})",
+                caption="Against the twin's truth",
             )
         )
-        paragraphs.append(v.note)
-        if d is not None:
-            paragraphs.append(
-                f"Decision rule: {d.rule}. {d.line[0].upper()}{d.line[1:]}. The range and "
-                "resolution checks carry no uncertainty here (set rates, and the resolution: the "
-                "larger of the output quantum and the noise of one reading, divided by |S|)."
-            )
+    nl_bias = (
+        f"{_g(r.nonlinearity_percent_fs_bias, 2)} % FS; less that bias "
+        f"{_g(r.nonlinearity_percent_fs_bias_corrected, 4)} % FS"
+        if np.isfinite(r.nonlinearity_percent_fs_bias)
+        else "not known apart from the NL: not corrected"
+    )
+    tables.append(
+        diagnostics_table(
+            [
+                ["full scale FS", f"{_g(r.full_scale_deg_s)} °/s"],
+                ["rate points / samples", f"{r.n_points} / {r.samples_used}"],
+                ["noise bias of NL", nl_bias],
+                *_resolution_rows(r),
+            ]
+        )
+    )
+    paragraphs = [
+        f"Unweighted least-squares line of the gyro's output against the set rate "
+        f"({cite('kokuyama2015')}, §4); NL is the largest residual in % of full scale.",
+        *(paragraph(n) for n in r.notes),
+    ]
+    if r.requirement is not None:
+        paragraphs.append(paragraph(r.requirement.note))
     tables.append(
         Table(
             [
                 "set rate (°/s)",
                 "n",
                 f"mean ({unit})",
-                f"std ({unit})",
-                f"std. error ({unit})",
+                f"standard deviation ({unit})",
+                f"standard error ({unit})",
                 f"residual δ ({unit})",
-                "δ (%FS)",
+                "δ (% FS)",
             ],
             [
                 [
-                    f"{p.rate_deg_s:+g}",
+                    _g(p.rate_deg_s),
                     str(p.n),
-                    f"{p.mean:.7g}",
+                    _g(p.mean, 7),
                     _g(p.std, 4),
                     _g(p.standard_error, 3),
-                    f"{p.residual:+.4g}",
-                    f"{p.residual_percent_fs:+.4f}",
+                    _g(p.residual, 4),
+                    _g(p.residual_percent_fs, 4),
                 ]
                 for p in r.points
             ],
-            caption="Rate points",
+            caption="Rate points (diagnostics, not results)",
         )
     )
-    tables += budget_tables(r._budgets)
+    references = ["kokuyama2015", "gum", "ilac_p14"]
+    if r.requirement is not None:
+        references += ["fmvss126", "ilac_g8"]
     return Section(
         title=title or "Gyro scale factor and nonlinearity",
         paragraphs=paragraphs,
         tables=tables,
         figures=[scale_factor_figure(r)] if figures else [],
         anchor="gyro-scale",
+        results=results,
+        details=readable_tables(budget_details(r._budgets)),
+        references=references,
     )

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from rotacal.inspect.result import InspectResult
 from rotacal.inspect.text import HEADINGS, column_rows, fits_line, sampling_line, suggestion_line
+from rotacal.numbers import fixed
 from rotacal.report.html import Section, Table
+from rotacal.report.wording import paragraph, readable_tables
 
 __all__ = ["inspect_section"]
 
@@ -26,8 +28,9 @@ def inspect_section(result: InspectResult) -> Section:
             Table(
                 columns=list(HEADINGS),
                 rows=[list(row) for row in column_rows(result)],
-                caption="repeated: share of samples equal to the one before; clipped: share at "
-                "a rail; step: the smallest non-zero step between samples (the resolution).",
+                caption="Columns of the file",
+                note="repeated: share of samples equal to the one before; clipped: share at a "
+                "rail; step: the smallest non-zero step between samples (the resolution).",
             )
         )
         if result.gaps:
@@ -35,7 +38,7 @@ def inspect_section(result: InspectResult) -> Section:
                 Table(
                     columns=["gap from (s)", "to (s)", "missing samples"],
                     rows=[
-                        [f"{g.start_s:.9g}", f"{g.end_s:.9g}", str(g.missing_samples)]
+                        [fixed(g.start_s, 9), fixed(g.end_s, 9), str(g.missing_samples)]
                         for g in result.gaps
                     ],
                     caption=f"{result.gap_count} gap(s) in {result.time_column}"
@@ -46,4 +49,8 @@ def inspect_section(result: InspectResult) -> Section:
                     ),
                 )
             )
-    return Section(title="First look", paragraphs=paragraphs, tables=tables)
+    return Section(
+        title="First look",
+        paragraphs=[paragraph(p) for p in paragraphs],
+        tables=readable_tables(tables),
+    )

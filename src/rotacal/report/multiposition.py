@@ -1,4 +1,4 @@
-"""Report section and figure for the multiposition drift calibration (seed 001, eqs. 1–6)."""
+"""Report section and figure for the multiposition drift calibration (GyroWheel study, eqs. 1–6)."""
 
 from __future__ import annotations
 
@@ -12,8 +12,16 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from rotacal.gyro.multiposition import MultipositionResult
+from rotacal.numbers import fixed
+from rotacal.references import cite
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
-from rotacal.report.uncertainty import budget_tables
+from rotacal.report.uncertainty import budget_details, budget_results
+from rotacal.report.wording import (
+    diagnostics_table,
+    paragraph,
+    readable_rows,
+    readable_tables,
+)
 
 __all__ = ["multiposition_figure", "multiposition_section"]
 
@@ -41,7 +49,7 @@ def multiposition_figure(r: MultipositionResult) -> Figure:
     ax.bar(idx, res, color=colors, width=0.75, zorder=2, label="mean at the position")
     if np.isfinite(r.residual_std_deg_h):
         s = r.residual_std_deg_h * 1e3
-        ax.axhspan(-s, s, color="#f2e3c6", zorder=0, label=f"±s = ±{s:.3g} mdeg/h")
+        ax.axhspan(-s, s, color="#f2e3c6", zorder=0, label=f"±s = ±{fixed(s, 3)} mdeg/h")
     ax.axhline(0.0, color="#555", lw=0.7)
     # Label the start of each outer angle's block of positions.
     starts = [0] + [i for i in range(1, p1.size) if p1[i] != p1[i - 1]]
@@ -63,10 +71,8 @@ def multiposition_figure(r: MultipositionResult) -> Figure:
     return figure_from_matplotlib(
         fig,
         "Residuals per turntable position",
-        f"Output minus Earth rate minus the fitted drift model ({r.axis} axis), in 10⁻³ °/h: bars "
-        "the mean at each position (colour: outer angle φ1), dots each reading. A systematic "
-        "pattern over φ1 or φ2 would show a term the model lacks or an orientation error (seed 001, "
-        "§2.2).",
+        f"Output − Earth rate − drift model ({r.axis} axis), 10⁻³ °/h: bars the mean per position "
+        "(colour: φ1), dots each reading; a pattern shows a missing term or an orientation error.",
     )
 
 
@@ -77,52 +83,71 @@ def multiposition_section(
     figures: bool = True,
     truth: Mapping[str, float] | None = None,
 ) -> Section:
-    """Coefficient table with standard uncertainties, the design's conditioning and the figure.
+    """Drift coefficients with U in the summary, the design's conditioning, the figure, the budgets.
 
     ``truth`` maps coefficient names to true values (a twin's) and adds them with the errors.
     """
-    cols = ["coefficient", "value", "standard uncertainty", "unit"]
+    results = readable_rows(
+        budget_results(
+            r._budgets,
+            names={
+                f"drift_coefficients.{name}": f"drift coefficient {name}"
+                for name in r.drift_coefficients
+            },
+        )
+    )
+    tables = []
     if truth is not None:
-        cols += ["twin truth", "error", "error / u"]
-    rows = []
-    for name, value in r.drift_coefficients.items():
-        u = r.drift_coefficients_u[name]
-        unit = r.drift_coefficient_units[name].replace("^2", "²")
-        row = [name, f"{value:+.5f}", f"{u:.2g}" if np.isfinite(u) else "—", unit]
-        if truth is not None:
+        rows = []
+        for name, value in r.drift_coefficients.items():
+            u = r.drift_coefficients_u[name]
             t = float(truth[name])
             err = value - t
-            row += [f"{t:+.5g}", f"{err:+.2g}", f"{err / u:+.2f}" if u > 0 else "—"]
-        rows.append(row)
-    design = Table(
-        ["design", "value"],
-        [
-            ["axis", r.axis],
-            ["distinct positions", str(r.positions)],
-            ["readings (rows)", str(r.rows)],
-            ["rank of A", f"{r.rank} of {len(r.drift_coefficients)}"],
-            ["condition number of A", f"{r.condition_number:.3g}"],
-            ["residual std s", f"{r.residual_std_deg_h:.3g} °/h"],
-            ["latitude", f"{r.latitude_deg:g}°"],
-            ["Earth rate (sidereal)", f"{r.earth_rate_deg_h:.8g} °/h"],
-        ],
-        caption="Regression design (seed 001, eqs. (4)–(6))",
+            rows.append(
+                [
+                    name,
+                    fixed(value, 5),
+                    fixed(t, 5),
+                    fixed(err, 2),
+                    fixed(err / u, 3) if u > 0 else "—",
+                ]
+            )
+        tables.append(
+            Table(
+                ["coefficient", "measured", "twin truth", "error", "error / u"],
+                rows,
+                caption="Against the twin's truth",
+            )
+        )
+    tables.append(
+        diagnostics_table(
+            [
+                ["axis", r.axis],
+                ["distinct positions", str(r.positions)],
+                ["readings (rows)", str(r.rows)],
+                ["rank of A", f"{r.rank} of {len(r.drift_coefficients)}"],
+                ["condition number of A", fixed(r.condition_number, 3)],
+                ["residual standard deviation s", f"{fixed(r.residual_std_deg_h, 3)} °/h"],
+                ["latitude", f"{fixed(r.latitude_deg)}°"],
+                ["Earth rate (sidereal)", f"{fixed(r.earth_rate_deg_h, 8)} °/h"],
+            ],
+            f"regression design ({cite('gyrowheel')}, eqs. 4–6)",
+        )
     )
     return Section(
         title=title or f"Multiposition drift coefficients, {r.axis} axis",
         paragraphs=[
-            "Least squares of k·i − ω on the gravity terms at each turntable position (seed 001, "
-            "eqs. (1)–(6)). Each coefficient's uncertainty budget holds the fit's residual "
-            "variance s²·(AᵀA)⁻¹ (Type A) and, where the lab states them, the latitude and the "
-            "turntable's orientation error (seed 001 eqs. (7)–(11)), with sensitivities from the "
-            "derivative of the least-squares solution.",
-            *r.notes,
+            f"Least squares of k·i − ω on the gravity terms at each turntable position "
+            f"({cite('gyrowheel')}, eqs. 1–6). Each coefficient's uncertainty budget holds the "
+            "fit's residual variance s²·(AᵀA)⁻¹ (Type A) and, where the lab states them, the "
+            "latitude and the turntable's orientation error (eqs. 7–11), with sensitivities from "
+            "the derivative of the least-squares solution.",
+            *(paragraph(n) for n in r.notes),
         ],
-        tables=[
-            Table(cols, rows, caption="Drift coefficients"),
-            design,
-            *budget_tables(r._budgets),
-        ],
+        tables=tables,
         figures=[multiposition_figure(r)] if figures else [],
         anchor=f"multiposition-{r.axis}",
+        results=results,
+        details=readable_tables(budget_details(r._budgets)),
+        references=["gyrowheel", "gum"],
     )

@@ -9,8 +9,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from rotacal.gyro.noise import GyroNoise
+from rotacal.numbers import fixed, format_plain, format_quantity
+from rotacal.references import cite
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
-from rotacal.report.uncertainty import budget_tables
+from rotacal.report.uncertainty import budget_details, budget_results
+from rotacal.report.wording import paragraph, readable_rows, readable_tables
 
 __all__ = ["noise_section"]
 
@@ -65,13 +68,15 @@ def _figure(r: GyroNoise) -> Figure:
     return figure_from_matplotlib(
         fig,
         "Allan deviation and noise terms",
-        f"Column {r.column}, {r.samples} samples at {r.fs_hz:.6g} Hz ({r.duration_s / 3600:.3g} h). "
-        "Dashed: the IEEE Std 952 lines fitted where each slope dominates.",
+        f"Column {r.column}, {r.samples} samples at {fixed(r.fs_hz)} Hz "
+        f"({fixed(r.duration_s / 3600, 3)} h). Dashed: the {cite('ieee952')} lines where each "
+        "slope dominates.",
     )
 
 
-def noise_section(r: GyroNoise, title: str = "Gyro noise (IEEE Std 952)") -> Section:
-    """Noise-term table with intervals, and the Allan deviation figure."""
+def noise_section(r: GyroNoise, title: str = "Gyro noise") -> Section:
+    """The noise terms with U in the summary, IEEE Std 952's rule-of-thumb intervals as
+    diagnostics, the Allan deviation figure and the budgets folded."""
     rows = []
     for name, term in r.terms.terms.items():
         label, slope, unit, scale = _LABELS.get(name, (name, "", term.unit, 1.0))
@@ -79,32 +84,45 @@ def noise_section(r: GyroNoise, title: str = "Gyro noise (IEEE Std 952)") -> Sec
             [
                 label,
                 slope,
-                f"{term.coefficient * scale:.4g} {unit}",
-                f"{term.low * scale:.3g} … {term.high * scale:.3g}",
-                f"{term.tau_ref_s:.3g} s",
+                f"{fixed(term.coefficient * scale, 4)} {unit}",
+                f"{fixed(term.low * scale, 3)} … {fixed(term.high * scale, 3)} {unit}",
+                _time_text(term.tau_ref_s),
             ]
         )
     if not rows:
         rows.append(["no term identified", "", "", "", ""])
     table = Table(
-        ["term", "slope", "value", "IEEE 952 C.4 interval (±1/√(2(N/m−1)))", "read at τ"],
+        ["term", "slope", "value", "interval ±1/√(2(N/m − 1))", "read at τ"],
         rows,
-        caption="Noise terms",
+        caption=f"Noise terms by the slope method ({cite('ieee952')}, Annex C)",
+        note="The intervals are IEEE Std 952 C.4's rule of thumb (diagnostics, not results); the "
+        "summary states each term with the U of its budget.",
     )
-    paragraphs = list(r.notes)
+    paragraphs = [paragraph(n) for n in r.notes]
     if r._budgets:
         paragraphs.append(
             "Uncertainty budgets: each term's Type A standard uncertainty is the ±1σ χ² interval "
             "of the reading it comes from — the level of the line fitted through correlated "
             "points of the curve (equivalent degrees of freedom for the term's own noise type), "
-            "or the one point of the flat minimum for B — rather than IEEE 952 C.4's rule of "
-            "thumb in the table above. The slope method's own bias (other terms adding to the "
-            "fitted points, the minimum of noisy points) is not in u; each budget's notes give "
-            "an upper estimate of the first part."
+            "or the one point of the flat minimum for B. The slope method's own bias (other terms "
+            "adding to the fitted points) is not in u; each budget's notes estimate it."
         )
     return Section(
         title=title,
         paragraphs=paragraphs,
-        tables=[table, *budget_tables(r._budgets)],
+        tables=[table],
         figures=[_figure(r)],
+        results=readable_rows(budget_results(r._budgets)),
+        details=readable_tables(budget_details(r._budgets)),
+        references=["ieee952", "greenhall2003", "gum"],
+        anchor="gyro-noise",
+    )
+
+
+def _time_text(seconds: float) -> str:
+    """A time for a table cell, with the SI prefix that keeps its digits readable."""
+    return (
+        format_plain(seconds, "s", digits=3)
+        if seconds >= 0.01
+        else format_quantity(seconds, "s", si_prefix=True, digits=3)
     )

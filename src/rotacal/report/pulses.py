@@ -1,4 +1,8 @@
-"""Report sections for the multi-head encoder: self-calibration and constant-rate stability (seed 004)."""
+"""Report sections for the multi-head encoder: self-calibration and constant-rate stability.
+
+The method is Kokuyama et al. (2015): the scale deviation by equal-division averaging of the heads,
+and the table's rate and its relative root Allan variance from the pulse times.
+"""
 
 from __future__ import annotations
 
@@ -11,10 +15,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from rotacal.encoder.selfcal import SelfCalibration
-from rotacal.errors import ConfigError
-from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
-from rotacal.report.motion import _fmt, _style
-from rotacal.report.uncertainty import budget_tables
+from rotacal.numbers import coverage, fixed, format_plain, format_quantity
+from rotacal.references import cite
+from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
+from rotacal.report.motion import _style
+from rotacal.report.uncertainty import budget_details, budget_results, budget_table, result_row
+from rotacal.report.wording import diagnostics_table, paragraph, readable_rows, readable_tables
 from rotacal.table.rate import RateResult
 from rotacal.uncertainty import UncertaintyBudget
 
@@ -24,7 +30,7 @@ _MEAN = "#1f5f99"
 _REV = "#9aa7b4"
 _BAD = "#b22222"
 _RAW = "#d2691e"
-#: FMVSS 126 accuracy requirement of a gyro (seed 004, Table 1), as a fraction of full scale.
+#: FMVSS 126 accuracy requirement of a gyro (Kokuyama et al. 2015, Table 1), a fraction of FS.
 _FMVSS126_ACCURACY = 0.05e-2
 
 
@@ -58,8 +64,7 @@ def _deviation_figure(r: SelfCalibration) -> Figure:
         fig,
         "Scale deviation",
         f"{r.pulses_per_rev} pulses per revolution, {r.heads} heads; peak-to-peak "
-        f"{r.deviation_pp_arcsec:.3g} arcsec (the seed's Figure 4). Orders that are multiples of "
-        f"{r.heads} are not in this curve.",
+        f"{fixed(r.deviation_pp_arcsec, 3)} arcsec (as {cite('kokuyama2015')}, Figure 4).",
     )
 
 
@@ -91,8 +96,8 @@ def _spectrum_figure(r: SelfCalibration) -> Figure:
     return figure_from_matplotlib(
         fig,
         "Harmonic spectrum of the deviation",
-        "Order 1 is the eccentricity of the scale against the axis. Shaded orders cannot be "
-        "measured by equal-division averaging and are zero here by construction.",
+        "Order 1 is the scale's eccentricity. Shaded orders cannot be measured by "
+        "equal-division averaging (zero by construction).",
     )
 
 
@@ -131,135 +136,132 @@ def _repeatability_figure(r: SelfCalibration) -> Figure | None:
     return figure_from_matplotlib(
         fig,
         "Repeatability",
-        f"One revolution's curve minus the mean of all {r.revolutions_used} (the seed's Figure 5), "
-        f"and the spread of every revolution; rms {_fmt(r.repeatability_rms_arcsec, 3)} arcsec.",
+        f"One revolution minus the mean of all {r.revolutions_used}, and their spread; rms "
+        f"{fixed(r.repeatability_rms_arcsec, 3)} arcsec (as {cite('kokuyama2015')}, Figure 5).",
     )
 
 
-def selfcal_section(r: SelfCalibration, title: str = "Self-calibration of the encoder") -> Section:
-    """Results, head placement and the three figures of a self-calibration."""
-    rows = [
-        ["heads × pulses per revolution", f"{r.heads} × {r.pulses_per_rev}"],
-        ["whole revolutions averaged", str(r.revolutions_used)],
-        ["deviation, peak-to-peak", f"{r.deviation_pp_arcsec:.4g} arcsec"],
-        ["deviation, rms", f"{r.deviation_rms_arcsec:.4g} arcsec"],
-        ["repeatability, rms (revolution − mean)", f"{_fmt(r.repeatability_rms_arcsec, 3)} arcsec"],
-        [
-            "standard uncertainty of every point of the curve",
-            f"{_fmt(r.deviation_u_arcsec, 2)} arcsec"
-            + (
-                f" (U = {r.point_budget.U:.2g} arcsec, k = {r.point_budget.k:.3g})"
-                if r.point_budget is not None
-                else ""
-            ),
-        ],
-        *(
-            _summary_row(label, r.budgets.get(key), bias, corrected, "arcsec", 4)
-            for label, key, bias, corrected in (
-                (
-                    "peak-to-peak",
-                    "deviation_pp_arcsec",
-                    r.deviation_pp_arcsec_bias,
-                    r.deviation_pp_arcsec_bias_corrected,
-                ),
-                (
-                    "rms",
-                    "deviation_rms_arcsec",
-                    r.deviation_rms_arcsec_bias,
-                    r.deviation_rms_arcsec_bias_corrected,
-                ),
-            )
-        ),
-        [
-            "closure residual of the head differences (rms)",
-            f"{r.closure_residual_rms_arcsec:.3g} arcsec",
-        ],
-        [
-            "sense of rotation",
-            f"{r.rotation} (head i lies i·360/n {'ahead' if r.rotation == 'forward' else 'behind'})",
-        ],
-    ]
-    heads = Table(
-        ["head", "nominal position (°)", "placement error (arcsec, modulo one pitch)"],
-        [
-            [f"head_{i}", f"{i * 360 / r.heads:.3f}", f"{off:+.3f}"]
-            for i, off in enumerate(r.head_offsets_arcsec)
-        ],
+def _point_row(b: UncertaintyBudget) -> ResultRow:
+    """The curve's uncertainty as one summary row: the same U at every line of the scale."""
+    u_text = format_quantity(0.0, "arcsec", U=b.U, k=b.k, p=b.p).split("±", 1)[-1].strip()
+    return ResultRow(
+        quantity="scale deviation, each point of the curve",
+        value=f"curve in the figure, ± {u_text.split(' (')[0]}",
+        coverage=coverage(b.k, b.p).strip("()"),
+        note="the same U at every line",
+    )
+
+
+def _head_table(r: SelfCalibration) -> Table:
+    """Each head's placement error with its U (Type A over the revolutions)."""
+    us = r.head_offsets_arcsec_U
+    k = r.head_offsets_k
+    rows = []
+    for i, off in enumerate(r.head_offsets_arcsec):
+        if i == 0:
+            placement = "0 (the reference)"
+        else:
+            placement = format_quantity(off, "arcsec", U=None if us is None else us[i], k=k, p=0.95)
+        rows.append([f"head {i}", fixed(i * 360 / r.heads, 6), placement])
+    return Table(
+        ["head", "nominal position (°)", "placement error, modulo one pitch"],
+        rows,
         caption="Head placement found from the mean time offsets",
+        note=(
+            "U from the spread of the revolutions' mean head differences (Type A, "
+            f"ν = {r.revolutions_used - 1})."
+            if us is not None
+            else "One whole revolution: the placement errors have no uncertainty from the data."
+        ),
+    )
+
+
+def _bias_text(bias: float | None, corrected: float | None) -> str:
+    if bias is None or corrected is None:
+        return "not known (one revolution: the noise is unknown)"
+    return f"noise bias {fixed(bias, 2)} arcsec; less that bias {fixed(corrected, 4)} arcsec"
+
+
+def selfcal_section(r: SelfCalibration, title: str = "Self-calibration of the encoder") -> Section:
+    """Results (peak-to-peak and rms with their coverage intervals, the curve's U), head
+    placement with U, diagnostics, the three figures, and the budgets folded."""
+    results = readable_rows(budget_results(r.budgets))
+    if r.point_budget is not None:
+        results.append(_point_row(r.point_budget))
+    diagnostics = diagnostics_table(
+        [
+            ["heads × pulses per revolution", f"{r.heads} × {r.pulses_per_rev}"],
+            ["whole revolutions averaged", str(r.revolutions_used)],
+            [
+                "repeatability, rms (revolution − mean)",
+                format_plain(r.repeatability_rms_arcsec, "arcsec", digits=3),
+            ],
+            [
+                "peak-to-peak",
+                _bias_text(r.deviation_pp_arcsec_bias, r.deviation_pp_arcsec_bias_corrected),
+            ],
+            ["rms", _bias_text(r.deviation_rms_arcsec_bias, r.deviation_rms_arcsec_bias_corrected)],
+            [
+                "closure residual of the head differences, rms",
+                format_plain(r.closure_residual_rms_arcsec, "arcsec", digits=3),
+            ],
+            [
+                "sense of rotation",
+                f"{r.rotation} (head i lies i·360/n {'ahead' if r.rotation == 'forward' else 'behind'})",
+            ],
+        ]
     )
     figures = [_deviation_figure(r), _spectrum_figure(r)]
     rep = _repeatability_figure(r)
     if rep is not None:
         figures.append(rep)
-    tables = [Table(["quantity", "value"], rows, caption="Results"), heads]
+    details = []
     if r.point_budget is not None:
-        tables.append(_point_table(r.point_budget))
-    tables.extend(budget_tables(r.budgets))
+        details.append(_point_table(r.point_budget))
+    details.extend(budget_details(r.budgets))
     return Section(
         title=title,
-        paragraphs=[r.undetectable_harmonics_note, *r.notes],
-        tables=tables,
+        paragraphs=[
+            f"Equal-division averaging of {r.heads} read heads ({cite('kokuyama2015')}, §3). "
+            + r.undetectable_harmonics_note[:1].upper()
+            + r.undetectable_harmonics_note[1:],
+            *(paragraph(n) for n in r.notes),
+        ],
+        tables=[_head_table(r), diagnostics],
         figures=figures,
+        results=results,
+        details=readable_tables(details),
+        references=["kokuyama2015", "gum", "gum_s1"],
+        anchor="selfcal",
     )
-
-
-def _summary_row(
-    label: str,
-    b: UncertaintyBudget | None,
-    bias: float | None,
-    corrected: float | None,
-    unit: str,
-    digits: int,
-) -> list[str]:
-    """One results row of a biased, bounded summary: the interval for the true value, the bias."""
-    if b is None or b.interval is None:
-        return [f"{label}: 95 % interval for the true value", "—"]
-    lo, hi = b.interval
-    try:  # the limits to the decimal place of U, as ILAC-P14 rounds a value (§5.4)
-        big_u = b.rounded()[1]
-        dec = len(big_u.split(".")[1]) if "." in big_u else 0
-        text = f"{lo:.{dec}f} … {hi:.{dec}f} {unit}"
-        fmt = f".{dec}f"
-    except ConfigError:  # U = 0
-        text, fmt = f"{lo:.{digits}g} … {hi:.{digits}g} {unit}", f".{digits}g"
-    if bias is not None and corrected is not None:
-        text += f" (noise bias {bias:+.2g} {unit}; bias-corrected {corrected:{fmt}} {unit})"
-    else:
-        text += " (no noise of known level: not bias-corrected)"
-    return [f"{label}: 95 % interval for the true value", text]
 
 
 def _point_table(b: UncertaintyBudget) -> Table:
     """The budget of one point of the deviation curve (the same at every line)."""
-    header, rows = b.table()
-    notes = " ".join(b.notes)
-    return Table(
-        header,
-        rows,
-        caption=(
-            f"Uncertainty budget of each point of the deviation curve ({b.method}): "
-            f"u = {b.u:.2g} arcsec, U = {b.U:.2g} arcsec (k = {b.k:.3g}, p ≈ {100 * b.p:g} %) "
-            f"at every line. {notes}"
-        ),
+    table = budget_table(b)
+    table.caption = "Uncertainty budget of each point of the deviation curve"
+    table.note = (
+        f"Every line: {format_quantity(0.0, 'arcsec', U=b.U, k=b.k, p=b.p).split('±', 1)[-1].strip()}"
+        f" ({b.method}). {' '.join(b.notes)}"
     )
+    return table
 
 
 def _allan_table(r: RateResult) -> Table:
-    """s(φ) with its χ² uncertainty, one row per angle."""
+    """s(φ) with its 95 % interval, one row per angle."""
     names = {2: "white PM", 1: "flicker PM", 0: "white FM", -1: "flicker FM", -2: "random-walk FM"}
     rows = [
         [
-            f"{phi:.4g}",
-            f"{100 * s:.3g}",
-            f"{100 * u:.2g}",
-            f"{100 * lo:.3g} … {100 * hi:.3g}",
-            f"{edf:.3g}",
+            fixed(phi, 4),
+            format_quantity(
+                100 * s_, "%", U=100 * (hi - lo) / 2, p=0.95, interval=(100 * lo, 100 * hi)
+            ),
+            fixed(edf, 3),
             names.get(a, str(a)),
         ]
-        for phi, s, u, (lo, hi), edf, a in zip(
+        for phi, s_, (lo, hi), edf, a in zip(
             r.allan_angle_deg,
             r.allan_relative,
-            r.allan_relative_u,
             r.allan_relative_interval,
             r.allan_relative_edf,
             r.allan_noise_alpha,
@@ -267,13 +269,14 @@ def _allan_table(r: RateResult) -> Table:
         )
     ]
     return Table(
-        ["φ (°)", "s(φ) (%)", "u (%)", "95 % interval (%)", "edf", "noise type assumed"],
+        ["φ (°)", "s(φ)", "equivalent degrees of freedom", "noise type assumed"],
         rows,
-        caption=(
-            "Relative root Allan variance with its uncertainty: ν·ŝ²/s² ~ χ²(ν), ν the equivalent "
-            "degrees of freedom of the overlapping estimator for the noise type the local slope "
-            "suggests (Greenhall & Riley 2003); u = ŝ/√(2ν). Sinusoidal fluctuations of the table "
-            "are no power-law noise: there the edf is an approximation."
+        caption="Relative root Allan variance with its 95 % interval",
+        note=(
+            "ν·ŝ²/s² follows χ²(ν), ν the equivalent degrees of freedom of the overlapping "
+            f"estimator for the noise type the local slope suggests ({cite('greenhall2003')}). "
+            "Sinusoidal fluctuations of the table are no power-law noise: there ν is an "
+            "approximation."
         ),
     )
 
@@ -290,17 +293,19 @@ def _rate_figure(r: RateResult) -> Figure:
             color=_RAW,
             lw=0.5,
             alpha=0.7,
-            label=f"nominal pitch: rms {r.rate_deviation_rms_percent_uncompensated:.2g} %",
+            label=f"nominal pitch: rms {fixed(r.rate_deviation_rms_percent_uncompensated, 2)} %",
         )
         ax.plot(
             t,
             comp,
             color=_MEAN,
             lw=0.6,
-            label=f"compensated: rms {r.rate_deviation_rms_percent:.2g} %",
+            label=f"compensated: rms {fixed(r.rate_deviation_rms_percent, 2)} %",
         )
     else:
-        ax.plot(t, comp, color=_MEAN, lw=0.6, label=f"rms {r.rate_deviation_rms_percent:.2g} %")
+        ax.plot(
+            t, comp, color=_MEAN, lw=0.6, label=f"rms {fixed(r.rate_deviation_rms_percent, 2)} %"
+        )
     ax.axhline(0.0, color="#333", lw=0.6)
     ax.set_xlim(0, t[-1])
     ax.set_xlabel("time (s)")
@@ -310,13 +315,10 @@ def _rate_figure(r: RateResult) -> Figure:
     return figure_from_matplotlib(
         fig,
         "Angular velocity over time",
-        f"Time-difference rate of {r.head}, averaged over {r.average} pulse intervals, about the "
-        f"mean {r.mean_rate_deg_s:.6f} °/s (the seed's Figure 9)"
-        + (
-            ", before and after compensation with the self-calibrated deviation."
-            if r.compensated
-            else "."
-        ),
+        f"Rate of {r.head.replace('_', ' ')} over {r.average} pulse intervals about its mean "
+        f"{fixed(r.mean_rate_deg_s, 7)} °/s"
+        + (", before and after compensation" if r.compensated else "")
+        + f" (as {cite('kokuyama2015')}, Figure 9).",
     )
 
 
@@ -357,73 +359,102 @@ def _allan_figure(r: RateResult) -> Figure:
     return figure_from_matplotlib(
         fig,
         "Relative root Allan variance versus rotation angle",
-        f"s(φ) = σ(φ/ω_m)/ω_m at ω_m = {r.mean_rate_deg_s:.4g} °/s (the seed's Figure 10). "
-        "White timing noise gives the φ⁻¹ slope at small angles; at 360° the scale's deviation "
-        "cancels.",
+        f"s(φ) = σ(φ/ω_m)/ω_m at ω_m = {fixed(r.mean_rate_deg_s, 4)} °/s (as "
+        f"{cite('kokuyama2015')}, Figure 10); at 360° the scale's deviation cancels.",
     )
 
 
-def _near(phi: list[float], values: list[float], target: float) -> str:
+def _nearest(phi: list[float], target: float) -> int | None:
     if not phi:
-        return "—"
-    i = int(np.argmin(np.abs(np.log(np.asarray(phi) / target))))
-    return f"{100 * values[i]:.3g} % at {phi[i]:.4g}°"
+        return None
+    return int(np.argmin(np.abs(np.log(np.asarray(phi) / target))))
+
+
+def _stability_row(r: RateResult) -> ResultRow | None:
+    """s(φ) at the angle nearest 360° against FMVSS 126's gyro accuracy (0.05 %).
+
+    Kokuyama et al. (2015) judge the standard by its stability against the accuracy FMVSS 126 asks
+    of a gyro: the verdict is a pass when the upper limit of the 95 % interval is below it.
+    """
+    i = _nearest(r.allan_angle_deg, 360.0)
+    if i is None:
+        return None
+    value = 100 * r.allan_relative[i]
+    interval = r.allan_relative_interval[i] if r.allan_relative_interval else None
+    if interval is None:
+        return result_row(
+            f"relative root Allan variance at φ = {fixed(r.allan_angle_deg[i], 4)}°",
+            value,
+            "%",
+            note="no interval: the record is too short for one",
+        )
+    lo, hi = (100 * x for x in interval)
+    limit = 100 * _FMVSS126_ACCURACY
+    return result_row(
+        f"relative root Allan variance at φ = {fixed(r.allan_angle_deg[i], 4)}°",
+        value,
+        "%",
+        U=(hi - lo) / 2,
+        p=0.95,
+        interval=(lo, hi),
+        limit=f"< {fixed(limit)} % ({cite('fmvss126')} gyro accuracy)",
+        passed=bool(hi < limit),
+        note="pass: the interval's upper limit is below the limit",
+    )
 
 
 def rate_section(r: RateResult, title: str = "Constant-rate stability") -> Section:
-    """Mean rate, bias, stability before/after compensation and s(φ), with figures."""
-    rows: list[list[Any]] = [
-        ["mean rate (whole revolutions)", f"{r.mean_rate_deg_s:.7f} °/s", ""],
-    ]
+    """Mean rate, bias and the rate's fluctuation with their U, s(φ) with its interval, figures."""
+    results = readable_rows(
+        budget_results(r.budgets, names={"rate_bias_percent": "rate bias, relative"})
+    )
+    stability = _stability_row(r)
+    if stability is not None:
+        results.append(stability)
+    rows = []
     if r.set_rate_deg_s is not None:
-        rows.append(["set rate", f"{r.set_rate_deg_s:.7g} °/s", ""])
-        rows.append(
-            ["bias (mean − set)", f"{r.rate_bias_deg_s:+.3g} °/s", f"{r.rate_bias_percent:+.3g} %"]
-        )
+        rows.append(["set rate", format_plain(r.set_rate_deg_s, "°/s", digits=7)])
     rows += [
         [
-            "rate deviation, rms",
-            f"{r.rate_deviation_rms_percent:.3g} %",
-            f"{r.rate_deviation_rms_percent_uncompensated:.3g} % uncompensated",
+            "rate fluctuation, rms, with the nominal pitch",
+            format_plain(r.rate_deviation_rms_percent_uncompensated, "%", digits=3),
         ],
         [
-            "rate deviation, peak",
-            f"{r.rate_deviation_peak_percent:.3g} %",
-            f"{r.rate_deviation_peak_percent_uncompensated:.3g} % uncompensated",
+            "rate fluctuation, largest, with the nominal pitch",
+            format_plain(r.rate_deviation_peak_percent_uncompensated, "%", digits=3),
         ],
-        *(
-            [*_summary_row(label, r.budgets.get(key), bias, corrected, "%", 3), ""]
-            for label, key, bias, corrected in (
-                (
-                    "rate deviation, rms",
-                    "rate_deviation_rms_percent",
-                    r.rate_deviation_rms_percent_bias,
-                    r.rate_deviation_rms_percent_bias_corrected,
-                ),
-                (
-                    "rate deviation, peak",
-                    "rate_deviation_peak_percent",
-                    r.rate_deviation_peak_percent_bias,
-                    r.rate_deviation_peak_percent_bias_corrected,
-                ),
-            )
-        ),
-        ["s(φ) near 10°", _near(r.allan_angle_deg, r.allan_relative, 10.0), ""],
-        ["s(φ) near 360°", _near(r.allan_angle_deg, r.allan_relative, 360.0), ""],
-        ["record", f"{r.duration_s:.4g} s, {r.revolutions} whole revolution(s)", r.head],
+        [
+            "rate fluctuation, rms: noise bias",
+            format_plain(r.rate_deviation_rms_percent_bias, "%", digits=2),
+        ],
+        [
+            "rate fluctuation, largest: noise bias",
+            format_plain(r.rate_deviation_peak_percent_bias, "%", digits=2),
+        ],
+        [
+            "record",
+            f"{fixed(r.duration_s, 4)} s, {r.revolutions} whole revolution(s), {r.head.replace('_', ' ')}",
+        ],
         [
             "timing noise of the pulses (Type A)",
-            "—" if r.timing_jitter_s is None else f"{r.timing_jitter_s:.3g} s",
-            "" if r.timing_jitter_dof is None else f"ν = {r.timing_jitter_dof:.3g}",
+            format_quantity(r.timing_jitter_s, "s", si_prefix=True, digits=3)
+            + ("" if r.timing_jitter_dof is None else f", ν = {fixed(r.timing_jitter_dof, 3)}"),
         ],
     ]
-    tables = [Table(["quantity", "value", ""], rows, caption="Results")]
-    tables.extend(budget_tables(r.budgets))
-    if r.allan_relative_u:
+    tables = [diagnostics_table(rows)]
+    if r.allan_relative_interval:
         tables.append(_allan_table(r))
     return Section(
         title=title,
-        paragraphs=list(r.notes),
+        paragraphs=[
+            f"Rate from the pulse times of one head ({cite('kokuyama2015')}, §4–5)"
+            + (", compensated with the self-calibrated scale deviation." if r.compensated else "."),
+            *(paragraph(n) for n in r.notes),
+        ],
         tables=tables,
         figures=[_rate_figure(r), _allan_figure(r)],
+        results=results,
+        details=readable_tables(budget_details(r.budgets)),
+        references=["kokuyama2015", "fmvss126", "greenhall2003", "gum"],
+        anchor="rate",
     )

@@ -1,4 +1,5 @@
-"""Report sections and figures for the 3-axis gyro calibrations (seed 003 and Ferraris rotations)."""
+"""Report sections and figures for the 3-axis gyro calibrations: the six-position least squares
+(IEEE A&E Systems Magazine 2023) and rotations through known angles (Ferraris et al. 1995)."""
 
 from __future__ import annotations
 
@@ -13,8 +14,16 @@ import numpy as np
 
 from rotacal.gyro.rotations import RotationCalibration
 from rotacal.gyro.triad import TriadResult
-from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
-from rotacal.report.uncertainty import budget_tables
+from rotacal.numbers import element_of, fixed
+from rotacal.references import cite
+from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
+from rotacal.report.uncertainty import budget_details, result_row
+from rotacal.report.wording import (
+    diagnostics_table,
+    paragraph,
+    readable_rows,
+    readable_tables,
+)
 
 __all__ = ["rotations_figures", "rotations_section", "triad_figures", "triad_section"]
 
@@ -29,44 +38,83 @@ def _style(ax: Any) -> None:
     ax.spines[["top", "right"]].set_visible(False)
 
 
-def _pm(value: float, u: float, digits: int = 6) -> str:
-    if not np.isfinite(u) or u == 0:
-        return f"{value:.{digits}g}"
-    return f"{value:.{digits}g} ± {u:.2g}"
+def _unit_k(unit: str) -> str:
+    return f"{unit or 'output units'}/(°/s)"
 
 
-def _matrix_table(k: np.ndarray, u: np.ndarray, caption: str, out_names: list[str]) -> Table:
+def _matrix_table(data: Mapping[str, Any], caption: str, out_names: list[str], unit: str) -> Table:
+    """K row by row, each element value ± U (k, p said once per row where they are shared)."""
     rows = [
-        [out_names[i]] + [_pm(float(k[i, j]), float(u[i, j]), 7) for j in range(3)]
-        for i in range(3)
-    ]
-    return Table(["output", "ω_x", "ω_y", "ω_z"], rows, caption=caption)
-
-
-def _axes_table(
-    bias: np.ndarray,
-    bias_u: np.ndarray,
-    scale: np.ndarray,
-    mis: np.ndarray,
-    out_names: list[str],
-) -> Table:
-    rows = [
-        [
-            out_names[i],
-            _pm(float(bias[i]), float(bias_u[i]), 6),
-            f"{scale[i]:.7g}",
-            f"{mis[i] * 60:.3g}",
-        ]
+        [out_names[i], *(element_of(data, "scale_misalignment", (i, j)) for j in range(3))]
         for i in range(3)
     ]
     return Table(
-        ["output", "bias b (± u)", "scale factor |K_i|", "sensitive axis off nominal (arcmin)"],
+        ["output", "ω_x", "ω_y", "ω_z"],
         rows,
-        caption="Bias, scale factors and axis misalignment",
+        caption=caption,
+        note=f"In {_unit_k(unit)}; each element ± its expanded uncertainty U (k, p as stated).",
     )
 
 
-# ------------------------------------------------------------------------------------ seed 003
+def _axis_results(
+    data: Mapping[str, Any], out_names: list[str], unit: str, with_axes: bool
+) -> list[ResultRow]:
+    """Bias and, where their uncertainties are known, |K_i| and the misalignment of each gyro."""
+    p = data.get("coverage_probability")
+    k = data.get("k", {})
+    rows = []
+    for i, name in enumerate(out_names):
+        rows.append(
+            result_row(
+                f"bias of {name}",
+                data["bias"][i],
+                unit or "output units",
+                U=data["bias_U"][i],
+                k=k["bias"][i],
+                p=p,
+            )
+        )
+        if not with_axes:
+            continue
+        rows.append(
+            result_row(
+                f"scale factor |K| of {name}",
+                data["scale_factors"][i],
+                _unit_k(unit),
+                U=data["scale_factors_U"][i],
+                k=k["scale_factors"][i],
+                p=p,
+            )
+        )
+        rows.append(
+            result_row(
+                f"misalignment of {name}",
+                data["misalignment_deg"][i],
+                "°",
+                U=data["misalignment_deg_U"][i],
+                k=k["misalignment_deg"][i],
+                p=p,
+                note="angle of its sensitive axis to the nominal axis",
+            )
+        )
+    return rows
+
+
+def _axes_diagnostics(scale: np.ndarray, mis: np.ndarray, out_names: list[str], unit: str) -> Table:
+    """|K_i| and the misalignment without uncertainty: diagnostics."""
+    return diagnostics_table(
+        [
+            [
+                f"{out_names[i]}: scale factor |K|, misalignment",
+                f"{fixed(float(scale[i]), 7)} {_unit_k(unit)}, {fixed(float(mis[i]) * 60, 3)} arcmin",
+            ]
+            for i in range(3)
+        ],
+        "scale factors and misalignment (no uncertainty propagated)",
+    )
+
+
+# ------------------------------------------------------------------------------ six positions
 def _point_axis(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """For each rate point: the dominant rotation axis ('x', 'y', 'z', or '0' at rest) and its
     signed rate about it (°/s)."""
@@ -124,9 +172,9 @@ def _residual_figure(r: TriadResult) -> Figure:
                     )
             ax.axhline(0.0, color="#999", lw=0.7)
             if row == 0:
-                title = f"axis {_AXES[j]}: {face} − ω, rms {r.residual_rms_before[j]:.3g} °/s"
+                title = f"axis {_AXES[j]}: {face} − ω, rms {fixed(r.residual_rms_before[j], 3)} °/s"
             else:
-                title = f"axis {_AXES[j]}: ω̂ − ω, rms {r.residual_rms[j]:.3g} °/s"
+                title = f"axis {_AXES[j]}: ω̂ − ω, rms {fixed(r.residual_rms[j], 3)} °/s"
             ax.set_title(title, fontsize=9.5)
             if j == 0:
                 ax.set_ylabel(("before" if row == 0 else "after") + " calibration (°/s)")
@@ -147,11 +195,8 @@ def _residual_figure(r: TriadResult) -> Figure:
     return figure_from_matplotlib(
         fig,
         "Residuals before and after calibration",
-        "Mean residual of each rate point, per axis (points of the three rotation axes drawn "
-        "slightly apart). Top: the raw outputs taken at face value (slopes are scale-factor "
-        "errors and cross-coupling, the offset is the bias). Bottom: after ω̂ = K⁻¹(u − b) "
-        "(seed 003, eq. 7), with the standard error of each point's mean; the grey band is ± the "
-        "rms of single samples. Rejected measurements are left out.",
+        "Mean residual of each rate point per axis. Top: raw outputs at face value. Bottom: after "
+        f"ω̂ = K⁻¹(u − b) ({cite('robot2023')}, eq. 7), ± the standard error; band: ± single-sample rms.",
     )
 
 
@@ -184,7 +229,7 @@ def _rejection_figure(r: TriadResult) -> Figure:
                     ax.plot(rej[sel], y[sel], marker, ms=4.5, color="#b22222", label=label)
                     label = None
         if np.isfinite(thr) and thr > 0:
-            ax.axhline(thr, color="#b22222", lw=0.8, ls="--", label=f"±k·σ = ±{thr:.3g}")
+            ax.axhline(thr, color="#b22222", lw=0.8, ls="--", label=f"±k·σ = ±{fixed(thr, 3)}")
             ax.axhline(-thr, color="#b22222", lw=0.8, ls="--")
         ax.set_ylim(-lim, lim)
         ax.set_ylabel(f"{names[c]} residual")
@@ -192,72 +237,65 @@ def _rejection_figure(r: TriadResult) -> Figure:
         _style(ax)
     axes[-1].set_xlabel("row of the capture")
     fig.tight_layout()
-    k_text = f"{r.reject_k:.3g}" if np.isfinite(r.reject_k) else "∞"
+    k_text = fixed(r.reject_k, 3) if np.isfinite(r.reject_k) else "∞"
     return figure_from_matplotlib(
         fig,
         "Least-squares residuals and rejected measurements",
-        f"u − (K·ω + b) per output (output unit). Dashed: ±k·σ with k = {k_text} and "
-        "σ = 1.4826·MAD of the residuals; measurements beyond it (red) are rejected and the fit "
-        "repeated without them. Triangles at the edge stand for rejected residuals off the scale "
-        "(listed in the table and the JSON).",
+        f"u − (K·ω + b) per output. Dashed: ±k·σ (k = {k_text}, σ = 1.4826·MAD); red: rejected, "
+        "triangles: off the scale (listed in the table and the JSON).",
     )
 
 
 def triad_figures(r: TriadResult) -> list[Figure]:
-    """The figures of a seed-003 triad calibration, in reading order."""
+    """The figures of a six-position triad calibration, in reading order."""
     return [_residual_figure(r), _rejection_figure(r)]
 
 
 def triad_section(r: TriadResult, title: str | None = None, *, figures: bool = True) -> Section:
-    """A report section for a 3-axis calibration (seed 003): K and b with u, residuals, rejections."""
+    """A report section for a 3-axis calibration (Wang et al. 2023): K and b with U, |K_i| and the
+    misalignment with U, residuals, rejections, the budgets folded."""
     out = list(r._plot.get("columns", ("", "", "", "ux", "uy", "uz")))[3:]
+    data = r.to_dict()
+    unit = r.output_unit
     plan = r.plan
     tables = [
-        _matrix_table(
-            r.scale_misalignment,
-            r.scale_misalignment_u,
-            "Scale/misalignment matrix K in u = K·ω + b (output unit per °/s, ± standard "
-            "uncertainty)",
-            out,
-        ),
-        _axes_table(r.bias, r.bias_u, r.scale_factors, r.misalignment_deg, out),
+        _matrix_table(data, "Scale/misalignment matrix K in u = K·ω + b", out, unit),
         Table(
-            ["axis", "before (°/s)", "after (°/s)", "fit residual (output unit)"],
+            ["axis", "before (°/s)", "after (°/s)", f"fit residual ({unit or 'output units'})"],
             [
                 [
                     _AXES[i],
-                    f"{r.residual_rms_before[i]:.4g}",
-                    f"{r.residual_rms[i]:.4g}",
-                    f"{r.fit_residual_rms[i]:.4g}",
+                    fixed(r.residual_rms_before[i], 4),
+                    fixed(r.residual_rms[i], 4),
+                    fixed(r.fit_residual_rms[i], 4),
                 ]
                 for i in range(3)
             ],
-            caption="Residual rms per axis, before and after calibration",
+            caption="Residual rms per axis (diagnostics, not results)",
         ),
-        Table(
-            ["quantity", "value"],
+        diagnostics_table(
             [
                 ["rows / rows kept in all outputs", f"{r.rows} / {r.rows_used}"],
                 ["rate points", str(r.points)],
-                ["rank of A", f"{plan.rank} of 4"],
+                ["rank of the plan's matrix A", f"{plan.rank} of 4"],
                 [
                     "condition number of A (as built / rows scaled)",
-                    f"{plan.condition_number:.4g} / {plan.condition_number_scaled:.4g}",
+                    f"{fixed(plan.condition_number, 4)} / {fixed(plan.condition_number_scaled, 4)}",
                 ],
                 [
                     "rejection threshold k (robust σ)",
-                    f"{r.reject_k:.3g}" if np.isfinite(r.reject_k) else "off",
+                    fixed(r.reject_k, 3) if np.isfinite(r.reject_k) else "off",
                 ],
-                ["robust σ per output", ", ".join(f"{s:.3g}" for s in r.robust_sigma)],
+                ["robust σ per output", ", ".join(fixed(s, 3) for s in r.robust_sigma)],
                 ["rows with a rejected output", str(r.outliers_rejected)],
             ],
-            caption="Plan and outlier rejection",
+            "plan and outlier rejection",
         ),
     ]
     if r.rejected:
         shown = r.rejected[:_MAX_REJECTED_ROWS]
         rows = [
-            [str(e["row"]), e["column"], f"{e['residual']:.4g}", f"{e['threshold']:.3g}"]
+            [str(e["row"]), e["column"], fixed(e["residual"], 4), fixed(e["threshold"], 3)]
             for e in shown
         ]
         more = len(r.rejected) - len(shown)
@@ -270,21 +308,23 @@ def triad_section(r: TriadResult, title: str | None = None, *, figures: bool = T
             )
         )
     paragraphs = [
-        "Seed 003 (modified six-position method): the outputs fill U, the reference rates with a "
-        "row of ones fill A (eq. 5), [K | b] solves U = [K | b]·A by least squares (eq. 4). "
-        "Anomalous measurements are rejected per output by a Huber fit and |r| > k·1.4826·MAD. "
-        "Uncertainties: the least-squares covariance (Type A: white, uncorrelated noise per row) "
-        "and, when stated, the table's set-rate error (Type B, table.set_rate_relative); one "
-        "budget per element of K and b below."
+        f"Modified six-position method ({cite('robot2023')}): the outputs fill U, the reference "
+        "rates with a row of ones fill A (eq. 5), [K | b] solves U = [K | b]·A by least squares "
+        "(eq. 4). Anomalous measurements are rejected per output (|r| > k·1.4826·MAD). "
+        "Uncertainties: the least-squares covariance (Type A) and, when stated, the table's "
+        "set-rate error (Type B); |K_i| and the misalignment propagate the covariance of row i "
+        f"(GUM law of propagation; the split K = diag(s)·R of {cite('ferraris1995')}).",
+        *(paragraph(n) for n in r.notes),
     ]
-    paragraphs += list(r.notes)
-    tables += budget_tables(r._budgets)
     return Section(
-        title=title or "3-axis gyro calibration (seed 003)",
+        title=title or "3-axis gyro calibration",
         paragraphs=paragraphs,
         tables=tables,
         figures=triad_figures(r) if figures else [],
         anchor="gyro-triad",
+        results=readable_rows(_axis_results(data, out, unit, with_axes=True)),
+        details=readable_tables(budget_details({**r._budgets, **r.axis_budgets})),
+        references=["robot2023", "ferraris1995", "gum"],
     )
 
 
@@ -325,8 +365,8 @@ def _recording_figure(r: RotationCalibration) -> Figure:
     return figure_from_matplotlib(
         fig,
         "Recording and its sections",
-        "Raw outputs; grey spans: static sections (bias and noise), yellow spans: rotations "
-        "through the set angle, integrated to give K.",
+        "Raw outputs; grey: static sections (bias and noise); yellow: rotations through the set "
+        "angle, integrated to give K.",
     )
 
 
@@ -348,24 +388,20 @@ def rotations_section(
     ``{"label": "imucal 2.6.0", "scale_misalignment": K (3×3), "bias": b (3)}``.
     """
     out = ["ux", "uy", "uz"]
+    data = r.to_dict()
+    unit = r.output_unit
     tables = [
-        _matrix_table(
-            r.scale_misalignment,
-            r.scale_misalignment_u,
-            "Scale/misalignment matrix K in u = K·ω + b (output unit per °/s, ± standard "
-            "uncertainty)",
-            out,
-        ),
-        _axes_table(r.bias, r.bias_u, r.scale_factors, r.misalignment_deg, out),
+        _matrix_table(data, "Scale/misalignment matrix K in u = K·ω + b", out, unit),
+        _axes_diagnostics(r.scale_factors, r.misalignment_deg, out, unit),
         Table(
             ["rotation", "samples", "duration (s)", "set angle (°)", "integrated output (u·s)"],
             [
                 [
                     f"about {rot['axis']}",
                     str(rot["samples"]),
-                    f"{rot['duration_s']:.3f}",
-                    f"{rot['angle_deg']:g}",
-                    ", ".join(f"{v:.5g}" for v in rot["integrated_output"]),
+                    fixed(rot["duration_s"], 6),
+                    fixed(rot["angle_deg"]),
+                    ", ".join(fixed(v, 5) for v in rot["integrated_output"]),
                 ]
                 for rot in r.rotations
             ],
@@ -379,9 +415,9 @@ def rotations_section(
         rows = [
             [
                 out[i],
-                ", ".join(f"{v:+.2e}" for v in r.scale_misalignment[i] - kref[i]),
-                ", ".join(f"{v:.1e}" for v in r.scale_misalignment_u[i]),
-                f"{r.bias[i] - bref[i]:+.2e}",
+                ", ".join(fixed(v, 2) for v in r.scale_misalignment[i] - kref[i]),
+                ", ".join(fixed(v, 2) for v in r.scale_misalignment_u[i]),
+                fixed(r.bias[i] - bref[i], 2),
             ]
             for i in range(3)
         ]
@@ -393,19 +429,21 @@ def rotations_section(
             )
         )
     paragraphs = [
-        "Ferraris et al. (1994, 1995): the rate minus the bias (from the static sections) is "
+        f"{cite('ferraris1995')}: the rate minus the bias (from the static sections) is "
         "integrated over each rotation; the integrated vectors against the set angles give "
         "K = Θ·Φᵀ(Φ·Φᵀ)⁻¹. Uncertainties: white noise of the static sections integrated over "
         "each rotation, the bias subtracted and the offset change during the rotations (spread "
-        f"of the static means), {r.angle_u_deg * 3600:.3g}″ on each realised angle, and the DAQ "
+        f"of the static means), {fixed(r.angle_u_deg * 3600, 3)}″ on each realised angle, and the DAQ "
         "timebase when stated; one budget per element of K and b below."
     ]
-    paragraphs += list(r.notes)
-    tables += budget_tables(r._budgets)
+    paragraphs += [paragraph(n) for n in r.notes]
     return Section(
-        title=title or "Gyro triad from rotations through known angles (Ferraris)",
+        title=title or "Gyro triad from rotations through known angles",
         paragraphs=paragraphs,
         tables=tables,
         figures=rotations_figures(r) if figures else [],
         anchor="gyro-rotations",
+        results=readable_rows(_axis_results(data, out, unit, with_axes=False)),
+        details=readable_tables(budget_details(r._budgets)),
+        references=["ferraris1995", "gum"],
     )
