@@ -303,6 +303,27 @@ GLOSSARY: dict[str, Term] = {
         "The 99.9 % quantile of |Δψ|, |Δθ|, |Δγ| over tables built within their tolerances, at "
         "random angles.",
     ),
+    "quantile_abs_interval_arcmin": _t(
+        "coverage interval of the orientation error 99.9 % of tables stay within",
+        "′",
+        "95 % distribution-free interval of the 99.9 % quantile, from the order statistics of the "
+        "draws (David and Nagaraja 2003, §7.1).",
+    ),
+    "fraction_outside_interval": _t(
+        "coverage interval of the fraction of tables outside the requirement",
+        "",
+        "95 % exact binomial interval (Clopper and Pearson 1934).",
+    ),
+    "p95_rate_error_interval_deg_h": _t(
+        "coverage interval of the rate-sensing error 95 % of calibrations stay within",
+        "°/h",
+        "95 % distribution-free interval of the 95th percentile, from the order statistics.",
+    ),
+    "fraction_above_required_interval": _t(
+        "coverage interval of the fraction of calibrations above the required accuracy",
+        "",
+        "95 % exact binomial interval (Clopper and Pearson 1934).",
+    ),
     "p95_rate_error_deg_h": _t(
         "rate-sensing error 95 % of calibrations stay within",
         "°/h",

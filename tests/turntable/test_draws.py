@@ -114,3 +114,12 @@ def test_monte_carlo_statistics_reach_the_budgets_json() -> None:
     assert mc["fraction_outside_interval"][1] == pytest.approx(np.log(40.0) / 20_000, rel=1e-3)
     low, high = mc["quantile_abs_interval_arcmin"]["theta"]
     assert low <= mc["quantile_abs_arcmin"]["theta"] <= high
+
+
+def test_verdict_passes_only_a_whole_interval_within_the_limit() -> None:
+    from rotacal.report.turntable_results import verdict
+
+    assert verdict((0.8, 0.99), 1.0) is True
+    assert verdict((0.8, 1.0), 1.0) is True  # at the limit is within
+    assert verdict((0.99, 1.01), 1.0) is None  # straddles: inconclusive (ILAC-G8 guarded)
+    assert verdict((1.01, 1.2), 1.0) is False
