@@ -74,7 +74,11 @@ class TurntableBudget(Result):
     ``sensitivities`` maps ``psi``/``theta``/``gamma`` to {error: mean |∂Δ/∂χ|} (eq. (28));
     ``upper_bounds_arcmin`` maps each error to its allocated upper bound (eq. (34); ``None`` for
     translations, which cannot change the orientation); ``monte_carlo`` holds ``runs``,
-    ``max_abs_arcmin`` (per component), ``all_within`` and the draw settings. ``options`` holds
+    ``max_abs_arcmin`` (per component), ``all_within``, the draw settings and what the check
+    states with a 95 % coverage interval (``fraction_outside`` with ``fraction_outside_interval``;
+    ``quantile_abs_arcmin`` with ``quantile_abs_interval_arcmin``, the 99.9 % quantile of each
+    |Δ|; :mod:`rotacal.turntable.draws`); ``calibration`` adds the intervals of its 95th
+    percentile and of its fraction above the required accuracy. ``options`` holds
     the two choices of the budget (``requirement_derivation``, ``constraint_angles``);
     ``derivation`` how a calibration accuracy became the requirement (``None`` when stated).
     """
