@@ -285,6 +285,143 @@ GLOSSARY: dict[str, Term] = {
     "outliers_rejected": _t(
         "rows with a rejected output", "", "Rows with at least one output rejected as anomalous."
     ),
+    # --- turntable error budget (the GyroWheel study; ISO 230-7 symbols in brackets) ---
+    "phi_y1": _t(
+        "position error of the outer axis",
+        "′",
+        "Angle by which the outer axis turns away from its commanded angle (ISO 230-7 EBB).",
+        "Δφy1",
+    ),
+    "phi_z2": _t(
+        "position error of the inner axis",
+        "′",
+        "Angle by which the inner axis turns away from its commanded angle (ISO 230-7 ECC).",
+        "Δφz2",
+    ),
+    "alpha_x1": _t(
+        "wobble of the outer axis about x",
+        "′",
+        "Tilt of the outer axis about the x axis as it turns (ISO 230-7 EAB).",
+        "Δαx1",
+    ),
+    "alpha_z1": _t(
+        "wobble of the outer axis about z",
+        "′",
+        "Tilt of the outer axis about the z axis as it turns (ISO 230-7 ECB).",
+        "Δαz1",
+    ),
+    "alpha_x2": _t(
+        "wobble of the inner axis about x",
+        "′",
+        "Tilt of the inner axis about the x axis as it turns (ISO 230-7 EAC).",
+        "Δαx2",
+    ),
+    "alpha_y2": _t(
+        "wobble of the inner axis about y",
+        "′",
+        "Tilt of the inner axis about the y axis as it turns (ISO 230-7 EBC).",
+        "Δαy2",
+    ),
+    "eps_x": _t(
+        "perpendicularity error of the axes about x",
+        "′",
+        "Departure of the inner axis from perpendicular to the outer axis, about x (ISO 230-7 "
+        "EA0C).",
+        "Δεx",
+    ),
+    "eps_y": _t(
+        "perpendicularity error of the axes about y",
+        "′",
+        "Departure of the inner axis from perpendicular to the outer axis, about y (ISO 230-7 "
+        "EB0C).",
+        "Δεy",
+    ),
+    "eta": _t(
+        "intersection error of the axes",
+        "mm",
+        "Distance by which the two axes miss each other; it moves the instrument but does not "
+        "turn it (ISO 230-7 EX0C).",
+        "Δη",
+    ),
+    "requirement_arcmin": _t(
+        "orientation requirement",
+        "′",
+        "Largest orientation error Δψ, Δθ, Δγ the instrument on the table may have.",
+        "I",
+    ),
+    "sensitivities": _t(
+        "averaged sensitivity",
+        "rad/rad",
+        "Mean over the table's angles of |∂Δ/∂χ|, how much an error source moves one orientation "
+        "component.",
+        "C",
+    ),
+    "lower_bounds_arcmin": _t(
+        "lower bound", "′", "Smallest error manufacturing can achieve for an error source.", "LB"
+    ),
+    "upper_bounds_arcmin": _t(
+        "allocated upper bound",
+        "′",
+        "Tolerance allocated to an error source so that the orientation stays within the "
+        "requirement.",
+        "UB",
+    ),
+    "max_abs_arcmin": _t(
+        "largest orientation error among the tables drawn",
+        "′",
+        "Largest |Δψ|, |Δθ|, |Δγ| over the Monte Carlo draws; it grows with the number of draws.",
+    ),
+    "fraction_outside": _t(
+        "fraction of tables outside the orientation requirement",
+        "",
+        "Share of the tables drawn within their tolerances (at random angles) whose orientation "
+        "error exceeds the requirement on some component.",
+    ),
+    "quantile_abs_arcmin": _t(
+        "orientation error 99.9 % of tables stay within",
+        "′",
+        "The 99.9 % quantile of |Δψ|, |Δθ|, |Δγ| over tables built within their tolerances, at "
+        "random angles.",
+    ),
+    "quantile_abs_interval_arcmin": _t(
+        "coverage interval of the orientation error 99.9 % of tables stay within",
+        "′",
+        "95 % distribution-free interval of the 99.9 % quantile, from the order statistics of the "
+        "draws (David and Nagaraja 2003, §7.1).",
+    ),
+    "fraction_outside_interval": _t(
+        "coverage interval of the fraction of tables outside the requirement",
+        "",
+        "95 % exact binomial interval (Clopper and Pearson 1934).",
+    ),
+    "p95_rate_error_interval_deg_h": _t(
+        "coverage interval of the rate-sensing error 95 % of calibrations stay within",
+        "°/h",
+        "95 % distribution-free interval of the 95th percentile, from the order statistics.",
+    ),
+    "fraction_above_required_interval": _t(
+        "coverage interval of the fraction of calibrations above the required accuracy",
+        "",
+        "95 % exact binomial interval (Clopper and Pearson 1934).",
+    ),
+    "p95_rate_error_deg_h": _t(
+        "rate-sensing error 95 % of calibrations stay within",
+        "°/h",
+        "95th percentile of the drift calibration's rate error Δω over tables drawn within the "
+        "allocation.",
+        "Δω",
+    ),
+    "max_rate_error_deg_h": _t(
+        "largest rate-sensing error among the tables drawn",
+        "°/h",
+        "Largest Δω of the drift calibration over the tables drawn.",
+        "Δω",
+    ),
+    "fraction_above_required": _t(
+        "fraction of calibrations above the required accuracy",
+        "",
+        "Share of the tables drawn on which the drift calibration's rate error exceeds ωm.",
+    ),
 }
 
 

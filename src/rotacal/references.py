@@ -207,6 +207,24 @@ REFERENCES: dict[str, Reference] = {
             "Uncertainty of stability variances based on finite differences",
             "Proc. 35th Annual Precise Time and Time Interval (PTTI) Meeting, 267–280",
         ),
+        _r(
+            "clopper1934",
+            "Clopper C. J., Pearson E. S.",
+            "Clopper and Pearson",
+            "1934",
+            "The use of confidence or fiducial limits illustrated in the case of the binomial",
+            "Biometrika 26(4), 404–413",
+            "10.1093/biomet/26.4.404",
+        ),
+        _r(
+            "david2003",
+            "David H. A., Nagaraja H. N.",
+            "David and Nagaraja",
+            "2003",
+            "Order Statistics, 3rd ed. (§7.1, distribution-free confidence intervals for quantiles)",
+            "Wiley, Hoboken",
+            "10.1002/0471722162",
+        ),
     )
 }
 

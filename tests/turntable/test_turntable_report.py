@@ -69,6 +69,11 @@ def single_budget():
     return turntable_budget(load_turntable(text=SINGLE_AXIS), runs=20_000)
 
 
+@pytest.fixture(scope="module")
+def single_section(single_budget):
+    return turntable_section(single_budget)
+
+
 def _is_png(fig) -> bool:
     return base64.b64decode(fig.png_base64)[:8] == b"\x89PNG\r\n\x1a\n"
 
@@ -78,18 +83,46 @@ def test_seed_section_has_every_part(seed_section) -> None:
     titles = [f.title for f in s.figures]
     assert len(s.figures) == 4, titles  # sensitivities, Monte Carlo, calibration map, draws
     assert all(_is_png(f) for f in s.figures)
-    assert len(s.tables) == 3  # allocation, worst case, reproducing seed 001
-    assert "seed Table 4 (′)" in s.tables[0].columns
+    assert len(s.tables) == 2  # allocation, worst case
+    assert "the study's Table 4 (′)" in s.tables[0].columns
     assert "rotacal / Table 4" in s.tables[0].columns
-    assert s.tables[2].caption.startswith("Reproducing seed 001")
+    # the side-by-side with the paper is folded away, cited by name
+    assert len(s.details) == 1
+    assert (
+        s.details[0].caption == "Reproducing the numbers of Int. J. Aerospace Eng., GyroWheel study"
+    )
+    assert s.details[0].note.startswith("What the paper's numbers rest on")
+    assert {"gyrowheel", "clopper1934", "david2003"} <= set(s.references)
     html = render_html(Report("t", sections=[s]))
-    assert s.title in html and html.count("<figure>") == 4
+    assert s.title in html and html.count("<figure>") == 4 and html.count("<details>") == 1
+    assert "seed 001" not in html.lower() and "seed 00" not in html.lower()
+
+
+def _visible_text(html: str) -> str:
+    body = re.sub(r"<(script|style)[^>]*>.*?</\1>", " ", html, flags=re.S)
+    body = re.sub(r'src="data:[^"]*"', "", body)
+    return re.sub(r"<[^>]+>", " ", body)
+
+
+@pytest.mark.parametrize("which", ["seed_section", "single_section"])
+def test_report_text_has_no_keys_no_e_notation_and_short_captions(which, request) -> None:
+    s = request.getfixturevalue(which)
+    text = _visible_text(render_html(Report("t", sections=[s])))
+    assert not re.search(r"\d[eE][+-]?\d", text), re.findall(r"\S*\d[eE][+-]?\d\S*", text)
+    keys = set(re.findall(r"\b[a-z]+_[a-z0-9_]+\b", text))
+    # the single-axis table's own error names (e_z, a_x, a_y) are what its configuration calls
+    # them; every name rotacal writes is plain words
+    assert keys <= {"e_z", "a_x", "a_y"}, keys
+    for f in s.figures:
+        assert len(f.caption) <= 260, (f.title, len(f.caption))
+    for t in [*s.tables, *s.details]:
+        assert len(t.caption) <= 90, t.caption
 
 
 def test_allocation_numbers_are_the_budgets(seed_budget) -> None:
     t = allocation_table(seed_budget)
     col_ub = t.columns.index("allocated upper bound (′)")
-    col_t4 = t.columns.index("seed Table 4 (′)")
+    col_t4 = t.columns.index("the study's Table 4 (′)")
     col_ratio = t.columns.index("rotacal / Table 4")
     assert len(t.rows) == len(seed_budget.error_names) == 9
     for name, row in zip(seed_budget.error_names, t.rows, strict=True):
@@ -167,9 +200,10 @@ def test_single_axis_table_builds_without_seed_parts(single_budget) -> None:
     assert len(s.figures) == 2 and all(_is_png(f) for f in s.figures)
     assert len(s.tables) == 2
     alloc = s.tables[0]
-    assert "seed Table 4 (′)" not in alloc.columns
+    assert "the study's Table 4 (′)" not in alloc.columns
     col = alloc.columns.index("allocated upper bound (′)")
     for name, row in zip(single_budget.error_names, alloc.rows, strict=True):
         assert row[col] == f"{single_budget.upper_bounds_arcmin[name]:.4f}"
     assert "Reproducing" not in " ".join(s.paragraphs)
+    assert not s.details
     assert "all within" in s.figures[1].caption or "outside" in s.figures[1].caption

@@ -37,7 +37,10 @@ def turntable() -> None:
     """
 
 
-_SEED001 = "GyroWheel calibration tests: turntable error analysis and allocation (seed 001)"
+def _report_subtitle() -> str:
+    from rotacal.references import cite
+
+    return f"Error analysis and allocation of a test turntable after {cite('gyrowheel')}"
 
 
 @turntable.command(
@@ -113,11 +116,11 @@ def turntable_budget_cmd(
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path)
     if report_path:
-        from rotacal.report.turntable import turntable_section
+        from rotacal.report.turntable import table_name, turntable_section
 
         _write_report(
-            f"Turntable error budget: {result.table}",
-            _SEED001 + " — eqs. (7)–(34)",
+            f"Turntable error budget: {table_name(result)}",
+            _report_subtitle(),
             [turntable_section(result)],
             config,
             report_path,

@@ -1,15 +1,17 @@
-"""Report section for a turntable's accuracy budget (seed 001, §§2.2–2.3 and §4).
+"""Report section for a turntable's accuracy budget (the GyroWheel study, §§2.2–2.3 and §4).
 
 :func:`turntable_section` renders a :class:`~rotacal.turntable.budget.TurntableBudget`: the
-sensitivities of the orientation error to each error source (the seed's Figure 8), the allocated
-upper bounds (Table 4), the worst case over all angles (Lemma 1), the Monte Carlo check with the
-full model (Figure 9), what an orientation error does to a multiposition gyro calibration
-(Figures 4–5) and, for the seed's own table, a side-by-side of the paper's numbers and rotacal's
+results a lab signs first (:mod:`rotacal.report.turntable_results`: the Monte Carlo and
+calibration checks with their coverage intervals), then the sensitivities of the orientation error
+to each error source (the study's Figure 8), the allocated upper bounds (Table 4), the worst case
+over all angles (Lemma 1), the Monte Carlo check with the full model (Figure 9), what an
+orientation error does to a multiposition gyro calibration (Figures 4–5) and, for the study's own
+table, a side-by-side of the paper's numbers and rotacal's, folded away
 (:mod:`rotacal.report.turntable_seed001`).
 
 References
 ----------
-Seed 001 (``../shared/seeds/001_4a387eb674e238f2.txt``): eqs. (7)–(16), (26), (28)–(34),
+The GyroWheel study (Int. J. Aerospace Eng., article 6524782): eqs. (7)–(16), (26), (28)–(34),
 Lemma 1, Tables 2 and 4, Figures 4, 5, 8 and 9.
 """
 
@@ -28,8 +30,11 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
 from matplotlib.ticker import MaxNLocator
 
+from rotacal.numbers import fixed
+from rotacal.references import cite
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
-from rotacal.report.turntable_common import COMP_SYMBOL, is_seed_budget, symbol
+from rotacal.report.turntable_common import COMP_SYMBOL, angle_symbol, is_seed_budget, symbol
+from rotacal.report.turntable_results import RESULT_REFERENCES, turntable_results
 from rotacal.report.turntable_seed001 import (
     seed_comparison_table,
     seed_paragraph,
@@ -53,10 +58,15 @@ __all__ = [
     "monte_carlo_figure",
     "seed_comparison_table",
     "sensitivity_figure",
+    "table_name",
     "turntable_section",
     "worst_case_table",
 ]
 
+#: How the text cites the paper the method comes from.
+_PAPER = cite("gyrowheel")
+#: How the text names it in running words ("the GyroWheel study's Table 4").
+_STUDY = "GyroWheel study"
 _COMP_COLOR = {"psi": "#1f5f99", "theta": "#2e8b57", "gamma": "#d2691e"}
 _REQ = "#b22222"
 
@@ -93,11 +103,11 @@ def _f4(x: float | None) -> str:
 
 
 def sensitivity_figure(budget: TurntableBudget) -> Figure:
-    """Averaged sensitivities of Δψ, Δθ, Δγ to every angular error (the seed's Figure 8).
+    """Averaged sensitivities of Δψ, Δθ, Δγ to every angular error (the study's Figure 8).
 
     References
     ----------
-    Seed 001, eq. (28) and Figure 8.
+    The GyroWheel study, eq. (28) and Figure 8.
     """
     names = list(budget._table.angular_error_names)
     labels = [_bar_label(budget, n) for n in names]
@@ -114,7 +124,7 @@ def sensitivity_figure(budget: TurntableBudget) -> Figure:
             text = "0" if v == 0.0 else f"{v:.4f}"
             ax.text(v + 0.02 * vmax, yi, text, va="center", ha="left", fontsize=8)
         ax.set_xlim(0, vmax * 1.32)
-        ax.set_title(f"{COMP_SYMBOL[comp]} ({comp})", fontsize=10)
+        ax.set_title(COMP_SYMBOL[comp], fontsize=10)
         ax.set_xlabel("mean |∂Δ/∂χ| (rad/rad)")
         _style(ax)
         ax.grid(False, axis="y")
@@ -123,19 +133,15 @@ def sensitivity_figure(budget: TurntableBudget) -> Figure:
     fig.tight_layout()
     step, endpoint = budget._table.sensitivity_grid
     grid = (
-        f"on the grid 0°, {step:g}°, …, 360° with both ends (the paper's averaging: 0° and 360° "
-        "count twice)"
+        f"every {fixed(step)}° from 0° to 360°, both ends"
         if endpoint
-        else f"over a full turn, every {step:g}°"
+        else f"every {fixed(step)}° over a turn"
     )
     return figure_from_matplotlib(
         fig,
         "Sensitivity of the orientation error to each error source",
-        "Each bar is |∂Δ/∂χᵢ| of the linearised model at zero error (seed 001, eqs. (26), (28)), "
-        f"averaged over every rotation angle of the table ({', '.join(budget._table.angle_names)})"
-        f" {grid}. "
-        "A larger value means the error source must be held tighter. Translations (offsets) have "
-        "no effect on orientation and are not shown.",
+        f"Mean |∂Δ/∂χᵢ| of the linearised model over the table's angles ({grid}; {_PAPER}, "
+        "eq. (28)); a longer bar needs a tighter tolerance. Offsets do not turn the instrument.",
     )
 
 
@@ -149,12 +155,13 @@ def allocation_table(budget: TurntableBudget) -> Table:
 
     References
     ----------
-    Seed 001, eqs. (29)–(34) and Table 4.
+    The GyroWheel study, eqs. (29)–(34) and Table 4.
     """
     seed = is_seed_budget(budget)
-    cols = ["error", "label", "ISO", "lower bound (′)", "allocated upper bound (′)", "set by"]
+    cols = ["error source", "symbol", "ISO 230-7", "lower bound (′)", "allocated upper bound (′)"]
+    cols.append("set by")
     if seed:
-        cols += ["seed Table 4 (′)", "rotacal / Table 4"]
+        cols += ["the study's Table 4 (′)", "rotacal / Table 4"]
     specs = _specs(budget)
     rows = []
     for name in budget.error_names:
@@ -163,10 +170,10 @@ def allocation_table(budget: TurntableBudget) -> Table:
         if ub is None:
             lower = spec.lower if spec is not None else 0.0
             row = [
+                budget.labels.get(name, "") or symbol(name),
                 symbol(name),
-                budget.labels.get(name, ""),
                 _iso(budget, name),
-                f"{lower * 1e3:g} mm",
+                f"{fixed(lower * 1e3)} mm",
                 "no effect on orientation",
                 "—",
             ]
@@ -175,8 +182,8 @@ def allocation_table(budget: TurntableBudget) -> Table:
         else:
             binding = budget.binding.get(name, "")
             row = [
+                budget.labels.get(name, "") or symbol(name),
                 symbol(name),
-                budget.labels.get(name, ""),
                 _iso(budget, name),
                 _f4(budget.lower_bounds_arcmin.get(name, 0.0)),
                 _f4(ub),
@@ -189,7 +196,10 @@ def allocation_table(budget: TurntableBudget) -> Table:
     return Table(
         cols,
         rows,
-        caption="Allocated upper bounds of the error sources (seed 001, eqs. (29)–(34))",
+        caption="Tolerances allocated to the error sources",
+        note=f"Allocation by {_PAPER}, eqs. (29)–(34). 'Set by' names the orientation component "
+        "whose requirement limits the source; the lower bound is what manufacturing achieves."
+        + (" Table 4 is the study's printed allocation, for its own requirement." if seed else ""),
     )
 
 
@@ -202,25 +212,29 @@ def _angles_text(angles: Any, names: tuple[str, ...]) -> str:
     if angles is None:
         return "—"
     if isinstance(angles, Mapping):
-        return ", ".join(f"{k} = {float(v):.1f}°" for k, v in angles.items())
+        return ", ".join(f"{angle_symbol(k)} = {float(v):.1f}°" for k, v in angles.items())
     arr = np.atleast_1d(np.asarray(angles, dtype=float))
-    return ", ".join(f"{n} = {v:.1f}°" for n, v in zip(names, arr, strict=False))
+    return ", ".join(f"{angle_symbol(n)} = {v:.1f}°" for n, v in zip(names, arr, strict=False))
 
 
 def worst_case_table(budget: TurntableBudget) -> Table:
     """Per component: requirement, Lemma-1 linear bound, full model worst case, where, within.
 
+    The last column, the largest error among the Monte Carlo draws, is a diagnostic: it grows with
+    the number of draws and stays below the worst case.
+
     References
     ----------
-    Seed 001, Lemma 1 (eqs. (35)–(38)) and eqs. (17)–(25).
+    The GyroWheel study, Lemma 1 (eqs. (35)–(38)) and eqs. (17)–(25).
     """
     names = tuple(budget._table.angle_names)
+    drawn = budget.monte_carlo["max_abs_arcmin"]
     rows = []
     for comp in COMPONENTS:
         wc = budget.worst_case.get(comp)
         req = budget.requirement_arcmin[comp]
         if not wc:
-            rows.append([COMP_SYMBOL[comp], _f4(req), "—", "—", "—", "—"])
+            rows.append([COMP_SYMBOL[comp], _f4(req), "—", "—", "—", "—", _f4(drawn[comp])])
             continue
         lin = wc.get("linear_arcmin")
         full = wc.get("full_arcmin")
@@ -232,8 +246,10 @@ def worst_case_table(budget: TurntableBudget) -> Table:
                 _f4(None if full is None else float(full)),
                 _angles_text(wc.get("angles_deg"), names),
                 "yes" if wc.get("within") else "NO",
+                _f4(drawn[comp]),
             ]
         )
+    runs = int(budget.monte_carlo["runs"])
     return Table(
         [
             "component",
@@ -242,9 +258,14 @@ def worst_case_table(budget: TurntableBudget) -> Table:
             "full model (′)",
             "worst at",
             "within",
+            f"largest of {runs:,} draws (′)",
         ],
         rows,
-        caption="Worst case over all angles with every error at its allocated bound (Lemma 1)",
+        caption="Worst case over all angles, every error at its allocated bound",
+        note=f"Design values of the model, not measurements: the linear bound is what Lemma 1 of "
+        f"{_PAPER} guarantees, the full model multiplies the error matrices of eqs. (17)–(22). "
+        "The largest error among the Monte Carlo draws is a diagnostic; it grows with the number "
+        "of draws and stays below the worst case.",
     )
 
 
@@ -258,43 +279,43 @@ def monte_carlo_figure(budget: TurntableBudget) -> Figure:
 
     References
     ----------
-    Seed 001, §4.3 and Figure 9.
+    The GyroWheel study, §4.3 and Figure 9.
     """
     mc = budget._monte_carlo
+    # counts in thousands when large: plain tick labels, no "1e4" offset on the axis
+    most = max(max(mc.histograms[c]["counts"]) for c in COMPONENTS)
+    per_unit, y_label = (
+        (1000.0, "draws per bin (thousands)") if most >= 10_000 else (1.0, "draws per bin")
+    )
     fig, axes = plt.subplots(1, 3, figsize=(12.0, 3.8), constrained_layout=True)
     for ax, comp in zip(axes, COMPONENTS, strict=True):
         h = mc.histograms[comp]
         edges = np.asarray(h["edges_rad"], dtype=float) * ARCMIN_PER_RAD
-        counts = np.asarray(h["counts"], dtype=float)
+        counts = np.asarray(h["counts"], dtype=float) / per_unit
         req = budget.requirement_arcmin[comp]
         ax.stairs(counts, edges, fill=True, color=_COMP_COLOR[comp], alpha=0.8)
         for sign in (-1.0, 1.0):
             ax.axvline(sign * req, color=_REQ, ls="--", lw=1.3)
         ax.set_xlim(-1.2 * req, 1.2 * req)
         ax.set_title(
-            f"{COMP_SYMBOL[comp]}: max |Δ| = {mc.max_abs_arcmin[comp]:.4f}′ of {req:.4f}′",
+            f"{COMP_SYMBOL[comp]}: largest |Δ| {mc.max_abs_arcmin[comp]:.4f}′ of {req:.4f}′",
             fontsize=9.5,
         )
         ax.set_xlabel(f"{COMP_SYMBOL[comp]} (arcmin)")
-        ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4))
         _style(ax)
-    axes[0].set_ylabel("draws per bin")
+    axes[0].set_ylabel(y_label)
     fig.legend(
         handles=[Line2D([], [], color=_REQ, ls="--", lw=1.3, label="requirement ±I")],
         loc="outside lower center",
         fontsize=8.5,
         frameon=False,
     )
-    within = "all within the requirement" if mc.all_within else f"{mc.outside} outside"
+    within = "all within the requirement" if mc.all_within else f"{mc.outside:,} outside"
     return figure_from_matplotlib(
         fig,
         "Monte Carlo check with the full model",
-        f"{mc.runs:,} tables drawn with every error uniform between its lower and allocated upper "
-        f"bound ({mc.signs} signs) and the angles uniform over a turn; orientation error from the "
-        "full nonlinear model (seed 001, eqs. (17)–(25)). Red dashed: the requirement ±I. "
-        "Max |Δ|: "
-        + ", ".join(f"{COMP_SYMBOL[c]} {mc.max_abs_arcmin[c]:.4f}′" for c in COMPONENTS)
-        + f" — {within}.",
+        f"{mc.runs:,} tables drawn within their tolerances at random angles (full model, "
+        f"{_PAPER}, eqs. (17)–(25)): {within}. Red dashed: the requirement ±I.",
     )
 
 
@@ -340,7 +361,7 @@ def calibration_figure(budget: TurntableBudget, *, n: int = 101) -> Figure | Non
     Left: Δωx over (Δψ, Δθ) at Δγ = 0; right: Δωy over (Δθ, Δγ) at Δψ = 0 (°/h, axes in degrees).
     The contour Δω = ωm, rotacal's requirement box (largest volume, all corners within ωm), the
     equal limit and (when it differs) the requirement the allocation used are drawn. ``None``
-    when ``budget._requirement`` is None (a table not of the seed's geometry).
+    when ``budget._requirement`` is None (a table not of the study's geometry).
 
     Parameters
     ----------
@@ -355,7 +376,7 @@ def calibration_figure(budget: TurntableBudget, *, n: int = 101) -> Figure | Non
 
     References
     ----------
-    Seed 001, eqs. (7)–(16), Figures 4 and 5.
+    The GyroWheel study, eqs. (7)–(16), Figures 4 and 5.
     """
     from rotacal.turntable.calibration import rate_error_surfaces
 
@@ -397,7 +418,7 @@ def calibration_figure(budget: TurntableBudget, *, n: int = 101) -> Figure | Non
         z = np.asarray(s[axis][key]).T  # first index is the first-named component → x axis
         cs = ax.contourf(g, g, z, levels=levels, cmap="Blues")
         line = ax.contour(g, g, z, levels=[wm], colors=_REQ, linewidths=1.6)
-        _label_top(ax, line, f"Δω{axis} = ωm = {wm:g} °/h")
+        _label_top(ax, line, f"Δω{axis} = ωm = {fixed(wm)} °/h")
         _box(ax, box[cx], box[cy], ec="black", lw=1.8)
         _box(ax, eq, eq, ec="black", lw=1.0, ls=":")
         if show_stated:
@@ -413,7 +434,7 @@ def calibration_figure(budget: TurntableBudget, *, n: int = 101) -> Figure | Non
     assert cs is not None
     fig.colorbar(cs, ax=axes, shrink=0.85, label="rate-sensing error Δω (°/h)")
     handles = [
-        Line2D([], [], color=_REQ, lw=1.6, label=f"Δω = ωm = {wm:g} °/h"),
+        Line2D([], [], color=_REQ, lw=1.6, label=f"Δω = ωm = {fixed(wm)} °/h"),
         Line2D([], [], color="black", lw=1.8, label="rotacal's requirement box"),
         Line2D([], [], color="black", lw=1.0, ls=":", label="equal limit"),
     ]
@@ -427,16 +448,9 @@ def calibration_figure(budget: TurntableBudget, *, n: int = 101) -> Figure | Non
     return figure_from_matplotlib(
         fig,
         "What an orientation error does to the gyro calibration",
-        f"Rate-sensing error of a multiposition drift calibration ({req.positions} positions, "
-        f"latitude {lat:g}°, Table 1 coefficients, method {req.method!r}) when the table tilts the "
-        "gyro by a constant orientation error (seed 001, eqs. (7)–(14), Figure 4). Red: the "
-        f"accuracy ωm = {wm:g} °/h; inside it the calibration is good enough. Solid box: rotacal's "
-        "requirement (the box of largest volume whose every corner (±Iψ, ±Iθ, ±Iγ) stays within "
-        "ωm, Figure 5 and eq. (15)); dotted: equal limits (the form of eq. (16))"
-        + ("; dashed: the requirement the allocation used" if show_stated else "")
-        + ". The boxes' corners are checked with the third component "
-        "at its limit too, so they sit inside the red line drawn at zero third component."
-        + _allocated_box_note(budget),
+        f"Rate-sensing error of a {req.positions}-position drift calibration at latitude "
+        f"{fixed(lat)}° under a constant orientation error ({_PAPER}, eqs. (7)–(14), Figures 4–5)."
+        " The lines and boxes are named in the legend.",
     )
 
 
@@ -452,7 +466,7 @@ def _allocated_box_note(budget: TurntableBudget) -> str:
         )
     if derivation.get("derivation") == "earth-rate-only":
         return (
-            " The allocation's requirement is the Earth-rate reading alone (seed 001's eq. (16)): "
+            f" The allocation's requirement is the Earth-rate reading alone ({_PAPER}, eq. (16)): "
             "it ignores what the drift fit does with gravity and lies outside ωm."
         )
     return ""
@@ -461,11 +475,11 @@ def _allocated_box_note(budget: TurntableBudget) -> str:
 def calibration_draws_figure(budget: TurntableBudget) -> Figure | None:
     """Histograms of Δωx, Δωy of calibrations run on tables drawn within the allocation.
 
-    Returns ``None`` when the budget has no such draws (a table not of the seed's geometry).
+    Returns ``None`` when the budget has no such draws (a table not of the study's geometry).
 
     References
     ----------
-    Seed 001, eqs. (7)–(14) with the position-dependent orientation error of eq. (23).
+    The GyroWheel study, eqs. (7)–(14) with the position-dependent orientation error of eq. (23).
     """
     draws = budget._calibration_draws
     if draws is None:
@@ -482,7 +496,7 @@ def calibration_draws_figure(budget: TurntableBudget) -> Figure | None:
         ax.hist(v, bins=bins, color="#1f5f99", alpha=0.85)
         title = f"Δω{axis}: max {np.max(v):.4f} °/h"
         if wm is not None:
-            ax.axvline(wm, color=_REQ, ls="--", lw=1.4, label=f"ωm = {wm:g} °/h")
+            ax.axvline(wm, color=_REQ, ls="--", lw=1.4, label=f"ωm = {fixed(wm)} °/h")
             ax.legend(loc="upper right", fontsize=8, frameon=False)
             title += f", {np.mean(v > wm) * 100:.1f} % above ωm"
         ax.set_title(title, fontsize=9.5)
@@ -494,12 +508,9 @@ def calibration_draws_figure(budget: TurntableBudget) -> Figure | None:
     return figure_from_matplotlib(
         fig,
         "Calibrations on tables built to the allocation",
-        f"{len(draws['x']):,} tables drawn with every error uniform between its lower and "
-        "allocated upper bound (random signs); on each, the multiposition calibration "
-        f"({cal.get('plan', '?')} positions, latitude {cal.get('latitude_deg', '?')}°) sees the "
-        "orientation error of every position from the full model (eq. (23)), and the rate-sensing "
-        "errors of eqs. (12)–(14) follow."
-        + (f" Red dashed: ωm = {wm:g} °/h." if wm is not None else ""),
+        f"Rate-sensing error of the {cal.get('plan', '')} position calibration on each of "
+        f"{len(draws['x']):,} tables drawn within the allocation (eqs. (12)–(14), (23))."
+        + (f" Red dashed: ωm = {fixed(wm)} °/h." if wm is not None else ""),
     )
 
 
@@ -518,7 +529,7 @@ def _remedy(budget: TurntableBudget, wm: float) -> str:
         )
     return (
         "the stated orientation requirement is looser than this calibration needs. Give "
-        f'[requirement] calibration_deg_h = {wm:g} instead (derivation "calibration-check") and '
+        f'[requirement] calibration_deg_h = {fixed(wm)} instead (derivation "calibration-check") and '
         "run the budget again."
     )
 
@@ -528,12 +539,78 @@ def _remedy(budget: TurntableBudget, wm: float) -> str:
 # ----------------------------------------------------------------------------------------------
 
 
-def turntable_section(budget: TurntableBudget, title: str | None = None) -> Section:
-    """The turntable's accuracy budget as one report section (seed 001, §§2.2–2.3 and §4).
+def _cited(text: str) -> str:
+    """``text`` (a table's name, the requirement's source: JSON values that say "seed 001") with
+    the paper cited by name, as a reader knows it."""
+    return text.replace("seed 001 (GyroWheel calibration)", f"the {_STUDY}").replace(
+        "seed 001", f"the {_STUDY}"
+    )
 
-    Figures: sensitivities, Monte Carlo histograms and — for a table of the seed's geometry —
-    the calibration maps and the calibration draws. Tables: allocation, worst case and — for the
-    seed's own error names — the side-by-side with the paper.
+
+def table_name(budget: TurntableBudget) -> str:
+    """The table's name as a report titles it (the paper cited by name, not by our file's)."""
+    return _cited(budget.table)
+
+
+def _requirement_source(budget: TurntableBudget) -> str:
+    """The budget's note on where the requirement came from, citing the paper by name."""
+    return _cited(budget.requirement_source)
+
+
+def _calibration_paragraphs(budget: TurntableBudget) -> list[str]:
+    """What the calibration map and the calibration draws show, and the verdict."""
+    req = budget._requirement
+    cal = budget.calibration
+    if req is None:
+        return []
+    wm = req.required_deg_h
+    out = [
+        "Calibration. A tilted gyro sees slightly wrong Earth rate and gravity at every "
+        "position, so the drift coefficients it is calibrated with come out wrong. For a "
+        f"calibration accurate to {fixed(wm)} °/h an orientation error that is the same at every "
+        f"position must stay within Δψ {req.limits_deg['psi']:.4f}°, Δθ "
+        f"{req.limits_deg['theta']:.4f}°, Δγ {req.limits_deg['gamma']:.4f}° (the box of largest "
+        "volume whose every corner keeps the rate-sensing error within ωm, eq. (15) and Figure 5; "
+        f"or {req.equal_limit_deg:.4f}° on every component, the form of eq. (16)) for rotacal's "
+        f"plan of {req.positions} positions at latitude {fixed(req.latitude_deg)}° (drift "
+        f"coefficients of Table 1, method '{req.method}'). The map draws the third component at "
+        "zero; the boxes' corners are checked with it at its limit too, so they sit inside the "
+        "red line." + _allocated_box_note(budget)
+    ]
+    if cal is None or budget._calibration_draws is None:
+        return out
+    mx = cal["max_rate_error_deg_h"]
+    worst = cal.get("worst_table_rate_error_deg_h", {})
+    # the worst table decides when it is known; the draws alone can miss it
+    within = (worst["worst_deg_h"] if worst else max(mx.values())) <= wm
+    worst_text = (
+        f"; the worst table within the bounds reaches {worst['worst_deg_h']:.4f} °/h"
+        if worst
+        else ""
+    )
+    verdict = (
+        f"all within {fixed(wm)} °/h{worst_text}."
+        if within
+        else f"more than the {fixed(wm)} °/h the calibration needs{worst_text}: "
+        + _remedy(budget, wm)
+    )
+    out.append(
+        f"Tables built to the allocated tolerances ({cal['runs']:,} drawn, the orientation error "
+        "of every test position from the full model) give calibrations with rate-sensing errors up "
+        f"to Δωx {mx['x']:.4f} °/h and Δωy {mx['y']:.4f} °/h: {verdict} The summary states the "
+        "error 95 % of such calibrations stay within, with its coverage interval."
+    )
+    return out
+
+
+def turntable_section(budget: TurntableBudget, title: str | None = None) -> Section:
+    """The turntable's accuracy budget as one report section (the GyroWheel study, §§2.2–2.3, §4).
+
+    Results (the summary): the Monte Carlo and calibration checks with their coverage intervals
+    (:func:`rotacal.report.turntable_results.turntable_results`). Figures: sensitivities, Monte
+    Carlo histograms and — for a table of the study's geometry — the calibration map and the
+    calibration draws. Tables: allocation and worst case; folded: for the study's own error
+    names, the side-by-side with the paper.
 
     Parameters
     ----------
@@ -548,7 +625,8 @@ def turntable_section(budget: TurntableBudget, title: str | None = None) -> Sect
 
     References
     ----------
-    Seed 001, eqs. (7)–(16), (26), (28)–(34), Lemma 1, Tables 2 and 4, Figures 4, 5, 8, 9.
+    The GyroWheel study, eqs. (7)–(16), (26), (28)–(34), Lemma 1, Tables 2 and 4, Figures 4, 5,
+    8, 9.
     """
     reqs = budget.requirement_arcmin
     req_text = ", ".join(f"{COMP_SYMBOL[c]} ≤ {reqs[c]:.4f}′" for c in COMPONENTS)
@@ -556,10 +634,12 @@ def turntable_section(budget: TurntableBudget, title: str | None = None) -> Sect
     n_off = len(budget.error_names) - n_ang
     mc = budget.monte_carlo
     paragraphs = [
-        f"{budget.table}: {n_ang} angular error source{'s' if n_ang != 1 else ''}"
+        f"{_cited(budget.table)}: {n_ang} angular error source{'s' if n_ang != 1 else ''}"
         + (f" and {n_off} offset{'s' if n_off != 1 else ''}" if n_off else "")
         + f". The instrument's orientation must stay within {req_text} "
-        f"(requirement {budget.requirement_source}) at every angle of the table.",
+        f"(requirement {_requirement_source(budget)}) at every angle of the table. The method is "
+        f"that of {_PAPER}: sensitivities, allocation of tolerances, worst case and a Monte Carlo "
+        "check with the full model.",
         "Sensitivities. How much one arc-minute of each error source moves the instrument's "
         "orientation, averaged over the table's angles. An error the orientation is more "
         "sensitive to gets a tighter tolerance; an error that does not appear in a panel does not "
@@ -568,12 +648,11 @@ def turntable_section(budget: TurntableBudget, title: str | None = None) -> Sect
         "Σ W²/χ² (W = 1/sensitivity: an error the component is less sensitive to gets a looser "
         "tolerance) while every error at its tolerance, at the worst angles, keeps that component "
         "within its requirement; an error shared by several components takes the smallest of "
-        "their tolerances (seed 001, eqs. (29)–(34)), which can leave a component some margin. "
-        "'Set by' names the component whose budget limits that source. "
+        "their tolerances (eqs. (29)–(34)), which can leave a component some margin. "
         "The lower bounds are what manufacturing can achieve; a tolerance below them would make "
         "the table unbuildable.",
         "Worst case. Every error at its allocated bound and the worst angles: the linear bound "
-        "(every term at its worst sign) is what Lemma 1 of the seed proves; the full model "
+        "(every term at its worst sign) is what Lemma 1 proves; the full model "
         "multiplies the error matrices of eqs. (17)–(22) over "
         + "; ".join(
             sorted({str(budget.worst_case[c].get("vertices", "")) for c in COMPONENTS} - {""})
@@ -584,62 +663,39 @@ def turntable_section(budget: TurntableBudget, title: str | None = None) -> Sect
         + (
             "every one stays within the requirement."
             if mc["all_within"]
-            else f"{mc['outside']} exceed the requirement — the allocation is not safe."
-        ),
+            else f"{mc['outside']:,} exceed the requirement — the allocation is not safe."
+        )
+        + " The summary states the orientation error 99.9 % of such tables stay within (its "
+        f"interval from the order statistics of the draws, {cite('david2003')}) and the fraction "
+        f"outside the requirement (exact binomial interval, {cite('clopper1934')}); a verdict is "
+        "given only when the whole interval lies on one side of the limit.",
     ]
     tables = [allocation_table(budget), worst_case_table(budget)]
     figures = [sensitivity_figure(budget), monte_carlo_figure(budget)]
     cal_fig = calibration_figure(budget)
-    if cal_fig is not None and budget._requirement is not None:
-        req = budget._requirement
-        paragraphs.append(
-            "Calibration. A tilted gyro sees slightly wrong Earth rate and gravity at every "
-            "position, so the drift coefficients it is calibrated with come out wrong. For a "
-            f"calibration accurate to {req.required_deg_h:g} °/h an orientation error that is the "
-            f"same at every position must stay within Δψ {req.limits_deg['psi']:.4f}°, Δθ "
-            f"{req.limits_deg['theta']:.4f}°, Δγ {req.limits_deg['gamma']:.4f}° (or "
-            f"{req.equal_limit_deg:.4f}° on every component) for rotacal's plan of "
-            f"{req.positions} positions at latitude {req.latitude_deg:g}°."
-            + _allocated_box_note(budget)
-        )
+    if cal_fig is not None:
+        paragraphs += _calibration_paragraphs(budget)
         figures.append(cal_fig)
         draws_fig = calibration_draws_figure(budget)
-        if draws_fig is not None and budget.calibration is not None:
-            mx = budget.calibration["max_rate_error_deg_h"]
-            p95 = budget.calibration["p95_rate_error_deg_h"]
-            wm = req.required_deg_h
-            worst = budget.calibration.get("worst_table_rate_error_deg_h", {})
-            # the worst table decides when it is known; the draws alone can miss it
-            within = (worst["worst_deg_h"] if worst else max(mx.values())) <= wm
-            worst_text = (
-                f"; the worst table within the bounds reaches {worst['worst_deg_h']:.4f} °/h"
-                if worst
-                else ""
-            )
-            verdict = (
-                f"all within {wm:g} °/h{worst_text}."
-                if within
-                else f"more than the {wm:g} °/h the calibration needs{worst_text}: "
-                + _remedy(budget, wm)
-            )
-            paragraphs.append(
-                "Tables built to the allocated tolerances and used for that calibration give rate "
-                f"errors up to Δωx {mx['x']:.4f} °/h and Δωy {mx['y']:.4f} °/h (95 % of tables "
-                f"below {p95['x']:.4f} and {p95['y']:.4f} °/h): {verdict}"
-            )
+        if draws_fig is not None:
             figures.append(draws_fig)
+    details = []
     t4 = table4_worst_case(budget) if is_seed_budget(budget) else None
     seed_tab = seed_comparison_table(budget, table4_worst=t4)
     if seed_tab is not None and t4 is not None:
-        tables.append(seed_tab)
+        seed_tab.note = seed_paragraph(budget, t4)
+        details.append(seed_tab)
         paragraphs.append(
-            "Reproducing seed 001. The paper's printed numbers beside rotacal's. "
-            + seed_paragraph(budget, t4)
+            f"Reproducing {_PAPER}: the paper's printed numbers beside rotacal's are in the "
+            "folded table below, with what they rest on."
         )
     return Section(
-        title=title or f"Turntable accuracy budget — {budget.table}",
+        title=title or f"Turntable accuracy budget — {_cited(budget.table)}",
         paragraphs=paragraphs,
         tables=tables,
         figures=figures,
         anchor="turntable-budget",
+        results=turntable_results(budget),
+        details=details,
+        references=["gyrowheel", "iso230_7", *RESULT_REFERENCES],
     )

@@ -1,4 +1,5 @@
-"""Report parts that set seed 001's printed numbers beside rotacal's (eq. (16), Figure 8, Table 4).
+"""Report parts that set the GyroWheel study's printed numbers beside rotacal's (eq. (16), Figure 8,
+Table 4).
 
 What the paper's numbers rest on, computed by the budget (:func:`rotacal.turntable.seed001.
 reproduce_seed001`): eq. (16) is the Earth-rate reading alone; Table 4 is the paper's allocation
@@ -6,8 +7,8 @@ on its 45° grid for the θ requirement its own entries imply (1.56′ = 0.026°
 
 References
 ----------
-Seed 001 (``../shared/seeds/001_4a387eb674e238f2.txt``): eq. (16), Figure 8, Table 4, Lemma 1,
-Figure 9.
+The GyroWheel study (Int. J. Aerospace Eng., article 6524782): eq. (16), Figure 8, Table 4,
+Lemma 1, Figure 9.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from rotacal.references import cite
 from rotacal.report.html import Table
 from rotacal.report.turntable_common import COMP_SYMBOL, is_seed_budget, symbol
 from rotacal.turntable.budget import TurntableBudget
@@ -47,7 +49,7 @@ def _digits(values: Mapping[str, float]) -> str:
 def seed_comparison_table(
     budget: TurntableBudget, *, table4_worst: Mapping[str, Mapping[str, Any]] | None = None
 ) -> Table | None:
-    """The seed's printed numbers beside rotacal's, for the seed's own table (else ``None``).
+    """The study's printed numbers beside rotacal's, for the study's own table (else ``None``).
 
     Rows: eq. (16) and the Earth-rate reading that gives it; Figure 8's two averaged sensitivities;
     Table 4 and the paper's allocation recomputed (grid constraint, the requirement Table 4
@@ -56,7 +58,7 @@ def seed_comparison_table(
 
     References
     ----------
-    Seed 001, eq. (16), Figure 8, Table 4, Lemma 1, Figure 9.
+    The GyroWheel study, eq. (16), Figure 8, Table 4, Lemma 1, Figure 9.
     """
     if not is_seed_budget(budget):
         return None
@@ -198,14 +200,15 @@ def seed_comparison_table(
         ]
     )
     return Table(
-        ["quantity", "seed 001 (printed)", "rotacal", "note"],
+        ["quantity", "the study (printed)", "rotacal", "note"],
         rows,
-        caption="Reproducing seed 001 (numbers side by side; no agreement is claimed that the "
-        "numbers do not show)",
+        caption=f"Reproducing the numbers of {cite('gyrowheel')}",
     )
 
 
 def seed_paragraph(budget: TurntableBudget, t4: Mapping[str, Mapping[str, Any]]) -> str:
+    """What the paper's numbers rest on, and what tables built to them do to the calibration."""
+
     def unused(wc: Mapping[str, Mapping[str, Any]], c: str, req: float) -> float:
         return 100.0 * (1.0 - float(wc[c]["full_arcmin"]) / req)
 

@@ -48,6 +48,7 @@ from rotacal.turntable.calibration import (
     orientation_requirement,
     rate_sensing_error_from_rotation,
 )
+from rotacal.turntable.draws import COVERAGE, fraction_interval, quantile_interval
 from rotacal.turntable.model import ARCMIN_PER_RAD, COMPONENTS, Turntable, load_turntable
 from rotacal.turntable.plausibility import budget_warnings
 from rotacal.turntable.requirement import (
@@ -73,7 +74,11 @@ class TurntableBudget(Result):
     ``sensitivities`` maps ``psi``/``theta``/``gamma`` to {error: mean |∂Δ/∂χ|} (eq. (28));
     ``upper_bounds_arcmin`` maps each error to its allocated upper bound (eq. (34); ``None`` for
     translations, which cannot change the orientation); ``monte_carlo`` holds ``runs``,
-    ``max_abs_arcmin`` (per component), ``all_within`` and the draw settings. ``options`` holds
+    ``max_abs_arcmin`` (per component), ``all_within``, the draw settings and what the check
+    states with a 95 % coverage interval (``fraction_outside`` with ``fraction_outside_interval``;
+    ``quantile_abs_arcmin`` with ``quantile_abs_interval_arcmin``, the 99.9 % quantile of each
+    |Δ|; :mod:`rotacal.turntable.draws`); ``calibration`` adds the intervals of its 95th
+    percentile and of its fraction above the required accuracy. ``options`` holds
     the two choices of the budget (``requirement_derivation``, ``constraint_angles``);
     ``derivation`` how a calibration accuracy became the requirement (``None`` when stated).
     """
@@ -117,6 +122,42 @@ def _worst_case_arcmin(worst: Mapping[str, Mapping[str, Any]]) -> dict[str, dict
             else:
                 out[comp][key] = value
     return out
+
+
+def _monte_carlo_statistics(mc: MonteCarloCheck) -> dict[str, Any]:
+    """What the Monte Carlo check states with a 95 % coverage interval (:mod:`.draws`): the
+    fraction of tables outside the requirement, and the 99.9 % quantile of each |Δ| (arcmin)."""
+    fraction, low, high = fraction_interval(mc.outside, mc.runs)
+    out: dict[str, Any] = {
+        "coverage_probability": COVERAGE,
+        "fraction_outside": fraction,
+        "fraction_outside_interval": [low, high],
+    }
+    if mc.quantile_abs_rad is not None:
+        out["quantile"] = mc.quantile
+        out["quantile_abs_arcmin"] = {
+            c: v[0] * ARCMIN_PER_RAD for c, v in mc.quantile_abs_rad.items()
+        }
+        out["quantile_abs_interval_arcmin"] = {
+            c: [v[1] * ARCMIN_PER_RAD, v[2] * ARCMIN_PER_RAD]
+            for c, v in mc.quantile_abs_rad.items()
+        }
+    return out
+
+
+def _calibration_statistics(draws: Mapping[str, np.ndarray], required: float) -> dict[str, Any]:
+    """95 % coverage intervals of the calibration check's 95th percentile (order statistics) and
+    of the fraction of tables above the required accuracy (Clopper–Pearson), per gyro axis."""
+    p95: dict[str, list[float]] = {}
+    above: dict[str, list[float]] = {}
+    for axis, values in draws.items():
+        v = np.asarray(values, dtype=float)
+        stated = quantile_interval(v, v.size, 0.95)
+        if stated is not None:
+            p95[axis] = [stated[1], stated[2]]
+        _, low, high = fraction_interval(int(np.count_nonzero(v > required)), v.size)
+        above[axis] = [low, high]
+    return {"p95_rate_error_interval_deg_h": p95, "fraction_above_required_interval": above}
 
 
 def _seed_geometry(table: Turntable) -> bool:
@@ -422,6 +463,7 @@ def turntable_budget(
             "max_rate_error_deg_h": {k: float(np.max(v)) for k, v in draws.items()},
             "p95_rate_error_deg_h": {k: float(np.percentile(v, 95)) for k, v in draws.items()},
             "fraction_above_required": {k: float(np.mean(v > required)) for k, v in draws.items()},
+            **_calibration_statistics(draws, required),
             "worst_table_rate_error_deg_h": worst,
             "orientation_requirement": requirement_obj.to_dict(),
         }
@@ -461,6 +503,7 @@ def turntable_budget(
             "max_abs_arcmin": dict(mc.max_abs_arcmin),
             "all_within": bool(mc.all_within),
             "outside": int(mc.outside),
+            **_monte_carlo_statistics(mc),
         },
         calibration=calibration,
         reproduction=reproduction,
