@@ -60,7 +60,7 @@ def gyro() -> None:
     "--full-scale-deg-s",
     type=float,
     default=None,
-    help="FS for the nonlinearity in %FS [default: the largest |set rate|].",
+    help="FS for the nonlinearity in %FS [default: the largest set rate in magnitude].",
 )
 @click.option(
     "--requirement",
@@ -105,7 +105,7 @@ def gyro_scale_factor(
 
     Columns rate_deg_s (the table's set rate) and output (the gyro's, in its own unit); the
     rows of each set rate are averaged and V(Ω) = S·Ω + V0 is fitted by least squares
-    (seed 004, §4). FS is the full scale, the largest |set rate| unless given. A test kept as
+    (seed 004, §4). FS is the full scale, the largest set rate in magnitude unless given. A test kept as
     one file per set rate takes the rate of each file from its name (--rate-from-name) or from a
     table (--rates).
     """

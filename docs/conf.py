@@ -1,0 +1,69 @@
+"""Sphinx configuration of the rotacal documentation site.
+
+Build it (from the repository's root; the HTML lands in docs/_build/html/index.html)::
+
+    python -m sphinx -W --keep-going -b html docs docs/_build/html
+
+Pages are MyST Markdown; the API reference comes from the docstrings (autodoc + napoleon, NumPy
+style), the CLI reference from the click commands (sphinx-click), the JSON-key table from
+rotacal.glossary (docs/_ext/rotacal_keys.py). Everything the pages load is served from the build
+(MathJax included, by sphinx-mathjax-offline): the site works without a network.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+DOCS = Path(__file__).resolve().parent
+# the package from this checkout (also when it is not installed), and the local extension
+sys.path.insert(0, str(DOCS.parent / "src"))
+sys.path.insert(0, str(DOCS / "_ext"))
+
+import rotacal  # noqa: E402
+
+project = "rotacal"
+author = "the rotacal contributors"
+copyright = "the rotacal contributors, BSD-3-Clause"  # noqa: A001 (Sphinx's name)
+release = rotacal.__version__
+version = release
+
+extensions = [
+    "myst_parser",
+    "sphinx.ext.autodoc",
+    "sphinx.ext.napoleon",
+    "sphinx_click",
+    # MathJax copied into _static/ and loaded from there instead of a CDN (works offline)
+    "sphinx-mathjax-offline",
+    "rotacal_keys",
+]
+
+source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
+root_doc = "index"
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "README.md"]
+# the methods/tutorials pages use these: $…$ and $$…$$ math, ::: fences, definition lists
+myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
+# anchors for `page.md#a-heading` links (README-style links between pages keep working)
+myst_heading_anchors = 3
+nitpicky = False
+suppress_warnings = [
+    # The Getting started, Tutorials and Methods sections are globs so that a page joins the site
+    # by being added; a section whose folder is still empty is not an error of the build.
+    "toc.empty_glob",
+]
+
+# autodoc: the documented signature shows the hints; members in source order (the order in which
+# a module reads, which is the order a reader learns it)
+autodoc_member_order = "bysource"
+autodoc_typehints = "description"
+autodoc_typehints_format = "short"
+autodoc_default_options = {"members": True, "show-inheritance": False}
+napoleon_google_docstring = False
+napoleon_numpy_docstring = True
+napoleon_use_rtype = False
+
+html_theme = "furo"
+html_title = f"rotacal {release}"
+html_static_path: list[str] = []
+html_show_sourcelink = False
+# no web fonts, no analytics: furo loads nothing from outside by default
