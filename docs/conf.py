@@ -36,6 +36,7 @@ extensions = [
     # MathJax copied into _static/ and loaded from there instead of a CDN (works offline)
     "sphinx-mathjax-offline",
     "rotacal_keys",
+    "optional_sections",
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
@@ -46,11 +47,8 @@ myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
 # anchors for `page.md#a-heading` links (README-style links between pages keep working)
 myst_heading_anchors = 3
 nitpicky = False
-suppress_warnings = [
-    # The Getting started, Tutorials and Methods sections are globs so that a page joins the site
-    # by being added; a section whose folder is still empty is not an error of the build.
-    "toc.empty_glob",
-]
+# no suppress_warnings: every warning fails the -W build (an empty section of the index is
+# allowed by docs/_ext/optional_sections.py, for those sections only)
 
 # autodoc: the documented signature shows the hints; members in source order (the order in which
 # a module reads, which is the order a reader learns it)
