@@ -24,7 +24,7 @@ import rotacal  # noqa: E402
 
 project = "rotacal"
 author = "the rotacal contributors"
-copyright = "the rotacal contributors, BSD-3-Clause"  # noqa: A001 (Sphinx's name)
+copyright = "the rotacal contributors, BSD-3-Clause"
 release = rotacal.__version__
 version = release
 
