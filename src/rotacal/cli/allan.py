@@ -9,6 +9,7 @@ from typing import Any
 import click
 
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.numbers import quantity_of
 
 from ._app import cli
 from ._common import (
@@ -23,7 +24,6 @@ from ._common import (
     _write_json,
     _write_report,
 )
-from rotacal.numbers import quantity_of
 from ._help import example
 from ._reading import current_read_options
 
