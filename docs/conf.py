@@ -61,6 +61,9 @@ suppress_warnings = [
 # a module reads, which is the order a reader learns it)
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
+# hints only for parameters the docstring describes: a result class documents its public
+# attributes, and its private fields (figures' data) stay out of the reference
+autodoc_typehints_description_target = "documented"
 autodoc_typehints_format = "short"
 autodoc_default_options = {"members": True, "show-inheritance": False}
 napoleon_google_docstring = False
