@@ -48,6 +48,10 @@ myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
 # anchors for `page.md#a-heading` links (README-style links between pages keep working)
 myst_heading_anchors = 3
 nitpicky = False
+# Help texts and docstrings are written for a terminal: "--out" stays two hyphens (no en dash)
+# and `demo` in single backquotes is code, as a reader of `rotacal --help` reads it.
+smartquotes = False
+default_role = "code"
 # An empty section of the index is allowed by docs/_ext/optional_sections.py (those only).
 suppress_warnings = [
     # "more than one target found": the docstrings' Attributes sections read "name : meaning"
