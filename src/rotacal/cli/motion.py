@@ -1,4 +1,4 @@
-"""``rotacal motion``: sinusoidal-motion calibration (seed 000)."""
+"""``rotacal motion``: sinusoidal-motion calibration (Feng et al. 2023)."""
 
 from __future__ import annotations
 
@@ -42,7 +42,7 @@ from ._reading import current_read_options
     )
 )
 def motion() -> None:
-    """Sinusoidal-motion calibration of a table (seed 000).
+    """Sinusoidal-motion calibration of a table.
 
     Amplitude, frequency, angular acceleration, THD (IEEE Std 1057 sine fit) and their errors
     against the set values, from an optical shaft encoder (OSE), a laser triangulation sensor
@@ -195,7 +195,7 @@ def motion_encoder(
     """Optical shaft encoder (OSE) scheme: columns time_s, a, b.
 
     a and b are the encoder's analog quadrature signals (a ≈ cos φ, b ≈ sin φ, φ = 2π·lines·θ/360);
-    the angle comes from their subintervals and the reversing moments (seed 000, eqs. 3–8).
+    the angle comes from their subintervals and the reversing moments (Feng et al. 2023, eqs. 3–8).
     """
     from rotacal.io import capture_length, parse_column_mapping
     from rotacal.table import (
@@ -255,7 +255,7 @@ def motion_lts(
     """Laser triangulation sensor (LTS) scheme: time_s, displacement_mm.
 
     The angle is θ = arctan(D/R) for the displacement D of a reflector at radius R on the table
-    (seed 000, eq. 15).
+    (Feng et al. 2023, eq. 15).
     """
     from rotacal.table import calibrate_lts_motion
 
@@ -283,7 +283,7 @@ def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: An
     """Fibre-optic gyro (FOG) scheme: columns time_s, rate_deg_s.
 
     The gyro's rate is fitted with the harmonics of the motion; THD and amplitude are those of
-    the angular displacement it implies, with the signal-to-noise ratio (seed 000, eqs. 9–14).
+    the angular displacement it implies, with the signal-to-noise ratio (Feng et al. 2023, eqs. 9–14).
     """
     from rotacal.table import calibrate_fog_motion
 

@@ -31,7 +31,7 @@ from ._help import example
 _PULSES_PER_REV = click.option(
     "--pulses-per-rev", type=int, required=True, help="m: pulses per revolution of one head."
 )
-_SEED004 = "Kokuyama et al. (2015): angular-velocity standard with a self-calibratable encoder"
+_KOKUYAMA2015_TITLE = "Kokuyama et al. (2015): angular-velocity standard with a self-calibratable encoder"
 
 
 @cli.command(
@@ -83,7 +83,7 @@ def selfcal_cmd(
 
         _write_report(
             "Self-calibration of a multi-head encoder",
-            _SEED004 + " — equal-division-averaged method",
+            _KOKUYAMA2015_TITLE + " — equal-division-averaged method",
             [selfcal_section(result)],
             capture,
             report_path,
@@ -193,7 +193,7 @@ def rate_cmd(
             sections.append(selfcal_section(result.selfcal))
         _write_report(
             "Angular-velocity stability of a rate table",
-            _SEED004,
+            _KOKUYAMA2015_TITLE,
             sections,
             capture,
             report_path,

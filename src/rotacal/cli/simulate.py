@@ -397,10 +397,10 @@ def simulate_fog(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw:
 def simulate_pulses_cmd(
     out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any
 ) -> None:
-    """Multi-head encoder's pulse times (seed 004).
+    """Multi-head encoder's pulse times.
 
     Columns head_0 … head_{n-1}: a self-calibratable encoder with n heads on a table turning at a constant rate: each column
-    holds the times (s) of the successive pulse edges seen by one head.
+    holds the times (s) of the successive pulse edges seen by one head (Kokuyama et al. 2015).
     """
     from rotacal.sim.pulses import simulate_pulses
 
@@ -442,10 +442,10 @@ def simulate_pulses_cmd(
     "--quantum", type=float, default=None, help="Output quantisation step (output unit) [none]."
 )
 def simulate_gyro_rates_cmd(out: str, overwrite: bool, **kw: Any) -> None:
-    """Single-axis gyro on a rate table (seed 004 §4).
+    """Single-axis gyro on a rate table.
 
     Columns rate_deg_s and output: rows of set rate (deg/s) and gyro output at eleven set rates from -100 to +100 deg/s,
-    with a known scale factor, bias and nonlinearity.
+    with a known scale factor, bias and nonlinearity (Kokuyama et al. 2015, §4).
     """
     from rotacal.sim import simulate_gyro_rates
 
@@ -470,7 +470,7 @@ def simulate_gyro_triad_cmd(out: str, overwrite: bool, **kw: Any) -> None:
     """Three-axis gyro turned about each axis at several rates.
 
     Columns wx_deg_s, wy_deg_s, wz_deg_s (reference rate) and ux, uy, uz (raw outputs), with a
-    known scale/misalignment matrix and bias (seed 003).
+    known scale/misalignment matrix and bias (robot-manipulator study 2023).
     """
     from rotacal.sim import simulate_gyro_triad
 
@@ -547,10 +547,10 @@ def simulate_gyro_rotations_cmd(out: str, overwrite: bool, **kw: Any) -> None:
 @click.option("--noise-deg-h", type=float, default=None, help="Output noise, rms (deg/h) [0.005].")
 @click.option("--repeats", type=int, default=None, help="Readings per position [4].")
 def simulate_multiposition_cmd(out: str, overwrite: bool, **kw: Any) -> None:
-    """Gyro torquer output at turntable positions (seed 001).
+    """Gyro torquer output at turntable positions.
 
     Columns phi1_deg (outer axis), phi2_deg (inner axis) and output_deg_h, with known drift
-    coefficients under Earth rate and gravity.
+    coefficients under Earth rate and gravity (GyroWheel study, Int. J. Aerospace Eng.).
     """
     from rotacal.sim import simulate_multiposition
 

@@ -1,5 +1,5 @@
-"""rotacal.encoder — angle from sensors: quadrature demodulation and reversals (seed 000), pulse
-timing and the self-calibration of a multi-head encoder (seed 004)."""
+"""rotacal.encoder — angle from sensors: quadrature demodulation and reversals (Feng et al. 2023), pulse
+timing and the self-calibration of a multi-head encoder (Kokuyama et al. 2015)."""
 
 from rotacal.encoder.pulses import (
     HeadPairing,

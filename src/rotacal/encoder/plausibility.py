@@ -1,4 +1,4 @@
-"""Plausibility check of a multi-head self-calibration (seed 004, equal-division averaging).
+"""Plausibility check of a multi-head self-calibration (Kokuyama et al. 2015, equal-division averaging).
 
 The heads must tell one story: the deviation curve fitted to the head differences leaves a closure
 residual (noise, rate changes within a pitch) that the revolution-to-revolution repeatability of

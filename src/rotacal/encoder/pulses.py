@@ -1,9 +1,9 @@
-"""Angle and angular velocity from the time stamps of encoder pulse edges (Kokuyama et al., seed 004).
+"""Angle and angular velocity from the time stamps of encoder pulse edges (Kokuyama et al. 2015).
 
 A multi-head encoder capture holds, per read head, the time (s) of every successive pulse edge
 (INTERFACE.md: columns ``head_0`` … ``head_{n-1}``, head 0 the reference). Between two pulses the
 scale has turned by one pitch Δθ = 360/m (plus the scale's deviation), so the angle is a count and
-the angular velocity a pitch over a time difference — the seed's time-difference method (§5).
+the angular velocity a pitch over a time difference — Kokuyama et al.'s time-difference method (§5).
 
 This module checks pulse trains (finite, strictly increasing, no missing or extra pulse), pairs
 the heads at the same instant (never by pulse index: heads start at different times), builds the
@@ -215,7 +215,7 @@ class HeadPairing:
 
 
 def pair_heads(heads: Sequence[FloatArray], names: Sequence[str] | None = None) -> HeadPairing:
-    """Pair every head's pulses with head 0's by time (seed 004 §3: heads output simultaneously).
+    """Pair every head's pulses with head 0's by time (Kokuyama et al. 2015, §3: heads output simultaneously).
 
     Parameters
     ----------
@@ -361,7 +361,7 @@ def pulse_angle_deg(
     References
     ----------
     Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity calibration
-    facility using self-calibratable rotary encoder" (seed 004), §3, s_i(k) = kΔθ + 360i/n + a_i(k).
+    facility using self-calibratable rotary encoder", §3, s_i(k) = kΔθ + 360i/n + a_i(k).
     """
     k = np.asarray(count, dtype=np.int64)
     angle = np.asarray(k * (360.0 / pulses_per_rev), dtype=np.float64)
@@ -386,7 +386,7 @@ def pulse_rate(
     """Angular velocity by the time-difference method, averaged over ``average`` intervals.
 
     The rate between two successive pulses is their angle difference over their time difference;
-    ``average`` consecutive rates are then averaged (the seed averages 10 to suppress electric
+    ``average`` consecutive rates are then averaged (Kokuyama et al. (2015) average 10 to suppress electric
     noise), in non-overlapping blocks.
 
     Parameters
@@ -406,7 +406,7 @@ def pulse_rate(
 
     References
     ----------
-    Kokuyama et al. (seed 004), §5: "Taking time difference between adjacent two pulses, angular
+    Kokuyama et al. (2015), §5: "Taking time difference between adjacent two pulses, angular
     velocity between the two pulses is obtained. Then … 10 straight points of data are averaged."
     """
     t = np.asarray(times_s, dtype=np.float64)

@@ -16,7 +16,7 @@ algorithm: it only uses changes of trend.
 
 Where rotacal departs from its sources in the subdivision (eqs. (3)–(4)):
 
-- *From Ye et al. (2020)*, whose linearisation subdivision the seed uses for its twelve
+- *From Ye et al. (2020)*, whose linearisation subdivision Feng et al. (2023) use for its twelve
   subintervals and for θ (§3.1, §3.3): rotacal does not linearise. It takes the phase
   ``φ = arctan2(v, u)`` of the Heydemann-corrected signals in float64 (the arctangent method the
   seed lists among the traditional ones), unwrapped by counting whole cycles; its error is the

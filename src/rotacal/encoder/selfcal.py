@@ -1,4 +1,4 @@
-"""Self-calibration of a multi-head rotary encoder by the equal-division-averaged method (seed 004).
+"""Self-calibration of a multi-head rotary encoder by the equal-division-averaged method (Kokuyama et al. 2015).
 
 n read heads sit at equal intervals around one scale of m lines. Head i reads the same scale
 deviation a(k) as head 0, shifted by m·i/n lines: a_i(k) = a(k + m·i/n) (Kokuyama et al., §3;
@@ -22,7 +22,7 @@ Heads are compared in time, not by pulse index: the angle between head 0's pulse
 pulse of head i is their time difference times the local rate (estimated from the head-averaged
 pulse times, in which the deviation cancels), so late-starting heads and rate fluctuations do not
 bias the curve. The deviation is the average over every whole revolution the heads share, and the
-repeatability is each revolution's curve minus that average (the seed's Figure 5).
+repeatability is each revolution's curve minus that average (Kokuyama et al.'s Figure 5).
 
 Uncertainty (GUM, JCGM 100; Monte Carlo, JCGM 101). The estimator is circulant — the same linear
 fit per Fourier order — so its noise has the same variance at every line: the standard uncertainty
@@ -365,7 +365,7 @@ class SelfCalibration(Result):
 
     @property
     def repeatability_arcsec(self) -> FloatArray:
-        """Each revolution minus the mean of all (the seed's Figure 5), shape (R, m)."""
+        """Each revolution minus the mean of all (Kokuyama et al.'s Figure 5), shape (R, m)."""
         return self._per_revolution_arcsec - self.deviation_arcsec
 
     @property
@@ -438,7 +438,7 @@ def noise_gain(shifts: ArrayLike, pulses_per_rev: int, head: int) -> NDArray[np.
 
     References
     ----------
-    Kokuyama et al. (seed 004) §3; the fit of :func:`self_calibrate` (generalised least squares
+    Kokuyama et al. (2015) §3; the fit of :func:`self_calibrate` (generalised least squares
     per order, noise shared through head 0).
     """
     s = np.asarray(shifts, dtype=np.int64)
@@ -826,7 +826,7 @@ def self_calibrate(
     References
     ----------
     Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity calibration
-    facility using self-calibratable rotary encoder" (seed 004), §3: s_i(k) = kΔθ + 360i/n + a_i(k),
+    facility using self-calibratable rotary encoder", §3: s_i(k) = kΔθ + 360i/n + a_i(k),
     m = 360/Δθ, a_i(k) = a(k + m·i/n); Figures 4–5.
     Masuda T., Kajitani M., "High accuracy calibration system for angular encoders", J. Robotics
     and Mechatronics 5 (1993) — the equal-division-averaged method.

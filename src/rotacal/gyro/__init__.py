@@ -1,6 +1,6 @@
-"""rotacal.gyro — gyroscope calibrations on the table: scale factor and nonlinearity (seed 004),
-3-axis calibration (seed 003) and calibration from rotations through a known angle (Ferraris),
-multiposition drift coefficients (seed 001), noise terms (IEEE Std 952)."""
+"""rotacal.gyro — gyroscope calibrations on the table: scale factor and nonlinearity (Kokuyama et al. 2015),
+3-axis calibration (robot-manipulator study 2023) and calibration from rotations through a known angle (Ferraris),
+multiposition drift coefficients (GyroWheel study), noise terms (IEEE Std 952)."""
 
 from rotacal.gyro.multiposition import (
     EARTH_RATE_DEG_H,

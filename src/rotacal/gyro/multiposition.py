@@ -1,4 +1,4 @@
-"""Multiposition calibration of a gyro's drift coefficients with Earth rate and gravity (seed 001).
+"""Multiposition calibration of a gyro's drift coefficients with Earth rate and gravity (GyroWheel study).
 
 The gyro sits on a two-axis turntable (outer angle φ1, inner angle φ2; initial orientation of its
 axes north-west-up). At each position the Earth rate and gravity components in the gyro frame are
@@ -82,7 +82,7 @@ _POSITION_DECIMALS = 6
 COVERAGE_PROBABILITY = 0.95
 #: One arcsecond in radians.
 _ARCSEC = math.pi / (180.0 * 3600.0)
-#: Budget row names of the orientation-error components (seed 001, eq. (7)).
+#: Budget row names of the orientation-error components (GyroWheel study, eq. (7)).
 _ORIENTATION = (
     ("Δψ", "orientation error Δψ about y (eq. 7)"),
     ("Δθ", "orientation error Δθ about z (eq. 7)"),
@@ -97,7 +97,7 @@ def _axis(axis: Any) -> str:
 
 
 def coefficient_names(axis: str = "x") -> tuple[str, ...]:
-    """Names of the seven drift coefficients of ``axis`` in the order of β (seed 001, eq. (4))."""
+    """Names of the seven drift coefficients of ``axis`` in the order of β (GyroWheel study, eq. (4))."""
     return _NAMES[_axis(axis)]
 
 
@@ -119,7 +119,7 @@ def _latitude(latitude_deg: Any) -> float:
 
 
 #: Largest |position| accepted (deg): float64 resolves it to 1e-7° (a 2e-9 rad error in sin/cos,
-#: nothing against seed 001's 0.01 °/h); beyond it a column holds something other than angles.
+#: nothing against the GyroWheel study's 0.01 °/h); beyond it a column holds something other than angles.
 MAX_POSITION_DEG = 1e9
 
 
@@ -214,7 +214,7 @@ def earth_rate_and_gravity(
 def drift_design_matrix(
     phi1_deg: np.ndarray, phi2_deg: np.ndarray, *, axis: str = "x"
 ) -> np.ndarray:
-    """The regression matrix A of seed 001, eq. (4): rows (1, ax, ay, az, a₁², az², ax·ay).
+    """The regression matrix A of the GyroWheel study, eq. (4): rows (1, ax, ay, az, a₁², az², ax·ay).
 
     Parameters
     ----------
@@ -253,7 +253,7 @@ def _design_derivative(a: np.ndarray, da: np.ndarray, axis: str) -> np.ndarray:
 
 
 def _orientation_generators() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """∂ΔR/∂Δψ, ∂ΔR/∂Δθ, ∂ΔR/∂Δγ of seed 001 eq. (7) (ΔR = I + Δψ·Eψ + Δθ·Eθ + Δγ·Eγ)."""
+    """∂ΔR/∂Δψ, ∂ΔR/∂Δθ, ∂ΔR/∂Δγ of the GyroWheel study's eq. (7) (ΔR = I + Δψ·Eψ + Δθ·Eθ + Δγ·Eγ)."""
     e_psi = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
     e_theta = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
     e_gamma = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
@@ -261,7 +261,7 @@ def _orientation_generators() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def _delta_r(dpsi: float, dtheta: float, dgamma: float) -> np.ndarray:
-    """ΔR of seed 001 eq. (7) for small rotations Δψ (about y), Δθ (about z), Δγ (about x), rad."""
+    """ΔR of the GyroWheel study's eq. (7) for small rotations Δψ (about y), Δθ (about z), Δγ (about x), rad."""
     e_psi, e_theta, e_gamma = _orientation_generators()
     return np.eye(3) + dpsi * e_psi + dtheta * e_theta + dgamma * e_gamma
 
@@ -315,7 +315,7 @@ def drift_sensitivities(
         Ωe (°/h).
     orientation_error_arcsec : (Δψ, Δθ, Δγ)
         The orientation error at which β and the derivatives are evaluated (arcsec; rotations
-        about the gyro's y, z and x axes, seed 001 eq. (7)). Default: none.
+        about the gyro's y, z and x axes, the GyroWheel study's eq. (7)). Default: none.
 
     Returns
     -------
@@ -695,7 +695,7 @@ def calibrate_multiposition(
     the least-squares fit, u = s·√[(AᵀA)⁻¹]_jj with ν = N − 7 (Type A; white, equal noise on
     every reading); the latitude, sensitivity ∂β_j/∂λ; the orientation error, one row per
     component Δψ, Δθ, Δγ (taken as the same at every position: a mounting error of the gyro on
-    the table, as seed 001 §2.2 analyses it), sensitivities ∂β_j/∂Δ from
+    the table, as the GyroWheel study's §2.2 analyses it), sensitivities ∂β_j/∂Δ from
     :func:`drift_sensitivities`. The inputs are independent.
 
     Raises
@@ -767,12 +767,12 @@ def calibrate_multiposition(
     dof = n - p
     notes: list[str] = [
         f"Earth rate {we:.8g} °/h (sidereal), latitude {lat:g}°; gravity components in g, "
-        "positions by seed 001 eq. (3) (gyro axes north-west-up at φ1 = φ2 = 0)."
+        "positions by the GyroWheel study's eq. (3) (gyro axes north-west-up at φ1 = φ2 = 0)."
     ]
     if d0 != 0.0:
         notes.append(
             f"corrected for the stated mean orientation error Δψ = Δθ = Δγ = {d0:g} arcsec "
-            "(seed 001 eqs. (7)–(11))."
+            "(GyroWheel study, eqs. (7)–(11))."
         )
     if dof > 0:
         s2 = float(resid @ resid) / dof
@@ -872,7 +872,7 @@ def _drift_budgets(
                 notes.append(fix)
             notes.append(
                 "the orientation error is taken as the same at every position (a mounting "
-                "error, seed 001 §2.2); a part that changes from position to position shows in "
+                "error, the GyroWheel study's §2.2); a part that changes from position to position shows in "
                 "the residuals (Type A)."
             )
         else:

@@ -99,7 +99,7 @@ def triad_fit_warnings(
 
     References
     ----------
-    NIST/SEMATECH e-Handbook of Statistical Methods (2012), §4.4.4.3; seed 003 (the model).
+    NIST/SEMATECH e-Handbook of Statistical Methods (2012), §4.4.4.3; the robot-manipulator study (2023) (the model).
     """
     out = []
     for c in range(3):
@@ -128,7 +128,7 @@ def scale_factor_warnings(
     output_unit: str,
     quantum: float | None = None,
 ) -> list[str]:
-    """Warnings of a single-axis scale-factor test (seed 004 §4).
+    """Warnings of a single-axis scale-factor test (Kokuyama et al. 2015, §4).
 
     * a negative scale factor (the output falls as the rate rises);
     * a nonlinearity beyond :data:`NONLINEARITY_LIMIT_PERCENT_FS`;

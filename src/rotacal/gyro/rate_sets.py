@@ -2,7 +2,7 @@
 
 Many rate tables and DAQ programs write one file per plateau (``p10.dat`` at +10 °/s,
 ``m10.dat`` at −10 °/s …) with the DUT's output only: the set rate is in the file's name or in
-the lab's notes. This module turns such a set into the rows the scale-factor analysis of seed 004
+the lab's notes. This module turns such a set into the rows the scale-factor analysis of Kokuyama et al. (2015)
 (:func:`rotacal.gyro.calibrate_scale_factor`) takes: every sample of a file is one row at the
 file's set rate, so each file becomes one rate point whose mean, standard deviation and Type A
 uncertainty come from its samples.

@@ -24,7 +24,7 @@ nonlinearity do not depend on any of this.
 References
 ----------
 Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity calibration facility
-using self-calibratable rotary encoder" (seed 004), §2 and Table 1 (FMVSS 126: resolution
+using self-calibratable rotary encoder", §2 and Table 1 (FMVSS 126: resolution
 < 0.004 deg/s). NHTSA, FMVSS 126 Laboratory Test Procedure for Electronic Stability Control Systems
 (2008), as cited there. IEEE Std 1431-2004 (its resolution test with small rate increments,
 which a test at set rates does not replace).

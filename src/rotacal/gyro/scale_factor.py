@@ -1,4 +1,4 @@
-"""Single-axis gyro scale factor and nonlinearity from a rate-table test (seed 004, §4).
+"""Single-axis gyro scale factor and nonlinearity from a rate-table test (Kokuyama et al. 2015, §4).
 
 The table holds a set rate Ω while the DUT's output is recorded, for several rates. Rows with the
 same set rate form one *rate point*; its samples are averaged (keeping n, standard deviation and
@@ -7,7 +7,7 @@ standard error). A straight line is fitted to the point means by least squares,
     V(Ω) = S·Ω + V0 + δ(Ω),
 
 S is the scale factor (output unit per °/s), V0 the bias (output unit), δ the residuals, and the
-nonlinearity is ``NL = 100·max|δ| / (|S|·FS)`` in %FS (seed 004: NL = max|δ|/FS with δ and FS in
+nonlinearity is ``NL = 100·max|δ| / (|S|·FS)`` in %FS (Kokuyama et al. 2015: NL = max|δ|/FS with δ and FS in
 the same unit; rotacal converts δ to °/s by S). Seed 004 recommends at least 11 points.
 
 Choices (documented in :func:`calibrate_scale_factor`):
@@ -15,14 +15,14 @@ Choices (documented in :func:`calibrate_scale_factor`):
 - **Same set rate.** Rates within ``rate_tolerance_deg_s`` (default 0.001 °/s) of their sorted
   neighbour are one point (single linkage): a commanded rate is written identically on every row,
   and no test resolves points closer than a millidegree per second.
-- **Unweighted fit.** Every point has equal weight, as in seed 004 and IEEE Std 952-1997 /
+- **Unweighted fit.** Every point has equal weight, as in Kokuyama et al. (2015) and IEEE Std 952-1997 /
   IEEE Std 1431-2004 (least-squares straight line through the averaged points). The residuals of a
   real gyro are dominated by its systematic nonlinearity, not by noise: weighting by the points'
   standard errors would let the quietest points define the line and make NL depend on how long
   each point was recorded. On the xinli_turntable recording the unweighted fit reproduces the
   published S = 1.000199, NL = 0.082 %FS; a 1/SE² fit gives 1.000489 and 0.122 %FS.
 - **Uncertainties** (one budget per quantity, :mod:`rotacal.gyro.uncertainty`). The measurand S
-  is the slope of the least-squares line through the DUT's mean output at the set rates (seed 004:
+  is the slope of the least-squares line through the DUT's mean output at the set rates (Kokuyama et al. 2015:
   δ(Ω) is part of the model, reported as NL, not an error of S). Type A: the standard error of
   each point mean (the spread of its samples) propagated through the line, u²(S₀) = Σ c_i²·u_i²
   with c_i = (Ω_i − Ω̄)/Σ(Ω_k − Ω̄)², ν by Welch–Satterthwaite; points of one sample take the
@@ -41,7 +41,7 @@ Choices (documented in :func:`calibrate_scale_factor`):
 References
 ----------
 Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity calibration facility
-using self-calibratable rotary encoder" (seed 004), §4 and Table 1.
+using self-calibratable rotary encoder", §4 and Table 1.
 IEEE Std 952-1997, Annex C (scale factor and nonlinearity from a least-squares line).
 NHTSA, FMVSS 126 Laboratory Test Procedure for Electronic Stability Control Systems (2008).
 JCGM 100:2008 (GUM) §4.2, §5.1.2, G.4, H.3; JCGM 101:2008 §7, §8; JCGM 102:2011 §9; Efron &
@@ -121,7 +121,7 @@ _LACK_OF_FIT_P = 0.999
 REQUIREMENTS: dict[str, dict[str, Any]] = {
     "fmvss126": {
         "title": "FMVSS 126",
-        "source": "seed 004 Table 1 (NHTSA FMVSS 126 laboratory test procedure, 2008)",
+        "source": "Kokuyama et al. (2015), Table 1 (NHTSA FMVSS 126 laboratory test procedure, 2008)",
         "range_deg_s": 100.0,
         "resolution_deg_s": 0.004,
         "accuracy_percent_fs": 0.05,
@@ -703,7 +703,7 @@ def calibrate_scale_factor(
 
     References
     ----------
-    Kokuyama et al. (seed 004), §4: V(Ω) = S·Ω + V0 + δ(Ω), NL = max|δ|/FS, ≥ 11 points; Table 1
+    Kokuyama et al. (2015), §4: V(Ω) = S·Ω + V0 + δ(Ω), NL = max|δ|/FS, ≥ 11 points; Table 1
     (FMVSS 126). IEEE Std 952-1997, Annex C. JCGM 100:2008 (GUM), §5.1.2, G.4.1, H.3 (straight-line
     fit and its uncertainties); JCGM 101:2008 §7–8 (Monte Carlo, validation); ILAC-G8:09/2019 §4.2.
     """
@@ -758,7 +758,7 @@ def calibrate_scale_factor(
     if ng == 1:
         raise CaptureError(
             f"every row of column rate_deg_s has the same set rate ({_fmt_rate(rates[0])}): a "
-            f"scale factor needs at least two rates (seed 004 recommends ≥ {MIN_POINTS_RECOMMENDED})."
+            f"scale factor needs at least two rates (Kokuyama et al. 2015 recommend ≥ {MIN_POINTS_RECOMMENDED})."
         )
     ok = np.isfinite(y)
     counts = np.bincount(gid, weights=ok, minlength=ng).astype(np.int64)
@@ -836,7 +836,7 @@ def calibrate_scale_factor(
 
     if ng < MIN_POINTS_RECOMMENDED:
         notes.append(
-            f"only {ng} rate points: seed 004 (§4) recommends at least {MIN_POINTS_RECOMMENDED}."
+            f"only {ng} rate points: Kokuyama et al. (2015, §4) recommend at least {MIN_POINTS_RECOMMENDED}."
         )
     if fs_user is not None and fs_user < float(np.max(np.abs(rates))):
         notes.append(
@@ -866,7 +866,7 @@ def calibrate_scale_factor(
     )
     resolution, basis = res.resolution_deg_s, res.basis
     notes.append(
-        "Unweighted least squares through the point means (seed 004 §4, IEEE Std 952 Annex C); "
+        "Unweighted least squares through the point means (Kokuyama et al. 2015, §4, IEEE Std 952 Annex C); "
         "scale_factor_u and bias_u are the combined standard uncertainties of the budgets: the "
         "standard errors of the point means through the line (Type A) and the stated table "
         "set-rate error (Type B); the nonlinearity δ(Ω) is reported as NL, not as an "
@@ -1505,7 +1505,7 @@ def _scale_factor_budgets(
                 lof = (
                     f"lack of fit: the point means scatter about the line {math.sqrt(ratio):.3g} "
                     "times more (rms) than their standard errors explain. That is the "
-                    "nonlinearity NL reports (seed 004's δ(Ω)) or drift between the points; only "
+                    "nonlinearity NL reports (Kokuyama et al. 2015's δ(Ω)) or drift between the points; only "
                     "drift is an uncertainty of S, and u(S) does not hold it — repeat the test to "
                     f"tell. The scatter about the line (GUM H.3) would give u(S) = {u_h3:.2g} "
                     f"{unit_s}."

@@ -1,4 +1,4 @@
-"""3-axis gyro calibration from rotations at several rates (seed 003, modified six-position method).
+"""3-axis gyro calibration from rotations at several rates (robot-manipulator study 2023, modified six-position method).
 
 Model of the gyro triad (output ``u`` in its own unit, reference rate ``ω`` in °/s in the DUT's
 nominal axes)::
@@ -6,11 +6,11 @@ nominal axes)::
     u = K·ω + b                                   (K: 3×3 scale/misalignment, b: bias)
 
 The test rotates the DUT at rates such as 6, 18, 30, 60, 90 °/s about each of its three axes, in
-both directions (seed 003, Table 2 and Fig. 5). The outputs fill U (3×N), the reference rates
+both directions (robot-manipulator study 2023, Table 2 and Fig. 5). The outputs fill U (3×N), the reference rates
 augmented by a row of ones fill A (4×N, eq. (5)); the coefficient matrix C = [K | b] solves
 U = C·A by least squares (eq. (4)); the calibrated output is ω̂ = K⁻¹(u − b) (eq. (7)).
 
-Anomalous measurements (seed 003, processing step 2) are rejected by a robust, documented rule
+Anomalous measurements (robot-manipulator study 2023, processing step 2) are rejected by a robust, documented rule
 (:func:`calibrate_triad`): a Huber M-estimate of each output's row of C gives residuals whose
 scale σ = 1.4826·MAD is insensitive to the outliers; measurements with |r| > k·σ are rejected
 and C is refitted by ordinary least squares on the rest, until the rejected set no longer
@@ -21,7 +21,7 @@ n = 15 000 rows, 3.9 for 600).
 References
 ----------
 Calibration Method of MEMS Gyroscopes Using a Robot Manipulator. IEEE Aerospace and Electronic
-Systems Magazine, March 2023 (seed 003): eqs. (4), (5), (7), Table 2.
+Systems Magazine, March 2023: eqs. (4), (5), (7), Table 2.
 Huber P. J. (1981), Robust Statistics, Wiley, §7 (M-estimates of regression).
 Rousseeuw P. J., Croux C. (1993), Alternatives to the median absolute deviation, JASA 88:1273
 (MAD consistency factor 1.4826).
@@ -68,7 +68,7 @@ __all__ = [
     "triad_plan_check",
 ]
 
-#: The rates of seed 003, Table 2 (°/s).
+#: The rates of the robot-manipulator study (2023), Table 2 (°/s).
 SEED_RATES_DEG_S = (6.0, 18.0, 30.0, 60.0, 90.0)
 
 _AXES = "xyz"
@@ -123,7 +123,7 @@ def _check_degenerate(
 
 
 def _design(omega: np.ndarray) -> np.ndarray:
-    """Aᵀ of seed 003 eq. (5): rows [ωx, ωy, ωz, 1] (°/s, °/s, °/s, 1)."""
+    """Aᵀ of the robot-manipulator study's eq. (5): rows [ωx, ωy, ωz, 1] (°/s, °/s, °/s, 1)."""
     return np.column_stack([omega, np.ones(omega.shape[0])])
 
 
@@ -166,7 +166,7 @@ def decompose_scale_misalignment(k: Any) -> tuple[np.ndarray, np.ndarray, np.nda
 
 
 def apply_triad_calibration(u: Any, scale_misalignment: Any, bias: Any) -> np.ndarray:
-    """Calibrated rate ω̂ = K⁻¹(u − b) (seed 003, eq. (7)).
+    """Calibrated rate ω̂ = K⁻¹(u − b) (robot-manipulator study 2023, eq. (7)).
 
     Parameters
     ----------
@@ -185,7 +185,7 @@ def apply_triad_calibration(u: Any, scale_misalignment: Any, bias: Any) -> np.nd
     References
     ----------
     Calibration Method of MEMS Gyroscopes Using a Robot Manipulator, IEEE A&E Systems Magazine,
-    March 2023 (seed 003), eq. (7).
+    March 2023, eq. (7).
     """
     k = np.asarray(scale_misalignment, dtype=float)
     b = np.asarray(bias, dtype=float)
@@ -217,11 +217,11 @@ def triad_plan(
     Parameters
     ----------
     rates_deg_s : sequence of float
-        Rate magnitudes (°/s); the seed's Table 2 uses 6, 18, 30, 60, 90.
+        Rate magnitudes (°/s); the robot-manipulator study's Table 2 uses 6, 18, 30, 60, 90.
     axes : str
-        Rotation axes in order, any of ``"xyz"`` (seed 003 Fig. 5: all three).
+        Rotation axes in order, any of ``"xyz"`` (robot-manipulator study 2023, Fig. 5: all three).
     both_directions : bool
-        Add each rate with a negative sign too (the seed's six positions: ± each axis).
+        Add each rate with a negative sign too (the robot-manipulator study's six positions: ± each axis).
     samples_per_point : int
         Rows per rate point (repeat each point, as a capture of that many samples would).
     include_static : bool
@@ -236,7 +236,7 @@ def triad_plan(
     References
     ----------
     Calibration Method of MEMS Gyroscopes Using a Robot Manipulator, IEEE A&E Systems Magazine,
-    March 2023 (seed 003), Table 2, Fig. 5.
+    March 2023, Table 2, Fig. 5.
     """
     rates = np.asarray(rates_deg_s, dtype=float).ravel()
     if rates.size == 0 or not np.isfinite(rates).all() or np.any(rates <= 0):
@@ -277,9 +277,9 @@ class TriadPlanCheck(Result):
     points : int
         Distinct reference-rate vectors.
     rank : int
-        Numerical rank of A (seed 003 eq. (5), 4×n); 4 is full.
+        Numerical rank of A (robot-manipulator study 2023, eq. (5), 4×n); 4 is full.
     condition_number : float
-        σ_max/σ_min of A as the seed builds it (rates in °/s, a row of ones); inf when rank < 4.
+        σ_max/σ_min of A as the robot-manipulator study (2023) builds it (rates in °/s, a row of ones); inf when rank < 4.
     condition_number_scaled : float
         The same after scaling each row of A to unit rms: what limits the precision, independent
         of units; inf when rank < 4.
@@ -385,7 +385,7 @@ def _check_plan(omega: np.ndarray) -> TriadPlanCheck:
 def triad_plan_check(omega_deg_s: Any, *, strict: bool = True) -> TriadPlanCheck:
     """Rank and condition number of A for a plan; are all 9 + 3 coefficients identifiable?
 
-    The model's design matrix A (seed 003, eq. (5)) has the reference rates and a row of ones. A
+    The model's design matrix A (robot-manipulator study 2023, eq. (5)) has the reference rates and a row of ones. A
     coefficient is identifiable when its unit vector lies in the row space of Aᵀ (orthogonal to
     the null space): rotations about x only, for instance, leave every K_iy and K_iz undetermined,
     and a single rate about an axis (without the opposite sign or a second rate) confounds that
@@ -413,7 +413,7 @@ def triad_plan_check(omega_deg_s: Any, *, strict: bool = True) -> TriadPlanCheck
     References
     ----------
     Calibration Method of MEMS Gyroscopes Using a Robot Manipulator, IEEE A&E Systems Magazine,
-    March 2023 (seed 003), eqs. (4)–(5).
+    March 2023, eqs. (4)–(5).
     """
     try:
         omega = _as_triplet("omega_deg_s", RATE_COLUMNS, omega_deg_s)
@@ -510,7 +510,7 @@ class TriadResult(Result):
         return dict(self._axis_budgets)
 
     def calibrate(self, u: Any) -> np.ndarray:
-        """ω̂ = K⁻¹(u − b) (°/s) for raw outputs ``u`` (n, 3) — seed 003, eq. (7)."""
+        """ω̂ = K⁻¹(u − b) (°/s) for raw outputs ``u`` (n, 3) — the robot-manipulator study (2023), eq. (7)."""
         return apply_triad_calibration(u, self.scale_misalignment, self.bias)
 
     def to_dict(self) -> dict[str, Any]:
@@ -608,7 +608,7 @@ def calibrate_triad(
     output_unit: str = "",
     allow_clipped: bool = False,
 ) -> TriadResult:
-    """Scale/misalignment matrix K and bias b of a gyro triad by least squares (seed 003).
+    """Scale/misalignment matrix K and bias b of a gyro triad by least squares (robot-manipulator study 2023).
 
     Builds U (outputs) and A (reference rates with a row of ones, eq. (5)), rejects anomalous
     measurements by the robust rule of this module's docstring (per output: Huber M-estimate,
@@ -669,7 +669,7 @@ def calibrate_triad(
     References
     ----------
     Calibration Method of MEMS Gyroscopes Using a Robot Manipulator, IEEE A&E Systems Magazine,
-    March 2023 (seed 003): U and A, eq. (5); least squares, eq. (4); calibrated output, eq. (7);
+    March 2023: U and A, eq. (5); least squares, eq. (4); calibrated output, eq. (7);
     rejection of anomalous measurements (processing step 2).
     Huber P. J. (1981), Robust Statistics, Wiley, §7; Rousseeuw P. J., Croux C. (1993), JASA
     88:1273 (1.4826·MAD). JCGM 100:2008 (GUM) §4.2, §4.3, §5.1.2, G.4.1 (the budgets).
@@ -1010,7 +1010,7 @@ def calibrate_triad_columns(columns: Mapping[str, Any] | Any, **options: Any) ->
 
     References
     ----------
-    As :func:`calibrate_triad` (seed 003, eqs. (4), (5), (7)).
+    As :func:`calibrate_triad` (robot-manipulator study 2023, eqs. (4), (5), (7)).
     """
     names = RATE_COLUMNS + TRIAD_OUTPUT_COLUMNS
     arrays = []

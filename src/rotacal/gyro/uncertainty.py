@@ -1,6 +1,6 @@
 """Uncertainty budgets of the gyro calibrations on the table: the helpers they share.
 
-The scale-factor (seed 004), 3-axis (seed 003) and rotation (Ferraris) calibrations build one
+The scale-factor (Kokuyama et al. 2015), 3-axis (robot-manipulator study 2023) and rotation (Ferraris) calibrations build one
 :class:`~rotacal.uncertainty.UncertaintyBudget` per reported quantity from two kinds of input:
 
 - **Type A**, from the capture: the spread of the samples at each rate point, the least-squares

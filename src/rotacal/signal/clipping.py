@@ -548,7 +548,7 @@ def check_clipping(
     columns : mapping — column name → its samples, or → a :class:`Clipping` (or None) already
         found (a streamed capture's :class:`RailDetector` result).
     allow_clipped : bool — analyse a clipped capture anyway (``--allow-clipped``).
-    **context — ``rest`` or ``groups`` for every column (see :func:`find_clipping`).
+    **context : ``rest`` or ``groups`` for every column (see :func:`find_clipping`).
 
     Returns
     -------

@@ -371,7 +371,7 @@ def fit_harmonics(
     2023, eq. (9)); with ``refine_frequency`` f is a parameter too (the IEEE 1057 iterative fit).
 
     With ``drift`` the model gains a linear term, ``y ≈ C + D·(t − t_ref) + Σ_h …`` (rotacal's
-    extension of eq. (9), not in the seed or IEEE 1057): a slow drift of y is then fitted as D
+    extension of eq. (9), not in Feng et al. (2023) or IEEE 1057): a slow drift of y is then fitted as D
     instead of leaking into the harmonics. Over n whole periods a ramp D·τ projects onto the
     sine terms as ``b_h = −2D·(−1)^{hn}/(2πhf)``, so without the term a drift reads as harmonic
     distortion; with it the b_h carry slightly more noise (their correlation with τ is

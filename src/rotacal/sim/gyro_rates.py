@@ -1,4 +1,4 @@
-"""Digital twin of a single-axis gyro rate-table test (seed 004, §4): the "gyro-rates" capture.
+"""Digital twin of a single-axis gyro rate-table test (Kokuyama et al. 2015, §4): the "gyro-rates" capture.
 
 The table holds each set rate Ω while the DUT's output is sampled. The DUT's analog response is
 
@@ -27,7 +27,7 @@ from rotacal.sim.sensors import SimCapture, register_kind
 
 __all__ = ["DEFAULT_RATES_DEG_S", "simulate_gyro_rates"]
 
-#: Eleven set rates from −100 to +100 °/s in steps of 20 °/s (seed 004 recommends ≥ 11 points;
+#: Eleven set rates from −100 to +100 °/s in steps of 20 °/s (Kokuyama et al. 2015 recommend ≥ 11 points;
 #: ±100 °/s is the FMVSS 126 measurement range).
 DEFAULT_RATES_DEG_S: tuple[float, ...] = tuple(float(r) for r in range(-100, 101, 20))
 
@@ -118,7 +118,7 @@ def simulate_gyro_rates(
     References
     ----------
     Kokuyama et al., "Development of angular velocity calibration facility using self-calibratable
-    rotary encoder", seed 004, §4 (V(Ω) = S·Ω + V0 + δ(Ω), ≥ 11 points, NL in %FS).
+    rotary encoder", §4 (V(Ω) = S·Ω + V0 + δ(Ω), ≥ 11 points, NL in %FS).
     """
     try:
         rates = np.asarray(rates_deg_s, dtype=float).reshape(-1)
@@ -127,7 +127,9 @@ def simulate_gyro_rates(
             f"rates_deg_s must be a sequence of numbers, got {rates_deg_s!r}."
         ) from None
     if rates.size < 2 or np.unique(rates).size < 2:
-        raise ConfigError("rates_deg_s must hold at least 2 distinct set rates (seed 004: ≥ 11).")
+        raise ConfigError(
+            "rates_deg_s must hold at least 2 distinct set rates (Kokuyama et al. 2015: ≥ 11)."
+        )
     if not np.all(np.isfinite(rates)):
         raise ConfigError("rates_deg_s must be finite numbers.")
     s = _finite("scale_factor", scale_factor)

@@ -1,11 +1,11 @@
-"""Twins of a 3-axis gyro test: rotations at set rates (seed 003) and rotations through known angles.
+"""Twins of a 3-axis gyro test: rotations at set rates (robot-manipulator study 2023) and rotations through known angles.
 
 A gyro triad with true scale/misalignment matrix K (output unit per °/s) and bias b (output unit)
 gives ``u = K·ω + b + n`` for the angular rate ω (°/s) in its nominal axes, with white Gaussian
 noise n. The truth (K, b, which rows carry gross errors, the sections of a rotation recording)
 is set here, not estimated, so it stays independent of rotacal's methods.
 
-- :func:`simulate_gyro_triad` — the rate-table test of seed 003: constant rates about each axis
+- :func:`simulate_gyro_triad` — the rate-table test of the robot-manipulator study (2023): constant rates about each axis
   in both directions (Table 2: 6, 18, 30, 60, 90 °/s), several samples per rate point, optional
   gross outliers, output clipping (saturation) and quantisation. Kind ``"gyro-triad"``.
 - :func:`simulate_gyro_rotations` — a Ferraris-style recording: rest, a rotation through a known
@@ -89,7 +89,7 @@ def _finish_outputs(
     return u, clipped
 
 
-# ------------------------------------------------------------------------------- seed 003 test
+# ------------------------------------------------------------------------------- the robot-manipulator study (2023) test
 def simulate_gyro_triad(
     *,
     rates_deg_s: tuple[float, ...] = (6.0, 18.0, 30.0, 60.0, 90.0),
@@ -107,9 +107,9 @@ def simulate_gyro_triad(
     rate_relative_error: float = 0.0,
     seed: int = 0,
 ) -> SimCapture:
-    """A 3-axis gyro test on a rate table: set rates about each axis, both directions (seed 003).
+    """A 3-axis gyro test on a rate table: set rates about each axis, both directions (robot-manipulator study 2023).
 
-    The table turns the DUT about x at +r₁, −r₁, +r₂, …, then about y, then about z (seed 003,
+    The table turns the DUT about x at +r₁, −r₁, +r₂, …, then about y, then about z (robot-manipulator study 2023,
     Table 2 and Fig. 5); each rate point is held for ``samples_per_point`` samples at ``fs_hz``
     (the transitions between points are not recorded). The outputs are
     ``u = K·ω + b + n``, n white Gaussian with σ = ``noise_std`` per channel. A fraction
@@ -160,7 +160,7 @@ def simulate_gyro_triad(
     References
     ----------
     Calibration Method of MEMS Gyroscopes Using a Robot Manipulator, IEEE A&E Systems Magazine,
-    March 2023 (seed 003), Table 2, Fig. 5 (the test sequence).
+    March 2023, Table 2, Fig. 5 (the test sequence).
     """
     rates = np.asarray(rates_deg_s, dtype=float).ravel()
     if rates.size == 0 or not np.isfinite(rates).all() or np.any(rates <= 0):

@@ -1,4 +1,4 @@
-"""The true angular motion of a sinusoidal rotary table, with its non-ideal behaviour (seed 000).
+"""The true angular motion of a sinusoidal rotary table, with its non-ideal behaviour (Feng et al. 2023).
 
 Feng et al. (2023) calibrate a low-frequency angular-acceleration rotary table whose commanded
 motion is a sine but whose real motion shows harmonic distortion and "stagnation, backwardness,

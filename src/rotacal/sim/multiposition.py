@@ -1,4 +1,4 @@
-"""Digital twin of a multiposition drift test on a two-axis turntable (seed 001, §2.1).
+"""Digital twin of a multiposition drift test on a two-axis turntable (GyroWheel study, §2.1).
 
 The gyro (a GyroWheel or any two-axis rate sensor with g-sensitive drift) sits on the inner axis
 of a two-axis turntable. Its axes start north-west-up (x north, y west, z up). The outer axis is
@@ -15,11 +15,11 @@ rate units
 
     k·i = ω_axis + DF + Dx·ax + Dy·ay + Dz·az + D₁·a₁² + Dzz·az² + D_xy·ax·ay + noise
 
-with D₁ = Dxx, a₁ = ax for the x axis and D₁ = Dyy, a₁ = ay for the y axis (seed 001, eq. (1)
+with D₁ = Dxx, a₁ = ax for the x axis and D₁ = Dyy, a₁ = ay for the y axis (GyroWheel study, eq. (1)
 rearranged). The kinematics are written here from the turntable's geometry, not taken from the
 method's eq. (3), so agreement between the two checks both.
 
-An orientation error of the gyro on the table (seed 001 §2.2: small rotations Δψ about its y,
+An orientation error of the gyro on the table (GyroWheel study, §2.2: small rotations Δψ about its y,
 Δθ about its z and Δγ about its x axis, the same at every position) turns the gyro's frame by the
 rotation vector (Δγ, Δψ, Δθ); the twin applies it exactly (Rodrigues), v_g′ = Rᵀ·v_g.
 
@@ -47,11 +47,11 @@ __all__ = [
 
 #: Sidereal Earth rotation rate, 7.292115·10⁻⁵ rad/s, in °/h.
 EARTH_RATE_DEG_H = 15.041067
-#: Latitude of the twin's laboratory (°): Harbin, where seed 001's authors work (the paper gives
+#: Latitude of the twin's laboratory (°): Harbin, where the GyroWheel study's authors work (the paper gives
 #: none).
 DEFAULT_LATITUDE_DEG = 45.75
 
-#: Nominal drift coefficients of seed 001, Table 1 (deg/h, deg/h/g, deg/h/g²). The table's y-axis
+#: Nominal drift coefficients of the GyroWheel study, Table 1 (deg/h, deg/h/g, deg/h/g²). The table's y-axis
 #: cross term is printed "D(y)xy"; rotacal names it Dyx as INTERFACE.md does.
 TABLE1_COEFFICIENTS: dict[str, dict[str, float]] = {
     "x": {
@@ -205,7 +205,7 @@ def simulate_multiposition(
         Latitude of the laboratory (deg, −90…90).
     coefficients : mapping or None
         Drift coefficients (deg/h, deg/h/g, deg/h/g²) by name (``DF, Dx, Dy, Dz, Dxx, Dzz, Dxy`` for
-        x; ``DF, Dx, Dy, Dz, Dyy, Dzz, Dyx`` for y); missing names take seed 001's Table 1 values.
+        x; ``DF, Dx, Dy, Dz, Dyy, Dzz, Dyx`` for y); missing names take the GyroWheel study's Table 1 values.
     noise_deg_h : float
         White noise of each reading (deg/h rms, ≥ 0). The default 0.005 °/h is the scatter of a
         ~100 s average of a tuned dynamically tuned gyro's rebalance output.
@@ -213,7 +213,7 @@ def simulate_multiposition(
         Readings per position (≥ 1); the rows run through all positions, then again.
     orientation_error_arcsec : (Δψ, Δθ, Δγ) or None
         Orientation error of the gyro's axes on the table (arcsec): rotations about its y, z and
-        x axes (seed 001 §2.2, Fig. 3), the same at every position. None: none.
+        x axes (GyroWheel study, §2.2, Fig. 3), the same at every position. None: none.
     seed : int
         Seed of ``numpy.random.default_rng``.
     output_limit_deg_h : float or None

@@ -1,6 +1,6 @@
-"""Digital twin of a multi-head pulse encoder on a rate table (Kokuyama et al., seed 004).
+"""Digital twin of a multi-head pulse encoder on a rate table (Kokuyama et al. 2015).
 
-The self-calibratable rotary encoder (SelfA) of seed 004 §3 is an incremental scale of m lines read
+The self-calibratable rotary encoder (SelfA) of Kokuyama et al. (2015), §3 is an incremental scale of m lines read
 by n heads spaced equally around it; the DAQ records the time of every pulse edge at every head
 (§5). :func:`simulate_pulses` makes that capture: columns ``head_0`` … ``head_{n-1}`` of pulse times
 (s) as in INTERFACE.md's "multi-head pulse timestamps", and a truth dict whose scale deviation
@@ -52,7 +52,7 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 #: Scale harmonics (order, amplitude arcsec, phase rad) of the default twin: an eccentricity of
-#: 3 arcsec (about 6 arcsec peak to peak, as in seed 004 Fig. 4) and a few small higher orders,
+#: 3 arcsec (about 6 arcsec peak to peak, as in Kokuyama et al. 2015, Fig. 4) and a few small higher orders,
 #: two of them (12, 24) multiples of the default 12 heads and so undetectable.
 DEFAULT_HARMONICS: tuple[tuple[int, float, float], ...] = (
     (1, 3.0, 0.3),
@@ -294,7 +294,7 @@ def simulate_pulses(
     outputs ``s_i(k) = k·Δθ + 360·i/n + a_i(k)`` with ``m = 360/Δθ`` and ``a_i(k) = a(k + m·i/n)``,
     the undetectable multiples of n; §5, angular velocity from the times of the pulse edges.
     T. Watanabe, H. Fujimoto and T. Masuda, "Self-calibratable rotary encoder", J. Phys.: Conf.
-    Ser. 13, 240 (2005) (seed 004 ref. [1]).
+    Ser. 13, 240 (2005) (Kokuyama et al. 2015, ref. [1]).
     """
     n = _int("heads", heads, 2)
     m = _int("pulses_per_rev", pulses_per_rev, 2)

@@ -1,4 +1,4 @@
-"""Sensor models of the digital twin: shaft encoder, laser triangulation sensor, FOG (seed 000).
+"""Sensor models of the digital twin: shaft encoder, laser triangulation sensor, FOG (Feng et al. 2023).
 
 Each ``simulate_*`` function samples a :class:`~rotacal.sim.motion.SineMotion` at a fixed rate and
 returns a :class:`SimCapture` whose columns follow the canonical capture layout of INTERFACE.md and

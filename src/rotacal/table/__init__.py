@@ -1,4 +1,4 @@
-"""Rotary-table calibrations: sinusoidal motion (seed 000), constant rate (seed 004)."""
+"""Rotary-table calibrations: sinusoidal motion (Feng et al. 2023), constant rate (Kokuyama et al. 2015)."""
 
 from rotacal.table.motion import (
     MotionResult,

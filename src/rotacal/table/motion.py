@@ -1,4 +1,4 @@
-"""Sinusoidal-motion calibration of a low-frequency angular-acceleration rotary table (seed 000).
+"""Sinusoidal-motion calibration of a low-frequency angular-acceleration rotary table (Feng et al. 2023).
 
 Three measurement schemes of Feng et al. (2023) give the table's angular displacement θ(t):
 
@@ -394,7 +394,7 @@ def _cut(
     span_deg: float | None = None,
     net_deg: float | None = None,
 ) -> tuple[int, int, int]:
-    """First and last sample of n whole periods bounded by 2n+1 reversals (seed 000, §3.3)."""
+    """First and last sample of n whole periods bounded by 2n+1 reversals (Feng et al. 2023, §3.3)."""
     available = (reversal_idx.size - 1) // 2
     if available < 1:
         moved = f" (the angle spans {span_deg:.3g}°)" if span_deg is not None else ""
@@ -722,7 +722,7 @@ def calibrate_fog_motion(
     The rate is sine-fitted directly, θ̇(t) = D0 + Σ A'_h sin(2π h f t + φ_h) (eqs. (9)–(10)), and
     integrated analytically: the displacement harmonics are A'_h/(2π h f) (eqs. (11)–(13)), which
     give THD_θ (eq. (14)). No noise filter and no numerical integration: the fit's robustness does
-    both jobs, as the seed intends. The reversing moments are the zero crossings of the fitted rate;
+    both jobs, as Feng et al. (2023) intend. The reversing moments are the zero crossings of the fitted rate;
     n whole periods are cut between 2n+1 of them and the fit is repeated on that span. The SNR is the
     fitted signal without its constant term over the residual, in dB (seed §5). The position error
     (eq. (2)) uses the measured rate minus the fitted D0, integrated by the trapezoid rule.
@@ -809,7 +809,7 @@ def calibrate_fog_motion(
 def compare_schemes(reference: MotionResult, other: MotionResult) -> SchemeComparison:
     """Compare two schemes that measured the same run, as a row of Feng et al. (2023) Table 1.
 
-    Every difference is ``reference − other``: THD in percentage points (the seed's "Difference
+    Every difference is ``reference − other``: THD in percentage points (Feng et al.'s "Difference
     Value of THD": the combined OSE/LTS scheme minus the FOG), amplitude and frequency in % of the
     reference's value. Each difference has a budget (:func:`~rotacal.table.motion_uncertainty.
     comparison_budgets`) from the two results' budgets; ``thd_difference_percent_u`` is its u.

@@ -1,4 +1,4 @@
-"""Slow drift in a sinusoidal-motion calibration (seed 000): fitted on request, flagged otherwise.
+"""Slow drift in a sinusoidal-motion calibration (Feng et al. 2023): fitted on request, flagged otherwise.
 
 A table that turns slowly on top of its sinusoidal motion, θ(t) = p(t) + d·t with p periodic,
 does not fit the IEEE 1057 model of eq. (1)'s sine fit: over n whole periods the ramp d·τ

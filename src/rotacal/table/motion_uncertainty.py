@@ -1,4 +1,4 @@
-"""Uncertainty budgets of the sinusoidal-motion calibration (seed 000), one place for every path.
+"""Uncertainty budgets of the sinusoidal-motion calibration (Feng et al. 2023), one place for every path.
 
 :func:`motion_budgets` gives the budget of every quantity a :class:`~rotacal.table.MotionResult`
 reports — amplitude, frequency, angular-acceleration amplitude, their errors against set values,

@@ -1,4 +1,4 @@
-"""Constant-rate calibration of a rotary table from encoder pulse timing (seed 004, §5).
+"""Constant-rate calibration of a rotary table from encoder pulse timing (Kokuyama et al. 2015, §5).
 
 The table turns at a set angular velocity; the encoder's pulse times give the angle at every
 pulse. From them: the mean rate over whole revolutions (where the scale's deviation cancels
@@ -271,7 +271,7 @@ def allan_versus_angle(
     With angles θ_i at pulse times t_i, the rate over k pulses is ω_i = (θ_{i+k} − θ_i)/(t_{i+k}
     − t_i), the Allan variance σ²(τ) = ½⟨(ω_{i+k} − ω_i)²⟩ (overlapping, averaged over every i)
     and s(φ) = √σ²(φ/ω_m)/ω_m. The seed samples the angle at equal times; here it is sampled at
-    equal angles (the pulses), so φ = k·Δθ is exact and τ = φ/ω_m as the seed converts it.
+    equal angles (the pulses), so φ = k·Δθ is exact and τ = φ/ω_m as Kokuyama et al. (2015) convert it.
 
     Parameters
     ----------
@@ -295,7 +295,7 @@ def allan_versus_angle(
 
     References
     ----------
-    Kokuyama et al. (seed 004), §5 "Evaluation using root Allan variance": ω_i = (θ_{i+k} −
+    Kokuyama et al. (2015), §5 "Evaluation using root Allan variance": ω_i = (θ_{i+k} −
     θ_i)/(kΔt), σ²(τ) = ½⟨(ω_{i+k} − ω_i)²⟩, τ = φ/ω_m, s(φ) = √σ²(φ/ω_m)/ω_m; Figure 10.
     """
     t = np.asarray(times_s, dtype=np.float64)
@@ -308,7 +308,7 @@ def allan_versus_angle(
     if angles_deg is None:
         decades = max(math.log10(kmax), 0.0)
         grid = np.rint(np.logspace(0.0, decades, int(decades * ALLAN_POINTS_PER_DECADE) + 1))
-        # one revolution, where the scale's deviation cancels (the seed's Figure 10 dip)
+        # one revolution, where the scale's deviation cancels (Kokuyama et al.'s Figure 10 dip)
         whole = np.rint(360.0 / pitch)
         extra = [whole] if whole <= kmax else []
         ks = np.unique(np.concatenate((grid, extra))).astype(np.int64)
@@ -532,7 +532,7 @@ def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float
 
     References
     ----------
-    JCGM 100:2008 (GUM) §4.2 (Type A evaluation); Kokuyama et al. (seed 004) §3, the head output
+    JCGM 100:2008 (GUM) §4.2 (Type A evaluation); Kokuyama et al. (2015) §3, the head output
     s_i(k) = kΔθ + 360i/n + a_i(k), a(k) periodic in k with period m, and §5 ("nearly-white
     electronic noise in the encoder output signals"); M. S. Bartlett, "On the theoretical
     specification of sampling properties of autocorrelated time series", J. R. Stat. Soc. Suppl.
@@ -572,7 +572,7 @@ def _noise_alpha(phi: FloatArray, s: FloatArray) -> NDArray[np.int64]:
     with np.errstate(divide="ignore"):
         mu = np.gradient(np.log(np.maximum(s, 1e-300)), np.log(phi))
     # σ ∝ τ^μ: μ = −1 white (or flicker) PM, −½ white FM, 0 flicker FM, +½ random-walk FM.
-    # White PM (the pulses' electronic noise, seed 004 §5) only in the leading run of the φ⁻¹
+    # White PM (the pulses' electronic noise, Kokuyama et al. 2015, §5) only in the leading run of the φ⁻¹
     # slope: a steep fall further out is the 360° dip of the graduation or a fluctuation's
     # notch, over which the FM types' smaller edf is the cautious choice.
     alpha = np.select([mu <= -0.25, mu <= 0.25], [0, -1], -2).astype(np.int64)
@@ -615,7 +615,7 @@ def allan_uncertainty(
     ----------
     C. A. Greenhall and W. J. Riley, "Uncertainty of stability variances based on finite
     differences", Proc. 35th PTTI (2003); NIST SP 1065 (Riley 2008) §5.3; Kokuyama et al.
-    (seed 004) §5, s(φ) = √σ²(φ/ω_m)/ω_m.
+    (2015) §5, s(φ) = √σ²(φ/ω_m)/ω_m.
     """
     sv = np.asarray(s, dtype=np.float64)
     phi = np.asarray(angles_deg, dtype=np.float64)
@@ -708,7 +708,7 @@ def _mean_rate_budgets(
     JCGM 100:2008 (GUM) §3.2.4 (correction for a stated systematic effect), §4.2–4.3, §5.1
     eq. (10), G.4 (Welch–Satterthwaite); JCGM 101:2008 §6.4.9 (a Type A input with ν degrees of
     freedom as a scaled t), §8 (validation of the GUM uncertainty framework); Kokuyama et al.
-    (seed 004) §3, §5.
+    (2015) §3, §5.
     """
     sigma_t, sigma_dof, graduation_free = jitter
     tb = spec_input(specs, _TIMEBASE, name="timebase relative error", unit="")
@@ -1068,7 +1068,7 @@ def _rate_deviation_budgets(
 
     References
     ----------
-    JCGM 101:2008 §7 (Monte Carlo); Kokuyama et al. (seed 004) §5 (the time-difference rate,
+    JCGM 101:2008 §7 (Monte Carlo); Kokuyama et al. (2015) §5 (the time-difference rate,
     10-point averaging); :mod:`rotacal.uncertainty.summaries`.
     """
     extra = [
@@ -1111,14 +1111,14 @@ def calibrate_rate(
         m, pulses per revolution.
     selfcal : SelfCalibration, its JSON dict, an array of m deviations (arcsec), or None
         The scale deviation used to compensate the angle. None with ≥ 2 heads and a whole
-        revolution: self-calibrate this capture (as the seed does); with one head: no compensation.
+        revolution: self-calibrate this capture (as Kokuyama et al. (2015) do); with one head: no compensation.
         A curve from another capture is aligned to this one by correlation.
     head : int or "all"
-        The head whose pulses give the rate (default 0, the reference, as in the seed's Figure 9)
+        The head whose pulses give the rate (default 0, the reference, as in Kokuyama et al.'s Figure 9)
         or ``"all"`` for the head-averaged times (the average cancels every detectable order of
         the deviation, so compensation changes nothing there).
     average : int
-        Pulse intervals averaged per rate point (the seed: 10).
+        Pulse intervals averaged per rate point (Kokuyama et al. (2015): 10).
     set_rate_deg_s : float, deg/s, optional
         The commanded rate, for the bias.
     allan_angles_deg : array_like, deg, optional
@@ -1148,7 +1148,7 @@ def calibrate_rate(
 
     References
     ----------
-    Kokuyama et al. (seed 004), §5: time-difference rate with 10-point averaging, Figure 9 (rate
+    Kokuyama et al. (2015), §5: time-difference rate with 10-point averaging, Figure 9 (rate
     compensated with the extracted deviation, bias and fluctuation in % of rate), the relative root
     Allan variance s(φ) of Figure 10. JCGM 100:2008 (GUM), JCGM 101:2008 (the budgets); Greenhall
     & Riley 2003 (edf of s(φ)).

@@ -1,4 +1,4 @@
-"""Plausibility checks of a constant-rate calibration from pulse timing (seed 004).
+"""Plausibility checks of a constant-rate calibration from pulse timing (Kokuyama et al. 2015).
 
 * the mean rate against the set rate: off by a factor near a power of ten or two, or by more than
   20 % (:func:`rotacal.signal.plausibility.set_value_warning`) — ``--pulses-per-rev`` or the set
@@ -48,7 +48,7 @@ def rate_warnings(
     References
     ----------
     NIST/SEMATECH e-Handbook of Statistical Methods (2012), §4.4.4 (straight-line fit, residual
-    scatter); seed 004 §3 (rate stability assumes a constant set rate).
+    scatter); Kokuyama et al. (2015), §3 (rate stability assumes a constant set rate).
     """
     out: list[str] = []
     if set_rate_deg_s is not None:

@@ -1,4 +1,4 @@
-"""Out-of-core sinusoidal-motion calibration from an optical shaft encoder (seed 000, OSE scheme).
+"""Out-of-core sinusoidal-motion calibration from an optical shaft encoder (Feng et al. 2023, OSE scheme).
 
 :func:`calibrate_encoder_motion_chunked` gives the same :class:`~rotacal.table.MotionResult` as
 :func:`~rotacal.table.calibrate_encoder_motion` while reading the capture chunk by chunk, so

@@ -1,10 +1,10 @@
-"""Turntable geometric errors (seed 001): the error model by homogeneous transforms, sensitivities,
+"""Turntable geometric errors (GyroWheel study): the error model by homogeneous transforms, sensitivities,
 error allocation with its Monte Carlo check, and what orientation errors do to a multiposition
 gyro calibration.
 
 Start from :func:`seed_table` (the paper's two-axis table) or :func:`load_turntable` (a TOML
 description of any serial table) and :func:`turntable_budget` (what ``rotacal turntable budget``
-runs). :func:`orientation_error` is the seed table's model, eqs. (17)–(24), radians in and out.
+runs). :func:`orientation_error` is the model of the GyroWheel study's table, eqs. (17)–(24), radians in and out.
 """
 
 from rotacal.turntable.allocation import (

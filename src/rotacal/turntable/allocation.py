@@ -1,4 +1,4 @@
-"""Error allocation of a turntable (seed 001, §4) and its worst-case and Monte Carlo checks.
+"""Error allocation of a turntable (GyroWheel study, §4) and its worst-case and Monte Carlo checks.
 
 For every orientation component j ∈ (ψ, θ, γ) with requirement I_j the allocation solves the
 generalised eqs. (31)–(33),
@@ -6,11 +6,11 @@ generalised eqs. (31)–(33),
     minimise  J_j = Σ_i W_ji² / χ_i²    over the errors i that j is sensitive to (C_ji > 1e-12)
     subject to  max_φ Σ_i |c_ji(φ)|·χ_i ≤ I_j   and   χ_i ≥ LB_i   (eq. (29)),
 
-where c(φ) = ∂(Δψ, Δθ, Δγ)/∂χ at χ = 0 is the table's linearised model (eq. (26) for the seed;
+where c(φ) = ∂(Δψ, Δθ, Δγ)/∂χ at χ = 0 is the table's linearised model (eq. (26) for the GyroWheel study's table;
 ``Turntable.linear_coefficients``), φ runs over every angle of the table on [0, 2π), and the weights
 are W_ji = 1/C_ji, the inverse of the averaged sensitivities of eq. (28) — averaged as the table
 chooses (``Turntable.sensitivity_grid``: by default the unbiased mean over a turn, the paper's
-45° grid with both ends for the packaged seed table) — or the error's ``weight`` override. For the seed table this is the paper's constraint on [0, π/2] (γ) and [3π/2, 2π] (ψ) —
+45° grid with both ends for the packaged table of the GyroWheel study) — or the error's ``weight`` override. For the GyroWheel study's table this is the paper's constraint on [0, π/2] (γ) and [3π/2, 2π] (ψ) —
 the four cases of Lemma 1 fold every angle onto it. The upper bounds are then eq. (34),
 UB_i = min_j χ*_ji, so that by Lemma 1 the linearised model meets every requirement for all
 angles and all |χ_i| ≤ UB_i.
@@ -22,7 +22,7 @@ the set; repeat until the fine-grid maximum is ≤ I_j·(1 + 1e-9); finally χ* 
 refined worst case is ≤ I_j.
 
 The full model of eqs. (17)–(25) (products of the small-angle matrices) adds second-order terms the
-linear allocation does not see: for the seed table, the θ bound of a tight allocation
+linear allocation does not see: for the GyroWheel study's table, the θ bound of a tight allocation
 (φz2 + αz1 = I_θ) is exceeded by ~1e-4 relative at the worst corner of the box. With
 ``full_model_guard=True`` (the default) :func:`allocate` therefore checks the full model over every
 sign vertex of the box (:func:`worst_case`) and shrinks the bounds of a component's errors by the
@@ -96,7 +96,7 @@ _TWO_PI = 2.0 * math.pi
 # ------------------------------------------------------------------------------------- results
 @dataclasses.dataclass(frozen=True)
 class Allocation(Result):
-    """Upper bounds of a turntable's errors (seed 001, eqs. (29)–(34)) and their Lemma 1 check.
+    """Upper bounds of a turntable's errors (GyroWheel study, eqs. (29)–(34)) and their Lemma 1 check.
 
     Attributes
     ----------
@@ -106,7 +106,7 @@ class Allocation(Result):
         The table's display units (values here are radians whatever it is).
     upper_bounds_rad : dict
         UB_i (rad, eq. (34)); ``None`` for an error with no effect on the orientation (a
-        translation such as the seed's intersection error η).
+        translation such as the GyroWheel study's intersection error η).
     lower_bounds_rad : dict
         LB_i (rad, eq. (29)) of every angular error.
     per_component : dict
@@ -150,7 +150,7 @@ class Allocation(Result):
 
 @dataclasses.dataclass(frozen=True)
 class MonteCarloCheck(Result):
-    """Monte Carlo check of an allocation with the full model (seed 001, §4.3, Figure 9).
+    """Monte Carlo check of an allocation with the full model (GyroWheel study, §4.3, Figure 9).
 
     Attributes
     ----------
@@ -867,7 +867,7 @@ def _linear_allocation(
             largest = ", ".join(
                 f"{names[cols[i]]} {contrib[i] / ufac:.4g}" for i in order if contrib[i] > 0
             )
-            # only the angles the component's coefficients depend on (ψ of the seed: φ2, not φ1)
+            # only the angles the component's coefficients depend on (ψ of the GyroWheel study's table: φ2, not φ1)
             comp_mesh = mesh_abs[..., j, :][..., cols]
             where = ", ".join(
                 f"{a} = {v:.2f}°"

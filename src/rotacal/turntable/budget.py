@@ -1,18 +1,18 @@
 """A turntable's accuracy budget end to end: model, sensitivities, allocation, Monte Carlo check,
-and what the allocated table does to a gyro calibration (seed 001, §§2–4).
+and what the allocated table does to a gyro calibration (GyroWheel study, §§2–4).
 
 :func:`turntable_budget` is what ``rotacal turntable budget CONFIG.toml`` runs. From the table's
 description (a TOML file, see :mod:`rotacal.turntable.config`) it
 
 1. takes the orientation requirement as stated, or derives it from a required calibration accuracy
-   of a multiposition drift test (eqs. (7)–(16); only for a table of the seed's geometry) — by
+   of a multiposition drift test (eqs. (7)–(16); only for a table of the GyroWheel study's geometry) — by
    default so that the tables the allocation admits pass the calibration check of step 4, or by
    the paper's Earth-rate reading of eq. (16) (:mod:`rotacal.turntable.requirement`);
 2. averages the sensitivities (eq. (28)) and allocates upper bounds to the error sources
    (eqs. (29)–(34)) — the constraint at every angle, or on the paper's grid — checking the worst
    case over all angles (Lemma 1);
 3. checks the allocation by Monte Carlo with the full nonlinear model (eqs. (17)–(25));
-4. for a table of the seed's geometry, draws tables within the allocation and computes the
+4. for a table of the GyroWheel study's geometry, draws tables within the allocation and computes the
    rate-sensing error of the multiposition calibration run on them (eqs. (7)–(14) with the
    orientation error of each test position from eq. (23)), and the worst such table.
 
@@ -161,7 +161,7 @@ def _calibration_statistics(draws: Mapping[str, np.ndarray], required: float) ->
 
 
 def _seed_geometry(table: Turntable) -> bool:
-    """True when the chain is the seed's: an outer axis about y, then an inner axis about z."""
+    """True when the chain is the GyroWheel study's: an outer axis about y, then an inner axis about z."""
     axes = [link.axis for link in table.links if link.axis is not None]
     return axes == ["y", "z"]
 
@@ -215,7 +215,7 @@ def calibration_check(
     Parameters
     ----------
     table : Turntable
-        A table of the seed's geometry (outer axis about y, inner about z).
+        A table of the GyroWheel study's geometry (outer axis about y, inner about z).
     upper_bounds_rad, lower_bounds_rad : mapping
         Bounds of each error (rad; translations are ignored: they cannot change the orientation).
     runs : int
@@ -238,7 +238,7 @@ def calibration_check(
     """
     if not _seed_geometry(table):
         raise ConfigError(
-            "the calibration check needs a table of the seed's geometry (an outer axis about y, "
+            "the calibration check needs a table of the GyroWheel study's geometry (an outer axis about y, "
             "then an inner axis about z): the multiposition kinematics of eq. (3) assume it."
         )
     names = table.angular_error_names
@@ -296,7 +296,7 @@ def _derivation_text(derived: DerivedRequirement) -> str:
         limit = derived.earth_rate.equal_limit_deg if derived.earth_rate is not None else math.nan
         return (
             f"derived from a calibration accuracy of {wm:g} °/h by the Earth-rate reading alone: "
-            f"{limit:.5f}° on each component (derivation 'earth-rate-only', seed 001 eq. (16); "
+            f"{limit:.5f}° on each component (derivation 'earth-rate-only', the GyroWheel study's eq. (16); "
             "gravity terms and the drift fit are left out)"
         )
     return (
@@ -391,7 +391,7 @@ def turntable_budget(
     elif table.calibration_requirement_deg_h is not None:
         if not _seed_geometry(table):
             raise ConfigError(
-                "calibration_deg_h needs a table of the seed's geometry (outer axis about y, inner "
+                "calibration_deg_h needs a table of the GyroWheel study's geometry (outer axis about y, inner "
                 "about z); state [requirement] psi, theta, gamma for this table instead."
             )
         p1, p2 = _plan_angles(cal_settings)

@@ -1,6 +1,6 @@
-"""What an orientation error of the turntable does to a multiposition gyro calibration (seed 001).
+"""What an orientation error of the turntable does to a multiposition gyro calibration (GyroWheel study).
 
-A multiposition test (seed 001 §2.1, :mod:`rotacal.gyro.multiposition`) estimates the seven drift
+A multiposition test (GyroWheel study, §2.1, :mod:`rotacal.gyro.multiposition`) estimates the seven drift
 coefficients of each gyro axis from ``b1 − b2 = A·β`` (eqs. (5)–(6)), with b2 the Earth-rate
 component and A the gravity terms of eq. (3) at the *intended* positions. A turntable whose
 instrument frame is off by the small rotation
@@ -11,7 +11,7 @@ instrument frame is off by the small rotation
 gyro feel the row vectors ``ω' = ω·ΔR`` and ``a' = a·ΔR`` (eq. (8)) instead. rotacal's reading of
 eqs. (9)–(14):
 
-* the physical outputs are ``b1 = b2' + A'·β_T`` with β_T the true coefficients (default seed 001
+* the physical outputs are ``b1 = b2' + A'·β_T`` with β_T the true coefficients (default the GyroWheel study
   Table 1) and b2', A' built from ω', a' (eqs. (9)–(10));
 * the lab, unaware of the error, solves eq. (6) with the nominal A and b2:
   ``β1 = (AᵀA)⁻¹Aᵀ(b1 − b2)``; eq. (11) gives ``β2 = (A'ᵀA')⁻¹A'ᵀ(b1 − b2') = β_T``, so
@@ -90,7 +90,7 @@ MAX_ORIENTATION_ERROR_RAD = 0.1
 _AXES = ("x", "y")
 _METHOD_TEXT = {
     "coefficients": "(‖A·Δβ‖∞, the rate error the deviated coefficients cause).",
-    "eq13": "(‖(A' − A)·β_T‖∞, seed 001 eq. (13) as printed).",
+    "eq13": "(‖(A' − A)·β_T‖∞, the GyroWheel study's eq. (13) as printed).",
     "earth-rate": "(‖b2' − b2‖∞, the Earth-rate reading alone: no gravity terms, no fit).",
 }
 #: The eight corners (±, ±, ±) of a box of orientation errors, in the order of COMPONENTS.
@@ -141,7 +141,7 @@ def _errors(
         if limit and arr.size and float(np.max(np.abs(arr))) > MAX_ORIENTATION_ERROR_RAD:
             raise ConfigError(
                 f"{name} reaches {float(np.max(np.abs(arr))):.4g} rad, beyond the small-angle "
-                f"model of seed 001 eq. (7) (|error| ≤ {MAX_ORIENTATION_ERROR_RAD} rad): give "
+                f"model of the GyroWheel study's eq. (7) (|error| ≤ {MAX_ORIENTATION_ERROR_RAD} rad): give "
                 "orientation errors in radians (e.g. np.radians(arcmin / 60))."
             )
         out.append(arr)
@@ -383,7 +383,7 @@ def _from_errors(s: _Setup, dpsi: Any, dtheta: Any, dgamma: Any) -> dict[str, An
 
 
 def orientation_matrix(dpsi: Any, dtheta: Any, dgamma: Any) -> np.ndarray:
-    """The small-angle orientation-error matrix ΔR of seed 001, eq. (7).
+    """The small-angle orientation-error matrix ΔR of the GyroWheel study, eq. (7).
 
     ``ΔR = [[1, −Δθ, Δψ], [Δθ, 1, −Δγ], [−Δψ, Δγ, 1]]`` (= I + skew(Δγ, Δψ, Δθ)).
 
@@ -473,7 +473,7 @@ def coefficient_deviation(
     coefficients : mapping or None
         True drift coefficients β_T, ``{"x": {...}, "y": {...}}`` by the names of
         :func:`rotacal.gyro.multiposition.coefficient_names` (deg/h, deg/h/g, deg/h/g²);
-        missing axes or names take seed 001 Table 1 values.
+        missing axes or names take the GyroWheel study's Table 1 values.
     earth_rate_deg_h : float
         Earth rate Ωe (°/h).
 
@@ -562,7 +562,7 @@ def rate_sensing_error(
         Latitude of the laboratory (deg); default 45.75° (the paper states none).
     coefficients : mapping or None
         True drift coefficients β_T, ``{"x": {...}, "y": {...}}`` (deg/h, deg/h/g, deg/h/g²);
-        missing axes or names take seed 001 Table 1 values.
+        missing axes or names take the GyroWheel study's Table 1 values.
     method : {"coefficients", "eq13", "earth-rate"}
         ``"coefficients"``: ‖A·Δβ‖∞ (the text's meaning); ``"eq13"``: ‖(A' − A)·β_T‖∞ (eq. (13)
         as printed); ``"earth-rate"``: ‖b2' − b2‖∞ (the Earth-rate reading alone, eq. (16)'s).
@@ -666,7 +666,7 @@ def _rotation_deviations(
     if d.size and float(np.max(np.abs(d))) > MAX_ORIENTATION_ERROR_RAD:
         raise ConfigError(
             f"delta_r differs from the identity by up to {float(np.max(np.abs(d))):.4g}, beyond "
-            f"the small orientation errors of seed 001 (≤ {MAX_ORIENTATION_ERROR_RAD} rad): pass "
+            f"the small orientation errors of the GyroWheel study (≤ {MAX_ORIENTATION_ERROR_RAD} rad): pass "
             "ΔR = R_dᵀ·R_t, not R_t."
         )
     return _deviations(s, d, per_position=True)
@@ -794,7 +794,7 @@ def orientation_requirement(
     Parameters
     ----------
     required_deg_h : float
-        Required calibration accuracy ωm (°/h, > 0); default 0.01 (the seed's example, §2.3).
+        Required calibration accuracy ωm (°/h, > 0); default 0.01 (the GyroWheel study's example, §2.3).
     phi1_deg, phi2_deg, latitude_deg, coefficients, method, earth_rate_deg_h
         As in :func:`rate_sensing_error`.
 
@@ -894,7 +894,7 @@ def rate_error_surfaces(
     method: str = "coefficients",
     earth_rate_deg_h: float = EARTH_RATE_DEG_H,
 ) -> dict[str, Any]:
-    """Δωx and Δωy over planes of orientation errors, the data of seed 001 Figure 4.
+    """Δωx and Δωy over planes of orientation errors, the data of the GyroWheel study's Figure 4.
 
     Each plane varies two components over ``[−limit_rad, +limit_rad]`` (n points each) with the
     third at zero; each curve varies one component with the other two at zero.

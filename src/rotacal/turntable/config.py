@@ -3,7 +3,7 @@
 The file lists the chain base → instrument (``[[chain]]``), the errors in χ order (``[errors]``),
 the orientation requirement (``[requirement]``) and optional Monte Carlo and calibration settings.
 Angles in the file are in ``units`` (default arcmin), translations in ``length_units`` (default
-mm); the loaded :class:`Turntable` is in rad and m. Example (the seed's table is packaged as
+mm); the loaded :class:`Turntable` is in rad and m. Example (the GyroWheel study's table is packaged as
 ``rotacal/turntable/tables/seed001.toml``; :func:`seed_table` loads it)::
 
     name = "Two-axis turntable"
@@ -15,7 +15,7 @@ mm); the loaded :class:`Turntable` is in rad and m. Example (the seed's table is
     theta = 1.62
     gamma = 1.62
     # … or instead: calibration_deg_h = 0.01 (derived from a multiposition calibration), with
-    # derivation = "calibration-check" (default) | "earth-rate-only" (seed 001's eq. (16))
+    # derivation = "calibration-check" (default) | "earth-rate-only" (the GyroWheel study's eq. (16))
 
     [[chain]]                    # a rotary axis about its own y, turning by phi1
     axis = "y"
@@ -56,7 +56,7 @@ admits keep the calibration within that accuracy) or ``"earth-rate-only"`` (the 
 weights (1/sensitivity): every angle of the table on 0, step, … below 360° by default — the unbiased
 mean over a turn, 2/π = 0.6366 for every |sin| and |cos| term — or up to 360° included with
 ``endpoint = true``. ``step_deg = 45, endpoint = true`` is the paper's averaging: it reproduces
-Figure 8's 0.6476/0.5365 but counts 0° and 360° twice (the packaged seed table uses it).
+Figure 8's 0.6476/0.5365 but counts 0° and 360° twice (the packaged table of the GyroWheel study uses it).
 
 Angular values must be small angles: a requirement component or an angular lower bound above 0.1 rad
 (5.7°) is refused — the small-angle error model (eqs. (17)–(19)) needs errors ≪ 1 rad, and such a
@@ -121,7 +121,7 @@ __all__ = [
     "seed_table_toml",
 ]
 
-#: The packaged description of seed 001's table, inside ``rotacal.turntable``.
+#: The packaged description of the GyroWheel study's table, inside ``rotacal.turntable``.
 SEED_TABLE_RESOURCE = ("tables", "seed001.toml")
 _TOP_KEYS = (
     "name",
@@ -527,7 +527,7 @@ def load_turntable(
 
 
 def seed_table() -> Turntable:
-    """The two-axis turntable of seed 001, loaded from the packaged ``tables/seed001.toml``.
+    """The two-axis turntable of the GyroWheel study, loaded from the packaged ``tables/seed001.toml``.
 
     Chain and error names of Tables 2–3 (χ order of eq. (25), then η), labels as in Table 2,
     requirement 1.62 arcmin = 0.027° per component (eq. (16)); lower bounds are rotacal's stated

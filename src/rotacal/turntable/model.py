@@ -1,10 +1,10 @@
-"""Geometric error model of a multi-axis turntable by homogeneous transforms (seed 001, §3).
+"""Geometric error model of a multi-axis turntable by homogeneous transforms (GyroWheel study, §3).
 
 A turntable is a chain of links from the base (frame F0) to the instrument (the last frame). A
 link is either a **rotary axis** — turning by its angle φ about its own x, y or z — or a **fixed
 link** that carries the orthogonality (squareness) and intersection (offset) errors between two
 axes. Each link also carries small error rotations, listed in order, and error translations. The
-two-axis table of seed 001 (Tables 2–3) is the chain::
+two-axis table of the GyroWheel study (Tables 2–3) is the chain::
 
     0T1 = Ry(φ1) · E(Δαx1, Δφy1, Δαz1)          outer axis about y: position error Δφy1, wobbles
     1T2 = E(Δεx, Δεy, 0) · Trans(Δη, 0, 0)      orthogonality Δεx, Δεy and intersection Δη
@@ -26,23 +26,23 @@ Two models of a link's error rotations:
 - ``model="seed"`` (default): one small-angle matrix E per link, with every error of the link
   summed about its axis, multiplied exactly as printed in eqs. (17)–(19) (E is not orthogonal);
 - ``model="exact"``: each error is a proper rotation (``scipy.spatial.transform.Rotation``),
-  applied in the order the link lists them — Table 3's order for the seed (e.g. φ1 about y, then
-  Δφy1 about y, Δαz1 about z, Δαx1 about x). It equals the seed model to first order.
+  applied in the order the link lists them — Table 3's order for the GyroWheel study's table (e.g. φ1 about y, then
+  Δφy1 about y, Δαz1 about z, Δαx1 about x). It equals the GyroWheel study's model to first order.
 
 Translations are applied after the link's rotations (eq. (18): E·Trans; Table 3's wording puts the
 translation first — the difference is an origin shift of order Δη·Δε and none in orientation).
 Translations never change the orientation: "the intersection error has no effect on the
-orientation error" (seed 001, after eq. (25)).
+orientation error" (GyroWheel study, after eq. (25)).
 
 ΔR is computed by the recursion D ← A_kᵀ·D·A_k·E_k over the links (A_k the link's perfect
 rotation, E_k its error matrix), which equals R_dᵀR_t because A_kᵀA_k = I. It starts from D = I
-and skips the conjugation while D is still exactly the identity, so the outer axis of the seed
+and skips the conjugation while D is still exactly the identity, so the outer axis of the GyroWheel study's table
 table, R_y(φ1), cancels exactly (to the last bit), as it does in eq. (26). The first-order
 expansion, ΔR ≈ I + Σ_k skew(S_kᵀ e_k) with S_k the product of the perfect rotations after link k,
 gives the generalised eq. (26) (:meth:`Turntable.linear_coefficients`) and the sensitivities of
 eq. (28) (:meth:`Turntable.sensitivities`).
 
-Names: the seed's error vector χ (eq. (25)) is ``phi_y1, phi_z2, alpha_x1, alpha_z1, alpha_x2,
+Names: the GyroWheel study's error vector χ (eq. (25)) is ``phi_y1, phi_z2, alpha_x1, alpha_z1, alpha_x2,
 alpha_y2, eps_x, eps_y`` plus the translation ``eta``. Every error may also be named by its
 ISO 230-1 / ISO 230-7 symbol: the one stated in the table (``iso``) or, when unambiguous, a
 generated one — a rotary axis about x/y/z has letter A/B/C; its position error is E{L}{L} (EBB),
@@ -97,7 +97,7 @@ COMPONENTS = ("psi", "theta", "gamma")
 #: Kinds of error: rotation of a rotary axis about itself, about another axis, of a fixed link, and
 #: any translation.
 KINDS = ("position", "wobble", "squareness", "offset")
-#: The seed's χ (eq. (25)) followed by the intersection error η.
+#: The GyroWheel study's χ (eq. (25)) followed by the intersection error η.
 SEED_ERROR_NAMES = (
     "phi_y1",
     "phi_z2",
@@ -150,7 +150,7 @@ _DEFAULT_SENSITIVITY_STEP_DEG = 1.0
 # ------------------------------------------------------------------------------------ the chain
 @dataclasses.dataclass(frozen=True)
 class Link:
-    """One element of the chain base → instrument (a row of seed 001, Table 3).
+    """One element of the chain base → instrument (a row of Table 3 of the GyroWheel study).
 
     Attributes
     ----------
@@ -203,7 +203,7 @@ class Link:
 
 @dataclasses.dataclass(frozen=True)
 class ErrorSpec:
-    """One geometric error of the table (a row of seed 001, Table 2).
+    """One geometric error of the table (a row of Table 2 of the GyroWheel study).
 
     Attributes
     ----------
@@ -217,9 +217,9 @@ class ErrorSpec:
         ISO 230-1/-7 symbol (e.g. ``"EBB"``), accepted as an alias. A :class:`Turntable` fills it
         with the generated symbol when none is given and the generated one is unambiguous.
     label : str
-        Human description (Table 2's wording for the seed).
+        Human description (Table 2's wording for the GyroWheel study's table).
     weight : float or None
-        Override of the allocation weight (default: 1/sensitivity, seed 001 after eq. (33)).
+        Override of the allocation weight (default: 1/sensitivity, the GyroWheel study after eq. (33)).
     """
 
     name: str
@@ -479,10 +479,10 @@ def _default_label(kind: str, link: Link, ax: str, next_angle: str | None) -> st
 # -------------------------------------------------------------------------------- the turntable
 @dataclasses.dataclass(frozen=True)
 class Turntable:
-    """A turntable's chain of links, its geometric errors and its requirement (seed 001, §3–4).
+    """A turntable's chain of links, its geometric errors and its requirement (GyroWheel study, §3–4).
 
     Build it from a TOML description with :func:`load_turntable`, or :func:`seed_table` for the
-    two-axis table of seed 001. Constructing it validates the chain against ``errors``: every
+    two-axis table of the GyroWheel study. Constructing it validates the chain against ``errors``: every
     chain error appears in ``errors`` exactly once and vice versa, names are unique, angle names
     are unique. Missing ISO symbols in ``errors`` are filled with the generated ones (see the
     module docstring); an empty label is filled with a description from the chain.
@@ -907,7 +907,7 @@ class Turntable:
         *,
         model: Model = "seed",
     ) -> np.ndarray:
-        """Orientation error matrix ΔR = R_dᵀ·R_t of the instrument (seed 001, eq. (23)).
+        """Orientation error matrix ΔR = R_dᵀ·R_t of the instrument (GyroWheel study, eq. (23)).
 
         Parameters
         ----------
@@ -989,7 +989,7 @@ class Turntable:
         *,
         model: Model = "seed",
     ) -> np.ndarray:
-        """Orientation error (Δψ, Δθ, Δγ) of the instrument (seed 001, eqs. (23)–(25)).
+        """Orientation error (Δψ, Δθ, Δγ) of the instrument (GyroWheel study, eqs. (23)–(25)).
 
         Parameters
         ----------
@@ -1015,7 +1015,7 @@ class Turntable:
         *,
         model: Model = "seed",
     ) -> np.ndarray:
-        """Actual homogeneous transform T_t = Π iT(i+1), base → instrument (seed 001, eq. (22)).
+        """Actual homogeneous transform T_t = Π iT(i+1), base → instrument (GyroWheel study, eq. (22)).
 
         Each link is [A·E, A·E·t; 0, 1]: its perfect rotation A (eqs. (17), (19)), its error
         rotation E, then its translation t (eq. (18): E·Trans).
@@ -1083,7 +1083,7 @@ class Turntable:
 
         ΔR ≈ I + Σ_k skew(S_kᵀ·e_k) with S_k the product of the perfect rotations after link k, so
         an error of link k about its axis a contributes row a of S_k (the same for both models).
-        For the seed table this is eq. (26): e.g. ∂Δψ/∂Δφy1 = cos φ2, ∂Δγ/∂Δφy1 = sin φ2.
+        For the GyroWheel study's table this is eq. (26): e.g. ∂Δψ/∂Δφy1 = cos φ2, ∂Δγ/∂Δφy1 = sin φ2.
 
         Parameters
         ----------
@@ -1116,14 +1116,14 @@ class Turntable:
     def sensitivities(
         self, *, step_deg: float | None = None, endpoint: bool | None = None
     ) -> np.ndarray:
-        """Mean |∂(Δψ, Δθ, Δγ)/∂χ_i| at χ = 0 over the rotation angles (seed 001, eq. (28)).
+        """Mean |∂(Δψ, Δθ, Δγ)/∂χ_i| at χ = 0 over the rotation angles (GyroWheel study, eq. (28)).
 
         The seed says only that the sensitivities "vary with the rotation angles" and that their
         average values are given (Figure 8). rotacal averages |coefficient| over a grid of every
         angle of the table: 0, step, … below 360° (``endpoint=False``, the default: the unbiased
         mean over a turn, 2/π = 0.6366 for every |sin| and |cos| term at a 1° step), or 0, step,
         …, 360° (``endpoint=True``). The paper's grid is ``step_deg=45, endpoint=True`` (9 points
-        per angle, 0° and 360° both counted): for the seed table it gives exactly Figure 8's
+        per angle, 0° and 360° both counted): for the GyroWheel study's table it gives exactly Figure 8's
         0.6476 (mean |cos φ2|) and 0.5365 (mean |sin φ2|) — the counted-twice 0°/360° points are
         where |cos| = 1 and |sin| = 0, hence the unequal pair. Without arguments the table's own
         choice is used (:attr:`sensitivity_grid`, its ``[sensitivity]`` settings).
@@ -1414,7 +1414,7 @@ def load_turntable(
 
 
 def seed_table() -> Turntable:
-    """The two-axis turntable of seed 001, from the packaged ``tables/seed001.toml``.
+    """The two-axis turntable of the GyroWheel study, from the packaged ``tables/seed001.toml``.
 
     Outer axis about y (φ1), a fixed link (orthogonality, intersection), inner axis about z (φ2);
     errors in the χ order of eq. (25), then η. See :func:`rotacal.turntable.config.seed_table`.
@@ -1443,7 +1443,7 @@ def _seed_cached() -> Turntable:
 def orientation_error(
     phi1: ArrayLike, phi2: ArrayLike, errors: Mapping[str, ArrayLike]
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Orientation error (Δψ, Δθ, Δγ) of the seed's two-axis table (seed 001, eqs. (17)–(24)).
+    """Orientation error (Δψ, Δθ, Δγ) of the GyroWheel study's two-axis table (eqs. (17)–(24)).
 
     Parameters
     ----------

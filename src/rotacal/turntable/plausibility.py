@@ -1,4 +1,4 @@
-"""Plausibility checks of a turntable error budget (seed 001).
+"""Plausibility checks of a turntable error budget (GyroWheel study).
 
 The error allocation (eqs. (29)–(34)) bounds each geometric error so that the orientation errors
 stay within the requirement; its Monte Carlo check draws tables built to those bounds. Draws

@@ -84,7 +84,7 @@ def check_derivation(value: Any, where: str) -> str:
     if value not in DERIVATIONS:
         raise ConfigError(
             f"{where} = {value!r} is unknown: use 'calibration-check' (tables built to the "
-            "allocation keep the calibration within its accuracy) or 'earth-rate-only' (seed 001's "
+            "allocation keep the calibration within its accuracy) or 'earth-rate-only' (the GyroWheel study's "
             "eq. (16): the Earth-rate reading alone)."
         )
     return str(value)
@@ -94,7 +94,7 @@ def _check_plan(table: Turntable) -> None:
     axes = [link.axis for link in table.links if link.axis is not None]
     if axes != ["y", "z"]:
         raise ConfigError(
-            "a calibration accuracy needs a table of the seed's geometry (an outer axis about y, "
+            "a calibration accuracy needs a table of the GyroWheel study's geometry (an outer axis about y, "
             "then an inner axis about z): the multiposition kinematics of eq. (3) assume it; "
             "state [requirement] psi, theta, gamma for this table instead."
         )
@@ -125,7 +125,7 @@ def calibration_response(
     Parameters
     ----------
     table : Turntable
-        A table of the seed's geometry.
+        A table of the GyroWheel study's geometry.
     phi1_deg, phi2_deg : ndarray
         The plan's outer and inner angles (deg).
     latitude_deg : float
@@ -168,7 +168,7 @@ def calibration_worst_case(
     Parameters
     ----------
     table : Turntable
-        A table of the seed's geometry.
+        A table of the GyroWheel study's geometry.
     upper_bounds_rad : mapping
         UB_i (rad; ``None`` or absent: the error is zero).
     phi1_deg, phi2_deg, latitude_deg
@@ -261,7 +261,7 @@ def derive_requirement(
     Parameters
     ----------
     table : Turntable
-        A table of the seed's geometry (outer axis about y, inner about z).
+        A table of the GyroWheel study's geometry (outer axis about y, inner about z).
     required_deg_h : float
         Calibration accuracy ωm (°/h, > 0).
     derivation : {"calibration-check", "earth-rate-only"}
@@ -280,7 +280,7 @@ def derive_requirement(
     Raises
     ------
     ConfigError
-        An unknown derivation, a table not of the seed's geometry, a non-positive ωm, lower bounds
+        An unknown derivation, a table not of the GyroWheel study's geometry, a non-positive ωm, lower bounds
         that leave no allocation for the derived requirement.
 
     References

@@ -1,4 +1,4 @@
-"""The numbers seed 001 prints, and rotacal's computations that stand beside them.
+"""The numbers the GyroWheel study prints, and rotacal's computations that stand beside them.
 
 One place for the paper's Table 4, eq. (16) and Figure 8 (the report, the benchmark and the budget
 import them from here; tests keep their own typed copies as independent truth), and
@@ -73,7 +73,7 @@ _SCAN_PLANS = ((8, 8), (12, 12))
 
 
 def is_seed_table(table: Turntable) -> bool:
-    """True when the table's angular errors are seed 001's χ (the paper's numbers then apply)."""
+    """True when the table's angular errors are the GyroWheel study's χ (the paper's numbers then apply)."""
     return tuple(table.angular_error_names) == CHI
 
 

@@ -83,32 +83,32 @@ KNOWN_SPECS: dict[str, tuple[str, str, str]] = {
     "encoder.graduation_error_arcsec": (
         "arcsec",
         "angle error of one encoder reading (graduation and interpolation)",
-        "motion amplitude by the optical encoder (seed 000)",
+        "motion amplitude by the optical encoder (Feng et al. 2023)",
     ),
     "encoder.undetectable_harmonics_arcsec": (
         "arcsec",
         "rms of the scale deviation at the orders that are multiples of the number of heads",
-        "self-calibrated deviation and compensated rate (seed 004)",
+        "self-calibrated deviation and compensated rate (Kokuyama et al. 2015)",
     ),
     "lts.resolution_um": (
         "µm",
         "resolution (quantisation) of the laser triangulation sensor's distance",
-        "motion amplitude by the LTS (seed 000)",
+        "motion amplitude by the LTS (Feng et al. 2023)",
     ),
     "lts.radius_mm": (
         "mm",
         "lever arm R from the axis to the LTS spot (value and its uncertainty)",
-        "motion amplitude by the LTS, θ = arctan(D/R) (seed 000, eq. 15)",
+        "motion amplitude by the LTS, θ = arctan(D/R) (Feng et al. 2023, eq. 15)",
     ),
     "fog.scale_factor_relative": (
         "1",
         "relative uncertainty of the FOG's scale factor",
-        "motion amplitude by the FOG (seed 000)",
+        "motion amplitude by the FOG (Feng et al. 2023)",
     ),
     "table.set_rate_relative": (
         "1",
         "relative error of the rate table's set rate (its rate accuracy)",
-        "gyro scale factor and 3-axis calibrations (seeds 003, 004)",
+        "gyro scale factor and 3-axis calibrations (robot-manipulator study 2023; Kokuyama et al. 2015)",
     ),
     "table.set_angle_arcsec": (
         "arcsec",
@@ -117,13 +117,13 @@ KNOWN_SPECS: dict[str, tuple[str, str, str]] = {
     ),
     "table.orientation_error_arcsec": (
         "arcsec",
-        "orientation error of the instrument on the turntable, per component (seed 001 eq. 7)",
-        "multiposition drift coefficients (seed 001)",
+        "orientation error of the instrument on the turntable, per component (GyroWheel study, eq. 7)",
+        "multiposition drift coefficients (GyroWheel study)",
     ),
     "site.latitude_deg": (
         "°",
         "latitude of the laboratory (value and its uncertainty)",
-        "multiposition drift coefficients (Earth rate and gravity, seed 001 eq. 3)",
+        "multiposition drift coefficients (Earth rate and gravity, GyroWheel study, eq. 3)",
     ),
 }
 
