@@ -26,8 +26,9 @@ DOC = Path(__file__).resolve().parents[2] / "docs" / "real-data.md"
 _BLOCK = re.compile(r"```console\n(.*?)```", re.S)
 _EXPECT = re.compile(r"<!-- expect (\S+): (.*?) -->")
 _CHECK = re.compile(
-    r"^(?P<key>[a-z_]+)(?:\[(?P<index>\d+)\])? = (?P<value>\S+)(?: ± (?P<tol>\S+))?$"
+    r"^(?P<key>[a-z][a-z0-9_]*)(?P<path>(?:\[\d+\]|\.\w+)*) = (?P<value>\S+)(?: ± (?P<tol>\S+))?$"
 )
+_STEP = re.compile(r"\[(\d+)\]|\.(\w+)")
 
 
 def _sections() -> list[tuple[str, str]]:
@@ -83,15 +84,22 @@ def test_section_commands_run_and_match_the_references(title, text, tmp_path, sh
             check=False,
         )
         assert done.returncode == 0, f"{command}\n{done.stderr}"
+    check_expects(text, tmp_path)
+
+
+def check_expects(text: str, folder: Path) -> None:
+    """Every ``<!-- expect FILE: KEY = VALUE ± TOL; … -->`` of ``text`` holds for the JSON
+    files the commands wrote in ``folder`` (``KEY[i]`` picks an element of a list, ``KEY.NAME``
+    an entry of an object; they chain: ``scale_misalignment[0][1]``, ``drift_coefficients.DF``)."""
     expects = _EXPECT.findall(text)
-    assert expects, title
+    assert expects, text.split("\n", 1)[0]
     for file, checks in expects:
-        result = json.loads((tmp_path / file).read_text())
+        result = json.loads((folder / file).read_text())
         for check in checks.split("; "):
             m = _CHECK.match(check.strip())
             assert m, check
             value = result[m["key"]]
-            if m["index"] is not None:
-                value = value[int(m["index"])]
+            for index, name in _STEP.findall(m["path"]):
+                value = value[int(index)] if index else value[name]
             tol = float(m["tol"] or 0)
             assert abs(value - float(m["value"])) <= tol, (file, check, value)
