@@ -363,7 +363,7 @@ def _check_plus_minus(summary: str, data: dict) -> None:
 
 def test_scale_factor_line_is_the_rounded_statement(captures):
     """S = value ± U with U to two significant digits and the value to the same place."""
-    from rotacal.cli._format import format_quantity
+    from rotacal.numbers import format_quantity
 
     argv = _analysis_argv(("gyro", "scale-factor"), captures)
     data = json.loads(run(*argv, "--json", "-").stdout)

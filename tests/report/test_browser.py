@@ -23,6 +23,8 @@ def look_at(browser: Any, path: Path) -> dict[str, Any]:
     """What a reader's browser finds on the page ``path``: console errors, requests beyond the
     file itself, the page's width at 420 px, images that did not load, folded sections left
     closed in print, the count of printed pages."""
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout  # the browser fixture has it
+
     url = path.resolve().as_uri()
     context = browser.new_context(viewport=PHONE, java_script_enabled=True)
     page = context.new_page()
@@ -50,6 +52,11 @@ def look_at(browser: Any, path: Path) -> dict[str, Any]:
         "details": page.evaluate("document.querySelectorAll('details').length"),
     }
     page.emulate_media(media="print")
+    closed = "Array.from(document.querySelectorAll('details')).filter(d => !d.open).length"
+    try:  # the print medium's change event reaches the page's script asynchronously
+        page.wait_for_function(f"{closed} === 0", timeout=3000)
+    except PlaywrightTimeout:
+        pass  # the count below reports what stayed closed
     found["closed_in_print"] = page.evaluate(
         "Array.from(document.querySelectorAll('details')).filter(d => !d.open).length"
     )

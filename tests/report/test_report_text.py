@@ -20,7 +20,9 @@ DEMO_PAGES = [name for name in demo_files() if name.endswith(".html")]
 
 #: The faults a reader must never see, each with the pattern that finds it.
 FAULTS = {
-    "a JSON key as a name": re.compile(r"\b[a-z]+(?:_[a-z0-9]+)+\b"),
+    # A name the user types is shown as typed: a capture's column in quotes (“rate_deg_s”), a key
+    # of the specification file with its table (encoder.undetectable_harmonics_arcsec).
+    "a JSON key as a name": re.compile(r"(?<![\w.“])[a-z]+(?:_[a-z0-9]+)+\b(?!”)"),
     "E notation": re.compile(r"\d[eE][+-]?\d"),
     "an internal paper name": re.compile(r"seed 00\d", re.IGNORECASE),
     "a placeholder unit": re.compile(r"\boutput unit\b(?!s)"),
@@ -126,7 +128,7 @@ def test_the_text_checks_find_the_old_reports_faults() -> None:
 
 def test_budget_text_is_rewritten_for_a_reader_without_changing_a_number() -> None:
     """The JSON's words of a budget (``edf 6.797e+04``) in fixed notation, same digits, same sign."""
-    from rotacal.report.uncertainty import readable
+    from rotacal.report.wording import readable
 
     assert readable("χ², edf 6.797e+04 (white)") == "χ², edf 67970 (white)"
     assert readable("bias +6.8e-05 and -1.6e-07 pp") == "bias +6.8 × 10⁻⁵ and -1.6 × 10⁻⁷ pp"
@@ -134,4 +136,5 @@ def test_budget_text_is_rewritten_for_a_reader_without_changing_a_number() -> No
     assert readable("1.2 output unit/(°/s), 3 output units") == (
         "1.2 output units/(°/s), 3 output units"
     )
-    assert readable("head_5 2.1430190 … 2.1430220") == "head_5 2.1430190 … 2.1430220"
+    assert readable("head_5 2.1430190 … 2.1430220") == "head 5 2.1430190 … 2.1430220"
+    assert readable("max_K|e_j| ≤ |e_j*|") == "max_K|eⱼ| ≤ |eⱼ*|"

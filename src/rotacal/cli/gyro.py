@@ -1,4 +1,4 @@
-"""``rotacal gyro``: gyroscope calibrations (seeds 004, 003, 001)."""
+"""``rotacal gyro``: gyroscope calibrations (Kokuyama et al. 2015; robot-manipulator study 2023; GyroWheel study)."""
 
 from __future__ import annotations
 
@@ -41,7 +41,11 @@ from ._reading import current_read_options
     )
 )
 def gyro() -> None:
-    """Gyroscope calibrations on the table (seeds 004, 003, 001)."""
+    """Gyroscope calibrations on the table.
+
+    Scale factor after Kokuyama et al. (2015); triad after the robot-manipulator study (IEEE A&E
+    Systems Magazine, 2023); multiposition after the GyroWheel study (Int. J. Aerospace Eng.).
+    """
 
 
 @gyro.command(
@@ -60,7 +64,7 @@ def gyro() -> None:
     "--full-scale-deg-s",
     type=float,
     default=None,
-    help="FS for the nonlinearity in %FS [default: the largest |set rate|].",
+    help="FS for the nonlinearity in %FS [default: the largest set rate in magnitude].",
 )
 @click.option(
     "--requirement",
@@ -105,7 +109,7 @@ def gyro_scale_factor(
 
     Columns rate_deg_s (the table's set rate) and output (the gyro's, in its own unit); the
     rows of each set rate are averaged and V(Ω) = S·Ω + V0 is fitted by least squares
-    (seed 004, §4). FS is the full scale, the largest |set rate| unless given. A test kept as
+    (Kokuyama et al. 2015, §4). FS is the full scale, the largest set rate in magnitude unless given. A test kept as
     one file per set rate takes the rate of each file from its name (--rate-from-name) or from a
     table (--rates).
     """
@@ -182,10 +186,11 @@ def _print_scale_factor(result: Any, data: dict[str, Any]) -> None:
 def gyro_triad(
     capture: str, reject_k: float | None, columns: Sequence[str], group: str | None, **kw: Any
 ) -> None:
-    """Three-axis scale/misalignment and bias (seed 003).
+    """Three-axis scale/misalignment and bias.
 
     Columns wx_deg_s, wy_deg_s, wz_deg_s (the reference rate in the gyro's nominal axes) and
-    ux, uy, uz (its raw outputs): u = K·ω + b by least squares, with outlier rejection.
+    ux, uy, uz (its raw outputs): u = K·ω + b by least squares, with outlier rejection (the
+    modified six-position method of the robot-manipulator study, IEEE A&E Systems Magazine 2023).
     """
     from rotacal.gyro import RATE_COLUMNS, TRIAD_OUTPUT_COLUMNS, calibrate_triad_columns
 
@@ -382,11 +387,11 @@ def gyro_multiposition(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """Drift coefficients by multiposition (seed 001).
+    """Drift coefficients by multiposition.
 
     Columns phi1_deg (outer axis), phi2_deg (inner axis) and output_deg_h: the drift
     coefficients by least squares with the Earth rate and gravity at each position
-    (seed 001, eqs. 1–6).
+    (GyroWheel study, Int. J. Aerospace Eng., eqs. 1–6).
     """
     from rotacal.gyro import calibrate_multiposition
 

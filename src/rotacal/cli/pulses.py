@@ -1,4 +1,4 @@
-"""``rotacal selfcal`` and ``rotacal rate``: the multi-head encoder (seed 004)."""
+"""``rotacal selfcal`` and ``rotacal rate``: the multi-head encoder (Kokuyama et al. 2015)."""
 
 from __future__ import annotations
 
@@ -31,7 +31,9 @@ from ._help import example
 _PULSES_PER_REV = click.option(
     "--pulses-per-rev", type=int, required=True, help="m: pulses per revolution of one head."
 )
-_KOKUYAMA2015_TITLE = "Kokuyama et al. (2015): angular-velocity standard with a self-calibratable encoder"
+_KOKUYAMA2015_TITLE = (
+    "Kokuyama et al. (2015): angular-velocity standard with a self-calibratable encoder"
+)
 
 
 @cli.command(
@@ -57,11 +59,11 @@ def selfcal_cmd(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """Scale deviation of a multi-head encoder (seed 004).
+    """Scale deviation of a multi-head encoder.
 
     Columns head_0 … head_{n-1}: the pulse times (s) of each head. The equal-division-averaged
     method compares the heads at the same instant; harmonics that are multiples of n stay
-    undetectable, as the result says.
+    undetectable, as the result says (Kokuyama et al. 2015).
     """
     from rotacal.encoder.selfcal import self_calibrate
 
@@ -152,7 +154,7 @@ def rate_cmd(
     """Table rate from pulse timing: mean, stability, s(φ).
 
     Columns head_0 … head_{n-1} (pulse times, s): the angular velocity, its bias against the
-    set rate, its stability and the root Allan variance versus angle s(φ) (seed 004).
+    set rate, its stability and the root Allan variance versus angle s(φ) (Kokuyama et al. 2015).
     """
     from rotacal.table.rate import calibrate_rate
 

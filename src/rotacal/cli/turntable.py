@@ -30,10 +30,11 @@ from ._help import example
     ),
 )
 def turntable() -> None:
-    """Turntable geometric error budget (seed 001).
+    """Turntable geometric error budget.
 
     The error model of a serial turntable by homogeneous transforms, its sensitivities, the
-    allocation of tolerances to the error sources and a Monte Carlo check.
+    allocation of tolerances to the error sources and a Monte Carlo check (GyroWheel study,
+    Int. J. Aerospace Eng.).
     """
 
 
@@ -66,7 +67,7 @@ def _report_subtitle() -> str:
     default=None,
     help="How [requirement] calibration_deg_h becomes the orientation requirement: "
     "'calibration-check' (tables built to the allocation keep the calibration within it) or "
-    "'earth-rate-only' (seed 001's eq. (16), the Earth-rate reading alone). Default: the config's "
+    "'earth-rate-only' (the GyroWheel study's eq. (16), the Earth-rate reading alone). Default: the config's "
     "[requirement] derivation, else calibration-check.",
 )
 @click.option(
@@ -172,7 +173,7 @@ def turntable_budget_cmd(
 def turntable_example(out: str, overwrite: bool) -> None:
     """Write the paper's two-axis table as commented TOML.
 
-    A configuration to start from for `rotacal turntable budget` (seed 001's table).
+    A configuration to start from for `rotacal turntable budget` (the GyroWheel study's table).
     """
     from rotacal.io.outputs import write_output
     from rotacal.turntable import seed_table_toml

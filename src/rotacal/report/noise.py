@@ -68,7 +68,7 @@ def _figure(r: GyroNoise) -> Figure:
     return figure_from_matplotlib(
         fig,
         "Allan deviation and noise terms",
-        f"Column {r.column}, {r.samples} samples at {fixed(r.fs_hz)} Hz "
+        f"Column “{r.column}” of the capture, {r.samples} samples at {fixed(r.fs_hz)} Hz "
         f"({fixed(r.duration_s / 3600, 3)} h). Dashed: the {cite('ieee952')} lines where each "
         "slope dominates.",
     )

@@ -8,7 +8,6 @@ value ± U with k and p — into its ``results`` (the report's summary at the to
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -16,6 +15,7 @@ from rotacal.errors import ConfigError
 from rotacal.glossary import GLOSSARY
 from rotacal.numbers import coverage, fixed, format_quantity
 from rotacal.report.html import ResultRow, Table
+from rotacal.report.wording import readable
 from rotacal.uncertainty.budget import UncertaintyBudget
 
 __all__ = [
@@ -24,7 +24,6 @@ __all__ = [
     "budget_table",
     "budget_tables",
     "plain_name",
-    "readable",
     "result_row",
     "results_table",
 ]
@@ -98,26 +97,6 @@ def budget_results(
             )
         )
     return rows
-
-
-_E_NUMBER = re.compile(r"(?<![\w.])([-+]?)(\d+(?:\.(\d+))?)[eE]([-+]?\d+)\b")
-_PLACEHOLDER_UNIT = re.compile(r"\boutput unit\b(?!s)")
-
-
-def readable(text: str) -> str:
-    """Text of a budget (sources, distributions, notes: the JSON's words) as a report shows it.
-
-    A number in E notation (``6.797e+04``) is rewritten in fixed notation with its significant
-    digits (``67970``; :func:`rotacal.numbers.fixed`), the GUM's ``t_p`` gets its subscript, and
-    the unit of a result whose output unit the user did not give reads "output units".
-    """
-
-    def fixed_number(m: re.Match[str]) -> str:
-        digits = len(m.group(2).replace(".", "").lstrip("0")) or 1
-        return ("+" if m.group(1) == "+" else "") + fixed(float(m.group(0)), digits)
-
-    text = _E_NUMBER.sub(fixed_number, text).replace("t_p(", "tₚ(")
-    return _PLACEHOLDER_UNIT.sub("output units", text)
 
 
 def budget_details(budgets: Mapping[str, UncertaintyBudget]) -> list[Table]:

@@ -47,6 +47,8 @@ _DEG_PER = re.compile(r"\bdeg/")
 _BIAS_SYMBOL = re.compile(r"\bb_([xyz])\b")
 _KEY_U = re.compile(r"\b([a-z][a-z0-9]*(?:_[a-z0-9]+)*)_u\b")
 _HEAD = re.compile(r"\bhead_(\d+)\b")
+#: An index written as a subscript in a method's note (e_j): the Unicode subscript letter.
+_SUBSCRIPT_J = re.compile(r"\b([a-z])_j\b")
 #: What an analysis writes when the user named no output unit: words, not a unit's name.
 _NO_UNIT = re.compile(r"\boutput unit\b(?!s)")
 
@@ -65,7 +67,7 @@ def _significant(text: str) -> int:
 def readable(text: str) -> str:
     """``text`` with E-notation numbers in fixed notation (same significant digits), head column
     names (``head_3``) as words ("head 3"), "seed 004" by its author and year, ``<key>_u`` of a
-    glossary key as u(plain name), "deg/" as "°/", and "output unit" (no unit given) as "output
+    glossary key as u(plain name), "deg/" as "°/", the GUM's ``t_p`` as tₚ, an index ``e_j`` as eⱼ, and "output unit" (no unit given) as "output
     units"."""
 
     def plain(m: re.Match[str]) -> str:
@@ -81,8 +83,9 @@ def readable(text: str) -> str:
     text = _SEED.sub(lambda m: cite(_SEEDS[m.group(1)]), text)
     text = _KEY_U.sub(key_u, text)
     text = _FIELD.sub(lambda m: _FIELDS[m.group(1)], text)
-    text = _DEG_PER.sub("°/", text.replace("^2", "²"))
+    text = _DEG_PER.sub("°/", text.replace("^2", "²").replace("t_p(", "tₚ("))
     text = _BIAS_SYMBOL.sub(r"b(\1)", text)
+    text = _SUBSCRIPT_J.sub(r"\1ⱼ", text)
     return _NO_UNIT.sub("output units", _HEAD.sub(r"head \1", text))
 
 
