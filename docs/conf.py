@@ -39,7 +39,6 @@ extensions = [
     # MathJax copied into _static/ and loaded from there instead of a CDN (works offline)
     "sphinx-mathjax-offline",
     "rotacal_keys",
-    "optional_sections",
     "plain_docstrings",
 ]
 
@@ -55,7 +54,6 @@ nitpicky = False
 # and `demo` in single backquotes is code, as a reader of `rotacal --help` reads it.
 smartquotes = False
 default_role = "code"
-# An empty section of the index is allowed by docs/_ext/optional_sections.py (those only).
 suppress_warnings = [
     # "more than one target found": the docstrings' Attributes sections read "name : meaning"
     # (the type is in the annotation) and napoleon renders the meaning as a type, whose words

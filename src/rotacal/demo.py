@@ -564,8 +564,8 @@ def _gyros(files: _Files) -> tuple[list[_Page], dict[str, Any]]:
 
 def _turntable(files: _Files) -> tuple[_Page, dict[str, Any]]:
     """The gyrowheel paper's two-axis turntable: sensitivities, allocation, 10⁶-draw Monte Carlo."""
-    from rotacal.report.html import ResultRow
     from rotacal.report.turntable import turntable_section
+    from rotacal.report.turntable_results import monte_carlo_rows
     from rotacal.turntable import seed_table, turntable_budget
 
     budget = turntable_budget(seed_table(), runs=1_000_000)
@@ -575,18 +575,7 @@ def _turntable(files: _Files) -> tuple[_Page, dict[str, Any]]:
         "monte_carlo": budget.monte_carlo,
         "calibration": budget.calibration,
     }
-    draws = budget.monte_carlo["runs"]
-    largest = budget.monte_carlo["max_abs_arcmin"]
-    headline = [
-        ResultRow(
-            quantity=f"largest orientation error {symbol} in {draws:,} draws".replace(",", " "),
-            value=format_plain(largest[comp], "arcmin", digits=3),
-            limit=f"≤ {format_plain(budget.requirement_arcmin[comp], 'arcmin', digits=3)}",
-            passed=bool(largest[comp] <= budget.requirement_arcmin[comp]),
-        )
-        for comp, symbol in (("psi", "Δψ"), ("theta", "Δθ"), ("gamma", "Δγ"))
-        if comp in largest
-    ]
+    headline = monte_carlo_rows(budget)
     page = _Page(
         "turntable_budget.html",
         _report(

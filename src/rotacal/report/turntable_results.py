@@ -29,7 +29,7 @@ from rotacal.report.uncertainty import result_row
 from rotacal.turntable.budget import TurntableBudget
 from rotacal.turntable.model import COMPONENTS
 
-__all__ = ["RESULT_REFERENCES", "turntable_results", "verdict"]
+__all__ = ["RESULT_REFERENCES", "monte_carlo_rows", "turntable_results", "verdict"]
 
 #: The references the results cite (the section lists them).
 RESULT_REFERENCES = ["clopper1934", "david2003", "ilac_g8"]
@@ -90,7 +90,10 @@ def _fraction_row(
     )
 
 
-def _monte_carlo_rows(budget: TurntableBudget, mc: Mapping[str, Any]) -> list[ResultRow]:
+def monte_carlo_rows(budget: TurntableBudget) -> list[ResultRow]:
+    """The Monte Carlo check's summary rows: each |Δ|'s 99.9 % quantile with its order-statistic
+    interval and verdict, then the fraction of tables outside the requirement (Clopper–Pearson)."""
+    mc = budget.monte_carlo
     p = float(mc["coverage_probability"])
     rows = []
     if "quantile_abs_arcmin" in mc:
@@ -155,7 +158,7 @@ def turntable_results(budget: TurntableBudget) -> list[ResultRow]:
     """The summary rows of a turntable budget (module docstring): the Monte Carlo check's, then the
     calibration check's where the budget has one."""
     mc = budget.monte_carlo
-    rows = _monte_carlo_rows(budget, mc)
+    rows = monte_carlo_rows(budget)
     cal = budget.calibration
     if cal is not None and "p95_rate_error_interval_deg_h" in cal:
         rows += _calibration_rows(cal, float(mc["coverage_probability"]))
