@@ -684,3 +684,28 @@ def test_values_beyond_the_small_angle_model_are_refused(seed, alloc) -> None:
         allocate(seed, {"psi": 0.5, "theta": 1e-3, "gamma": 1e-3})
     with pytest.raises(ConfigError, match=r"the upper bound of phi_y1 = 0.4235 rad .*give radians"):
         worst_case(seed, {"phi_y1": 0.4235}, I_SEED)  # Table 4's arcmin given as radians
+
+
+def test_a_repeated_allocation_is_the_same_and_its_copy_is_the_callers() -> None:
+    """The memo of :func:`allocate` (same table, same options → the result made before) gives an
+    equal result, which a caller may change without changing the next one; other options or
+    another table are allocated afresh."""
+    from rotacal.turntable import allocation
+
+    t = load_turntable(SINGLE)
+    first = allocate(t)
+    first.upper_bounds_rad["eps_x"] = -1.0  # a caller's change stays with the caller
+    again = allocate(t)
+    assert again.upper_bounds_rad["eps_x"] > 0.0
+    assert again == allocate(dataclasses.replace(t, source="elsewhere.toml"))
+    fresh = allocation._allocate(
+        t,
+        None,
+        angle_step_deg=1.0,
+        full_model_guard=True,
+        max_evaluations=allocation._MAX_FULL_EVALUATIONS,
+        constraint_step_deg=None,
+    )
+    assert again == fresh
+    tighter = allocate(t, 0.5 * min(t.requirement.values()))
+    assert tighter.upper_bounds_rad["eps_x"] < again.upper_bounds_rad["eps_x"]
