@@ -145,3 +145,19 @@ def analysis_args() -> Callable[[str, str, dict[str, Any]], list[str]]:
     """``analysis_args(kind, path, truth)``: the arguments of the command that analyses a twin
     of ``kind`` (``rotacal simulate KIND``) at ``path``, with the set values its truth states."""
     return _analysis_args
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Each test module runs whole on one xdist worker (``--dist loadgroup``, pyproject's addopts).
+
+    The expensive twins and Monte Carlo runs are module-scoped fixtures; spread test by test over
+    the workers, every worker would make them again. A test that names its own ``xdist_group``
+    (the demo's: one demo per session for several modules) keeps it. Runs before xdist's hook,
+    which turns the marks into the groups it schedules.
+    """
+    if not config.pluginmanager.hasplugin("xdist"):
+        return
+    for item in items:
+        if item.get_closest_marker("xdist_group") is None:
+            item.add_marker(pytest.mark.xdist_group(item.nodeid.split("::", 1)[0]))

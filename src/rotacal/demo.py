@@ -146,10 +146,7 @@ def _headline(
     """The index's rows of a result: the budgets of ``keys`` as value ± U (k, p)."""
     from rotacal.report.uncertainty import budget_results
 
-    rows = budget_results({k: budgets[k] for k in keys if k in budgets}, names=names)
-    for row in rows:  # a result without the unit the user gave states it in "output units"
-        row.value = row.value.replace("output unit", "output units").replace("deg/", "°/")
-    return rows
+    return budget_results({k: budgets[k] for k in keys if k in budgets}, names=names)
 
 
 def _report(title: str, subtitle: str, sections: list[Section], **inputs: str) -> Report:
@@ -194,18 +191,12 @@ def _rate_standard(files: _Files) -> tuple[_Page, dict[str, Any]]:
     true_bias = 100 * (truth["mean_rate_whole_revs_deg_s"] - 300.0) / 300.0
     paper = cite("kokuyama2015")
 
-    def measured(budgets: Mapping[str, UncertaintyBudget], key: str, value: float | None) -> str:
-        b = budgets.get(key)
-        if b is None:
-            return format_plain(value, "")
-        return format_quantity(b.value, b.unit, U=b.U, p=b.p, interval=b.interval)
-
     table = Table(
         ["quantity", "rotacal", "twin's truth", paper],
         [
             [
                 "scale deviation, peak-to-peak",
-                measured(selfcal._budgets, "deviation_pp_arcsec", selfcal.deviation_pp_arcsec),
+                _with_u(selfcal._budgets, "deviation_pp_arcsec", selfcal.deviation_pp_arcsec),
                 f"{format_plain(truth['deviation_detectable_pp_arcsec'], 'arcsec', digits=4)} "
                 "(detectable part)",
                 "about 6 arcsec (Figure 4)",
@@ -224,19 +215,19 @@ def _rate_standard(files: _Files) -> tuple[_Page, dict[str, Any]]:
             ],
             [
                 "mean rate",
-                measured(rate._budgets, "mean_rate_deg_s", rate.mean_rate_deg_s),
+                _with_u(rate._budgets, "mean_rate_deg_s", rate.mean_rate_deg_s),
                 format_plain(truth["mean_rate_whole_revs_deg_s"], "°/s", digits=10),
                 "300 °/s set",
             ],
             [
                 "rate bias against the set rate",
-                measured(rate._budgets, "rate_bias_percent", rate.rate_bias_percent),
+                _with_u(rate._budgets, "rate_bias_percent", rate.rate_bias_percent),
                 format_plain(true_bias, "%", digits=3),
                 "about 0.01 % (Figure 9)",
             ],
             [
                 "rate fluctuation, rms (10-pulse average)",
-                measured(
+                _with_u(
                     rate._budgets, "rate_deviation_rms_percent", rate.rate_deviation_rms_percent
                 ),
                 f"{format_plain(truth['rate_fluctuation_rms_percent'], '%', digits=3)} "
@@ -303,12 +294,17 @@ def _analyse(kind: str, capture: sim.SimCapture, scenario: dict[str, Any]) -> Mo
     return calibrate_fog_motion(c["time_s"], c["rate_deg_s"], **settings)
 
 
-def _with_u(r: MotionResult, key: str, value: float, unit: str) -> str:
-    """A motion result with its U (or interval); k is in the summary, p in the table's note."""
-    b = r._budgets.get(key)
+def _with_u(
+    budgets: Mapping[str, UncertaintyBudget], key: str, value: float | None, unit: str = ""
+) -> str:
+    """A result with its U (or interval) as a table cell, in the budget's unit unless ``unit`` is
+    given; the plain value where the result has no budget. k is in the summary, p in the note."""
+    from rotacal.report.wording import readable
+
+    b = budgets.get(key)
     if b is None:
         return format_plain(value, unit, digits=7)
-    return format_quantity(b.value, unit, U=b.U, p=b.p, interval=b.interval)
+    return readable(format_quantity(b.value, unit or b.unit, U=b.U, p=b.p, interval=b.interval))
 
 
 def _truth_table(
@@ -318,11 +314,11 @@ def _truth_table(
 
     rows = [
         ["amplitude", format_plain(truth["amplitude_deg"], "°", digits=7)]
-        + [_with_u(r, "amplitude_deg", r.amplitude_deg, "°") for r in results],
+        + [_with_u(r._budgets, "amplitude_deg", r.amplitude_deg, "°") for r in results],
         ["frequency", format_plain(truth["frequency_hz"], "Hz", digits=9)]
-        + [_with_u(r, "frequency_hz", r.frequency_hz, "Hz") for r in results],
+        + [_with_u(r._budgets, "frequency_hz", r.frequency_hz, "Hz") for r in results],
         ["THD", format_plain(truth["thd_percent"], "%", digits=4)]
-        + [_with_u(r, "thd_percent", r.thd_percent, "%") for r in results],
+        + [_with_u(r._budgets, "thd_percent", r.thd_percent, "%") for r in results],
         ["reversing moments found / true (whole capture)", ""]
         + [
             f"{r.reversal_times_s.size} / {n}" for r, n in zip(results, true_reversals, strict=True)
@@ -339,31 +335,15 @@ def _truth_table(
     )
 
 
-def _axis_names(prefix: str, symbol: str, unit_word: str) -> dict[str, str]:
-    """Plain names of a triad's diagonal (``K_xx`` → "scale factor of the x gyro")."""
-    return {
-        f"{prefix}[{i}][{i}]": f"{unit_word} of the {a} gyro ({symbol}{a}{a})"
-        for i, a in enumerate("xyz")
-    }
-
-
-def _requirement_rows(verdict: Any) -> list[ResultRow]:
-    """One index row per check of a scale-factor requirement (FMVSS 126): value, limit, verdict."""
-    from rotacal.report.html import ResultRow
-
-    units = {"deg/s": "°/s", "percent_fs": "% FS"}
-    rows = []
-    for check in verdict.checks:
-        unit = units.get(check.unit, check.unit)
-        rows.append(
-            ResultRow(
-                quantity=f"{verdict.title}: {check.quantity}",
-                value=format_plain(check.value, unit, digits=3),
-                limit=format_plain(check.limit, unit, digits=3),
-                passed=check.passed,
-            )
-        )
-    return rows
+#: A triad's scale factors |K_i| (the length of row i of K), by the keys of their budgets.
+_SCALE_FACTORS = {
+    f"scale_factors[{i}]": f"scale factor |K{a}| of the {a} gyro" for i, a in enumerate("xyz")
+}
+#: The diagonal of K (a triad calibrated from rotations states no |K_i|), by the keys of its budgets.
+_DIAGONAL = {
+    f"scale_misalignment[{i}][{i}]": f"K{a}{a}, the {a} gyro's sensitivity along {a}"
+    for i, a in enumerate("xyz")
+}
 
 
 def _gyros(files: _Files) -> tuple[list[_Page], dict[str, Any]]:
@@ -375,7 +355,7 @@ def _gyros(files: _Files) -> tuple[list[_Page], dict[str, Any]]:
         calibrate_triad_rotations,
         gyro_noise,
     )
-    from rotacal.report.gyro_scale import scale_factor_section
+    from rotacal.report.gyro_scale import requirement_rows, scale_factor_section
     from rotacal.report.html import Section
     from rotacal.report.multiposition import multiposition_section
     from rotacal.report.noise import noise_section
@@ -470,8 +450,7 @@ def _gyros(files: _Files) -> tuple[list[_Page], dict[str, Any]]:
                 ],
             ),
             f"The line of a yaw-rate sensor's output against the rate; {cite('fmvss126')}.",
-            _headline(sf._budgets, ["scale_factor"])
-            + (_requirement_rows(sf.requirement) if sf.requirement is not None else []),
+            _headline(sf._budgets, ["scale_factor"]) + requirement_rows(sf),
         ),
         _Page(
             "gyro_triad.html",
@@ -481,11 +460,7 @@ def _gyros(files: _Files) -> tuple[list[_Page], dict[str, Any]]:
                 [triad_intro, triad_section(triad, "3-axis calibration (2 % outliers)")],
             ),
             "Scale factors, misalignments and biases of a triad from turns at set rates.",
-            _headline(
-                triad._budgets,
-                list(_axis_names("scale_misalignment", "K", "")),
-                names=_axis_names("scale_misalignment", "K", "scale factor"),
-            ),
+            _headline(triad.axis_budgets, list(_SCALE_FACTORS), names=_SCALE_FACTORS),
         ),
         _Page(
             "gyro_rotations.html",
@@ -506,11 +481,7 @@ def _gyros(files: _Files) -> tuple[list[_Page], dict[str, Any]]:
                 ],
             ),
             "Scale factors, misalignments and biases of a triad from whole turns.",
-            _headline(
-                rot._budgets,
-                list(_axis_names("scale_misalignment", "K", "")),
-                names=_axis_names("scale_misalignment", "K", "scale factor"),
-            ),
+            _headline(rot._budgets, list(_DIAGONAL), names=_DIAGONAL),
         ),
         _Page(
             "gyro_multiposition.html",
@@ -649,10 +620,6 @@ def _scenario_page(
     return page, (label, comparison, truth, paper_row)
 
 
-def _sentence(text: str) -> str:
-    return text[:1].upper() + text[1:]
-
-
 def run_demo(
     out: Path, progress: Callable[[str], None] | None = None, *, overwrite: bool = False
 ) -> list[Path]:
@@ -663,6 +630,7 @@ def run_demo(
     """
     from rotacal.report.html import Link, Report, Section, render_html
     from rotacal.report.motion import comparison_section
+    from rotacal.report.wording import paragraph
 
     step = progress or (lambda label: None)
     out = Path(out)
@@ -741,7 +709,7 @@ def run_demo(
         inputs={"captures": "simulated by rotacal's digital twin", "output folder": str(out)},
         links=[
             Link(
-                title=_sentence(page.report.title.removeprefix("rotacal demo — ")),
+                title=paragraph(page.report.title.removeprefix("rotacal demo — ")),
                 href=f"{REPORTS}/{page.name}",
                 description=page.description,
                 results=page.headline,

@@ -49,11 +49,13 @@ _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 FIXED_MIN, FIXED_MAX = 1e-4, 1e9
 
 
-def fixed(value: Any, digits: int = PLAIN_DIGITS) -> str:
+def fixed(value: Any, digits: int = PLAIN_DIGITS, *, keep_zeros: bool = False) -> str:
     """``value`` with ``digits`` significant digits in fixed notation, no exponent.
 
     Trailing zeros after the decimal point are dropped (``2.50000`` → ``2.5``): a value without an
-    uncertainty states no resolution. Magnitudes outside [10⁻⁴, 10⁹) are written ``m × 10ⁿ``.
+    uncertainty states no resolution. With ``keep_zeros`` they stay, for a number whose digits
+    were chosen (an uncertainty rounded to two significant digits: ``1.0e-05`` → ``0.000010``).
+    Magnitudes outside [10⁻⁴, 10⁹) are written ``m × 10ⁿ``.
     """
     if not _finite(value):
         return NOT_DETERMINED
@@ -66,11 +68,11 @@ def fixed(value: Any, digits: int = PLAIN_DIGITS) -> str:
         if float(mantissa) in (10.0, -10.0):  # 9.9999… rounded up
             exponent += 1
             mantissa = f"{x / 10.0**exponent:.{max(digits - 1, 0)}f}"
-        if "." in mantissa:
+        if "." in mantissa and not keep_zeros:
             mantissa = mantissa.rstrip("0").rstrip(".")
         return f"{mantissa} × 10{str(exponent).translate(_SUPERSCRIPT)}"
     text = f"{x:.{max(digits - 1 - exponent, 0)}f}"
-    if "." in text:
+    if "." in text and not keep_zeros:
         text = text.rstrip("0").rstrip(".")
     return "0" if text in ("-0", "") else text
 

@@ -50,9 +50,13 @@ class Reference:
 
     def full(self) -> str:
         """The entry of a references list: authors (year). Title. Venue. doi."""
-        who = self.authors or self.short_authors
-        year = f" ({self.year})" if self.year else ""
         doi = f" doi:{self.doi}" if self.doi else ""
+        year = f" ({self.year})" if self.year else ""
+        if not self.authors and self.short_authors[:1].islower():
+            # cited by a description ("the GyroWheel study"), not a name: the entry starts with
+            # the work's title
+            return f"{self.title}. {self.venue}.{doi}"
+        who = self.authors or self.short_authors
         return f"{who}{year}. {self.title}. {self.venue}.{doi}"
 
 
@@ -79,7 +83,7 @@ REFERENCES: dict[str, Reference] = {
         _r(
             "gyrowheel",
             "",
-            "Int. J. Aerospace Eng., GyroWheel study",
+            "the GyroWheel study",
             "",
             "Error analysis for GyroWheel calibration tests and error allocation of the test "
             "turntable (authors and year not given in our copy)",

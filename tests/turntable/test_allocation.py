@@ -675,7 +675,7 @@ def test_infeasible_message_names_the_source_and_only_the_angles_that_matter(see
     assert "phi1" not in msg and "phi2" not in msg and "2 arcmin" in msg
     # a table built in code is named by its name
     t = dataclasses.replace(seed, source="")
-    with pytest.raises(ConfigError, match=r"^turntable 'Two-axis turntable of seed 001"):
+    with pytest.raises(ConfigError, match=r"^turntable 'Two-axis turntable of the GyroWheel study"):
         allocate(t, 0.08 * ARCMIN)
 
 

@@ -117,7 +117,7 @@ def test_monte_carlo_statistics_reach_the_budgets_json() -> None:
 
 
 def test_verdict_passes_only_a_whole_interval_within_the_limit() -> None:
-    from rotacal.report.turntable_results import verdict
+    from rotacal.report.uncertainty import verdict
 
     assert verdict((0.8, 0.99), 1.0) is True
     assert verdict((0.8, 1.0), 1.0) is True  # at the limit is within

@@ -89,7 +89,7 @@ def test_seed_section_has_every_part(seed_section) -> None:
     # the side-by-side with the paper is folded away, cited by name
     assert len(s.details) == 1
     assert (
-        s.details[0].caption == "Reproducing the numbers of Int. J. Aerospace Eng., GyroWheel study"
+        s.details[0].caption == "Reproducing the numbers of the GyroWheel study"
     )
     assert s.details[0].note.startswith("What the paper's numbers rest on")
     assert {"gyrowheel", "clopper1934", "david2003"} <= set(s.references)

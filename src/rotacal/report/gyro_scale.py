@@ -22,7 +22,7 @@ from rotacal.report.wording import (
     readable_tables,
 )
 
-__all__ = ["scale_factor_figure", "scale_factor_section"]
+__all__ = ["requirement_rows", "scale_factor_figure", "scale_factor_section"]
 
 _C = {"pt": "#1f5f99", "fit": "#d2691e", "band": "#f2e3c6", "limit": "#b22222", "grid": "#e3e7eb"}
 
@@ -161,7 +161,7 @@ def scale_factor_figure(r: ScaleFactorResult) -> Figure:
     )
 
 
-def _requirement_rows(r: ScaleFactorResult) -> list[ResultRow]:
+def requirement_rows(r: ScaleFactorResult) -> list[ResultRow]:
     """One summary row per check of the requirement, with its limit and verdict.
 
     The accuracy check is judged with the uncertainty of NL (ILAC-G8: a pass when the whole 95 %
@@ -226,7 +226,7 @@ def scale_factor_section(
         "bias": "bias V0",
         "nonlinearity_percent_fs": "nonlinearity NL",
     }
-    judged = _requirement_rows(r)
+    judged = requirement_rows(r)
     budgets = dict(r._budgets)
     if any(row.quantity.startswith("nonlinearity") for row in judged):
         budgets.pop("nonlinearity_percent_fs", None)  # stated once, with its limit and verdict

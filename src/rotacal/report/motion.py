@@ -24,6 +24,7 @@ from rotacal.numbers import coverage, fixed, format_plain, format_quantity
 from rotacal.references import cite
 from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
 from rotacal.report.uncertainty import budget_details, budget_results, plain_name, result_row
+from rotacal.report.wording import readable
 from rotacal.table.motion import MotionResult, SchemeComparison
 from rotacal.uncertainty import UncertaintyBudget, coverage_factor, round_ilac
 
@@ -31,12 +32,6 @@ __all__ = ["comparison_section", "motion_figures", "motion_section"]
 
 _SCHEME_NAMES = {"encoder": "OSE", "lts": "LTS", "fog": "FOG"}
 _COLORS = {"meas": "#1f5f99", "fit": "#d2691e", "rev_max": "#b22222", "rev_min": "#2e8b57"}
-
-
-def _fmt(x: float | None, digits: int = 6) -> str:
-    """``x`` in fixed notation to ``digits`` significant digits ("—" when not determined); kept
-    for report/pulses.py, which imports it."""
-    return fixed(x, digits)
 
 
 def _style(ax: Any) -> None:
@@ -248,25 +243,17 @@ _P = 0.95
 _CORRECTIONS = {"heydemann": "Heydemann's ellipse fit"}
 #: A snake_case token: a JSON key, replaced by its plain name where the glossary has one.
 _KEY = re.compile(r"\b[a-z][a-z0-9]*(?:_[a-z0-9]+)+\b")
-#: A number in E notation (``4.14e-06``), as the budgets' sources and notes hold it in the JSON.
-_E_NUMBER = re.compile(r"[-+]?(\d+)(?:\.(\d+))?[eE][-+]?\d+")
 
 
 def _correction_name(method: str) -> str:
     return _CORRECTIONS.get(method, method)
 
 
-def _fixed_number(m: re.Match[str]) -> str:
-    """An E-notation number in fixed notation, with the significant digits it was written with."""
-    digits = len(m.group(1).lstrip("0") or "0") + len(m.group(2) or "")
-    sign = "+" if m.group().startswith("+") else ""
-    return sign + fixed(float(m.group()), max(digits, 1))
-
-
 def _plain_text(text: str) -> str:
     """``text`` for a reader: every JSON key the glossary knows written as its plain name, every
-    number in fixed notation (the JSON keeps the budgets' text as it is)."""
-    text = _E_NUMBER.sub(_fixed_number, text)
+    number in fixed notation (:func:`~rotacal.report.wording.readable`; the JSON keeps the budgets'
+    text as it is)."""
+    text = readable(text)
     return _KEY.sub(
         lambda m: GLOSSARY[m.group()].name if m.group() in GLOSSARY else m.group(), text
     )

@@ -19,7 +19,14 @@ from rotacal.numbers import coverage, fixed, format_plain, format_quantity
 from rotacal.references import cite
 from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
 from rotacal.report.motion import _style
-from rotacal.report.uncertainty import budget_details, budget_results, budget_table, result_row
+from rotacal.report.uncertainty import (
+    budget_details,
+    budget_results,
+    budget_table,
+    result_row,
+    verdict,
+    verdict_note,
+)
 from rotacal.report.wording import diagnostics_table, paragraph, readable_rows, readable_tables
 from rotacal.table.rate import RateResult
 from rotacal.uncertainty import UncertaintyBudget
@@ -374,7 +381,8 @@ def _stability_row(r: RateResult) -> ResultRow | None:
     """s(φ) at the angle nearest 360° against FMVSS 126's gyro accuracy (0.05 %).
 
     Kokuyama et al. (2015) judge the standard by its stability against the accuracy FMVSS 126 asks
-    of a gyro: the verdict is a pass when the upper limit of the 95 % interval is below it.
+    of a gyro: the verdict is a pass when the whole 95 % interval is below it, a fail when it is wholly above,
+    inconclusive otherwise (:func:`~rotacal.report.uncertainty.verdict`, ILAC-G8).
     """
     i = _nearest(r.allan_angle_deg, 360.0)
     if i is None:
@@ -390,6 +398,7 @@ def _stability_row(r: RateResult) -> ResultRow | None:
         )
     lo, hi = (100 * x for x in interval)
     limit = 100 * _FMVSS126_ACCURACY
+    passed = verdict((lo, hi), limit)
     return result_row(
         f"relative root Allan variance at φ = {fixed(r.allan_angle_deg[i], 4)}°",
         value,
@@ -398,8 +407,8 @@ def _stability_row(r: RateResult) -> ResultRow | None:
         p=0.95,
         interval=(lo, hi),
         limit=f"< {fixed(limit)} % ({cite('fmvss126')} gyro accuracy)",
-        passed=bool(hi < limit),
-        note="pass: the interval's upper limit is below the limit",
+        passed=passed,
+        note=verdict_note(passed),
     )
 
 

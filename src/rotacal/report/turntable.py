@@ -40,6 +40,7 @@ from rotacal.report.turntable_seed001 import (
     seed_paragraph,
     table4_worst_case,
 )
+from rotacal.report.wording import readable
 from rotacal.turntable.budget import TurntableBudget
 from rotacal.turntable.model import ARCMIN_PER_RAD, COMPONENTS
 from rotacal.turntable.seed001 import (
@@ -66,7 +67,6 @@ __all__ = [
 #: How the text cites the paper the method comes from.
 _PAPER = cite("gyrowheel")
 #: How the text names it in running words ("the GyroWheel study's Table 4").
-_STUDY = "GyroWheel study"
 _COMP_COLOR = {"psi": "#1f5f99", "theta": "#2e8b57", "gamma": "#d2691e"}
 _REQ = "#b22222"
 
@@ -540,11 +540,9 @@ def _remedy(budget: TurntableBudget, wm: float) -> str:
 
 
 def _cited(text: str) -> str:
-    """``text`` (a table's name, the requirement's source: JSON values that say "seed 001") with
-    the paper cited by name, as a reader knows it."""
-    return text.replace("seed 001 (GyroWheel calibration)", f"the {_STUDY}").replace(
-        "seed 001", f"the {_STUDY}"
-    )
+    """``text`` (a table's name, the requirement's source: JSON text that may name a paper by the
+    project's file name) as a reader reads it (:func:`~rotacal.report.wording.readable`)."""
+    return readable(text)
 
 
 def table_name(budget: TurntableBudget) -> str:

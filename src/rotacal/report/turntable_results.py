@@ -25,32 +25,17 @@ from typing import Any
 from rotacal.numbers import fixed
 from rotacal.report.html import ResultRow
 from rotacal.report.turntable_common import COMP_SYMBOL
-from rotacal.report.uncertainty import result_row
+from rotacal.report.uncertainty import result_row, verdict, verdict_note
 from rotacal.turntable.budget import TurntableBudget
 from rotacal.turntable.model import COMPONENTS
 
-__all__ = ["RESULT_REFERENCES", "monte_carlo_rows", "turntable_results", "verdict"]
+__all__ = ["RESULT_REFERENCES", "monte_carlo_rows", "turntable_results"]
 
 #: The references the results cite (the section lists them).
 RESULT_REFERENCES = ["clopper1934", "david2003", "ilac_g8"]
 
 #: A fraction whose interval ends below this is stated in ppm (easier to read than 0.00037 %).
 _PPM_BELOW = 1e-3
-
-
-def verdict(interval: Sequence[float], limit: float) -> bool | None:
-    """Pass (True) when the whole interval is at or below ``limit``, fail (False) when it lies
-    wholly above, None (inconclusive) when it straddles the limit (ILAC-G8 §4.2, guarded)."""
-    low, high = float(interval[0]), float(interval[1])
-    if high <= limit:
-        return True
-    if low > limit:
-        return False
-    return None
-
-
-def _note(passed: bool | None) -> str:
-    return "" if passed is not None else "inconclusive: the interval straddles the limit"
 
 
 def _interval_row(
@@ -67,14 +52,16 @@ def _interval_row(
         interval=(low, high),
         limit=f"≤ {fixed(limit, 4)} {unit}",
         passed=passed,
-        note=_note(passed),
+        note=verdict_note(passed),
     )
 
 
 def _fraction_row(
     name: str, hits: int, n: int, interval: Sequence[float], what: str, p: float
 ) -> ResultRow:
-    """A fraction of draws, in ppm or %, with its interval; limit: none of the draws."""
+    """A fraction of draws, in ppm or %, with its interval. No verdict: the limit is "none", which
+    an interval from finitely many draws never lies wholly within (the worst case of the
+    allocation is the guarantee); the count of the draws is the note."""
     scale, unit = (1e6, "ppm") if float(interval[1]) < _PPM_BELOW else (100.0, "%")
     low, high = (float(v) * scale for v in interval)
     return result_row(
@@ -84,9 +71,7 @@ def _fraction_row(
         U=0.5 * (high - low),
         p=p,
         interval=(low, high),
-        limit=f"none of the {what}",
-        passed=hits == 0,
-        note=f"{hits:,} of {n:,} {what}",
+        note=f"{hits:,} of {n:,} {what}".replace(",", " "),
     )
 
 

@@ -8,7 +8,7 @@ value ± U with k and p — into its ``results`` (the report's summary at the to
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from rotacal.errors import ConfigError
@@ -26,6 +26,8 @@ __all__ = [
     "plain_name",
     "result_row",
     "results_table",
+    "verdict",
+    "verdict_note",
 ]
 
 
@@ -216,3 +218,21 @@ def budget_tables(budgets: Mapping[str, UncertaintyBudget]) -> list[Table]:
     if not budgets:
         return []
     return [results_table(budgets), *(budget_table(b) for b in budgets.values())]
+
+
+def verdict(interval: Sequence[float], limit: float) -> bool | None:
+    """Guarded acceptance of a result against an upper limit (ILAC-G8:09/2019 §4.2.2, guard band
+    w = U): pass (True) when the whole coverage interval is at or below ``limit``, fail (False)
+    when it lies wholly above, None (inconclusive) when it straddles the limit. ``interval`` and
+    ``limit`` in the same unit."""
+    low, high = float(interval[0]), float(interval[1])
+    if high <= limit:
+        return True
+    if low > limit:
+        return False
+    return None
+
+
+def verdict_note(passed: bool | None) -> str:
+    """The note of a summary row judged by :func:`verdict`: empty unless inconclusive."""
+    return "" if passed is not None else "inconclusive: the interval straddles the limit"

@@ -37,12 +37,14 @@ DIAGNOSTICS = "Diagnostics, not results"
 _E_NUMBER = re.compile(r"(?<![\w.])([-+]?\d+(?:\.\d+)?[eE][-+]?\d+)(?!\w)(?!\.\d)")
 #: The papers as the analyses' notes name them (the JSON keeps the notes as they are).
 _SEEDS = {"000": "feng2023", "001": "gyrowheel", "003": "robot2023", "004": "kokuyama2015"}
-_SEED = re.compile(r"\b(?:the )?seed (00[0134])(?:'s)?\b")
+_SEED = re.compile(r"\b(?:the )?seed (00[0134])('s)?\b")
 #: Functions and fields an analysis's notes name, in words.
 _FIELDS = {"timing_jitter": "the timing-noise estimate"}
 _FIELD = re.compile(r"\b(" + "|".join(_FIELDS) + r")\b")
 #: A rate unit as the JSON writes it (deg/s, deg/h/g): the degree sign on the page.
 _DEG_PER = re.compile(r"\bdeg/")
+#: A square written with a caret (s^2), not a power with more digits (2^20).
+_SQUARED = re.compile(r"\^2(?!\d)")
 #: A triad's bias symbol b_x as the budgets name it.
 _BIAS_SYMBOL = re.compile(r"\bb_([xyz])\b")
 _KEY_U = re.compile(r"\b([a-z][a-z0-9]*(?:_[a-z0-9]+)*)_u\b")
@@ -73,17 +75,17 @@ def readable(text: str) -> str:
     def plain(m: re.Match[str]) -> str:
         number = m.group(1)
         sign = "+" if number.startswith("+") else ""
-        return sign + fixed(float(number), _significant(number))
+        return sign + fixed(float(number), _significant(number), keep_zeros=True)
 
     def key_u(m: re.Match[str]) -> str:
         term = GLOSSARY.get(m.group(1))
         return f"u({term.name})" if term is not None else m.group(0)
 
     text = _E_NUMBER.sub(plain, text)
-    text = _SEED.sub(lambda m: cite(_SEEDS[m.group(1)]), text)
+    text = _SEED.sub(lambda m: cite(_SEEDS[m.group(1)]) + (m.group(2) or ""), text)
     text = _KEY_U.sub(key_u, text)
     text = _FIELD.sub(lambda m: _FIELDS[m.group(1)], text)
-    text = _DEG_PER.sub("°/", text.replace("^2", "²").replace("t_p(", "tₚ("))
+    text = _DEG_PER.sub("°/", _SQUARED.sub("²", text).replace("t_p(", "tₚ("))
     text = _BIAS_SYMBOL.sub(r"b(\1)", text)
     text = _SUBSCRIPT_J.sub(r"\1ⱼ", text)
     return _NO_UNIT.sub("output units", _HEAD.sub(r"head \1", text))

@@ -155,9 +155,10 @@ def _fit_direct(
         return a, p, r, float(r @ r)
 
     def jacobian(a: np.ndarray, p: np.ndarray, f: float) -> np.ndarray:
-        ang = np.outer(2.0 * math.pi * f * tau, h)
+        # cos(hωτ) and sin(hωτ) are the design's own columns at this f (computed the same way)
+        cos_ang, sin_ang = a[:, 1 : nh + 1], a[:, nh + 1 : 2 * nh + 1]
         ca, cb = p[1 : nh + 1], p[nh + 1 : 2 * nh + 1]
-        dcol = 2.0 * math.pi * tau * ((np.cos(ang) * cb - np.sin(ang) * ca) @ h)
+        dcol = 2.0 * math.pi * tau * ((cos_ang * cb - sin_ang * ca) @ h)
         return np.hstack([a, dcol[:, None]])
 
     f = f0

@@ -106,8 +106,8 @@ def quantile_interval(
     -------
     (value, low, high) or None
         The order statistic of rank ⌈n·q⌉ and the order statistics X_(l), X_(u) whose ranks come
-        from Binomial(n, q); ``None`` when n is too small for an interval (fewer than about
-        3/(1 − q) draws: the upper rank would lie beyond the largest draw).
+        from Binomial(n, q); ``None`` when n is too small for an interval (qⁿ > (1 − p)/2, about
+        3.7/(1 − q) draws for p = 95 %: the upper rank would lie beyond the largest draw).
 
     References
     ----------

@@ -1214,8 +1214,18 @@ class Turntable:
                 f"{', '.join(self.angular_error_names)}), got {chi.shape}."
             )
         n = angles.shape[0]
-        out = np.empty((n, 3))
         needs_angle = self._fast_angles()
+        if n == 1:
+            # One point (the worst case's local search asks for thousands, one at a time): the
+            # same kernel on Python floats, without NumPy's per-operation overhead on 1-element
+            # arrays — the same IEEE operations in the same order; cos and sin still by NumPy.
+            trig1 = {
+                k: (float(np.cos(angles[:, k])[0]), float(np.sin(angles[:, k])[0]))
+                for k in needs_angle
+            }
+            one = _fast_kernel(self._p.links, trig1, [float(v) for v in chi[0]])
+            return np.array([one], dtype=float)
+        out = np.empty((n, 3))
         for start in range(0, n, _FAST_CHUNK):
             stop = min(n, start + _FAST_CHUNK)
             a_t = angles[start:stop].T
