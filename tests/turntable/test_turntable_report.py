@@ -88,9 +88,7 @@ def test_seed_section_has_every_part(seed_section) -> None:
     assert "rotacal / Table 4" in s.tables[0].columns
     # the side-by-side with the paper is folded away, cited by name
     assert len(s.details) == 1
-    assert (
-        s.details[0].caption == "Reproducing the numbers of the GyroWheel study"
-    )
+    assert s.details[0].caption == "Reproducing the numbers of the GyroWheel study"
     assert s.details[0].note.startswith("What the paper's numbers rest on")
     assert {"gyrowheel", "clopper1934", "david2003"} <= set(s.references)
     html = render_html(Report("t", sections=[s]))

@@ -1217,14 +1217,15 @@ class Turntable:
         needs_angle = self._fast_angles()
         if n == 1:
             # One point (the worst case's local search asks for thousands, one at a time): the
-            # same kernel on Python floats, without NumPy's per-operation overhead on 1-element
-            # arrays — the same IEEE operations in the same order; cos and sin still by NumPy.
+            # kernel written out as straight-line code (:func:`_one_point_kernel`) on Python
+            # floats, without NumPy's per-operation overhead on 1-element arrays — the same IEEE
+            # operations in the same order; cos and sin still by NumPy.
             trig1 = {
                 k: (float(np.cos(angles[:, k])[0]), float(np.sin(angles[:, k])[0]))
                 for k in needs_angle
             }
-            one = _fast_kernel(self._p.links, trig1, [float(v) for v in chi[0]])
-            return np.array([one], dtype=float)
+            kernel = _one_point_kernel(self._p.links, needs_angle, n_ang)
+            return np.array([kernel(trig1, [float(v) for v in chi[0]])], dtype=float)
         out = np.empty((n, 3))
         for start in range(0, n, _FAST_CHUNK):
             stop = min(n, start + _FAST_CHUNK)
@@ -1329,6 +1330,66 @@ def _mul(a: _Entry, b: _Entry) -> _Entry:
     if _is_const(b, 1.0):
         return a
     return a * b
+
+
+class _Symbol:
+    """An entry of :func:`_fast_kernel` as the name of a local variable of generated code: each
+    operation on it appends one assignment to ``lines`` (see :func:`_one_point_kernel`)."""
+
+    __slots__ = ("lines", "name")
+
+    def __init__(self, name: str, lines: list[str]) -> None:
+        self.name, self.lines = name, lines
+
+    def _new(self, expression: str) -> _Symbol:
+        name = f"t{len(self.lines)}"
+        self.lines.append(f"    {name} = {expression}")
+        return _Symbol(name, self.lines)
+
+    @staticmethod
+    def _text(x: Any) -> str:
+        return x.name if isinstance(x, _Symbol) else repr(float(x))
+
+    def __add__(self, other: Any) -> _Symbol:
+        return self._new(f"{self.name} + {self._text(other)}")
+
+    def __radd__(self, other: Any) -> _Symbol:
+        return self._new(f"{self._text(other)} + {self.name}")
+
+    def __sub__(self, other: Any) -> _Symbol:
+        return self._new(f"{self.name} - {self._text(other)}")
+
+    def __rsub__(self, other: Any) -> _Symbol:
+        return self._new(f"{self._text(other)} - {self.name}")
+
+    def __mul__(self, other: Any) -> _Symbol:
+        return self._new(f"{self.name} * {self._text(other)}")
+
+    def __rmul__(self, other: Any) -> _Symbol:
+        return self._new(f"{self._text(other)} * {self.name}")
+
+    def __neg__(self) -> _Symbol:
+        return self._new(f"-{self.name}")
+
+
+@functools.lru_cache(maxsize=32)
+def _one_point_kernel(links: tuple[_LinkPlan, ...], angles: tuple[int, ...], n_angular: int) -> Any:
+    """:func:`_fast_kernel` for one chain, generated once as a straight-line Python function
+    ``f(trig, chi) -> (Δψ, Δθ, Δγ)``: the kernel run on :class:`_Symbol` entries records every
+    operation it does (the constant zeros and ones of the chain skipped as the kernel skips
+    them), in its order, so that on floats the function computes exactly what the kernel does
+    on arrays."""
+    lines: list[str] = []
+    trig = {k: (_Symbol(f"c{k}", lines), _Symbol(f"s{k}", lines)) for k in angles}
+    chi = [_Symbol(f"x{i}", lines) for i in range(n_angular)]
+    result = _fast_kernel(links, trig, chi)  # type: ignore[arg-type]
+    head = [f"    c{k}, s{k} = trig[{k}]" for k in angles]
+    head += [f"    x{i} = chi[{i}]" for i in range(n_angular)]
+    values = ", ".join(_Symbol._text(v) for v in result)
+    source = "\n".join(["def kernel(trig, chi):", *head, *lines, f"    return ({values})"])
+    namespace: dict[str, Any] = {}
+    exec(compile(source, "<rotacal.turntable.model one-point kernel>", "exec"), namespace)
+    return namespace["kernel"]
 
 
 def _fast_kernel(
