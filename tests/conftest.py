@@ -147,17 +147,31 @@ def analysis_args() -> Callable[[str, str, dict[str, Any]], list[str]]:
     return _analysis_args
 
 
+def _module_of(item: pytest.Item) -> str:
+    return item.nodeid.split("::", 1)[0]
+
+
+def _uses_a_module_fixture(item: pytest.Item) -> bool:
+    info = getattr(item, "_fixtureinfo", None)
+    definitions = info.name2fixturedefs.values() if info is not None else []
+    return any(defs and defs[-1].scope == "module" for defs in definitions)
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Each test module runs whole on one xdist worker (``--dist loadgroup``, pyproject's addopts).
+    """A module whose tests share a module-scoped fixture runs whole on one xdist worker
+    (``--dist loadgroup``, pyproject's addopts).
 
-    The expensive twins and Monte Carlo runs are module-scoped fixtures; spread test by test over
-    the workers, every worker would make them again. A test that names its own ``xdist_group``
-    (the demo's: one demo per session for several modules) keeps it. Runs before xdist's hook,
-    which turns the marks into the groups it schedules.
+    Those fixtures are the expensive twins and Monte Carlo runs; spread test by test over the
+    workers, every worker would make them again (a test may also ask for one by name, through
+    ``request.getfixturevalue``, hence the whole module). Modules without one stay spread test by
+    test, so long modules of independent tests still use both workers. A test that names its own
+    ``xdist_group`` (the demo's: one demo per session for several modules) keeps it. Runs before
+    xdist's hook, which turns the marks into the groups it schedules.
     """
     if not config.pluginmanager.hasplugin("xdist"):
         return
+    shared = {_module_of(item) for item in items if _uses_a_module_fixture(item)}
     for item in items:
-        if item.get_closest_marker("xdist_group") is None:
-            item.add_marker(pytest.mark.xdist_group(item.nodeid.split("::", 1)[0]))
+        if item.get_closest_marker("xdist_group") is None and _module_of(item) in shared:
+            item.add_marker(pytest.mark.xdist_group(_module_of(item)))
