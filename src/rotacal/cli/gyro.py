@@ -180,11 +180,21 @@ def _print_scale_factor(result: Any, data: dict[str, Any]) -> None:
     default=None,
     help="Reject residuals beyond k robust sigmas [default: 5 % family-wise for Gaussian noise].",
 )
+@click.option(
+    "--output-unit",
+    default="",
+    help="Unit of the outputs ux, uy, uz (e.g. V, LSB, deg/s), for the results and the report.",
+)
 @_clipping_option
 @_analysis_options
 @_names_capture
 def gyro_triad(
-    capture: str, reject_k: float | None, columns: Sequence[str], group: str | None, **kw: Any
+    capture: str,
+    reject_k: float | None,
+    output_unit: str,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
 ) -> None:
     """Three-axis scale/misalignment and bias.
 
@@ -201,6 +211,7 @@ def gyro_triad(
         result = calibrate_triad_columns(
             cap.columns,
             reject_k=reject_k,
+            output_unit=output_unit,
             specs=kw.pop("specs"),
             allow_clipped=kw.pop("allow_clipped"),
         )
