@@ -39,12 +39,14 @@ DECISION_RULES = ("simple", "guarded")
 
 @dataclasses.dataclass(frozen=True)
 class Contact:
-    """A laboratory or a customer: name, postal address, e-mail (and a phone, if given)."""
+    """A laboratory or a customer: name, postal address, e-mail (and a phone, if given);
+    ``country`` as an ISO 3166-1 alpha-2 code ("DE"), "" when not given."""
 
     name: str
     address: str = ""
     email: str = ""
     phone: str = ""
+    country: str = ""
 
 
 @dataclasses.dataclass(frozen=True)
