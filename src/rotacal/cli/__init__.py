@@ -7,7 +7,16 @@ traceback.
 
 from rotacal.errors import CaptureError
 
-from . import allan, gyro, inspect, motion, pulses, simulate, turntable  # noqa: F401  (registers)
+from . import (  # noqa: F401  (registers the commands)
+    allan,
+    certify,
+    gyro,
+    inspect,
+    motion,
+    pulses,
+    simulate,
+    turntable,
+)
 from ._app import cli, main
 
 __all__ = ["CaptureError", "cli", "main"]

@@ -1,0 +1,357 @@
+"""Issuing a certificate from a plan: run the measurements, state the results, render the PDF and
+the DCC, and publish the folder whole — or leave nothing behind.
+
+Everything is made in a hidden staging folder beside the target and renamed into place at the
+end (one ``rename`` on the same file system), so a reader never sees half a certificate: a plan
+that fails at any step leaves no folder, consumes no number and changes nothing the user had. An
+existing certificate folder is replaced only with ``overwrite``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from rotacal.errors import ConfigError, RotacalError
+from rotacal.plan.model import Measurement, Plan
+from rotacal.plan.read import read_plan
+from rotacal.plan.run import run_plan
+
+from .conformity import judge
+from .content import CaptureRef, CertificateContent, Figure, MeasurementResult
+from .methods import method_of
+from .quantities import reported_quantities
+
+__all__ = [
+    "IssuedCertificate",
+    "build_content",
+    "certify",
+    "plan_measurement_count",
+    "plan_sha256",
+    "results_document",
+]
+
+#: The files of a certificate folder (and the figures, ``figure-*.svg``).
+PDF_NAME, XML_NAME, JSON_NAME = "certificate.pdf", "certificate.xml", "results.json"
+
+
+@dataclasses.dataclass(frozen=True)
+class IssuedCertificate:
+    """A certificate made: its number, its folder and what it states."""
+
+    number: str
+    folder: Path
+    content: CertificateContent
+
+
+def plan_sha256(plan_bytes: bytes, input_digests: Sequence[str]) -> str:
+    """The SHA-256 that ties a certificate to its plan and its data: of the plan file's bytes,
+    followed by the hexadecimal SHA-256 of each file the measurements read (captures and option
+    files, in the plan's order), each on a line of its own.
+
+    The same plan and the same captures give the same hash wherever they lie; a changed byte in
+    any of them gives another.
+    """
+    h = hashlib.sha256(plan_bytes)
+    for digest in input_digests:
+        h.update(b"\n" + digest.encode("ascii"))
+    return h.hexdigest()
+
+
+def _limit_error(plan: Plan, m: Measurement, key: str, known: Sequence[str]) -> ConfigError:
+    return ConfigError(
+        f"{plan.path}: {m.key}.limits.{key}: '{m.command}' reports no such result; its results "
+        f"with an uncertainty: {', '.join(known)}"
+    )
+
+
+def _measurement_result(
+    plan: Plan, m: Measurement, results: Mapping[str, Any]
+) -> MeasurementResult:
+    """What the certificate states of one measurement: its quantities and conformity."""
+    output_unit = str(results.get("output_unit") or m.option_map().get("output-unit") or "")
+    try:
+        quantities = reported_quantities(m.command, results, output_unit=output_unit)
+    except RotacalError as e:
+        raise type(e)(f"{plan.path}: {m.key}: {e}") from None
+    by_key = {q.key: q for q in quantities}
+    conformity = []
+    for limit in m.limits:
+        if limit.key not in by_key:
+            raise _limit_error(plan, m, limit.key, list(by_key))
+        conformity.append(judge(by_key[limit.key], limit, m.decision_rule))
+    method, references = method_of(m.command)
+    inputs = results.get("provenance", {}).get("inputs", [])
+    return MeasurementResult(
+        index=m.index,
+        name=m.name,
+        command=m.command,
+        method=method,
+        references=references,
+        captures=tuple(CaptureRef(i["path"], i["sha256"], int(i["bytes"])) for i in inputs),
+        options=dict(results.get("provenance", {}).get("options", {})),
+        results=results,
+        quantities=quantities,
+        conformity=tuple(conformity),
+        decision_rule=m.decision_rule,
+        warnings=tuple(str(w) for w in results.get("warnings", ())),
+    )
+
+
+def build_content(
+    plan: Plan, runs: Sequence[Mapping[str, Any]], number: str, software_version: str
+) -> CertificateContent:
+    """The certificate's content from the plan and its measurements' JSON (``runs``, in order)."""
+    measurements = tuple(
+        _measurement_result(plan, m, results)
+        for m, results in zip(plan.measurements, runs, strict=True)
+    )
+    digests = [c.sha256 for m in measurements for c in m.captures]
+    return CertificateContent(
+        number=number,
+        plan=plan,
+        plan_sha256=plan_sha256(plan.text, digests),
+        software_version=software_version,
+        measurements=measurements,
+    )
+
+
+def _contact(c: Any) -> dict[str, Any]:
+    return {k: v for k, v in dataclasses.asdict(c).items() if v != ""}
+
+
+def _number(text: str) -> float | int:
+    """A printed decimal as a JSON number (the same value; JSON keeps no trailing zeros)."""
+    value = float(text)
+    return int(value) if value.is_integer() and "." not in text else value
+
+
+def results_document(content: CertificateContent) -> dict[str, Any]:
+    """``results.json`` (INTERFACE.md): the certificate's data for software, with each command's
+    own JSON under ``results``, each reported quantity as printed (``reported``) and the
+    conformity (quantity → pass | fail | indeterminate, with the ``decision_rule``)."""
+    plan = content.plan
+    measurements = []
+    for m in content.measurements:
+        measurements.append(
+            {
+                "name": m.name,
+                "command": m.command,
+                "method": m.method,
+                "captures": [dataclasses.asdict(c) for c in m.captures],
+                "decision_rule": m.decision_rule,
+                "reported": [
+                    {
+                        "quantity": q.key,
+                        "name": q.name,
+                        "value": _number(q.value),
+                        "U": _number(q.U),
+                        "k": _number(q.k),
+                        "coverage_probability": _number(q.p),
+                        "unit": q.unit,
+                        "dsi_unit": q.dsi_unit,
+                        "interval": [_number(x) for x in q.interval] if q.interval else None,
+                        "note": q.note,
+                    }
+                    for q in m.quantities
+                ],
+                "conformity": {c.key: c.verdict for c in m.conformity},
+                "conformity_statements": [
+                    {
+                        "quantity": c.key,
+                        "verdict": c.verdict,
+                        "limit_min": _number(c.limit_min) if c.limit_min else None,
+                        "limit_max": _number(c.limit_max) if c.limit_max else None,
+                        "statement": c.statement,
+                    }
+                    for c in m.conformity
+                ],
+                "figures": [dataclasses.asdict(f) for f in m.figures],
+                "results": m.results,
+                "warnings": list(m.warnings),
+                "provenance": m.results.get("provenance", {}),
+            }
+        )
+    inputs = [
+        {
+            "path": plan.path.name,
+            "sha256": hashlib.sha256(plan.text).hexdigest(),
+            "bytes": len(plan.text),
+        }
+    ]
+    inputs += [dataclasses.asdict(c) for m in content.measurements for c in m.captures]
+    return {
+        "certificate_number": content.number,
+        "plan_sha256": content.plan_sha256,
+        "title": plan.title,
+        "supersedes": plan.supersedes,
+        "calibration_start_date": plan.start_date.isoformat(),
+        "calibration_end_date": plan.end_date.isoformat(),
+        "issue_date": plan.issue_date.isoformat(),
+        "laboratory": _contact(plan.laboratory),
+        "customer": _contact(plan.customer),
+        "persons": [_contact(p) for p in plan.persons],
+        "item": _contact(plan.item),
+        "standards": [{**_contact(s), "due": s.due.isoformat()} for s in plan.standards],
+        "conditions": {
+            **{
+                k: v
+                for k, v in dataclasses.asdict(plan.conditions).items()
+                if k != "others" and v is not None
+            },
+            **dict(plan.conditions.others),
+        },
+        "measurements": measurements,
+        "warnings": [f"{m.name}: {w}" for m in content.measurements for w in m.warnings],
+        "provenance": {
+            "rotacal_version": content.software_version,
+            "command": "certify",
+            "options": {},
+            "inputs": inputs,
+        },
+    }
+
+
+def _draw(content: CertificateContent, folder: Path) -> CertificateContent:
+    """Draw each measurement's figures into ``folder`` and note them in the content."""
+    from .figures import draw_figures
+
+    measurements = []
+    for m in content.measurements:
+        figures = []
+        for name, caption, svg in draw_figures(m):
+            (folder / name).write_bytes(svg)
+            figures.append(Figure(name, caption))
+        measurements.append(dataclasses.replace(m, figures=tuple(figures)))
+    return dataclasses.replace(content, measurements=tuple(measurements))
+
+
+def _render(content: CertificateContent, folder: Path) -> None:
+    """Write results.json, certificate.xml (checked against the DCC schema) and certificate.pdf."""
+    from .dcc import dcc_xml
+    from .pdf import render_pdf
+
+    text = json.dumps(results_document(content), indent=2, ensure_ascii=False, allow_nan=False)
+    (folder / JSON_NAME).write_text(text + "\n", encoding="utf-8")
+    xml = dcc_xml(content)
+    with contextlib.suppress(ImportError):
+        from .dcc import validate_dcc
+
+        validate_dcc(xml)
+    (folder / XML_NAME).write_bytes(xml)
+    (folder / PDF_NAME).write_bytes(render_pdf(content, folder))
+
+
+def _check_free(folder: Path, overwrite: bool) -> None:
+    if folder.exists() and not overwrite:
+        raise ConfigError(
+            f"{folder} exists: a certificate folder is never replaced unless --overwrite is given"
+        )
+    if folder.exists() and not folder.is_dir():
+        raise ConfigError(f"{folder} exists and is not a folder; choose another --out")
+
+
+def _publish(staging: Path, folder: Path, overwrite: bool) -> None:
+    """Rename the finished ``staging`` folder to ``folder``; an existing one (``overwrite``) is
+    moved aside first and removed only once the new one is in place."""
+    _check_free(folder, overwrite)
+    old = None
+    if folder.exists():
+        old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.old-", dir=folder.parent))
+        os.rename(folder, old / "certificate")
+    try:
+        os.rename(staging, folder)
+    except OSError:
+        if old is not None:  # put the old certificate back
+            os.rename(old / "certificate", folder)
+        raise
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def plan_measurement_count(plan_path: str | Path) -> int:
+    """How many measurements a plan names (for a progress bar; 0 when it cannot be read — the
+    certification that follows then says why)."""
+    try:
+        return len(read_plan(plan_path).measurements)
+    except RotacalError:
+        return 0
+
+
+@contextlib.contextmanager
+def _explicit(number: str) -> Iterator[str]:
+    yield number
+
+
+def certify(
+    plan_path: str | Path,
+    *,
+    out: str | Path | None = None,
+    overwrite: bool = False,
+    advance: Callable[[str], None] | None = None,
+) -> IssuedCertificate:
+    """Run a plan's measurements and issue its certificate (INTERFACE.md, ``rotacal certify``).
+
+    Parameters
+    ----------
+    plan_path : str or Path
+        The plan file (TOML).
+    out : str or Path, optional
+        The certificate's folder [default: a folder named after the certificate number, beside
+        the plan].
+    overwrite : bool
+        Replace an existing certificate folder.
+    advance : callable, optional
+        Called with each measurement's name when it is done (a progress bar).
+
+    Returns
+    -------
+    IssuedCertificate
+
+    Raises
+    ------
+    ConfigError, CaptureError
+        One line naming the plan file, the key or the capture at fault; nothing is written.
+    """
+    from rotacal import __version__
+
+    plan = read_plan(plan_path)
+    target = Path(out).resolve() if out is not None else None
+    if target is None and plan.number != "auto":
+        target = plan.path.parent / plan.number
+    if target is not None:
+        _check_free(target, overwrite)
+    parent = target.parent if target is not None else plan.path.parent
+    if not parent.is_dir():
+        raise ConfigError(f"{parent}: no such folder for the certificate")
+    staging = Path(tempfile.mkdtemp(prefix=".rotacal-certify-", dir=parent))
+    try:
+        scratch = staging / ".runs"
+        scratch.mkdir()
+        runs = run_plan(plan, scratch, advance)
+        shutil.rmtree(scratch)
+        content = _draw(build_content(plan, runs, plan.number, __version__), staging)
+        if plan.number == "auto":
+            from .numbering import reserve_number
+
+            numbering: contextlib.AbstractContextManager[str] = reserve_number(plan.issue_date)
+        else:
+            numbering = _explicit(plan.number)
+        with numbering as number:
+            folder = target if target is not None else plan.path.parent / number
+            _check_free(folder, overwrite)
+            content = dataclasses.replace(content, number=number)
+            _render(content, staging)
+            _publish(staging, folder, overwrite)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return IssuedCertificate(number, folder, content)

@@ -1,0 +1,62 @@
+"""``rotacal certify``: a calibration plan in, a certificate out (PDF, PTB DCC, results.json)."""
+
+from __future__ import annotations
+
+from importlib import resources
+
+import click
+
+from ._app import cli
+from ._common import _progress, _wrote
+from ._help import example
+
+
+def example_plan() -> str:
+    """The commented example plan (``rotacal certify --example``)."""
+    return resources.files("rotacal.plan").joinpath("example.toml").read_text(encoding="utf-8")
+
+
+@cli.command(
+    "certify",
+    epilog=example(
+        "rotacal certify --example > plan.toml     # a plan to edit",
+        "rotacal certify plan.toml                 # → RC-…/certificate.pdf, .xml, results.json",
+        "rotacal certify plan.toml --out cert --overwrite",
+    ),
+)
+@click.argument("plan", required=False, metavar="PLAN.toml")
+@click.option(
+    "--out",
+    metavar="DIR",
+    default=None,
+    help="The certificate's folder [default: a folder named after the certificate number, "
+    "beside the plan].",
+)
+@click.option("--overwrite", is_flag=True, help="Replace an existing certificate folder.")
+@click.option("--example", "show_example", is_flag=True, help="Print a commented plan and exit.")
+def certify_command(plan: str | None, out: str | None, overwrite: bool, show_example: bool) -> None:
+    """Run every measurement of a calibration plan and issue its certificate.
+
+    The plan (TOML) names the laboratory, the customer, the item, the reference standards, the
+    conditions and the measurements with their captures, options and acceptance limits. The
+    certificate folder gets certificate.pdf (ISO/IEC 17025 §7.8), certificate.xml (PTB Digital
+    Calibration Certificate v3.1.2), results.json and the figures — whole, or not at all.
+    """
+    if show_example:
+        click.echo(example_plan(), nl=False)
+        return
+    if plan is None:
+        raise click.UsageError("give the plan file (PLAN.toml), or --example to see one")
+    from rotacal.certificate.issue import certify, plan_measurement_count
+
+    with _progress(plan_measurement_count(plan), "measuring") as advance:
+        issued = certify(plan, out=out, overwrite=overwrite, advance=advance)
+    _wrote(issued.folder)
+    verdicts = [c.verdict for m in issued.content.measurements for c in m.conformity]
+    summary = ", ".join(
+        f"{verdicts.count(v)} {v}" for v in ("pass", "fail", "indeterminate") if v in verdicts
+    )
+    click.echo(
+        f"certificate {issued.number}: {len(issued.content.measurements)} measurements"
+        + (f"; conformity: {summary}" if summary else "")
+    )
