@@ -13,12 +13,12 @@ from collections.abc import Iterator, Mapping
 from decimal import ROUND_HALF_EVEN, Decimal
 from typing import Any
 
-from rotacal.errors import ConfigError
+from rotacal.errors import CaptureError, ConfigError
 from rotacal.glossary import GLOSSARY
 from rotacal.uncertainty.budget import round_ilac
 
 from .content import ReportedQuantity
-from .units import dsi_unit, printed_unit
+from .units import CONVERTED_UNITS, dsi_unit, factor_to_printed, printed_unit
 
 __all__ = ["REPRESENTATIVE_BUDGETS", "reported_quantities"]
 
@@ -98,7 +98,13 @@ def reported_quantities(
         if key in skip:
             continue
         unit = printed_unit(str(b.get("unit", "")), output_unit)
-        value, big_u = round_ilac(float(b["value"]), float(b["U"]))
+        factor = factor_to_printed(str(b.get("unit", "")), output_unit)
+        if not float(b["U"]) > 0.0:
+            raise CaptureError(
+                f"the {_name(key, b)} has no uncertainty (U = {b['U']}): a certificate states no "
+                "result without one; is the capture noise-free (a simulation without noise)?"
+            )
+        value, big_u = round_ilac(factor * float(b["value"]), factor * float(b["U"]))
         decimals = len(big_u.split(".")[1]) if "." in big_u else 0
         interval = b.get("interval")
         quantities.append(
@@ -111,10 +117,12 @@ def reported_quantities(
                 U=big_u,
                 k=_three_digits(float(b["k"])),
                 p=_p_text(float(b["p"])),
-                interval=_interval(interval, float(b["value"]), decimals)
+                interval=_interval(
+                    [factor * float(x) for x in interval], factor * float(b["value"]), decimals
+                )
                 if interval is not None
                 else None,
-                note=_note(key, results),
+                note=_note(key, results, str(b.get("unit", ""))),
             )
         )
     if not quantities:
@@ -124,7 +132,9 @@ def reported_quantities(
     return tuple(quantities)
 
 
-def _note(key: str, results: Mapping[str, Any]) -> str:
+def _note(key: str, results: Mapping[str, Any], unit: str) -> str:
+    if unit in CONVERTED_UNITS:
+        return "stated per m/s² (1 g = 9.806 65 m/s²)"
     if key.endswith("_percent_fs") and results.get("full_scale_deg_s") is not None:
         return f"of the full scale {float(results['full_scale_deg_s']):g} °/s"
     return ""

@@ -11,7 +11,14 @@ from __future__ import annotations
 
 from rotacal.errors import ConfigError
 
-__all__ = ["OUTPUT_UNITS", "RESULT_UNITS", "dsi_unit", "printed_unit"]
+__all__ = [
+    "CONVERTED_UNITS",
+    "OUTPUT_UNITS",
+    "RESULT_UNITS",
+    "dsi_unit",
+    "factor_to_printed",
+    "printed_unit",
+]
 
 #: Units of the analyses' results (the ``unit`` of their uncertainty budgets) → D-SI.
 RESULT_UNITS: dict[str, str] = {
@@ -31,6 +38,17 @@ RESULT_UNITS: dict[str, str] = {
     "°/√h": r"\degree\per\hour\tothe{0.5}",
     "°/h/√h": r"\degree\per\hour\tothe{1.5}",
     "°/h²": r"\degree\per\hour\tothe{2}",
+    "°/h/(m/s²)": r"\degree\per\hour\per\metre\second\tothe{2}",
+    "°/h/(m/s²)²": r"\degree\per\hour\per\metre\tothe{2}\second\tothe{4}",
+}
+
+#: Units without a D-SI form, stated in SI instead: unit → (printed unit, factor to it). The
+#: g-sensitivity of a gyro is stated per m/s² (1 g = 9.806 65 m/s², the standard acceleration of
+#: gravity, CGPM 1901); the certificate says so.
+STANDARD_GRAVITY = 9.80665
+CONVERTED_UNITS: dict[str, tuple[str, float]] = {
+    "deg/h/g": ("°/h/(m/s²)", 1.0 / STANDARD_GRAVITY),
+    "deg/h/g^2": ("°/h/(m/s²)²", 1.0 / STANDARD_GRAVITY**2),
 }
 
 #: A gyro's output units (``--output-unit``) that a certificate can state → D-SI. Counts of an
@@ -62,11 +80,11 @@ def printed_unit(unit: str, output_unit: str = "") -> str:
     ``"°/s/(°/s)"`` becomes ``""`` (a pure number). Units without the placeholder come back as
     they are.
     """
-    if UNSTATED_OUTPUT not in unit or not output_unit:
-        return unit
-    if unit == f"{UNSTATED_OUTPUT}/(°/s)" and output_unit in ("°/s", "deg/s"):
+    if output_unit:
+        unit = unit.replace(UNSTATED_OUTPUT, output_unit)
+    if unit in ("°/s/(°/s)", "deg/s/(°/s)"):  # a gyro that reads in °/s: a pure number
         return ""
-    return unit.replace(UNSTATED_OUTPUT, output_unit)
+    return CONVERTED_UNITS[unit][0] if unit in CONVERTED_UNITS else unit
 
 
 def dsi_unit(unit: str, output_unit: str = "") -> str:
@@ -109,3 +127,11 @@ def _output_dsi(output_unit: str) -> str:
             f"the output unit {output_unit!r} cannot be stated in a certificate (D-SI); use one of "
             + ", ".join(OUTPUT_UNITS)
         ) from None
+
+
+def factor_to_printed(unit: str, output_unit: str = "") -> float:
+    """The factor that takes a value in ``unit`` to :func:`printed_unit` (1 but for
+    :data:`CONVERTED_UNITS`)."""
+    if output_unit:
+        unit = unit.replace(UNSTATED_OUTPUT, output_unit)
+    return CONVERTED_UNITS[unit][1] if unit in CONVERTED_UNITS else 1.0

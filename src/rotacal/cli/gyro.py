@@ -275,6 +275,11 @@ def _print_triad(result: Any, data: dict[str, Any]) -> None:
     "convention; the gyro reads negative), +360 one counter-clockwise turn. "
     "[default: the sections file's angle_deg, else -360]",
 )
+@click.option(
+    "--output-unit",
+    default="",
+    help="Unit of the outputs ux, uy, uz (e.g. V, LSB, deg/s), for the results and the report.",
+)
 @_clipping_option
 @_analysis_options
 @_names_capture
@@ -283,6 +288,7 @@ def gyro_rotations(
     sections_path: str,
     fs_hz: float | None,
     angle_deg: float | None,
+    output_unit: str,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -349,6 +355,7 @@ def gyro_rotations(
             rotations,
             static=static,
             angle_deg=angle_deg,
+            output_unit=output_unit,
             specs=kw.pop("specs"),
             allow_clipped=kw.pop("allow_clipped"),
         )
