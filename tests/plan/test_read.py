@@ -76,7 +76,7 @@ BAD = [
         "start_date = 2026-11-26\nend_date = 2026-11-25\n",
         "certificate.end_date",
         "before",
-        "start_date",
+        "end_date = 2026",
     ),
     ('name = "Rate Lab"', "name = 42", "laboratory.name", "non-empty text", "name = 42"),
     (
@@ -144,7 +144,7 @@ BAD = [
         "{ max = 0.5, typ = 0.1 } }",
         "measurement[3].limits.arw_deg_rt_h.typ",
         "unknown key",
-        "limits",
+        "typ = 0.1",
     ),
     (
         "min = 0.0124, max = 0.0126",
@@ -158,7 +158,7 @@ BAD = [
         'options = { column = "rate_deg_s", json = "x.json" }',
         "measurement[3].options.json",
         "leave this option out",
-        "options",
+        "x.json",
     ),
     ("[conditions]", "[condition]", "condition", "unknown table", "[condition]"),
 ]
