@@ -221,3 +221,12 @@ def make_plan(twin_folder: Path) -> Callable[..., Path]:
         return write_plan(folder, data, name)
 
     return make
+
+
+@pytest.fixture(scope="session")
+def dcc_schema() -> Any:
+    """PTB's DCC schema v3.1.2 from the shared standards folder beside the project (offline)."""
+    import xmlschema
+
+    path = Path(__file__).resolve().parents[3] / "shared" / "standards" / "dcc" / "dcc.xsd"
+    return xmlschema.XMLSchema(str(path))
