@@ -51,6 +51,12 @@ class IssuedCertificate:
     folder: Path
     content: CertificateContent
 
+    @property
+    def files(self) -> list[str]:
+        """The files of the certificate folder: the PDF, the DCC, results.json, the figures."""
+        figures = [f.file for m in self.content.measurements for f in m.figures]
+        return [PDF_NAME, XML_NAME, JSON_NAME, *figures]
+
 
 def plan_sha256(plan_bytes: bytes, input_digests: Sequence[str]) -> str:
     """The SHA-256 that ties a certificate to its plan and its data: of the plan file's bytes,

@@ -19,8 +19,8 @@ def example_plan() -> str:
 @cli.command(
     "certify",
     epilog=example(
-        "rotacal certify --example > plan.toml     # a plan to edit",
-        "rotacal certify plan.toml                 # → RC-…/certificate.pdf, .xml, results.json",
+        "rotacal certify --example             # a commented plan to start from",
+        "rotacal certify plan.toml             # the certificate folder, named by its number",
         "rotacal certify plan.toml --out cert --overwrite",
     ),
 )
@@ -35,7 +35,7 @@ def example_plan() -> str:
 @click.option("--overwrite", is_flag=True, help="Replace an existing certificate folder.")
 @click.option("--example", "show_example", is_flag=True, help="Print a commented plan and exit.")
 def certify_command(plan: str | None, out: str | None, overwrite: bool, show_example: bool) -> None:
-    """Run every measurement of a calibration plan and issue its certificate.
+    """Run a calibration plan and issue its certificate.
 
     The plan (TOML) names the laboratory, the customer, the item, the reference standards, the
     conditions and the measurements with their captures, options and acceptance limits. The
@@ -51,7 +51,8 @@ def certify_command(plan: str | None, out: str | None, overwrite: bool, show_exa
 
     with _progress(plan_measurement_count(plan), "measuring") as advance:
         issued = certify(plan, out=out, overwrite=overwrite, advance=advance)
-    _wrote(issued.folder)
+    for name in issued.files:
+        _wrote(issued.folder / name)
     verdicts = [c.verdict for m in issued.content.measurements for c in m.conformity]
     summary = ", ".join(
         f"{verdicts.count(v)} {v}" for v in ("pass", "fail", "indeterminate") if v in verdicts
