@@ -19,8 +19,8 @@ def example_plan() -> str:
 @cli.command(
     "certify",
     epilog=example(
-        "rotacal certify --example             # a commented plan to start from",
-        "rotacal certify plan.toml             # the certificate folder, named by its number",
+        "rotacal certify --example             # a commented plan",
+        "rotacal certify plan.toml             # → a folder named by its number",
         "rotacal certify plan.toml --out cert --overwrite",
     ),
 )
