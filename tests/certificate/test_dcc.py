@@ -350,9 +350,7 @@ def test_validate_dcc_refuses_what_the_schema_refuses(schema, xml, old, new, nam
     assert old in xml
     bad = xml.replace(old, new, 1)
     assert _errors(schema, bad) != []  # the reference validator refuses it too
-    with pytest.raises(
-        ConfigError, match=f"not valid against the PTB DCC 3.1.2 schema: line .*{names}"
-    ):
+    with pytest.raises(ConfigError, match=f"not valid against the PTB DCC 3.1.2 schema: .*{names}"):
         validate_dcc(bad)
 
 

@@ -145,8 +145,8 @@ def validate_dcc(xml: bytes) -> None:
     Raises
     ------
     ConfigError
-        When it is not well-formed or not valid: one line with the first fault, its line in the
-        XML and the element; a certificate that does not validate must not be issued.
+        When it is not well-formed or not valid: one line with the first fault (the element and
+        the value refused); a certificate that does not validate must not be issued.
     """
     try:
         document = etree.fromstring(xml)
@@ -158,10 +158,10 @@ def validate_dcc(xml: bytes) -> None:
     if schema.validate(document):
         return
     error = schema.error_log.filter_from_errors()[0]
+    # the message names the element and the value it refuses, which is what a person can act on
     raise ConfigError(
-        f"certificate.xml is not valid against the PTB DCC {SCHEMA_VERSION} schema: line "
-        f"{error.line}: {error.message}; nothing was issued — check the plan's text that went "
-        "into that element"
+        f"certificate.xml is not valid against the PTB DCC {SCHEMA_VERSION} schema: "
+        f"{error.message.rstrip('.')}; nothing was issued"
     )
 
 
