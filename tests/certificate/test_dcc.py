@@ -176,10 +176,12 @@ def test_laboratory_customer_and_persons(content, tree):
         )
         for p in tree.iterfind(".//dcc:respPersons/dcc:respPerson", NS)
     ]
-    # the sample: A. Operator performed, B. Manager approved (the one main signer)
+    # each person with the role's sentence; the first who approved is the one main signer
+    roles = {"performed": "performed the calibration", "approved": "approved the certificate"}
+    approvers = [p for p in plan.persons if p.role == "approved"]
+    assert approvers, "the fixture's plan names no one who approved"
     assert persons == [
-        ("A. Operator", "performed the calibration", None),
-        ("B. Manager", "approved the certificate", "true"),
+        (p.name, roles[p.role], "true" if p is approvers[0] else None) for p in plan.persons
     ]
 
 
@@ -196,15 +198,19 @@ def test_standards_conditions_and_methods_of_each_measurement(content, tree):
         assert _text(method, "dcc:description/dcc:content") == m.method
         cited = method.xpath("dcc:norm/text() | dcc:reference/text()", namespaces=NS)
         assert cited == list(m.references)
+        assert plan.conditions.temperature_c is not None, "the fixture's plan has no temperature"
         temperature = _one(
             result, ".//dcc:influenceCondition[@refType='basic_temperature']//si:real"
         )
         assert float(_text(temperature, "si:value") or "nan") == plan.conditions.temperature_c
         assert _text(temperature, "si:unit") == r"\degreeCelsius"
-        assert float(_text(temperature, "si:expandedUnc/si:uncertainty") or "nan") == (
-            plan.conditions.temperature_u_c
-        )
-        assert _text(temperature, "si:expandedUnc/si:coverageFactor") == "1"
+        if plan.conditions.temperature_u_c is None:
+            assert temperature.find("si:expandedUnc", NS) is None
+        else:  # a standard uncertainty: k = 1
+            assert float(_text(temperature, "si:expandedUnc/si:uncertainty") or "nan") == (
+                plan.conditions.temperature_u_c
+            )
+            assert _text(temperature, "si:expandedUnc/si:coverageFactor") == "1"
         for name, _value in plan.conditions.others:
             assert name in result.xpath(
                 ".//dcc:influenceCondition/dcc:name/dcc:content/text()", namespaces=NS
@@ -337,16 +343,42 @@ def test_validate_dcc_accepts_the_certificate(xml):
     validate_dcc(xml)
 
 
+def _spoilt(content: CertificateContent, xml: bytes) -> dict[str, tuple[bytes, bytes, str]]:
+    """What to change in the valid certificate → (old, new, what the refusal names)."""
+    m = content.measurements[0]
+    first, second = (quantity_id(m.index, q.key).encode() for q in m.quantities[:2])
+    limited = next(quantity_id(m.index, c.key) for m in content.measurements for c in m.conformity)
+    number = f"<dcc:uniqueIdentifier>{content.number}</dcc:uniqueIdentifier>".encode()
+    k = xml.split(b"<si:coverageFactor>", 1)[1].split(b"<", 1)[0]
+    return {
+        "k below 1 (si:kValueType)": (
+            b"<si:coverageFactor>" + k + b"<",
+            b"<si:coverageFactor>0.96<",
+            "coverageFactor",
+        ),
+        "an unknown conformity status": (b"<dcc:conformity>", b"<dcc:conformity>X", "conformity"),
+        "the number removed": (number, b"", "identifications"),
+        "a conformity statement about no quantity": (
+            f'refId="{limited}"'.encode(),
+            b'refId="nothing"',
+            "refId 'nothing' names no",
+        ),
+        "two quantities with one id": (b'id="' + second + b'"', b'id="' + first + b'"', "xs:ID"),
+    }
+
+
 @pytest.mark.parametrize(
-    ("old", "new", "names"),
+    "fault",
     [
-        # k below 1 (si:kValueType); an unknown conformity status; the number removed
-        (b"<si:coverageFactor>1.96<", b"<si:coverageFactor>0.96<", "coverageFactor"),
-        (b"<dcc:conformity>fail<", b"<dcc:conformity>failed<", "conformity"),
-        (b"<dcc:uniqueIdentifier>RC-2026-0042</dcc:uniqueIdentifier>", b"", "identifications"),
+        "k below 1 (si:kValueType)",
+        "an unknown conformity status",
+        "the number removed",
+        "a conformity statement about no quantity",
+        "two quantities with one id",
     ],
 )
-def test_validate_dcc_refuses_what_the_schema_refuses(schema, xml, old, new, names):
+def test_validate_dcc_refuses_what_the_schema_refuses(schema, content, xml, fault):
+    old, new, names = _spoilt(content, xml)[fault]
     assert old in xml
     bad = xml.replace(old, new, 1)
     assert _errors(schema, bad) != []  # the reference validator refuses it too

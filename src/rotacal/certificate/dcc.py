@@ -156,6 +156,14 @@ def validate_dcc(xml: bytes) -> None:
         ) from None
     schema = _schema()
     if schema.validate(document):
+        # libxml2 checks that IDs are unique but not that every IDREF names one (xmlschema does)
+        ids = set(document.xpath("//@id"))
+        dangling = sorted({r for refs in document.xpath("//@refId") for r in refs.split()} - ids)
+        if dangling:
+            raise ConfigError(
+                f"certificate.xml is not valid against the PTB DCC {SCHEMA_VERSION} schema: "
+                f"refId {dangling[0]!r} names no element's id; nothing was issued"
+            )
         return
     error = schema.error_log.filter_from_errors()[0]
     # the message names the element and the value it refuses, which is what a person can act on
