@@ -78,6 +78,11 @@ _RULE_CLAUSE = {"simple": "4.2.1", "guarded": "4.2.2"}
 _NORM_PREFIXES = ("IEEE Std", "ISO", "IEC", "JCGM", "ILAC", "EA-", "DIN", "ASTM", "VDI")
 
 
+def _is_norm(citation: str) -> bool:
+    """Whether a references-list entry cites a standard (its designation appears in it)."""
+    return any(f" {prefix}" in f" {citation}" for prefix in _NORM_PREFIXES)
+
+
 def dcc_conformity(conformity: Conformity) -> str:
     """The DCC's conformity status (``dcc:stringConformityStatementStatusType``) of a statement.
 
@@ -502,10 +507,13 @@ class _DccWriter:
         method = self.el(methods, "usedMethod")
         self.texts(method, "name", f"rotacal {m.command}")
         self.texts(method, "description", m.method)
+        # the schema wants every dcc:norm before the first dcc:reference
+        norms = [c for c in m.references if _is_norm(c)]
+        for citation in norms:
+            self.el(method, "norm", citation)
         for citation in m.references:
-            self.el(
-                method, "norm" if citation.startswith(_NORM_PREFIXES) else "reference", citation
-            )
+            if citation not in norms:
+                self.el(method, "reference", citation)
         self.software(self.el(element, "usedSoftware"), _command_line(m))
         if self.plan.standards:
             equipment = self.el(element, "measuringEquipments")

@@ -242,16 +242,13 @@ def _draw(content: CertificateContent, folder: Path) -> CertificateContent:
 
 def _render(content: CertificateContent, folder: Path) -> None:
     """Write results.json, certificate.xml (checked against the DCC schema) and certificate.pdf."""
-    from .dcc import dcc_xml
+    from .dcc import dcc_xml, validate_dcc
     from .pdf import render_pdf
 
     text = json.dumps(results_document(content), indent=2, ensure_ascii=False, allow_nan=False)
     (folder / JSON_NAME).write_text(text + "\n", encoding="utf-8")
     xml = dcc_xml(content)
-    with contextlib.suppress(ImportError):
-        from .dcc import validate_dcc
-
-        validate_dcc(xml)
+    validate_dcc(xml)  # a certificate that is not a valid DCC is not issued
     (folder / XML_NAME).write_bytes(xml)
     (folder / PDF_NAME).write_bytes(render_pdf(content, folder))
 
