@@ -9,6 +9,7 @@ strings below.
 from __future__ import annotations
 
 import dataclasses
+import datetime as dt
 import io
 import re
 import xml.etree.ElementTree as ET
@@ -85,6 +86,11 @@ def special(content: CertificateContent) -> list[str]:
     plan = content.plan
     plan = dataclasses.replace(
         plan,
+        data={
+            "certificate": {"location": "on site: <Hall 3> #2"},
+            "item": {"received": dt.date(2026, 11, 20), "condition": "as new, seal intact"},
+        },
+        supersedes="RC-2026-0041",
         laboratory=dataclasses.replace(plan.laboratory, name="Lab *#1* $"),
         customer=dataclasses.replace(plan.customer, name=SPECIAL, address="<addr> @ref"),
         item=dataclasses.replace(plan.item, description="_under_ #emph[x] {y}"),
@@ -293,6 +299,25 @@ def test_markup_characters_print_as_typed(special: list[str]) -> None:
         "Lab *#1* $",
     ):
         assert typed in text, typed
+
+
+def test_optional_plan_keys_and_a_superseded_certificate(special: list[str]) -> None:
+    first = _flat(special[0])
+    assert "Place of calibration on site: <Hall 3> #2" in first
+    assert "Date of receipt 2026-11-20" in first
+    assert "Condition of the item as new, seal intact" in first
+    assert "Supersedes certificate No. RC-2026-0041, which this certificate replaces" in first
+
+
+def test_every_command_kind_prints_its_results(
+    kind_content: dict[str, CertificateContent],
+) -> None:
+    for command, content in kind_content.items():
+        text = _flat("\n".join(_pages(render_pdf(content, Path(".")))))
+        assert f"rotacal {command}" in text
+        for q in content.measurements[0].quantities:
+            spread = printed_interval(q.interval) if q.interval else printed_number(q.U)
+            assert _row(printed_number(q.value), spread, q.unit, q.k) in text, (command, q.key)
 
 
 # --- the figures' files -------------------------------------------------------------------
