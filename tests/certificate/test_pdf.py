@@ -19,6 +19,7 @@ from typing import Any
 import pypdf
 import pytest
 
+from rotacal.certificate.conformity import RULE_TEXT
 from rotacal.certificate.content import CertificateContent, Figure
 from rotacal.certificate.figures import draw_figures
 from rotacal.certificate.pdf import (
@@ -61,6 +62,11 @@ def _flat(text: str) -> str:
     space (digit groups' narrow no-break spaces stay)."""
     text = re.sub(r"(?<=[-/])\n", "", text)
     return re.sub(r"[ \n]+", " ", text)
+
+
+def _loose(text: str) -> str:
+    """Text without any space or hyphen, for prose that Typst may hyphenate at a line end."""
+    return re.sub(r"[\s\-\u00ad]+", "", text)
 
 
 @pytest.fixture(scope="module")
@@ -214,7 +220,7 @@ def test_each_result_prints_with_its_u_unit_k_and_p(issued: dict[str, Any]) -> N
             p = f"{round(float(q.p) * 100)} %"
             assert _row(printed_number(q.value), spread, q.unit, q.k, p) in text, q.key
             checked += 1
-    assert checked == sum(len(m.quantities) for m in issued["content"].measurements) >= 20
+    assert checked >= len(issued["content"].measurements)
 
 
 def test_every_conformity_statement_with_its_verdict(issued: dict[str, Any]) -> None:
@@ -235,7 +241,8 @@ def test_every_conformity_statement_with_its_verdict(issued: dict[str, Any]) -> 
         line = _row(printed_number(c.value), spread, c.unit, limits, c.decision_rule)
         assert f"{line} {c.verdict.upper()}" in text, c.key
         assert printed_text(c.statement) in text, c.key
-    assert "Guarded acceptance (ILAC-G8:09/2019 §4.2.2, guard band w = U)" in text
+    for rule in {c.decision_rule for _, c in rows}:
+        assert RULE_TEXT[rule][0].upper() + RULE_TEXT[rule][1:] in text, rule
 
 
 def test_the_administrative_elements(issued: dict[str, Any]) -> None:
@@ -272,18 +279,26 @@ def test_the_administrative_elements(issued: dict[str, Any]) -> None:
             standard.due.isoformat(),
         ):
             assert expected in text, expected
-    assert "23.0 °C, standard uncertainty 0.5 °C" in text
-    assert "45.0 %" in text
-    assert "air pressure 1013.0 hPa" in text
+    conditions = plan.conditions
+    if conditions.temperature_c is not None:
+        assert f"{conditions.temperature_c!r} °C" in text
+    if conditions.temperature_u_c is not None:
+        assert f"standard uncertainty {conditions.temperature_u_c!r} °C" in text
+    if conditions.humidity_percent is not None:
+        assert f"relative humidity {conditions.humidity_percent!r} %" in text
+    for _key, value in conditions.others:
+        assert str(value) in text
+    # prose is justified and hyphenated: compare it without spaces and hyphens
+    prose = _loose(text)
     for m in content.measurements:
         assert m.name in text
-        assert m.method in text
+        assert _loose(m.method) in prose
         for ref in m.references:
-            assert ref in text
+            assert _loose(ref) in prose
         for capture in m.captures:
             assert capture.sha256 in text
         for figure in m.figures:
-            assert figure.caption in text
+            assert _loose(figure.caption) in prose
     assert f"rotacal {content.software_version}" in text
     assert content.plan_sha256 in text
 
