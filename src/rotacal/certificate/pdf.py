@@ -13,7 +13,7 @@ loses parts of matplotlib's SVG), counts pages natively ("page n of m" without a
 and writes PDF/A-2b for the archive. Its Python package is one pip wheel with the compiler and the
 fonts inside (no TeX, no system library); only those embedded fonts are used, so the PDF is the
 same on every machine. Compiling a certificate of five measurements (six pages, five figures)
-takes 0.13–0.18 s (``benchmarks/bench_certificate_pdf.py``); drawing its figures 0.1–0.35 s each.
+takes 0.12–0.19 s (``benchmarks/bench_certificate_pdf.py``); drawing its figures 0.1–0.35 s each.
 
 Number layout: a value or U prints exactly as :class:`ReportedQuantity` holds it (ILAC-P14
 rounded), with its digits grouped by three on both sides of the decimal point with a narrow
