@@ -60,13 +60,17 @@ class Person:
 
 @dataclasses.dataclass(frozen=True)
 class Item:
-    """The item calibrated; ``serial`` identifies it (and its records' history)."""
+    """The item calibrated; ``serial`` identifies it (and its records' history). ``condition`` is
+    its condition on receipt and ``received`` the date it was received (ISO/IEC 17025:2017
+    §7.8.2.1 g, h), when the plan states them."""
 
     kind: str
     manufacturer: str
     model: str
     serial: str
     description: str = ""
+    condition: str = ""
+    received: dt.date | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -138,8 +142,9 @@ class Plan:
     ``number`` is the certificate number or ``"auto"``; ``start_date``/``end_date`` the dates of
     calibration (equal for a one-day calibration) and ``issue_date`` the certificate's date of issue
     (``[certificate] issued``; default ``end_date``) — all from the plan, never the clock, so that
-    the same plan gives the same certificate. ``text`` is the plan file's bytes as given, ``data``
-    the TOML as parsed.
+    the same plan gives the same certificate. ``location`` is where the calibration was performed
+    when not at the laboratory (ISO/IEC 17025 §7.8.2.1 c). ``text`` is the plan file's bytes as
+    given, ``data`` the TOML as parsed.
     """
 
     path: Path
@@ -159,3 +164,4 @@ class Plan:
     supersedes: str | None = None
     language: str = "en"
     title: str = "Calibration certificate"
+    location: str = ""

@@ -66,11 +66,12 @@ _TABLES = {
         "supersedes",
         "language",
         "title",
+        "location",
     ),
     "laboratory": ("name", "address", "email", "phone", "country"),
     "customer": ("name", "address", "email", "phone", "country"),
     "person": ("name", "role", "title"),
-    "item": ("kind", "manufacturer", "model", "serial", "description"),
+    "item": ("kind", "manufacturer", "model", "serial", "description", "condition", "received"),
     "standard": ("name", "id", "certificate", "due", "traceability"),
     "measurement": ("name", "command", "capture", "options", "limits", "decision_rule"),
 }
@@ -249,6 +250,8 @@ class _Reader:
             model=self.text(table, "item", "model"),
             serial=self.text(table, "item", "serial"),
             description=self.text(table, "item", "description", required=False),
+            condition=self.text(table, "item", "condition", required=False),
+            received=self.date(table, "item", "received"),
         )
 
     def standards(self, data: Mapping[str, Any], end: dt.date) -> tuple[Standard, ...]:
@@ -445,6 +448,7 @@ class _Reader:
             "language": language,
             "supersedes": supersedes,
             "title": title,
+            "location": location,
         }
 
 
