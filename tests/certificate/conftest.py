@@ -216,8 +216,9 @@ def make_plan(twin_folder: Path) -> Callable[..., Path]:
                 m["capture"],
                 *(v for k, v in m.get("options", {}).items() if k == "sections"),
             ]:
-                if not (folder / file).exists():
-                    shutil.copy(twin_folder / file, folder / file)
+                for copied in (file, f"{file}.truth.json"):
+                    if not (folder / copied).exists() and (twin_folder / copied).exists():
+                        shutil.copy(twin_folder / copied, folder / copied)
         return write_plan(folder, data, name)
 
     return make

@@ -100,15 +100,25 @@ def test_the_reported_values_agree_with_the_twins_truth(issued: Path) -> None:
 
 def test_every_number_of_the_dcc_is_the_one_in_results_json(issued: Path) -> None:
     doc = json.loads((issued / "results.json").read_text())
-    xml = (issued / "certificate.xml").read_bytes()
-    values = [(el.text or "").strip() for el in etree.fromstring(xml).iterfind(".//si:value", NS)]
-    uncertainties = [
-        (el.text or "").strip() for el in etree.fromstring(xml).iterfind(".//si:uncertainty", NS)
-    ]
+    root = etree.fromstring((issued / "certificate.xml").read_bytes())
+    reals = {
+        (real.findtext("si:label", namespaces=NS) or ""): real
+        for real in root.iterfind(".//dcc:result//si:real", NS)
+    }
     for m in doc["measurements"]:
         for q in m["reported"]:
-            assert any(float(v) == q["value"] for v in values), q
-            assert any(float(u) == q["U"] for u in uncertainties), q
+            real = reals[q["quantity"]]
+            assert float(real.findtext("si:value", namespaces=NS)) == q["value"], q
+            assert real.findtext("si:unit", namespaces=NS) == q["dsi_unit"], q
+            if q["interval"] is None:
+                U = real.findtext("si:expandedUnc/si:uncertainty", namespaces=NS)
+                assert float(U) == q["U"], q
+                k = real.findtext("si:expandedUnc/si:coverageFactor", namespaces=NS)
+                assert float(k) == q["k"], q
+            else:
+                low = real.findtext("si:coverageInterval/si:intervalMin", namespaces=NS)
+                high = real.findtext("si:coverageInterval/si:intervalMax", namespaces=NS)
+                assert [float(low), float(high)] == q["interval"], q
 
 
 def test_the_dcc_is_valid(issued: Path, dcc_schema) -> None:
@@ -159,7 +169,11 @@ def test_a_limit_on_a_result_the_command_does_not_report_is_named(
     result = CliRunner().invoke(cli, ["certify", str(plan)])
     assert result.exit_code == 2
     assert "measurement[1].limits.arw_deg_h" in result.output and "arw_deg_rt_h" in result.output
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["noise.npz", "plan.toml"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "noise.npz",
+        "noise.npz.truth.json",
+        "plan.toml",
+    ]
 
 
 def test_a_bad_option_value_is_named(tmp_path: Path, make_plan) -> None:

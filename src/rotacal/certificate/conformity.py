@@ -110,4 +110,5 @@ def _statement(quantity: ReportedQuantity, limit: Limit, rule: str, verdict: str
         "indeterminate": "cannot be stated to conform or not to conform to",
     }[verdict]
     rule_name = "simple acceptance" if rule == "simple" else "guarded acceptance, w = U"
-    return f"The {quantity.name}, {measured}, {said} the limit ({bounds}; {rule_name})."
+    name = quantity.name[:1].upper() + quantity.name[1:]
+    return f"{name}, {measured}, {said} the limit ({bounds}; {rule_name})."

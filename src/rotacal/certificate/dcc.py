@@ -41,10 +41,10 @@ from lxml import etree
 
 from rotacal.errors import ConfigError
 from rotacal.plan.model import Conditions, Contact, Person, Plan, Standard
-from rotacal.uncertainty import round_ilac
 
 from .conformity import RULE_TEXT
 from .content import CertificateContent, Conformity, MeasurementResult, ReportedQuantity
+from .quantities import standard_uncertainty
 
 __all__ = [
     "DCC_NAMESPACE",
@@ -607,7 +607,7 @@ class _DccWriter:
             self.expanded(real, q.U, q.k, q.p)
         else:
             interval = self.el(real, "coverageInterval", ns=SI_NAMESPACE)
-            self.el(interval, "standardUnc", _standard_uncertainty(q), ns=SI_NAMESPACE)
+            self.el(interval, "standardUnc", standard_uncertainty(q), ns=SI_NAMESPACE)
             self.el(interval, "intervalMin", q.interval[0], ns=SI_NAMESPACE)
             self.el(interval, "intervalMax", q.interval[1], ns=SI_NAMESPACE)
             self.el(interval, "coverageProbability", q.p, ns=SI_NAMESPACE)
@@ -670,10 +670,3 @@ def _command_ref(command: str) -> str:
 def _command_line(m: MeasurementResult) -> str:
     options = ", ".join(f"{name} = {_plain(value)}" for name, value in m.options.items())
     return f"command: rotacal {m.command}" + (f"; options: {options}" if options else "")
-
-
-def _standard_uncertainty(q: ReportedQuantity) -> str:
-    """u = U/k of the printed U and k, to two significant digits (``si:coverageInterval`` needs
-    it; the certificate states U and k, whose ratio it is)."""
-    u = Decimal(q.U) / Decimal(q.k)
-    return round_ilac(0.0, float(u))[1]

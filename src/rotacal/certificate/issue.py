@@ -103,7 +103,7 @@ def _measurement_result(
         method=method,
         references=references,
         captures=tuple(CaptureRef(i["path"], i["sha256"], int(i["bytes"])) for i in inputs),
-        options=dict(results.get("provenance", {}).get("options", {})),
+        options=dict(m.options),  # as the plan gives them; every option is in the provenance
         results=results,
         quantities=quantities,
         conformity=tuple(conformity),

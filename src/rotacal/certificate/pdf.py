@@ -35,6 +35,7 @@ from typing import Any
 
 from .conformity import RULE_TEXT
 from .content import CertificateContent, Conformity, MeasurementResult, ReportedQuantity
+from .quantities import standard_uncertainty
 
 __all__ = [
     "END_MARKER",
@@ -203,7 +204,15 @@ def _conditions(content: CertificateContent) -> list[dict[str, str]]:
 
 def _quantity_row(q: ReportedQuantity, notes: list[str]) -> dict[str, Any]:
     marks = []
-    for text in ([q.note] if q.note else []) + ([_INTERVAL_NOTE] if q.interval else []):
+    texts = [q.note] if q.note else []
+    if q.interval:
+        unit = f" {q.unit}" if q.unit else ""
+        texts += [
+            _INTERVAL_NOTE,
+            f"Standard uncertainty u = {printed_number(standard_uncertainty(q))}{unit}, "
+            f"expanded uncertainty U = {printed_number(q.U)}{unit} (k = {q.k}).",
+        ]
+    for text in texts:
         if text not in notes:
             notes.append(text)
         marks.append(chr(ord("a") + notes.index(text)))

@@ -20,7 +20,7 @@ from rotacal.uncertainty.budget import round_ilac
 from .content import ReportedQuantity
 from .units import CONVERTED_UNITS, dsi_unit, factor_to_printed, printed_unit
 
-__all__ = ["REPRESENTATIVE_BUDGETS", "reported_quantities"]
+__all__ = ["REPRESENTATIVE_BUDGETS", "reported_quantities", "standard_uncertainty"]
 
 #: Budgets that stand for one of many values (not a result of the item), by command.
 REPRESENTATIVE_BUDGETS: dict[str, frozenset[str]] = {
@@ -138,3 +138,11 @@ def _note(key: str, results: Mapping[str, Any], unit: str) -> str:
     if key.endswith("_percent_fs") and results.get("full_scale_deg_s") is not None:
         return f"of the full scale {float(results['full_scale_deg_s']):g} °/s"
     return ""
+
+
+def standard_uncertainty(q: ReportedQuantity) -> str:
+    """u = U/k of the printed U and k, to two significant digits: the standard uncertainty the
+    DCC's ``si:coverageInterval`` of a biased, bounded quantity needs; the PDF prints it beside
+    that interval, so both state the same number."""
+    u = Decimal(q.U) / Decimal(q.k)
+    return round_ilac(0.0, float(u))[1]

@@ -51,6 +51,9 @@ CONVERTED_UNITS: dict[str, tuple[str, float]] = {
     "deg/h/g^2": ("°/h/(m/s²)²", 1.0 / STANDARD_GRAVITY**2),
 }
 
+#: Units some analyses write with "deg", printed with the degree sign like the rest.
+_DEGREE_SIGN = {"deg": "°", "deg/s": "°/s", "deg/h": "°/h", "deg/s/(°/s)": ""}
+
 #: A gyro's output units (``--output-unit``) that a certificate can state → D-SI. Counts of an
 #: A/D converter or a digital output (LSB) are numbers: ``\\one``.
 OUTPUT_UNITS: dict[str, str] = {
@@ -84,7 +87,9 @@ def printed_unit(unit: str, output_unit: str = "") -> str:
         unit = unit.replace(UNSTATED_OUTPUT, output_unit)
     if unit in ("°/s/(°/s)", "deg/s/(°/s)"):  # a gyro that reads in °/s: a pure number
         return ""
-    return CONVERTED_UNITS[unit][0] if unit in CONVERTED_UNITS else unit
+    if unit in CONVERTED_UNITS:
+        return CONVERTED_UNITS[unit][0]
+    return _DEGREE_SIGN.get(unit, unit)
 
 
 def dsi_unit(unit: str, output_unit: str = "") -> str:

@@ -440,6 +440,7 @@ class _Reader:
         title = (
             self.text(table, "certificate", "title", required=False) or "Calibration certificate"
         )
+        location = self.text(table, "certificate", "location", required=False)
         return {
             "number": number,
             "start_date": start,
