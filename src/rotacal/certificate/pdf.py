@@ -202,6 +202,23 @@ def _conditions(content: CertificateContent) -> list[dict[str, str]]:
     return rows
 
 
+def _verdict_summary(verdicts: list[str]) -> str:
+    """The first page's sentence on the conformity statements: only the verdicts that occur."""
+    n = len(verdicts)
+    if n == 0:
+        return "No statement of conformity with a specification is made."
+    if n == 1:
+        return f"Its one statement of conformity (section 4) is {_VERDICT_WORDS[verdicts[0]]}."
+    counts = [(verdicts.count(v), _VERDICT_WORDS[v]) for v in ("pass", "fail", "indeterminate")]
+    parts = [f"{count} {word}" for count, word in counts if count]
+    said = (
+        f"all {n} are {parts[0].split(' ', 1)[1]}"
+        if len(parts) == 1
+        else (", ".join(parts[:-1]) + " and " + parts[-1])
+    )
+    return f"Of its {n} statements of conformity (section 4), {said}."
+
+
 def _quantity_row(q: ReportedQuantity, notes: list[str]) -> dict[str, Any]:
     marks = []
     texts = [q.note] if q.note else []
@@ -352,7 +369,7 @@ def certificate_data(content: CertificateContent, folder: Path) -> dict[str, Any
         "conditions": _conditions(content),
         "measurements": [_measurement(m, folder) for m in content.measurements],
         "conformity": conformity,
-        "verdict_counts": {v: verdicts.count(v) for v in ("pass", "fail", "indeterminate")},
+        "verdict_summary": _verdict_summary(verdicts),
         "rules": _rules(row["rule"] for row in conformity),
         "software": f"rotacal {content.software_version}",
         "plan_sha256": content.plan_sha256,
