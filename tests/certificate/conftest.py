@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
+import os
 import pickle
 import tempfile
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -166,7 +167,11 @@ def cached(folder: Path, name: str, make: Any) -> Any:
 @pytest.fixture(scope="session")
 def twin_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The twin captures of every measurement command, shared by the xdist workers."""
-    shared = tmp_path_factory.getbasetemp().parent / "certificate-twins"
+    base = tmp_path_factory.getbasetemp()
+    # an xdist worker's base is a folder of this session's (pytest-N/popen-gwK): its parent is
+    # shared by the workers of this session only; without xdist the base itself is this session's
+    session = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+    shared = session / "certificate-twins"
     return make_captures(shared)
 
 
