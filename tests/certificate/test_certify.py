@@ -242,3 +242,13 @@ def test_the_example_plan_works_as_it_is_on_simulated_captures(tmp_path: Path) -
     assert result.exit_code == 0, result.output
     assert FILES <= {p.name for p in (tmp_path / "RC-2026-0001").iterdir()}
     shutil.rmtree(tmp_path / "RC-2026-0001")
+
+
+def test_the_end_marker_closes_the_last_page_and_never_stands_alone(issued: Path) -> None:
+    from pypdf import PdfReader
+
+    pages = [p.extract_text() for p in PdfReader(issued / "certificate.pdf").pages]
+    assert all("End of certificate" not in page for page in pages[:-1])
+    last = pages[-1]
+    assert "End of certificate" in last
+    assert "SHA-256" in last  # the annex's table goes with it
