@@ -252,3 +252,15 @@ def test_the_end_marker_closes_the_last_page_and_never_stands_alone(issued: Path
     last = pages[-1]
     assert "End of certificate" in last
     assert "SHA-256" in last  # the annex's table goes with it
+
+
+def test_an_unknown_option_is_named_before_anything_runs(tmp_path: Path, make_plan) -> None:
+    plan = make_plan(tmp_path)
+    text = plan.read_text().replace('column = "rate_deg_s"', 'colum = "rate_deg_s"')
+    plan.write_text(text)
+    result = CliRunner().invoke(cli, ["certify", str(plan)])
+    assert result.exit_code == 2
+    line = result.output.strip()
+    assert "measurement[3].options.colum" in line and "has no option --colum" in line
+    assert "column" in line  # the options it has
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith((".", "RC-"))]

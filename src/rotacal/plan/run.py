@@ -148,7 +148,11 @@ def run_plan(
 ) -> list[dict[str, Any]]:
     """Run every measurement of ``plan`` in order; the commands' JSON, one per measurement.
 
-    ``advance(name)`` is called after each measurement (a progress bar)."""
+    ``advance(name)`` is called after each measurement (a progress bar). Every measurement's
+    option names and captures are checked before the first one runs, so a misspelt option of the
+    last measurement does not wait for the others."""
+    for m in plan.measurements:
+        _arguments(plan, m, scratch / "check.json")
     results = []
     for m in plan.measurements:
         results.append(run_measurement(plan, m, scratch))
