@@ -367,7 +367,11 @@ class _LinearMax:
         self.refine = refine
 
     def rows(self, angles: np.ndarray) -> np.ndarray:
-        c = _coefficients(self.table, np.atleast_2d(angles))
+        angles = np.asarray(angles, dtype=float)
+        if angles.ndim == 1:  # one point of the local search: the fast path, the same numbers
+            c = self.table.point_coefficients(angles)[None]
+        else:
+            c = _coefficients(self.table, angles)
         return np.abs(c[:, self.component, :][:, self.columns])
 
     def __call__(self, x: np.ndarray, peaks: int = 3) -> list[tuple[float, np.ndarray]]:
