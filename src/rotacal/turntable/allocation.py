@@ -67,6 +67,7 @@ __all__ = [
     "MonteCarloCheck",
     "allocate",
     "check_constraint_angles",
+    "check_draws",
     "linear_allocation",
     "monte_carlo_check",
     "worst_case",
@@ -1227,8 +1228,8 @@ def monte_carlo_check(
     Seed 001, §4.3 (Monte Carlo verification, 10 000 runs), Figure 9; eqs. (17)–(25).
     """
     _require_angular(table)
-    runs_i, chunk_i = _integer("runs", runs, 1), _integer("chunk", chunk, 1)
-    seed_i = _integer("seed", seed, 0)
+    runs_i, seed_i = check_draws(runs, seed)
+    chunk_i = _integer("chunk", chunk, 1)
     if signs not in ("random", "positive"):
         raise ConfigError(f"signs must be 'random' or 'positive', got {signs!r}.")
     names = tuple(table.angular_error_names)
@@ -1302,6 +1303,13 @@ def monte_carlo_check(
             None if any(v is None for v in quantiles.values()) else quantiles  # type: ignore[arg-type]
         ),
     )
+
+
+def check_draws(runs: Any, seed: Any) -> tuple[int, int]:
+    """``runs`` (an integer ≥ 1) and ``seed`` (an integer ≥ 0) of :func:`monte_carlo_check` as
+    ints; anything else is one ConfigError line naming it. A caller that allocates first checks
+    them before the allocation's seconds of work."""
+    return _integer("runs", runs, 1), _integer("seed", seed, 0)
 
 
 def _integer(name: str, value: Any, minimum: int) -> int:

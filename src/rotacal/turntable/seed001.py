@@ -153,7 +153,11 @@ def reproduce_seed001(
     from rotacal.gyro.multiposition import EARTH_RATE_DEG_H, multiposition_plan
     from rotacal.sim.multiposition import DEFAULT_LATITUDE_DEG
     from rotacal.turntable.allocation import linear_allocation, worst_case
-    from rotacal.turntable.calibration import METHODS, orientation_requirement
+    from rotacal.turntable.calibration import (
+        METHODS,
+        equal_orientation_limit_rad,
+        orientation_requirement,
+    )
 
     lat = DEFAULT_LATITUDE_DEG if latitude_deg is None else float(latitude_deg)
     earth = orientation_requirement(
@@ -210,14 +214,14 @@ def reproduce_seed001(
         for outer, inner in _SCAN_PLANS:
             plan = multiposition_plan(outer_steps=outer, inner_steps=inner)
             for scan_lat in _SCAN_LATITUDES:
-                req = orientation_requirement(
+                limit = equal_orientation_limit_rad(
                     required_deg_h,
                     phi1_deg=plan.phi1_deg,
                     phi2_deg=plan.phi2_deg,
                     latitude_deg=scan_lat,
                     method=method,
                 )
-                limits.append(req.equal_limit_deg)
+                limits.append(math.degrees(limit))
         scan[method] = {
             "min_deg": float(np.min(limits)),
             "max_deg": float(np.max(limits)),
