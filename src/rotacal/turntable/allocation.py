@@ -38,8 +38,6 @@ Lemma 1, Table 4, Figures 8–9.
 
 from __future__ import annotations
 
-import collections
-import copy
 import dataclasses
 import itertools
 import math
@@ -53,6 +51,7 @@ from scipy.optimize import Bounds, minimize
 from rotacal.errors import ConfigError
 from rotacal.results import Result
 from rotacal.turntable.draws import QUANTILE, TopValues, quantile_interval, top_values_needed
+from rotacal.turntable.memo import LastResults, memo_key
 from rotacal.turntable.model import (
     ANGLE_UNITS,
     ARCMIN_PER_RAD,
@@ -1022,35 +1021,27 @@ def allocate(
     ----------
     Seed 001, §4.1–4.2, eqs. (28)–(34), Lemma 1 (eqs. (35)–(38)), Table 4.
     """
-    key = _memo_key(
+    key = memo_key(
         table, requirement, angle_step_deg, full_model_guard, max_evaluations, constraint_step_deg
     )
-    if key not in _ALLOCATIONS:
-        _ALLOCATIONS[key] = _allocate(
+    return _ALLOCATIONS.get(
+        key,
+        lambda: _allocate(
             table,
             requirement,
             angle_step_deg=angle_step_deg,
             full_model_guard=full_model_guard,
             max_evaluations=max_evaluations,
             constraint_step_deg=constraint_step_deg,
-        )
-        while len(_ALLOCATIONS) > _MEMO_SIZE:
-            _ALLOCATIONS.popitem(last=False)
-    _ALLOCATIONS.move_to_end(key)
-    return copy.deepcopy(_ALLOCATIONS[key])
+        ),
+    )
 
 
-#: The last allocations made in this process, by their inputs (see :func:`_memo_key`).
-_ALLOCATIONS: collections.OrderedDict[str, Allocation] = collections.OrderedDict()
-_MEMO_SIZE = 8
-
-
-def _memo_key(table: Turntable, *inputs: Any) -> str:
-    """The inputs of an allocation as text: the table as it compares (its ``source``, a file name,
-    left out) and the options. An allocation is deterministic in these, and a repeat with the same
-    ones is common — the requirement's derivation tries scales it tried before, a batch of one
-    table design, a command run twice in one session — while one costs 10–20 s."""
-    return repr((dataclasses.replace(table, source=""), *inputs))
+#: The last allocations made in this process, by their inputs (the table as it compares and the
+#: options). An allocation is deterministic in these, and a repeat with the same ones is common —
+#: the requirement's derivation tries scales it tried before, a batch of one table design, a
+#: command run twice in one session — while one costs 5–15 s.
+_ALLOCATIONS: LastResults[Allocation] = LastResults(8)
 
 
 def _allocate(
