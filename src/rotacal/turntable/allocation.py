@@ -549,12 +549,13 @@ def _full_worst(
     cands: list[list[tuple[float, np.ndarray, np.ndarray]]] = [[], [], []]
     evaluations = 0
 
-    def consider(vals: np.ndarray, angles: np.ndarray, chi: np.ndarray) -> None:
+    def consider(vals: np.ndarray, point: Callable[[int], tuple[np.ndarray, np.ndarray]]) -> None:
+        """Keep the ``top`` largest values of each component; ``point(i)``: row i's angles, χ."""
         for j in range(3):
             v = vals[:, j]
             k = min(top, v.size)
             idx = np.argpartition(-v, k - 1)[:k]
-            cands[j].extend((float(v[i]), angles[i].copy(), chi[i].copy()) for i in idx)
+            cands[j].extend((float(v[i]), *point(int(i))) for i in idx)
             cands[j].sort(key=lambda t: -t[0])
             del cands[j][top:]
 
@@ -567,12 +568,23 @@ def _full_worst(
         grid = _grid_m(n_angles, per_axis)
         step = _TWO_PI / per_axis
         strategy = f"all {chi_v.shape[0]} sign vertices × {grid.shape[0]} angle points"
-        total = chi_v.shape[0] * grid.shape[0]
+        g = grid.shape[0]
+        total = chi_v.shape[0] * g
+        trig = table.fast_angle_trig(grid)  # once: every vertex sees the same angles
         for start in range(0, total, _EVAL_CHUNK):
-            p = np.arange(start, min(start + _EVAL_CHUNK, total))
-            angles, chi = grid[p % grid.shape[0]], chi_v[p // grid.shape[0]]
-            consider(np.abs(_fast(table, angles, chi)) / req, angles, chi)
-            evaluations += p.size
+            stop = min(start + _EVAL_CHUNK, total)
+            vals = np.empty((stop - start, 3))  # point p: vertex p // g at angle point p % g
+            for v in range(start // g, (stop - 1) // g + 1):
+                lo, hi = max(start, v * g) - v * g, min(stop, (v + 1) * g) - v * g
+                part = {k: (cos[lo:hi], sin[lo:hi]) for k, (cos, sin) in trig.items()}
+                at = v * g + lo - start
+                vals[at : at + hi - lo] = table.fast_orientation_error_at(part, chi_v[v], hi - lo)
+
+            def point(i: int, start: int = start) -> tuple[np.ndarray, np.ndarray]:
+                return grid[(start + i) % g].copy(), chi_v[(start + i) // g].copy()
+
+            consider(np.abs(vals) / req, point)
+            evaluations += stop - start
     else:
         step = _TWO_PI / max(round(grid_lin.shape[0] ** (1.0 / max(n_angles, 1))), 1)
         strategy = (
@@ -585,11 +597,17 @@ def _full_worst(
             c = _coefficients(table, angles)[:, :, active]
             s = np.where(c >= 0.0, 1.0, -1.0)  # (k, 3, nv)
             s = np.concatenate([s, -s], axis=1).reshape(-1, nv)
-            chi = np.zeros((s.shape[0], n_ang))
-            chi[:, active] = s * ub[active]
+            chi_s = np.zeros((s.shape[0], n_ang))
+            chi_s[:, active] = s * ub[active]
             ang = np.repeat(angles, 6, axis=0)
-            consider(np.abs(_fast(table, ang, chi)) / req, ang, chi)
-            evaluations += chi.shape[0]
+
+            def row(
+                i: int, a: np.ndarray = ang, c: np.ndarray = chi_s
+            ) -> tuple[np.ndarray, np.ndarray]:
+                return a[i].copy(), c[i].copy()
+
+            consider(np.abs(_fast(table, ang, chi_s)) / req, row)
+            evaluations += chi_s.shape[0]
     enumerated = evaluations
     out = []
     for j in range(3):

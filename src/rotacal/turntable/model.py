@@ -1274,6 +1274,55 @@ class Turntable:
             out[start:stop, 2] = gamma
         return out
 
+    def fast_angle_trig(self, angles: np.ndarray) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+        """cos and sin of the angles :meth:`fast_orientation_error_at` needs, by angle index.
+
+        Parameters
+        ----------
+        angles : ndarray, shape (N, n_angles)
+            Rotation angles (rad), columns :attr:`angle_names`.
+
+        Returns
+        -------
+        dict
+            Angle index → (cos, sin), each of shape (N,); slices of them serve any run of rows.
+        """
+        angles = np.asarray(angles, dtype=float)
+        return {k: (np.cos(angles[:, k]), np.sin(angles[:, k])) for k in self._fast_angles()}
+
+    def fast_orientation_error_at(
+        self, trig: dict[int, tuple[np.ndarray, np.ndarray]], chi: np.ndarray, n: int
+    ) -> np.ndarray:
+        """(Δψ, Δθ, Δγ) of one error vector at n angle points: :meth:`fast_orientation_error`
+        for many angles and the same χ, as a search over the vertices of an error box asks.
+
+        The same operations on the same values (each χ_i a 0-d array that broadcasts, so no entry
+        is taken for a constant), hence the same numbers, without gathering a row of χ and the
+        angles' cos and sin for every point again.
+
+        Parameters
+        ----------
+        trig : dict
+            Of the n points, from :meth:`fast_angle_trig` (or slices of its arrays).
+        chi : ndarray, shape (n_angular,)
+            Angular errors (rad), columns :attr:`angular_error_names`.
+        n : int
+            Number of angle points.
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            (Δψ, Δθ, Δγ) in rad.
+
+        References
+        ----------
+        Seed 001, eqs. (17)–(24).
+        """
+        entries = [np.asarray(float(v)) for v in np.asarray(chi, dtype=float)]
+        out = np.empty((n, 3))
+        out[:, 0], out[:, 1], out[:, 2] = _fast_kernel(self._p.links, trig, entries)  # type: ignore[arg-type]
+        return out
+
     def _fast_angles(self) -> tuple[int, ...]:
         """Angles whose rotation conjugates a non-identity D (the others cancel exactly)."""
         needed = []
