@@ -98,7 +98,13 @@ def bound_by_permissions() -> Callable[..., Any]:
 def demo_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any]:
     """``rotacal demo`` run once per test session (it takes about a minute): its folder and the
     CliRunner result. Tests that use it carry ``@pytest.mark.xdist_group("demo")`` so that, with
-    ``--dist loadgroup``, they all run in the one worker that ran it."""
+    ``--dist loadgroup``, they all run in the one worker that ran it.
+
+    The tests that budget the example (seed) table carry that group too: the allocations of its
+    requirement (~8 s, the same inputs in each) are then made once per session and kept by
+    ``rotacal.turntable.allocation``'s memo of the last allocations of the process, not once per
+    test on whichever worker runs it; each test still checks the budget it asked for. They share
+    the demo's worker, whose headless browser the report tests use as well."""
     from click.testing import CliRunner
 
     from rotacal.cli import cli

@@ -53,6 +53,7 @@ def test_rate_of_the_pulse_twin_is_warning_free(tmp_path) -> None:
     assert json.loads(r.stdout)["warnings"] == []
 
 
+@pytest.mark.xdist_group("demo")  # the example table's allocations: tests/conftest.py
 def test_turntable_example_budget_is_warning_free(tmp_path) -> None:
     config = tmp_path / "table.toml"
     assert run("turntable", "example", "--out", str(config)).exit_code == 0

@@ -32,6 +32,7 @@ def example(tmp_path: Path) -> Path:
     return path
 
 
+@pytest.mark.xdist_group("demo")  # the example table's allocations: tests/conftest.py
 def test_budget_json_has_the_interface_keys_and_the_closed_form(example, tmp_path):
     out = tmp_path / "budget.json"
     report = tmp_path / "budget.html"

@@ -129,7 +129,11 @@ def test_the_tour_covers_every_analysis_and_writes_nothing_twice() -> None:
     )
 
 
-@pytest.mark.parametrize("part", ["rest", "turntable"])
+@pytest.mark.parametrize(
+    "part",
+    # the turntable part with the other budgets of the example table (tests/conftest.py)
+    ["rest", pytest.param("turntable", marks=pytest.mark.xdist_group("demo"))],
+)
 def test_the_readme_tour_runs_line_by_line(
     part: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -82,7 +82,17 @@ def test_every_calibration_has_a_tutorial_with_checked_numbers() -> None:
             assert path.stat().st_size < 120_000, f"{image} is over 120 kB"
 
 
-@pytest.mark.parametrize("page", PAGES, ids=lambda page: page.stem)
+@pytest.mark.parametrize(
+    "page",
+    [
+        # the turntable page with the other budgets of the example table (tests/conftest.py)
+        pytest.param(page, marks=pytest.mark.xdist_group("demo"))
+        if page.stem == "turntable-budget"
+        else page
+        for page in PAGES
+    ],
+    ids=lambda page: page.stem,
+)
 def test_page_runs_and_states_what_rotacal_gives(page: Path, tmp_path: Path, shared_data) -> None:
     """The page's sections in order, in one folder (a later section reads what an earlier one
     wrote); the sections on real recordings come last, and skip when the recordings are absent."""

@@ -430,9 +430,16 @@ def _sf_runs(specs=None, half_width: float = 0.0, **twin) -> dict[str, np.ndarra
     return {k: np.asarray(v) for k, v in out.items()}
 
 
-def test_scale_factor_bias_and_nl_spread_match_their_u_type_a() -> None:
+@pytest.fixture(scope="module")
+def type_a_sf_runs() -> dict[str, np.ndarray]:
+    """RUNS Type A twins of 500 samples per point: the honesty check's runs, and the reference
+    two other checks compare with (the same seeds, hence computed once)."""
+    return _sf_runs(samples_per_point=500)
+
+
+def test_scale_factor_bias_and_nl_spread_match_their_u_type_a(type_a_sf_runs) -> None:
     lo, hi = _bounds(RUNS)
-    o = _sf_runs(samples_per_point=500)
+    o = type_a_sf_runs
     for err, u in (("eS", "uS"), ("eb", "ub"), ("nl", "unl")):
         ratio = np.std(o[err], ddof=1) / np.mean(o[u])
         assert lo < ratio < hi, (err, ratio, lo, hi)
@@ -445,7 +452,9 @@ def test_scale_factor_bias_and_nl_spread_match_their_u_type_a() -> None:
     assert abs(excess - np.mean(o["bias"])) < 4 * sem
 
 
-def test_scale_factor_spread_matches_u_with_the_table_rate_error_drawn_per_run() -> None:
+def test_scale_factor_spread_matches_u_with_the_table_rate_error_drawn_per_run(
+    type_a_sf_runs,
+) -> None:
     lo, hi = _bounds(RUNS)
     a = 2e-5
     specs = _specs(table__set_rate_relative={"distribution": "rectangular", "half_width": a})
@@ -453,7 +462,7 @@ def test_scale_factor_spread_matches_u_with_the_table_rate_error_drawn_per_run()
     ratio = np.std(o["eS"], ddof=1) / np.mean(o["uS"])
     assert lo < ratio < hi, (ratio, lo, hi)
     # the Type B part is a real share of u (otherwise this test would not check it)
-    type_a = _sf_runs(samples_per_point=500)
+    type_a = type_a_sf_runs
     assert np.mean(o["uS"]) > 1.3 * np.mean(type_a["uS"])
     # and without it the budget would be dishonest: the spread exceeds the Type A u
     assert np.std(o["eS"], ddof=1) / np.mean(type_a["uS"]) > 1.2

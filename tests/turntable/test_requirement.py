@@ -34,6 +34,10 @@ from rotacal.turntable.requirement import (
     derive_requirement,
 )
 
+#: With the other budgets of the example table on the demo's xdist worker, whose process keeps
+#: their allocations (tests/conftest.py).
+pytestmark = pytest.mark.xdist_group("demo")
+
 ARCMIN = math.pi / 10_800.0
 OMEGA_E = 15.041067  # °/h, sidereal
 LATITUDE = 45.75

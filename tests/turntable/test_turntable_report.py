@@ -24,6 +24,10 @@ from rotacal.report.turntable import (
 from rotacal.turntable.budget import turntable_budget
 from rotacal.turntable.model import load_turntable, seed_table
 
+#: With the other budgets of the example table on the demo's xdist worker, whose process keeps
+#: their allocations (tests/conftest.py).
+pytestmark = pytest.mark.xdist_group("demo")
+
 # Seed 001, Table 4 (arcmin), typed from the paper.
 TABLE4 = {
     "phi_y1": 0.4235,

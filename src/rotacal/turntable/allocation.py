@@ -38,8 +38,6 @@ Lemma 1, Table 4, Figures 8–9.
 
 from __future__ import annotations
 
-import collections
-import copy
 import dataclasses
 import itertools
 import math
@@ -53,6 +51,7 @@ from scipy.optimize import Bounds, minimize
 from rotacal.errors import ConfigError
 from rotacal.results import Result
 from rotacal.turntable.draws import QUANTILE, TopValues, quantile_interval, top_values_needed
+from rotacal.turntable.memo import LastResults, memo_key
 from rotacal.turntable.model import (
     ANGLE_UNITS,
     ARCMIN_PER_RAD,
@@ -67,6 +66,7 @@ __all__ = [
     "MonteCarloCheck",
     "allocate",
     "check_constraint_angles",
+    "check_draws",
     "linear_allocation",
     "monte_carlo_check",
     "worst_case",
@@ -367,7 +367,11 @@ class _LinearMax:
         self.refine = refine
 
     def rows(self, angles: np.ndarray) -> np.ndarray:
-        c = _coefficients(self.table, np.atleast_2d(angles))
+        angles = np.asarray(angles, dtype=float)
+        if angles.ndim == 1:  # one point of the local search: the fast path, the same numbers
+            c = self.table.point_coefficients(angles)[None]
+        else:
+            c = _coefficients(self.table, angles)
         return np.abs(c[:, self.component, :][:, self.columns])
 
     def __call__(self, x: np.ndarray, peaks: int = 3) -> list[tuple[float, np.ndarray]]:
@@ -545,12 +549,13 @@ def _full_worst(
     cands: list[list[tuple[float, np.ndarray, np.ndarray]]] = [[], [], []]
     evaluations = 0
 
-    def consider(vals: np.ndarray, angles: np.ndarray, chi: np.ndarray) -> None:
+    def consider(vals: np.ndarray, point: Callable[[int], tuple[np.ndarray, np.ndarray]]) -> None:
+        """Keep the ``top`` largest values of each component; ``point(i)``: row i's angles, χ."""
         for j in range(3):
             v = vals[:, j]
             k = min(top, v.size)
             idx = np.argpartition(-v, k - 1)[:k]
-            cands[j].extend((float(v[i]), angles[i].copy(), chi[i].copy()) for i in idx)
+            cands[j].extend((float(v[i]), *point(int(i))) for i in idx)
             cands[j].sort(key=lambda t: -t[0])
             del cands[j][top:]
 
@@ -563,12 +568,23 @@ def _full_worst(
         grid = _grid_m(n_angles, per_axis)
         step = _TWO_PI / per_axis
         strategy = f"all {chi_v.shape[0]} sign vertices × {grid.shape[0]} angle points"
-        total = chi_v.shape[0] * grid.shape[0]
+        g = grid.shape[0]
+        total = chi_v.shape[0] * g
+        trig = table.fast_angle_trig(grid)  # once: every vertex sees the same angles
         for start in range(0, total, _EVAL_CHUNK):
-            p = np.arange(start, min(start + _EVAL_CHUNK, total))
-            angles, chi = grid[p % grid.shape[0]], chi_v[p // grid.shape[0]]
-            consider(np.abs(_fast(table, angles, chi)) / req, angles, chi)
-            evaluations += p.size
+            stop = min(start + _EVAL_CHUNK, total)
+            vals = np.empty((stop - start, 3))  # point p: vertex p // g at angle point p % g
+            for v in range(start // g, (stop - 1) // g + 1):
+                lo, hi = max(start, v * g) - v * g, min(stop, (v + 1) * g) - v * g
+                part = {k: (cos[lo:hi], sin[lo:hi]) for k, (cos, sin) in trig.items()}
+                at = v * g + lo - start
+                vals[at : at + hi - lo] = table.fast_orientation_error_at(part, chi_v[v], hi - lo)
+
+            def point(i: int, start: int = start) -> tuple[np.ndarray, np.ndarray]:
+                return grid[(start + i) % g].copy(), chi_v[(start + i) // g].copy()
+
+            consider(np.abs(vals) / req, point)
+            evaluations += stop - start
     else:
         step = _TWO_PI / max(round(grid_lin.shape[0] ** (1.0 / max(n_angles, 1))), 1)
         strategy = (
@@ -581,11 +597,17 @@ def _full_worst(
             c = _coefficients(table, angles)[:, :, active]
             s = np.where(c >= 0.0, 1.0, -1.0)  # (k, 3, nv)
             s = np.concatenate([s, -s], axis=1).reshape(-1, nv)
-            chi = np.zeros((s.shape[0], n_ang))
-            chi[:, active] = s * ub[active]
+            chi_s = np.zeros((s.shape[0], n_ang))
+            chi_s[:, active] = s * ub[active]
             ang = np.repeat(angles, 6, axis=0)
-            consider(np.abs(_fast(table, ang, chi)) / req, ang, chi)
-            evaluations += chi.shape[0]
+
+            def row(
+                i: int, a: np.ndarray = ang, c: np.ndarray = chi_s
+            ) -> tuple[np.ndarray, np.ndarray]:
+                return a[i].copy(), c[i].copy()
+
+            consider(np.abs(_fast(table, ang, chi_s)) / req, row)
+            evaluations += chi_s.shape[0]
     enumerated = evaluations
     out = []
     for j in range(3):
@@ -1017,35 +1039,27 @@ def allocate(
     ----------
     Seed 001, §4.1–4.2, eqs. (28)–(34), Lemma 1 (eqs. (35)–(38)), Table 4.
     """
-    key = _memo_key(
+    key = memo_key(
         table, requirement, angle_step_deg, full_model_guard, max_evaluations, constraint_step_deg
     )
-    if key not in _ALLOCATIONS:
-        _ALLOCATIONS[key] = _allocate(
+    return _ALLOCATIONS.get(
+        key,
+        lambda: _allocate(
             table,
             requirement,
             angle_step_deg=angle_step_deg,
             full_model_guard=full_model_guard,
             max_evaluations=max_evaluations,
             constraint_step_deg=constraint_step_deg,
-        )
-        while len(_ALLOCATIONS) > _MEMO_SIZE:
-            _ALLOCATIONS.popitem(last=False)
-    _ALLOCATIONS.move_to_end(key)
-    return copy.deepcopy(_ALLOCATIONS[key])
+        ),
+    )
 
 
-#: The last allocations made in this process, by their inputs (see :func:`_memo_key`).
-_ALLOCATIONS: collections.OrderedDict[str, Allocation] = collections.OrderedDict()
-_MEMO_SIZE = 8
-
-
-def _memo_key(table: Turntable, *inputs: Any) -> str:
-    """The inputs of an allocation as text: the table as it compares (its ``source``, a file name,
-    left out) and the options. An allocation is deterministic in these, and a repeat with the same
-    ones is common — the requirement's derivation tries scales it tried before, a batch of one
-    table design, a command run twice in one session — while one costs 10–20 s."""
-    return repr((dataclasses.replace(table, source=""), *inputs))
+#: The last allocations made in this process, by their inputs (the table as it compares and the
+#: options). An allocation is deterministic in these, and a repeat with the same ones is common —
+#: the requirement's derivation tries scales it tried before, a batch of one table design, a
+#: command run twice in one session — while one costs 5–15 s.
+_ALLOCATIONS: LastResults[Allocation] = LastResults(8)
 
 
 def _allocate(
@@ -1223,8 +1237,8 @@ def monte_carlo_check(
     Seed 001, §4.3 (Monte Carlo verification, 10 000 runs), Figure 9; eqs. (17)–(25).
     """
     _require_angular(table)
-    runs_i, chunk_i = _integer("runs", runs, 1), _integer("chunk", chunk, 1)
-    seed_i = _integer("seed", seed, 0)
+    runs_i, seed_i = check_draws(runs, seed)
+    chunk_i = _integer("chunk", chunk, 1)
     if signs not in ("random", "positive"):
         raise ConfigError(f"signs must be 'random' or 'positive', got {signs!r}.")
     names = tuple(table.angular_error_names)
@@ -1298,6 +1312,13 @@ def monte_carlo_check(
             None if any(v is None for v in quantiles.values()) else quantiles  # type: ignore[arg-type]
         ),
     )
+
+
+def check_draws(runs: Any, seed: Any) -> tuple[int, int]:
+    """``runs`` (an integer ≥ 1) and ``seed`` (an integer ≥ 0) of :func:`monte_carlo_check` as
+    ints; anything else is one ConfigError line naming it. A caller that allocates first checks
+    them before the allocation's seconds of work."""
+    return _integer("runs", runs, 1), _integer("seed", seed, 0)
 
 
 def _integer(name: str, value: Any, minimum: int) -> int:

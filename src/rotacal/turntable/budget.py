@@ -41,6 +41,7 @@ from rotacal.turntable.allocation import (
     MonteCarloCheck,
     allocate,
     check_constraint_angles,
+    check_draws,
     monte_carlo_check,
 )
 from rotacal.turntable.calibration import (
@@ -376,9 +377,9 @@ def turntable_budget(
     """
     table = config if isinstance(config, Turntable) else load_turntable(Path(config))
     mc_settings = dict(table.settings.get("monte_carlo", {}))
-    # monte_carlo_check validates both (integers, runs ≥ 1, seed ≥ 0) before anything else uses them.
     runs = runs if runs is not None else mc_settings.get("runs", 1_000_000)
     seed = seed if seed is not None else mc_settings.get("seed", 2026)
+    check_draws(runs, seed)  # a refusal before the allocation's seconds of work, not after
     cal_settings = _calibration_settings(table)
     derivation, constraint_step = _options(table, requirement_derivation, constraint_angles)
 

@@ -71,6 +71,7 @@ __all__ = [
     "OrientationRequirement",
     "actual_inputs",
     "coefficient_deviation",
+    "equal_orientation_limit_rad",
     "orientation_matrix",
     "orientation_requirement",
     "rate_error_surfaces",
@@ -770,6 +771,59 @@ def _scale_to_boundary(s: _Setup, shape: np.ndarray, wm: float) -> tuple[float, 
     return float(t), False
 
 
+def _required(required_deg_h: Any) -> float:
+    """ωm (°/h) as a float; a non-positive or non-finite one is one ConfigError line."""
+    wm = _finite_number("required_deg_h", required_deg_h)
+    if wm <= 0:
+        raise ConfigError(
+            f"required_deg_h must be a positive accuracy in °/h, got {required_deg_h!r}."
+        )
+    return wm
+
+
+def equal_orientation_limit_rad(
+    required_deg_h: float = 0.01,
+    *,
+    phi1_deg: Any = None,
+    phi2_deg: Any = None,
+    latitude_deg: float = DEFAULT_LATITUDE_DEG,
+    coefficients: Mapping[str, Mapping[str, float]] | None = None,
+    method: str = "coefficients",
+    earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+) -> float:
+    """The equal limit I = Iψ = Iθ = Iγ (rad) of :func:`orientation_requirement` alone.
+
+    The same root (the largest I at which every corner (±I, ±I, ±I) keeps Δωx, Δωy ≤ ωm), hence
+    the same number as its ``equal_limit_rad``, without the box of largest volume that SLSQP
+    finds there — most of its time, and not needed where only the form of eq. (16) is asked
+    (the latitude and plan scan of :func:`rotacal.turntable.seed001.reproduce_seed001`).
+
+    Parameters
+    ----------
+    required_deg_h : float
+        Required calibration accuracy ωm (°/h, > 0).
+    phi1_deg, phi2_deg, latitude_deg, coefficients, method, earth_rate_deg_h
+        As in :func:`rate_sensing_error`.
+
+    Returns
+    -------
+    float
+        I (rad).
+
+    Raises
+    ------
+    ConfigError
+        As :func:`orientation_requirement`.
+
+    References
+    ----------
+    Seed 001, §2.2–2.3, eqs. (13)–(16).
+    """
+    wm = _required(required_deg_h)
+    s = _setup(phi1_deg, phi2_deg, latitude_deg, coefficients, method, earth_rate_deg_h)
+    return _scale_to_boundary(s, np.ones(3), wm)[0]
+
+
 def orientation_requirement(
     required_deg_h: float = 0.01,
     *,
@@ -812,11 +866,7 @@ def orientation_requirement(
     ----------
     Seed 001, §2.2–2.3, eqs. (13)–(16), Figures 4–5.
     """
-    wm = _finite_number("required_deg_h", required_deg_h)
-    if wm <= 0:
-        raise ConfigError(
-            f"required_deg_h must be a positive accuracy in °/h, got {required_deg_h!r}."
-        )
+    wm = _required(required_deg_h)
     s = _setup(phi1_deg, phi2_deg, latitude_deg, coefficients, method, earth_rate_deg_h)
     notes: list[str] = [
         f"plan of {s.positions} positions, latitude {s.latitude_deg:g}°, Earth rate "

@@ -1113,6 +1113,40 @@ class Turntable:
                 suffix = _rotation_matrix(plan.axis, phis[plan.angle]) @ suffix
         return out
 
+    def point_coefficients(self, angles: np.ndarray) -> np.ndarray:
+        """:meth:`linear_coefficients` at one point, for a search that asks for tens of thousands.
+
+        The same products in the same order (each rotation matrix of shape (1, 3, 3) and the
+        suffix multiplied by NumPy, as there, so the same bits), without the checks of the angles
+        and with the entries gathered as Python floats — NumPy's per-call cost on 3×3 arrays was
+        most of a point's time.
+
+        Parameters
+        ----------
+        angles : ndarray, shape (n_angles,)
+            Rotation angles (rad, finite; trusted: not checked), in :attr:`angle_names` order.
+
+        Returns
+        -------
+        ndarray, shape (3, n_angular)
+            rad/rad; rows :data:`COMPONENTS`, columns :attr:`angular_error_names`.
+
+        References
+        ----------
+        Seed 001, eqs. (26)–(28).
+        """
+        out = [[0.0] * len(self._p.angular) for _ in range(3)]
+        suffix: np.ndarray = np.eye(3)
+        for plan in reversed(self._p.links):
+            if plan.rotations:
+                rows = suffix.reshape(3, 3).tolist()
+                for i, a in plan.rotations:
+                    for c, vi in enumerate(_V_INDEX):
+                        out[c][i] = rows[a][vi]
+            if plan.axis >= 0:
+                suffix = _point_rotation(plan.axis, angles[plan.angle : plan.angle + 1]) @ suffix
+        return np.array(out)
+
     def sensitivities(
         self, *, step_deg: float | None = None, endpoint: bool | None = None
     ) -> np.ndarray:
@@ -1240,6 +1274,55 @@ class Turntable:
             out[start:stop, 2] = gamma
         return out
 
+    def fast_angle_trig(self, angles: np.ndarray) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+        """cos and sin of the angles :meth:`fast_orientation_error_at` needs, by angle index.
+
+        Parameters
+        ----------
+        angles : ndarray, shape (N, n_angles)
+            Rotation angles (rad), columns :attr:`angle_names`.
+
+        Returns
+        -------
+        dict
+            Angle index → (cos, sin), each of shape (N,); slices of them serve any run of rows.
+        """
+        angles = np.asarray(angles, dtype=float)
+        return {k: (np.cos(angles[:, k]), np.sin(angles[:, k])) for k in self._fast_angles()}
+
+    def fast_orientation_error_at(
+        self, trig: dict[int, tuple[np.ndarray, np.ndarray]], chi: np.ndarray, n: int
+    ) -> np.ndarray:
+        """(Δψ, Δθ, Δγ) of one error vector at n angle points: :meth:`fast_orientation_error`
+        for many angles and the same χ, as a search over the vertices of an error box asks.
+
+        The same operations on the same values (each χ_i a 0-d array that broadcasts, so no entry
+        is taken for a constant), hence the same numbers, without gathering a row of χ and the
+        angles' cos and sin for every point again.
+
+        Parameters
+        ----------
+        trig : dict
+            Of the n points, from :meth:`fast_angle_trig` (or slices of its arrays).
+        chi : ndarray, shape (n_angular,)
+            Angular errors (rad), columns :attr:`angular_error_names`.
+        n : int
+            Number of angle points.
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            (Δψ, Δθ, Δγ) in rad.
+
+        References
+        ----------
+        Seed 001, eqs. (17)–(24).
+        """
+        entries = [np.asarray(float(v)) for v in np.asarray(chi, dtype=float)]
+        out = np.empty((n, 3))
+        out[:, 0], out[:, 1], out[:, 2] = _fast_kernel(self._p.links, trig, entries)  # type: ignore[arg-type]
+        return out
+
     def _fast_angles(self) -> tuple[int, ...]:
         """Angles whose rotation conjugates a non-identity D (the others cancel exactly)."""
         needed = []
@@ -1264,6 +1347,18 @@ def _rotation_matrix(axis: int, phi: np.ndarray) -> np.ndarray:
     out[..., i, j] = -s
     out[..., j, i] = s
     return out
+
+
+def _point_rotation(axis: int, phi: np.ndarray) -> np.ndarray:
+    """:func:`_rotation_matrix` of one angle (φ of shape (1,), rad): the same entries, shape
+    (1, 3, 3), built from Python floats (a few µs less per call)."""
+    c, s = float(np.cos(phi)[0]), float(np.sin(phi)[0])
+    m = [[0.0] * 3 for _ in range(3)]
+    i, j = _PLANE[axis]
+    m[axis][axis] = 1.0
+    m[i][i] = m[j][j] = c
+    m[i][j], m[j][i] = -s, s
+    return np.array([m])
 
 
 def _small_angle_matrix(present: list[tuple[np.ndarray, int]]) -> np.ndarray:

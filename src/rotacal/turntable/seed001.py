@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from rotacal.turntable.memo import LastResults, memo_key
 from rotacal.turntable.model import ARCMIN_PER_RAD, COMPONENTS, SEED_ERROR_NAMES, Turntable
 
 __all__ = [
@@ -150,10 +151,45 @@ def reproduce_seed001(
     ----------
     Seed 001, eqs. (13)–(16), (26), (31)–(34), Table 4, Lemma 1, Figure 8.
     """
+    plan = tuple(
+        None if a is None else tuple(np.asarray(a, dtype=float).ravel().tolist())
+        for a in (phi1_deg, phi2_deg)
+    )
+    key = memo_key(table, *plan, latitude_deg, required_deg_h)
+    return _REPRODUCTIONS.get(
+        key,
+        lambda: _reproduce(
+            table,
+            phi1_deg=phi1_deg,
+            phi2_deg=phi2_deg,
+            latitude_deg=latitude_deg,
+            required_deg_h=required_deg_h,
+        ),
+    )
+
+
+#: The last reproductions in this process, by their inputs: every budget of the seed table asks
+#: for the same one (seconds of allocations, worst cases and the eq. (16) scan).
+_REPRODUCTIONS: LastResults[dict[str, Any]] = LastResults(4)
+
+
+def _reproduce(
+    table: Turntable,
+    *,
+    phi1_deg: Any,
+    phi2_deg: Any,
+    latitude_deg: float | None,
+    required_deg_h: float,
+) -> dict[str, Any]:
+    """:func:`reproduce_seed001` without its memo."""
     from rotacal.gyro.multiposition import EARTH_RATE_DEG_H, multiposition_plan
     from rotacal.sim.multiposition import DEFAULT_LATITUDE_DEG
     from rotacal.turntable.allocation import linear_allocation, worst_case
-    from rotacal.turntable.calibration import METHODS, orientation_requirement
+    from rotacal.turntable.calibration import (
+        METHODS,
+        equal_orientation_limit_rad,
+        orientation_requirement,
+    )
 
     lat = DEFAULT_LATITUDE_DEG if latitude_deg is None else float(latitude_deg)
     earth = orientation_requirement(
@@ -210,14 +246,14 @@ def reproduce_seed001(
         for outer, inner in _SCAN_PLANS:
             plan = multiposition_plan(outer_steps=outer, inner_steps=inner)
             for scan_lat in _SCAN_LATITUDES:
-                req = orientation_requirement(
+                limit = equal_orientation_limit_rad(
                     required_deg_h,
                     phi1_deg=plan.phi1_deg,
                     phi2_deg=plan.phi2_deg,
                     latitude_deg=scan_lat,
                     method=method,
                 )
-                limits.append(req.equal_limit_deg)
+                limits.append(math.degrees(limit))
         scan[method] = {
             "min_deg": float(np.min(limits)),
             "max_deg": float(np.max(limits)),
