@@ -135,7 +135,17 @@ def _analysis_argv(path: tuple[str, ...], captures: dict[str, Path]) -> list[str
 
 
 # ------------------------------------------------------------------ wrote lines and --overwrite
-@pytest.mark.parametrize("path", sorted(ANALYSES), ids=" ".join)
+@pytest.mark.parametrize(
+    "path",
+    [
+        # the budget with the other budgets of the example table (tests/conftest.py)
+        pytest.param(path, marks=pytest.mark.xdist_group("demo"))
+        if path == ("turntable", "budget")
+        else path
+        for path in sorted(ANALYSES)
+    ],
+    ids=" ".join,
+)
 def test_analysis_wrote_lines_overwrite_and_identical_json(captures, tmp_path, path):
     """One ``wrote`` line per file; a second run refuses to replace them without --overwrite
     (before any work, leaving them as they were); with it, the JSON comes out byte-identical."""

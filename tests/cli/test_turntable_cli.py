@@ -77,6 +77,7 @@ def test_budget_json_has_the_interface_keys_and_the_closed_form(example, tmp_pat
     assert report.stat().st_size > 50_000
 
 
+@pytest.mark.xdist_group("demo")  # the example table's budgets: tests/conftest.py
 def test_budget_text_summary_with_the_papers_reading(example):
     r = run(
         "turntable",

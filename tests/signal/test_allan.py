@@ -33,9 +33,13 @@ def literal_sums(x: np.ndarray, ms: np.ndarray) -> np.ndarray:
     """Independent reference: Σ (x_{i+2m} − 2x_{i+m} + x_i)² literally, one m at a time."""
     n = x.size
     out = np.empty(ms.size)
+    buf = np.empty(n)  # one buffer for every m: no temporaries of N points per cluster size
     for k, m in enumerate(ms.tolist()):
-        d = x[2 * m :] - 2.0 * x[m : n - m] + x[: n - 2 * m]
-        out[k] = np.sum(d * d)
+        d = buf[: n - 2 * m]
+        np.multiply(x[m : n - m], -2.0, out=d)
+        d += x[2 * m :]
+        d += x[: n - 2 * m]
+        out[k] = d @ d
     return out
 
 

@@ -108,10 +108,19 @@ def _design(tau: np.ndarray, f: float, nh: int, drift: bool = False) -> np.ndarr
     return np.hstack(cols)
 
 
+def _column_scaled(a: np.ndarray, norms: np.ndarray) -> np.ndarray:
+    """``a / norms``, written in Fortran order: LAPACK's layout, which NumPy's ``lstsq`` and ``qr``
+    copy a C-ordered matrix into column by column (strided, slow for a tall one); the same
+    values, so the same solution."""
+    out = np.empty(a.shape, order="F")
+    np.divide(a, norms, out=out)
+    return out
+
+
 def _scaled_lstsq(a: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, float]:
     norms = np.sqrt(np.einsum("ij,ij->j", a, a))
     norms[norms == 0] = 1.0
-    x, _, rank, sv = np.linalg.lstsq(a / norms, rhs, rcond=None)
+    x, _, rank, sv = np.linalg.lstsq(_column_scaled(a, norms), rhs, rcond=None)
     cond = float(sv[0] / sv[-1]) if rank == a.shape[1] and sv[-1] > 0 else math.inf
     return x / norms, cond
 
@@ -120,7 +129,7 @@ def _unit_covariance(j: np.ndarray) -> np.ndarray:
     """(JᵀJ)⁻¹ from the QR factor of the column-scaled Jacobian."""
     norms = np.sqrt(np.einsum("ij,ij->j", j, j))
     norms[norms == 0] = 1.0
-    r: np.ndarray = np.asarray(np.linalg.qr(j / norms, mode="r"), dtype=np.float64)
+    r: np.ndarray = np.asarray(np.linalg.qr(_column_scaled(j, norms), mode="r"), dtype=np.float64)
     rinv = np.linalg.solve(r, np.eye(r.shape[0], dtype=np.float64))
     return (rinv @ rinv.T) / np.outer(norms, norms)
 
