@@ -18,3 +18,13 @@ class CaptureError(RotacalError, ValueError):
 
 class ConfigError(RotacalError, ValueError):
     """A setting, option or configuration file is invalid."""
+
+
+class StoreError(RotacalError):
+    """The records store cannot do what was asked: it cannot be reached, it is locked, its schema
+    is older or newer than this rotacal's, or the change would alter an issued record."""
+
+
+class RecordImmutableError(StoreError):
+    """An issued record was to be changed or deleted; issued records never change (a correction is
+    a new certificate that supersedes the old one)."""

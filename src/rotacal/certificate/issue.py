@@ -11,14 +11,15 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import datetime as dt
 import hashlib
 import json
 import os
 import shutil
 import tempfile
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from rotacal.errors import ConfigError, RotacalError
 from rotacal.plan.model import Measurement, Plan
@@ -262,9 +263,10 @@ def _check_free(folder: Path, overwrite: bool) -> None:
         raise ConfigError(f"{folder} exists and is not a folder; choose another --out")
 
 
-def _publish(staging: Path, folder: Path, overwrite: bool) -> None:
-    """Rename the finished ``staging`` folder to ``folder``; an existing one (``overwrite``) is
-    moved aside first and removed only once the new one is in place."""
+def _swap_in(staging: Path, folder: Path, overwrite: bool) -> Path | None:
+    """Rename the finished ``staging`` folder to ``folder``. An existing one (``overwrite``) is
+    moved aside first; its place is returned, to be removed by :func:`_discard` once the new
+    certificate is kept, or put back by :func:`_swap_back`."""
     _check_free(folder, overwrite)
     old = None
     if folder.exists():
@@ -276,8 +278,44 @@ def _publish(staging: Path, folder: Path, overwrite: bool) -> None:
         if old is not None:  # put the old certificate back
             os.rename(old / "certificate", folder)
         raise
+    return old
+
+
+def _swap_back(staging: Path, folder: Path, old: Path | None) -> None:
+    """Undo :func:`_swap_in`: the new folder back to ``staging``, the old one back in place."""
+    os.rename(folder, staging)
+    if old is not None:
+        os.rename(old / "certificate", folder)
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def _discard(old: Path | None) -> None:
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
+
+
+class Registry(Protocol):
+    """Where issued certificates are kept and numbers drawn (the records store,
+    :class:`rotacal.records.Store`); :func:`certify` asks it at each step."""
+
+    def check_plan(self, plan: Plan) -> None:
+        """Refuse a plan whose number is taken or whose ``supersedes`` is not usable."""
+
+    def check_unissued(self, plan: Plan, plan_sha256: str) -> None:
+        """Refuse a plan and captures that were certified already."""
+
+    def draw_number(self, issue_date: dt.date) -> str:
+        """The next number of the series."""
+        ...
+
+    def void_number(self, number: str, reason: str) -> None:
+        """Keep a drawn, unused number out of the series, with the reason."""
+
+    def keep(
+        self, content: CertificateContent, files: Mapping[str, bytes]
+    ) -> contextlib.AbstractContextManager[None]:
+        """One transaction that keeps the certificate; committed when the block succeeds."""
+        ...
 
 
 def plan_measurement_count(plan_path: str | Path) -> int:
@@ -289,9 +327,8 @@ def plan_measurement_count(plan_path: str | Path) -> int:
         return 0
 
 
-@contextlib.contextmanager
-def _explicit(number: str) -> Iterator[str]:
-    yield number
+def _folder_files(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
 
 
 def certify(
@@ -300,6 +337,7 @@ def certify(
     out: str | Path | None = None,
     overwrite: bool = False,
     advance: Callable[[str], None] | None = None,
+    registry: Registry | None = None,
 ) -> IssuedCertificate:
     """Run a plan's measurements and issue its certificate (INTERFACE.md, ``rotacal certify``).
 
@@ -314,6 +352,10 @@ def certify(
         Replace an existing certificate folder.
     advance : callable, optional
         Called with each measurement's name when it is done (a progress bar).
+    registry : Registry, optional
+        The records store that draws ``number = "auto"`` and keeps the certificate, in the same
+        step that publishes its folder (:func:`rotacal.records.open_store`). Without one the
+        certificate is not recorded, and the plan must give its number.
 
     Returns
     -------
@@ -321,12 +363,20 @@ def certify(
 
     Raises
     ------
-    ConfigError, CaptureError
-        One line naming the plan file, the key or the capture at fault; nothing is written.
+    ConfigError, CaptureError, StoreError
+        One line naming the plan file, the key, the capture or the store at fault; nothing is
+        written and nothing recorded.
     """
     from rotacal import __version__
 
     plan = read_plan(plan_path)
+    if registry is not None:
+        registry.check_plan(plan)
+    elif plan.number == "auto":
+        raise ConfigError(
+            f'{plan.path}: certificate.number: "auto" draws the next number from the records '
+            "store; give the number, or let the certificate be recorded (without --no-record)"
+        )
     target = Path(out).resolve() if out is not None else None
     if target is None and plan.number != "auto":
         target = plan.path.parent / plan.number
@@ -342,19 +392,46 @@ def certify(
         runs = run_plan(plan, scratch, advance)
         shutil.rmtree(scratch)
         content = _draw(build_content(plan, runs, plan.number, __version__), staging)
-        if plan.number == "auto":
-            from .numbering import reserve_number
-
-            numbering: contextlib.AbstractContextManager[str] = reserve_number(plan.issue_date)
-        else:
-            numbering = _explicit(plan.number)
-        with numbering as number:
+        if registry is not None:
+            registry.check_unissued(plan, content.plan_sha256)
+        number = plan.number
+        if number == "auto":
+            assert registry is not None
+            number = registry.draw_number(plan.issue_date)
+        try:
             folder = target if target is not None else plan.path.parent / number
             _check_free(folder, overwrite)
             content = dataclasses.replace(content, number=number)
             _render(content, staging)
-            _publish(staging, folder, overwrite)
+            if registry is None:
+                _discard(_swap_in(staging, folder, overwrite))
+            else:
+                _keep(registry, content, staging, folder, overwrite)
+        except BaseException as e:
+            if plan.number == "auto" and registry is not None:
+                with contextlib.suppress(RotacalError):  # the store may be what failed
+                    registry.void_number(number, f"not issued: {type(e).__name__}: {e}")
+            raise
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
     return IssuedCertificate(number, folder, content)
+
+
+def _keep(
+    registry: Registry, content: CertificateContent, staging: Path, folder: Path, overwrite: bool
+) -> None:
+    """Record the certificate and publish its folder as one step: the folder is put in place
+    inside the store's transaction and taken back if the transaction does not commit."""
+    files = _folder_files(staging)
+    old: Path | None = None
+    published = False
+    try:
+        with registry.keep(content, files):
+            old = _swap_in(staging, folder, overwrite)
+            published = True
+    except BaseException:
+        if published:
+            _swap_back(staging, folder, old)
+        raise
+    _discard(old)

@@ -9,6 +9,7 @@ import click
 from ._app import cli
 from ._common import _progress, _wrote
 from ._help import example
+from ._store import db_option, open_db
 
 
 def example_plan() -> str:
@@ -32,15 +33,29 @@ def example_plan() -> str:
     help="The certificate's folder [default: a folder named after the certificate number, "
     "beside the plan].",
 )
+@db_option
+@click.option(
+    "--no-record",
+    is_flag=True,
+    help="Do not keep the certificate in the records store (the plan must then give its number).",
+)
 @click.option("--overwrite", is_flag=True, help="Replace an existing certificate folder.")
 @click.option("--example", "show_example", is_flag=True, help="Print a commented plan and exit.")
-def certify_command(plan: str | None, out: str | None, overwrite: bool, show_example: bool) -> None:
+def certify_command(
+    plan: str | None,
+    out: str | None,
+    db: str | None,
+    no_record: bool,
+    overwrite: bool,
+    show_example: bool,
+) -> None:
     """Run a calibration plan and issue its certificate.
 
     The plan (TOML) names the laboratory, the customer, the item, the reference standards, the
     conditions and the measurements with their captures, options and acceptance limits. The
     certificate folder gets certificate.pdf (ISO/IEC 17025 §7.8), certificate.xml (PTB Digital
-    Calibration Certificate v3.1.2), results.json and the figures — whole, or not at all.
+    Calibration Certificate v3.1.2), results.json and the figures — whole, or not at all. The
+    certificate is kept in the records store (--db) in the same step, unless --no-record.
     """
     if show_example:
         click.echo(example_plan(), nl=False)
@@ -49,8 +64,9 @@ def certify_command(plan: str | None, out: str | None, overwrite: bool, show_exa
         raise click.UsageError("give the plan file (PLAN.toml), or --example to see one")
     from rotacal.certificate.issue import certify, plan_measurement_count
 
+    store = None if no_record else open_db(db)
     with _progress(plan_measurement_count(plan), "measuring") as advance:
-        issued = certify(plan, out=out, overwrite=overwrite, advance=advance)
+        issued = certify(plan, out=out, overwrite=overwrite, advance=advance, registry=store)
     for name in issued.files:
         _wrote(issued.folder / name)
     verdicts = [c.verdict for m in issued.content.measurements for c in m.conformity]
@@ -60,4 +76,5 @@ def certify_command(plan: str | None, out: str | None, overwrite: bool, show_exa
     click.echo(
         f"certificate {issued.number}: {len(issued.content.measurements)} measurements"
         + (f"; conformity: {summary}" if summary else "")
+        + (f"; recorded in {store.shown}" if store is not None else "; not recorded")
     )

@@ -1,0 +1,201 @@
+"""Where the records store is and how rotacal talks to it: the URL, the engine, and the one-line
+errors of a store that cannot be used.
+
+The store is named by an SQLAlchemy URL (INTERFACE.md, "Records of calibrations"): ``--db URL``,
+else the environment variable ``ROTACAL_DB``, else an SQLite file ``records.sqlite`` in the user's
+data folder (``platformdirs``; ``ROTACAL_DATA_DIR`` overrides the folder). Two engines are
+supported: SQLite (zero set-up, one computer) and PostgreSQL through psycopg 3 (a laboratory with
+several test stations).
+
+SQLite is opened so that several processes can write at once without losing anything: write-ahead
+logging, every transaction begun with ``BEGIN IMMEDIATE`` (the write lock is taken at the start, so
+two writers never deadlock on a lock upgrade) and a busy timeout after which the store is reported
+as locked. Foreign keys are enforced on every connection.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import sqlalchemy as sa
+from sqlalchemy import event
+from sqlalchemy.engine import URL, Engine
+
+from rotacal.errors import ConfigError, RecordImmutableError, StoreError
+
+__all__ = [
+    "DEFAULT_TIMEOUT_S",
+    "data_dir",
+    "default_url",
+    "display_url",
+    "make_engine",
+    "resolve_url",
+    "store_errors",
+]
+
+#: How long a writer waits for another one before the store is reported as locked [s].
+DEFAULT_TIMEOUT_S = 30.0
+
+#: The word the schema's triggers put in their refusal (migrations/versions/0002).
+IMMUTABLE_MARK = "issued records are immutable"
+
+
+def data_dir() -> Path:
+    """The folder where rotacal keeps its state: ``ROTACAL_DATA_DIR`` or the user's data folder."""
+    given = os.environ.get("ROTACAL_DATA_DIR")
+    if given:
+        return Path(given)
+    import platformdirs
+
+    return Path(platformdirs.user_data_dir("rotacal", appauthor=False))
+
+
+def default_url() -> str:
+    """The default store: ``records.sqlite`` in :func:`data_dir`."""
+    return f"sqlite:///{data_dir() / 'records.sqlite'}"
+
+
+def resolve_url(given: str | None) -> str:
+    """The store's URL: ``given`` (``--db``), else ``ROTACAL_DB``, else :func:`default_url`."""
+    return given or os.environ.get("ROTACAL_DB") or default_url()
+
+
+def _parse(url: str) -> URL:
+    try:
+        parsed = sa.engine.make_url(url)
+    except (sa.exc.ArgumentError, ValueError):
+        parsed = None
+    if parsed is None or parsed.get_backend_name() not in ("sqlite", "postgresql"):
+        raise ConfigError(
+            f"records store {url!r}: not a usable database URL; give sqlite:///path/records.sqlite "
+            "or postgresql+psycopg://user@host/dbname (--db or ROTACAL_DB)"
+        )
+    if parsed.get_backend_name() == "postgresql":
+        if parsed.get_driver_name() not in ("psycopg", "psycopg2"):
+            raise ConfigError(
+                f"records store {display_url(parsed)}: the driver "
+                f"{parsed.get_driver_name()!r} is not supported; use postgresql+psycopg://…"
+            )
+        parsed = parsed.set(drivername="postgresql+psycopg")  # psycopg 3 is what rotacal installs
+    elif parsed.get_driver_name() != "pysqlite":
+        raise ConfigError(
+            f"records store {url!r}: use sqlite:///path/records.sqlite (the driver "
+            f"{parsed.get_driver_name()!r} is not supported)"
+        )
+    elif not parsed.database or parsed.database == ":memory:":
+        raise ConfigError(
+            f"records store {url!r}: an SQLite store needs a file (sqlite:///path/records.sqlite); "
+            "a store in memory would keep nothing"
+        )
+    return parsed
+
+
+def display_url(url: URL | str) -> str:
+    """The URL as messages print it: without its password."""
+    if isinstance(url, str):
+        try:
+            url = sa.engine.make_url(url)
+        except (sa.exc.ArgumentError, ValueError):
+            return url
+    return url.render_as_string(hide_password=True)
+
+
+def _sqlite_connect(dbapi_connection: Any, _record: Any) -> None:
+    # The driver's own transaction handling is switched off: every transaction is begun
+    # explicitly in _sqlite_begin, so that the write lock is taken at its start.
+    dbapi_connection.isolation_level = None
+    cursor = dbapi_connection.cursor()
+    cursor.execute("PRAGMA foreign_keys = ON")
+    cursor.execute("PRAGMA journal_mode = WAL")
+    cursor.execute("PRAGMA synchronous = FULL")  # a record, once committed, survives a power cut
+    cursor.close()
+
+
+def _sqlite_begin(connection: sa.Connection) -> None:
+    connection.exec_driver_sql("BEGIN IMMEDIATE")
+
+
+def make_engine(url: str, *, timeout_s: float = DEFAULT_TIMEOUT_S) -> Engine:
+    """An engine for the store at ``url`` (see :func:`resolve_url`).
+
+    Parameters
+    ----------
+    url : str
+        An SQLAlchemy URL: ``sqlite:///path`` or ``postgresql+psycopg://user@host/dbname``.
+    timeout_s : float
+        How long to wait for a locked SQLite store, or for a PostgreSQL server to answer the
+        connection [s].
+
+    Raises
+    ------
+    ConfigError
+        The URL is not an SQLite file or PostgreSQL URL; the SQLite file's folder does not exist.
+    """
+    parsed = _parse(url)
+    if parsed.get_backend_name() == "sqlite":
+        path = Path(str(parsed.database)).expanduser()
+        if url == default_url():
+            path.parent.mkdir(parents=True, exist_ok=True)
+        elif not path.parent.is_dir():
+            raise ConfigError(
+                f"records store {url}: the folder {path.parent} does not exist; create it or give "
+                "another path"
+            )
+        engine = sa.create_engine(
+            parsed.set(database=str(path)),
+            connect_args={"timeout": timeout_s, "check_same_thread": False},
+            poolclass=sa.pool.NullPool,  # a connection per use: nothing stays locked between calls
+        )
+        event.listen(engine, "connect", _sqlite_connect)
+        event.listen(engine, "begin", _sqlite_begin)
+        return engine
+    return sa.create_engine(
+        parsed,
+        connect_args={"connect_timeout": max(1, round(timeout_s))},
+        pool_pre_ping=True,
+    )
+
+
+def _reason(e: BaseException) -> str:
+    """The database's own first line of an error, without SQLAlchemy's statement dump."""
+    inner = getattr(e, "orig", None) or e
+    text = str(inner).strip().splitlines()
+    return text[0] if text else type(inner).__name__
+
+
+@contextlib.contextmanager
+def store_errors(url: str, timeout_s: float = DEFAULT_TIMEOUT_S) -> Iterator[None]:
+    """Turn what the database driver raises into one line that names the store and what to do
+    (:class:`StoreError`); a refused change of an issued record becomes
+    :class:`RecordImmutableError`."""
+    shown = display_url(url)
+    try:
+        yield
+    except sa.exc.DBAPIError as e:
+        reason = _reason(e)
+        lower = reason.lower()
+        if IMMUTABLE_MARK in lower:
+            raise RecordImmutableError(
+                f"records store {shown}: {IMMUTABLE_MARK}; a correction is a new certificate "
+                "whose plan says supersedes = \"NUMBER\""
+            ) from None
+        if "database is locked" in lower or "database table is locked" in lower:
+            raise StoreError(
+                f"records store {shown}: locked by another program (waited {timeout_s:g} s); "
+                "try again when it has finished"
+            ) from None
+        if "file is not a database" in lower or "malformed" in lower:
+            raise StoreError(
+                f"records store {shown}: the file is not an SQLite database (or it is damaged); "
+                "give the path of a records store"
+            ) from None
+        if isinstance(e, (sa.exc.OperationalError, sa.exc.InterfaceError)):
+            raise StoreError(
+                f"records store {shown}: cannot be used ({reason}); check that the server runs, "
+                "the URL, the user and the password"
+            ) from None
+        raise StoreError(f"records store {shown}: {reason}") from None

@@ -1,0 +1,438 @@
+"""The records store: what a laboratory keeps of every certificate it issued, and the number series.
+
+:func:`open_store` opens (and on first use creates) the store named by a URL
+(:mod:`rotacal.records.engine`). A :class:`Store` draws certificate numbers, keeps an issued
+certificate in ONE transaction (:meth:`Store.keep`), and reads records back. It never changes or
+deletes an issued row: it has no method that would, an ORM session that tries is stopped before
+the database is touched, and the schema's triggers refuse it for any other program.
+
+``rotacal certify`` uses a store through the small protocol that
+:class:`rotacal.certificate.issue.Registry` names, so the certificate code knows nothing of
+databases.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import datetime as dt
+import getpass
+import hashlib
+import json
+import socket
+import string
+from collections.abc import Iterator, Mapping
+from typing import Any
+
+import sqlalchemy as sa
+from sqlalchemy import event
+from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.orm import Session
+
+from rotacal.certificate.content import CertificateContent
+from rotacal.errors import ConfigError, RecordImmutableError, StoreError
+from rotacal.plan.model import Plan
+
+from . import models as m
+from .engine import DEFAULT_TIMEOUT_S, display_url, make_engine, resolve_url, store_errors
+from .schema import ensure_schema
+
+__all__ = ["DEFAULT_SETTINGS", "Store", "open_store"]
+
+#: The laboratory's settings and their defaults: the number series (``{year}`` and ``{count}``,
+#: Python format syntax) and the fixed calibration interval used when no drift sets one.
+DEFAULT_SETTINGS = {"number_format": "RC-{year}-{count:04d}", "interval_months": "12"}
+
+
+def check_number_format(fmt: str) -> str:
+    """``fmt`` if it is a usable number format: ``{count}`` (with an optional format spec such
+    as ``:04d``) and optionally ``{year}``, nothing else in braces."""
+    try:
+        fields = {name for _, name, _, _ in string.Formatter().parse(fmt) if name is not None}
+        fmt.format(year="2026", count=1)
+    except (ValueError, KeyError, IndexError) as e:
+        raise ConfigError(f"number format {fmt!r}: not usable ({e})") from None
+    if "count" not in fields or fields - {"year", "count"}:
+        raise ConfigError(
+            f"number format {fmt!r}: must contain {{count}} (e.g. {{count:04d}}) and may "
+            "contain {year}, nothing else in braces"
+        )
+    return fmt
+
+
+def _refuse_changes(session: Session, _context: Any, _instances: Any) -> None:
+    """Stop an ORM session that would change or delete an issued row (before any SQL)."""
+    for obj in (*session.dirty, *session.deleted):
+        table = getattr(obj, "__tablename__", None)
+        if table in m.IMMUTABLE_TABLES and (obj in session.deleted or session.is_modified(obj)):
+            raise RecordImmutableError(
+                f"{table}: issued records are immutable; a correction is a new certificate "
+                'whose plan says supersedes = "NUMBER"'
+            )
+
+
+event.listen(Session, "before_flush", _refuse_changes)
+
+
+def _station() -> str:
+    """Who records: user@computer (the test station), as far as the system tells."""
+    try:
+        user = getpass.getuser()
+    except (KeyError, OSError):  # no name for this user id (a container)
+        user = "?"
+    return f"{user}@{socket.gethostname()}"[:256]
+
+
+def _contact_text(contact: Any) -> str:
+    return json.dumps(
+        {k: v for k, v in dataclasses.asdict(contact).items() if v}, ensure_ascii=False
+    )
+
+
+def open_store(
+    url: str | None = None, *, timeout_s: float = DEFAULT_TIMEOUT_S, check_schema: bool = True
+) -> Store:
+    """Open the records store at ``url`` (``--db``; default ``ROTACAL_DB``, else the SQLite file
+    in the user's data folder), making its schema when the database is empty.
+
+    Parameters
+    ----------
+    url : str, optional
+        SQLAlchemy URL of the store.
+    timeout_s : float
+        How long to wait for a store locked by another writer, or for a server's answer [s].
+    check_schema : bool
+        Refuse a store whose schema is not this rotacal's (False only for ``records upgrade``).
+
+    Raises
+    ------
+    ConfigError
+        The URL is not usable.
+    StoreError
+        The store cannot be reached or used; one line says why and what to do.
+    """
+    resolved = resolve_url(url)
+    engine = make_engine(resolved, timeout_s=timeout_s)
+    store = Store(engine, resolved, timeout_s)
+    if check_schema:
+        with store.errors():
+            ensure_schema(engine, store.shown)
+    return store
+
+
+class Store:
+    """An open records store. Make one with :func:`open_store`."""
+
+    def __init__(self, engine: sa.Engine, url: str, timeout_s: float) -> None:
+        self.engine = engine
+        self.url = url
+        self.shown = display_url(url)
+        self.timeout_s = timeout_s
+
+    # -- plumbing ----------------------------------------------------------------------------
+    def errors(self) -> contextlib.AbstractContextManager[None]:
+        """Database faults as one-line :class:`StoreError` naming this store."""
+        return store_errors(self.url, self.timeout_s)
+
+    @contextlib.contextmanager
+    def begin(self) -> Iterator[sa.Connection]:
+        """A transaction (SQLite: with the write lock from its start)."""
+        with self.errors(), self.engine.begin() as connection:
+            yield connection
+
+    @contextlib.contextmanager
+    def read(self) -> Iterator[Session]:
+        """A session for reading records."""
+        with self.errors(), Session(self.engine) as session:
+            yield session
+
+    def _insert(self, connection: sa.Connection) -> Any:
+        return postgresql.insert if connection.dialect.name == "postgresql" else sqlite.insert
+
+    def _id_of(self, connection: sa.Connection, table: sa.Table, values: Mapping[str, Any]) -> int:
+        """The id of the row with ``values`` (all of its unique key), inserted when absent —
+        safe when other writers insert the same row at the same time."""
+        insert = self._insert(connection)
+        connection.execute(insert(table).values(**values).on_conflict_do_nothing())
+        where = [table.c[k] == v for k, v in values.items()]
+        return int(connection.execute(sa.select(table.c.id).where(*where)).scalar_one())
+
+    # -- settings ----------------------------------------------------------------------------
+    def settings(self) -> dict[str, str]:
+        """The laboratory's settings (:data:`DEFAULT_SETTINGS` where none is set)."""
+        with self.begin() as connection:
+            rows = connection.execute(sa.select(m.Setting.key, m.Setting.value)).all()
+        return {**DEFAULT_SETTINGS, **{k: v for k, v in rows}}
+
+    def set_settings(self, **values: str) -> dict[str, str]:
+        """Change settings (``number_format``, ``interval_months``); returns all of them."""
+        for key, value in values.items():
+            if key not in DEFAULT_SETTINGS:
+                raise ConfigError(f"no setting {key!r}; settings: {', '.join(DEFAULT_SETTINGS)}")
+            if key == "number_format":
+                check_number_format(value)
+            if key == "interval_months" and (not value.isdigit() or not 1 <= int(value) <= 240):
+                raise ConfigError(
+                    f"interval {value!r}: give a whole number of months from 1 to 240"
+                )
+        with self.begin() as connection:
+            insert = self._insert(connection)
+            for key, value in values.items():
+                stmt = insert(m.Setting).values(key=key, value=value)
+                connection.execute(
+                    stmt.on_conflict_do_update(index_elements=["key"], set_={"value": value})
+                )
+        return self.settings()
+
+    # -- numbers -----------------------------------------------------------------------------
+    def _taken(self, connection: sa.Connection, number: str) -> bool:
+        issued = sa.select(m.Certificate.id).where(m.Certificate.number == number)
+        voided = sa.select(m.VoidedNumber.number).where(m.VoidedNumber.number == number)
+        return bool(
+            connection.execute(sa.select(sa.exists(issued) | sa.exists(voided))).scalar_one()
+        )
+
+    def draw_number(self, issue_date: dt.date) -> str:
+        """The next number of the laboratory's series for a certificate issued on
+        ``issue_date``; never one issued or voided before, whatever other writers do at the same
+        time (the count is incremented in the database, row-locked). A number drawn and then not
+        used must be given back with :meth:`void_number`, which keeps it out of the series with
+        its reason."""
+        fmt = check_number_format(self.settings()["number_format"])
+        year = f"{issue_date.year:04d}"
+        scope = year if "year" in fmt else "*"
+        counters = m.Counter.__table__
+        with self.begin() as connection:
+            insert = self._insert(connection)
+            connection.execute(
+                insert(counters).values(scope=scope, last=0).on_conflict_do_nothing()
+            )
+            while True:  # skip numbers that explicit plans took
+                count = connection.execute(
+                    sa.update(counters)
+                    .where(counters.c.scope == scope)
+                    .values(last=counters.c.last + 1)
+                    .returning(counters.c.last)
+                ).scalar_one()
+                number = fmt.format(year=year, count=count)
+                if not self._taken(connection, number):
+                    return number
+
+    def void_number(self, number: str, reason: str) -> None:
+        """Keep a drawn number out of the series for good, with the reason it was not issued."""
+        with self.begin() as connection:
+            insert = self._insert(connection)
+            connection.execute(
+                insert(m.VoidedNumber)
+                .values(
+                    number=number,
+                    voided_at=dt.datetime.now(dt.timezone.utc),
+                    reason=" ".join(reason.split())[:2000],
+                )
+                .on_conflict_do_nothing()
+            )
+
+    # -- the Registry protocol of rotacal.certificate.issue ------------------------------------
+    def check_plan(self, plan: Plan) -> None:
+        """Refuse, before anything is measured, a plan whose explicit number is taken or whose
+        ``supersedes`` names no issued certificate or one already superseded."""
+        with self.begin() as connection:
+            if plan.number != "auto" and self._taken(connection, plan.number):
+                raise ConfigError(
+                    f"{plan.path}: certificate.number: {plan.number} is already in the records "
+                    f"({self.shown}); a number is never issued twice — a correction is a new "
+                    'certificate whose plan says supersedes = "' + plan.number + '"'
+                )
+            if plan.supersedes is None:
+                return
+            if not self._exists(connection, plan.supersedes):
+                raise ConfigError(
+                    f"{plan.path}: certificate.supersedes: no certificate {plan.supersedes} in "
+                    f"the records ({self.shown}); name an issued certificate"
+                )
+            later = connection.execute(
+                sa.select(m.Certificate.number).where(m.Certificate.supersedes == plan.supersedes)
+            ).scalar()
+            if later is not None:
+                raise ConfigError(
+                    f"{plan.path}: certificate.supersedes: {plan.supersedes} is already superseded "
+                    f"by {later}; supersede {later} instead"
+                )
+
+    def _exists(self, connection: sa.Connection, number: str) -> bool:
+        issued = sa.select(m.Certificate.id).where(m.Certificate.number == number)
+        return bool(connection.execute(sa.select(sa.exists(issued))).scalar_one())
+
+    def issued_with(self, plan_sha256: str) -> str | None:
+        """The number of the certificate issued from exactly this plan and these captures."""
+        with self.begin() as connection:
+            return connection.execute(
+                sa.select(m.Certificate.number)
+                .where(m.Certificate.plan_sha256 == plan_sha256)
+                .order_by(m.Certificate.id)
+            ).scalar()
+
+    def check_unissued(self, plan: Plan, plan_sha256: str) -> None:
+        """Refuse a plan whose every byte, and every capture's, was certified before."""
+        number = self.issued_with(plan_sha256)
+        if number is not None:
+            raise ConfigError(
+                f"{plan.path}: this plan and its captures were certified already as {number} "
+                f"(same plan_sha256, {self.shown}); a correction is a new plan with "
+                f'supersedes = "{number}"'
+            )
+
+    @contextlib.contextmanager
+    def keep(self, content: CertificateContent, files: Mapping[str, bytes]) -> Iterator[None]:
+        """Keep an issued certificate: every row of it in ONE transaction, committed when the
+        block ends without an exception (the caller publishes the certificate folder inside the
+        block), rolled back otherwise.
+
+        Parameters
+        ----------
+        content : CertificateContent
+            What the certificate states (with its final number).
+        files : mapping of str to bytes
+            Every file of the certificate folder by name (PDF, XML, results.json, figures).
+        """
+        with self.errors():
+            connection = self.engine.connect()
+            transaction = connection.begin()
+        try:
+            with self.errors():
+                if self._exists(connection, content.number):
+                    raise StoreError(
+                        f"records store {self.shown}: certificate {content.number} was issued "
+                        "meanwhile by another writer; certify again"
+                    )
+                self._write(connection, content, files)
+            yield
+            with self.errors():
+                transaction.commit()
+        except BaseException:
+            with contextlib.suppress(sa.exc.SQLAlchemyError):
+                transaction.rollback()
+            raise
+        finally:
+            connection.close()
+
+    def _write(
+        self, connection: sa.Connection, content: CertificateContent, files: Mapping[str, bytes]
+    ) -> None:
+        plan = content.plan
+        item = plan.item
+        item_id = self._id_of(
+            connection,
+            m.Item.__table__,
+            {
+                "kind": item.kind,
+                "manufacturer": item.manufacturer,
+                "model": item.model,
+                "serial": item.serial,
+            },
+        )
+        certificate_id = connection.execute(
+            sa.insert(m.Certificate)
+            .values(
+                number=content.number,
+                item_id=item_id,
+                title=plan.title,
+                laboratory=_contact_text(plan.laboratory),
+                customer=_contact_text(plan.customer),
+                start_date=plan.start_date,
+                end_date=plan.end_date,
+                issue_date=plan.issue_date,
+                plan_name=plan.path.name,
+                plan=plan.text,
+                plan_sha256=content.plan_sha256,
+                results=files["results.json"].decode("utf-8"),
+                software_version=content.software_version,
+                supersedes=plan.supersedes,
+                recorded_at=dt.datetime.now(dt.timezone.utc),
+                recorded_by=_station(),
+            )
+            .returning(m.Certificate.id)
+        ).scalar_one()
+        self._write_parts(connection, certificate_id, content, files)
+
+    def _write_parts(
+        self,
+        connection: sa.Connection,
+        certificate_id: int,
+        content: CertificateContent,
+        files: Mapping[str, bytes],
+    ) -> None:
+        plan = content.plan
+        rows: list[tuple[type[m.Base], list[dict[str, Any]]]] = []
+        persons = []
+        for position, p in enumerate(plan.persons):
+            person_id = self._id_of(
+                connection, m.Person.__table__, {"name": p.name, "title": p.title}
+            )
+            persons.append({"position": position, "person_id": person_id, "role": p.role})
+        rows.append((m.CertificatePerson, persons))
+        standards = []
+        for position, s in enumerate(plan.standards):
+            values = {"identifier": s.id, "name": s.name, "certificate": s.certificate, "due": s.due}
+            standard_id = self._id_of(connection, m.Standard.__table__, values)
+            standards.append({"position": position, "standard_id": standard_id})
+        rows.append((m.CertificateStandard, standards))
+        inputs = [
+            {
+                "measurement": mr.index,
+                "path": c.path,
+                "sha256": c.sha256,
+                "size_bytes": c.bytes,
+            }
+            for mr in content.measurements
+            for c in mr.captures
+        ]
+        rows.append(
+            (m.CertificateInput, [{"position": i, **row} for i, row in enumerate(inputs)])
+        )
+        rows.append(
+            (
+                m.CertificateFile,
+                [
+                    {"name": name, "sha256": hashlib.sha256(data).hexdigest(), "content": data}
+                    for name, data in sorted(files.items())
+                ],
+            )
+        )
+        rows.append((m.ReportedValue, _value_rows(content)))
+        for model, values in rows:
+            if values:
+                connection.execute(
+                    sa.insert(model), [{"certificate_id": certificate_id, **v} for v in values]
+                )
+
+
+def _value_rows(content: CertificateContent) -> list[dict[str, Any]]:
+    """One row per reported quantity, with its conformity statement where a limit was set."""
+    rows = []
+    for mr in content.measurements:
+        verdicts = {c.key: c for c in mr.conformity}
+        for position, q in enumerate(mr.quantities):
+            c = verdicts.get(q.key)
+            rows.append(
+                {
+                    "measurement": mr.index,
+                    "position": position,
+                    "measurement_name": mr.name,
+                    "command": mr.command,
+                    "quantity": q.key,
+                    "name": q.name,
+                    "unit": q.unit,
+                    "value": q.value,
+                    "expanded": q.U,
+                    "coverage_factor": q.k,
+                    "coverage_probability": q.p,
+                    "interval_low": q.interval[0] if q.interval else None,
+                    "interval_high": q.interval[1] if q.interval else None,
+                    "limit_min": (c.limit_min or None) if c else None,
+                    "limit_max": (c.limit_max or None) if c else None,
+                    "decision_rule": c.decision_rule if c else None,
+                    "verdict": c.verdict if c else None,
+                }
+            )
+    return rows
