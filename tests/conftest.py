@@ -10,6 +10,13 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
+# rotacal's state (the default records store) goes to a folder of this test process, never to the
+# user's own data folder; ROTACAL_DB from the environment would send certificates elsewhere.
+import tempfile  # noqa: E402
+
+os.environ["ROTACAL_DATA_DIR"] = tempfile.mkdtemp(prefix="rotacal-test-state-")
+os.environ.pop("ROTACAL_DB", None)
+
 from collections.abc import Callable  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402

@@ -181,7 +181,7 @@ def store_errors(url: str, timeout_s: float = DEFAULT_TIMEOUT_S) -> Iterator[Non
         if IMMUTABLE_MARK in lower:
             raise RecordImmutableError(
                 f"records store {shown}: {IMMUTABLE_MARK}; a correction is a new certificate "
-                "whose plan says supersedes = \"NUMBER\""
+                'whose plan says supersedes = "NUMBER"'
             ) from None
         if "database is locked" in lower or "database table is locked" in lower:
             raise StoreError(

@@ -373,7 +373,12 @@ class Store:
         rows.append((m.CertificatePerson, persons))
         standards = []
         for position, s in enumerate(plan.standards):
-            values = {"identifier": s.id, "name": s.name, "certificate": s.certificate, "due": s.due}
+            values = {
+                "identifier": s.id,
+                "name": s.name,
+                "certificate": s.certificate,
+                "due": s.due,
+            }
             standard_id = self._id_of(connection, m.Standard.__table__, values)
             standards.append({"position": position, "standard_id": standard_id})
         rows.append((m.CertificateStandard, standards))
@@ -387,9 +392,7 @@ class Store:
             for mr in content.measurements
             for c in mr.captures
         ]
-        rows.append(
-            (m.CertificateInput, [{"position": i, **row} for i, row in enumerate(inputs)])
-        )
+        rows.append((m.CertificateInput, [{"position": i, **row} for i, row in enumerate(inputs)]))
         rows.append(
             (
                 m.CertificateFile,

@@ -60,7 +60,11 @@ def upgrade() -> None:
         sa.Column("serial", sa.String(256), nullable=False),
         sa.PrimaryKeyConstraint("id", name=op.f("pk_items")),
         sa.UniqueConstraint(
-            "kind", "manufacturer", "model", "serial", name=op.f("uq_items_kind_manufacturer_model_serial")
+            "kind",
+            "manufacturer",
+            "model",
+            "serial",
+            name=op.f("uq_items_kind_manufacturer_model_serial"),
         ),
     )
     op.create_index(op.f("ix_items_serial"), "items", ["serial"])
@@ -81,7 +85,10 @@ def upgrade() -> None:
         sa.Column("due", sa.Date(), nullable=False),
         sa.PrimaryKeyConstraint("id", name=op.f("pk_standards")),
         sa.UniqueConstraint(
-            "identifier", "name", "certificate", "due",
+            "identifier",
+            "name",
+            "certificate",
+            "due",
             name=op.f("uq_standards_identifier_name_certificate_due"),
         ),
     )
