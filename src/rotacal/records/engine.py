@@ -98,10 +98,12 @@ def display_url(url: URL | str) -> str:
     """The URL as messages print it: without its password."""
     if isinstance(url, str):
         try:
-            url = sa.engine.make_url(url)
+            parsed = sa.engine.make_url(url)
         except (sa.exc.ArgumentError, ValueError):
             return url
-    return url.render_as_string(hide_password=True)
+    else:
+        parsed = url
+    return parsed.render_as_string(hide_password=True)
 
 
 def _sqlite_connect(dbapi_connection: Any, _record: Any) -> None:

@@ -22,7 +22,7 @@ import json
 import socket
 import string
 from collections.abc import Iterator, Mapping
-from typing import Any
+from typing import Any, cast
 
 import sqlalchemy as sa
 from sqlalchemy import event
@@ -72,6 +72,10 @@ def _refuse_changes(session: Session, _context: Any, _instances: Any) -> None:
 
 
 event.listen(Session, "before_flush", _refuse_changes)
+
+
+def _table(model: type[m.Base]) -> sa.Table:
+    return cast(sa.Table, model.__table__)
 
 
 def _station() -> str:
@@ -201,7 +205,7 @@ class Store:
         fmt = check_number_format(self.settings()["number_format"])
         year = f"{issue_date.year:04d}"
         scope = year if "year" in fmt else "*"
-        counters = m.Counter.__table__
+        counters = _table(m.Counter)
         with self.begin() as connection:
             insert = self._insert(connection)
             connection.execute(
@@ -323,7 +327,7 @@ class Store:
         item = plan.item
         item_id = self._id_of(
             connection,
-            m.Item.__table__,
+            _table(m.Item),
             {
                 "kind": item.kind,
                 "manufacturer": item.manufacturer,
@@ -367,7 +371,7 @@ class Store:
         persons = []
         for position, p in enumerate(plan.persons):
             person_id = self._id_of(
-                connection, m.Person.__table__, {"name": p.name, "title": p.title}
+                connection, _table(m.Person), {"name": p.name, "title": p.title}
             )
             persons.append({"position": position, "person_id": person_id, "role": p.role})
         rows.append((m.CertificatePerson, persons))
@@ -379,7 +383,7 @@ class Store:
                 "certificate": s.certificate,
                 "due": s.due,
             }
-            standard_id = self._id_of(connection, m.Standard.__table__, values)
+            standard_id = self._id_of(connection, _table(m.Standard), values)
             standards.append({"position": position, "standard_id": standard_id})
         rows.append((m.CertificateStandard, standards))
         inputs = [
@@ -403,10 +407,10 @@ class Store:
             )
         )
         rows.append((m.ReportedValue, _value_rows(content)))
-        for model, values in rows:
-            if values:
+        for model, table_rows in rows:
+            if table_rows:
                 connection.execute(
-                    sa.insert(model), [{"certificate_id": certificate_id, **v} for v in values]
+                    sa.insert(model), [{"certificate_id": certificate_id, **r} for r in table_rows]
                 )
 
 
