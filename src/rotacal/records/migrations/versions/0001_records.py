@@ -18,7 +18,7 @@ depends_on = None
 DECIMAL = sa.String(64)
 
 
-def _certificate_part(name: str, *columns: sa.SchemaItem, key: tuple[str, ...]) -> None:
+def _certificate_part(name: str, *columns: sa.schema.SchemaItem, key: tuple[str, ...]) -> None:
     """A table of one certificate's rows, keyed by the certificate and ``key``."""
     op.create_table(
         name,
