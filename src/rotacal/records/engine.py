@@ -35,9 +35,11 @@ __all__ = [
     "make_engine",
     "resolve_url",
     "store_errors",
+    "timeout_from_environment",
 ]
 
-#: How long a writer waits for another one before the store is reported as locked [s].
+#: How long a writer waits for another one before the store is reported as locked [s]
+#: (``ROTACAL_DB_TIMEOUT`` overrides it for the commands).
 DEFAULT_TIMEOUT_S = 30.0
 
 #: The word the schema's triggers put in their refusal (migrations/versions/0002).
@@ -57,6 +59,22 @@ def data_dir() -> Path:
 def default_url() -> str:
     """The default store: ``records.sqlite`` in :func:`data_dir`."""
     return f"sqlite:///{data_dir() / 'records.sqlite'}"
+
+
+def timeout_from_environment() -> float:
+    """``ROTACAL_DB_TIMEOUT`` in seconds, else :data:`DEFAULT_TIMEOUT_S`."""
+    given = os.environ.get("ROTACAL_DB_TIMEOUT", "").strip()
+    if not given:
+        return DEFAULT_TIMEOUT_S
+    try:
+        value = float(given)
+    except ValueError:
+        value = -1.0
+    if not 0 < value <= 3600:
+        raise ConfigError(
+            f"ROTACAL_DB_TIMEOUT={given!r}: give the seconds to wait for a locked store (0 to 3600)"
+        )
+    return value
 
 
 def resolve_url(given: str | None) -> str:

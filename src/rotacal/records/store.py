@@ -34,7 +34,7 @@ from rotacal.errors import ConfigError, RecordImmutableError, StoreError
 from rotacal.plan.model import Plan
 
 from . import models as m
-from .engine import DEFAULT_TIMEOUT_S, display_url, make_engine, resolve_url, store_errors
+from .engine import display_url, make_engine, resolve_url, store_errors, timeout_from_environment
 from .schema import ensure_schema
 
 __all__ = ["DEFAULT_SETTINGS", "Store", "open_store"]
@@ -94,7 +94,7 @@ def _contact_text(contact: Any) -> str:
 
 
 def open_store(
-    url: str | None = None, *, timeout_s: float = DEFAULT_TIMEOUT_S, check_schema: bool = True
+    url: str | None = None, *, timeout_s: float | None = None, check_schema: bool = True
 ) -> Store:
     """Open the records store at ``url`` (``--db``; default ``ROTACAL_DB``, else the SQLite file
     in the user's data folder), making its schema when the database is empty.
@@ -103,8 +103,9 @@ def open_store(
     ----------
     url : str, optional
         SQLAlchemy URL of the store.
-    timeout_s : float
-        How long to wait for a store locked by another writer, or for a server's answer [s].
+    timeout_s : float, optional
+        How long to wait for a store locked by another writer, or for a server's answer [s]
+        [default: ``ROTACAL_DB_TIMEOUT``, else 30 s].
     check_schema : bool
         Refuse a store whose schema is not this rotacal's (False only for ``records upgrade``).
 
@@ -116,6 +117,8 @@ def open_store(
         The store cannot be reached or used; one line says why and what to do.
     """
     resolved = resolve_url(url)
+    if timeout_s is None:
+        timeout_s = timeout_from_environment()
     engine = make_engine(resolved, timeout_s=timeout_s)
     store = Store(engine, resolved, timeout_s)
     if check_schema:
