@@ -14,6 +14,7 @@ from . import (  # noqa: F401  (registers the commands)
     inspect,
     motion,
     pulses,
+    records,
     simulate,
     turntable,
 )

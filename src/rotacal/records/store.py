@@ -14,19 +14,13 @@ databases.
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import datetime as dt
-import getpass
-import hashlib
-import json
-import socket
 import string
 from collections.abc import Iterator, Mapping
 from typing import Any, cast
 
 import sqlalchemy as sa
 from sqlalchemy import event
-from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
 from rotacal.certificate.content import CertificateContent
@@ -35,6 +29,7 @@ from rotacal.plan.model import Plan
 
 from . import models as m
 from .engine import display_url, make_engine, resolve_url, store_errors, timeout_from_environment
+from .record import insert_for, insert_record, record_of
 from .schema import ensure_schema
 
 __all__ = ["DEFAULT_SETTINGS", "Store", "open_store"]
@@ -72,25 +67,6 @@ def _refuse_changes(session: Session, _context: Any, _instances: Any) -> None:
 
 
 event.listen(Session, "before_flush", _refuse_changes)
-
-
-def _table(model: type[m.Base]) -> sa.Table:
-    return cast(sa.Table, model.__table__)
-
-
-def _station() -> str:
-    """Who records: user@computer (the test station), as far as the system tells."""
-    try:
-        user = getpass.getuser()
-    except (KeyError, OSError):  # no name for this user id (a container)
-        user = "?"
-    return f"{user}@{socket.gethostname()}"[:256]
-
-
-def _contact_text(contact: Any) -> str:
-    return json.dumps(
-        {k: v for k, v in dataclasses.asdict(contact).items() if v}, ensure_ascii=False
-    )
 
 
 def open_store(
@@ -153,17 +129,6 @@ class Store:
         with self.errors(), Session(self.engine) as session:
             yield session
 
-    def _insert(self, connection: sa.Connection) -> Any:
-        return postgresql.insert if connection.dialect.name == "postgresql" else sqlite.insert
-
-    def _id_of(self, connection: sa.Connection, table: sa.Table, values: Mapping[str, Any]) -> int:
-        """The id of the row with ``values`` (all of its unique key), inserted when absent —
-        safe when other writers insert the same row at the same time."""
-        insert = self._insert(connection)
-        connection.execute(insert(table).values(**values).on_conflict_do_nothing())
-        where = [table.c[k] == v for k, v in values.items()]
-        return int(connection.execute(sa.select(table.c.id).where(*where)).scalar_one())
-
     # -- settings ----------------------------------------------------------------------------
     def settings(self) -> dict[str, str]:
         """The laboratory's settings (:data:`DEFAULT_SETTINGS` where none is set)."""
@@ -183,7 +148,7 @@ class Store:
                     f"interval {value!r}: give a whole number of months from 1 to 240"
                 )
         with self.begin() as connection:
-            insert = self._insert(connection)
+            insert = insert_for(connection)
             for key, value in values.items():
                 stmt = insert(m.Setting).values(key=key, value=value)
                 connection.execute(
@@ -208,9 +173,9 @@ class Store:
         fmt = check_number_format(self.settings()["number_format"])
         year = f"{issue_date.year:04d}"
         scope = year if "year" in fmt else "*"
-        counters = _table(m.Counter)
+        counters = cast(sa.Table, m.Counter.__table__)
         with self.begin() as connection:
-            insert = self._insert(connection)
+            insert = insert_for(connection)
             connection.execute(
                 insert(counters).values(scope=scope, last=0).on_conflict_do_nothing()
             )
@@ -228,7 +193,7 @@ class Store:
     def void_number(self, number: str, reason: str) -> None:
         """Keep a drawn number out of the series for good, with the reason it was not issued."""
         with self.begin() as connection:
-            insert = self._insert(connection)
+            insert = insert_for(connection)
             connection.execute(
                 insert(m.VoidedNumber)
                 .values(
@@ -312,7 +277,7 @@ class Store:
                         f"records store {self.shown}: certificate {content.number} was issued "
                         "meanwhile by another writer; certify again"
                     )
-                self._write(connection, content, files)
+                insert_record(connection, record_of(content, files))
             yield
             with self.errors():
                 transaction.commit()
@@ -322,127 +287,3 @@ class Store:
             raise
         finally:
             connection.close()
-
-    def _write(
-        self, connection: sa.Connection, content: CertificateContent, files: Mapping[str, bytes]
-    ) -> None:
-        plan = content.plan
-        item = plan.item
-        item_id = self._id_of(
-            connection,
-            _table(m.Item),
-            {
-                "kind": item.kind,
-                "manufacturer": item.manufacturer,
-                "model": item.model,
-                "serial": item.serial,
-            },
-        )
-        certificate_id = connection.execute(
-            sa.insert(m.Certificate)
-            .values(
-                number=content.number,
-                item_id=item_id,
-                title=plan.title,
-                laboratory=_contact_text(plan.laboratory),
-                customer=_contact_text(plan.customer),
-                start_date=plan.start_date,
-                end_date=plan.end_date,
-                issue_date=plan.issue_date,
-                plan_name=plan.path.name,
-                plan=plan.text,
-                plan_sha256=content.plan_sha256,
-                results=files["results.json"].decode("utf-8"),
-                software_version=content.software_version,
-                supersedes=plan.supersedes,
-                recorded_at=dt.datetime.now(dt.timezone.utc),
-                recorded_by=_station(),
-            )
-            .returning(m.Certificate.id)
-        ).scalar_one()
-        self._write_parts(connection, certificate_id, content, files)
-
-    def _write_parts(
-        self,
-        connection: sa.Connection,
-        certificate_id: int,
-        content: CertificateContent,
-        files: Mapping[str, bytes],
-    ) -> None:
-        plan = content.plan
-        rows: list[tuple[type[m.Base], list[dict[str, Any]]]] = []
-        persons = []
-        for position, p in enumerate(plan.persons):
-            person_id = self._id_of(
-                connection, _table(m.Person), {"name": p.name, "title": p.title}
-            )
-            persons.append({"position": position, "person_id": person_id, "role": p.role})
-        rows.append((m.CertificatePerson, persons))
-        standards = []
-        for position, s in enumerate(plan.standards):
-            values = {
-                "identifier": s.id,
-                "name": s.name,
-                "certificate": s.certificate,
-                "due": s.due,
-            }
-            standard_id = self._id_of(connection, _table(m.Standard), values)
-            standards.append({"position": position, "standard_id": standard_id})
-        rows.append((m.CertificateStandard, standards))
-        inputs = [
-            {
-                "measurement": mr.index,
-                "path": c.path,
-                "sha256": c.sha256,
-                "size_bytes": c.bytes,
-            }
-            for mr in content.measurements
-            for c in mr.captures
-        ]
-        rows.append((m.CertificateInput, [{"position": i, **row} for i, row in enumerate(inputs)]))
-        rows.append(
-            (
-                m.CertificateFile,
-                [
-                    {"name": name, "sha256": hashlib.sha256(data).hexdigest(), "content": data}
-                    for name, data in sorted(files.items())
-                ],
-            )
-        )
-        rows.append((m.ReportedValue, _value_rows(content)))
-        for model, table_rows in rows:
-            if table_rows:
-                connection.execute(
-                    sa.insert(model), [{"certificate_id": certificate_id, **r} for r in table_rows]
-                )
-
-
-def _value_rows(content: CertificateContent) -> list[dict[str, Any]]:
-    """One row per reported quantity, with its conformity statement where a limit was set."""
-    rows = []
-    for mr in content.measurements:
-        verdicts = {c.key: c for c in mr.conformity}
-        for position, q in enumerate(mr.quantities):
-            c = verdicts.get(q.key)
-            rows.append(
-                {
-                    "measurement": mr.index,
-                    "position": position,
-                    "measurement_name": mr.name,
-                    "command": mr.command,
-                    "quantity": q.key,
-                    "name": q.name,
-                    "unit": q.unit,
-                    "value": q.value,
-                    "expanded": q.U,
-                    "coverage_factor": q.k,
-                    "coverage_probability": q.p,
-                    "interval_low": q.interval[0] if q.interval else None,
-                    "interval_high": q.interval[1] if q.interval else None,
-                    "limit_min": (c.limit_min or None) if c else None,
-                    "limit_max": (c.limit_max or None) if c else None,
-                    "decision_rule": c.decision_rule if c else None,
-                    "verdict": c.verdict if c else None,
-                }
-            )
-    return rows

@@ -1,0 +1,273 @@
+"""``rotacal records``: the certificates issued — list, show, an item's history, export/import,
+the schema's upgrade and the laboratory's settings."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+
+from rotacal.errors import ConfigError
+
+from ._app import cli
+from ._common import INPUT_FILE, _check_outputs, _emit_warnings, _write_json, _wrote
+from ._help import example
+from ._store import db_option, open_db
+
+_JSON_HELP = "Write the result as JSON ('-' = stdout)."
+
+
+@cli.group(
+    "records",
+    epilog=example(
+        "rotacal records list                      # the certificates issued, newest first",
+        "rotacal records show RC-2026-0001",
+        "rotacal records history SN-0001 --report history.html",
+        "rotacal records export --out backup.jsonl",
+        "rotacal records import backup.jsonl --db postgresql+psycopg://lab@server/records",
+    ),
+)
+def records_group() -> None:
+    """The records of the certificates issued (ISO/IEC 17025 §7.5, §8.4).
+
+    Every certificate `rotacal certify` issues is kept, unchanged, in the records store: an
+    SQLite file in your data folder by default, or a PostgreSQL database shared by the test
+    stations (--db URL or ROTACAL_DB). A correction is a new certificate whose plan says
+    supersedes = "NUMBER"; both stay.
+    """
+
+
+def _table(rows: list[list[str]], header: list[str]) -> str:
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
+    lines = [
+        "  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip()
+        for r in [header, *rows]
+    ]
+    return "\n".join(lines)
+
+
+def _conformity_text(tally: dict[str, int]) -> str:
+    return ", ".join(f"{n} {v}" for v, n in tally.items()) or "—"
+
+
+@records_group.command("list")
+@click.option("--serial", default=None, metavar="S", help="Only the certificates of this item.")
+@click.option("--json", "json_path", metavar="PATH", help=_JSON_HELP)
+@click.option("--overwrite", is_flag=True, help="Replace an existing --json file.")
+@db_option
+def list_cmd(serial: str | None, json_path: str | None, overwrite: bool, db: str | None) -> None:
+    """The certificates issued, newest first."""
+    from rotacal.records.query import list_certificates
+
+    _check_outputs(json_path, None, overwrite)
+    store = open_db(db)
+    rows = list_certificates(store, serial)
+    _write_json({"store": store.shown, "certificates": rows}, json_path)
+    if json_path == "-":
+        return
+    if not rows:
+        click.echo(f"no certificates{f' of {serial}' if serial else ''} in {store.shown}")
+        return
+    table = [
+        [
+            r["number"],
+            r["issue_date"],
+            f"{r['item']['manufacturer']} {r['item']['model']} {r['item']['serial']}",
+            r["customer"],
+            _conformity_text(r["conformity"]),
+            f"superseded by {r['superseded_by']}" if r["superseded_by"] else "",
+        ]
+        for r in rows
+    ]
+    click.echo(_table(table, ["number", "issued", "item", "customer", "conformity", ""]))
+
+
+@records_group.command("show")
+@click.argument("number")
+@click.option("--json", "json_path", metavar="PATH", help=_JSON_HELP)
+@click.option(
+    "--files",
+    "files_dir",
+    metavar="DIR",
+    default=None,
+    help="Write the certificate's files as issued (PDF, XML, results.json, figures) into the new "
+    "folder DIR.",
+)
+@click.option("--overwrite", is_flag=True, help="Replace an existing --json file.")
+@db_option
+def show_cmd(
+    number: str, json_path: str | None, files_dir: str | None, overwrite: bool, db: str | None
+) -> None:
+    """One certificate's record: plan, plan_sha256, results, conformity, supersession."""
+    from rotacal.records.query import certificate_record, restore_files
+
+    _check_outputs(json_path, None, overwrite)
+    store = open_db(db)
+    record = certificate_record(store, number)
+    _write_json(record, json_path)
+    if files_dir is not None:
+        for path in restore_files(store, number, Path(files_dir)):
+            _wrote(path)
+    if json_path == "-":
+        return
+    item = record["item"]
+    lines = [
+        f"certificate {record['number']}: {record['title']}",
+        f"  item        {item['kind']} {item['manufacturer']} {item['model']}, "
+        f"serial {item['serial']}",
+        f"  customer    {record['customer'].get('name', '')}",
+        f"  calibrated  {record['start_date']}"
+        + (f" to {record['end_date']}" if record["end_date"] != record["start_date"] else ""),
+        f"  issued      {record['issue_date']} (recorded {record['recorded_at']} by "
+        f"{record['recorded_by']}, rotacal {record['software_version']})",
+        f"  plan        {record['plan']['name']}, plan_sha256 {record['plan_sha256']}",
+        "  standards   "
+        + "; ".join(f"{s['id']} ({s['certificate']}, due {s['due']})" for s in record["standards"]),
+    ]
+    for c in record["conformity"]:
+        lines.append(f"  conformity  {c['measurement']}: {c['quantity']} {c['verdict']}")
+    if record["supersedes"]:
+        lines.append(f"  supersedes  {record['supersedes']}")
+    if record["superseded_by"]:
+        lines.append(f"  SUPERSEDED by {record['superseded_by']}")
+    click.echo("\n".join(lines))
+
+
+@records_group.command("history")
+@click.argument("serial")
+@click.option(
+    "--model", default=None, metavar="M", help="The item's model, when several share the serial."
+)
+@click.option("--json", "json_path", metavar="PATH", help=_JSON_HELP)
+@click.option("--report", "report_path", metavar="PATH.html", help="Write an HTML report.")
+@click.option("--overwrite", is_flag=True, help="Replace existing --json/--report files.")
+@db_option
+def history_cmd(
+    serial: str,
+    model: str | None,
+    json_path: str | None,
+    report_path: str | None,
+    overwrite: bool,
+    db: str | None,
+) -> None:
+    """An item's calibrations over time, the drift per year and the next due date.
+
+    Each reported quantity with its U at each calibration; the drift per year by weighted least
+    squares with its uncertainty; next_due: when the predicted value plus its expanded
+    uncertainty reaches the acceptance limit, or the laboratory's fixed interval when no drift
+    is significant (ILAC-G24).
+    """
+    from rotacal.records.history import item_history
+
+    _check_outputs(json_path, report_path, overwrite)
+    store = open_db(db)
+    history = item_history(store, serial, model=model)
+    _emit_warnings(history)
+    _write_json(history.to_dict(), json_path)
+    if report_path:
+        from rotacal.report.history import history_report
+        from rotacal.report.html import write_html
+
+        from ._common import _declared_inputs, _overwrite_given, _status
+
+        with _status("drawing the report"):
+            write_html(
+                history_report(history, store.shown),
+                report_path,
+                overwrite=_overwrite_given(),
+                inputs=_declared_inputs(),
+                label=f"--report {report_path}",
+            )
+        _wrote(report_path)
+    if json_path == "-":
+        return
+    data = history.to_dict()
+    due = data["next_due"]
+    click.echo(
+        f"{serial}: {len(data['calibrations'])} calibrations; next due {due['date']} "
+        f"({due['method']})"
+    )
+    for key, drift in data["drift_per_year"].items():
+        mark = " (significant)" if drift.get("significant") else ""
+        click.echo(f"  drift of {key}: {drift['value']:.4g} ± {drift['u']:.2g} /year{mark}")
+
+
+@records_group.command("export")
+@click.option(
+    "--out", metavar="FILE.jsonl", default=None, help="The export file [default: stdout]."
+)
+@db_option
+def export_cmd(out: str | None, db: str | None) -> None:
+    """Every record of the store as JSON lines (a backup; the move to another store)."""
+    from rotacal.records.exchange import export_lines, export_to
+
+    store = open_db(db)
+    if out is None:
+        sys.stdout.writelines(export_lines(store))
+        return
+    if not out.endswith(".jsonl"):
+        raise ConfigError(f"--out {out}: the export is JSON lines; give a name ending in .jsonl")
+    export_to(store, Path(out))
+    _wrote(out)
+
+
+@records_group.command("import")
+@click.argument("file", type=INPUT_FILE, metavar="FILE.jsonl")
+@db_option
+def import_cmd(file: str, db: str | None) -> None:
+    """Import an export into the store: all of it or nothing; records already there are kept."""
+    from rotacal.records.exchange import import_lines
+
+    store = open_db(db)
+    with open(file, encoding="utf-8") as lines:
+        summary = import_lines(store, lines, file)
+    for line in summary["warnings"]:
+        click.echo(f"rotacal: warning: {line}", err=True)
+    click.echo(
+        f"imported {summary['imported']} certificates into {store.shown}"
+        + (f" ({summary['unchanged']} were there already)" if summary["unchanged"] else "")
+    )
+
+
+@records_group.command("upgrade")
+@db_option
+def upgrade_cmd(db: str | None) -> None:
+    """Migrate an older store's schema to this rotacal's (Alembic), in one transaction."""
+    from rotacal.records.schema import upgrade
+
+    store = open_db(db, check_schema=False)
+    with store.errors():
+        before, after = upgrade(store.engine, store.shown)
+    if before == after:
+        click.echo(f"{store.shown}: schema revision {after}, already this rotacal's")
+    else:
+        click.echo(f"{store.shown}: schema upgraded from revision {before or 'none'} to {after}")
+
+
+@records_group.command("settings")
+@click.option(
+    "--number-format",
+    default=None,
+    metavar="F",
+    help='The series of number = "auto", with {year} and {count}, e.g. "LAB-{year}-{count:05d}".',
+)
+@click.option(
+    "--interval-months",
+    default=None,
+    metavar="N",
+    help="The fixed calibration interval, when no drift sets the next due date.",
+)
+@db_option
+def settings_cmd(number_format: str | None, interval_months: str | None, db: str | None) -> None:
+    """Show, or change, the laboratory's settings kept in the store."""
+    store = open_db(db)
+    changes: dict[str, Any] = {}
+    if number_format is not None:
+        changes["number_format"] = number_format
+    if interval_months is not None:
+        changes["interval_months"] = interval_months
+    values = store.set_settings(**changes) if changes else store.settings()
+    for key, value in values.items():
+        click.echo(f"{key} = {value}")
