@@ -6,10 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -27,11 +24,21 @@ def _certify(*args: str) -> Any:
     return CliRunner().invoke(cli, ["certify", *args], catch_exceptions=False)
 
 
+@pytest.fixture(autouse=True)
+def _records_of_this_test(
+    tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Each test certifies into a records store of its own (plans here share numbers), outside
+    the folder of its plan (whose contents the tests check)."""
+    store = tmp_path_factory.mktemp("records") / "records.sqlite"
+    monkeypatch.setenv("ROTACAL_DB", f"sqlite:///{store}")
+
+
 @pytest.fixture(scope="module")
 def issued(tmp_path_factory: pytest.TempPathFactory, make_plan) -> Path:
     folder = tmp_path_factory.mktemp("certify")
     plan = make_plan(folder)
-    result = _certify(str(plan))
+    result = _certify(str(plan), "--db", f"sqlite:///{folder / 'records.sqlite'}")
     assert result.exit_code == 0, result.output
     return folder / "RC-2026-0042"
 
@@ -127,7 +134,8 @@ def test_the_dcc_is_valid(issued: Path, dcc_schema) -> None:
 
 def test_the_same_plan_gives_the_same_certificate(issued: Path, tmp_path: Path) -> None:
     again = tmp_path / "again"
-    result = _certify(str(issued.parent / "plan.toml"), "--out", str(again))
+    # not recorded: the records refuse a second certificate of the same plan (test below)
+    result = _certify(str(issued.parent / "plan.toml"), "--out", str(again), "--no-record")
     assert result.exit_code == 0, result.output
     for name in ("results.json", "certificate.xml"):
         assert (again / name).read_bytes() == (issued / name).read_bytes(), name
@@ -141,9 +149,21 @@ def test_the_same_plan_gives_the_same_certificate(issued: Path, tmp_path: Path) 
 
 def test_an_existing_certificate_is_not_replaced_without_overwrite(issued: Path) -> None:
     before = (issued / "results.json").read_bytes()
-    result = CliRunner().invoke(cli, ["certify", str(issued.parent / "plan.toml")])
+    plan = str(issued.parent / "plan.toml")
+    result = CliRunner().invoke(cli, ["certify", plan, "--no-record"])
     assert result.exit_code == 2
     assert "--overwrite" in result.output and result.output.count("\n") == 1
+    assert (issued / "results.json").read_bytes() == before
+
+
+def test_a_number_in_the_records_is_never_issued_again(issued: Path) -> None:
+    before = (issued / "results.json").read_bytes()
+    plan = str(issued.parent / "plan.toml")
+    db = f"sqlite:///{issued.parent / 'records.sqlite'}"
+    result = CliRunner().invoke(cli, ["certify", plan, "--overwrite", "--db", db])
+    assert result.exit_code == 2 and result.output.count("\n") == 1
+    assert "RC-2026-0042 is already in the records" in result.output
+    assert "supersedes" in result.output
     assert (issued / "results.json").read_bytes() == before
 
 
@@ -188,10 +208,12 @@ def test_a_bad_option_value_is_named(tmp_path: Path, make_plan) -> None:
 def test_auto_numbers_follow_the_series_and_a_failure_consumes_none(
     tmp_path: Path, make_plan, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setenv("ROTACAL_DATA_DIR", str(tmp_path / "state"))
     one = [{"name": "Noise", "command": "allan"}]
     plan = make_plan(tmp_path, one, certificate={"number": "auto", "date": "2026-11-25"})
     assert _certify(str(plan)).exit_code == 0
+    again = CliRunner().invoke(cli, ["certify", str(plan)])  # the same calibration again
+    assert again.exit_code == 2 and "certified already as RC-2026-0001" in again.output
+    plan.write_text(plan.read_text() + "# the next calibration\n")
     (tmp_path / "noise.npz").rename(tmp_path / "kept.npz")
     assert CliRunner().invoke(cli, ["certify", str(plan)]).exit_code == 2  # no capture
     (tmp_path / "kept.npz").rename(tmp_path / "noise.npz")
@@ -199,29 +221,13 @@ def test_auto_numbers_follow_the_series_and_a_failure_consumes_none(
     assert sorted(p.name for p in tmp_path.glob("RC-*")) == ["RC-2026-0001", "RC-2026-0002"]
 
 
-def test_concurrent_certifications_draw_distinct_numbers(tmp_path: Path, make_plan) -> None:
-    plan = make_plan(
-        tmp_path,
-        [{"name": "Noise", "command": "allan"}],
-        certificate={"number": "auto", "date": "2026-11-25"},
-    )
-    env = {**os.environ, "ROTACAL_DATA_DIR": str(tmp_path / "state")}
-    processes = [
-        subprocess.Popen(
-            [sys.executable, "-m", "rotacal", "certify", str(plan)],
-            env=env,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-        )
-        for _ in range(4)
-    ]
-    for p in processes:
-        _, err = p.communicate(timeout=300)
-        assert p.returncode == 0, err.decode()
-    numbers = sorted(p.name for p in tmp_path.glob("RC-*"))
-    assert numbers == [f"RC-2026-{n:04d}" for n in range(1, 5)]
-    for n in numbers:
-        assert json.loads((tmp_path / n / "results.json").read_text())["certificate_number"] == n
+def test_auto_needs_the_records(tmp_path: Path, make_plan) -> None:
+    one = [{"name": "Noise", "command": "allan"}]
+    plan = make_plan(tmp_path, one, certificate={"number": "auto", "date": "2026-11-25"})
+    result = CliRunner().invoke(cli, ["certify", str(plan), "--no-record"])
+    assert result.exit_code == 2 and result.output.count("\n") == 1
+    assert "certificate.number" in result.output and "--no-record" in result.output
+    assert not list(tmp_path.glob("RC-*"))
 
 
 def test_the_example_plan_works_as_it_is_on_simulated_captures(tmp_path: Path) -> None:

@@ -133,7 +133,8 @@ class Certificate(Base):
     #: the plan file's name and its bytes as given
     plan_name: Mapped[str] = mapped_column(sa.Text)
     plan: Mapped[bytes] = mapped_column(sa.LargeBinary)
-    plan_sha256: Mapped[str] = mapped_column(sa.String(64), index=True)
+    #: one certificate per plan and captures: the same calibration is never certified twice
+    plan_sha256: Mapped[str] = mapped_column(sa.String(64), index=True, unique=True)
     #: results.json as issued (UTF-8 text)
     results: Mapped[str] = mapped_column(sa.Text)
     software_version: Mapped[str] = mapped_column(sa.String(64))

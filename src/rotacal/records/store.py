@@ -235,6 +235,18 @@ class Store:
         issued = sa.select(m.Certificate.id).where(m.Certificate.number == number)
         return bool(connection.execute(sa.select(sa.exists(issued))).scalar_one())
 
+    def _conflict(self, content: CertificateContent, e: sa.exc.IntegrityError) -> StoreError:
+        """What another writer did meanwhile, from the unique key the insert ran into."""
+        if "plan_sha256" in str(e.orig):
+            return StoreError(
+                f"{content.plan.path}: this plan and its captures were certified meanwhile by "
+                f"another writer ({self.shown}); `rotacal records list` shows it"
+            )
+        return StoreError(
+            f"records store {self.shown}: certificate {content.number} was issued meanwhile by "
+            "another writer; certify again"
+        )
+
     def issued_with(self, plan_sha256: str) -> str | None:
         """The number of the certificate issued from exactly this plan and these captures."""
         with self.begin() as connection:
@@ -272,12 +284,10 @@ class Store:
             transaction = connection.begin()
         try:
             with self.errors():
-                if self._exists(connection, content.number):
-                    raise StoreError(
-                        f"records store {self.shown}: certificate {content.number} was issued "
-                        "meanwhile by another writer; certify again"
-                    )
-                insert_record(connection, record_of(content, files))
+                try:
+                    insert_record(connection, record_of(content, files))
+                except sa.exc.IntegrityError as e:
+                    raise self._conflict(content, e) from None
             yield
             with self.errors():
                 transaction.commit()

@@ -122,7 +122,9 @@ def upgrade() -> None:
     )
     op.create_index(op.f("ix_certificates_item_id"), "certificates", ["item_id"])
     op.create_index(op.f("ix_certificates_issue_date"), "certificates", ["issue_date"])
-    op.create_index(op.f("ix_certificates_plan_sha256"), "certificates", ["plan_sha256"])
+    op.create_index(
+        op.f("ix_certificates_plan_sha256"), "certificates", ["plan_sha256"], unique=True
+    )
     _certificate_part(
         "certificate_inputs",
         sa.Column("position", sa.Integer(), nullable=False),
