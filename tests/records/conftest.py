@@ -102,12 +102,13 @@ def make_content(
         conformity=conformity,
         decision_rule="simple",
     )
-    import hashlib
+    from rotacal.certificate.issue import plan_sha256 as digest_of
 
+    captures = [c.sha256 for c in measurement.captures]
     return CertificateContent(
         number=number,
         plan=plan,
-        plan_sha256=plan_sha256 or hashlib.sha256(plan.text).hexdigest(),
+        plan_sha256=plan_sha256 or digest_of(plan.text, captures),
         software_version="0.1.0",
         measurements=(measurement,),
     )
