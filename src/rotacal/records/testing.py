@@ -87,15 +87,17 @@ class ThrowawayPostgres:
         return f"postgresql+psycopg://rotacal@127.0.0.1:{self.port}/{dbname}"
 
     def new_database(self) -> str:
-        """An empty database of its own; returns its URL."""
+        """An empty store of its own; returns its URL. It is a schema of its own in one
+        database (the URL sets ``search_path``): as empty as a new database to rotacal, made
+        in milliseconds rather than the second a ``CREATE DATABASE`` takes."""
         import psycopg
 
         name = "t_" + uuid.uuid4().hex[:12]
         with psycopg.connect(
             f"host=127.0.0.1 port={self.port} user=rotacal dbname=postgres", autocommit=True
         ) as connection:
-            connection.execute(f"CREATE DATABASE {name}")
-        return self.url(name)
+            connection.execute(f"CREATE SCHEMA {name}")
+        return self.url("postgres") + f"?options=-csearch_path%3D{name}"
 
     def stop(self) -> None:
         """Stop the server and remove its folder."""
