@@ -121,8 +121,11 @@ WRITER_ARGS = {
 
 def test_every_command_has_a_recipe():
     # certify's convention (wrote lines, --overwrite, identical JSON) is checked in
-    # tests/certificate/test_certify.py, on a plan of its own
-    assert set(_commands(cli)) == {*ANALYSES, *WRITERS, ("demo",), ("certify",)}
+    # tests/certificate/test_certify.py, on a plan of its own; the records commands' in
+    # tests/records/test_cli.py, on a store of their own
+    records = {("records", c) for c in ("list", "show", "history", "export", "import")}
+    records |= {("records", "upgrade"), ("records", "settings")}
+    assert set(_commands(cli)) == {*ANALYSES, *WRITERS, ("demo",), ("certify",), *records}
 
 
 def _analysis_argv(path: tuple[str, ...], captures: dict[str, Path]) -> list[str]:
