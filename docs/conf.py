@@ -15,8 +15,13 @@ rotacal.glossary (docs/_ext/rotacal_keys.py). Everything the pages load is serve
 
 from __future__ import annotations
 
+import logging
 import sys
 from pathlib import Path
+
+# The theme's a11y_pygments configures the root logger at INFO when imported; Alembic's start-up
+# chatter (imported with rotacal.records' reference page) is not the build's business.
+logging.getLogger("alembic").setLevel(logging.WARNING)
 
 DOCS = Path(__file__).resolve().parent
 # the package from this checkout (also when it is not installed), and the local extension
