@@ -22,7 +22,7 @@ _JSON_HELP = "Write the result as JSON ('-' = stdout)."
 @cli.group(
     "records",
     epilog=example(
-        "rotacal records list                      # the certificates issued, newest first",
+        "rotacal records list                 # newest first",
         "rotacal records show RC-2026-0001",
         "rotacal records history SN-0001 --report history.html",
         "rotacal records export --out backup.jsonl",
@@ -30,7 +30,9 @@ _JSON_HELP = "Write the result as JSON ('-' = stdout)."
     ),
 )
 def records_group() -> None:
-    """The records of the certificates issued (ISO/IEC 17025 §7.5, §8.4).
+    """The certificates issued: list, show, history, backup.
+
+    The records of ISO/IEC 17025 §7.5 and §8.4.
 
     Every certificate `rotacal certify` issues is kept, unchanged, in the records store: an
     SQLite file in your data folder by default, or a PostgreSQL database shared by the test
@@ -52,7 +54,10 @@ def _conformity_text(tally: dict[str, int]) -> str:
     return ", ".join(f"{n} {v}" for v, n in tally.items()) or "—"
 
 
-@records_group.command("list")
+@records_group.command(
+    "list",
+    epilog=example("rotacal records list --serial SN-0001", "rotacal records list --json -"),
+)
 @click.option("--serial", default=None, metavar="S", help="Only the certificates of this item.")
 @click.option("--json", "json_path", metavar="PATH", help=_JSON_HELP)
 @click.option("--overwrite", is_flag=True, help="Replace an existing --json file.")
@@ -84,7 +89,13 @@ def list_cmd(serial: str | None, json_path: str | None, overwrite: bool, db: str
     click.echo(_table(table, ["number", "issued", "item", "customer", "conformity", ""]))
 
 
-@records_group.command("show")
+@records_group.command(
+    "show",
+    epilog=example(
+        "rotacal records show RC-2026-0001",
+        "rotacal records show RC-2026-0001 --files RC-2026-0001-copy",
+    ),
+)
 @click.argument("number")
 @click.option("--json", "json_path", metavar="PATH", help=_JSON_HELP)
 @click.option(
@@ -100,7 +111,11 @@ def list_cmd(serial: str | None, json_path: str | None, overwrite: bool, db: str
 def show_cmd(
     number: str, json_path: str | None, files_dir: str | None, overwrite: bool, db: str | None
 ) -> None:
-    """One certificate's record: plan, plan_sha256, results, conformity, supersession."""
+    """One certificate's whole record.
+
+    The plan as given, plan_sha256, the captures' SHA-256, results, conformity, the files with
+    their SHA-256, who recorded it, and the certificates it supersedes or is superseded by.
+    """
     from rotacal.records.query import certificate_record, restore_files
 
     _check_outputs(json_path, None, overwrite)
@@ -135,7 +150,13 @@ def show_cmd(
     click.echo("\n".join(lines))
 
 
-@records_group.command("history")
+@records_group.command(
+    "history",
+    epilog=example(
+        "rotacal records history SN-0001",
+        "rotacal records history SN-0001 --json h.json --report h.html",
+    ),
+)
 @click.argument("serial")
 @click.option(
     "--model", default=None, metavar="M", help="The item's model, when several share the serial."
@@ -152,7 +173,7 @@ def history_cmd(
     overwrite: bool,
     db: str | None,
 ) -> None:
-    """An item's calibrations over time, the drift per year and the next due date.
+    """An item's calibrations, drift and next due date.
 
     Each reported quantity with its U at each calibration; the drift per year by weighted least
     squares with its uncertainty; next_due: when the predicted value plus its expanded
@@ -194,13 +215,17 @@ def history_cmd(
         click.echo(f"  drift of {key}: {drift['value']:.4g} ± {drift['u']:.2g} /year{mark}")
 
 
-@records_group.command("export")
+@records_group.command("export", epilog=example("rotacal records export --out backup.jsonl"))
 @click.option(
     "--out", metavar="FILE.jsonl", default=None, help="The export file [default: stdout]."
 )
 @db_option
 def export_cmd(out: str | None, db: str | None) -> None:
-    """Every record of the store as JSON lines (a backup; the move to another store)."""
+    """Every record as JSON lines, for a backup.
+
+    Loss-free: the same store always exports to the same bytes, and `rotacal records import`
+    puts every record into another store (SQLite or PostgreSQL) as it was.
+    """
     from rotacal.records.exchange import export_lines, export_to
 
     store = open_db(db)
@@ -213,11 +238,20 @@ def export_cmd(out: str | None, db: str | None) -> None:
     _wrote(out)
 
 
-@records_group.command("import")
+@records_group.command(
+    "import",
+    epilog=example(
+        "rotacal records import backup.jsonl --db postgresql+psycopg://lab@server/records"
+    ),
+)
 @click.argument("file", type=INPUT_FILE, metavar="FILE.jsonl")
 @db_option
 def import_cmd(file: str, db: str | None) -> None:
-    """Import an export into the store: all of it or nothing; records already there are kept."""
+    """Import an export into the store.
+
+    All of it or nothing: every file is checked against its SHA-256 first. A certificate the
+    store holds already is skipped when identical and refused when it differs.
+    """
     from rotacal.records.exchange import import_lines
 
     store = open_db(db)
@@ -231,10 +265,17 @@ def import_cmd(file: str, db: str | None) -> None:
     )
 
 
-@records_group.command("upgrade")
+@records_group.command(
+    "upgrade",
+    epilog=example("rotacal records upgrade", "rotacal records upgrade --db sqlite:///lab.sqlite"),
+)
 @db_option
 def upgrade_cmd(db: str | None) -> None:
-    """Migrate an older store's schema to this rotacal's (Alembic), in one transaction."""
+    """Migrate an older store's schema to this rotacal's.
+
+    Alembic migrations, in one transaction: a failed upgrade leaves the store as it was. Back the
+    store up first (`rotacal records export`).
+    """
     from rotacal.records.schema import upgrade
 
     store = open_db(db, check_schema=False)
@@ -246,7 +287,13 @@ def upgrade_cmd(db: str | None) -> None:
         click.echo(f"{store.shown}: schema upgraded from revision {before or 'none'} to {after}")
 
 
-@records_group.command("settings")
+@records_group.command(
+    "settings",
+    epilog=example(
+        "rotacal records settings",
+        'rotacal records settings --number-format "LAB-{year}-{count:05d}"',
+    ),
+)
 @click.option(
     "--number-format",
     default=None,
@@ -261,7 +308,11 @@ def upgrade_cmd(db: str | None) -> None:
 )
 @db_option
 def settings_cmd(number_format: str | None, interval_months: str | None, db: str | None) -> None:
-    """Show, or change, the laboratory's settings kept in the store."""
+    """Show or change the laboratory's settings.
+
+    The number series of number = "auto" and the fixed calibration interval; kept in the store,
+    so that every station shares them.
+    """
     store = open_db(db)
     changes: dict[str, Any] = {}
     if number_format is not None:
