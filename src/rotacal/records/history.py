@@ -137,7 +137,9 @@ class Drift:
     ``significant`` when |value| > 2u, fitted over ``n`` calibrations, with the Birge ratio (None
     for two). ``line`` is the fit (its time axis: years after ``origin``, the last calibration);
     ``limits`` the acceptance limits (min, max) of the latest certificate reporting the quantity,
-    in ``quantity_unit``."""
+    in ``quantity_unit``. ``reaches`` is the date at which the prediction ± its expanded
+    uncertainty reaches the limit it drifts towards (``reaches_limit`` names it; None when it
+    does not drift significantly towards a limit; 9999-12-31 when beyond the calendar)."""
 
     value: float
     u: float
@@ -149,6 +151,8 @@ class Drift:
     origin: dt.date
     quantity_unit: str
     limits: tuple[float | None, float | None] = (None, None)
+    reaches: dt.date | None = None
+    reaches_limit: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -415,7 +419,7 @@ def _drift(
             "quantity near zero); the drift treats each value as ± U/k"
         )
     latest = usable[-1][1]
-    return Drift(
+    drift = Drift(
         value=line.slope,
         u=line.u_slope,
         unit=per_year(unit),
@@ -427,11 +431,15 @@ def _drift(
         quantity_unit=unit,
         limits=(latest.limit_min, latest.limit_max),
     )
+    found = _crossing(drift)
+    if found is None:
+        return drift
+    return dataclasses.replace(drift, reaches=found[0], reaches_limit=found[1])
 
 
-def _crossing(key: str, drift: Drift) -> tuple[dt.date | None, str] | None:
-    """When the drift of ``key`` takes its prediction's band to the limit it runs towards: the
-    date (None beyond the calendar) and which limit; None when no limit lies that way."""
+def _crossing(drift: Drift) -> tuple[dt.date, str] | None:
+    """When a drift takes its prediction's band to the limit it runs towards: the date
+    (9999-12-31 beyond the calendar) and which limit; None when no limit lies that way."""
     low, high = drift.limits
     upper = drift.value > 0
     limit = high if upper else low
@@ -441,9 +449,7 @@ def _crossing(key: str, drift: Drift) -> tuple[dt.date | None, str] | None:
     if t is None:
         return None
     side = "upper" if upper else "lower"
-    day = date_after(drift.origin, t)
-    if day is None and t < 0:
-        day = dt.date.min
+    day = date_after(drift.origin, t) or (dt.date.min if t < 0 else dt.date.max)
     unit = f" {drift.quantity_unit}" if drift.quantity_unit else ""
     return day, f"its {side} limit {fixed(limit)}{unit}"
 
@@ -459,18 +465,15 @@ def _next_due(
     fixed_text = (
         f"the laboratory's fixed interval of {months} months after the last calibration ({last})"
     )
-    crossings = []
-    for key, drift in drifts.items():
-        found = _crossing(key, drift)
-        if found is not None:
-            crossings.append((found[0] or dt.date.max, key, found[1], found[0] is None))
+    crossings = [(d.reaches, key) for key, d in drifts.items() if d.reaches is not None]
     method_ref = (
         "straight-line drift by weighted least squares, k = 2 (ILAC-G24:2022 / OIML D 10 §6.3, "
         "method 2; NCSLI RP-1 variables data)"
     )
     if crossings:
-        day, key, limit_text, beyond = min(crossings)
+        day, key = min(crossings)
         drift = drifts[key]
+        limit_text = drift.reaches_limit
         what = (
             f"the drift of {key} ({fixed(drift.value, 3)} {drift.unit}, u = "
             f"{fixed(drift.u, 2)} {drift.unit}) "
@@ -480,13 +483,13 @@ def _next_due(
         if day < fixed_due:
             method = f"{what} on {day} ({method_ref}); earlier than {fixed_text} ({fixed_due})"
             due = NextDue(day, _sentence(method), key)
-            if day <= today:
+            if day < today:
                 warnings.append(
                     f"{key} is predicted out of tolerance since {day} (its drift reaches "
                     f"{limit_text}); recalibrate the item before further use"
                 )
             return due
-        when = "beyond the year 9999" if beyond else f"on {day}"
+        when = "beyond the year 9999" if day == dt.date.max else f"on {day}"
         method = (
             f"{fixed_text}; {what} only {when}, and drift may shorten the interval, "
             "never lengthen it"
@@ -498,7 +501,7 @@ def _next_due(
         )
     else:
         method = f"{fixed_text}; no quantity with a limit drifts significantly (|b| > 2 u(b))"
-    if fixed_due <= today:
+    if fixed_due < today:
         warnings.append(f"the item is overdue for calibration since {fixed_due}")
     return NextDue(fixed_due, _sentence(method), None)
 
