@@ -28,14 +28,14 @@ from __future__ import annotations
 
 import dataclasses
 import datetime as dt
+import functools
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from decimal import Decimal, InvalidOperation
-from typing import Any
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 import sqlalchemy as sa
-from sqlalchemy.orm import aliased
 
 from rotacal.errors import ConfigError
 from rotacal.numbers import fixed
@@ -70,7 +70,7 @@ def per_year(unit: str) -> str:
     return f"({unit})/year" if any(c in unit for c in "/ ·*") else f"{unit}/year"
 
 
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, slots=True)
 class ReportedResult:
     """One reported quantity of one certificate, as printed and as numbers.
 
@@ -198,6 +198,7 @@ class ItemHistory(Result):
 # -- reading -----------------------------------------------------------------------------------
 
 
+@functools.lru_cache(maxsize=16384)  # U, k and limits repeat from certificate to certificate
 def _number(text: str | None) -> float | None:
     """Printed decimal text as a float (Decimal first: the text is exactly what was printed)."""
     if text is None or not str(text).strip():
@@ -213,7 +214,7 @@ def _pick_item(store: Store, serial: str, model: str | None) -> tuple[list[int],
     """The ids of the item(s) with ``serial`` that the history covers, and the item's names.
 
     Items that differ only in their kind are one item (the same manufacturer, model and serial)."""
-    items = m.Item.__table__
+    items = _table(m.Item)
     with store.read() as session:
         rows = session.execute(
             sa.select(items.c.id, items.c.kind, items.c.manufacturer, items.c.model)
@@ -268,75 +269,93 @@ def _pick_item(store: Store, serial: str, model: str | None) -> tuple[list[int],
     return [r.id for r in group], item
 
 
+def _table(model: type[m.Base]) -> sa.Table:
+    return cast(sa.Table, model.__table__)
+
+
 def _shell(text: str) -> str:
     """``text`` as it is typed on a command line (quoted when it has a space)."""
     return f'"{text}"' if any(c.isspace() for c in text) else text
 
 
-def _rows(store: Store, item_ids: Sequence[int]) -> list[Any]:
+class _Row(NamedTuple):
+    """One row of :func:`_rows` (a plain tuple: its fields read fast)."""
+
+    id: int
+    number: str
+    end_date: dt.date
+    issue_date: dt.date
+    supersedes: str | None
+    superseded_by: str | None
+    measurement: int | None
+    measurement_name: str | None
+    quantity: str | None
+    name: str
+    unit: str
+    value: str
+    expanded: str
+    coverage_factor: str
+    interval_low: str | None
+    interval_high: str | None
+    limit_min: str | None
+    limit_max: str | None
+    verdict: str | None
+
+
+def _rows(store: Store, item_ids: Sequence[int]) -> list[_Row]:
     """Every reported value of the items' certificates, with the certificate's dates and the
-    number of the certificate that superseded it: one query, oldest calibration first."""
-    cert = aliased(m.Certificate)
-    later = aliased(m.Certificate)
-    rv = m.ReportedValue
+    number of the certificate that superseded it: one query, oldest calibration first (a
+    certificate without values gives one row whose value columns are None)."""
+    cert = _table(m.Certificate).alias("c")
+    later = _table(m.Certificate).alias("later")
+    rv = _table(m.ReportedValue).alias("v")
     stmt = (
         sa.select(
-            cert.id,
-            cert.number,
-            cert.end_date,
-            cert.issue_date,
-            cert.supersedes,
-            later.number.label("superseded_by"),
-            rv.measurement,
-            rv.measurement_name,
-            rv.quantity,
-            rv.name,
-            rv.unit,
-            rv.value,
-            rv.expanded,
-            rv.coverage_factor,
-            rv.interval_low,
-            rv.interval_high,
-            rv.limit_min,
-            rv.limit_max,
-            rv.verdict,
+            cert.c.id,
+            cert.c.number,
+            cert.c.end_date,
+            cert.c.issue_date,
+            cert.c.supersedes,
+            later.c.number,
+            *(rv.c[name] for name in _Row._fields[6:]),
         )
         .select_from(cert)
-        .outerjoin(later, later.supersedes == cert.number)
-        .outerjoin(rv, rv.certificate_id == cert.id)
-        .where(cert.item_id.in_(item_ids))
-        .order_by(cert.end_date, cert.issue_date, cert.id, rv.measurement, rv.position)
+        .outerjoin(later, later.c.supersedes == cert.c.number)
+        .outerjoin(rv, rv.c.certificate_id == cert.c.id)
+        .where(cert.c.item_id.in_(item_ids))
+        .order_by(cert.c.end_date, cert.c.issue_date, cert.c.id, rv.c.measurement, rv.c.position)
     )
-    with store.read() as session:
-        return list(session.execute(stmt).all())
+    with store.begin() as connection:
+        return [_Row._make(r) for r in connection.execute(stmt).all()]
 
 
-def _series_keys(rows: Sequence[Any]) -> list[str | None]:
+def _series_keys(rows: Sequence[_Row]) -> list[str | None]:
     """The series name of each row: its key, or ``key@measurement name`` for a key that some
     certificate reports more than once (see the module's docstring); None for a certificate
     without values."""
-    counts = Counter((r.id, r.quantity) for r in rows if r.quantity is not None)
-    repeated = {key for (_, key), n in counts.items() if n > 1}
-    names: list[str | None] = []
+    keys: list[str | None] = [r.quantity for r in rows]
+    counts = Counter(zip((r.id for r in rows), keys, strict=True))
+    repeated = {key for (_, key), n in counts.items() if n > 1 and key is not None}
+    if not repeated:
+        return keys
     seen: Counter[tuple[int, str]] = Counter()
-    for r in rows:
-        if r.quantity is None:
-            names.append(None)
+    for i, r in enumerate(rows):
+        if r.quantity not in repeated:
             continue
-        name = f"{r.quantity}@{r.measurement_name}" if r.quantity in repeated else r.quantity
+        name = f"{r.quantity}@{r.measurement_name}"
         seen[(r.id, name)] += 1
         if seen[(r.id, name)] > 1:  # two measurements of one certificate with the same name
             name = f"{name} (measurement {r.measurement})"
-        names.append(name)
-    return names
+        keys[i] = name
+    return keys
 
 
-def _result(r: Any, warnings: list[str], number: str, key: str) -> ReportedResult:
+def _result(r: _Row, warnings: list[str], key: str) -> ReportedResult:
     value, U, k = _number(r.value), _number(r.expanded), _number(r.coverage_factor)
     u = U / k if U is not None and k is not None and k > 0 else None
     if value is None or u is None or not u > 0:
         warnings.append(
-            f"{number}: {key} = {r.value} ± {r.expanded} (k = {r.coverage_factor}) is not a "
+            f"{r.number}: {key} = {r.value} ± {r.expanded} (k = {r.coverage_factor}) is not a "
             "value with a positive uncertainty; it is listed but left out of the drift"
         )
     low, high = _number(r.interval_low), _number(r.interval_high)
@@ -347,7 +366,7 @@ def _result(r: Any, warnings: list[str], number: str, key: str) -> ReportedResul
         k=k,
         unit=r.unit,
         name=r.name,
-        measurement=r.measurement_name,
+        measurement=r.measurement_name or "",
         printed=(r.value, r.expanded),
         interval=(low, high) if low is not None and high is not None else None,
         limit_min=_number(r.limit_min),
@@ -356,13 +375,15 @@ def _result(r: Any, warnings: list[str], number: str, key: str) -> ReportedResul
     )
 
 
-def _calibrations(rows: Sequence[Any], warnings: list[str]) -> list[Calibration]:
+def _calibrations(rows: Sequence[_Row], warnings: list[str]) -> list[Calibration]:
     """The rows grouped into certificates (in the query's order)."""
     keys = _series_keys(rows)
     calibrations: list[Calibration] = []
     current: dict[str, ReportedResult] = {}
-    for i, r in enumerate(rows):
-        if i == 0 or r.id != rows[i - 1].id:
+    last_id = None
+    for r, key in zip(rows, keys, strict=True):
+        if r.id != last_id:
+            last_id = r.id
             current = {}
             calibrations.append(
                 Calibration(
@@ -374,9 +395,8 @@ def _calibrations(rows: Sequence[Any], warnings: list[str]) -> list[Calibration]
                     results=current,
                 )
             )
-        key = keys[i]
         if key is not None:
-            current[key] = _result(r, warnings, r.number, key)
+            current[key] = _result(r, warnings, key)
     return calibrations
 
 

@@ -212,9 +212,13 @@ def limit_crossing(line: DriftLine, limit: float, upper: bool) -> float | None:
 
 
 def years_since(dates: Sequence[dt.date] | np.ndarray, origin: dt.date) -> np.ndarray:
-    """The times of ``dates`` (``datetime64[D]`` or dates) after ``origin`` [years of 365.25 days]."""
-    days = np.asarray(dates, dtype="datetime64[D]") - np.datetime64(origin, "D")
-    return days.astype(np.float64) / DAYS_PER_YEAR
+    """The times of ``dates`` (an array of ``datetime64``, or dates) after ``origin`` [years of
+    365.25 days]."""
+    if isinstance(dates, np.ndarray):
+        days = (dates.astype("datetime64[D]") - np.datetime64(origin, "D")).astype(np.float64)
+    else:  # whole days from the dates themselves (NumPy's conversion of date objects is slow)
+        days = np.fromiter(((d - origin).days for d in dates), np.float64, count=len(dates))
+    return days / DAYS_PER_YEAR
 
 
 def date_after(origin: dt.date, years: float) -> dt.date | None:
