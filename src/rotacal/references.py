@@ -181,7 +181,7 @@ REFERENCES: dict[str, Reference] = {
             "NCSLI RP-1",
             "2010",
             "Establishment and adjustment of calibration intervals",
-            "NCSL International, Recommended Practice RP-1, 4th ed.",
+            "NCSL International, Recommended Practice RP-1, 4th edition",
         ),
         _r(
             "iso_ts28037",

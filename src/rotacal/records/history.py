@@ -486,6 +486,14 @@ def _next_due(
         f"the laboratory's fixed interval of {months} months after the last calibration ({last})"
     )
     crossings = [(d.reaches, key) for key, d in drifts.items() if d.reaches is not None]
+    for day, key in sorted(crossings):
+        if day < today:
+            warnings.append(
+                f"{key} is predicted out of tolerance since {day}: its predicted value "
+                f"{'plus' if drifts[key].value > 0 else 'minus'} its expanded uncertainty "
+                f"(k = 2) reaches {drifts[key].reaches_limit} then; recalibrate the item before "
+                "further use"
+            )
     method_ref = (
         "straight-line drift by weighted least squares, k = 2 (ILAC-G24:2022 / OIML D 10 §6.3, "
         "method 2; NCSLI RP-1 variables data)"
@@ -502,13 +510,7 @@ def _next_due(
         )
         if day < fixed_due:
             method = f"{what} on {day} ({method_ref}); earlier than {fixed_text} ({fixed_due})"
-            due = NextDue(day, _sentence(method), key)
-            if day < today:
-                warnings.append(
-                    f"{key} is predicted out of tolerance since {day} (its drift reaches "
-                    f"{limit_text}); recalibrate the item before further use"
-                )
-            return due
+            return NextDue(day, _sentence(method), key)
         when = "beyond the year 9999" if day == dt.date.max else f"on {day}"
         method = (
             f"{fixed_text}; {what} only {when}, and drift may shorten the interval, "

@@ -31,6 +31,8 @@ _FITTED = "#1f5f99"
 _SUPERSEDED = "#9aa3ad"
 _LIMIT = "#a4161a"
 _DUE = "#b8860b"
+#: More calibrations than this: smaller markers without caps, and the table folded away.
+_MANY = 40
 
 
 def _points(
@@ -74,8 +76,8 @@ def _plot_values(
             np.array([r.value for _, r in points], dtype=float),
             yerr=_bars(points),
             fmt="o",
-            ms=4,
-            capsize=3,
+            ms=4 if len(points) <= _MANY else 2,
+            capsize=3 if len(points) <= _MANY else 0,  # caps on hundreds of bars make a blur
             elinewidth=1,
             **style,  # type: ignore[arg-type]
         )
@@ -158,15 +160,23 @@ def _figure(history: ItemHistory, key: str, title: str) -> Figure | None:
     ax.grid(True, color="#e3e7eb", linewidth=0.6)
     ax.spines[["top", "right"]].set_visible(False)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
-    n_superseded = f", {len(superseded)} superseded" if superseded else ""
-    return figure_from_matplotlib(
-        fig,
-        title,
-        f"{len(fitted)} calibrations{n_superseded}. Bars: the expanded uncertainty U each "
-        "certificate states. Line: the straight-line drift fitted by weighted least squares "
-        "(weights 1/u²) to the calibrations that were not superseded; band: its prediction ± 2 u. "
-        "Limits: those of the latest certificate.",
-    )
+    caption = [
+        _count(len(fitted), "calibration")
+        + (f" and {len(superseded)} superseded (not fitted)" if superseded else "")
+        + ". Bars: the expanded uncertainty U each certificate states."
+    ]
+    if drift is not None:
+        caption.append(
+            "Line: the straight-line drift fitted by weighted least squares (weights 1/u²) to "
+            "the calibrations that were not superseded; band: its prediction ± 2 u."
+        )
+    if low is not None or high is not None:
+        caption.append("Limits: those of the latest certificate.")
+    return figure_from_matplotlib(fig, title, " ".join(caption))
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
 def _title(history: ItemHistory, key: str) -> str:
@@ -220,7 +230,8 @@ def _calibrations_table(history: ItemHistory, keys: Sequence[str]) -> Table:
     return Table(
         ["certificate", "calibrated", "issued", "supersedes", "superseded by", *keys],
         rows,
-        caption="The calibrations, oldest first: each value ± U as its certificate printed it",
+        caption=f"The {len(rows)} calibrations, oldest first: each value ± U as its certificate "
+        "printed it",
         note="U is the expanded uncertainty the certificate states, for k = 2 unless another k "
         "is given; the verdict is the certificate's conformity statement where its plan set a limit. A "
         "superseded certificate stays in the records; its correction replaces it in the drift.",
@@ -298,11 +309,13 @@ def history_report(history: ItemHistory, store: str) -> Report:
                 figures=[figure] if figure is not None else [],
             )
         )
+    table = _calibrations_table(history, keys)
     sections.append(
         Section(
             title="Calibrations",
             anchor="calibrations",
-            tables=[_calibrations_table(history, keys)],
+            tables=[] if len(history.calibrations) > _MANY else [table],
+            details=[table] if len(history.calibrations) > _MANY else [],
         )
     )
     return Report(
