@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from tests.records.conftest import files_of, make_content
+from tests.report.test_report_text import faults
 
 from rotacal.certificate.content import ReportedQuantity
 from rotacal.errors import ConfigError
@@ -388,8 +389,9 @@ def test_the_report_has_one_figure_per_quantity(store_url, issue, tmp_path: Path
     store = open_store(store_url)
     _drifting(store, issue, "rising", "19.2")
     history = item_history(store, "SN-0001", today=dt.date(2024, 6, 1))
-    path = write_html(history_report(history, store.shown), tmp_path / "history.html")
-    html = path.read_text(encoding="utf-8")
+    report = history_report(history, "sqlite:///lab/records.sqlite")
+    html = write_html(report, tmp_path / "history.html").read_text(encoding="utf-8")
+    assert faults(html) == []  # plain words: keys quoted as a plan names them, no E notation
     assert html.count("<figure>") == 2 == len(history.drift_per_year)
     assert html.count('src="data:image/png;base64,') == 2
     assert "serial SN-0001" in html and "2025-01-01" in html and "2027-07-02" in html

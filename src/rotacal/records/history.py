@@ -21,7 +21,8 @@ its values do not enter the fits: the certificate that superseded it replaces it
 Quantity keys: a quantity is named by its key (``scale_factor``). When one certificate of the item
 reports a key in more than one measurement, every value of that key (in every certificate of the
 item) is named ``key@measurement name`` — so that each series follows one measurement by its name
-through time, whatever order the plans listed them in.
+through time, whatever order the plans listed them in. Messages quote a key as the plan names
+it: “scale_factor”.
 """
 
 from __future__ import annotations
@@ -355,7 +356,7 @@ def _result(r: _Row, warnings: list[str], key: str) -> ReportedResult:
     u = U / k if U is not None and k is not None and k > 0 else None
     if value is None or u is None or not u > 0:
         warnings.append(
-            f"{r.number}: {key} = {r.value} ± {r.expanded} (k = {r.coverage_factor}) is not a "
+            f"{r.number}: “{key}” = {r.value} ± {r.expanded} (k = {r.coverage_factor}) is not a "
             "value with a positive uncertainty; it is listed but left out of the drift"
         )
     low, high = _number(r.interval_low), _number(r.interval_high)
@@ -419,7 +420,7 @@ def _drift(
     other_units = sorted({r.unit for _, r in points if r.unit != unit})
     if other_units:
         warnings.append(
-            f"{key}: some certificates state it in {', '.join(other_units)}, the latest in "
+            f"“{key}”: some certificates state it in {', '.join(other_units)}, the latest in "
             f"{unit}; the drift uses only the values in {unit}"
         )
     usable = [(d, r) for d, r in points if r.unit == unit and r.value is not None and r.u]
@@ -429,13 +430,13 @@ def _drift(
     line = fit_drift(t, np.array([r.value for _, r in usable]), np.array([r.u for _, r in usable]))
     if line.scaled:
         warnings.append(
-            f"{key}: the values scatter more than their uncertainties allow (Birge ratio "
+            f"“{key}”: the values scatter more than their uncertainties allow (Birge ratio "
             f"{line.birge_ratio:.2f} over {line.n} calibrations); the drift's uncertainty is "
             "multiplied by it"
         )
     if any(r.interval is not None for _, r in usable):
         warnings.append(
-            f"{key}: its certificates state a coverage interval rather than ± U (a bounded "
+            f"“{key}”: its certificates state a coverage interval rather than ± U (a bounded "
             "quantity near zero); the drift treats each value as ± U/k"
         )
     latest = usable[-1][1]
@@ -489,7 +490,7 @@ def _next_due(
     for day, key in sorted(crossings):
         if day < today:
             warnings.append(
-                f"{key} is predicted out of tolerance since {day}: its predicted value "
+                f"“{key}” is predicted out of tolerance since {day}: its predicted value "
                 f"{'plus' if drifts[key].value > 0 else 'minus'} its expanded uncertainty "
                 f"(k = 2) reaches {drifts[key].reaches_limit} then; recalibrate the item before "
                 "further use"
@@ -503,7 +504,7 @@ def _next_due(
         drift = drifts[key]
         limit_text = drift.reaches_limit
         what = (
-            f"the drift of {key} ({fixed(drift.value, 3)} {drift.unit}, u = "
+            f"the drift of “{key}” ({fixed(drift.value, 3)} {drift.unit}, u = "
             f"{fixed(drift.u, 2)} {drift.unit}) "
             f"takes its predicted value {'plus' if drift.value > 0 else 'minus'} its expanded "
             f"uncertainty to {limit_text}"
@@ -581,7 +582,7 @@ def item_history(
     for key, r in latest.results.items():
         if r.verdict == "fail":
             warnings.append(
-                f"the latest calibration ({latest.number}) found {key} outside its limit"
+                f"the latest calibration ({latest.number}) found “{key}” outside its limit"
             )
     next_due = _next_due(drifts, last, months, today or dt.date.today(), warnings)
     return ItemHistory(

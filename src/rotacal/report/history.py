@@ -182,13 +182,13 @@ def _count(n: int, noun: str) -> str:
 def _title(history: ItemHistory, key: str) -> str:
     latest = [c.results[key] for c in history.calibrations if key in c.results][-1]
     name = latest.name or key
-    return f"{name} ({key})" if name != key else key
+    return f"{name} (“{key}”)" if name != key else f"“{key}”"
 
 
 def _drift_text(key: str, drift: Drift | None) -> str:
     if drift is None:
         return (
-            f"{key}: no drift — it needs values from at least two calibrations on different "
+            f"“{key}”: no drift — it needs values from at least two calibrations on different "
             "dates that were not superseded."
         )
     birge = (
@@ -228,7 +228,8 @@ def _calibrations_table(history: ItemHistory, keys: Sequence[str]) -> Table:
         for c in history.calibrations
     ]
     return Table(
-        ["certificate", "calibrated", "issued", "supersedes", "superseded by", *keys],
+        ["certificate", "calibrated", "issued", "supersedes", "superseded by"]
+        + [f"“{key}”" for key in keys],
         rows,
         caption=f"The {len(rows)} calibrations, oldest first: each value ± U as its certificate "
         "printed it",
