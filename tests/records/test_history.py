@@ -396,3 +396,16 @@ def test_the_report_has_one_figure_per_quantity(store_url, issue, tmp_path: Path
     assert html.count('src="data:image/png;base64,') == 2
     assert "serial SN-0001" in html and "2025-01-01" in html and "2027-07-02" in html
     assert html.count("<tr>") >= 1 + len(history.calibrations)  # the calibrations table
+
+
+def test_a_certificate_without_values_is_listed_and_dates_the_interval(store_url, issue) -> None:
+    store = open_store(store_url)
+    issue(store, {"bias": ("1.0", "0.2")}, number="auto", date=D2020)
+    issue(store, {}, number="auto", date=dt.date(2023, 8, 31))
+    history = item_history(store, "SN-0001", today=D2020)
+    assert [len(c.results) for c in history.calibrations] == [1, 0]
+    assert history.drift_per_year == {}
+    assert history.next_due.date == dt.date(2024, 8, 31)
+    assert history.next_due.method.startswith(
+        "The laboratory's fixed interval of 12 months after the last calibration on 2023-08-31;"
+    )

@@ -484,7 +484,8 @@ def _next_due(
 ) -> NextDue:
     fixed_due = add_months(last, months)
     fixed_text = (
-        f"the laboratory's fixed interval of {months} months after the last calibration ({last})"
+        f"the laboratory's fixed interval of {months} month{'s' if months != 1 else ''} after "
+        f"the last calibration on {last}"
     )
     crossings = [(d.reaches, key) for key, d in drifts.items() if d.reaches is not None]
     for day, key in sorted(crossings):
@@ -496,8 +497,8 @@ def _next_due(
                 "further use"
             )
     method_ref = (
-        "straight-line drift by weighted least squares, k = 2 (ILAC-G24:2022 / OIML D 10 §6.3, "
-        "method 2; NCSLI RP-1 variables data)"
+        "straight-line drift by weighted least squares, k = 2; ILAC-G24:2022 / OIML D 10 §6.3, "
+        "method 2; NCSLI RP-1, variables data"
     )
     if crossings:
         day, key = min(crossings)
@@ -510,7 +511,9 @@ def _next_due(
             f"uncertainty to {limit_text}"
         )
         if day < fixed_due:
-            method = f"{what} on {day} ({method_ref}); earlier than {fixed_text} ({fixed_due})"
+            method = (
+                f"{what} on {day} ({method_ref}); earlier than the end of {fixed_text}, {fixed_due}"
+            )
             return NextDue(day, _sentence(method), key)
         when = "beyond the year 9999" if day == dt.date.max else f"on {day}"
         method = (
