@@ -117,8 +117,8 @@ def test_equal_weights_agree_with_numpy_polyfit(store_url, issue, spread) -> Non
 
 
 def test_iso_ts_28037_example_as_a_peer_program_gives_it() -> None:
-    """ISO/TS 28037's example (uncertainties in y only), as GTC's line_fit_wls prints it:
-    intercept 1.87 (u 0.47), slope 1.76 (u 0.12), Σ w r² = 1.66476."""
+    """The example of ISO/TS 28037:2010 clause 6 (uncertainties in y only, equal weights), as
+    GTC's line_fit_wls prints it: intercept 1.87 (u 0.47), slope 1.76 (u 0.12), Σ w r² = 1.66476."""
     line = fit_drift(np.arange(1.0, 7.0), [3.3, 5.6, 7.1, 9.3, 10.7, 12.1], np.full(6, 0.5))
     intercept, u_intercept = line.predict(0.0)
     assert round(line.slope, 2) == 1.76 and round(line.u_slope, 2) == 0.12
