@@ -127,6 +127,30 @@ def test_iso_ts_28037_example_as_a_peer_program_gives_it() -> None:
     assert not line.scaled  # R = √(1.66/4) < 1: the stated u are kept
 
 
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_the_crossing_agrees_with_bisection_on_the_full_covariance(seed: int) -> None:
+    """The band ŷ + 2u(ŷ) from numpy.polyfit's parameters and covariance at t = 0 (intercept and
+    slope correlated, scaled as the fit scales) reaches the limit where limit_crossing says."""
+    rng = np.random.default_rng(seed)
+    t = np.sort(rng.uniform(-9.0, 0.0, 7))
+    u = rng.uniform(0.2, 0.6, 7)
+    y = 5.0 + 0.8 * t + rng.normal(0.0, 1.0, 7) * u * (3.0 if seed == 3 else 1.0)
+    line = fit_drift(t, y, u)
+    (slope, intercept), cov = np.polyfit(t, y, 1, w=1 / u, cov=True if line.scaled else "unscaled")
+
+    def edge(x: float) -> float:
+        g = np.array([x, 1.0])
+        return intercept + slope * x + 2.0 * math.sqrt(g @ cov @ g) - 12.0
+
+    low, high = 0.0, 100.0
+    assert edge(low) < 0 < edge(high)
+    for _ in range(200):
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if edge(mid) < 0 else (low, mid)
+    assert limit_crossing(line, 12.0, upper=True) == pytest.approx(low, abs=1e-9)
+    assert line.scaled == (seed == 3)
+
+
 def test_a_drift_away_from_the_limit_never_reaches_it() -> None:
     line = fit_drift([-8.0, 0.0], [14.0, 6.0], [0.4, 0.4])
     assert limit_crossing(line, 20.0, upper=True) is None
