@@ -41,6 +41,7 @@ import sqlalchemy as sa
 from rotacal.errors import ConfigError
 from rotacal.numbers import fixed
 from rotacal.results import Result
+from rotacal.uncertainty import round_ilac
 
 from . import models as m
 from .store import Store
@@ -154,6 +155,11 @@ class Drift:
     limits: tuple[float | None, float | None] = (None, None)
     reaches: dt.date | None = None
     reaches_limit: str = ""
+
+    def rounded(self) -> tuple[str, str]:
+        """The drift and its u as a person reads them: u to two significant digits, the drift to
+        the same decimal place (ILAC-P14 §5.4)."""
+        return round_ilac(self.value, self.u)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -504,9 +510,9 @@ def _next_due(
         day, key = min(crossings)
         drift = drifts[key]
         limit_text = drift.reaches_limit
+        value, u = drift.rounded()
         what = (
-            f"the drift of “{key}” ({fixed(drift.value, 3)} {drift.unit}, u = "
-            f"{fixed(drift.u, 2)} {drift.unit}) "
+            f"the drift of “{key}” ({value} {drift.unit}, u = {u} {drift.unit}) "
             f"takes its predicted value {'plus' if drift.value > 0 else 'minus'} its expanded "
             f"uncertainty to {limit_text}"
         )

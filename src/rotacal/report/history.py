@@ -87,22 +87,24 @@ def _plot_drift(ax: plt.Axes, drift: Drift, start: dt.date, end: dt.date) -> Non
     """The fitted line and its band ŷ ± 2 u(ŷ) from ``start`` to ``end``."""
     days = np.linspace(0, (end - start).days, 240).round().astype("timedelta64[D]")
     dates = np.datetime64(start, "D") + days
-    value, u = drift.line.predict(years_since(dates, drift.origin))
+    predicted, u_predicted = drift.line.predict(years_since(dates, drift.origin))
     style = "-" if drift.significant else "--"
+    value, u = drift.rounded()
     label = (
-        f"drift {fixed(drift.value, 3)} {drift.unit} (u = {fixed(drift.u, 2)}), "
+        f"drift {value} {drift.unit} (u = {u}), "
         f"{'significant' if drift.significant else 'not significant'}"
     )
     ax.fill_between(
         dates,
-        value - SIGNIFICANCE_K * u,
-        value + SIGNIFICANCE_K * u,
+        predicted - SIGNIFICANCE_K * u_predicted,
+        predicted + SIGNIFICANCE_K * u_predicted,
         color="#9fb7cf",
         alpha=0.4,
         lw=0,
         label="predicted value ± 2 u",
     )
-    ax.plot(dates, value, style, color=_FITTED, lw=1.2, label=label)
+    # above the points: with hundreds of calibrations their bars would hide it
+    ax.plot(dates, predicted, style, color=_FITTED, lw=1.4, label=label, zorder=4)
 
 
 def _figure(history: ItemHistory, key: str, title: str) -> Figure | None:
@@ -198,9 +200,9 @@ def _drift_text(key: str, drift: Drift | None) -> str:
         else "two calibrations leave no residual to judge the scatter by"
     )
     verdict = "significant" if drift.significant else "not significant"
+    value, u = drift.rounded()
     return (
-        f"Drift: {fixed(drift.value, 4)} {drift.unit} with standard uncertainty "
-        f"{fixed(drift.u, 2)} {drift.unit} over {drift.n} calibrations ({birge}); "
+        f"Drift: {value} {drift.unit} with standard uncertainty {u} {drift.unit} over {drift.n} calibrations ({birge}); "
         f"{verdict} (|b| {'>' if drift.significant else '≤'} 2 u(b))."
     )
 
