@@ -140,11 +140,14 @@ def _figure(history: ItemHistory, key: str, title: str) -> Figure | None:
                 lw=1.1,
                 label=f"{side} limit {fixed(limit)}{unit_text}",
             )
-    what = "drift" if due.quantity == key else "fixed interval" if due.quantity is None else None
-    if what is not None:
-        ax.axvline(
-            mdates.date2num(due.date), color=_DUE, lw=1.4, label=f"next due {due.date} ({what})"
-        )
+    what = (
+        "fixed interval"
+        if due.quantity is None
+        else "drift"
+        if due.quantity == key
+        else f"drift of “{due.quantity}”"
+    )
+    ax.axvline(mdates.date2num(due.date), color=_DUE, lw=1.4, label=f"next due {due.date} ({what})")
     if reaches is not None and reaches != due.date:
         ax.axvline(
             mdates.date2num(reaches),
@@ -184,7 +187,9 @@ def _count(n: int, noun: str) -> str:
 def _title(history: ItemHistory, key: str) -> str:
     latest = [c.results[key] for c in history.calibrations if key in c.results][-1]
     name = latest.name or key
-    return f"{name} (“{key}”)" if name != key else f"“{key}”"
+    if name == key:  # the certificate names it by its key
+        return f"“{key}”" if "_" in key else key
+    return f"{name} (“{key}”)"
 
 
 def _drift_text(key: str, drift: Drift | None) -> str:
