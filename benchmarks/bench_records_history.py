@@ -12,7 +12,8 @@ times best of ``--repeat``:
 - the baseline: the bare SELECT of the same rows (items ⋈ certificates ⋈ reported_values of that
   serial) through SQLAlchemy's core, every row fetched;
 
-and prints both, their ratio, the rows read, and the process's peak RSS. The issue's bar is
+and prints both, their ratio, the rows read, the process's RSS once the store is open and its
+peak, and (once) the time to make and render the ``--report`` page (a figure per quantity). The issue's bar is
 history under 1 s on both engines. No asserts.
 
 Run: ``python benchmarks/bench_records_history.py [--certificates 1000] [--quantities 4]
@@ -101,17 +102,23 @@ def measure(url: str, repeat: int) -> dict[str, float]:
             return len(connection.execute(sa.text(BARE_SELECT), {"serial": "SN-0001"}).all())
 
     history = item_history(store, "SN-0001")
-    rows = bare()
-    return {
+    out = {
+        "rows": bare(),
         "history_s": best(lambda: item_history(store, "SN-0001")),
         "select_s": best(bare),
-        "rows": rows,
         "calibrations": len(history.calibrations),
         "quantities": len(history.drift_per_year),
         "next_due": history.next_due.date.isoformat(),
         "rss_before_mb": before_kib / 1024,
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
+    from rotacal.report.history import history_report  # after the RSS: matplotlib is large
+    from rotacal.report.html import render_html
+
+    begin = time.perf_counter()
+    render_html(history_report(history, store.shown))
+    out["report_s"] = time.perf_counter() - begin
+    return out
 
 
 def main() -> None:
@@ -133,7 +140,7 @@ def main() -> None:
     )
     print(
         f"{'engine':<11}{'keep/cert':>11}{'history':>10}{'bare SELECT':>13}{'ratio':>7}"
-        f"{'rows':>7}{'peak RSS':>10}  next_due"
+        f"{'rows':>7}{'RSS open':>10}{'peak RSS':>10}{'report':>9}  next_due"
     )
     postgres = ThrowawayPostgres()
     try:
@@ -154,7 +161,8 @@ def main() -> None:
                 print(
                     f"{engine:<11}{keep_s * 1e3:>8.1f} ms{r['history_s'] * 1e3:>7.1f} ms"
                     f"{r['select_s'] * 1e3:>10.1f} ms{r['history_s'] / r['select_s']:>7.2f}"
-                    f"{r['rows']:>7d}{r['peak_rss_mb']:>7.0f} MB  {r['next_due']}"
+                    f"{r['rows']:>7d}{r['rss_before_mb']:>7.0f} MB{r['peak_rss_mb']:>7.0f} MB"
+                    f"{r['report_s']:>7.1f} s  {r['next_due']}"
                 )
     finally:
         postgres.stop()
