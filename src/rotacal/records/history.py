@@ -246,11 +246,12 @@ def _pick_item(store: Store, serial: str, model: str | None) -> tuple[list[int],
     for row in rows:
         groups.setdefault((row.manufacturer, row.model), []).append(row)
     if model is not None:
+        groups_all = list(groups)
         groups = {
             key: group for key, group in groups.items() if model in (key[1], f"{key[0]} {key[1]}")
         }
         if not groups:
-            found = "; ".join(f"{mf} {md}" for mf, md in {(r.manufacturer, r.model) for r in rows})
+            found = "; ".join(f"{mf} {md}" for mf, md in sorted(groups_all))
             raise ConfigError(
                 f"records store {store.shown}: serial {serial!r} has no item of model {model!r}; "
                 f"its items: {found}"
