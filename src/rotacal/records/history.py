@@ -548,7 +548,8 @@ def _interval_months(store: Store) -> int:
     if not text.strip().isdigit() or not 1 <= int(text) <= 240:
         raise ConfigError(
             f"records store {store.shown}: the setting interval_months = {text!r} is not a whole "
-            "number of months from 1 to 240; set it again"
+            "number of months from 1 to 240; correct it in the store's settings table (it was "
+            "changed outside rotacal)"
         )
     return int(text)
 
