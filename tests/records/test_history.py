@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import sqlalchemy as sa
 from tests.records.conftest import files_of, make_content
 from tests.report.test_report_text import faults
 
@@ -433,3 +434,17 @@ def test_a_certificate_without_values_is_listed_and_dates_the_interval(store_url
     assert history.next_due.method.startswith(
         "The laboratory's fixed interval of 12 months after the last calibration on 2023-08-31;"
     )
+
+
+def test_an_interval_setting_broken_outside_rotacal_is_named(store_url, issue) -> None:
+    store = open_store(store_url)
+    issue(store, {"bias": ("1.0", "0.2")}, number="auto", date=D2020)
+    store.set_settings(interval_months="12")
+    with store.begin() as connection:
+        connection.execute(
+            sa.text("UPDATE settings SET value = 'abc' WHERE key = 'interval_months'")
+        )
+    with pytest.raises(
+        ConfigError, match="interval_months = 'abc' is not a whole number of months"
+    ):
+        item_history(store, "SN-0001")
