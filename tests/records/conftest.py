@@ -4,6 +4,7 @@ PostgreSQL server started on loopback for the session) and certificates made to 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import datetime as dt
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
@@ -21,6 +22,7 @@ from rotacal.plan.model import Conditions, Contact, Item, Person, Plan, Standard
 from rotacal.records.testing import ThrowawayPostgres
 
 ENGINES = ("sqlite", "postgresql")
+_PLANS = itertools.count(1)
 
 
 @pytest.fixture(scope="session")
@@ -49,7 +51,9 @@ def make_plan(
     text: bytes | None = None,
 ) -> Plan:
     """A plan as read, for one gyro; ``text`` (the plan's bytes) differs per date and serial."""
-    body = text if text is not None else f"plan of {serial} on {date} {supersedes}".encode()
+    # each plan made here is another calibration (the store certifies a plan once) unless the
+    # test gives the plan's bytes
+    body = text if text is not None else f"plan {next(_PLANS)} of {serial} on {date}".encode()
     return Plan(
         path=path,
         text=body,

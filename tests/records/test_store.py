@@ -194,3 +194,24 @@ def test_list_filters_by_serial_and_counts_verdicts(store_url: str, issue) -> No
     assert [r["number"] for r in rows] == ["RC-2026-0001"]
     assert rows[0]["conformity"] == {"pass": 1} and rows[0]["customer"] == "Gyro Maker Ltd"
     assert [r["item"]["serial"] for r in list_certificates(store)] == ["B", "A"]  # newest first
+
+
+def test_readers_neither_wait_for_a_writer_nor_hold_it_up(tmp_path, issue) -> None:
+    """SQLite: a writer holds the write lock; reading the records still answers at once (WAL
+    snapshot), and a second writer is refused after its timeout with one line."""
+    import sqlite3
+
+    url = f"sqlite:///{tmp_path / 'records.sqlite'}"
+    store = open_store(url, timeout_s=0.5)
+    issue(store, VALUES, number="auto")
+    writer = sqlite3.connect(tmp_path / "records.sqlite", isolation_level=None)
+    writer.execute("BEGIN IMMEDIATE")
+    try:
+        assert [r["number"] for r in list_certificates(store)] == ["RC-2026-0001"]
+        assert certificate_record(store, "RC-2026-0001")["number"] == "RC-2026-0001"
+        with pytest.raises(StoreError, match=r"locked by another program \(waited 0.5 s\)"):
+            store.draw_number(dt.date(2026, 11, 25))
+    finally:
+        writer.execute("ROLLBACK")
+        writer.close()
+    assert store.draw_number(dt.date(2026, 11, 25)) == "RC-2026-0002"

@@ -206,13 +206,16 @@ def history_cmd(
         return
     data = history.to_dict()
     due = data["next_due"]
-    click.echo(
-        f"{serial}: {len(data['calibrations'])} calibrations; next due {due['date']} "
-        f"({due['method']})"
-    )
+    click.echo(f"{serial}: {len(data['calibrations'])} calibrations; next due {due['date']}")
+    click.echo(f"  {due['method']}")
     for key, drift in data["drift_per_year"].items():
-        mark = " (significant)" if drift.get("significant") else ""
-        click.echo(f"  drift of {key}: {drift['value']:.4g} ± {drift['u']:.2g} /year{mark}")
+        if drift.get("value") is None:
+            continue
+        mark = "significant" if drift.get("significant") else "not significant"
+        click.echo(
+            f"  drift of {key}: {drift['value']:.3g} {drift.get('unit', '')}, "
+            f"u = {drift['u']:.2g} ({mark})"
+        )
 
 
 @records_group.command("export", epilog=example("rotacal records export --out backup.jsonl"))

@@ -8,6 +8,16 @@ stations; the schema by Alembic migrations. See :func:`open_store`.
 from __future__ import annotations
 
 from .engine import data_dir, default_url, resolve_url
+from .history import ItemHistory, item_history
 from .store import DEFAULT_SETTINGS, Store, open_store
 
-__all__ = ["DEFAULT_SETTINGS", "Store", "data_dir", "default_url", "open_store", "resolve_url"]
+__all__ = [
+    "DEFAULT_SETTINGS",
+    "ItemHistory",
+    "Store",
+    "data_dir",
+    "default_url",
+    "item_history",
+    "open_store",
+    "resolve_url",
+]

@@ -135,8 +135,15 @@ def _sqlite_connect(dbapi_connection: Any, _record: Any) -> None:
     cursor.close()
 
 
+#: The execution option that marks a reading transaction (Store.begin(read_only=True)).
+READ_ONLY = "rotacal_read_only"
+
+
 def _sqlite_begin(connection: sa.Connection) -> None:
-    connection.exec_driver_sql("BEGIN IMMEDIATE")
+    # A reader takes no lock until it reads, and then a snapshot (write-ahead log): it never
+    # waits for a writer. A writer takes the write lock at once.
+    read_only = connection.get_execution_options().get(READ_ONLY, False)
+    connection.exec_driver_sql("BEGIN" if read_only else "BEGIN IMMEDIATE")
 
 
 def make_engine(url: str, *, timeout_s: float = DEFAULT_TIMEOUT_S) -> Engine:

@@ -58,8 +58,9 @@ def _encode(record: dict[str, Any]) -> dict[str, Any]:
 
 
 def export_lines(store: Store) -> Iterator[str]:
-    """Every record of the store as JSON lines (see the module's description)."""
-    with store.begin() as connection:
+    """Every record of the store as JSON lines (see the module's description), from one
+    snapshot of the store."""
+    with store.begin(read_only=True) as connection:
         numbers = list(
             connection.execute(sa.select(m.Certificate.number).order_by(m.Certificate.id)).scalars()
         )

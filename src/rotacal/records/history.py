@@ -333,7 +333,7 @@ def _rows(store: Store, item_ids: Sequence[int]) -> list[_Row]:
         .where(cert.c.item_id.in_(item_ids))
         .order_by(cert.c.end_date, cert.c.issue_date, cert.c.id, rv.c.measurement, rv.c.position)
     )
-    with store.begin() as connection:
+    with store.begin(read_only=True) as connection:
         return [_Row._make(r) for r in connection.execute(stmt).all()]
 
 

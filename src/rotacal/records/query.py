@@ -48,7 +48,7 @@ def list_certificates(store: Store, serial: str | None = None) -> list[dict[str,
     )
     if serial is not None:
         query = query.where(i.serial == serial)
-    with store.begin() as connection:
+    with store.begin(read_only=True) as connection:
         rows = connection.execute(query).all()
         verdicts = connection.execute(
             sa.select(v.certificate_id, v.verdict).where(v.verdict.is_not(None))
@@ -99,7 +99,7 @@ def _missing(store: Store, connection: sa.Connection, number: str) -> ConfigErro
 
 
 def _raw_record(store: Store, number: str) -> dict[str, Any]:
-    with store.begin() as connection:
+    with store.begin(read_only=True) as connection:
         record = read_record(connection, number)
         if record is None:
             raise _missing(store, connection, number)

@@ -28,7 +28,14 @@ from rotacal.errors import ConfigError, RecordImmutableError, StoreError
 from rotacal.plan.model import Plan
 
 from . import models as m
-from .engine import display_url, make_engine, resolve_url, store_errors, timeout_from_environment
+from .engine import (
+    READ_ONLY,
+    display_url,
+    make_engine,
+    resolve_url,
+    store_errors,
+    timeout_from_environment,
+)
 from .record import insert_for, insert_record, record_of
 from .schema import ensure_schema
 
@@ -108,6 +115,7 @@ class Store:
 
     def __init__(self, engine: sa.Engine, url: str, timeout_s: float) -> None:
         self.engine = engine
+        self._reader = engine.execution_options(**{READ_ONLY: True})
         self.url = url
         self.shown = display_url(url)
         self.timeout_s = timeout_s
@@ -118,21 +126,23 @@ class Store:
         return store_errors(self.url, self.timeout_s)
 
     @contextlib.contextmanager
-    def begin(self) -> Iterator[sa.Connection]:
-        """A transaction (SQLite: with the write lock from its start)."""
-        with self.errors(), self.engine.begin() as connection:
+    def begin(self, *, read_only: bool = False) -> Iterator[sa.Connection]:
+        """A transaction. On SQLite a writing one holds the write lock from its start; a
+        ``read_only`` one reads a snapshot and neither waits for writers nor holds them up."""
+        engine = self._reader if read_only else self.engine
+        with self.errors(), engine.begin() as connection:
             yield connection
 
     @contextlib.contextmanager
     def read(self) -> Iterator[Session]:
-        """A session for reading records."""
-        with self.errors(), Session(self.engine) as session:
+        """A session for reading records (a snapshot, as ``begin(read_only=True)``)."""
+        with self.errors(), Session(self._reader) as session:
             yield session
 
     # -- settings ----------------------------------------------------------------------------
     def settings(self) -> dict[str, str]:
         """The laboratory's settings (:data:`DEFAULT_SETTINGS` where none is set)."""
-        with self.begin() as connection:
+        with self.begin(read_only=True) as connection:
             rows = connection.execute(sa.select(m.Setting.key, m.Setting.value)).all()
         return {**DEFAULT_SETTINGS, **{k: v for k, v in rows}}
 
