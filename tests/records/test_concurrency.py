@@ -1,0 +1,230 @@
+"""Several writers of one store at the same moment, on each engine (ISSUE 16, "Numbers"): every
+number drawn once, the series without gaps, every record whole, nothing lost.
+
+The writers are real processes released together (writers.py, run as a program): eight
+``rotacal certify`` commands on eight plans with ``number = "auto"``, and eight writers keeping
+certificates through the Store API, one of them a certification whose rendering fails after its
+number was drawn. What each record must hold comes from the files on disk and the plans the test
+wrote, never from the store.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import json
+import os
+import subprocess
+import sys
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import pytest
+import sqlalchemy as sa
+from click.testing import CliRunner
+
+from rotacal.cli import cli
+from rotacal.records import models as m
+from rotacal.records import open_store
+
+from ..certificate.conftest import KINDS, plan_dict, write_plan
+from .conftest import files_of, make_content
+
+WRITERS = Path(__file__).with_name("writers.py")
+
+#: the cheapest measurement to certify (a fraction of a second): a gyro's rotation test
+COMMAND = "gyro rotations"
+
+
+def run_at_once(jobs: Sequence[Mapping[str, Any]], tmp_path: Path) -> list[dict[str, Any]]:
+    """Run the jobs of writers.py at once; their outcomes (exit_code, stdout, stderr, value …)."""
+    spec = tmp_path / "jobs.json"
+    spec.write_text(json.dumps(list(jobs)))
+    done = subprocess.run(
+        [sys.executable, str(WRITERS), str(spec)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)},
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    return list(json.loads(done.stdout))
+
+
+@pytest.fixture(scope="module")
+def capture_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The twin capture of :data:`COMMAND` (and its sections file)."""
+    folder = tmp_path_factory.mktemp("captures")
+    line, capture, _ = KINDS[COMMAND]
+    result = CliRunner().invoke(cli, ["simulate", *line.split(), "--out", str(folder / capture)])
+    assert result.exit_code == 0, result.output
+    return folder
+
+
+def write_plans(folder: Path, captures: Path, count: int, **changes: Any) -> list[Path]:
+    """``count`` different plans with ``number = "auto"`` in ``folder``: one measurement each,
+    items SN-0 … SN-2 (writers share items), each on a day of its own."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for file in captures.iterdir():
+        (folder / file.name).write_bytes(file.read_bytes())
+    plans = []
+    for i in range(count):
+        data = plan_dict([{"name": f"Rotation test {i}", "command": COMMAND}])
+        data["certificate"] = {"number": "auto", "date": f"2026-11-{i + 1:02d}"}
+        data["item"]["serial"] = f"SN-{i % 3}"
+        data.update(changes)
+        plans.append(write_plan(folder, data, f"plan-{i}.toml"))
+    return plans
+
+
+def series(count: int) -> list[str]:
+    return [f"RC-2026-{n:04d}" for n in range(1, count + 1)]
+
+
+def sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def record(session: Any, number: str) -> m.Certificate:
+    return session.execute(
+        sa.select(m.Certificate).where(m.Certificate.number == number)
+    ).scalar_one()
+
+
+def voided(url: str) -> dict[str, str]:
+    with open_store(url).read() as session:
+        return dict(session.execute(sa.select(m.VoidedNumber.number, m.VoidedNumber.reason)).all())
+
+
+def issued(url: str) -> list[str]:
+    with open_store(url).read() as session:
+        return sorted(session.execute(sa.select(m.Certificate.number)).scalars())
+
+
+def check_certified(session: Any, number: str, plan: Path) -> None:
+    """The record of ``number`` is the whole certificate of ``plan``: the plan's bytes, every
+    file of its folder (bytes and SHA-256), every input (the SHA-256 of the file on disk), every
+    reported value of results.json, the persons and the standards of the plan."""
+    folder = plan.parent / number
+    results = json.loads((folder / "results.json").read_text())
+    assert results["certificate_number"] == number
+    kept = record(session, number)
+    assert kept.plan == plan.read_bytes()
+    assert kept.plan_sha256 == results["plan_sha256"]
+    assert kept.results == (folder / "results.json").read_text()
+    on_disk = {p.name: p.read_bytes() for p in folder.iterdir()}
+    assert {f.name: (f.sha256, f.content) for f in kept.files} == {
+        name: (sha256(data), data) for name, data in on_disk.items()
+    }
+    assert kept.inputs, "no inputs kept"
+    for i in kept.inputs:
+        data = (plan.parent / i.path).read_bytes()
+        assert (i.sha256, i.size_bytes) == (sha256(data), len(data)), i.path
+    assert {i.path for i in kept.inputs} >= {KINDS[COMMAND][1]}
+    reported = [q for mr in results["measurements"] for q in mr["reported"]]
+    assert reported, "the certificate reports nothing"
+    assert [(v.quantity, float(v.value), float(v.expanded)) for v in kept.values] == [
+        (q["quantity"], q["value"], q["U"]) for q in reported
+    ]
+    assert [(p.person.name, p.role) for p in kept.persons] == [
+        (p["name"], p["role"]) for p in results["persons"]
+    ]
+    assert [s.standard.identifier for s in kept.standards] == [
+        s["id"] for s in results["standards"]
+    ]
+    assert kept.item.serial == results["item"]["serial"]
+
+
+def test_eight_certify_commands_at_once_draw_eight_numbers_and_keep_eight_records(
+    store_url: str, capture_folder: Path, tmp_path: Path
+) -> None:
+    plans = write_plans(tmp_path / "plans", capture_folder, 8)
+    outcomes = run_at_once([{"certify": [str(p), "--db", store_url]} for p in plans], tmp_path)
+
+    for o in outcomes:
+        assert o["exit_code"] == 0, o["stderr"] + o["error"]
+    # they ran at the same time: every one started before any one ended
+    assert max(o["start"] for o in outcomes) < min(o["end"] for o in outcomes)
+    numbers = [o["stdout"].splitlines()[-1].split()[1].rstrip(":") for o in outcomes]
+    assert sorted(numbers) == series(8)
+    assert issued(store_url) == series(8)
+    assert voided(store_url) == {}
+    assert sorted(p.name for p in (tmp_path / "plans").glob("RC-*")) == series(8)
+    with open_store(store_url).read() as session:
+        for plan, number in zip(plans, numbers, strict=True):
+            check_certified(session, number, plan)
+
+
+def test_writers_through_the_store_api_draw_a_series_without_gaps_and_keep_every_record(
+    store_url: str, capture_folder: Path, tmp_path: Path
+) -> None:
+    writers, each = 8, 12
+    jobs: list[dict[str, Any]] = [
+        {
+            "keep": store_url,
+            "certificates": [
+                {
+                    "serial": f"SN-{w % 3}",
+                    "date": str(dt.date(2026, 1, 1) + dt.timedelta(days=w * each + i)),
+                    "values": {"scale_factor": [f"{w}.{i:03d}", "0.002"], "bias": ["-0.5", "0.1"]},
+                }
+                for i in range(each)
+            ],
+        }
+        for w in range(writers)
+    ]
+    # and a certification whose DCC cannot be rendered (a control character in the customer's
+    # name), which it finds out only after its number was drawn
+    (bad,) = write_plans(
+        tmp_path / "bad",
+        capture_folder,
+        1,
+        customer={"name": "Gyro\x01Maker", "address": "2 Sensor Street", "email": "q@example.com"},
+    )
+    jobs.append({"certify": [str(bad), "--db", store_url]})
+    outcomes = run_at_once(jobs, tmp_path)
+
+    *kept, failed = outcomes
+    for o in kept:
+        assert o["exit_code"] == 0, o["stderr"] + o["error"]
+    assert failed["exit_code"] == 2
+    assert "control character U+0001" in failed["stderr"]
+    assert len(failed["stderr"].strip().splitlines()) == 1
+    numbers = [n for o in kept for n in o["value"]]
+    assert len(numbers) == len(set(numbers)) == writers * each
+    gaps = voided(store_url)
+    assert len(gaps) == 1
+    ((lost, reason),) = gaps.items()
+    assert "control character U+0001" in reason
+    assert sorted([*numbers, lost]) == series(writers * each + 1)
+    assert issued(store_url) == sorted(numbers)
+    assert not [p for p in (tmp_path / "bad").iterdir() if p.name.startswith(("RC-", ".rotacal"))]
+
+    with open_store(store_url).read() as session:
+        for job, o in zip(jobs[:-1], kept, strict=True):
+            for given, number in zip(job["certificates"], o["value"], strict=True):
+                c = record(session, number)
+                values = {k: (value, U) for k, (value, U) in given["values"].items()}
+                date = dt.date.fromisoformat(given["date"])
+                content = make_content(values, number=number, serial=given["serial"], date=date)
+                assert (c.item.serial, c.issue_date, c.plan) == (
+                    given["serial"],
+                    date,
+                    content.plan.text,
+                )
+                assert [(v.quantity, v.value, v.expanded) for v in c.values] == [
+                    (k, value, U) for k, (value, U) in values.items()
+                ]
+                assert {f.name: (f.sha256, f.content) for f in c.files} == {
+                    name: (sha256(data), data) for name, data in files_of(content).items()
+                }
+                assert [(i.path, i.sha256, i.size_bytes) for i in c.inputs] == [
+                    ("rates.npz", "ab" * 32, 1234)
+                ]
+                assert [(p.person.name, p.role) for p in c.persons] == [
+                    ("A. Operator", "performed"),
+                    ("B. Manager", "approved"),
+                ]
+                assert [s.standard.identifier for s in c.standards] == ["STD-17"]
