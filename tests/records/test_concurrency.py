@@ -20,21 +20,15 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import pytest
 import sqlalchemy as sa
-from click.testing import CliRunner
 
-from rotacal.cli import cli
 from rotacal.records import models as m
 from rotacal.records import open_store
 
-from ..certificate.conftest import KINDS, plan_dict, write_plan
+from .certify_plans import CAPTURE, capture_folder_fixture, write_plans  # noqa: F401  (a fixture)
 from .conftest import files_of, make_content
 
 WRITERS = Path(__file__).with_name("writers.py")
-
-#: the cheapest measurement to certify (a fraction of a second): a gyro's rotation test
-COMMAND = "gyro rotations"
 
 
 def run_at_once(jobs: Sequence[Mapping[str, Any]], tmp_path: Path) -> list[dict[str, Any]]:
@@ -51,32 +45,6 @@ def run_at_once(jobs: Sequence[Mapping[str, Any]], tmp_path: Path) -> list[dict[
     )
     assert done.returncode == 0, done.stderr[-3000:]
     return list(json.loads(done.stdout))
-
-
-@pytest.fixture(scope="module")
-def capture_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The twin capture of :data:`COMMAND` (and its sections file)."""
-    folder = tmp_path_factory.mktemp("captures")
-    line, capture, _ = KINDS[COMMAND]
-    result = CliRunner().invoke(cli, ["simulate", *line.split(), "--out", str(folder / capture)])
-    assert result.exit_code == 0, result.output
-    return folder
-
-
-def write_plans(folder: Path, captures: Path, count: int, **changes: Any) -> list[Path]:
-    """``count`` different plans with ``number = "auto"`` in ``folder``: one measurement each,
-    items SN-0 … SN-2 (writers share items), each on a day of its own."""
-    folder.mkdir(parents=True, exist_ok=True)
-    for file in captures.iterdir():
-        (folder / file.name).write_bytes(file.read_bytes())
-    plans = []
-    for i in range(count):
-        data = plan_dict([{"name": f"Rotation test {i}", "command": COMMAND}])
-        data["certificate"] = {"number": "auto", "date": f"2026-11-{i + 1:02d}"}
-        data["item"]["serial"] = f"SN-{i % 3}"
-        data.update(changes)
-        plans.append(write_plan(folder, data, f"plan-{i}.toml"))
-    return plans
 
 
 def series(count: int) -> list[str]:
@@ -122,7 +90,7 @@ def check_certified(session: Any, number: str, plan: Path) -> None:
     for i in kept.inputs:
         data = (plan.parent / i.path).read_bytes()
         assert (i.sha256, i.size_bytes) == (sha256(data), len(data)), i.path
-    assert {i.path for i in kept.inputs} >= {KINDS[COMMAND][1]}
+    assert {i.path for i in kept.inputs} >= {CAPTURE}
     reported = [q for mr in results["measurements"] for q in mr["reported"]]
     assert reported, "the certificate reports nothing"
     assert [(v.quantity, float(v.value), float(v.expanded)) for v in kept.values] == [
