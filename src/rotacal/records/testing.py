@@ -64,7 +64,9 @@ class ThrowawayPostgres:
     ``url(dbname)`` gives an SQLAlchemy URL; :meth:`new_database` makes an empty database.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, *, durable: bool = False) -> None:
+        """Start the server; ``durable`` keeps PostgreSQL's own default of flushing every
+        commit to disk (for benchmarks), otherwise commits are not flushed (for tests)."""
         bin_dir = find_postgres_bin()
         self.folder = Path(tempfile.mkdtemp(prefix="rotacal-pg-"))
         self.port = _free_port()
@@ -78,8 +80,8 @@ class ThrowawayPostgres:
              "UTF8", "--no-sync", "--no-instructions"]
         )  # fmt: skip
         options = (
-            f"-c listen_addresses=127.0.0.1 -p {self.port} -k {self.folder} -c fsync=off "
-            "-c max_connections=60"
+            f"-c listen_addresses=127.0.0.1 -p {self.port} -k {self.folder} "
+            f"-c fsync={'on' if durable else 'off'} -c max_connections=60"
         )
         self._pg_ctl = [str(bin_dir / "pg_ctl"), "-D", str(data)]
         self._run([*self._pg_ctl, "-o", options, "-l", str(self.folder / "log"), "-w", "start"])
