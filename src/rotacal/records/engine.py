@@ -245,6 +245,11 @@ def _advice(url: str, reason: str) -> str:
             f"cannot be used ({reason}); check the path, and that you may read and write the "
             "file and its folder"
         )
+    if "deadlock detected" in lower or "could not serialize" in lower:
+        return (
+            f"another writer changed the same rows at the same moment ({reason}); nothing of "
+            "this certificate was kept: run it again"
+        )
     where = f"{parsed.host or 'localhost'}:{parsed.port or 5432}"
     if "database" in lower and "does not exist" in lower:
         return (
