@@ -10,20 +10,25 @@ wrote, never from the store.
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as dt
 import hashlib
 import json
 import os
 import subprocess
 import sys
+import threading
+import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import sqlalchemy as sa
 
+from rotacal.plan.model import Person
 from rotacal.records import models as m
 from rotacal.records import open_store
+from rotacal.records.testing import ThrowawayPostgres
 
 from .certify_plans import CAPTURE, capture_folder_fixture, write_plans  # noqa: F401  (a fixture)
 from .conftest import files_of, make_content
@@ -194,3 +199,60 @@ def test_writers_through_the_store_api_draw_a_series_without_gaps_and_keep_every
                     ("B. Manager", "approved"),
                 ]
                 assert [s.standard.identifier for s in c.standards] == ["STD-17"]
+
+
+def test_two_writers_naming_the_same_new_persons_in_another_order_both_keep_their_record(
+    postgres: ThrowawayPostgres,
+) -> None:
+    """Two stations certify at the same time, each the first certificate of two new persons,
+    one naming them as (performed A, approved B), the other as (performed B, approved A): both
+    certificates are kept. The order in which the store's transactions reach the rows is forced
+    with a third transaction that holds a person row of each plan until both writers wait on it;
+    then each holds the row the other needs next."""
+    url = postgres.new_database()
+    store = open_store(url)
+    a, b = Person("A. New", "performed"), Person("B. New", "approved")
+
+    def content(first: Person, gate: str, second: Person, day: int) -> Any:
+        c = make_content({"bias": ("0.1", "0.01")}, number=f"RC-2026-{day:04d}", serial=gate)
+        persons = (first, Person(gate, "performed"), second)
+        plan = dataclasses.replace(c.plan, persons=persons, issue_date=dt.date(2026, 1, day))
+        return dataclasses.replace(c, plan=plan, plan_sha256=f"{day:064d}")
+
+    gate = sa.create_engine(url).connect()
+    gate.begin()
+    for name in ("Gate 1", "Gate 2"):  # held, uncommitted: the writers wait here
+        gate.execute(sa.insert(m.Person).values(name=name, title=""))
+    errors: list[BaseException] = []
+
+    def write(c: Any) -> None:
+        try:
+            with store.keep(c, files_of(c)):
+                pass
+        except BaseException as e:
+            errors.append(e)
+
+    writers = [
+        threading.Thread(target=write, args=(content(a, "Gate 1", b, 1),)),
+        threading.Thread(target=write, args=(content(b, "Gate 2", a, 2),)),
+    ]
+    for w in writers:
+        w.start()
+    with sa.create_engine(url).connect() as watch:  # until both writers wait on the gate
+        for _ in range(600):
+            waiting = watch.execute(
+                sa.text(
+                    "SELECT count(*) FROM pg_stat_activity WHERE wait_event_type = 'Lock' "
+                    "AND datname = current_database()"
+                )
+            ).scalar_one()
+            if waiting == 2:
+                break
+            time.sleep(0.05)
+        assert waiting == 2, "the writers did not reach the gate"
+    gate.rollback()
+    gate.close()
+    for w in writers:
+        w.join(timeout=120)
+    assert not errors, [str(e) for e in errors]
+    assert issued(url) == ["RC-2026-0001", "RC-2026-0002"]
