@@ -1,7 +1,8 @@
 """Concurrent writers of one records store, for test_concurrency.py (run as a program, not
-collected): ``python writers.py JOBS.json`` runs every job of the JSON list in a process of its
-own, all released together (:func:`rotacal.records.testing.at_once`), and prints their outcomes
-as a JSON list, in the jobs' order.
+collected): ``python writers.py`` reads batches of jobs from its standard input, a JSON list on
+each line; it runs every job of a batch in a process of its own, all released together
+(:func:`rotacal.records.testing.at_once`), and answers with their outcomes as a JSON list on one
+line, in the jobs' order.
 
 A job is one of
 - ``{"certify": [ARG, …]}``: the command ``rotacal certify ARG …``;
@@ -10,8 +11,9 @@ A job is one of
   the other through the Store API, each with a number drawn as certify draws it; the task
   returns the numbers.
 
-rotacal is imported, and warmed up (:func:`warm_up`), here before the processes are forked: each process then starts its work at once instead of spending seconds importing NumPy,
-SciPy and Matplotlib.
+rotacal is imported, and warmed up (:func:`warm_up`), once, here before the processes are
+forked: each process then starts its work at once instead of spending seconds importing NumPy,
+SciPy and Matplotlib, and one program serves all the tests of a module.
 """
 
 from __future__ import annotations
@@ -86,7 +88,7 @@ def warm_up() -> None:
 
 
 if __name__ == "__main__":
-    jobs = json.loads(Path(sys.argv[1]).read_text())
     warm_up()
-    outcomes = at_once([task(job) for job in jobs])
-    print(json.dumps([dataclasses.asdict(o) for o in outcomes]))
+    for line in sys.stdin:
+        outcomes = at_once([task(job) for job in json.loads(line)])
+        print(json.dumps([dataclasses.asdict(o) for o in outcomes]), flush=True)

@@ -136,8 +136,8 @@ class Outcome:
 
 def _run_task(task: Callable[[], Any], barrier: Any, send: Any, out: str, err: str) -> None:
     """In the child: write stdout/stderr to files, wait for the others, run, send the outcome."""
-    for stream, target, path in ((sys.stdout, 1, out), (sys.stderr, 2, err)):
-        stream.flush()
+    # whatever the parent left in its buffers goes to these files, not twice into its streams
+    for target, path in ((1, out), (2, err)):
         fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
         os.dup2(fd, target)
         os.close(fd)
