@@ -23,8 +23,14 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
 import pytest
 import sqlalchemy as sa
+import tomllib
 
 from rotacal.plan.model import Person
 from rotacal.records import models as m
@@ -90,7 +96,7 @@ def issued(url: str) -> list[str]:
 def check_certified(session: Any, number: str, plan: Path) -> None:
     """The record of ``number`` is the whole certificate of ``plan``: the plan's bytes, every
     file of its folder (bytes and SHA-256), every input (the SHA-256 of the file on disk), every
-    reported value of results.json, the persons and the standards of the plan."""
+    reported value of the issued results.json, the item, persons and standards of the plan."""
     folder = plan.parent / number
     results = json.loads((folder / "results.json").read_text())
     assert results["certificate_number"] == number
@@ -112,13 +118,12 @@ def check_certified(session: Any, number: str, plan: Path) -> None:
     assert [(v.quantity, float(v.value), float(v.expanded)) for v in kept.values] == [
         (q["quantity"], q["value"], q["U"]) for q in reported
     ]
+    given = tomllib.loads(plan.read_text(encoding="utf-8"))
     assert [(p.person.name, p.role) for p in kept.persons] == [
-        (p["name"], p["role"]) for p in results["persons"]
+        (p["name"], p["role"]) for p in given["person"]
     ]
-    assert [s.standard.identifier for s in kept.standards] == [
-        s["id"] for s in results["standards"]
-    ]
-    assert kept.item.serial == results["item"]["serial"]
+    assert [s.standard.identifier for s in kept.standards] == [s["id"] for s in given["standard"]]
+    assert kept.item.serial == given["item"]["serial"]
 
 
 def test_eight_certify_commands_at_once_draw_eight_numbers_and_keep_eight_records(
