@@ -4,8 +4,9 @@ number drawn once, the series without gaps, every record whole, nothing lost.
 The writers are real processes released together (writers.py, run as a program): eight
 ``rotacal certify`` commands on eight plans with ``number = "auto"``, and eight writers keeping
 certificates through the Store API, one of them a certification whose rendering fails after its
-number was drawn. What each record must hold comes from the files on disk and the plans the test
-wrote, never from the store.
+number was drawn; and, on PostgreSQL, two writers forced to reach the same new rows in opposite
+orders. What each record must hold comes from the files on disk and the plans the test wrote,
+never from the store.
 """
 
 from __future__ import annotations
@@ -226,7 +227,7 @@ def test_two_writers_naming_the_same_new_persons_in_another_order_both_keep_thei
     with a third transaction that holds a person row of each plan until both writers wait on it;
     then each holds the row the other needs next."""
     url = postgres.new_database()
-    store = open_store(url)
+    open_store(url).engine.dispose()  # the schema
     a, b = Person("A. New", "performed"), Person("B. New", "approved")
 
     def content(first: Person, gate: str, second: Person, day: int) -> Any:
@@ -235,40 +236,46 @@ def test_two_writers_naming_the_same_new_persons_in_another_order_both_keep_thei
         plan = dataclasses.replace(c.plan, persons=persons, issue_date=dt.date(2026, 1, day))
         return dataclasses.replace(c, plan=plan, plan_sha256=f"{day:064d}")
 
-    gate = sa.create_engine(url).connect()
-    gate.begin()
-    for name in ("Gate 1", "Gate 2"):  # held, uncommitted: the writers wait here
-        gate.execute(sa.insert(m.Person).values(name=name, title=""))
     errors: list[BaseException] = []
 
     def write(c: Any) -> None:
+        station = open_store(url)  # a store of its own, as on another test station
         try:
-            with store.keep(c, files_of(c)):
+            with station.keep(c, files_of(c)):
                 pass
         except BaseException as e:
             errors.append(e)
+        finally:
+            station.engine.dispose()
 
     writers = [
-        threading.Thread(target=write, args=(content(a, "Gate 1", b, 1),)),
-        threading.Thread(target=write, args=(content(b, "Gate 2", a, 2),)),
+        threading.Thread(target=write, args=(content(a, "Gate 1", b, 1),), daemon=True),
+        threading.Thread(target=write, args=(content(b, "Gate 2", a, 2),), daemon=True),
     ]
-    for w in writers:
-        w.start()
-    with sa.create_engine(url).connect() as watch:  # until both writers wait on the gate
-        for _ in range(600):
-            waiting = watch.execute(
-                sa.text(
-                    "SELECT count(*) FROM pg_stat_activity WHERE wait_event_type = 'Lock' "
-                    "AND datname = current_database()"
-                )
-            ).scalar_one()
-            if waiting == 2:
-                break
-            time.sleep(0.05)
-        assert waiting == 2, "the writers did not reach the gate"
-    gate.rollback()
-    gate.close()
-    for w in writers:
-        w.join(timeout=120)
+    engine = sa.create_engine(url)
+    try:
+        with engine.connect() as gate, engine.connect() as watch:
+            gate.begin()
+            for name in ("Gate 1", "Gate 2"):  # held, uncommitted: the writers wait here
+                gate.execute(sa.insert(m.Person).values(name=name, title=""))
+            for w in writers:
+                w.start()
+            for _ in range(600):  # until both writers wait on the gate
+                waiting = watch.execute(
+                    sa.text(
+                        "SELECT count(*) FROM pg_stat_activity WHERE wait_event_type = 'Lock' "
+                        "AND datname = current_database()"
+                    )
+                ).scalar_one()
+                watch.rollback()  # the activity view is read once per transaction
+                if waiting == 2:
+                    break
+                time.sleep(0.05)
+            assert waiting == 2, ("the writers did not reach the gate", errors)
+            gate.rollback()
+        for w in writers:
+            w.join(timeout=120)
+    finally:
+        engine.dispose()
     assert not errors, [str(e) for e in errors]
     assert issued(url) == ["RC-2026-0001", "RC-2026-0002"]
