@@ -180,7 +180,7 @@ def test_writers_through_the_store_api_draw_a_series_without_gaps_and_keep_every
     assert failed["exit_code"] == 2
     assert "control character U+0001" in failed["stderr"]
     assert len(failed["stderr"].strip().splitlines()) == 1
-    numbers = [n for o in kept for n in o["value"]]
+    numbers = [c["number"] for o in kept for c in o["value"]]
     assert len(numbers) == len(set(numbers)) == writers * each
     gaps = voided(store_url)
     assert len(gaps) == 1
@@ -192,19 +192,21 @@ def test_writers_through_the_store_api_draw_a_series_without_gaps_and_keep_every
 
     with open_store(store_url).read() as session:
         for job, o in zip(jobs[:-1], kept, strict=True):
-            for given, number in zip(job["certificates"], o["value"], strict=True):
+            for given, written in zip(job["certificates"], o["value"], strict=True):
+                number = written["number"]
                 c = record(session, number)
                 values = {k: (value, U) for k, (value, U) in given["values"].items()}
                 date = dt.date.fromisoformat(given["date"])
-                content = make_content(values, number=number, serial=given["serial"], date=date)
-                assert (c.item.serial, c.issue_date, c.plan) == (
+                assert (c.item.serial, c.issue_date, c.plan, c.plan_sha256) == (
                     given["serial"],
                     date,
-                    content.plan.text,
+                    written["plan"].encode(),
+                    written["plan_sha256"],
                 )
                 assert [(v.quantity, v.value, v.expanded) for v in c.values] == [
                     (k, value, U) for k, (value, U) in values.items()
                 ]
+                content = make_content(values, number=number)  # files_of reads its number
                 assert {f.name: (f.sha256, f.content) for f in c.files} == {
                     name: (sha256(data), data) for name, data in files_of(content).items()
                 }

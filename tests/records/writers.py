@@ -9,7 +9,7 @@ A job is one of
 - ``{"keep": URL, "certificates": [{"serial": S, "date": "YYYY-MM-DD", "values": {KEY: [VALUE,
   U]}}, …]}``: those certificates, made to order (conftest.py ``make_content``), kept one after
   the other through the Store API, each with a number drawn as certify draws it; the task
-  returns the numbers.
+  returns, for each, the number, the plan's text and the plan_sha256 it gave the store.
 
 rotacal is imported, and warmed up (:func:`warm_up`), once, here before the processes are
 forked: each process then starts its work at once instead of spending seconds importing NumPy,
@@ -35,10 +35,10 @@ sys.path.insert(0, str(Path(__file__).parent))
 from conftest import files_of, make_content
 
 
-def _keeper(url: str, certificates: list[dict[str, Any]]) -> Callable[[], list[str]]:
-    def run() -> list[str]:
+def _keeper(url: str, certificates: list[dict[str, Any]]) -> Callable[[], list[dict[str, str]]]:
+    def run() -> list[dict[str, str]]:
         store = open_store(url)
-        numbers = []
+        kept = []
         for c in certificates:
             content = make_content(
                 {key: (value, U) for key, (value, U) in c["values"].items()},
@@ -50,8 +50,14 @@ def _keeper(url: str, certificates: list[dict[str, Any]]) -> Callable[[], list[s
             content = dataclasses.replace(content, number=number)
             with store.keep(content, files_of(content)):
                 pass
-            numbers.append(number)
-        return numbers
+            kept.append(
+                {
+                    "number": number,
+                    "plan": content.plan.text.decode(),
+                    "plan_sha256": content.plan_sha256,
+                }
+            )
+        return kept
 
     return run
 
