@@ -87,10 +87,23 @@ def _parse(url: str) -> URL:
         parsed = sa.engine.make_url(url)
     except (sa.exc.ArgumentError, ValueError):
         parsed = None
-    if parsed is None or parsed.get_backend_name() not in ("sqlite", "postgresql"):
+    if parsed is None and "://" not in url:
+        path = Path(url).expanduser().resolve()
         raise ConfigError(
-            f"records store {url!r}: not a usable database URL; give sqlite:///path/records.sqlite "
-            "or postgresql+psycopg://user@host/dbname (--db or ROTACAL_DB)"
+            f"records store {url!r}: a file path, not a database URL; give sqlite:///{path} "
+            "(--db or ROTACAL_DB)"
+        )
+    if parsed is not None and parsed.get_backend_name() == "postgres":
+        raise ConfigError(
+            f"records store {display_url(parsed)}: write the URL as postgresql+psycopg://… "
+            "(postgres:// is not a name the database library knows)"
+        )
+    if parsed is None or parsed.get_backend_name() not in ("sqlite", "postgresql"):
+        kind = f"the database kind {parsed.get_backend_name()!r}" if parsed else "this URL"
+        raise ConfigError(
+            f"records store {display_url(url)}: {kind} is not supported; rotacal keeps its "
+            "records in SQLite or PostgreSQL: give sqlite:///path/records.sqlite or "
+            "postgresql+psycopg://user@host/dbname (--db or ROTACAL_DB)"
         )
     if parsed.get_backend_name() == "postgresql":
         if parsed.get_driver_name() not in ("psycopg", "psycopg2"):
@@ -101,12 +114,13 @@ def _parse(url: str) -> URL:
         parsed = parsed.set(drivername="postgresql+psycopg")  # psycopg 3 is what rotacal installs
     elif parsed.get_driver_name() != "pysqlite":
         raise ConfigError(
-            f"records store {url!r}: use sqlite:///path/records.sqlite (the driver "
+            f"records store {display_url(url)}: use sqlite:///path/records.sqlite (the driver "
             f"{parsed.get_driver_name()!r} is not supported)"
         )
     elif not parsed.database or parsed.database == ":memory:":
         raise ConfigError(
-            f"records store {url!r}: an SQLite store needs a file (sqlite:///path/records.sqlite); "
+            f"records store {display_url(url)}: an SQLite store needs a file "
+            "(sqlite:///path/records.sqlite); "
             "a store in memory would keep nothing"
         )
     return parsed
@@ -169,8 +183,8 @@ def make_engine(url: str, *, timeout_s: float = DEFAULT_TIMEOUT_S) -> Engine:
             path.parent.mkdir(parents=True, exist_ok=True)
         elif not path.parent.is_dir():
             raise ConfigError(
-                f"records store {url}: the folder {path.parent} does not exist; create it or give "
-                "another path"
+                f"records store {url}: the folder {path.parent.resolve()} does not exist; create "
+                "it or give another path"
             )
         engine = sa.create_engine(
             parsed.set(database=str(path)),
@@ -221,8 +235,54 @@ def store_errors(url: str, timeout_s: float = DEFAULT_TIMEOUT_S) -> Iterator[Non
                 "give the path of a records store"
             ) from None
         if isinstance(e, (sa.exc.OperationalError, sa.exc.InterfaceError)):
-            raise StoreError(
-                f"records store {shown}: cannot be used ({reason}); check that the server runs, "
-                "the URL, the user and the password"
-            ) from None
+            raise StoreError(f"records store {shown}: {_advice(url, reason)}") from None
         raise StoreError(f"records store {shown}: {reason}") from None
+
+
+def _advice(url: str, reason: str) -> str:
+    """What a store that cannot be opened or used says: the database's reason, and what to do
+    about it — for SQLite the file, for PostgreSQL the server, the database or the user."""
+    lower = reason.lower()
+    try:
+        parsed = sa.engine.make_url(url)
+    except (sa.exc.ArgumentError, ValueError):
+        return f"cannot be used ({reason})"
+    if parsed.get_backend_name() == "sqlite":
+        return (
+            f"cannot be used ({reason}); check the path, and that you may read and write the "
+            "file and its folder"
+        )
+    if "deadlock detected" in lower or "could not serialize" in lower:
+        return (
+            f"another writer changed the same rows at the same moment ({reason}); nothing of "
+            "this certificate was kept: run it again"
+        )
+    where = f"{parsed.host or 'localhost'}:{parsed.port or 5432}"
+    if "database" in lower and "does not exist" in lower:
+        return (
+            f"the PostgreSQL server at {where} has no database {parsed.database!r}; create it "
+            f"(createdb {parsed.database}) or correct the database name in the URL"
+        )
+    if ("role" in lower and "does not exist" in lower) or "authentication failed" in lower:
+        return (
+            f"the PostgreSQL server at {where} refuses the user {parsed.username!r} ({reason}); "
+            "check the user and the password in the URL"
+        )
+    if any(
+        word in lower
+        for word in (
+            "refused",
+            "timeout",
+            "timed out",
+            "resolve host",
+            "translate host",
+            "no route",
+        )
+    ):
+        return (
+            f"no PostgreSQL server answers at {where} ({reason}); start the server, or correct "
+            "the host and the port in the URL"
+        )
+    return (
+        f"cannot be used ({reason}); check that the server runs, the URL, the user and the password"
+    )
