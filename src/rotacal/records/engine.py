@@ -79,7 +79,12 @@ def timeout_from_environment() -> float:
 
 def resolve_url(given: str | None) -> str:
     """The store's URL: ``given`` (``--db``), else ``ROTACAL_DB``, else :func:`default_url`."""
-    return given or os.environ.get("ROTACAL_DB") or default_url()
+    if given is not None and not given.strip():
+        raise ConfigError(
+            "--db is empty; give the records store's URL (sqlite:///path/records.sqlite or "
+            "postgresql+psycopg://user@host/dbname), or leave --db out for the default store"
+        )
+    return given or os.environ.get("ROTACAL_DB", "").strip() or default_url()
 
 
 def _parse(url: str) -> URL:
@@ -188,8 +193,9 @@ def make_engine(url: str, *, timeout_s: float = DEFAULT_TIMEOUT_S) -> Engine:
             )
         engine = sa.create_engine(
             parsed.set(database=str(path)),
+            # pooled: an idle connection holds no lock (no open transaction), and keeping it
+            # open spares each transaction the write-ahead log's flush at the last close
             connect_args={"timeout": timeout_s, "check_same_thread": False},
-            poolclass=sa.pool.NullPool,  # a connection per use: nothing stays locked between calls
         )
         event.listen(engine, "connect", _sqlite_connect)
         event.listen(engine, "begin", _sqlite_begin)

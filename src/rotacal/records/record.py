@@ -150,6 +150,24 @@ def insert_record(connection: sa.Connection, record: Mapping[str, Any]) -> int:
     """Write ``record`` (the form of :func:`record_of`) in the caller's transaction; returns the
     certificate's id."""
     date = dt.date.fromisoformat
+    people = [{"name": p["name"], "title": p["title"]} for p in record["persons"]]
+    standards_used = [
+        {"identifier": s["id"], "name": s["name"], "certificate": s["certificate"],
+         "due": date(s["due"])}
+        for s in record["standards"]
+    ]  # fmt: skip
+    # Shared rows are inserted in one global order (sorted by their key), whatever order the
+    # plan names them in: two writers naming the same new persons in opposite orders would
+    # otherwise each wait for the other's row (a deadlock on PostgreSQL).
+    insert = insert_for(connection)
+    shared: tuple[tuple[type[m.Base], list[dict[str, Any]]], ...] = (
+        (m.Person, people),
+        (m.Standard, standards_used),
+    )
+    for shared_model, shared_rows in shared:
+        for row in sorted(shared_rows, key=lambda r: tuple(str(v) for v in r.values())):
+            statement = insert(_table(shared_model)).values(**row)
+            connection.execute(statement.on_conflict_do_nothing())
     item_id = id_of(connection, m.Item, record["item"])
     certificate_id = connection.execute(
         sa.insert(m.Certificate)
@@ -174,28 +192,12 @@ def insert_record(connection: sa.Connection, record: Mapping[str, Any]) -> int:
         .returning(m.Certificate.id)
     ).scalar_one()
     persons = [
-        {
-            "position": i,
-            "person_id": id_of(connection, m.Person, {"name": p["name"], "title": p["title"]}),
-            "role": p["role"],
-        }
-        for i, p in enumerate(record["persons"])
+        {"position": i, "person_id": id_of(connection, m.Person, person), "role": p["role"]}
+        for i, (p, person) in enumerate(zip(record["persons"], people, strict=True))
     ]
     standards = [
-        {
-            "position": i,
-            "standard_id": id_of(
-                connection,
-                m.Standard,
-                {
-                    "identifier": s["id"],
-                    "name": s["name"],
-                    "certificate": s["certificate"],
-                    "due": date(s["due"]),
-                },
-            ),
-        }
-        for i, s in enumerate(record["standards"])
+        {"position": i, "standard_id": id_of(connection, m.Standard, standard)}
+        for i, standard in enumerate(standards_used)
     ]
     inputs = [
         {
