@@ -4,8 +4,8 @@ PostgreSQL server started on loopback for the session) and certificates made to 
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import datetime as dt
+import itertools
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 
