@@ -283,7 +283,12 @@ def reversal_time_u_argmax(
     for s in range(0, draws, block):
         e = min(draws, s + block)
         tau = (k[None, :] + offset[s:e, None]) * dt
-        y = -0.5 * kappa * tau**2 + s_eff[s:e, None] * rng.standard_normal((e - s, k.size))
+        # y = −κτ²/2 + σ_eff·z, each product and the sum as written so, in place (no temporaries)
+        y = rng.standard_normal((e - s, k.size))
+        y *= s_eff[s:e, None]
+        drop = np.square(tau)
+        drop *= -0.5 * kappa
+        y += drop
         est = tau[np.arange(e - s), np.argmax(y, axis=1)]
         sq += float(est @ est)
     return math.sqrt(sq / draws)
@@ -579,8 +584,15 @@ class _ThdDraws:
     def plain(self, thd: float) -> np.ndarray:
         """The plain estimator of eq. (1) in every draw, at a true THD ``thd`` (%)."""
         p = self.power(thd)
-        t = np.maximum(p + 2.0 * math.sqrt(p) * self.x + self.y, 0.0)
-        return np.asarray(100.0 * np.sqrt(t) / self.a1)
+        # 100·√max(P + 2√P·X + Y, 0)/A₁, evaluated in that order, in place (no temporaries)
+        t = self.x * (2.0 * math.sqrt(p))
+        t += p
+        t += self.y
+        np.maximum(t, 0.0, out=t)
+        np.sqrt(t, out=t)
+        t *= 100.0
+        t /= self.a1
+        return t
 
 
 @functools.lru_cache(maxsize=4)

@@ -25,6 +25,7 @@ Table G.2); Annex H.1–H.3. JCGM 101:2008 §5 (the GUM uncertainty framework).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -364,7 +365,7 @@ def coverage_factor(dof: float, p: float = 0.95, *, truncate: bool = True) -> fl
         raise ConfigError(f"degrees of freedom ν = {nu!r} must be > 0 (math.inf for none).")
     tail = 0.5 * (1.0 - pf)
     if math.isinf(nu):
-        return float(stats.norm.isf(tail))
+        return _upper_quantile(tail, math.inf)
     if truncate:
         nu_t = math.floor(nu + 1e-9 * max(1.0, nu))
         if nu_t < 1:
@@ -373,6 +374,16 @@ def coverage_factor(dof: float, p: float = 0.95, *, truncate: bool = True) -> fl
                 "degree of freedom has no t-based coverage factor — give k or more readings."
             )
         nu = float(nu_t)
+    return _upper_quantile(tail, nu)
+
+
+@functools.lru_cache(maxsize=4096)
+def _upper_quantile(tail: float, nu: float) -> float:
+    """The upper ``tail`` quantile of Student's t with ν degrees of freedom (the normal's for
+    ν = inf), kept by its arguments: scipy takes ~0.3 ms a call, and the budgets of every
+    calibration ask for the same few (p = 0.95, integer ν) again and again."""
+    if math.isinf(nu):
+        return float(stats.norm.isf(tail))
     return float(stats.t.isf(tail, nu))
 
 
@@ -761,6 +772,13 @@ def _dof_eff(
     comps: list[float] = []
     dofs: list[float] = []
     contrib = np.abs(jac_row) * np.sqrt(np.diag(cov_x))
+    if n_blocks == jac_row.size:  # uncorrelated: each input one component, c_i·u_i·c_i as below
+        active = contrib > 0.0
+        if not np.any(active):
+            return math.inf, notes
+        c = jac_row[active]
+        var = np.maximum(c * np.diag(cov_x)[active] * c, 0.0)
+        return welch_satterthwaite(np.sqrt(var), nu[active]), notes
     for b in range(n_blocks):
         members = np.flatnonzero(blocks == b)
         active = members[contrib[members] > 0.0]
@@ -931,7 +949,10 @@ def propagate(
     np.fill_diagonal(corr_y, 1.0)
     contributions = jac * u[None, :]
 
-    n_blocks, blocks = connected_components(csr_matrix(corr - np.eye(n) != 0.0), directed=False)
+    if correlated:
+        n_blocks, blocks = connected_components(csr_matrix(corr - np.eye(n) != 0.0), directed=False)
+    else:  # every input a block of its own, as connected_components labels a graph without edges
+        n_blocks, blocks = n, np.arange(n)
     dof_eff = np.empty(m)
     kk = np.empty(m)
     notes_by_output: list[tuple[str, ...]] = []
