@@ -135,6 +135,9 @@ def test_export_and_import_through_the_commands(certified, tmp_path: Path) -> No
     one_line(run("records", "export", "--db", db, "--out", str(tmp_path / "b.json")), ".jsonl")
     one_line(run("records", "export", "--db", db, "--out", str(tmp_path / "b.jsonl")), "b.jsonl")
     one_line(run("records", "import", str(tmp_path / "none.jsonl"), "--db", other), "none.jsonl")
+    (tmp_path / "x.pdf").write_bytes(b"%PDF-1.7\n\xff\xfe\x00binary")
+    one_line(run("records", "import", str(tmp_path / "x.pdf"), "--db", other), "not text (UTF-8)")
+    one_line(run("records", "import", str(tmp_path), "--db", other), str(tmp_path))
 
 
 def test_settings_shown_and_changed(tmp_path: Path) -> None:

@@ -12,7 +12,7 @@ import click
 from rotacal.errors import ConfigError
 
 from ._app import cli
-from ._common import INPUT_FILE, _check_outputs, _emit_warnings, _write_json, _wrote
+from ._common import _check_outputs, _emit_warnings, _write_json, _wrote
 from ._help import example
 from ._store import db_option, open_db
 
@@ -247,7 +247,7 @@ def export_cmd(out: str | None, db: str | None) -> None:
         "rotacal records import backup.jsonl --db postgresql+psycopg://lab@server/records"
     ),
 )
-@click.argument("file", type=INPUT_FILE, metavar="FILE.jsonl")
+@click.argument("file", metavar="FILE.jsonl")
 @db_option
 def import_cmd(file: str, db: str | None) -> None:
     """Import an export into the store.

@@ -125,9 +125,24 @@ def _decode(record: dict[str, Any], where: str) -> dict[str, Any]:
     return out
 
 
+def _text_lines(lines: IO[str], name: str) -> Iterator[str]:
+    """The lines of ``lines`` one at a time (an export may be larger than memory)."""
+    iterator = iter(lines)
+    while True:
+        try:
+            yield next(iterator)
+        except StopIteration:
+            return
+        except UnicodeDecodeError:
+            raise ConfigError(
+                f"{name}: not text (UTF-8), so not a rotacal records export; make one with "
+                "`rotacal records export`"
+            ) from None
+
+
 def _read(lines: IO[str], name: str) -> Iterator[tuple[str, dict[str, Any]]]:
     """(where, object) of each line, the first checked to be a rotacal records export."""
-    for index, text in enumerate(lines, start=1):
+    for index, text in enumerate(_text_lines(lines, name), start=1):
         where = f"{name} line {index}"
         if not text.strip():
             continue
