@@ -32,9 +32,6 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy import stats
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
 
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
@@ -382,6 +379,10 @@ def _upper_quantile(tail: float, nu: float) -> float:
     """The upper ``tail`` quantile of Student's t with ν degrees of freedom (the normal's for
     ν = inf), kept by its arguments: scipy takes ~0.3 ms a call, and the budgets of every
     calibration ask for the same few (p = 0.95, integer ν) again and again."""
+    # imported here: scipy.stats costs ~1 s to import, which every `rotacal` command would pay
+    # at start-up (rotacal.numbers imports this module) whether it computes a quantile or not
+    from scipy import stats
+
     if math.isinf(nu):
         return float(stats.norm.isf(tail))
     return float(stats.t.isf(tail, nu))
@@ -950,6 +951,9 @@ def propagate(
     contributions = jac * u[None, :]
 
     if correlated:
+        from scipy.sparse import csr_matrix
+        from scipy.sparse.csgraph import connected_components
+
         n_blocks, blocks = connected_components(csr_matrix(corr - np.eye(n) != 0.0), directed=False)
     else:  # every input a block of its own, as connected_components labels a graph without edges
         n_blocks, blocks = n, np.arange(n)
