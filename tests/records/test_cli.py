@@ -172,3 +172,18 @@ def test_a_superseding_certificate_is_linked_both_ways(certified, tmp_path: Path
     assert "superseded by RC-2026-0002" in listed
     twice = run("certify", str(plan), "--db", db)
     one_line(twice, "RC-2026-0001 is already superseded by RC-2026-0002")
+
+
+def test_a_password_in_the_url_never_reaches_the_json(postgres, tmp_path: Path) -> None:
+    # the test server trusts loopback, so a password in the URL is accepted and ignored
+    db = postgres.new_database().replace("rotacal@", "rotacal:s3cret@")
+    result = run("records", "list", "--db", db, "--json", "-")
+    assert result.exit_code == 0, result.output
+    assert "s3cret" not in result.output
+    data = json.loads(result.output)
+    assert data["provenance"]["options"]["db"].startswith("postgresql+psycopg://rotacal:***@")
+    assert data["store"].startswith("postgresql+psycopg://rotacal:***@")
+    one_line(
+        run("records", "list", "--db", f"sqlite://u:pw@/{tmp_path / 'r.sqlite'}"),
+        "takes no user, password or host",
+    )

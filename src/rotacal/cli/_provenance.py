@@ -55,6 +55,10 @@ def command_options(ctx: click.Context) -> dict[str, Any]:
         if param.name in paths:  # a file: the path(s) as given
             given = paths[param.name]
             value = given if param.multiple or param.nargs != 1 else given[-1]
+        if param.name == "db" and value:  # a records store's URL: never its password
+            from rotacal.records.engine import display_url
+
+            value = display_url(str(value))
         out[option_name(param)] = _plain(value)
     return out
 

@@ -128,6 +128,11 @@ def _parse(url: str) -> URL:
             "(sqlite:///path/records.sqlite); "
             "a store in memory would keep nothing"
         )
+    elif parsed.username or parsed.password or parsed.host or parsed.port:
+        raise ConfigError(
+            f"records store {display_url(url)}: an SQLite store is a file and takes no user, "
+            "password or host; give sqlite:////abs/path/records.sqlite"
+        )
     return parsed
 
 
@@ -181,7 +186,15 @@ def make_engine(url: str, *, timeout_s: float = DEFAULT_TIMEOUT_S) -> Engine:
     ConfigError
         The URL is not an SQLite file or PostgreSQL URL; the SQLite file's folder does not exist.
     """
-    parsed = _parse(url)
+    try:
+        return _make_engine(_parse(url), url, timeout_s)
+    except sa.exc.ArgumentError as e:  # a URL the database library refuses after all
+        raise ConfigError(
+            f"records store {display_url(url)}: not a usable database URL ({_reason(e)})"
+        ) from None
+
+
+def _make_engine(parsed: URL, url: str, timeout_s: float) -> Engine:
     if parsed.get_backend_name() == "sqlite":
         path = Path(str(parsed.database)).expanduser()
         if url == default_url():
