@@ -12,9 +12,12 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 # rotacal's state (the default records store) goes to a folder of this test process, never to the
 # user's own data folder; ROTACAL_DB from the environment would send certificates elsewhere.
+import atexit  # noqa: E402
+import shutil  # noqa: E402
 import tempfile  # noqa: E402
 
 os.environ["ROTACAL_DATA_DIR"] = tempfile.mkdtemp(prefix="rotacal-test-state-")
+atexit.register(shutil.rmtree, os.environ["ROTACAL_DATA_DIR"], ignore_errors=True)
 os.environ.pop("ROTACAL_DB", None)
 
 from collections.abc import Callable  # noqa: E402
