@@ -121,6 +121,30 @@ def test_blocks_equal_direct_with_noise():
     assert b.residual_rms == pytest.approx(a.residual_rms, rel=1e-6)
 
 
+@pytest.mark.parametrize("drift_check", [False, True])
+def test_blocks_give_the_residual_of_a_nearly_noise_free_record(drift_check):
+    """Noise 1e-9 of a unit sine: yᵀy − bᵀp cannot resolve a residual 2e-18 of yᵀy, so the
+    in-memory block fit sums it from the samples — the rms is the noise's, not 0, and so are
+    the uncertainties that scale with it (the chunked accumulator, without the samples, cannot)."""
+    rng = np.random.default_rng(8)
+    f = 2.0
+    t = np.arange(40_000) / 2000.0
+    noise = 1e-9 * rng.standard_normal(t.size)
+    y = multisine(t, f, AMPS[:4], PHASES[:4], 0.2) + noise
+    a = fit_harmonics(t, y, harmonics=4, method="direct", drift_check=drift_check)
+    b = fit_harmonics(t, y, harmonics=4, method="blocks", drift_check=drift_check)
+    assert b.residual_rms == pytest.approx(1e-9, rel=0.03)
+    assert b.residual_rms == pytest.approx(a.residual_rms, rel=1e-3)
+    np.testing.assert_allclose(b.amplitudes_u, a.amplitudes_u, rtol=1e-3)
+    assert b.frequency_u_hz == pytest.approx(a.frequency_u_hz, rel=1e-3)
+    if drift_check:
+        assert b.drift_check.residual_rms == pytest.approx(a.drift_check.residual_rms, rel=1e-3)
+    acc = HarmonicFitAccumulator(f, harmonics=4)
+    acc.add(t, y)
+    assert acc.fit(harmonics=4).residual_rms < 0.5e-9  # rounding: why the samples are summed
+
+
+
 # ------------------------------------------------------------------------- independent solvers
 def test_three_parameter_fit_equals_explicit_lstsq():
     rng = np.random.default_rng(11)

@@ -32,7 +32,7 @@ from rotacal.signal._checks import (
 )
 from rotacal.signal._freq import estimate_frequency_unchecked
 from rotacal.signal._normal import solve_normal
-from rotacal.signal._result import SineFit, build_drift_check, build_sine_fit
+from rotacal.signal._result import SineFit, build_drift_check, build_sine_fit, harmonic_series
 
 _X_PLAN = 0.25  # planned largest in-block phase (rad) of harmonic 2H at 1.25·f
 _F_MARGIN = 1.25
@@ -42,6 +42,9 @@ _TRUNC = 1e-17
 _SUB_BLOCKS = 256
 _SUB_SAMPLES = 1 << 16
 _SUM_ROWS = 8192
+# The residual from the normal equations, yᵀy − bᵀp, loses its digits when it is this small a
+# part of yᵀy; below it a fit that still has the samples sums the residual itself.
+_RSS_ROUNDING = 1e-9
 
 
 def taylor_terms(x: float, limit: int) -> int:
@@ -422,6 +425,7 @@ class HarmonicFitAccumulator:
         rtol: float = 1e-12,
         drift: bool = False,
         drift_check: bool = False,
+        _samples: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> SineFit:
         """Fit ``C + Σ_h a_h cos(2πhf(t−t_ref)) + b_h sin(...)`` to every sample added.
 
@@ -441,6 +445,10 @@ class HarmonicFitAccumulator:
         drift_check : bool
             Without ``drift``: refit with the drift term at the final frequency as well
             (``SineFit.drift_check``), at the cost of one more solve of the normal equations.
+        _samples : (t, y), private
+            Every sample added, when the caller still holds them: a residual sum of squares too
+            small for the normal equations to resolve (a noise-free record) is then summed from
+            the samples, so the fit's uncertainties are not rounded to 0.
 
         Returns
         -------
@@ -482,9 +490,14 @@ class HarmonicFitAccumulator:
             drift=bool(drift),
             drift_check=bool(drift_check),
         )
+        rss = sol.rss
+        if _samples is not None and rss <= _RSS_ROUNDING * self._sum_y2:
+            rss = self._summed_rss(_samples, sol.frequency_hz, t_ref, sol.params, nh, drift)
         check = None
         if sol.check is not None:
             p_d, rss_d, inv_d = sol.check
+            if _samples is not None and rss_d <= _RSS_ROUNDING * self._sum_y2:
+                rss_d = self._summed_rss(_samples, sol.frequency_hz, t_ref, p_d, nh, True)
             check = build_drift_check(
                 params=p_d,
                 offset=self._y0 + float(p_d[0]),
@@ -498,7 +511,7 @@ class HarmonicFitAccumulator:
             cos_coefs=sol.params[1 : nh + 1],
             sin_coefs=sol.params[nh + 1 : 2 * nh + 1],
             t_ref_s=t_ref,
-            rss=sol.rss,
+            rss=rss,
             n_samples=self._n,
             iterations=sol.iterations,
             cov_unit=sol.cov_unit,
@@ -506,3 +519,27 @@ class HarmonicFitAccumulator:
             drift=float(sol.params[-1]) if drift else None,
             drift_check=check,
         )
+
+    def _summed_rss(
+        self,
+        samples: tuple[np.ndarray, np.ndarray],
+        frequency_hz: float,
+        t_ref: float,
+        params: np.ndarray,
+        nh: int,
+        drift: bool,
+    ) -> float:
+        """Σ (y − model)² over the samples, for parameters ``[C, a_1..a_H, b_1..b_H(, D)]``
+        relative to the accumulator's ``y0``."""
+        t, y = samples
+        tau = t - t_ref
+        model = harmonic_series(
+            2.0 * math.pi * frequency_hz * tau,
+            params[1 : nh + 1],
+            params[nh + 1 : 2 * nh + 1],
+            self._y0 + float(params[0]),
+        )
+        if drift:
+            model += float(params[2 * nh + 1]) * tau
+        r = y - model
+        return float(r @ r)

@@ -31,7 +31,9 @@ class SineFit(Result):
     cos_coefs, sin_coefs : a_h and b_h (unit of y).
     t_ref_s : time origin of the phases (s); the middle of the record.
     residual_rms : rms of y − model (unit of y). With the block-moment method it comes from the
-        normal equations (yᵀy − bᵀp), so values below ~1e-7·rms(y) are rounding (clamped at 0).
+        normal equations (yᵀy − bᵀp); when that is too small to trust (below ~3e-5·rms(y)) the
+        in-memory fits sum it from the samples, and a :class:`HarmonicFitAccumulator` fed in
+        chunks, which no longer has them, gives it as computed (rounding, clamped at 0).
     n_samples : number of samples fitted.
     iterations : Gauss–Newton iterations of the frequency refinement (0 when f was fixed).
     amplitudes_u : standard uncertainty of A_h (unit of y) from the residual variance, assuming

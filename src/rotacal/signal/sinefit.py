@@ -6,13 +6,14 @@ samples ``y`` at times ``t`` (s; increasing, not necessarily uniform; any number
 Two solvers give the same least-squares solution:
 
 * **direct** — the explicit design matrix solved by QR (``numpy.linalg.lstsq``), the frequency
-  refined by Gauss–Newton on the residuals. Used for short or small records, where it is exact and
-  fast.
+  refined by Gauss–Newton on the residuals. Used for records shorter than 1.5 periods, whose
+  block plan the frequency's wide convergence range could upset.
 * **blocks** — :class:`HarmonicFitAccumulator`: the samples are compressed once into per-block
   polynomial moments; every later evaluation of the normal equations (at any trial frequency)
   costs O(blocks·moments·H), independent of N. A 10-harmonic fit with frequency refinement of
   10⁷ uniformly spaced samples takes ~0.1 s on one core, and works chunk-wise for captures that do
-  not fit in memory.
+  not fit in memory. Used for everything else: it agrees with the direct solver to ~1e-15 and is
+  faster from a few hundred samples on (31,250 samples, 10 harmonics: 38 ms against 258 ms).
 """
 
 from __future__ import annotations
@@ -58,7 +59,6 @@ __all__ = [
 
 Method = Literal["auto", "direct", "blocks"]
 
-_DIRECT_MAX_SAMPLES = 50_000
 _DIRECT_MAX_ELEMENTS = 20_000_000
 _SHORT_PERIODS = 1.5
 _EPS = float(np.finfo(np.float64).eps)
@@ -275,9 +275,8 @@ def _fit(
     check_record(n, span, f0, nh, n_par)
     periods = f0 * span * n / (n - 1)
     if method == "auto":
-        small = n <= _DIRECT_MAX_SAMPLES
         short = periods < _SHORT_PERIODS and n * (2 * nh + 2) <= _DIRECT_MAX_ELEMENTS
-        method = "direct" if (small or short) else "blocks"
+        method = "direct" if short else "blocks"
     if method == "direct":
         return _fit_direct(
             ta, ya, f0, nh, refine, int(max_iter), float(rtol), bool(drift), bool(drift_check)
@@ -292,6 +291,7 @@ def _fit(
         rtol=float(rtol),
         drift=bool(drift),
         drift_check=bool(drift_check),
+        _samples=(ta, ya),
     )
 
 
