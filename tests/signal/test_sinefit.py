@@ -144,7 +144,6 @@ def test_blocks_give_the_residual_of_a_nearly_noise_free_record(drift_check):
     assert acc.fit(harmonics=4).residual_rms < 0.5e-9  # rounding: why the samples are summed
 
 
-
 # ------------------------------------------------------------------------- independent solvers
 def test_three_parameter_fit_equals_explicit_lstsq():
     rng = np.random.default_rng(11)
