@@ -191,3 +191,51 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     for item in items:
         if item.get_closest_marker("xdist_group") is None and _module_of(item) in shared:
             item.add_marker(pytest.mark.xdist_group(_module_of(item)))
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """On an xdist worker: count the tests that carry ``xdist_group`` but that xdist does not group.
+
+    xdist marks a grouped test by the suffix ``@group`` on its node id, which its scheduler reads;
+    with pytest 9.2 and pytest-xdist 3.8 the suffix no longer takes (pytest-dev/pytest-xdist#1386)
+    and the groups are spread like any other test: still correct, but every worker then builds
+    the demo and the shared twins again (the suite took 20 % longer). pyproject's dev extra keeps
+    pytest below 9.2; the controller fails the run when it happens all the same.
+    """
+    config = session.config
+    # on a worker xdist keeps the choice as option.loadgroup (its dist option reads "no" there)
+    if not (hasattr(config, "workerinput") and getattr(config.option, "loadgroup", False)):
+        return
+    config.workeroutput["ungrouped"] = [  # type: ignore[attr-defined]
+        item.nodeid
+        for item in session.items
+        if item.get_closest_marker("xdist_group") is not None and "@" not in item.nodeid
+    ]
+
+
+_UNGROUPED: list[str] = []
+
+
+def pytest_testnodedown(node: Any, error: Any) -> None:
+    """On the controller: collect what the workers found ungrouped."""
+    lost = getattr(node, "workeroutput", {}).get("ungrouped", [])
+    if lost and not _UNGROUPED:
+        _UNGROUPED.extend(lost)
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    if _UNGROUPED and not hasattr(session.config, "workerinput"):
+        session.exitstatus = pytest.ExitCode.USAGE_ERROR
+
+
+def pytest_terminal_summary(terminalreporter: Any) -> None:
+    if _UNGROUPED:
+        terminalreporter.write_line(
+            f"pytest {pytest.__version__} with this pytest-xdist ignored xdist_group "
+            f"({len(_UNGROUPED)} tests, e.g. {_UNGROUPED[0]}; pytest-dev/pytest-xdist#1386), "
+            'so the run took longer and failed: install the dev extra again (pip install -e ".[dev]" '
+            "keeps pytest below 9.2).",
+            red=True,
+            bold=True,
+        )
