@@ -585,8 +585,12 @@ def test_three_axis_iso_aliases_skip_the_ambiguous_ones() -> None:
 
 
 # ------------------------------------------------------------------------- 7. fast path
+@pytest.mark.parametrize("numba", ["1", "0"])  # the compiled kernel and the NumPy path
 @pytest.mark.parametrize("size", [1e-4, 1e-2])
-def test_fast_path_equals_orientation_error(table: Turntable, size: float) -> None:
+def test_fast_path_equals_orientation_error(
+    table: Turntable, size: float, numba: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("ROTACAL_NUMBA", numba)
     rng = np.random.default_rng(40)
     n = 50_000  # more than one chunk
     angles = rng.uniform(0, 2 * np.pi, (n, 2))

@@ -72,6 +72,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from rotacal.errors import ConfigError
+from rotacal.turntable.fast import chain_arrays, compiled_kernel, numba_enabled
 
 __all__ = [
     "ANGLE_UNITS",
@@ -1261,6 +1262,16 @@ class Turntable:
             kernel = _one_point_kernel(self._p.links, needs_angle, n_ang)
             return np.array([kernel(trig1, [float(v) for v in chi[0]])], dtype=float)
         out = np.empty((n, 3))
+        if numba_enabled():
+            compiled_kernel()(
+                np.ascontiguousarray(angles),
+                np.ascontiguousarray(chi),
+                *_chain_arrays(self._p.links),
+                out,
+            )
+            return out
+        # the kernel's operations as straight-line code on whole chunks (no per-entry checks)
+        kernel = _one_point_kernel(self._p.links, needs_angle, n_ang)
         for start in range(0, n, _FAST_CHUNK):
             stop = min(n, start + _FAST_CHUNK)
             a_t = angles[start:stop].T
@@ -1268,7 +1279,7 @@ class Turntable:
             trig = {
                 k: (np.cos(a_t[k]), np.sin(a_t[k])) for k in needs_angle
             }  # only angles that do not cancel
-            psi, theta, gamma = _fast_kernel(self._p.links, trig, c_t)
+            psi, theta, gamma = kernel(trig, c_t)
             out[start:stop, 0] = psi
             out[start:stop, 1] = theta
             out[start:stop, 2] = gamma
@@ -1465,6 +1476,12 @@ class _Symbol:
 
     def __neg__(self) -> _Symbol:
         return self._new(f"-{self.name}")
+
+
+@functools.lru_cache(maxsize=32)
+def _chain_arrays(links: tuple[_LinkPlan, ...]) -> tuple[np.ndarray, ...]:
+    """:func:`rotacal.turntable.fast.chain_arrays` of a chain, made once per chain."""
+    return chain_arrays(links)
 
 
 @functools.lru_cache(maxsize=32)
