@@ -51,6 +51,7 @@ from scipy.optimize import Bounds, minimize
 from rotacal.errors import ConfigError
 from rotacal.results import Result
 from rotacal.turntable.draws import QUANTILE, TopValues, quantile_interval, top_values_needed
+from rotacal.turntable.fast import compiled_draws, compiled_tally, numba_enabled
 from rotacal.turntable.memo import LastResults, memo_key
 from rotacal.turntable.model import (
     ANGLE_UNITS,
@@ -1263,9 +1264,22 @@ def monte_carlo_check(
     largest = TopValues(top_values_needed(runs_i), 3)  # for the 99.9 % quantile of |Δ|
     t0 = time.perf_counter()
     done = 0
+    if numba_enabled():  # the same numbers, each chunk's draws and tallies in one pass
+        draws, tally = compiled_draws(), compiled_tally()
+        chi_buffer, angle_buffer = np.empty((chunk_i, n_err)), np.empty((chunk_i, n_angles))
     while done < runs_i:
         m = min(chunk_i, runs_i - done)
         u = rng.random((m, n_err + n_angles))
+        if numba_enabled():
+            chi, angles = chi_buffer[:m], angle_buffer[:m]
+            draws(u, lb, width, signs == "random", chi, angles)
+            d = _fast(table, angles, chi)
+            outside += tally(d, req_v, bins_per_rad, max_abs, counts)
+            largest.add(np.abs(d))
+            done += m
+            if progress is not None:
+                progress(done, runs_i)
+            continue
         if signs == "random":
             v = 2.0 * u[:, :n_err] - 1.0
             chi = np.copysign(lb + width * np.abs(v), v)

@@ -144,6 +144,15 @@ class TopValues:
         """Merge the rows of ``chunk`` (shape (m, columns)) into the largest values kept."""
         if self.keep == 0:
             return
+        if self.values.shape[0] == self.keep:  # full: only values above a column's least can enter
+            columns = []
+            for j in range(self.values.shape[1]):
+                kept = self.values[:, j]
+                column = chunk[:, j]
+                both = np.concatenate((kept, column[column > kept.min()]))
+                columns.append(np.partition(both, both.size - self.keep)[-self.keep :])
+            self.values = np.stack(columns, axis=1)
+            return
         both = np.concatenate((self.values, chunk), axis=0)
         if both.shape[0] > self.keep:
             both = np.partition(both, both.shape[0] - self.keep, axis=0)[-self.keep :]

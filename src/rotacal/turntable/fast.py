@@ -31,7 +31,13 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["chain_arrays", "compiled_kernel", "numba_enabled"]
+__all__ = [
+    "chain_arrays",
+    "compiled_draws",
+    "compiled_kernel",
+    "compiled_tally",
+    "numba_enabled",
+]
 
 
 def numba_enabled() -> bool:
@@ -81,16 +87,86 @@ def chain_arrays(links: Sequence[Any]) -> tuple[np.ndarray, ...]:
     return axis, angle, start, error, error_axis, np.array([last], dtype=np.int64)
 
 
-@functools.cache
 def compiled_kernel() -> Callable[..., None]:
     """The Numba kernel ``kernel(angles, chi, *chain_arrays(links), out)``, compiled on first use.
 
     ``angles`` (N, n_angles) rad, ``chi`` (N, n_angular) rad, ``out`` (N, 3) receives (Δψ, Δθ, Δγ)
     in rad (seed 001, eqs. (17)–(24)).
     """
+    return _jit(_kernel)
+
+
+def compiled_draws() -> Callable[..., None]:
+    """``draws(u, lower, width, random_signs, chi, angles)``: the Monte Carlo's χ and angles from
+    its uniforms, as :func:`rotacal.turntable.allocation.monte_carlo_check` makes them with NumPy
+    (the same operations), compiled on first use."""
+    return _jit(_draws)
+
+
+def compiled_tally() -> Callable[..., int]:
+    """``tally(d, requirement, bins_per_rad, max_abs, counts) -> outside``: the Monte Carlo's
+    running maxima and histograms of one chunk of (Δψ, Δθ, Δγ), as
+    :func:`rotacal.turntable.allocation.monte_carlo_check` keeps them with NumPy, compiled on first
+    use."""
+    return _jit(_tally)
+
+
+@functools.cache
+def _jit(function: Callable[..., Any]) -> Callable[..., Any]:
     import numba
 
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(_kernel)
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(function)
+
+
+def _draws(
+    u: np.ndarray,
+    lower: np.ndarray,
+    width: np.ndarray,
+    random_signs: bool,
+    chi: np.ndarray,
+    angles: np.ndarray,
+) -> None:
+    """χ_i = s_i·(LB_i + (UB_i − LB_i)·|v|) with v = 2u − 1 (random signs) or LB_i + width·u, and
+    φ = 2π·u, from the row of uniforms u = (errors…, angles…) of each draw (rad)."""
+    n_err = chi.shape[1]
+    two_pi = 2.0 * np.pi
+    for row in range(u.shape[0]):
+        for i in range(n_err):
+            if random_signs:
+                v = 2.0 * u[row, i] - 1.0
+                chi[row, i] = np.copysign(lower[i] + width[i] * np.abs(v), v)
+            else:
+                chi[row, i] = lower[i] + width[i] * u[row, i]
+        for k in range(angles.shape[1]):
+            angles[row, k] = two_pi * u[row, n_err + k]
+
+
+def _tally(
+    d: np.ndarray,
+    requirement: np.ndarray,
+    bins_per_rad: np.ndarray,
+    max_abs: np.ndarray,
+    counts: np.ndarray,
+) -> int:
+    """Running max |Δ_j| (in ``max_abs``), histograms over ±I_j of the draws within it (in
+    ``counts``, +I_j in the last bin), and the number of draws with some |Δ_j| > I_j (returned)."""
+    bins = counts.shape[1]
+    outside = 0
+    for row in range(d.shape[0]):
+        out = False
+        for j in range(3):
+            value = d[row, j]
+            size = np.abs(value)
+            if size > max_abs[j]:
+                max_abs[j] = size
+            if size > requirement[j]:
+                out = True
+                continue
+            index = int(np.floor((value + requirement[j]) * bins_per_rad[j]))
+            counts[j, min(index, bins - 1)] += 1
+        if out:
+            outside += 1
+    return outside
 
 
 def _kernel(
@@ -104,71 +180,81 @@ def _kernel(
     last_link: np.ndarray,
     out: np.ndarray,
 ) -> None:
-    """D ← A_kᵀ·D·A_k·E_k draw by draw, the operations of ``_fast_kernel`` in its order."""
+    """D ← A_kᵀ·D·A_k·E_k draw by draw, the operations of ``_fast_kernel`` in its order.
+
+    D is nine scalars (row-major d0…d8) so that the compiler keeps them in registers; the
+    conjugation by a rotation about x, y or z is written out for each axis: with (i, j) the plane
+    it turns (y–z, z–x, x–y), D·A mixes columns i, j of every row and Aᵀ·(D·A) rows i, j of every
+    column, each pair (a, b) becoming (a·c + b·s, b·c − a·s).
+    """
     n_links = axis.shape[0]
     last = last_link[0]
-    d = np.empty(9)
-    e = np.empty(3)
     for row in range(angles.shape[0]):
         started = False
+        d0 = d1 = d2 = d3 = d4 = d5 = d6 = d7 = d8 = 0.0
         for k in range(n_links):
             ax = axis[k]
             if ax >= 0 and started:
                 phi = angles[row, angle[k]]
                 c = np.cos(phi)
                 s = np.sin(phi)
-                i = (ax + 1) % 3
-                j = (ax + 2) % 3
-                for r in range(3):  # M = D·A: columns i, j mix
-                    di = d[3 * r + i]
-                    dj = d[3 * r + j]
-                    d[3 * r + i] = di * c + dj * s
-                    d[3 * r + j] = dj * c - di * s
-                for col in range(3):  # Aᵀ·M: rows i, j mix
-                    mi = d[3 * i + col]
-                    mj = d[3 * j + col]
-                    d[3 * i + col] = mi * c + mj * s
-                    d[3 * j + col] = mj * c - mi * s
+                if ax == 0:  # (i, j) = (1, 2)
+                    d1, d2 = d1 * c + d2 * s, d2 * c - d1 * s
+                    d4, d5 = d4 * c + d5 * s, d5 * c - d4 * s
+                    d7, d8 = d7 * c + d8 * s, d8 * c - d7 * s
+                    d3, d6 = d3 * c + d6 * s, d6 * c - d3 * s
+                    d4, d7 = d4 * c + d7 * s, d7 * c - d4 * s
+                    d5, d8 = d5 * c + d8 * s, d8 * c - d5 * s
+                elif ax == 1:  # (i, j) = (2, 0)
+                    d2, d0 = d2 * c + d0 * s, d0 * c - d2 * s
+                    d5, d3 = d5 * c + d3 * s, d3 * c - d5 * s
+                    d8, d6 = d8 * c + d6 * s, d6 * c - d8 * s
+                    d6, d0 = d6 * c + d0 * s, d0 * c - d6 * s
+                    d7, d1 = d7 * c + d1 * s, d1 * c - d7 * s
+                    d8, d2 = d8 * c + d2 * s, d2 * c - d8 * s
+                else:  # (i, j) = (0, 1)
+                    d0, d1 = d0 * c + d1 * s, d1 * c - d0 * s
+                    d3, d4 = d3 * c + d4 * s, d4 * c - d3 * s
+                    d6, d7 = d6 * c + d7 * s, d7 * c - d6 * s
+                    d0, d3 = d0 * c + d3 * s, d3 * c - d0 * s
+                    d1, d4 = d1 * c + d4 * s, d4 * c - d1 * s
+                    d2, d5 = d2 * c + d5 * s, d5 * c - d2 * s
             if start[k + 1] == start[k]:
                 continue
-            e[0] = 0.0
-            e[1] = 0.0
-            e[2] = 0.0
+            ex = ey = ez = 0.0
             for q in range(start[k], start[k + 1]):
-                e[error_axis[q]] = e[error_axis[q]] + chi[row, error[q]]
-            ex = e[0]
-            ey = e[1]
-            ez = e[2]
+                a = error_axis[q]
+                if a == 0:
+                    ex = ex + chi[row, error[q]]
+                elif a == 1:
+                    ey = ey + chi[row, error[q]]
+                else:
+                    ez = ez + chi[row, error[q]]
             if not started:
-                d[0] = 1.0
-                d[1] = 0.0 - ez
-                d[2] = ey
-                d[3] = ez
-                d[4] = 1.0
-                d[5] = 0.0 - ex
-                d[6] = 0.0 - ey
-                d[7] = ex
-                d[8] = 1.0
+                d0, d1, d2 = 1.0, 0.0 - ez, ey
+                d3, d4, d5 = ez, 1.0, 0.0 - ex
+                d6, d7, d8 = 0.0 - ey, ex, 1.0
                 started = True
-                continue
-            # D·(I + skew(e)): (D·K)[r] = (D[r,1]ez − D[r,2]ey, D[r,2]ex − D[r,0]ez, D[r,0]ey − D[r,1]ex)
-            if k == last:
-                d[2] = d[2] + (d[0] * ey - d[1] * ex)
-                d[3] = d[3] + (d[4] * ez - d[5] * ey)
-                d[7] = d[7] + (d[8] * ex - d[6] * ez)
-                continue
-            for r in range(3):
-                d0 = d[3 * r]
-                d1 = d[3 * r + 1]
-                d2 = d[3 * r + 2]
-                d[3 * r] = d0 + (d1 * ez - d2 * ey)
-                d[3 * r + 1] = d1 + (d2 * ex - d0 * ez)
-                d[3 * r + 2] = d2 + (d0 * ey - d1 * ex)
-        if started:
-            out[row, 0] = d[2]
-            out[row, 1] = d[3]
-            out[row, 2] = d[7]
-        else:
-            out[row, 0] = 0.0
-            out[row, 1] = 0.0
-            out[row, 2] = 0.0
+            elif k == last:  # only the entries of eq. (24) are needed
+                d2 = d2 + (d0 * ey - d1 * ex)
+                d3 = d3 + (d4 * ez - d5 * ey)
+                d7 = d7 + (d8 * ex - d6 * ez)
+            else:  # D·(I + skew(e)), row by row: (d1·ez − d2·ey, d2·ex − d0·ez, d0·ey − d1·ex)
+                d0, d1, d2 = (
+                    d0 + (d1 * ez - d2 * ey),
+                    d1 + (d2 * ex - d0 * ez),
+                    d2 + (d0 * ey - d1 * ex),
+                )
+                d3, d4, d5 = (
+                    d3 + (d4 * ez - d5 * ey),
+                    d4 + (d5 * ex - d3 * ez),
+                    d5 + (d3 * ey - d4 * ex),
+                )
+                d6, d7, d8 = (
+                    d6 + (d7 * ez - d8 * ey),
+                    d7 + (d8 * ex - d6 * ez),
+                    d8 + (d6 * ey - d7 * ex),
+                )
+        out[row, 0] = d2
+        out[row, 1] = d3
+        out[row, 2] = d7
