@@ -92,17 +92,17 @@ from typing import Any
 
 from rotacal.errors import ConfigError
 from rotacal.signal._values import LARGEST, SMALLEST
-from rotacal.turntable.model import (
+from rotacal.turntable.chain import (
     ANGLE_UNITS,
     COMPONENTS,
     LENGTH_UNITS,
     ErrorSpec,
     Link,
-    Turntable,
     _chain_kinds,
     _check_chain,
     generated_aliases,
 )
+from rotacal.turntable.geometry import Turntable
 
 if sys.version_info >= (3, 11):
     import tomllib

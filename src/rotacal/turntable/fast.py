@@ -1,20 +1,22 @@
-"""The Monte Carlo's orientation-error kernel: every draw through the chain in one pass.
+"""The Monte Carlo's path through the model: many draws of (angles, χ) to (Δψ, Δθ, Δγ).
 
-:meth:`rotacal.turntable.model.Turntable.fast_orientation_error` evaluates ΔR = R_dᵀ·R_t
-(seed 001, eqs. (17)–(24)) by the recursion D ← A_kᵀ·D·A_k·E_k of :func:`_fast_kernel
-<rotacal.turntable.model._fast_kernel>`. That kernel runs on whole arrays, one NumPy operation per
-entry product (about 75 for the seed table), so every draw's numbers go through memory 75 times.
-Here the same recursion runs draw by draw in compiled code (Numba): the nine entries of D stay in
-registers, cos and sin of an angle are taken only where D is no longer the identity (as there),
-and each draw costs its arithmetic only.
+:meth:`Turntable.fast_orientation_error <rotacal.turntable.geometry.Turntable>` (defined here, a
+method of the table through :class:`_FastPath`) evaluates ΔR = R_dᵀ·R_t (seed 001,
+eqs. (17)–(24)) by the recursion D ← A_kᵀ·D·A_k·E_k of :func:`rotacal.turntable.matrices._fast_kernel`.
+That kernel runs on whole arrays, one NumPy operation per entry product (about 75 for the seed
+table), so every draw's numbers go through memory 75 times. Here the same recursion also runs
+draw by draw in compiled code (Numba): the nine entries of D stay in registers, cos and sin of an
+angle are taken only where D is no longer the identity (as there), and each draw costs its
+arithmetic only. The Monte Carlo's draws from its uniforms and its tallies (maxima, histograms,
+draws outside the requirement) are compiled the same way.
 
 The operations are those of ``_fast_kernel`` in the same order. Where that kernel skips a
 constant (a product with an exact 0 or 1, a sum with an exact 0), the compiled one does the
 operation, whose result is the same number (x·1 = x, x + 0 = x, 0·x = ±0 added to y is y for
 finite x); only the sign of an exact zero may differ. cos and sin are the C library's, as
-NumPy's are on this platform; the tests compare the two paths draw by draw.
+NumPy's are on this platform; the tests compare the two paths draw by draw, to the last bit.
 
-Numba compiles the kernel on first use (cached on disk); without Numba, or with the environment
+Numba compiles the kernels on first use (cached on disk); without Numba, or with the environment
 variable ``ROTACAL_NUMBA=0``, the NumPy path is used.
 
 References
@@ -27,9 +29,13 @@ from __future__ import annotations
 import functools
 import os
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from rotacal.errors import ConfigError
+from rotacal.turntable.chain import _FAST_CHUNK, _LinkPlan, _Plan
+from rotacal.turntable.matrices import _fast_kernel, _one_point_kernel
 
 __all__ = [
     "chain_arrays",
@@ -258,3 +264,159 @@ def _kernel(
         out[row, 0] = d2
         out[row, 1] = d3
         out[row, 2] = d7
+
+
+class _FastPath:
+    """:meth:`fast_orientation_error` and its variants of a
+    :class:`~rotacal.turntable.geometry.Turntable`."""
+
+    if TYPE_CHECKING:  # provided by Turntable
+
+        @property
+        def _p(self) -> _Plan: ...
+
+        @property
+        def angle_names(self) -> tuple[str, ...]: ...
+
+        @property
+        def angular_error_names(self) -> tuple[str, ...]: ...
+
+    def fast_orientation_error(self, angles: np.ndarray, chi: np.ndarray) -> np.ndarray:
+        """(Δψ, Δθ, Δγ) of many draws at once, the Monte Carlo path (seed model, eqs. (17)–(24)).
+
+        The same recursion as :meth:`rotation_error` with ``model="seed"``, written as whole-array
+        element-wise products of 3×3 matrices kept as nine arrays, in cache-sized chunks; constant
+        zeros and ones of each link are skipped. Orientation only: translations cannot change it.
+        Inputs are trusted (finite; checked for shape only).
+
+        Parameters
+        ----------
+        angles : ndarray, shape (N, n_angles)
+            Rotation angles (rad), columns :attr:`angle_names`.
+        chi : ndarray, shape (N, n_angular)
+            Angular errors (rad), columns :attr:`angular_error_names`.
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            (Δψ, Δθ, Δγ) in rad.
+
+        References
+        ----------
+        Seed 001, eqs. (17)–(24).
+        """
+        angles = np.asarray(angles, dtype=float)
+        chi = np.asarray(chi, dtype=float)
+        n_angles, n_ang = len(self._p.angle_names), len(self._p.angular)
+        if angles.ndim != 2 or angles.shape[1] != n_angles:
+            raise ConfigError(
+                f"angles must have shape (N, {n_angles}) (columns {', '.join(self.angle_names)}), "
+                f"got {angles.shape}."
+            )
+        if chi.ndim != 2 or chi.shape[1] != n_ang or chi.shape[0] != angles.shape[0]:
+            raise ConfigError(
+                f"chi must have shape ({angles.shape[0]}, {n_ang}) (columns "
+                f"{', '.join(self.angular_error_names)}), got {chi.shape}."
+            )
+        n = angles.shape[0]
+        needs_angle = self._fast_angles()
+        if n == 1:
+            # One point (the worst case's local search asks for thousands, one at a time): the
+            # kernel written out as straight-line code (:func:`_one_point_kernel`) on Python
+            # floats, without NumPy's per-operation overhead on 1-element arrays — the same IEEE
+            # operations in the same order; cos and sin still by NumPy.
+            trig1 = {
+                k: (float(np.cos(angles[:, k])[0]), float(np.sin(angles[:, k])[0]))
+                for k in needs_angle
+            }
+            kernel = _one_point_kernel(self._p.links, needs_angle, n_ang)
+            return np.array([kernel(trig1, [float(v) for v in chi[0]])], dtype=float)
+        out = np.empty((n, 3))
+        if numba_enabled():
+            compiled_kernel()(
+                np.ascontiguousarray(angles),
+                np.ascontiguousarray(chi),
+                *_chain_arrays(self._p.links),
+                out,
+            )
+            return out
+        # the kernel's operations as straight-line code on whole chunks (no per-entry checks)
+        kernel = _one_point_kernel(self._p.links, needs_angle, n_ang)
+        for start in range(0, n, _FAST_CHUNK):
+            stop = min(n, start + _FAST_CHUNK)
+            a_t = angles[start:stop].T
+            c_t = np.ascontiguousarray(chi[start:stop].T)
+            trig = {
+                k: (np.cos(a_t[k]), np.sin(a_t[k])) for k in needs_angle
+            }  # only angles that do not cancel
+            psi, theta, gamma = kernel(trig, c_t)
+            out[start:stop, 0] = psi
+            out[start:stop, 1] = theta
+            out[start:stop, 2] = gamma
+        return out
+
+    def fast_angle_trig(self, angles: np.ndarray) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+        """cos and sin of the angles :meth:`fast_orientation_error_at` needs, by angle index.
+
+        Parameters
+        ----------
+        angles : ndarray, shape (N, n_angles)
+            Rotation angles (rad), columns :attr:`angle_names`.
+
+        Returns
+        -------
+        dict
+            Angle index → (cos, sin), each of shape (N,); slices of them serve any run of rows.
+        """
+        angles = np.asarray(angles, dtype=float)
+        return {k: (np.cos(angles[:, k]), np.sin(angles[:, k])) for k in self._fast_angles()}
+
+    def fast_orientation_error_at(
+        self, trig: dict[int, tuple[np.ndarray, np.ndarray]], chi: np.ndarray, n: int
+    ) -> np.ndarray:
+        """(Δψ, Δθ, Δγ) of one error vector at n angle points: :meth:`fast_orientation_error`
+        for many angles and the same χ, as a search over the vertices of an error box asks.
+
+        The same operations on the same values (each χ_i a 0-d array that broadcasts, so no entry
+        is taken for a constant), hence the same numbers, without gathering a row of χ and the
+        angles' cos and sin for every point again.
+
+        Parameters
+        ----------
+        trig : dict
+            Of the n points, from :meth:`fast_angle_trig` (or slices of its arrays).
+        chi : ndarray, shape (n_angular,)
+            Angular errors (rad), columns :attr:`angular_error_names`.
+        n : int
+            Number of angle points.
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            (Δψ, Δθ, Δγ) in rad.
+
+        References
+        ----------
+        Seed 001, eqs. (17)–(24).
+        """
+        entries = [np.asarray(float(v)) for v in np.asarray(chi, dtype=float)]
+        out = np.empty((n, 3))
+        out[:, 0], out[:, 1], out[:, 2] = _fast_kernel(self._p.links, trig, entries)  # type: ignore[arg-type]
+        return out
+
+    def _fast_angles(self) -> tuple[int, ...]:
+        """Angles whose rotation conjugates a non-identity D (the others cancel exactly)."""
+        needed = []
+        seen_error = False
+        for plan in self._p.links:
+            if plan.axis >= 0 and seen_error:
+                needed.append(plan.angle)
+            if plan.rotations:
+                seen_error = True
+        return tuple(needed)
+
+
+@functools.lru_cache(maxsize=32)
+def _chain_arrays(links: tuple[_LinkPlan, ...]) -> tuple[np.ndarray, ...]:
+    """:func:`rotacal.turntable.fast.chain_arrays` of a chain, made once per chain."""
+    return chain_arrays(links)
