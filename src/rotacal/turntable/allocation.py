@@ -50,16 +50,11 @@ from scipy.optimize import Bounds, minimize
 
 from rotacal.errors import ConfigError
 from rotacal.results import Result
+from rotacal.turntable.chain import ANGLE_UNITS, ARCMIN_PER_RAD, COMPONENTS, SMALL_ANGLE_LIMIT_RAD
 from rotacal.turntable.draws import QUANTILE, TopValues, quantile_interval, top_values_needed
 from rotacal.turntable.fast import compiled_draws, compiled_tally, numba_enabled
+from rotacal.turntable.geometry import Turntable
 from rotacal.turntable.memo import LastResults, memo_key
-from rotacal.turntable.model import (
-    ANGLE_UNITS,
-    ARCMIN_PER_RAD,
-    COMPONENTS,
-    SMALL_ANGLE_LIMIT_RAD,
-    Turntable,
-)
 
 __all__ = [
     "EVERY_ANGLE",

@@ -49,8 +49,10 @@ from rotacal.turntable.calibration import (
     orientation_requirement,
     rate_sensing_error_from_rotation,
 )
+from rotacal.turntable.chain import ARCMIN_PER_RAD, COMPONENTS
+from rotacal.turntable.config import load_turntable
 from rotacal.turntable.draws import COVERAGE, fraction_interval, quantile_interval
-from rotacal.turntable.model import ARCMIN_PER_RAD, COMPONENTS, Turntable, load_turntable
+from rotacal.turntable.geometry import Turntable
 from rotacal.turntable.plausibility import budget_warnings
 from rotacal.turntable.requirement import (
     DEFAULT_DERIVATION,

@@ -62,7 +62,7 @@ from rotacal.gyro.multiposition import (
 )
 from rotacal.results import Result
 from rotacal.sim.multiposition import DEFAULT_LATITUDE_DEG, TABLE1_COEFFICIENTS
-from rotacal.turntable.model import COMPONENTS
+from rotacal.turntable.chain import COMPONENTS
 
 __all__ = [
     "COMPONENTS",

@@ -64,7 +64,6 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -82,6 +81,7 @@ from rotacal.turntable.chain import (
     Link,
     generated_aliases,
 )
+from rotacal.turntable.config import load_turntable, seed_table
 from rotacal.turntable.geometry import Turntable
 
 __all__ = [
@@ -104,63 +104,6 @@ __all__ = [
 
 
 # ------------------------------------------------------------------------------ module level
-def load_turntable(
-    path_or_text: Any = None, *, text: str | None = None, name: str | None = None
-) -> Turntable:
-    """A turntable from its TOML description (:func:`rotacal.turntable.config.load_turntable`).
-
-    Parameters
-    ----------
-    path_or_text : str or path-like, optional
-        The TOML file; a ``str`` containing a line break is the TOML text itself.
-    text : str, optional
-        The TOML text (give either this or ``path_or_text``).
-    name : str, optional
-        The table's name when the document has none (default: the file's stem).
-
-    Returns
-    -------
-    Turntable
-        Angles, angular errors, lower bounds and requirement in rad (converted from the file's
-        ``units``, default arcmin); translations in m (from ``length_units``, default mm).
-
-    Raises
-    ------
-    ConfigError
-        One line naming the file (or "turntable TOML text"), the table and key at fault.
-
-    References
-    ----------
-    Seed 001, §3.2, Tables 2–3 and eqs. (17)–(22) (the chain); eqs. (16), (29) (requirement,
-    lower bounds).
-    """
-    from rotacal.turntable.config import load_turntable as _load
-
-    return _load(path_or_text, text=text, name=name)
-
-
-def seed_table() -> Turntable:
-    """The two-axis turntable of the GyroWheel study, from the packaged ``tables/seed001.toml``.
-
-    Outer axis about y (φ1), a fixed link (orthogonality, intersection), inner axis about z (φ2);
-    errors in the χ order of eq. (25), then η. See :func:`rotacal.turntable.config.seed_table`.
-
-    Returns
-    -------
-    Turntable
-        Requirement 0.027° = 1.62 arcmin per component (eq. (16)), in rad; lower bounds 0.05
-        arcmin (rad) for every angular error and 0 m for η — rotacal's stated choice, the paper
-        gives none; the paper's sensitivity averaging (``sensitivity_grid`` = (45.0, True)).
-
-    References
-    ----------
-    Seed 001, Tables 2–3, eqs. (16)–(22), Figure 8.
-    """
-    from rotacal.turntable.config import seed_table as _seed
-
-    return _seed()
-
-
 @functools.lru_cache(maxsize=1)
 def _seed_cached() -> Turntable:
     return seed_table()

@@ -51,7 +51,8 @@ from rotacal.turntable.calibration import (
     orientation_requirement,
     rate_error_vectors_from_rotation,
 )
-from rotacal.turntable.model import COMPONENTS, SMALL_ANGLE_LIMIT_RAD, Turntable
+from rotacal.turntable.chain import COMPONENTS, SMALL_ANGLE_LIMIT_RAD
+from rotacal.turntable.geometry import Turntable
 
 __all__ = [
     "DEFAULT_DERIVATION",

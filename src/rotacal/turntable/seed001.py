@@ -31,8 +31,9 @@ from typing import Any
 
 import numpy as np
 
+from rotacal.turntable.chain import ARCMIN_PER_RAD, COMPONENTS, SEED_ERROR_NAMES
+from rotacal.turntable.geometry import Turntable
 from rotacal.turntable.memo import LastResults, memo_key
-from rotacal.turntable.model import ARCMIN_PER_RAD, COMPONENTS, SEED_ERROR_NAMES, Turntable
 
 __all__ = [
     "CHI",
