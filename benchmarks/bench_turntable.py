@@ -4,20 +4,27 @@ On the seed's two-axis table (seed 001) with rotacal's allocation for eq. (16)'s
 (0.027° on each component, stated — the packaged table derives its own from 0.01 °/h, see
 ``bench_turntable_requirement.py``; the stated one keeps these figures comparable between runs):
 
-1. ``monte_carlo_check`` with ``--runs`` draws (default 10⁶): random generator, full model
-   (``Turntable.fast_orientation_error``), maxima and histograms — draws/s;
-2. the same draws (same generator and seed) evaluated three ways, all measured in this run:
-   a. ``table.fast_orientation_error`` alone (the fast path),
-   b. the generic batched chain: ``table.transform`` (4×4 homogeneous transforms, eq. (22)) and
+1. ``monte_carlo_check`` with ``--runs`` draws (default 10⁶): random generator, full model, maxima,
+   histograms and largest values — draws/s with the compiled (Numba) path and with the NumPy path
+   (``ROTACAL_NUMBA=0``), the same numbers;
+2. the same draws (same generator and seed) evaluated five ways, all measured in this run:
+   a. ``table.fast_orientation_error``, compiled kernel (turntable/fast.py),
+   b. the same, NumPy path (the kernel's straight-line code per chunk),
+   c. BASELINE: the NumPy kernel as it was before the compiled one (``matrices._fast_kernel`` on
+      chunks of 16 384 draws, its constant checks per entry),
+   d. the generic batched chain: ``table.transform`` (4×4 homogeneous transforms, eq. (22)) and
       ``table.ideal_transform``, ΔR = R_dᵀ·R_t by ``np.matmul`` (eq. (23)), in chunks,
-   c. a per-draw Python loop building the 4×4 matrices of eqs. (17)–(22) with NumPy (on 10⁴
+   e. a per-draw Python loop building the 4×4 matrices of eqs. (17)–(22) with NumPy (on 10⁴
       draws, time scaled to ``--runs``),
-   with their ratio to (a) and the largest difference from (a);
-3. rotacal's upper bounds next to Table 4 (arcmin) and the worst cases (linear and full model).
+   with draws/s, the speed-up over (c) and the largest difference from (a);
+3. seconds and peak RSS of ``monte_carlo_check`` (compiled) at 10⁷ and 10⁸ draws, each in a
+   fresh process (``--sizes``; peak RSS from ``resource.getrusage`` in that process);
+4. rotacal's upper bounds next to Table 4 (arcmin) and the worst cases (linear and full model).
 
-Best of ``--repeat`` (default 3) with ``time.perf_counter``; no asserts.
+Best of ``--repeat`` (default 3) with ``time.perf_counter``; no asserts. ``--quick``: 2·10⁵ draws,
+one repeat, sizes 10⁶ only.
 
-Run: ``python benchmarks/bench_turntable.py [--runs N] [--repeat R]``
+Run: ``python benchmarks/bench_turntable.py [--runs N] [--repeat R] [--sizes 1e7,1e8] [--quick]``
 """
 
 from __future__ import annotations
@@ -28,7 +35,11 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
+import json  # noqa: E402
 import math  # noqa: E402
+import resource  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
 import time  # noqa: E402
 from collections.abc import Callable  # noqa: E402
 from typing import Any  # noqa: E402
@@ -36,6 +47,7 @@ from typing import Any  # noqa: E402
 import numpy as np  # noqa: E402
 
 from rotacal.turntable.allocation import allocate, monte_carlo_check, worst_case  # noqa: E402
+from rotacal.turntable.matrices import _fast_kernel  # noqa: E402
 from rotacal.turntable.model import Turntable, seed_table  # noqa: E402
 from rotacal.turntable.seed001 import EQ16_DEG  # noqa: E402
 from rotacal.turntable.seed001 import TABLE4_ARCMIN as TABLE4  # noqa: E402
@@ -65,6 +77,50 @@ def draws(table: Turntable, alloc: Any, runs: int, seed: int) -> tuple[np.ndarra
     v = 2.0 * u[:, : len(names)] - 1.0
     chi = np.copysign(lb + (ub - lb) * np.abs(v), v)
     return 2.0 * math.pi * u[:, len(names) :], chi
+
+
+def baseline_kernel(table: Turntable, angles: np.ndarray, chi: np.ndarray) -> np.ndarray:
+    """(Δψ, Δθ, Δγ) as ``fast_orientation_error`` computed them before the compiled kernel."""
+    out = np.empty((angles.shape[0], 3))
+    needs_angle = table._fast_angles()
+    for start in range(0, angles.shape[0], 16_384):
+        stop = min(angles.shape[0], start + 16_384)
+        a_t = angles[start:stop].T
+        c_t = np.ascontiguousarray(chi[start:stop].T)
+        trig = {k: (np.cos(a_t[k]), np.sin(a_t[k])) for k in needs_angle}
+        out[start:stop, 0], out[start:stop, 1], out[start:stop, 2] = _fast_kernel(
+            table._p.links, trig, c_t
+        )
+    return out
+
+
+def with_numba(flag: str, fn: Callable[[], Any]) -> Callable[[], Any]:
+    """``fn`` run with ``ROTACAL_NUMBA`` set to ``flag``."""
+
+    def run() -> Any:
+        before = os.environ.get("ROTACAL_NUMBA")
+        os.environ["ROTACAL_NUMBA"] = flag
+        try:
+            return fn()
+        finally:
+            if before is None:
+                del os.environ["ROTACAL_NUMBA"]
+            else:
+                os.environ["ROTACAL_NUMBA"] = before
+
+    return run
+
+
+def child(runs: int) -> None:
+    """Allocate, then time ``monte_carlo_check`` of ``runs`` draws; print seconds and peak RSS."""
+    table = seed_table()
+    alloc = allocate(table, math.radians(EQ16_DEG))
+    monte_carlo_check(table, alloc, runs=1_000, seed=1)  # compile (or load) the kernels first
+    t0 = time.perf_counter()
+    monte_carlo_check(table, alloc, runs=runs, seed=2026)
+    elapsed = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    print(json.dumps({"seconds": elapsed, "peak_mb": peak}))
 
 
 def via_transform(table: Turntable, angles: np.ndarray, chi: np.ndarray) -> np.ndarray:
@@ -110,45 +166,81 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=1_000_000)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--sizes", default="1e7,1e8", help="draws for the seconds/peak-RSS table")
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--child", type=float, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.child:
+        child(int(args.child))
+        return
+    if args.quick:
+        args.runs, args.repeat, args.sizes = 200_000, 1, "1e6"
     runs, seed = args.runs, 2026
 
     table = seed_table()
     t_alloc, alloc = best_of(lambda: allocate(table, math.radians(EQ16_DEG)), 1)
-    t_mc, mc = best_of(lambda: monte_carlo_check(table, alloc, runs=runs, seed=seed), args.repeat)
+    monte_carlo_check(table, alloc, runs=1_000, seed=1)  # compile (or load) the kernels first
+
+    def mc() -> Any:
+        return monte_carlo_check(table, alloc, runs=runs, seed=seed)
+
+    t_mc, result = best_of(with_numba("1", mc), args.repeat)
+    t_mc_np, result_np = best_of(with_numba("0", mc), args.repeat)
+    same_mc = {**result.to_dict(), "draws_per_second": 0} == {
+        **result_np.to_dict(),
+        "draws_per_second": 0,
+    }
     angles, chi = draws(table, alloc, runs, seed)
-    t_fast, d_fast = best_of(lambda: table.fast_orientation_error(angles, chi), args.repeat)
+    fast = lambda: table.fast_orientation_error(angles, chi)  # noqa: E731
+    t_fast, d_fast = best_of(with_numba("1", fast), args.repeat)
+    t_np, d_np = best_of(with_numba("0", fast), args.repeat)
+    t_base, d_base = best_of(lambda: baseline_kernel(table, angles, chi), args.repeat)
     t_htm, d_htm = best_of(lambda: via_transform(table, angles, chi), 1)
     n_loop = min(LOOP_DRAWS, runs)
     t_loop_part, d_loop = best_of(lambda: per_draw_loop(angles[:n_loop], chi[:n_loop]), 1)
     t_loop = t_loop_part * runs / n_loop
     same = all(
-        float(np.max(np.abs(d_fast[:, j]))) == mc.max_abs_rad[c]
+        float(np.max(np.abs(d_fast[:, j]))) == result.max_abs_rad[c]
         for j, c in enumerate(("psi", "theta", "gamma"))
     )
 
     print(f"turntable Monte Carlo, seed 001 table, {runs:,} draws, one core")
-    print(f"{'case':62s} {'time':>9s} {'draws/s':>12s} {'ratio':>8s}  max |Δ − fast| (rad)")
+    print(f"{'case':66s} {'time':>9s} {'draws/s':>12s} {'× (c)':>7s}  max |Δ − (a)| (rad)")
     rows = [
-        ("monte_carlo_check (RNG + full model + histograms)", t_mc, None),
-        ("a. fast_orientation_error alone", t_fast, 0.0),
-        (
-            "b. batched 4×4 HTM chain: transform + matmul",
-            t_htm,
-            float(np.max(np.abs(d_htm - d_fast))),
-        ),
-        (
-            f"c. per-draw Python loop, eqs. (17)–(22) ({n_loop:,} draws, scaled)",
-            t_loop,
-            float(np.max(np.abs(d_loop - d_fast[:n_loop]))),
-        ),
-    ]
+        ("monte_carlo_check, compiled (RNG + model + tallies)", t_mc, None),
+        ("monte_carlo_check, NumPy path (ROTACAL_NUMBA=0)", t_mc_np, None),
+        ("a. fast_orientation_error, compiled kernel", t_fast, 0.0),
+        ("b. fast_orientation_error, NumPy path", t_np, float(np.max(np.abs(d_np - d_fast)))),
+        ("c. BASELINE: the NumPy kernel before (_fast_kernel per chunk)", t_base,
+         float(np.max(np.abs(d_base - d_fast)))),
+        ("d. batched 4×4 HTM chain: transform + matmul", t_htm,
+         float(np.max(np.abs(d_htm - d_fast)))),
+        (f"e. per-draw Python loop, eqs. (17)–(22) ({n_loop:,} draws, scaled)", t_loop,
+         float(np.max(np.abs(d_loop - d_fast[:n_loop])))),
+    ]  # fmt: skip
     for label, t, diff in rows:
         print(
-            f"{label:62s} {t:8.3f}s {runs / t:12,.0f} {t / t_fast:8.1f}  "
+            f"{label:66s} {t:8.3f}s {runs / t:12,.0f} {t_base / t:7.2f}  "
             + ("" if diff is None else f"{diff:.1e}")
         )
-    print(f"ratio: time / time of (a); same draws as the Monte Carlo (equal maxima): {same}")
+    print(
+        f"× (c): draws/s over the baseline (c), measured in this run; the Monte Carlo's result "
+        f"is the same on both paths: {same_mc}; its maxima are (a)'s: {same}"
+    )
+    print()
+    print(f"{'monte_carlo_check draws':>24s} {'seconds':>9s} {'draws/s':>12s} {'peak RSS':>10s}")
+    for size in (int(float(x)) for x in args.sizes.split(",") if x):
+        out = subprocess.run(
+            [sys.executable, __file__, "--child", str(size)],
+            check=True,
+            capture_output=True,
+            text=True,
+        ).stdout
+        got = json.loads(out.strip().splitlines()[-1])
+        print(
+            f"{size:24,d} {got['seconds']:9.2f} {size / got['seconds']:12,.0f} "
+            f"{got['peak_mb']:7.0f} MB"
+        )
     print()
     print(f"allocation (SLSQP + exchange, full-model guard) in {t_alloc:.2f} s; arcmin:")
     print(f"{'error':10s} {'Table 4':>9s} {'rotacal':>9s} {'ratio':>7s}  binding")
@@ -170,10 +262,10 @@ def main() -> None:
         print(
             f"{c:22s} {wc4[c]['linear_rad'] / ARCMIN:10.5f} {wc4[c]['full_rad'] / ARCMIN:10.5f} "
             f"{w['linear_rad'] / ARCMIN:10.5f} {w['full_rad'] / ARCMIN:10.5f} "
-            f"{mc.max_abs_arcmin[c]:10.5f} {alloc.requirement_rad[c] / ARCMIN:8.3f}"
+            f"{result.max_abs_arcmin[c]:10.5f} {alloc.requirement_rad[c] / ARCMIN:8.3f}"
         )
     print(
-        f"Monte Carlo: all within = {mc.all_within}, outside = {mc.outside}; full-model guard "
+        f"Monte Carlo: all within = {result.all_within}, outside = {result.outside}; full-model guard "
         f"scales {alloc.optimiser['full_model_scale']}"
     )
 

@@ -186,84 +186,99 @@ def _kernel(
     last_link: np.ndarray,
     out: np.ndarray,
 ) -> None:
-    """D ← A_kᵀ·D·A_k·E_k draw by draw, the operations of ``_fast_kernel`` in its order.
+    """D ← A_kᵀ·D·A_k·E_k for blocks of draws, the operations of ``_fast_kernel`` in its order.
 
-    D is nine scalars (row-major d0…d8) so that the compiler keeps them in registers; the
-    conjugation by a rotation about x, y or z is written out for each axis: with (i, j) the plane
-    it turns (y–z, z–x, x–y), D·A mixes columns i, j of every row and Aᵀ·(D·A) rows i, j of every
-    column, each pair (a, b) becoming (a·c + b·s, b·c − a·s).
+    Link by link over a block of 256 draws (D as nine rows of the block, in the first-level
+    cache): each loop over the block does one kind of step for every draw without a branch, so
+    the compiler runs it on several draws at once. The conjugation by a rotation about the axis
+    with plane (i, j) mixes columns i, j of every row of D (D·A), then rows i, j of every column
+    (Aᵀ·(D·A)), each pair (a, b) becoming (a·c + b·s, b·c − a·s).
     """
+    n = angles.shape[0]
     n_links = axis.shape[0]
     last = last_link[0]
-    for row in range(angles.shape[0]):
+    block = 256
+    d = np.empty((9, block))
+    e = np.empty((3, block))
+    cos = np.empty(block)
+    sin = np.empty(block)
+    for lo in range(0, n, block):
+        m = min(block, n - lo)
         started = False
-        d0 = d1 = d2 = d3 = d4 = d5 = d6 = d7 = d8 = 0.0
         for k in range(n_links):
             ax = axis[k]
             if ax >= 0 and started:
-                phi = angles[row, angle[k]]
-                c = np.cos(phi)
-                s = np.sin(phi)
-                if ax == 0:  # (i, j) = (1, 2)
-                    d1, d2 = d1 * c + d2 * s, d2 * c - d1 * s
-                    d4, d5 = d4 * c + d5 * s, d5 * c - d4 * s
-                    d7, d8 = d7 * c + d8 * s, d8 * c - d7 * s
-                    d3, d6 = d3 * c + d6 * s, d6 * c - d3 * s
-                    d4, d7 = d4 * c + d7 * s, d7 * c - d4 * s
-                    d5, d8 = d5 * c + d8 * s, d8 * c - d5 * s
-                elif ax == 1:  # (i, j) = (2, 0)
-                    d2, d0 = d2 * c + d0 * s, d0 * c - d2 * s
-                    d5, d3 = d5 * c + d3 * s, d3 * c - d5 * s
-                    d8, d6 = d8 * c + d6 * s, d6 * c - d8 * s
-                    d6, d0 = d6 * c + d0 * s, d0 * c - d6 * s
-                    d7, d1 = d7 * c + d1 * s, d1 * c - d7 * s
-                    d8, d2 = d8 * c + d2 * s, d2 * c - d8 * s
-                else:  # (i, j) = (0, 1)
-                    d0, d1 = d0 * c + d1 * s, d1 * c - d0 * s
-                    d3, d4 = d3 * c + d4 * s, d4 * c - d3 * s
-                    d6, d7 = d6 * c + d7 * s, d7 * c - d6 * s
-                    d0, d3 = d0 * c + d3 * s, d3 * c - d0 * s
-                    d1, d4 = d1 * c + d4 * s, d4 * c - d1 * s
-                    d2, d5 = d2 * c + d5 * s, d5 * c - d2 * s
+                column = angle[k]
+                for r in range(m):
+                    phi = angles[lo + r, column]
+                    cos[r] = np.cos(phi)
+                    sin[r] = np.sin(phi)
+                i = (ax + 1) % 3
+                j = (ax + 2) % 3
+                for p in range(6):
+                    if p < 3:
+                        a = d[3 * p + i]
+                        b = d[3 * p + j]
+                    else:
+                        a = d[3 * i + p - 3]
+                        b = d[3 * j + p - 3]
+                    for r in range(m):
+                        x = a[r]
+                        y = b[r]
+                        a[r] = x * cos[r] + y * sin[r]
+                        b[r] = y * cos[r] - x * sin[r]
             if start[k + 1] == start[k]:
                 continue
-            ex = ey = ez = 0.0
+            ex = e[0]
+            ey = e[1]
+            ez = e[2]
+            for r in range(m):
+                ex[r] = 0.0
+                ey[r] = 0.0
+                ez[r] = 0.0
             for q in range(start[k], start[k + 1]):
-                a = error_axis[q]
-                if a == 0:
-                    ex = ex + chi[row, error[q]]
-                elif a == 1:
-                    ey = ey + chi[row, error[q]]
-                else:
-                    ez = ez + chi[row, error[q]]
+                acc = e[error_axis[q]]
+                column = error[q]
+                for r in range(m):
+                    acc[r] = acc[r] + chi[lo + r, column]
             if not started:
-                d0, d1, d2 = 1.0, 0.0 - ez, ey
-                d3, d4, d5 = ez, 1.0, 0.0 - ex
-                d6, d7, d8 = 0.0 - ey, ex, 1.0
+                for r in range(m):
+                    d[0, r] = 1.0
+                    d[1, r] = 0.0 - ez[r]
+                    d[2, r] = ey[r]
+                    d[3, r] = ez[r]
+                    d[4, r] = 1.0
+                    d[5, r] = 0.0 - ex[r]
+                    d[6, r] = 0.0 - ey[r]
+                    d[7, r] = ex[r]
+                    d[8, r] = 1.0
                 started = True
-            elif k == last:  # only the entries of eq. (24) are needed
-                d2 = d2 + (d0 * ey - d1 * ex)
-                d3 = d3 + (d4 * ez - d5 * ey)
-                d7 = d7 + (d8 * ex - d6 * ez)
-            else:  # D·(I + skew(e)), row by row: (d1·ez − d2·ey, d2·ex − d0·ez, d0·ey − d1·ex)
-                d0, d1, d2 = (
-                    d0 + (d1 * ez - d2 * ey),
-                    d1 + (d2 * ex - d0 * ez),
-                    d2 + (d0 * ey - d1 * ex),
-                )
-                d3, d4, d5 = (
-                    d3 + (d4 * ez - d5 * ey),
-                    d4 + (d5 * ex - d3 * ez),
-                    d5 + (d3 * ey - d4 * ex),
-                )
-                d6, d7, d8 = (
-                    d6 + (d7 * ez - d8 * ey),
-                    d7 + (d8 * ex - d6 * ez),
-                    d8 + (d6 * ey - d7 * ex),
-                )
-        out[row, 0] = d2
-        out[row, 1] = d3
-        out[row, 2] = d7
+            elif k == last:
+                for r in range(m):
+                    d[2, r] = d[2, r] + (d[0, r] * ey[r] - d[1, r] * ex[r])
+                    d[3, r] = d[3, r] + (d[4, r] * ez[r] - d[5, r] * ey[r])
+                    d[7, r] = d[7, r] + (d[8, r] * ex[r] - d[6, r] * ez[r])
+            else:
+                for p in range(3):
+                    a0 = d[3 * p]
+                    a1 = d[3 * p + 1]
+                    a2 = d[3 * p + 2]
+                    for r in range(m):
+                        x0 = a0[r]
+                        x1 = a1[r]
+                        x2 = a2[r]
+                        a0[r] = x0 + (x1 * ez[r] - x2 * ey[r])
+                        a1[r] = x1 + (x2 * ex[r] - x0 * ez[r])
+                        a2[r] = x2 + (x0 * ey[r] - x1 * ex[r])
+        for r in range(m):
+            if started:
+                out[lo + r, 0] = d[2, r]
+                out[lo + r, 1] = d[3, r]
+                out[lo + r, 2] = d[7, r]
+            else:
+                out[lo + r, 0] = 0.0
+                out[lo + r, 1] = 0.0
+                out[lo + r, 2] = 0.0
 
 
 class _FastPath:
