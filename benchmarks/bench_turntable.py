@@ -116,11 +116,12 @@ def child(runs: int) -> None:
     table = seed_table()
     alloc = allocate(table, math.radians(EQ16_DEG))
     monte_carlo_check(table, alloc, runs=1_000, seed=1)  # compile (or load) the kernels first
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     t0 = time.perf_counter()
     monte_carlo_check(table, alloc, runs=runs, seed=2026)
     elapsed = time.perf_counter() - t0
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    print(json.dumps({"seconds": elapsed, "peak_mb": peak}))
+    print(json.dumps({"seconds": elapsed, "peak_mb": peak, "before_mb": before}))
 
 
 def via_transform(table: Turntable, angles: np.ndarray, chi: np.ndarray) -> np.ndarray:
@@ -228,7 +229,10 @@ def main() -> None:
         f"is the same on both paths: {same_mc}; its maxima are (a)'s: {same}"
     )
     print()
-    print(f"{'monte_carlo_check draws':>24s} {'seconds':>9s} {'draws/s':>12s} {'peak RSS':>10s}")
+    print(
+        f"{'monte_carlo_check draws':>24s} {'seconds':>9s} {'draws/s':>12s} {'peak RSS':>10s} "
+        f"{'before the Monte Carlo (imports, allocation)':>46s}"
+    )
     for size in (int(float(x)) for x in args.sizes.split(",") if x):
         out = subprocess.run(
             [sys.executable, __file__, "--child", str(size)],
@@ -239,7 +243,7 @@ def main() -> None:
         got = json.loads(out.strip().splitlines()[-1])
         print(
             f"{size:24,d} {got['seconds']:9.2f} {size / got['seconds']:12,.0f} "
-            f"{got['peak_mb']:7.0f} MB"
+            f"{got['peak_mb']:7.0f} MB {got['before_mb']:43.0f} MB"
         )
     print()
     print(f"allocation (SLSQP + exchange, full-model guard) in {t_alloc:.2f} s; arcmin:")
