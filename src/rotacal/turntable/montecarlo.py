@@ -169,13 +169,16 @@ def monte_carlo_check(
     largest = TopValues(top_values_needed(runs_i), 3)  # for the 99.9 % quantile of |Δ|
     t0 = time.perf_counter()
     done = 0
-    if numba_enabled():  # the same numbers, each chunk's draws and tallies in one pass
+    compiled = numba_enabled()
+    if compiled:  # the same numbers, each chunk's draws and tallies in one pass
         draws, tally = compiled_draws(), compiled_tally()
-        chi_buffer, angle_buffer = np.empty((chunk_i, n_err)), np.empty((chunk_i, n_angles))
+        rows = min(chunk_i, runs_i)  # buffers filled again for every chunk
+        chi_buffer, angle_buffer = np.empty((rows, n_err)), np.empty((rows, n_angles))
+        uniforms = np.empty((rows, n_err + n_angles))
     while done < runs_i:
         m = min(chunk_i, runs_i - done)
-        u = rng.random((m, n_err + n_angles))
-        if numba_enabled():
+        if compiled:
+            u = rng.random(out=uniforms[:m])  # the same numbers as rng.random((m, ·))
             chi, angles = chi_buffer[:m], angle_buffer[:m]
             draws(u, lb, width, signs == "random", chi, angles)
             d = _fast(table, angles, chi)
@@ -185,6 +188,7 @@ def monte_carlo_check(
             if progress is not None:
                 progress(done, runs_i)
             continue
+        u = rng.random((m, n_err + n_angles))
         if signs == "random":
             v = 2.0 * u[:, :n_err] - 1.0
             chi = np.copysign(lb + width * np.abs(v), v)
