@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rotacal.turntable.fast import numba_enabled
+from rotacal.turntable.fast import COMPILE_FROM_DRAWS, use_compiled
 from rotacal.turntable.model import ErrorSpec, Link, Turntable, seed_table
 
 
@@ -56,6 +56,7 @@ CHAINS = {
 
 def _both(table: Turntable, angles: np.ndarray, chi: np.ndarray, monkeypatch: pytest.MonkeyPatch):
     monkeypatch.setenv("ROTACAL_NUMBA", "1")
+    assert use_compiled(angles.shape[0])
     compiled = table.fast_orientation_error(angles, chi)
     monkeypatch.setenv("ROTACAL_NUMBA", "0")
     numpy_path = table.fast_orientation_error(angles, chi)
@@ -67,7 +68,6 @@ def _both(table: Turntable, angles: np.ndarray, chi: np.ndarray, monkeypatch: py
 def test_compiled_kernel_equals_the_numpy_path(
     name: str, size: float, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    assert numba_enabled()
     table = CHAINS[name]
     rng = np.random.default_rng(17)
     n = 40_000  # more than two of the NumPy path's chunks
@@ -91,8 +91,10 @@ def test_compiled_kernel_on_two_and_one_rows(monkeypatch: pytest.MonkeyPatch) ->
     np.testing.assert_array_equal(one, compiled[1:])
 
 
-def test_numba_can_be_switched_off(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_numba_can_be_switched_off_and_forced(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("ROTACAL_NUMBA", "0")
-    assert not numba_enabled()
+    assert not use_compiled(10**9)
     monkeypatch.setenv("ROTACAL_NUMBA", "1")
-    assert numba_enabled()
+    assert use_compiled(1)
+    monkeypatch.delenv("ROTACAL_NUMBA")
+    assert use_compiled(COMPILE_FROM_DRAWS)

@@ -16,8 +16,10 @@ operation, whose result is the same number (x·1 = x, x + 0 = x, 0·x = ±0 adde
 finite x); only the sign of an exact zero may differ. cos and sin are the C library's, as
 NumPy's are on this platform; the tests compare the two paths draw by draw, to the last bit.
 
-Numba compiles the kernels on first use (cached on disk); without Numba, or with the environment
-variable ``ROTACAL_NUMBA=0``, the NumPy path is used.
+Numba compiles the kernels on first use (cached on disk). Loading Numba and the cached kernels
+costs a fresh process about 1 s, so they are used from :data:`COMPILE_FROM_DRAWS` draws (or once
+loaded); ``ROTACAL_NUMBA=1`` uses them always, ``ROTACAL_NUMBA=0`` never (and without Numba the
+NumPy path is used).
 
 References
 ----------
@@ -38,19 +40,33 @@ from rotacal.turntable.chain import _FAST_CHUNK, _LinkPlan, _Plan
 from rotacal.turntable.matrices import _fast_kernel, _one_point_kernel
 
 __all__ = [
+    "COMPILE_FROM_DRAWS",
     "chain_arrays",
     "compiled_draws",
     "compiled_kernel",
     "compiled_tally",
-    "numba_enabled",
+    "use_compiled",
 ]
 
 
-def numba_enabled() -> bool:
-    """Whether the compiled kernel is to be used: Numba importable and ``ROTACAL_NUMBA`` not 0."""
-    if os.environ.get("ROTACAL_NUMBA", "1").strip() == "0":
+#: Draws from which the compiled path pays for loading Numba and the kernels in a fresh process
+#: (about 1 s and 100 MB; the NumPy path runs ~10⁶ draws/s, the compiled one ~3.5·10⁶ with the
+#: Monte Carlo's generator, so the two meet near 1.5·10⁶ draws on the development machine).
+COMPILE_FROM_DRAWS = 2_000_000
+
+
+def use_compiled(draws: int) -> bool:
+    """Whether ``draws`` draws go through the compiled kernels (the numbers are the same).
+
+    ``ROTACAL_NUMBA=0``: never; ``ROTACAL_NUMBA=1``: always (when Numba is installed); otherwise
+    from :data:`COMPILE_FROM_DRAWS` draws, or for any number once the kernels are loaded in this
+    process.
+    """
+    setting = os.environ.get("ROTACAL_NUMBA", "").strip()
+    if setting == "0":
         return False
-    return _numba_available()
+    wanted = setting == "1" or draws >= COMPILE_FROM_DRAWS or _jit.cache_info().currsize > 0
+    return wanted and _numba_available()  # Numba imported only when wanted
 
 
 @functools.cache
@@ -347,7 +363,7 @@ class _FastPath:
             kernel = _one_point_kernel(self._p.links, needs_angle, n_ang)
             return np.array([kernel(trig1, [float(v) for v in chi[0]])], dtype=float)
         out = np.empty((n, 3))
-        if numba_enabled():
+        if use_compiled(n):
             compiled_kernel()(
                 np.ascontiguousarray(angles),
                 np.ascontiguousarray(chi),

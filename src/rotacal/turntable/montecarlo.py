@@ -25,7 +25,7 @@ from rotacal.errors import ConfigError
 from rotacal.results import Result
 from rotacal.turntable.chain import ARCMIN_PER_RAD, COMPONENTS
 from rotacal.turntable.draws import QUANTILE, TopValues, quantile_interval, top_values_needed
-from rotacal.turntable.fast import compiled_draws, compiled_tally, numba_enabled
+from rotacal.turntable.fast import compiled_draws, compiled_tally, use_compiled
 from rotacal.turntable.geometry import Turntable
 from rotacal.turntable.worstcase import (
     _TWO_PI,
@@ -169,7 +169,7 @@ def monte_carlo_check(
     largest = TopValues(top_values_needed(runs_i), 3)  # for the 99.9 % quantile of |Δ|
     t0 = time.perf_counter()
     done = 0
-    compiled = numba_enabled()
+    compiled = use_compiled(runs_i)
     if compiled:  # the same numbers, each chunk's draws and tallies in one pass
         draws, tally = compiled_draws(), compiled_tally()
         rows = min(chunk_i, runs_i)  # buffers filled again for every chunk
