@@ -9,7 +9,7 @@ On the seed's two-axis table (seed 001) with rotacal's allocation for eq. (16)'s
    (``ROTACAL_NUMBA=0``), the same numbers;
 2. the same draws (same generator and seed) evaluated five ways, all measured in this run:
    a. ``table.fast_orientation_error``, compiled kernel (turntable/fast.py),
-   b. the same, NumPy path (the kernel's straight-line code per chunk),
+   b. the same, NumPy path (``ROTACAL_NUMBA=0``: the code of c, through the method),
    c. BASELINE: the NumPy kernel as it was before the compiled one (``matrices._fast_kernel`` on
       chunks of 16 384 draws, its constant checks per entry),
    d. the generic batched chain: ``table.transform`` (4×4 homogeneous transforms, eq. (22)) and
@@ -211,7 +211,8 @@ def main() -> None:
         ("monte_carlo_check, compiled (RNG + model + tallies)", t_mc, None),
         ("monte_carlo_check, NumPy path (ROTACAL_NUMBA=0)", t_mc_np, None),
         ("a. fast_orientation_error, compiled kernel", t_fast, 0.0),
-        ("b. fast_orientation_error, NumPy path", t_np, float(np.max(np.abs(d_np - d_fast)))),
+        ("b. fast_orientation_error, NumPy path (the code of c)", t_np,
+         float(np.max(np.abs(d_np - d_fast)))),
         ("c. BASELINE: the NumPy kernel before (_fast_kernel per chunk)", t_base,
          float(np.max(np.abs(d_base - d_fast)))),
         ("d. batched 4×4 HTM chain: transform + matmul", t_htm,

@@ -371,8 +371,6 @@ class _FastPath:
                 out,
             )
             return out
-        # the kernel's operations as straight-line code on whole chunks (no per-entry checks)
-        kernel = _one_point_kernel(self._p.links, needs_angle, n_ang)
         for start in range(0, n, _FAST_CHUNK):
             stop = min(n, start + _FAST_CHUNK)
             a_t = angles[start:stop].T
@@ -380,7 +378,7 @@ class _FastPath:
             trig = {
                 k: (np.cos(a_t[k]), np.sin(a_t[k])) for k in needs_angle
             }  # only angles that do not cancel
-            psi, theta, gamma = kernel(trig, c_t)
+            psi, theta, gamma = _fast_kernel(self._p.links, trig, c_t)
             out[start:stop, 0] = psi
             out[start:stop, 1] = theta
             out[start:stop, 2] = gamma
