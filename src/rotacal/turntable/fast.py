@@ -4,11 +4,11 @@
 method of the table through :class:`_FastPath`) evaluates ΔR = R_dᵀ·R_t (seed 001,
 eqs. (17)–(24)) by the recursion D ← A_kᵀ·D·A_k·E_k of :func:`rotacal.turntable.matrices._fast_kernel`.
 That kernel runs on whole arrays, one NumPy operation per entry product (about 75 for the seed
-table), so every draw's numbers go through memory 75 times. Here the same recursion also runs
-draw by draw in compiled code (Numba): the nine entries of D stay in registers, cos and sin of an
-angle are taken only where D is no longer the identity (as there), and each draw costs its
-arithmetic only. The Monte Carlo's draws from its uniforms and its tallies (maxima, histograms,
-draws outside the requirement) are compiled the same way.
+table), so every draw's numbers go through memory 75 times. Here the same recursion also runs in
+compiled code (Numba) over blocks of 256 draws: D is nine rows of the block, kept in the
+first-level cache, each step a loop without branches over the block; cos and sin of an angle are
+taken only where D is no longer the identity (as there). The Monte Carlo's draws from its
+uniforms and its tallies (maxima, histograms, draws outside the requirement) are compiled too.
 
 The operations are those of ``_fast_kernel`` in the same order. Where that kernel skips a
 constant (a product with an exact 0 or 1, a sum with an exact 0), the compiled one does the
