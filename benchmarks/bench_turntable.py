@@ -6,7 +6,8 @@ On the seed's two-axis table (seed 001) with rotacal's allocation for eq. (16)'s
 
 1. ``monte_carlo_check`` with ``--runs`` draws (default 10⁶): random generator, full model, maxima,
    histograms and largest values — draws/s with the compiled (Numba) path and with the NumPy path
-   (``ROTACAL_NUMBA=0``), the same numbers;
+   (``ROTACAL_NUMBA=0``), the same numbers; and its generator alone (the same stream of uniforms,
+   one row per draw: no faster Monte Carlo gives the same draws);
 2. the same draws (same generator and seed) evaluated five ways, all measured in this run:
    a. ``table.fast_orientation_error``, compiled kernel (turntable/fast.py),
    b. the same, NumPy path (``ROTACAL_NUMBA=0``: the code of c, through the method),
@@ -18,7 +19,8 @@ On the seed's two-axis table (seed 001) with rotacal's allocation for eq. (16)'s
       draws, time scaled to ``--runs``),
    with draws/s, the speed-up over (c) and the largest difference from (a);
 3. seconds and peak RSS of ``monte_carlo_check`` (compiled) at 10⁷ and 10⁸ draws, each in a
-   fresh process (``--sizes``; peak RSS: that process's VmHWM);
+   fresh process (``--sizes``; peak RSS: that process's VmHWM), after importing Numba and loading
+   (or compiling) the kernels, whose time is printed apart;
 4. rotacal's upper bounds next to Table 4 (arcmin) and the worst cases (linear and full model).
 
 Best of ``--repeat`` (default 3) with ``time.perf_counter``; no asserts. ``--quick``: 2·10⁵ draws,
@@ -128,13 +130,16 @@ def child(runs: int) -> None:
     """Allocate, then time ``monte_carlo_check`` of ``runs`` draws; print seconds and peak RSS."""
     table = seed_table()
     alloc = allocate(table, math.radians(EQ16_DEG))
-    monte_carlo_check(table, alloc, runs=1_000, seed=1)  # compile (or load) the kernels first
+    t0 = time.perf_counter()
+    warm = with_numba("1", lambda: monte_carlo_check(table, alloc, runs=1_000, seed=1))
+    warm()  # import Numba and compile (or load) the kernels: timed apart
+    load = time.perf_counter() - t0
     before = peak_rss_mb()
     t0 = time.perf_counter()
     monte_carlo_check(table, alloc, runs=runs, seed=2026)
     elapsed = time.perf_counter() - t0
     peak = peak_rss_mb()
-    print(json.dumps({"seconds": elapsed, "peak_mb": peak, "before_mb": before}))
+    print(json.dumps({"seconds": elapsed, "peak_mb": peak, "before_mb": before, "load": load}))
 
 
 def via_transform(table: Turntable, angles: np.ndarray, chi: np.ndarray) -> np.ndarray:
@@ -193,13 +198,21 @@ def main() -> None:
 
     table = seed_table()
     t_alloc, alloc = best_of(lambda: allocate(table, math.radians(EQ16_DEG)), 1)
-    monte_carlo_check(table, alloc, runs=1_000, seed=1)  # compile (or load) the kernels first
+    with_numba("1", lambda: monte_carlo_check(table, alloc, runs=1_000, seed=1))()  # compile first
 
     def mc() -> Any:
         return monte_carlo_check(table, alloc, runs=runs, seed=seed)
 
     t_mc, result = best_of(with_numba("1", mc), args.repeat)
     t_mc_np, result_np = best_of(with_numba("0", mc), args.repeat)
+    width = len(table.angular_error_names) + len(table.angle_names)
+
+    def uniforms_only() -> None:
+        rng, buffer = np.random.Generator(np.random.PCG64(seed)), np.empty((262_144, width))
+        for start in range(0, runs, 262_144):
+            rng.random(out=buffer[: min(262_144, runs - start)])
+
+    t_rng, _ = best_of(uniforms_only, args.repeat)
     same_mc = {**result.to_dict(), "draws_per_second": 0} == {
         **result_np.to_dict(),
         "draws_per_second": 0,
@@ -223,6 +236,7 @@ def main() -> None:
     rows = [
         ("monte_carlo_check, compiled (RNG + model + tallies)", t_mc, None),
         ("monte_carlo_check, NumPy path (ROTACAL_NUMBA=0)", t_mc_np, None),
+        (f"   its generator alone: PCG64, {width} uniforms per draw (the floor)", t_rng, None),
         ("a. fast_orientation_error, compiled kernel", t_fast, 0.0),
         ("b. fast_orientation_error, NumPy path (the code of c)", t_np,
          float(np.max(np.abs(d_np - d_fast)))),
@@ -245,7 +259,7 @@ def main() -> None:
     print()
     print(
         f"{'monte_carlo_check draws':>24s} {'seconds':>9s} {'draws/s':>12s} {'peak RSS':>10s} "
-        f"{'before the Monte Carlo (imports, allocation)':>46s}"
+        f"{'before it (imports, allocation)':>32s} {'kernels loaded in':>18s}"
     )
     for size in (int(float(x)) for x in args.sizes.split(",") if x):
         out = subprocess.run(
@@ -257,7 +271,7 @@ def main() -> None:
         got = json.loads(out.strip().splitlines()[-1])
         print(
             f"{size:24,d} {got['seconds']:9.2f} {size / got['seconds']:12,.0f} "
-            f"{got['peak_mb']:7.0f} MB {got['before_mb']:43.0f} MB"
+            f"{got['peak_mb']:7.0f} MB {got['before_mb']:29.0f} MB {got['load']:16.2f} s"
         )
     print()
     print(f"allocation (SLSQP + exchange, full-model guard) in {t_alloc:.2f} s; arcmin:")
