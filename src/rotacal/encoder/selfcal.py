@@ -44,6 +44,7 @@ from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy import fft as sp_fft
 from scipy.signal import find_peaks
 
 from rotacal.encoder.plausibility import selfcal_warnings
@@ -490,6 +491,20 @@ def _local_rate_deg_s(mean_times: FloatArray, pitch_deg: float) -> FloatArray:
     return rate
 
 
+def _autocorrelation(x: FloatArray, lags: int) -> FloatArray:
+    """Σ_i x_i·x_{i+ℓ} for ℓ = 0 … lags − 1, by a zero-padded FFT of a fast length ≥ 2N.
+
+    The spectrum's power is formed in place: the whole-record FFT is the largest array of a
+    long capture, and a power of two ≥ 2N was up to 4N long with a product array beside it.
+    """
+    size = sp_fft.next_fast_len(2 * x.size, real=True)
+    f = sp_fft.rfft(x, size, workers=1)
+    power = f.real**2
+    power += f.imag**2
+    del f
+    return np.asarray(sp_fft.irfft(power, size, workers=1)[:lags], dtype=np.float64)
+
+
 def check_period(signal: FloatArray, m: int, *, coarse: bool = True) -> bool:
     """Refuse a pulses-per-revolution that contradicts the period of the deviation.
 
@@ -511,9 +526,7 @@ def check_period(signal: FloatArray, m: int, *, coarse: bool = True) -> bool:
     lo, hi = max(2, m // 8), n - max(m // 4, n // 4)
     if not lo <= m <= hi:
         return False
-    size = 1 << int(np.ceil(np.log2(2 * n)))
-    f = np.fft.rfft(x, size)
-    acf = np.fft.irfft(f * np.conj(f), size)[: hi + 1]
+    acf = _autocorrelation(x, hi + 1)
     c2 = np.cumsum(x**2)
     lags = np.arange(lo, hi + 1)
     # normalise by the energy of both overlapping parts
