@@ -294,7 +294,6 @@ class SelfCalibration(Result):
     head0_pulses: int
     notes: list[str]
     _per_revolution_arcsec: FloatArray = dataclasses.field(repr=False)
-    _head_differences_arcsec: FloatArray = dataclasses.field(repr=False)
     _spectrum_arcsec: FloatArray = dataclasses.field(repr=False)
     head_offsets_arcsec_u: list[float] | None = None
     head_offsets_dof: float | None = None
@@ -1001,7 +1000,6 @@ def self_calibrate(
         head_offsets_arcsec_u=offsets_u,
         head_offsets_dof=offsets_dof,
         _per_revolution_arcsec=per_rev,
-        _head_differences_arcsec=angle_diff,
         _spectrum_arcsec=amp,
         _noise=noise,
         _point_budget=point,
