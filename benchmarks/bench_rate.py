@@ -7,7 +7,8 @@ times included: 8 bytes per timestamp), on a twin made in the child:
   300 °/s, the issue's case: no self-calibration, so every part of the analysis is the rate's);
 - ``selfcal R``: ``self_calibrate`` of 12 heads × 18,000 pulses × R revolutions.
 
-Printed per case: timestamps, seconds, timestamps/s, peak RSS (MB) and bytes per timestamp
+Printed per case: timestamps, seconds (wall, and the child's CPU time: on a shared machine the
+steadier figure), timestamps/s (wall), peak RSS (MB) and bytes per timestamp
 above the idle child's (the interpreter and the imports), and the ratio of the analysis's time
 to the baseline measured in the same child — the rate points ``360·A/m / (t[i+A] − t[i])`` over
 the whole record for ``rate`` (the least any rate analysis does), the nearest-pulse search of
@@ -59,9 +60,9 @@ def child(case: str, size: float) -> None:
     out: dict[str, float] = {}
     if case == "rate":
         t = one_head(int(size))
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         r = calibrate_rate([t], pulses_per_rev=PULSES_PER_REV, average=AVERAGE)
-        out["seconds"] = time.perf_counter() - t0
+        out["seconds"], out["cpu_s"] = time.perf_counter() - t0, time.process_time() - c0
         t0 = time.perf_counter()
         _ = (360.0 * AVERAGE / PULSES_PER_REV) / (t[AVERAGE:] - t[:-AVERAGE])
         out["baseline_s"] = time.perf_counter() - t0
@@ -71,9 +72,9 @@ def child(case: str, size: float) -> None:
         cap = simulate_pulses(heads=12, pulses_per_rev=PULSES_PER_REV, revolutions=size, seed=2)
         heads = [np.asarray(cap.columns[f"head_{i}"]) for i in range(12)]
         del cap
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         self_calibrate(heads, pulses_per_rev=PULSES_PER_REV)
-        out["seconds"] = time.perf_counter() - t0
+        out["seconds"], out["cpu_s"] = time.perf_counter() - t0, time.process_time() - c0
         t0 = time.perf_counter()
         for h in heads[1:]:
             np.searchsorted(h, heads[0])
@@ -116,7 +117,7 @@ def main() -> None:
     idle = run("idle", 0.0)["peak_rss_mb"]
     print(f"idle child (interpreter + imports): {idle:.0f} MB")
     print(
-        f"{'case':>16} {'timestamps':>12} {'seconds':>9} {'ts/s':>10} {'peak MB':>8} "
+        f"{'case':>16} {'timestamps':>12} {'seconds':>9} {'cpu s':>7} {'ts/s':>10} {'peak MB':>8} "
         f"{'B/ts':>6} {'× baseline':>11}"
     )
     for case, size in cases:
@@ -124,7 +125,7 @@ def main() -> None:
         label = f"{case} {size:g}" + (" rev" if case == "selfcal" else "")
         per_ts = (r["peak_rss_mb"] - idle) * 2**20 / r["timestamps"]
         print(
-            f"{label:>16} {r['timestamps']:>12.3g} {r['seconds']:>9.2f} "
+            f"{label:>16} {r['timestamps']:>12.3g} {r['seconds']:>9.2f} {r['cpu_s']:>7.2f} "
             f"{r['timestamps'] / r['seconds']:>10.3g} {r['peak_rss_mb']:>8.0f} {per_ts:>6.0f} "
             f"{r['seconds'] / r['baseline_s']:>11.0f}"
         )
