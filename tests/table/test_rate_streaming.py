@@ -5,9 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import rotacal.table.rate as rate_module
 import rotacal.table.rate_allan as rate_allan
+from rotacal.errors import CaptureError
 from rotacal.sim.pulses import simulate_pulses
-from rotacal.table.rate import allan_versus_angle
+from rotacal.table.rate import allan_versus_angle, calibrate_rate
 
 
 @pytest.fixture(scope="module")
@@ -50,3 +52,33 @@ def test_blocked_allan_white_timing_noise_closed_form():
     )
     # relative scatter of an Allan estimate ~ 1/√(terms); terms ≥ 60,000 here
     np.testing.assert_allclose(s, np.sqrt(3) * sigma_t * rate / phi, rtol=0.03)
+
+
+@pytest.fixture(scope="module")
+def long_head():
+    """One head of 15 revolutions of 600 pulses with a coarse graduation pattern."""
+    cap = simulate_pulses(
+        heads=2,
+        pulses_per_rev=600,
+        rate_deg_s=90.0,
+        revolutions=15.0,
+        graduation_noise_arcsec=1.0,
+        seed=12,
+    )
+    return cap.columns["head_0"]
+
+
+def test_single_head_period_check_on_a_prefix_keeps_the_result(long_head, monkeypatch):
+    """Checking the period on the first 8 revolutions gives the result of the whole record."""
+    whole = calibrate_rate([long_head], pulses_per_rev=600)
+    monkeypatch.setattr(rate_module, "PERIOD_CHECK_PULSES", 10)  # 8 revolutions: 4800 pulses
+    prefix = calibrate_rate([long_head], pulses_per_rev=600)
+    assert not any("cannot be confirmed" in n for n in whole.notes)  # the twin's m is confirmed
+    assert prefix.to_dict() == whole.to_dict()
+
+
+def test_single_head_period_check_on_a_prefix_still_refuses_a_wrong_count(long_head, monkeypatch):
+    """A wrong pulses-per-revolution (the twin has 600) is refused from the prefix too."""
+    monkeypatch.setattr(rate_module, "PERIOD_CHECK_PULSES", 10)
+    with pytest.raises(CaptureError, match="repeats every 600 pulses"):
+        calibrate_rate([long_head], pulses_per_rev=500)

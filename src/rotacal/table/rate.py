@@ -82,6 +82,9 @@ __all__ = [
     "timing_jitter",
 ]
 
+#: Pulses of a single head on which its period (the pulses per revolution) is checked.
+PERIOD_CHECK_PULSES = 1 << 21
+
 FloatArray = NDArray[np.float64]
 
 
@@ -410,15 +413,23 @@ def calibrate_rate(
     )
 
     if n == 1 and times.size > m:
-        # one head: nothing else checks m; its angle error must repeat once per revolution
-        t_rel = times - times[0]
-        err = angle_nom - np.polyval(np.polyfit(t_rel, angle_nom, 1), t_rel)
+        # one head: nothing else checks m; its angle error must repeat once per revolution.
+        # Judged on the first PERIOD_CHECK_PULSES pulses (8 revolutions at least): as much
+        # evidence as any record of that length, and the whole-record FFT of a long capture was
+        # its largest array and a third of its time.
+        used = max(PERIOD_CHECK_PULSES, 8 * m)
+        head_t, head_angle = times[:used], angle_nom[:used]
+        t_rel = head_t - head_t[0]
+        err = head_angle - np.polyval(np.polyfit(t_rel, head_angle, 1), t_rel)
+        del t_rel
         if not check_period(-err, m, coarse=False):
+            judged = f" (judged on its first {used} pulses)" if times.size > used else ""
             notes.append(
                 f"one head: {m} pulses per revolution cannot be confirmed from the data's own "
-                "period (too short a record, or too weak a graduation pattern); a wrong count "
-                "scales the rate."
+                f"period{judged} (too short a record, or too weak a graduation pattern); a wrong "
+                "count scales the rate."
             )
+        del err
     mean_rate, revs = whole_revolution_rate(times, m)
     window = [float(times[0]), float(times[revs * m] if revs else times[-1])]
     if mean_rate is None:
