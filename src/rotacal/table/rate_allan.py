@@ -91,17 +91,18 @@ def allan_versus_angle(
             )
     s = np.empty(ks.size)
     for idx, k in enumerate(int(x) for x in ks):
-        mean_square = allan_square_sum(t, a, k) / (n - 2 * k)
+        mean_square = allan_mean_square(t, a, k)
         s[idx] = math.sqrt(0.5 * mean_square) / abs(mean_rate_deg_s)
     return np.asarray(ks * pitch, dtype=np.float64), s
 
 
-def allan_square_sum(times_s: FloatArray, angle_deg: FloatArray, k: int) -> float:
-    """Σ_i (ω_{i+k} − ω_i)² over i = 0 … N − 2k − 1, ω_i = (θ_{i+k} − θ_i)/(t_{i+k} − t_i).
+def allan_mean_square(times_s: FloatArray, angle_deg: FloatArray, k: int) -> float:
+    """⟨(ω_{i+k} − ω_i)²⟩ over i = 0 … N − 2k − 1, ω_i = (θ_{i+k} − θ_i)/(t_{i+k} − t_i).
 
-    Taken over blocks of :data:`ALLAN_BLOCK` values, so its temporaries stay a few MB at any N
-    (whole-array differences held three N-long arrays per k); the block sums are added exactly
-    (``math.fsum``), so the sum equals the whole-array mean's to ~1e-15 relative.
+    Up to :data:`ALLAN_BLOCK` terms, the whole-array mean; more are taken in blocks of that
+    many, so the temporaries stay a few MB at any N (the whole arrays were three N-long
+    temporaries per k), and the block sums are added exactly (``math.fsum``): the mean then
+    equals the whole-array one to ~1e-15 relative.
 
     Parameters
     ----------
@@ -122,6 +123,10 @@ def allan_square_sum(times_s: FloatArray, angle_deg: FloatArray, k: int) -> floa
     """
     t, a = times_s, angle_deg
     count = t.size - 2 * k
+    if count <= ALLAN_BLOCK:
+        omega = (a[k:] - a[:-k]) / (t[k:] - t[:-k])
+        d = omega[k:] - omega[:-k]
+        return float(np.mean(d * d))
     parts = []
     for start in range(0, count, ALLAN_BLOCK):
         stop = min(start + ALLAN_BLOCK, count)
@@ -130,7 +135,7 @@ def allan_square_sum(times_s: FloatArray, angle_deg: FloatArray, k: int) -> floa
         second = (a[end] - a[mid]) / (t[end] - t[mid])
         d = second - first
         parts.append(float(np.dot(d, d)))
-    return math.fsum(parts)
+    return math.fsum(parts) / count
 
 
 def _noise_alpha(phi: FloatArray, s: FloatArray) -> NDArray[np.int64]:
