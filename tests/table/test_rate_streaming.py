@@ -35,6 +35,7 @@ def test_blocked_allan_equals_the_whole_array_formula(train, monkeypatch, block)
     t, rate = train
     a = np.arange(t.size) * 0.4 + 1e-4 * np.sin(np.arange(t.size) * 0.01)
     monkeypatch.setattr(rate_allan, "ALLAN_BLOCK", block)
+    monkeypatch.setattr(rate_allan, "ALLAN_WHOLE_MAX", block)
     phi, s = allan_versus_angle(t, a, mean_rate_deg_s=rate, pitch_deg=0.4)
     ks = np.rint(phi / 0.4).astype(np.int64)
     assert ks[0] == 1 and ks[-1] == (t.size - 1) // 3  # the whole range of cluster sizes

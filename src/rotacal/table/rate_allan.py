@@ -20,7 +20,9 @@ FloatArray = NDArray[np.float64]
 
 #: Allan points per decade of rotation angle.
 ALLAN_POINTS_PER_DECADE = 12
-#: Rate values per block of :func:`allan_square_sum` (its temporaries: a few of these).
+#: Terms up to which :func:`allan_mean_square` takes the whole-array mean (as it always did:
+#: the same bits; three temporaries of 8 MB at most), and per block beyond.
+ALLAN_WHOLE_MAX = 1 << 20
 ALLAN_BLOCK = 1 << 16
 
 
@@ -99,10 +101,10 @@ def allan_versus_angle(
 def allan_mean_square(times_s: FloatArray, angle_deg: FloatArray, k: int) -> float:
     """⟨(ω_{i+k} − ω_i)²⟩ over i = 0 … N − 2k − 1, ω_i = (θ_{i+k} − θ_i)/(t_{i+k} − t_i).
 
-    Up to :data:`ALLAN_BLOCK` terms, the whole-array mean; more are taken in blocks of that
-    many, so the temporaries stay a few MB at any N (the whole arrays were three N-long
-    temporaries per k), and the block sums are added exactly (``math.fsum``): the mean then
-    equals the whole-array one to ~1e-15 relative.
+    Up to :data:`ALLAN_WHOLE_MAX` terms, the whole-array mean; more are taken in blocks of
+    :data:`ALLAN_BLOCK`, so the temporaries stay a few MB at any N (the whole arrays were three
+    N-long temporaries per k), and the block sums are added exactly (``math.fsum``): the mean
+    then equals the whole-array one to ~1e-15 relative.
 
     Parameters
     ----------
@@ -123,7 +125,7 @@ def allan_mean_square(times_s: FloatArray, angle_deg: FloatArray, k: int) -> flo
     """
     t, a = times_s, angle_deg
     count = t.size - 2 * k
-    if count <= ALLAN_BLOCK:
+    if count <= ALLAN_WHOLE_MAX:
         omega = (a[k:] - a[:-k]) / (t[k:] - t[:-k])
         d = omega[k:] - omega[:-k]
         return float(np.mean(d * d))
