@@ -474,7 +474,8 @@ def _gls(diff_spec: np.ndarray, shifts: NDArray[np.int64], m: int) -> tuple[np.n
     ok = info > _UNDETECTABLE_TOL * n
     a = np.zeros((*diff_spec.shape[:-2], g.shape[1]), dtype=complex)
     a[..., ok] = num[..., ok] / info[ok]
-    resid = diff_spec - a[..., None, :] * g
+    resid = a[..., None, :] * g
+    np.subtract(diff_spec, resid, out=resid)  # in place: one array of the spectra's size less
     return a, resid
 
 
@@ -881,13 +882,16 @@ def self_calibrate(
     pitch = 360.0 / m
     rate = _local_rate_deg_s(pairing.mean_times_s, pitch)
     angle_diff = pairing.delays_s[1:] * rate * 3600.0  # arcsec, shape (n−1, J)
+    # the pairing's per-pulse delays and mean times are not needed past here: drop them
+    first_paired, pairing_notes = pairing.first, pairing.notes
+    del pairing, rate
     period_checked = check_period(angle_diff.mean(axis=0), m)
 
     used = angle_diff[:, : revs * m].reshape(n - 1, revs, m).transpose(1, 0, 2)  # (R, n−1, m)
     offsets_mean = used.mean(axis=(0, 2))
     spec = np.fft.rfft(used - used.mean(axis=2, keepdims=True), axis=-1)
 
-    notes = list(pairing.notes)
+    notes = list(pairing_notes)
     candidates = ["forward", "reverse"] if rotation == "auto" else [rotation]
     fits = {}
     for sense in candidates:
@@ -922,7 +926,7 @@ def self_calibrate(
 
     per_rev = np.fft.irfft(a, m, axis=-1)  # (R, m), index j' = head-0 pulse first + r·m + j'
     mean_curve = per_rev.mean(axis=0)
-    roll = pairing.first % m
+    roll = first_paired % m
     deviation = np.roll(mean_curve, roll)
     per_rev = np.roll(per_rev, roll, axis=1)
 
