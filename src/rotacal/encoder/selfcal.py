@@ -44,6 +44,7 @@ from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy import fft as sp_fft
 from scipy.signal import find_peaks
 
 from rotacal.encoder.plausibility import selfcal_warnings
@@ -293,7 +294,6 @@ class SelfCalibration(Result):
     head0_pulses: int
     notes: list[str]
     _per_revolution_arcsec: FloatArray = dataclasses.field(repr=False)
-    _head_differences_arcsec: FloatArray = dataclasses.field(repr=False)
     _spectrum_arcsec: FloatArray = dataclasses.field(repr=False)
     head_offsets_arcsec_u: list[float] | None = None
     head_offsets_dof: float | None = None
@@ -474,7 +474,8 @@ def _gls(diff_spec: np.ndarray, shifts: NDArray[np.int64], m: int) -> tuple[np.n
     ok = info > _UNDETECTABLE_TOL * n
     a = np.zeros((*diff_spec.shape[:-2], g.shape[1]), dtype=complex)
     a[..., ok] = num[..., ok] / info[ok]
-    resid = diff_spec - a[..., None, :] * g
+    resid = a[..., None, :] * g
+    np.subtract(diff_spec, resid, out=resid)  # in place: one array of the spectra's size less
     return a, resid
 
 
@@ -488,6 +489,20 @@ def _local_rate_deg_s(mean_times: FloatArray, pitch_deg: float) -> FloatArray:
     rate[:w] = rate[w]
     rate[n - w :] = rate[n - w - 1]
     return rate
+
+
+def _autocorrelation(x: FloatArray, lags: int) -> FloatArray:
+    """Σ_i x_i·x_{i+ℓ} for ℓ = 0 … lags − 1, by a zero-padded FFT of a fast length ≥ 2N.
+
+    The spectrum's power is formed in place: the whole-record FFT is the largest array of a
+    long capture, and a power of two ≥ 2N was up to 4N long with a product array beside it.
+    """
+    size = sp_fft.next_fast_len(2 * x.size, real=True)
+    f = sp_fft.rfft(x, size, workers=1)
+    power = f.real**2
+    power += f.imag**2
+    del f
+    return np.asarray(sp_fft.irfft(power, size, workers=1)[:lags], dtype=np.float64)
 
 
 def check_period(signal: FloatArray, m: int, *, coarse: bool = True) -> bool:
@@ -511,9 +526,7 @@ def check_period(signal: FloatArray, m: int, *, coarse: bool = True) -> bool:
     lo, hi = max(2, m // 8), n - max(m // 4, n // 4)
     if not lo <= m <= hi:
         return False
-    size = 1 << int(np.ceil(np.log2(2 * n)))
-    f = np.fft.rfft(x, size)
-    acf = np.fft.irfft(f * np.conj(f), size)[: hi + 1]
+    acf = _autocorrelation(x, hi + 1)
     c2 = np.cumsum(x**2)
     lags = np.arange(lo, hi + 1)
     # normalise by the energy of both overlapping parts
@@ -869,13 +882,16 @@ def self_calibrate(
     pitch = 360.0 / m
     rate = _local_rate_deg_s(pairing.mean_times_s, pitch)
     angle_diff = pairing.delays_s[1:] * rate * 3600.0  # arcsec, shape (n−1, J)
+    # the pairing's per-pulse delays and mean times are not needed past here: drop them
+    first_paired, pairing_notes = pairing.first, pairing.notes
+    del pairing, rate
     period_checked = check_period(angle_diff.mean(axis=0), m)
 
     used = angle_diff[:, : revs * m].reshape(n - 1, revs, m).transpose(1, 0, 2)  # (R, n−1, m)
     offsets_mean = used.mean(axis=(0, 2))
     spec = np.fft.rfft(used - used.mean(axis=2, keepdims=True), axis=-1)
 
-    notes = list(pairing.notes)
+    notes = list(pairing_notes)
     candidates = ["forward", "reverse"] if rotation == "auto" else [rotation]
     fits = {}
     for sense in candidates:
@@ -910,7 +926,7 @@ def self_calibrate(
 
     per_rev = np.fft.irfft(a, m, axis=-1)  # (R, m), index j' = head-0 pulse first + r·m + j'
     mean_curve = per_rev.mean(axis=0)
-    roll = pairing.first % m
+    roll = first_paired % m
     deviation = np.roll(mean_curve, roll)
     per_rev = np.roll(per_rev, roll, axis=1)
 
@@ -988,7 +1004,6 @@ def self_calibrate(
         head_offsets_arcsec_u=offsets_u,
         head_offsets_dof=offsets_dof,
         _per_revolution_arcsec=per_rev,
-        _head_differences_arcsec=angle_diff,
         _spectrum_arcsec=amp,
         _noise=noise,
         _point_budget=point,

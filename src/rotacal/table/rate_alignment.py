@@ -1,0 +1,180 @@
+"""The deviation curve a rate is compensated with: read from a self-calibration (its result, its
+JSON or a bare array) and placed on a capture by correlation (Kokuyama et al. 2015, §3)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rotacal.encoder.selfcal import (
+    SelfCalibration,
+    self_calibrate,
+)
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.signal._values import LARGEST
+
+__all__ = ["align_deviation"]
+
+FloatArray = NDArray[np.float64]
+
+#: Below this correlation a deviation curve is not trusted to match a capture.
+MIN_ALIGNMENT_CORRELATION = 0.7
+#: A single head's phase-correlation peak must stand this many robust spreads above the rest
+#: (the largest of m Gaussian values stands about 4.5 spreads out for m ~ 10⁴).
+_SINGLE_HEAD_SIGNIFICANCE = 10.0
+
+
+def _circular_match(observed: FloatArray, deviation: FloatArray) -> tuple[int, float]:
+    """Shift L maximising Σ_j observed[j]·deviation[(j + L) mod m], and the correlation there."""
+    m = deviation.size
+    o = observed - observed.mean()
+    d = deviation - deviation.mean()
+    corr = np.fft.irfft(np.conj(np.fft.rfft(o)) * np.fft.rfft(d), m)
+    shift = int(np.argmax(corr))
+    norm = float(np.sqrt(np.sum(o**2) * np.sum(d**2)))
+    return shift, float(corr[shift] / norm) if norm > 0 else 0.0
+
+
+def align_deviation(
+    heads: Sequence[FloatArray], deviation_arcsec: FloatArray, pulses_per_rev: int
+) -> tuple[int, float]:
+    """Find the deviation index of head 0's first pulse in a capture, by correlation.
+
+    With two or more heads the capture is self-calibrated and its own curve matched to the given
+    one: both are free of the table's rate fluctuation. With one head, the head's angle error
+    against a straight line in time, folded over the revolutions, is matched instead, without
+    the first order: a once-per-revolution rate fluctuation of the table (common: cogging, an
+    unbalanced load) looks exactly like eccentricity to a single head.
+
+    Parameters
+    ----------
+    heads : sequence of ndarray, s
+        Checked pulse trains of the capture, head 0 first.
+    deviation_arcsec : ndarray, shape (m,), arcsec
+        The deviation curve to place.
+    pulses_per_rev : int
+
+    Returns
+    -------
+    shift : int
+        Deviation index of head 0's pulse 0.
+    correlation : float
+        With several heads, the normalised correlation of the two curves at that shift (1 = the
+        same shape); with one head, 0.07 × the phase-correlation peak's height in robust spreads
+        (so that the same 0.7 threshold means a peak ten spreads out).
+    """
+    m = pulses_per_rev
+    if len(heads) >= 2:
+        own = self_calibrate(heads, pulses_per_rev=m)
+        return _circular_match(own.deviation_arcsec, deviation_arcsec)
+    times_s = heads[0]
+    revs = (times_s.size - 1) // m
+    if revs < 1:
+        raise CaptureError(
+            "aligning a deviation curve from another capture needs at least one whole revolution "
+            f"of the head ({m} pulses); this one has {times_s.size}."
+        )
+    count = np.arange(revs * m)
+    t = times_s[: revs * m]
+    slope, icpt = np.polyfit(t - t[0], count * (360.0 / m), 1)
+    err = (count * (360.0 / m) - (icpt + slope * (t - t[0]))) * 3600.0
+    folded = -err.reshape(revs, m).mean(axis=0)
+    # Phase correlation: every order weighs the same, so the many orders carried by the
+    # graduation errors outvote the few where the table's rate fluctuation sits.
+    cross = np.conj(np.fft.rfft(folded)) * np.fft.rfft(deviation_arcsec)
+    cross[:2] = 0.0
+    mag = np.abs(cross)
+    cross = np.where(mag > 0, cross / np.where(mag > 0, mag, 1.0), 0.0)
+    phat = np.fft.irfft(cross, m)
+    shift = int(np.argmax(phat))
+    spread = 1.4826 * float(np.median(np.abs(phat - np.median(phat))))
+    significance = (float(phat[shift]) - float(np.median(phat))) / spread if spread > 0 else 0.0
+    # on the scale of the correlation threshold: 0.7 when the peak stands 10 spreads out
+    return shift, MIN_ALIGNMENT_CORRELATION * significance / _SINGLE_HEAD_SIGNIFICANCE
+
+
+@dataclasses.dataclass(frozen=True)
+class _Deviation:
+    """A deviation curve to compensate with, and what identifies the capture it indexes."""
+
+    values: FloatArray
+    fingerprint: tuple[float, float, int] | None  # head 0's first and last time, pulse count
+    rotation: str
+    shifts: list[int] | None
+
+
+def _json_number(d: Mapping[str, Any], key: str, kind: type) -> Any:
+    value = d.get(key)
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ConfigError(f"the self-calibration's '{key}' must be a number, got {value!r}.")
+    if not math.isfinite(value) or abs(value) > LARGEST:
+        raise ConfigError(
+            f"the self-calibration's '{key}' = {value!r} is not a usable number (not finite, or "
+            "beyond float64's working range); redo the self-calibration (--selfcal)."
+        )
+    if kind is int and float(value) != int(value):
+        raise ConfigError(f"the self-calibration's '{key}' must be a whole number, got {value!r}.")
+    return kind(value)
+
+
+def _as_deviation(selfcal: Any, m: int) -> _Deviation:
+    """The deviation from a SelfCalibration, its JSON dict, or a bare array of m values."""
+    fingerprint: tuple[float, float, int] | None = None
+    rotation, shifts, pprev = "forward", None, m
+    if isinstance(selfcal, SelfCalibration):
+        raw: Any = selfcal.deviation_arcsec
+        fingerprint = (selfcal.first_pulse_time_s, selfcal.last_pulse_time_s, selfcal.head0_pulses)
+        rotation, shifts, pprev = selfcal.rotation, selfcal.head_line_shifts, selfcal.pulses_per_rev
+    elif isinstance(selfcal, Mapping):
+        if "deviation_arcsec" not in selfcal:
+            raise ConfigError("the self-calibration has no 'deviation_arcsec' (a selfcal JSON?).")
+        raw = selfcal["deviation_arcsec"]
+        first = _json_number(selfcal, "first_pulse_time_s", float)
+        last = _json_number(selfcal, "last_pulse_time_s", float)
+        count = _json_number(selfcal, "head0_pulses", int)
+        if first is not None and last is not None and count is not None:
+            fingerprint = (first, last, count)
+        pprev = _json_number(selfcal, "pulses_per_rev", int) or m
+        rotation = selfcal.get("rotation", "forward")
+        if rotation not in ("forward", "reverse"):
+            raise ConfigError(
+                f"the self-calibration's 'rotation' must be 'forward' or 'reverse', got {rotation!r}."
+            )
+        shifts = selfcal.get("head_line_shifts")
+    else:
+        raw = selfcal
+    try:
+        values = np.asarray(raw, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ConfigError("the deviation must be a list of numbers (arcsec).") from None
+    if values.ndim != 1:
+        raise ConfigError(f"the deviation must be one list of m values, got shape {values.shape}.")
+    if pprev != m or values.size != m:
+        given = pprev if pprev != m else values.size
+        raise ConfigError(
+            f"the self-calibration is for {given} pulses per revolution, the capture is analysed "
+            f"with {m}; use a self-calibration of the same encoder and --pulses-per-rev."
+        )
+    if not np.all(np.isfinite(values)):
+        raise ConfigError("the deviation holds a NaN or null; redo the self-calibration.")
+    if values.size and float(np.max(np.abs(values))) > LARGEST:
+        i = int(np.argmax(np.abs(values)))
+        raise ConfigError(
+            f"the deviation holds {values[i]:.6g} arcsec at entry {i}: not a scale deviation "
+            "(beyond float64's working range); redo the self-calibration (--selfcal)."
+        )
+    if shifts is not None:
+        try:
+            shifts = [int(x) for x in shifts]
+        except (TypeError, ValueError):
+            raise ConfigError(
+                "the self-calibration's 'head_line_shifts' must be integers."
+            ) from None
+    return _Deviation(values, fingerprint, str(rotation), shifts)

@@ -1,0 +1,519 @@
+"""Uncertainty budgets of a constant-rate calibration: the mean rate and the bias against the set
+rate (GUM, validated by Monte Carlo, JCGM 101 §8), and the rms and peak of the rate deviation
+(:mod:`rotacal.uncertainty.summaries`)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rotacal.encoder.selfcal import (
+    UNDETECTABLE_SPEC,
+    DeviationNoise,
+    SelfCalibration,
+    noise_gain,
+    undetectable_input,
+    undetectable_orders,
+)
+from rotacal.errors import ConfigError
+from rotacal.uncertainty import (
+    Constant,
+    Input,
+    InstrumentSpecs,
+    UncertaintyBudget,
+    linear_fit_uncertainty,
+    monte_carlo,
+    propagate,
+    validate_gum,
+)
+from rotacal.uncertainty.distributions import Distribution, Normal, StudentT
+from rotacal.uncertainty.specs import (
+    TYPE_A_ONLY_NOTE,
+    corrected_note,
+    spec_distribution,
+    spec_input,
+)
+from rotacal.uncertainty.summaries import (
+    COVERAGE,
+    CirculantError,
+    CovarianceCorrection,
+    ErrorProcess,
+    FilteredWhite,
+    Summary,
+    drop_large_dof_notes,
+    mc_budget,
+    rms_budget,
+)
+
+__all__ = []
+
+FloatArray = NDArray[np.float64]
+
+#: Trials of the Monte Carlo that validates the mean rate's GUM budget (JCGM 101 §8).
+_VALIDATION_TRIALS = 200_000
+_TIMEBASE = "timebase.relative_error"
+_GRADUATION = "encoder.graduation_error_arcsec"
+
+
+def _with_notes(
+    b: UncertaintyBudget, notes: Sequence[str], method: str | None = None
+) -> UncertaintyBudget:
+    return dataclasses.replace(b, notes=(*b.notes, *notes), method=method or b.method)
+
+
+def _validated(
+    gum: Any,
+    model: Any,
+    dists: Mapping[str, Distribution],
+    names: Sequence[str],
+    unit: str,
+    notes: Sequence[str],
+) -> dict[str, UncertaintyBudget]:
+    """The GUM budgets of ``names`` (the outputs of ``gum``), each validated by one Monte Carlo
+    of the same model (JCGM 101 §8); where the GUM interval fails, U is half the Monte Carlo
+    probabilistically symmetric 95 % interval (method "Monte Carlo")."""
+    mc = monte_carlo(model, dists, trials=_VALIDATION_TRIALS, p=COVERAGE)
+    results = mc if isinstance(mc, Mapping) else {names[0]: mc}
+    checks = [validate_gum(gum, results[name], j=j, shortest=False) for j, name in enumerate(names)]
+    # one decision for all outputs of the model (e.g. a bias in deg/s and in %): the same inputs
+    # must not give a validated GUM U for one and a Monte Carlo U for the other
+    passed = all(c["passed"] for c in checks)
+    out: dict[str, UncertaintyBudget] = {}
+    for j, name in enumerate(names):
+        budget = drop_large_dof_notes(gum.budget(j))
+        res, check = results[name], checks[j]
+        unit_j = budget.unit or unit
+        if passed:
+            out[name] = _with_notes(
+                budget,
+                [
+                    *notes,
+                    f"the GUM interval agrees with a Monte Carlo of {res.trials} trials within "
+                    f"the numerical tolerance {check['delta']:.2g} {unit_j} (JCGM 101 §8).",
+                ],
+                "GUM, validated by Monte Carlo",
+            )
+            continue
+        lo, hi = res.interval_symmetric
+        big_u = 0.5 * (hi - lo)
+        worst = max(max(c["d_low"], c["d_high"]) / c["delta"] for c in checks)
+        out[name] = dataclasses.replace(
+            budget,
+            U=big_u,
+            k=big_u / budget.u if budget.u > 0 else budget.k,
+            dof_eff=math.inf,
+            method="Monte Carlo",
+            notes=(
+                *(n for n in budget.notes if "truncated to" not in n),
+                *notes,
+                f"the GUM interval ±{budget.U:.3g} {unit_j} is not validated by a Monte Carlo of "
+                f"{res.trials} trials (an end is off by {worst:.2g} times the numerical "
+                "tolerance, JCGM 101 §8; a rectangular or a t input with few degrees of freedom "
+                f"dominates): U is half the Monte Carlo 95 % interval [{lo:.10g}, {hi:.10g}] "
+                f"{unit_j}.",
+            ),
+        )
+    return out
+
+
+def _mean_rate_budgets(
+    times: FloatArray,
+    angle: FloatArray,
+    m: int,
+    revs: int,
+    set_rate: float | None,
+    specs: InstrumentSpecs | None,
+    jitter: tuple[float, float, bool],
+) -> dict[str, UncertaintyBudget]:
+    """GUM budgets of the mean rate and of the bias against the set rate, both validated by a
+    Monte Carlo of their own model (JCGM 101 §8) — the same inputs give the same U.
+
+    References
+    ----------
+    JCGM 100:2008 (GUM) §3.2.4 (correction for a stated systematic effect), §4.2–4.3, §5.1
+    eq. (10), G.4 (Welch–Satterthwaite); JCGM 101:2008 §6.4.9 (a Type A input with ν degrees of
+    freedom as a scaled t), §8 (validation of the GUM uncertainty framework); Kokuyama et al.
+    (2015) §3, §5.
+    """
+    sigma_t, sigma_dof, graduation_free = jitter
+    tb = spec_input(specs, _TIMEBASE, name="timebase relative error", unit="")
+    inputs: list[Input] = []
+    dists: dict[str, Distribution] = {}
+    notes: list[str] = []
+    if revs >= 1:
+        span = float(times[revs * m] - times[0])
+        inputs.append(
+            Input(
+                name="pulse timing jitter at the window's two ends",
+                value=0.0,
+                u=math.sqrt(2.0) * sigma_t,
+                dof=sigma_dof,
+                distribution="normal",
+                unit="s",
+                source=(
+                    f"Type A, σ_t = {sigma_t:.3g} s per pulse from the pulse times "
+                    + (
+                        "(the same line one and two revolutions later)"
+                        if graduation_free
+                        else "(along the pulses: includes the graduation, an upper bound)"
+                    )
+                ),
+                description="normal, √2·σ_t",
+            )
+        )
+        inputs.append(
+            Input(
+                name="graduation error over whole revolutions",
+                value=0.0,
+                u=0.0,
+                distribution="constant",
+                unit="arcsec",
+                source=(
+                    "exact: the window starts and ends on the same line, and m pitches make "
+                    "exactly 360° whatever the scale's deviation"
+                ),
+                description="exact (0)",
+            )
+        )
+        turns = 360.0 * revs
+
+        def rate(*x: Any) -> Any:  # x = (end-pulse timing error e, graduation g[, δ])
+            return (turns + x[1] / 3600.0) / (span - x[0]) * (1.0 + (x[2] if len(x) > 2 else 0.0))
+
+        def grad(*x: float) -> list[float]:  # exact ∂ω/∂(e, g[, δ])
+            f = 1.0 + (x[2] if len(x) > 2 else 0.0)
+            a, t = turns + x[1] / 3600.0, span - x[0]
+            return [a / t**2 * f, f / (3600.0 * t), *([a / t] if len(x) > 2 else [])]
+
+        dists["e"] = Normal(0.0, math.sqrt(2.0) * sigma_t)
+        dists["g"] = Constant(0.0)
+    else:
+        fit = linear_fit_uncertainty(times - times[0], angle)
+        inputs.append(
+            Input(
+                name="straight-line fit of the angle over time",
+                value=fit.slope,
+                u=fit.u_slope,
+                dof=float(fit.dof),
+                distribution="normal",
+                unit="deg/s",
+                source=f"Type A, slope of {fit.n} pulses (residuals taken as independent)",
+            )
+        )
+        notes.append(
+            "less than one revolution: the graduation error the compensation leaves is not "
+            "averaged out, and its correlated residuals make the fit's u a lower bound."
+        )
+
+        def rate(*x: Any) -> Any:  # x = (fitted slope[, δ])
+            return x[0] * (1.0 + (x[1] if len(x) > 1 else 0.0))
+
+        def grad(*x: float) -> list[float]:  # exact ∂ω/∂(slope[, δ])
+            return [1.0 + (x[1] if len(x) > 1 else 0.0), *([x[0]] if len(x) > 1 else [])]
+
+        dists["e"] = Normal(fit.slope, fit.u_slope)
+    dist_tb = spec_distribution(specs, _TIMEBASE)
+    if tb is not None and dist_tb is not None:
+        inputs.append(tb)
+        dists["d"] = dist_tb
+        if tb.value != 0.0:
+            notes.append(corrected_note(_TIMEBASE, tb.value, "", specs.source if specs else ""))
+    elif specs is None:
+        notes.append(TYPE_A_ONLY_NOTE)
+    else:
+        notes.append(
+            f"{_TIMEBASE} not stated: the timebase error is not in the budget; rate ∝ 1/time, so "
+            "a timebase of ±a makes the rate ∓a (relative)."
+        )
+
+    gum = propagate(
+        rate,
+        inputs,
+        jacobian=grad,
+        p=COVERAGE,
+        names_out=["mean_rate_deg_s"],
+        units_out=["deg/s"],
+    )
+    budgets = _validated(
+        gum,
+        lambda **kw: rate(*(kw[k] for k in dists)),
+        dists,
+        ["mean_rate_deg_s"],
+        "deg/s",
+        notes,
+    )
+    if set_rate is None:
+        return budgets
+
+    # the bias is the table's: its mean rate at this setting, not only in this record
+    per_rev = 360.0 / np.diff(times[: revs * m + 1 : m]) if revs >= 1 else np.zeros(0)
+    wander: list[Input] = []
+    bias_notes: list[str] = []
+    bias_dists = dict(dists)
+    if per_rev.size >= 2:
+        s_w = float(np.std(per_rev, ddof=1)) / math.sqrt(per_rev.size)
+        wander.append(
+            Input(
+                name="table rate wander between revolutions",
+                value=0.0,
+                u=s_w,
+                dof=float(per_rev.size - 1),
+                distribution="normal",
+                unit="deg/s",
+                source=f"Type A, s/√R of {per_rev.size} single-revolution rates",
+            )
+        )
+        bias_dists["w"] = StudentT(0.0, s_w, float(per_rev.size - 1))
+        bias_notes.append(
+            "the wander is the spread of the single-revolution rates (it also holds their "
+            "timing jitter); it makes the bias a statement about the table at this setting, "
+            "not only about this record; in the Monte Carlo it is a scaled t with ν = R − 1 "
+            "(JCGM 101 §6.4.9)."
+        )
+    else:
+        bias_notes.append(
+            "fewer than two whole revolutions: the table's rate wander between records cannot be "
+            "estimated, so the bias budget holds only this record's measurement."
+        )
+    n_in = len(inputs)
+    names = ["rate_bias_deg_s", "rate_bias_percent"]
+
+    def bias(*x: Any) -> Any:
+        y = rate(*x[:n_in]) + (x[n_in] if len(x) > n_in else 0.0) - set_rate
+        return np.array([y, 100.0 * y / set_rate])
+
+    def bias_grad(*x: float) -> np.ndarray:
+        g = np.array([*grad(*x[:n_in]), *([1.0] if len(x) > n_in else [])])
+        return np.vstack([g, 100.0 * g / set_rate])
+
+    def bias_mc(**kw: Any) -> dict[str, Any]:
+        y = rate(*(kw[k] for k in dists)) + kw.get("w", 0.0) - set_rate
+        return {names[0]: y, names[1]: 100.0 * y / set_rate}
+
+    gb = propagate(
+        bias,
+        [*inputs, *wander],
+        jacobian=bias_grad,
+        p=COVERAGE,
+        names_out=names,
+        units_out=["deg/s", "%"],
+    )
+    extra = [*notes, *bias_notes, f"set rate {set_rate:.10g} deg/s taken as exact (the reference)."]
+    budgets.update(_validated(gb, bias_mc, bias_dists, names, "deg/s", extra))
+    return budgets
+
+
+def _point_errors(autocov_lines: FloatArray, m: int, average: int, scale: float) -> FloatArray:
+    """Autocovariance, over the rate points, of the error a curve on the scale lines gives them.
+
+    Rate point i averages ``average`` pulse intervals from boundary line L_i = (i·A + L₀) mod m,
+    so an angle error ξ(L) (arcsec) moves it by scale·(ξ(L_i + A) − ξ(L_i))/3600 (%). Along the
+    points this is stationary with period P = m/gcd(A, m): c_η(k) = (scale/3600)²·[2c(kA) −
+    c(kA + A) − c(kA − A)] (indices of c mod m), k = 0 … P − 1.
+    """
+    a = int(average)
+    period = m // math.gcd(a, m)
+    k = np.arange(period)
+    c = autocov_lines
+    lag = (k * a) % m
+    eta = 2.0 * c[lag] - c[(lag + a) % m] - c[(lag - a) % m]
+    return np.asarray((scale / 3600.0) ** 2 * eta, dtype=np.float64)
+
+
+def _deviation_sources(
+    *,
+    m: int,
+    heads: int,
+    use_all: bool,
+    compensated: bool,
+    selfcal: Any,
+    specs: InstrumentSpecs | None,
+    average: int,
+    omega: float,
+    jitter: tuple[float, float, bool],
+    own: tuple[list[int], int, int, float] | None = None,
+) -> tuple[list[ErrorProcess], list[str]]:
+    """The errors of the rate points (% of rate): the timing jitter at each point's two ends,
+    and the scale-curve errors the angle still holds (the self-calibration's noise, the orders
+    it cannot see, an uncompensated graduation), each in its role.
+
+    ``own`` = (head line shifts, rate head, revolutions of the self-calibration, share of the
+    rate's pulses inside them) when the curve was self-calibrated from this capture: the rate
+    head's timing noise is then also in the curve (:func:`rotacal.encoder.selfcal.noise_gain`),
+    and the two partly cancel — a covariance correction of −2·Cov(curve error, the head's angle
+    noise) per line."""
+    sigma_t, sigma_dof, graduation_free = jitter
+    scale = 100.0 / (average * 360.0 / m)  # % of rate per degree of boundary angle error
+    out: list[ErrorProcess] = []
+    notes: list[str] = []
+    out.append(
+        FilteredWhite(
+            Input(
+                name="pulse timing jitter",
+                value=0.0,
+                u=sigma_t,
+                dof=sigma_dof,
+                distribution="normal",
+                unit="s",
+                source="Type A, from the pulse times (see timing_jitter)"
+                + ("" if graduation_free else "; an upper bound that holds the graduation too"),
+            ),
+            "noise" if graduation_free else "bound",
+            level="timing jitter",
+            taps=np.array([-1.0, 1.0]) * scale * abs(omega),
+            sigma=sigma_t,
+        )
+    )
+
+    def curve(inp: Input, autocov: FloatArray, role: Any) -> CirculantError:
+        return CirculantError(inp, role, autocov=_point_errors(autocov, m, average, scale))
+
+    und, und_note = undetectable_input(specs)
+    grad = spec_input(specs, _GRADUATION, name="graduation error (not compensated)", unit="arcsec")
+    if compensated:
+        noise: DeviationNoise | None = None
+        dof_sc = math.inf
+        if isinstance(selfcal, SelfCalibration):
+            noise = selfcal._noise
+            pb = selfcal.point_budget
+            if noise is not None and pb is not None and pb.rows:
+                dof_sc = pb.rows[0].dof  # the revolutions' spread (Type A) alone
+            if noise is None:
+                notes.append(
+                    "the self-calibration has no uncertainty from its data (one revolution): its "
+                    "noise is not in the budgets."
+                )
+        elif isinstance(selfcal, Mapping) and selfcal.get("deviation_arcsec_u") is not None:
+            try:
+                u_pts = np.asarray(selfcal["deviation_arcsec_u"], dtype=np.float64)
+            except (TypeError, ValueError):
+                raise ConfigError(
+                    "the self-calibration's 'deviation_arcsec_u' must be a list of numbers."
+                ) from None
+            if u_pts.shape != (m,) or not np.all(np.isfinite(u_pts)) or np.any(u_pts < 0):
+                raise ConfigError(
+                    f"the self-calibration's 'deviation_arcsec_u' must hold {m} finite values ≥ 0."
+                )
+            noise = DeviationNoise.white(m, float(np.sqrt(np.mean(u_pts**2))))
+            notes.append(
+                "the deviation's uncertainty comes from its JSON (one u per line): taken as white "
+                "noise of that size (it may already hold the undetectable orders)."
+            )
+        else:
+            notes.append(
+                "the deviation was given without its uncertainty: its noise is not in the budgets."
+            )
+        if noise is not None:
+            inp = Input(
+                name="noise of the self-calibrated deviation",
+                value=0.0,
+                u=noise.point_u,
+                dof=dof_sc,
+                distribution="normal",
+                unit="arcsec",
+                source="Type A, the self-calibration's budget (per line)",
+                description="normal, with the curve's spectrum",
+            )
+            out.append(curve(inp, noise.autocov(), "noise"))
+            if own is not None and own[2] >= 2:
+                shifts, head, revs, share = own
+                kappa = noise_gain(shifts, m, head)
+                s2 = (abs(omega) * sigma_t * 3600.0) ** 2  # the head's angle noise, arcsec²
+                cross = np.fft.irfft(kappa.real, m) * (s2 / revs)  # Cov(curve(L), noise(L − ℓ))
+                out.append(
+                    CovarianceCorrection(
+                        Input(
+                            name="correlation of the rate head's timing noise with the curve",
+                            value=0.0,
+                            u=0.0,
+                            unit="arcsec",
+                            source=(
+                                f"the curve was self-calibrated from this capture over {revs} "
+                                "revolutions, so it holds this head's own timing noise "
+                                f"(gain {float(np.mean(kappa.real[kappa.real != 0])):.3g} per "
+                                "order, averaged over the revolutions)"
+                            ),
+                        ),
+                        "noise",
+                        level="timing jitter",
+                        autocov=_point_errors(-2.0 * share * cross, m, average, scale),
+                    )
+                )
+    if (compensated or use_all) and und is not None:
+        n_sc = heads
+        if isinstance(selfcal, SelfCalibration):
+            n_sc = selfcal.heads
+        elif isinstance(selfcal, Mapping) and isinstance(selfcal.get("heads"), int):
+            n_sc = int(selfcal["heads"])
+        mask = np.zeros(m // 2 + 1, dtype=bool)
+        if n_sc >= 2:
+            mask[undetectable_orders(n_sc, m)] = True
+        model = DeviationNoise(m, np.zeros(m // 2 + 1), mask, und.u)
+        out.append(curve(und, model.autocov(undetectable=True), "bound"))
+        if und_note:
+            notes.append(und_note)
+        notes.append(
+            f"{UNDETECTABLE_SPEC} is taken as a random curve, white across the undetectable "
+            "orders (the cautious choice for a rate: a smooth n-th harmonic of the same rms moves "
+            "it far less)."
+        )
+    elif compensated or use_all:
+        notes.append(
+            "the orders that are multiples of the number of heads stay in the rate (no "
+            f"self-calibration sees them) and are not in its uncertainty; state {UNDETECTABLE_SPEC}."
+        )
+    if not compensated and not use_all:
+        if grad is not None:
+            out.append(curve(grad, DeviationNoise.white(m, grad.u).autocov(), "bound"))
+            if grad.value != 0.0:
+                notes.append(
+                    f"the stated mean {grad.value:g} arcsec of {_GRADUATION} is a common offset "
+                    "of every reading: a rate takes angle differences, so the correction for it "
+                    "is exactly 0 (GUM §3.2.4); its u stays in the budget."
+                )
+        else:
+            notes.append(
+                "the rate is not compensated: the scale's graduation error is in it but not in its "
+                f"uncertainty; compensate, or state {_GRADUATION}."
+            )
+    return out, notes
+
+
+def _rate_deviation_budgets(
+    dev_pct: FloatArray,
+    sources: list[ErrorProcess],
+    notes: list[str],
+    specs: InstrumentSpecs | None,
+) -> dict[str, Summary]:
+    """Budgets of the rms (closed form) and the peak (Monte Carlo) of the rate deviation.
+
+    A rate point averages A pulse intervals, so an angle error ξ_j at pulse j (deg: the angle's
+    error minus ω times the time's error) moves it by (ξ_end − ξ_start)/(A·Δθ) relative: only the
+    errors at the block boundaries count.
+
+    References
+    ----------
+    JCGM 101:2008 §7 (Monte Carlo); Kokuyama et al. (2015) §5 (the time-difference rate,
+    10-point averaging); :mod:`rotacal.uncertainty.summaries`.
+    """
+    extra = [
+        *notes,
+        "the measurand is the table's rate deviation in this record, so the table's own "
+        "fluctuation is the value, not an error; a timebase error scales every rate and the mean "
+        "alike and leaves a relative deviation unchanged.",
+    ]
+    if specs is None:
+        extra.append(TYPE_A_ONLY_NOTE)
+    return {
+        "rate_deviation_rms_percent": rms_budget(
+            "rate_deviation_rms_percent", "%", dev_pct, sources, notes=extra
+        ),
+        "rate_deviation_peak_percent": mc_budget(
+            "rate_deviation_peak_percent", "%", dev_pct, sources, statistic="peak", notes=extra
+        ),
+    }
