@@ -108,11 +108,19 @@ def _lagged_products(z: np.ndarray, lag_max: int) -> np.ndarray:
 
     Blocks of length ``P ≥ lag_max`` are transformed once (length 2P, zero padded); the spectrum
     of block ``b`` followed by block ``b + 1`` is ``U_b + (−1)^k U_{b+1}``, and the per-block
-    correlation spectra are summed before one inverse transform.
+    correlation spectra are summed before one inverse transform. A record shorter than one
+    block takes its power spectrum instead (one forward, one inverse transform).
     """
     n = z.size
     p = sfft.next_fast_len(max(lag_max, 4096), real=True)
     nb = -(-n // p)
+    if nb == 1:  # one block: the power spectrum of the record, zero padded past n + lag_max
+        spec = sfft.rfft(z, n=sfft.next_fast_len(n + lag_max, real=True))
+        power = spec.real * spec.real
+        power += spec.imag * spec.imag
+        del spec
+        whole: np.ndarray = sfft.irfft(power, n=2 * (power.size - 1))
+        return whole[:lag_max].copy()
     zp = np.zeros(nb * p)
     zp[:n] = z
     blocks = zp.reshape(nb, p)
