@@ -27,7 +27,7 @@ def to_jsonable(value: Any) -> Any:
     if isinstance(value, dict):
         return {str(k): to_jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        if all(type(v) is float for v in value):  # a long curve: no call per number
+        if set(map(type, value)) <= {float}:  # a curve of floats: no call per number
             return list(value) if all(map(math.isfinite, value)) else [_finite(v) for v in value]
         return [to_jsonable(v) for v in value]
     if isinstance(value, np.ndarray):

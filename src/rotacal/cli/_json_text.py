@@ -30,7 +30,7 @@ def dumps_indented(data: Any) -> str:
         if type(value) is list:
             if (
                 len(value) >= _LONG
-                and all(type(v) is float for v in value)
+                and set(map(type, value)) == {float}
                 and all(map(math.isfinite, value))
             ):
                 lists.append(value)
