@@ -51,6 +51,18 @@ def test_equals_the_in_memory_deviation(history, sizes):
     assert (res.n_samples, res.n_phase, res.data_type) == (ref.n_samples, ref.n_phase, "rate")
 
 
+def test_long_cluster_sizes_read_in_many_blocks(monkeypatch):
+    """The phase file read back a few hundred points at a time (the readers pass the end of the
+    record at different blocks) gives the same sums."""
+    import rotacal.signal.allan_stream as stream
+
+    monkeypatch.setattr(stream, "_READ", 333)
+    y = gyro_rate(20_000, seed=2)
+    ref = overlapping_adev(y, fs=100.0, taus="octave")
+    res = octave_adev_chunks(pieces(y, [4096]), fs=100.0, history=64)
+    np.testing.assert_allclose(res.adev, ref.adev, rtol=1e-9, atol=0)
+
+
 def test_equals_allantools_and_white_noise_closed_form():
     sigma, fs, n = 0.004, 200.0, 400_000
     y = 0.3 + sigma * math.sqrt(fs) * np.random.default_rng(31).standard_normal(n)

@@ -99,7 +99,8 @@ def _long_sums(f: BinaryIO, n_phase: int, ms: list[int]) -> np.ndarray:
         at = {}
         for o in offsets:
             f.seek(8 * (i + o))
-            at[o] = np.fromfile(f, dtype=np.float64, count=min(_READ, n_phase - i - o))
+            count = max(0, min(_READ, n_phase - i - o))  # offsets past the end read nothing
+            at[o] = np.fromfile(f, dtype=np.float64, count=count)
         for k, m in enumerate(ms):
             c = min(_READ, n_phase - 2 * m - i)  # terms of this block: i + j < N − 2m
             if c <= 0:
