@@ -30,6 +30,7 @@ from typing import Any, BinaryIO
 import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.signal._allan_fast import direct_sums
 from rotacal.signal._values import check_magnitudes
 from rotacal.signal.allan import (
     MIN_SAMPLES,
@@ -83,9 +84,7 @@ class _PhaseCarry:
             start = max(back - 2 * m, back - first)  # ext index of x_i for the first new term
             if start + 2 * m >= ext.size:
                 continue
-            d = ext[start + 2 * m :] - 2.0 * ext[start + m : ext.size - m]
-            d += ext[start : ext.size - 2 * m]
-            self.sums[k] += float(np.dot(d, d))
+            self.sums[k] += float(direct_sums(ext[start:], np.array([m]))[0])
         self.count += phase.size
         self.tail = ext[-self.history :].copy()
 
