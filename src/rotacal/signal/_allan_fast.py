@@ -35,7 +35,9 @@ rounding. The derivation (this module is its reference):
 
    where the middle sum needs only sums of ``z`` and ``t·z`` over windows around each knot
    (local prefix sums, O(1) per knot and ``m``). Within a group ``Σz²/S(m)`` is bounded by a
-   constant that depends on ``B/m`` only, not on ``N``.
+   constant that depends on ``B/m`` only, not on ``N``. A rate ramp makes ``x`` a parabola, whose
+   bumps between knots break that bound: the best parabola is removed exactly first and its share
+   added back in closed form (:func:`_without_parabola`, :class:`_RampTerms`).
 
 3. **Guards.** Cluster sizes below ``DIRECT_BELOW`` and those with fewer than ``DIRECT_TAIL``
    terms (``m`` near ``N/2``, where ``S`` is a sum of few terms) are computed directly (cheap
