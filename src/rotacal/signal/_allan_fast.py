@@ -309,14 +309,14 @@ def second_difference_sums(z: np.ndarray, ms: np.ndarray) -> tuple[np.ndarray, i
     NIST SP 1065 (Riley 2008), eq. (11) (the sum evaluated); the O(N log² N) evaluation is
     derived in this module's docstring (expansion, divide and conquer, local detrending).
     Measured against the literal sum: ≤ 5e-10 relative for white/flicker/random-walk FM, white
-    PM and a dominant rate ramp (tests/signal/test_allan.py).
+    PM and a dominant rate ramp (tests/signal/test_allan.py); against the literal sum in long
+    double on the same phase ≤ 1e-12 for white FM and ramps, ≤ 3e-11 for random-walk FM.
     """
     n = z.size
     out = np.empty(ms.size)
     direct = (ms < DIRECT_BELOW) | (n - 2 * ms < DIRECT_TAIL)
     nlog = math.log2(max(n, 2))
-    w, curvature = _without_parabola(z)
-    ramp = _RampTerms(w, curvature, nlog) if curvature else None
+    parabola: tuple[np.ndarray, _RampTerms | None] | None = None  # made for the first fast group
     for lo, hi in _groups(n, int(ms[-1])):
         sel = np.flatnonzero(~direct & (ms >= lo) & (ms < hi))
         if not sel.size:
@@ -328,6 +328,10 @@ def second_difference_sums(z: np.ndarray, ms: np.ndarray) -> tuple[np.ndarray, i
         if cost_direct <= cost_fast:
             direct[sel] = True
             continue
+        if parabola is None:
+            w, curvature = _without_parabola(z)
+            parabola = (w, _RampTerms(w, curvature, nlog) if curvature else None)
+        w, ramp = parabola
         s, mag = _group_sums(w, group, m_hi)
         if ramp is not None:
             ramp.add_to(group, s, mag)
