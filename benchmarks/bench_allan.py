@@ -5,14 +5,16 @@ points (default 10⁷):
 
 1. octave τ: ``overlapping_adev(y, fs, taus="octave")`` and ``allantools.oadev(..., taus="octave")``
    on the same data in the same run — times, their ratio and the largest relative difference;
-2. every τ (m = 1 … ⌊N/2⌋): ``overlapping_adev(y, fs, taus="all")`` timed; allantools is not run
+2. every τ (m = 1 … ⌊N/2⌋): ``overlapping_adev(y, fs, taus="all")`` timed, also with a rate ramp
+   added (the case that used to fall back to the direct method), and with ``--cli`` the whole
+   ``rotacal allan --taus all`` command on an NPZ of the record; allantools is not run
    at that size (O(N²)): its ``taus="all"`` cost is measured at 10⁴ and 10⁵ samples and
    extrapolated both with the exponent those two give (≈ 1.5: overheads still count there) and
    with N², its asymptotic cost (N/2 values of τ at O(N) each).
 
 Best of ``--repeat`` (default 1 for the big runs) with ``time.perf_counter``; no asserts.
 
-Run: ``python benchmarks/bench_allan.py [--samples N] [--repeat R]``
+Run: ``python benchmarks/bench_allan.py [--samples N] [--repeat R] [--quick] [--cli]``
 """
 
 from __future__ import annotations
@@ -24,6 +26,9 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import math  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
 import time  # noqa: E402
 from collections.abc import Callable  # noqa: E402
 from typing import Any  # noqa: E402
@@ -33,6 +38,8 @@ import numpy as np  # noqa: E402
 from rotacal.signal.allan import overlapping_adev  # noqa: E402
 
 FS_HZ = 100.0
+#: Rate ramp of the ramp case (°/s²): dominates the curve from τ of a few seconds.
+RAMP_DEG_S2 = 1e-2
 
 
 def best_of(fn: Callable[[], Any], repeat: int) -> tuple[float, Any]:
@@ -60,12 +67,26 @@ def fmt(seconds: float) -> str:
     return f"{seconds / 3600:10.1f} h"
 
 
+def time_cli(y: np.ndarray) -> float:
+    """Seconds of ``rotacal allan FILE --taus all --json OUT`` in a subprocess (NPZ input)."""
+    with tempfile.TemporaryDirectory() as folder:
+        capture = os.path.join(folder, "gyro.npz")
+        np.savez(capture, rate_deg_s=y, time_s=np.arange(y.size) / FS_HZ)
+        command = [sys.executable, "-m", "rotacal", "allan", capture, "--taus", "all"]
+        command += ["--json", os.path.join(folder, "out.json")]
+        t0 = time.perf_counter()
+        subprocess.run(command, check=True, capture_output=True)
+        return time.perf_counter() - t0
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--samples", type=int, default=10_000_000)
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--quick", action="store_true", help="10⁶ samples")
+    ap.add_argument("--cli", action="store_true", help="also time the whole rotacal allan command")
     args = ap.parse_args()
-    n = args.samples
+    n = 1_000_000 if args.quick else args.samples
     try:
         import allantools
     except ImportError:  # pragma: no cover - dev extra
@@ -93,6 +114,18 @@ def main() -> None:
         f"{'every τ: rotacal overlapping_adev(taus=all)':44s} {fmt(t_all)}  {t_all / t_rc:8.2f}  "
         f"{res_all.tau_s.size:,} τ, {res_all._n_direct} computed directly"
     )
+    ramp = y + RAMP_DEG_S2 * np.arange(n) / FS_HZ
+    t_ramp, res_ramp = best_of(lambda: overlapping_adev(ramp, fs=FS_HZ, taus="all"), args.repeat)
+    print(
+        f"{'every τ, with a rate ramp':44s} {fmt(t_ramp)}  {t_ramp / t_rc:8.2f}  "
+        f"{res_ramp._n_direct} computed directly"
+    )
+    if args.cli:
+        t_cli = time_cli(y)
+        print(
+            f"{'rotacal allan --taus all (NPZ → JSON)':44s} {fmt(t_cli)}  {t_cli / t_rc:8.2f}  "
+            f"{t_cli / t_all:.2f}× the in-process every-τ time"
+        )
     sizes = (10_000, 100_000)
     times = []
     for small in sizes:
@@ -110,7 +143,7 @@ def main() -> None:
             f"{estimate / t_all:8.0f}  cost ∝ {label}"
         )
     print(
-        "ratio: time / rotacal octave time (rows 1–3); allantools estimate / rotacal every-τ time"
+        "ratio: time / rotacal octave time (rotacal rows); allantools estimate / rotacal every-τ time"
     )
 
 

@@ -27,6 +27,8 @@ def to_jsonable(value: Any) -> Any:
     if isinstance(value, dict):
         return {str(k): to_jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
+        if set(map(type, value)) <= {float}:  # a curve of floats: no call per number
+            return list(value) if all(map(math.isfinite, value)) else [_finite(v) for v in value]
         return [to_jsonable(v) for v in value]
     if isinstance(value, np.ndarray):
         return to_jsonable(value.tolist())
@@ -35,9 +37,12 @@ def to_jsonable(value: Any) -> Any:
     if isinstance(value, (np.integer, int)):
         return int(value)
     if isinstance(value, (np.floating, float)):
-        f = float(value)
-        return f if math.isfinite(f) else None
+        return _finite(float(value))
     return value
+
+
+def _finite(f: float) -> float | None:
+    return f if math.isfinite(f) else None
 
 
 @dataclasses.dataclass(frozen=True)

@@ -251,6 +251,56 @@ def test_all_taus_million_points_equals_literal_sum():
     assert rel.max() < 1e-8, f"max relative error of σ² {rel.max():.2e}"
 
 
+def exact_sums(x: np.ndarray, ms: np.ndarray) -> np.ndarray:
+    """The literal sum in long double (64-bit mantissa where the platform has it): a reference
+    whose own rounding lies far below the 1e-12 being checked for the records used here."""
+    xl = x.astype(np.longdouble)
+    n = x.size
+    out = [np.sum((xl[2 * m :] - 2 * xl[m : n - m] + xl[: n - 2 * m]) ** 2) for m in ms.tolist()]
+    return np.array(out, dtype=np.longdouble)
+
+
+def gyro_ramp_rate(n: int, ramp: float, seed: int = 1) -> np.ndarray:
+    """A gyro at 100 Hz: white rate noise, a rate random walk and a rate ramp (°/s per sample)."""
+    rng = np.random.default_rng(seed)
+    walk = np.cumsum(2e-5 * rng.standard_normal(n))
+    return 0.1 + 0.3 * rng.standard_normal(n) + walk + ramp * np.arange(n)
+
+
+@pytest.mark.parametrize("kind", ["ramp_mix", "gyro_ramp", "white_fm"])
+def test_fast_sums_with_a_rate_ramp_equal_the_exact_sum(kind):
+    """A rate ramp (a parabola in the phase) stays on the fast path and equals the literal sum,
+    evaluated in long double on the same phase, to 1e-12: the parabola is removed exactly
+    (its coefficient rounded so that every a·T_k is exact) and added back in closed form."""
+    from rotacal.signal._allan_fast import DIRECT_BELOW, DIRECT_TAIL, second_difference_sums
+    from rotacal.signal.allan import _phase
+
+    n = 40_000
+    if kind == "gyro_ramp":
+        z = _phase(gyro_ramp_rate(n - 1, 1e-4), 100.0, "rate")
+    else:
+        z = _phase(noise_phase(kind, n, seed=13), 1.0, "phase")
+    ms = np.arange(1, (n - 1) // 2 + 1)
+    sums, n_direct = second_difference_sums(z, ms)
+    assert n_direct == np.count_nonzero((ms < DIRECT_BELOW) | (n - 2 * ms < DIRECT_TAIL))
+    rng = np.random.default_rng(14)
+    pick = np.unique(np.concatenate([np.arange(1, 120), rng.integers(1, ms[-1], 300), ms[-60:]]))
+    ref = exact_sums(z, pick)
+    rel = np.abs(sums[pick - 1] / ref - 1.0).astype(np.float64)
+    assert rel.max() < 1e-12, f"max relative error {rel.max():.2e} at m = {pick[np.argmax(rel)]}"
+
+
+def test_rate_ramp_all_taus_equal_allantools():
+    """A gyro record whose rate ramp dominates from τ of a few seconds: allantools agrees."""
+    y = gyro_ramp_rate(20_000, 2e-4, seed=15)
+    res = overlapping_adev(y, fs=100.0, taus="all")
+    t, d, _, _ = allantools.oadev(y, rate=100.0, taus="all", data_type="freq")
+    at = np.rint(t * 100.0).astype(np.int64) - 1  # allantools' "all" leaves out some m
+    np.testing.assert_array_equal(res.tau_s[at], t)
+    np.testing.assert_allclose(res.adev[at], d, rtol=1e-9, atol=0)
+    assert res.method == "fast"
+
+
 def test_direct_method_equals_fast():
     x = noise_phase("white_fm", 20_000, seed=9)
     fast = overlapping_adev(x, fs=5.0, taus="all", data_type="phase")

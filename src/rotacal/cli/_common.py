@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import json
 import os
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -217,12 +216,13 @@ def _write_json(data: Any, target: str | None) -> None:
     from rotacal.io.outputs import write_output
     from rotacal.results import to_jsonable
 
+    from ._json_text import dumps_indented
     from ._provenance import provenance
 
     data = dict(data)
     data.setdefault("warnings", [])
     data["provenance"] = provenance()
-    text = json.dumps(to_jsonable(data), indent=2, allow_nan=False)
+    text = dumps_indented(to_jsonable(data))
     if target == "-":
         click.echo(text)
         return

@@ -498,6 +498,37 @@ def overlapping_adev(
         n_direct = int(ms.size)
     else:
         sums, n_direct = second_difference_sums(x, ms)
+    return deviation_from_sums(
+        sums,
+        ms,
+        n_phase=int(n_phase),
+        n_samples=int(y.size),
+        fs_hz=fs_hz,
+        data_type=data_type,
+        confidence=conf,
+        alphas=alphas,
+        notes=tuple(notes),
+        warnings=clipped,
+        n_direct=n_direct,
+    )
+
+
+def deviation_from_sums(
+    sums: np.ndarray,
+    ms: np.ndarray,
+    *,
+    n_phase: int,
+    n_samples: int,
+    fs_hz: float,
+    data_type: str,
+    confidence: float,
+    alphas: np.ndarray,
+    notes: tuple[str, ...],
+    warnings: tuple[str, ...],
+    n_direct: int,
+) -> AllanDeviation:
+    """The :class:`AllanDeviation` of the sums of squared second differences ``S(m)`` (phase
+    unit²) at cluster sizes ``ms``: σ(τ) = √(S/(2(N − 2m)))/τ, its edf and χ² interval."""
     n_terms = n_phase - 2 * ms
     tau = ms / fs_hz
     adev = np.sqrt(np.maximum(sums, 0.0) / (2.0 * n_terms)) / tau
@@ -505,7 +536,7 @@ def overlapping_adev(
     for a in np.unique(alphas).tolist():
         sel = alphas == a
         edf[sel] = edf_oadev(n_phase, ms[sel], int(a))
-    lo, hi = adev_confidence_interval(adev, edf, conf)
+    lo, hi = adev_confidence_interval(adev, edf, confidence)
     alpha_out: Any = int(alphas[0]) if np.all(alphas == alphas[0]) else alphas
     return AllanDeviation(
         tau_s=tau,
@@ -516,14 +547,14 @@ def overlapping_adev(
         n_terms=n_terms,
         cluster_sizes=ms,
         fs_hz=fs_hz,
-        n_samples=int(y.size),
-        n_phase=int(n_phase),
+        n_samples=n_samples,
+        n_phase=n_phase,
         data_type=data_type,
-        confidence=conf,
+        confidence=confidence,
         noise_alpha=alpha_out,
         method="direct" if n_direct == ms.size else "fast",
-        notes=tuple(notes),
-        warnings=clipped,
+        notes=notes,
+        warnings=warnings,
         _n_direct=n_direct,
     )
 

@@ -1,0 +1,212 @@
+"""Overlapping Allan deviation at octave τ of a rate record read in chunks, in bounded memory.
+
+:func:`octave_adev_chunks` takes the record as an iterable of rate chunks (any sizes) and gives
+the :class:`~rotacal.signal.allan.AllanDeviation` that
+``overlapping_adev(whole, fs=fs, taus="octave")`` gives, to rounding (≤ 1e-9 relative, tested),
+holding a few chunks and a carried history instead of the record:
+
+* The phase (the rate's running integral, x_0 = 0) is carried from chunk to chunk: each chunk's
+  rate, less the first chunk's mean (an offset the second difference annihilates; it keeps the
+  phase small), is summed onto the last phase value.
+* Cluster sizes with 2m ≤ ``history`` are summed as the chunks arrive: the last ``history``
+  phase values are carried, and each chunk adds the second differences x_{i+2m} − 2x_{i+m} + x_i
+  whose last point x_{i+2m} lies in it.
+* The phase is also written to a temporary file (8 bytes a sample, deleted at the end); the
+  few longer cluster sizes (m > history/2, each with fewer than N/m ≤ N·2/history clusters) are
+  summed afterwards in one pass over that file, with a sequential reader at each offset 0, m
+  and 2m.
+
+Memory: the carried history (``history`` phase values, 32 MB by default), a chunk and its
+temporaries; not the record.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from collections.abc import Iterable
+from typing import Any, BinaryIO
+
+import numpy as np
+
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.signal._allan_fast import direct_sums
+from rotacal.signal._values import check_magnitudes
+from rotacal.signal.allan import (
+    MIN_SAMPLES,
+    ONE_SIGMA,
+    AllanDeviation,
+    _check_alpha,
+    _check_confidence,
+    _check_fs,
+    _cluster_sizes,
+    deviation_from_sums,
+)
+
+__all__ = ["DEFAULT_HISTORY", "octave_adev_chunks"]
+
+#: Phase values carried between chunks: cluster sizes up to half of it are summed in the pass.
+DEFAULT_HISTORY = 1 << 22
+#: Samples read at a time from the phase file for the long cluster sizes.
+_READ = 1 << 20
+
+
+class _PhaseCarry:
+    """The running phase, its carried tail, and the sums of the short cluster sizes."""
+
+    def __init__(self, fs: float, history: int, phase_file: BinaryIO) -> None:
+        self.fs = fs
+        self.history = history
+        self.short_ms = 2 ** np.arange(int(math.log2(history // 2)) + 1, dtype=np.int64)
+        self.sums = np.zeros(self.short_ms.size)
+        self.tail = np.zeros(1)  # x_0 = 0: the phase before the first sample
+        self.count = 1  # phase points so far
+        self.offset: float | None = None
+        self.low = math.inf
+        self.high = -math.inf
+        self.file = phase_file
+        self.file.write(self.tail.tobytes())
+
+    def add(self, rate: np.ndarray) -> None:
+        if self.offset is None:
+            self.offset = float(np.mean(rate))
+        self.low = min(self.low, float(rate.min()))
+        self.high = max(self.high, float(rate.max()))
+        phase = np.cumsum(rate - self.offset)
+        phase /= self.fs
+        phase += self.tail[-1]
+        self.file.write(phase.tobytes())
+        ext = np.concatenate((self.tail, phase))
+        first = self.count  # global index of phase[0]; ext[0] has index first − tail.size
+        back = self.tail.size
+        for k, m in enumerate(self.short_ms.tolist()):
+            # second differences whose last point x_{i+2m} is in this chunk (i ≥ 0)
+            start = max(back - 2 * m, back - first)  # ext index of x_i for the first new term
+            if start + 2 * m >= ext.size:
+                continue
+            self.sums[k] += float(direct_sums(ext[start:], np.array([m]))[0])
+        self.count += phase.size
+        self.tail = ext[-self.history :].copy()
+
+
+def _long_sums(f: BinaryIO, n_phase: int, ms: list[int]) -> np.ndarray:
+    """S(m) of the long cluster sizes in one pass over the phase file: one sequential reader at
+    each offset 0, m and 2m (shared between the sizes), ``_READ`` points at a time."""
+    offsets = sorted({0, *ms, *(2 * m for m in ms)})
+    sums = np.zeros(len(ms))
+    for i in range(0, n_phase - 2 * min(ms), _READ):
+        at = {}
+        for o in offsets:
+            f.seek(8 * (i + o))
+            count = max(0, min(_READ, n_phase - i - o))  # offsets past the end read nothing
+            at[o] = np.fromfile(f, dtype=np.float64, count=count)
+        for k, m in enumerate(ms):
+            c = min(_READ, n_phase - 2 * m - i)  # terms of this block: i + j < N − 2m
+            if c <= 0:
+                continue
+            d = at[2 * m][:c] - 2.0 * at[m][:c]
+            d += at[0][:c]
+            sums[k] += float(np.dot(d, d))
+    return sums
+
+
+def octave_adev_chunks(
+    chunks: Iterable[Any],
+    *,
+    fs: float,
+    confidence: float = ONE_SIGMA,
+    noise_alpha: Any = 0,
+    history: int = DEFAULT_HISTORY,
+    column: str = "data",
+) -> AllanDeviation:
+    """Overlapping Allan deviation at octave τ (m = 1, 2, 4, …) of a rate record in chunks.
+
+    σ²(τ) = Σ_{i=0}^{N−2m−1} (x_{i+2m} − 2x_{i+m} + x_i)² / (2·τ²·(N − 2m)), τ = m/fs, x the
+    running integral of the rate (x_0 = 0), as :func:`rotacal.signal.allan.overlapping_adev`
+    with ``data_type="rate"`` and ``taus="octave"``; see the module for how it is streamed.
+
+    Parameters
+    ----------
+    chunks : iterable of array_like
+        Consecutive pieces of one rate record (°/s, rad/s, fractional frequency, …), 1-D.
+    fs : float
+        Sampling rate (Hz).
+    confidence : float
+        Confidence level of ``adev_low``/``adev_high`` (default ±1σ).
+    noise_alpha : int
+        Noise type for the edf (2 white PM … −2 random-walk FM; 0 white rate noise).
+    history : int
+        Phase values carried between chunks (a power of two ≥ 4); longer cluster sizes are
+        summed from the temporary phase file.
+    column : str
+        The column's name, for messages.
+
+    Returns
+    -------
+    AllanDeviation
+        As ``overlapping_adev(whole, fs=fs, taus="octave")``; ``method`` is "direct".
+
+    Raises
+    ------
+    CaptureError
+        NaN/inf or out-of-range samples (the sample is named), fewer than 10 samples, a constant
+        record.
+    ConfigError
+        A bad fs, confidence or α.
+
+    References
+    ----------
+    NIST SP 1065 (Riley 2008), eq. (11) (overlapping ADEV from phase data) and §5.3 (edf);
+    IEEE Std 952-1997, Annex C.
+    """
+    fs_hz = _check_fs(fs)
+    conf = _check_confidence(confidence)
+    if history < 4 or history & (history - 1):
+        raise ConfigError(
+            f"history must be a power of two of at least 4 phase values; got {history!r}."
+        )
+    with tempfile.TemporaryFile(prefix="rotacal-phase-") as phase_file:
+        carry = _PhaseCarry(fs_hz, history, phase_file)
+        for chunk in chunks:
+            rate = np.asarray(chunk, dtype=np.float64)
+            if rate.ndim != 1:
+                raise CaptureError(
+                    f"{column} must be one-dimensional; a chunk has shape {rate.shape}."
+                )
+            if not rate.size:
+                continue
+            check_magnitudes(column, rate, what="rate data", offset=carry.count - 1)
+            carry.add(rate)
+        n_phase = carry.count
+        n_samples = n_phase - 1
+        if n_phase < MIN_SAMPLES:
+            raise CaptureError(
+                f"the record holds {n_samples} rate samples; the Allan deviation needs at least "
+                f"{MIN_SAMPLES - 1}: supply a longer record."
+            )
+        if carry.low == carry.high:
+            raise CaptureError(
+                f"the rate record is constant ({carry.high!r} in all {n_samples} samples): the "
+                "sensor is stuck or saturated, or the column is a set value; supply the sensor "
+                "output."
+            )
+        ms, notes = _cluster_sizes("octave", n_phase, fs_hz)
+        sums = np.empty(ms.size)
+        phase_file.flush()
+        short = 2 * ms <= history
+        sums[short] = carry.sums[np.log2(ms[short]).astype(np.int64)]
+        if not short.all():
+            sums[~short] = _long_sums(phase_file, n_phase, ms[~short].tolist())
+    return deviation_from_sums(
+        sums,
+        ms,
+        n_phase=n_phase,
+        n_samples=n_samples,
+        fs_hz=fs_hz,
+        data_type="rate",
+        confidence=conf,
+        alphas=_check_alpha(noise_alpha, ms.size),
+        notes=tuple(notes),
+        warnings=(),
+        n_direct=int(ms.size),
+    )
