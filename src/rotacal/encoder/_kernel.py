@@ -82,7 +82,8 @@ def phase_pass(
     state : PhaseState, optional
         From the previous chunk (None for the first).
     previous_k : float, optional
-        k of the sample before the chunk (None for the first chunk).
+        k of the sample before the chunk (None for the first chunk; with a ``state`` and no
+        ``previous_k`` it is taken from the state).
     offset : int
         Global sample index of the chunk's first sample.
     jit : bool, optional
@@ -93,9 +94,16 @@ def phase_pass(
     ChunkPhase
     """
     check_correction(correction)
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
     n = int(a.size)
-    if (state is None) != (previous_k is None):
-        raise ValueError("state and previous_k are carried together")
+    if state is None:
+        previous_k = None
+    elif previous_k is None:
+        # k of the sample before the chunk, from its phase exactly as unwrapped_phase forms it
+        previous_k = float(
+            math.floor((state.cycles * (2.0 * math.pi) + state.last_wrapped_rad) * _INV_SUB)
+        )
     if use_numba(n, jit):
         return _phase_jit(a, b, correction, state, previous_k, offset)
     phase = np.empty(n, dtype=np.float64)

@@ -54,7 +54,7 @@ def residual_sums(
         One residual sum of squares per model (unit of y squared).
     """
     omega = 2.0 * math.pi * frequency_hz
-    if use_numba(t.size, jit):
+    if len(models) <= 2 and use_numba(t.size, jit):
         from rotacal.signal._residual_jit import residual_sums_jit
 
         consts = np.array([float(m[0]) for m in models])
