@@ -23,6 +23,8 @@ _RESYNC = 64
 _PART = 4096
 #: Largest step δ (rad) rotated with the Taylor series.
 _MAX_STEP = 0.1
+#: Samples per block of the harmonics' vectorised loops (their arrays stay in the L1/L2 cache).
+_BLOCK = 1024
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -50,51 +52,81 @@ def residual_sums_jit(
 ) -> np.ndarray:  # pragma: no cover - compiled
     """Residual sums of squares of one or two models (rows of ``ca``/``cb``) over the samples.
 
-    With one model the second row repeats the first (its sum is discarded by the caller); the
-    two models are kept in scalars so that they stay in registers.
+    With one model the second row repeats the first (its sum is dropped). Blocks of
+    :data:`_BLOCK` samples: cos θ, sin θ sample by sample, then each harmonic for the whole
+    block (a loop over samples without dependences, which the compiler vectorises), then the
+    residuals summed in sample order.
     """
+    n = t.size
     nh = ca.shape[1]
     two = consts.size > 1
     j = 1 if two else 0
     ca0, cb0, ca1, cb1 = ca[0], cb[0], ca[j], cb[j]
     const0, const1 = consts[0], consts[j]
     drift0, drift1 = drifts[0], drifts[j]
+    c1 = np.empty(_BLOCK)
+    s1 = np.empty(_BLOCK)
+    ch = np.empty(_BLOCK)
+    sh = np.empty(_BLOCK)
+    tau = np.empty(_BLOCK)
+    m0 = np.empty(_BLOCK)
+    m1 = np.empty(_BLOCK)
     out0 = 0.0
     out1 = 0.0
     part0 = 0.0
     part1 = 0.0
-    c1 = 1.0
-    s1 = 0.0
+    c_prev = 1.0
+    s_prev = 0.0
     theta_prev = 0.0
-    for i in range(t.size):
-        tau = t[i] - t_ref
-        theta = omega * tau
-        c1, s1 = _cos_sin(theta, theta_prev, c1, s1, i % _RESYNC == 0)
-        theta_prev = theta
-        if i % _PART == 0:
-            out0 += part0
-            out1 += part1
-            part0 = 0.0
-            part1 = 0.0
-        m0 = const0
-        m1 = const1
-        ch = c1
-        sh = s1
+    for s in range(0, n, _BLOCK):
+        size = min(n - s, _BLOCK)
+        for q in range(size):
+            i = s + q
+            tq = t[i] - t_ref
+            theta = omega * tq
+            c_prev, s_prev = _cos_sin(theta, theta_prev, c_prev, s_prev, i % _RESYNC == 0)
+            theta_prev = theta
+            tau[q] = tq
+            c1[q] = c_prev
+            s1[q] = s_prev
+            ch[q] = c_prev
+            sh[q] = s_prev
+            m0[q] = const0
+            m1[q] = const1
         for k in range(nh):
-            if k > 0:
-                ch, sh = ch * c1 - sh * s1, sh * c1 + ch * s1
-            m0 = m0 + ca0[k] * ch
-            m0 = m0 + cb0[k] * sh
-            m1 = m1 + ca1[k] * ch
-            m1 = m1 + cb1[k] * sh
-        if drift0 != 0.0:
-            m0 = m0 + drift0 * tau
-        if drift1 != 0.0:
-            m1 = m1 + drift1 * tau
-        r0 = y[i] - m0
-        r1 = y[i] - m1
-        part0 += r0 * r0
-        part1 += r1 * r1
+            a0 = ca0[k]
+            b0 = cb0[k]
+            a1 = ca1[k]
+            b1 = cb1[k]
+            rotate = k > 0
+            for q in range(size):
+                cq = ch[q]
+                sq = sh[q]
+                if rotate:
+                    cq, sq = cq * c1[q] - sq * s1[q], sq * c1[q] + cq * s1[q]
+                    ch[q] = cq
+                    sh[q] = sq
+                m0[q] = m0[q] + a0 * cq
+                m0[q] = m0[q] + b0 * sq
+                m1[q] = m1[q] + a1 * cq
+                m1[q] = m1[q] + b1 * sq
+        for q in range(size):
+            i = s + q
+            if i % _PART == 0:
+                out0 += part0
+                out1 += part1
+                part0 = 0.0
+                part1 = 0.0
+            v0 = m0[q]
+            v1 = m1[q]
+            if drift0 != 0.0:
+                v0 = v0 + drift0 * tau[q]
+            if drift1 != 0.0:
+                v1 = v1 + drift1 * tau[q]
+            r0 = y[i] - v0
+            r1 = y[i] - v1
+            part0 += r0 * r0
+            part1 += r1 * r1
     out = np.empty(consts.size)
     out[0] = out0 + part0
     if two:
