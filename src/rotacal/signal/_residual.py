@@ -14,7 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from rotacal._jit import use_numba
-from rotacal.signal._result import harmonic_series
+from rotacal.signal._result import harmonic_series_many
 
 #: Samples per chunk of the NumPy path (the whole record below it: the same sums as one piece).
 _CHUNK = 1 << 20
@@ -64,12 +64,12 @@ def residual_sums(
         out = residual_sums_jit(t, y, float(t_ref), omega, consts, ca, cb, drifts)
         return [float(x) for x in out]
     sums = [0.0] * len(models)
+    series = [(np.asarray(ca_i), np.asarray(cb_i), const) for const, ca_i, cb_i, _ in models]
     for s in range(0, t.size, _CHUNK):
         tau = t[s : s + _CHUNK] - t_ref
         ys = y[s : s + _CHUNK]
-        theta = omega * tau
-        for i, (const, ca_i, cb_i, drift) in enumerate(models):
-            model = harmonic_series(theta, ca_i, cb_i, const)
+        for i, model in enumerate(harmonic_series_many(omega * tau, series)):
+            drift = models[i][3]
             if drift:
                 model += drift * tau
             r = ys - model
