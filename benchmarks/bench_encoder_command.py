@@ -71,7 +71,7 @@ def main() -> None:
                  "--amplitude-deg", f"{0.5 * min(1.0, 20.0 / f):g}", "--harmonic", "2:0.01",
                  "--offset-a", "0.02", "--gain-ratio", "0.98", "--phase-error-deg", "0.5",
                  "--noise", "0.003", "--overwrite"],
-                check=True, env=env, stdout=subprocess.DEVNULL,
+                check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             )  # fmt: skip
             base_cmd = [
                 sys.executable,

@@ -33,6 +33,8 @@ Where rotacal departs from its sources in the subdivision (eqs. (3)–(4)):
   the reversal, the cluster pruning by hysteresis and the window of eqs. (7)–(8)).
 
 Everything is whole-array NumPy; the only Python loops run over reversals (a few hundred).
+:func:`demodulate` runs the correction, the phase and the subinterval transitions in one pass
+over cache-sized blocks (:mod:`rotacal.encoder._kernel`; a Numba twin for long captures).
 """
 
 from __future__ import annotations
