@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from rotacal._jit import use_numba
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.signal._checks import (
     as_pair,
@@ -266,12 +267,17 @@ class HarmonicFitAccumulator:
         if nfull:
             jstart = (g0 + i) // m
             q = np.empty((nfull, v.shape[1]))
-            for b in range(0, nfull, _SUB_BLOCKS):
-                e = min(nfull, b + _SUB_BLOCKS)
-                blk = y[i + b * m : i + e * m].reshape(e - b, m) - y0
-                q[b:e] = blk @ v
-                flat = blk.reshape(-1)
-                s2 += float(flat @ flat)
+            if use_numba(nfull * m):
+                from rotacal.signal._blocks_jit import block_moments
+
+                s2 += block_moments(y[i : i + nfull * m], y0, v, q)
+            else:
+                for b in range(0, nfull, _SUB_BLOCKS):
+                    e = min(nfull, b + _SUB_BLOCKS)
+                    blk = y[i + b * m : i + e * m].reshape(e - b, m) - y0
+                    q[b:e] = blk @ v
+                    flat = blk.reshape(-1)
+                    s2 += float(flat @ flat)
             js.append(np.arange(jstart, jstart + nfull, dtype=np.int64))
             ps.append(np.broadcast_to(self._cumv[m], (nfull, v.shape[1])))
             qs.append(q)
