@@ -9,18 +9,65 @@ from __future__ import annotations
 
 import hashlib
 import os
+import threading
 from collections.abc import Iterable, Mapping
+from concurrent.futures import Future
 from pathlib import Path
 from typing import Any
 
-__all__ = ["file_record", "provenance_record", "sha256_file"]
+__all__ = ["file_record", "prefetch_sha256", "provenance_record", "sha256_file"]
 
 #: Files are hashed in blocks of this many bytes: a capture of any size in flat memory.
 HASH_BLOCK_BYTES = 1 << 20
 
 
+#: Hashes started ahead (:func:`prefetch_sha256`), by the file's identity when they started.
+_PREFETCHED: dict[tuple[str, int, int], Future[str]] = {}
+
+
+def _identity(path: str | os.PathLike[str]) -> tuple[str, int, int] | None:
+    """(real path, size, modification time in ns), or None when the file cannot be looked at."""
+    try:
+        st = os.stat(path)
+        return os.path.realpath(path), st.st_size, st.st_mtime_ns
+    except OSError:
+        return None
+
+
+def prefetch_sha256(paths: Iterable[str | os.PathLike[str]]) -> None:
+    """Start hashing each file in a background thread while the command analyses it.
+
+    hashlib lets other threads run while it hashes a block, so on a machine with a free core the
+    hash of a large capture costs no wall time; :func:`sha256_file` then takes the result, unless
+    the file changed since (size or modification time), when it hashes the file again.
+    """
+    for path in paths:
+        key = _identity(path)
+        if key is None or key in _PREFETCHED or not os.path.isfile(key[0]):
+            continue
+        future: Future[str] = Future()
+
+        def work(p: str = key[0], f: Future[str] = future) -> None:
+            try:
+                f.set_result(_hash(p))
+            except BaseException as exc:  # handed to the caller that waits for it
+                f.set_exception(exc)
+
+        _PREFETCHED[key] = future
+        threading.Thread(target=work, name="rotacal-sha256", daemon=True).start()
+
+
 def sha256_file(path: str | os.PathLike[str]) -> str:
-    """The SHA-256 of a file's bytes (hex), read in blocks of 1 MiB (never whole into memory)."""
+    """The SHA-256 of a file's bytes (hex), read in blocks of 1 MiB (never whole into memory);
+    the result of :func:`prefetch_sha256` when it hashed the same, unchanged file."""
+    key = _identity(path)
+    future = _PREFETCHED.pop(key, None) if key is not None else None
+    if future is not None:
+        return future.result()
+    return _hash(path)
+
+
+def _hash(path: str | os.PathLike[str]) -> str:
     digest = hashlib.sha256()
     buffer = bytearray(HASH_BLOCK_BYTES)
     view = memoryview(buffer)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import rotacal.table.streaming as streaming
-from rotacal import sim
+from rotacal import _jit, sim
 from rotacal.encoder import demodulate
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.io import read_capture, write_capture
@@ -256,3 +256,16 @@ def test_chunk_sources_that_cannot_work_are_refused(capture):
         calibrate_encoder_motion_chunked(chunked(capture, 997), lines=LINES, set_amplitude_deg=0.5)
     with pytest.raises(ConfigError, match="chunk_rows"):
         encoder_chunks_from_file("x.npz", chunk_rows=0)
+
+
+def test_chunked_with_the_numba_pass_equals_in_memory_without(capture, monkeypatch):
+    kw = {"lines": LINES, "set_amplitude_deg": 0.5, "set_frequency_hz": 2.0}
+    monkeypatch.setenv("ROTACAL_NUMBA", "0")
+    r0 = in_memory(capture, **kw)
+    monkeypatch.delenv("ROTACAL_NUMBA")
+    monkeypatch.setattr(_jit, "MIN_SAMPLES", 0)  # the Numba twin for every pass of the capture
+    assert _jit.use_numba(capture["a"].size)
+    r = calibrate_encoder_motion_chunked(chunked(capture, 65_537), **kw)
+    assert_same(r0, r)
+    truth = DISTORTED.truth(r.analysis_start_s, r.analysis_stop_s)
+    assert r.thd_percent == pytest.approx(truth["thd_percent"], abs=0.02)

@@ -188,6 +188,12 @@ def _check_outputs(json_path: str | None, report_path: str | None, overwrite: bo
     # an output that would replace an input is named first: the worst of the mistakes
     check_outputs(targets, overwrite=overwrite, inputs=_declared_inputs(), make_folders=True)
     _check_extensions(json_path, report_path)
+    if json_path is not None and ctx is not None:
+        from rotacal.provenance import prefetch_sha256
+
+        # the JSON's provenance hashes the inputs: start now, beside the analysis
+        paths = ctx.meta.get(_INPUT_PATHS_KEY, {})
+        prefetch_sha256(p for given in paths.values() for p in given)
 
 
 def _wrote(path: str | os.PathLike[str]) -> None:

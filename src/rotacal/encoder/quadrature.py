@@ -33,6 +33,8 @@ Where rotacal departs from its sources in the subdivision (eqs. (3)–(4)):
   the reversal, the cluster pruning by hysteresis and the window of eqs. (7)–(8)).
 
 Everything is whole-array NumPy; the only Python loops run over reversals (a few hundred).
+:func:`demodulate` runs the correction, the phase and the subinterval transitions in one pass
+over cache-sized blocks (:mod:`rotacal.encoder._kernel`; a Numba twin for long captures).
 """
 
 from __future__ import annotations
@@ -589,13 +591,18 @@ def correct_quadrature(
             f"columns 'a' and 'b' differ in shape ({aa.shape} and {bb.shape}); "
             "they must be sampled together."
         )
-    c = correction
+    c = check_correction(correction)
+    return _apply(aa, bb, c.offset_a, c.offset_b, c.amplitude_a, c.amplitude_b, c.phase_error_rad)
+
+
+def check_correction(c: QuadratureCorrection) -> QuadratureCorrection:
+    """Refuse a correction that cannot be applied (amplitudes ≤ 0, |phase error| ≥ π/2)."""
     if not (c.amplitude_a > 0 and c.amplitude_b > 0 and abs(c.phase_error_rad) < math.pi / 2):
         raise ConfigError(
             f"correction has amplitudes {c.amplitude_a:g}, {c.amplitude_b:g} and phase error "
             f"{c.phase_error_rad:g} rad; amplitudes must be > 0 and |phase error| < π/2."
         )
-    return _apply(aa, bb, c.offset_a, c.offset_b, c.amplitude_a, c.amplitude_b, c.phase_error_rad)
+    return c
 
 
 # --------------------------------------------------------------------------------------------
@@ -839,12 +846,32 @@ def reversing_subintervals(
     return idx[middle - 1], idx[middle] - 1, kinds
 
 
-def _reversal_point(u: FloatArray, v: FloatArray, first: int, last: int) -> int:
+#: ``(lo, hi) → (u, v)`` of samples lo..hi (inclusive): the corrected signals of a window.
+WindowSignals = Callable[[int, int], tuple[FloatArray, FloatArray]]
+
+
+def _reversal_point(signals: WindowSignals, n: int, first: int, last: int) -> int:
     """Chp of eqs. (7)–(8): the extreme sample of the faster-changing signal in [Sub⁻, Sub⁺]."""
     if last <= first:
         return first
-    lo, hi = reversal_window(first, last, u.size)
-    return lo + reversal_point_in_window(u[lo : hi + 1], v[lo : hi + 1])
+    lo, hi = reversal_window(first, last, n)
+    return lo + reversal_point_in_window(*signals(lo, hi))
+
+
+def _pinned(plan: ReversalPlan, t: FloatArray, signals: WindowSignals) -> Reversals:
+    """The reversals of a plan, each pinned to its Chp (eqs. (7)–(8)) with its time (s)."""
+    chp = [_reversal_point(signals, t.size, int(f), int(last)) for f, last in plan.windows.tolist()]
+    indices = plan.indices(chp)
+    return Reversals(
+        indices=indices,
+        times_s=t[indices],
+        kinds=plan.kinds,
+        candidates=plan.candidates,
+        hysteresis_subintervals=plan.hysteresis_subintervals,
+        transitions=plan.transitions,
+        skipped_transitions=plan.skipped_transitions,
+        max_step_subintervals=plan.max_step_subintervals,
+    )
 
 
 def reversal_window(first: int, last: int, n_samples: int) -> tuple[int, int]:
@@ -1206,18 +1233,7 @@ def find_reversals(
     plan = plan_reversals(
         idx, k_after, k0, hysteresis_subintervals=hysteresis_subintervals, stacklevel=3
     )
-    chp = [_reversal_point(uu, vv, int(f), int(last)) for f, last in plan.windows.tolist()]
-    indices = plan.indices(chp)
-    return Reversals(
-        indices=indices,
-        times_s=tt[indices],
-        kinds=plan.kinds,
-        candidates=plan.candidates,
-        hysteresis_subintervals=plan.hysteresis_subintervals,
-        transitions=plan.transitions,
-        skipped_transitions=plan.skipped_transitions,
-        max_step_subintervals=plan.max_step_subintervals,
-    )
+    return _pinned(plan, tt, lambda lo, hi: (uu[lo : hi + 1], vv[lo : hi + 1]))
 
 
 def intercept_periods(reversals: Reversals, n_periods: int | None = None) -> tuple[int, int, int]:
@@ -1348,15 +1364,25 @@ def demodulate(
     else:
         stride = _stride_for(aa.size, max_points)
         _check_varies(aa[::stride], bb[::stride])
-    u, v = correct_quadrature(aa, bb, correction)
-    phase, _ = unwrapped_phase(u, v)
+    # correction, phase and subinterval transitions in one pass (the signals u, v are not kept:
+    # eqs. (7)–(8) correct the few samples of each reversal window again)
+    from rotacal.encoder._kernel import phase_pass
+
+    run = phase_pass(aa, bb, correction)
+    phase = run.phase_rad
     if hysteresis_subintervals is None and hysteresis_from is not None:
         step = hysteresis_stride(phase.size)
         hysteresis_subintervals = hysteresis_from(tt[::step], phase[::step])
-    reversals = find_reversals(tt, u, v, phase, hysteresis_subintervals=hysteresis_subintervals)
-    del u, v
+    plan = plan_reversals(
+        run.indices, run.k_after, run.k_first, hysteresis_subintervals=hysteresis_subintervals
+    )
+    corr = correction
+    reversals = _pinned(
+        plan, tt, lambda lo, hi: correct_quadrature(aa[lo : hi + 1], bb[lo : hi + 1], corr)
+    )
+    scale = 360.0 / (_TWO_PI * float(lines))
     theta = phase
-    theta *= 360.0 / (_TWO_PI * float(lines))
+    theta *= scale
     span = float(tt[-1] - tt[0])
     return Demodulation(
         correction=correction,
@@ -1364,8 +1390,9 @@ def demodulate(
         lines=int(lines),
         n_samples=int(aa.size),
         sample_rate_hz=(aa.size - 1) / span,
-        angle_min_deg=float(theta.min()),
-        angle_max_deg=float(theta.max()),
+        # the scaling is monotonic: the extremes of θ are the scaled extremes of φ
+        angle_min_deg=run.phase_min_rad * scale,
+        angle_max_deg=run.phase_max_rad * scale,
         _angle_deg=theta,
         _time_s=tt,
         warnings=clipped,

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from rotacal._jit import use_numba
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.signal._checks import (
     as_pair,
@@ -32,7 +33,8 @@ from rotacal.signal._checks import (
 )
 from rotacal.signal._freq import estimate_frequency_unchecked
 from rotacal.signal._normal import solve_normal
-from rotacal.signal._result import SineFit, build_drift_check, build_sine_fit, harmonic_series
+from rotacal.signal._residual import residual_sums
+from rotacal.signal._result import SineFit, build_drift_check, build_sine_fit
 
 _X_PLAN = 0.25  # planned largest in-block phase (rad) of harmonic 2H at 1.25·f
 _F_MARGIN = 1.25
@@ -265,12 +267,17 @@ class HarmonicFitAccumulator:
         if nfull:
             jstart = (g0 + i) // m
             q = np.empty((nfull, v.shape[1]))
-            for b in range(0, nfull, _SUB_BLOCKS):
-                e = min(nfull, b + _SUB_BLOCKS)
-                blk = y[i + b * m : i + e * m].reshape(e - b, m) - y0
-                q[b:e] = blk @ v
-                flat = blk.reshape(-1)
-                s2 += float(flat @ flat)
+            if use_numba(nfull * m):
+                from rotacal.signal._blocks_jit import block_moments
+
+                s2 += block_moments(y[i : i + nfull * m], y0, v, q)
+            else:
+                for b in range(0, nfull, _SUB_BLOCKS):
+                    e = min(nfull, b + _SUB_BLOCKS)
+                    blk = y[i + b * m : i + e * m].reshape(e - b, m) - y0
+                    q[b:e] = blk @ v
+                    flat = blk.reshape(-1)
+                    s2 += float(flat @ flat)
             js.append(np.arange(jstart, jstart + nfull, dtype=np.int64))
             ps.append(np.broadcast_to(self._cumv[m], (nfull, v.shape[1])))
             qs.append(q)
@@ -491,13 +498,25 @@ class HarmonicFitAccumulator:
             drift_check=bool(drift_check),
         )
         rss = sol.rss
-        if _samples is not None and rss <= _RSS_ROUNDING * self._sum_y2:
-            rss = self._summed_rss(_samples, sol.frequency_hz, t_ref, sol.params, nh, drift)
+        rss_d = sol.check[1] if sol.check is not None else 0.0
+        if _samples is not None:
+            # the residuals the normal equations cannot resolve, summed from the samples in one
+            # pass (the fit and its drift check share the frequency, hence the cos and sin)
+            unresolved = _RSS_ROUNDING * self._sum_y2
+            models = {}
+            if rss <= unresolved:
+                models["fit"] = self._model(sol.params, nh, drift)
+            if sol.check is not None and rss_d <= unresolved:
+                models["check"] = self._model(sol.check[0], nh, True)
+            if models:
+                t_s, y_s = _samples
+                sums = residual_sums(t_s, y_s, t_ref, sol.frequency_hz, list(models.values()))
+                summed = dict(zip(models, sums, strict=True))
+                rss = summed.get("fit", rss)
+                rss_d = summed.get("check", rss_d)
         check = None
         if sol.check is not None:
-            p_d, rss_d, inv_d = sol.check
-            if _samples is not None and rss_d <= _RSS_ROUNDING * self._sum_y2:
-                rss_d = self._summed_rss(_samples, sol.frequency_hz, t_ref, p_d, nh, True)
+            p_d, _, inv_d = sol.check
             check = build_drift_check(
                 params=p_d,
                 offset=self._y0 + float(p_d[0]),
@@ -520,26 +539,14 @@ class HarmonicFitAccumulator:
             drift_check=check,
         )
 
-    def _summed_rss(
-        self,
-        samples: tuple[np.ndarray, np.ndarray],
-        frequency_hz: float,
-        t_ref: float,
-        params: np.ndarray,
-        nh: int,
-        drift: bool,
-    ) -> float:
-        """Σ (y − model)² over the samples, for parameters ``[C, a_1..a_H, b_1..b_H(, D)]``
-        relative to the accumulator's ``y0``."""
-        t, y = samples
-        tau = t - t_ref
-        model = harmonic_series(
-            2.0 * math.pi * frequency_hz * tau,
+    def _model(
+        self, params: np.ndarray, nh: int, drift: bool
+    ) -> tuple[float, np.ndarray, np.ndarray, float]:
+        """``(const, a, b, D)`` of :func:`residual_sums` for parameters
+        ``[C, a_1..a_H, b_1..b_H(, D)]`` relative to the accumulator's ``y0``."""
+        return (
+            self._y0 + float(params[0]),
             params[1 : nh + 1],
             params[nh + 1 : 2 * nh + 1],
-            self._y0 + float(params[0]),
+            float(params[2 * nh + 1]) if drift else 0.0,
         )
-        if drift:
-            model += float(params[2 * nh + 1]) * tau
-        r = y - model
-        return float(r @ r)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -146,20 +147,30 @@ def harmonic_series(theta: np.ndarray, ca: np.ndarray, cb: np.ndarray, const: fl
 
     The exact cos/sin are recomputed every 8 harmonics so rounding cannot build up.
     """
+    return harmonic_series_many(theta, [(ca, cb, const)])[0]
+
+
+def harmonic_series_many(
+    theta: np.ndarray, series: Sequence[tuple[np.ndarray, np.ndarray, float]]
+) -> list[np.ndarray]:
+    """:func:`harmonic_series` for several ``(ca, cb, const)`` of one length at the same θ: the
+    cos/sin of each harmonic are formed once, each series summed as :func:`harmonic_series` sums
+    it (the same numbers to the bit)."""
     c1 = np.cos(theta)
     s1 = np.sin(theta)
-    out = np.full(theta.shape, const, dtype=np.float64)
+    outs = [np.full(theta.shape, const, dtype=np.float64) for _, _, const in series]
     ch, sh = c1, s1
-    for k in range(ca.size):
+    for k in range(series[0][0].size):
         hk = k + 1
         if hk > 1:
             if hk % 8 == 0:
                 ch, sh = np.cos(hk * theta), np.sin(hk * theta)
             else:
                 ch, sh = ch * c1 - sh * s1, sh * c1 + ch * s1
-        out += ca[k] * ch
-        out += cb[k] * sh
-    return out
+        for out, (ca, cb, _) in zip(outs, series, strict=True):
+            out += ca[k] * ch
+            out += cb[k] * sh
+    return outs
 
 
 def build_sine_fit(

@@ -44,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from rotacal._jit import use_numba
 from rotacal.encoder import (
     HysteresisRule,
     PhaseState,
@@ -55,9 +56,8 @@ from rotacal.encoder import (
     plan_reversals,
     reversal_point_in_window,
     reversal_window,
-    subinterval_transitions,
-    unwrapped_phase,
 )
+from rotacal.encoder._kernel import phase_pass
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.io import iter_capture_chunks
 from rotacal.results import with_warnings
@@ -333,6 +333,7 @@ def _pass_phase(
     """Pass 3: phase with the cycle count carried, transitions, chunk-start states, plot copy
     (and the samples a hysteresis rule sees, as in memory)."""
     step = _plot_stride(n)
+    jit = use_numba(n)  # by the capture's size, not the chunk's
     state: PhaseState | None = None
     k_prev: float | None = None
     k_start = math.nan
@@ -347,17 +348,15 @@ def _pass_phase(
     ends: list[float] = []
     for _, off, cols in passes.run():
         states.append(state)
-        u, v = correct_quadrature(cols["a"], cols["b"], corr)
-        phase, state = unwrapped_phase(u, v, state=state)
-        del u, v
-        idx, k_after, k_first, k_last = subinterval_transitions(
-            phase, previous_k=k_prev, offset=off
+        run = phase_pass(
+            cols["a"], cols["b"], corr, state=state, previous_k=k_prev, offset=off, jit=jit
         )
+        phase, state = run.phase_rad, run.state
         if k_prev is None:
-            k_start = k_first
-        k_prev = k_last
-        trans_idx.append(idx.astype(np.int64, copy=False))
-        trans_k.append(k_after)
+            k_start = run.k_first
+        k_prev = run.k_last
+        trans_idx.append(run.indices)
+        trans_k.append(run.k_after)
         s0 = (-off) % step
         dec["t"].append(np.array(cols["time_s"][s0::step]))
         dec["angle"].append(phase[s0::step] * scale)
@@ -367,7 +366,7 @@ def _pass_phase(
             r0 = (-off) % rule_step
             rule_t.append(np.array(cols["time_s"][r0::rule_step]))
             rule_phase.append(phase[r0::rule_step])
-        lo, hi = min(lo, float(phase.min())), max(hi, float(phase.max()))
+        lo, hi = min(lo, run.phase_min_rad), max(hi, run.phase_max_rad)
         ends[:] = [ends[0] if ends else float(phase[0]), float(phase[-1])]
         del phase
     all_idx = np.concatenate(trans_idx)
@@ -470,9 +469,9 @@ def _segment(
     """θ (deg) of samples ``first..last``, recomputed chunk by chunk from the saved phase state:
     ``(global index of the piece's first sample, t, θ)``."""
     for number, off, cols in passes.run(first, last + 1):
-        u, v = correct_quadrature(cols["a"], cols["b"], corr)
-        phase, _ = unwrapped_phase(u, v, state=states[number])
-        del u, v
+        phase = phase_pass(
+            cols["a"], cols["b"], corr, state=states[number], jit=use_numba(last + 1 - first)
+        ).phase_rad
         s = max(first - off, 0)
         e = min(last + 1 - off, phase.size)
         yield off + s, cols["time_s"][s:e], phase[s:e] * scale

@@ -1,0 +1,93 @@
+"""The harmonic fit's Numba twins (block moments, residual sums) against NumPy and direct sums."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rotacal import _jit
+from rotacal.signal import fit_harmonics
+from rotacal.signal._residual import residual_sums
+
+
+def _direct_rss(t, y, t_ref, f, const, a, b, drift):
+    """Σ (y − model)² with every cos(hωτ), sin(hωτ) evaluated directly (no recurrence)."""
+    tau = t - t_ref
+    model = const + drift * tau
+    for h in range(1, a.size + 1):
+        model = model + a[h - 1] * np.cos(h * 2 * math.pi * f * tau)
+        model = model + b[h - 1] * np.sin(h * 2 * math.pi * f * tau)
+    r = y - model
+    return float(r @ r)
+
+
+@pytest.mark.parametrize("jit", [False, True])
+def test_residual_sums_match_a_direct_evaluation(jit):
+    assert _jit.use_numba(1, jit) == jit  # Numba is a dependency: the twin under test runs
+    rng = np.random.default_rng(7)
+    t = np.arange(300_001) / 5000.0
+    f = 1.37
+    a = rng.normal(size=10) * np.logspace(0, -3, 10)
+    b = rng.normal(size=10) * np.logspace(0, -3, 10)
+    t_ref = 0.5 * (t[0] + t[-1])
+    tau = t - t_ref
+    clean = 0.25 + 0.01 * tau
+    for h in range(1, 11):
+        clean = clean + a[h - 1] * np.cos(h * 2 * math.pi * f * tau)
+        clean = clean + b[h - 1] * np.sin(h * 2 * math.pi * f * tau)
+    y = clean + 1e-6 * rng.standard_normal(t.size)
+    models = [(0.25, a, b, 0.01), (0.2, a * 0.999, b, 0.0)]
+    got = residual_sums(t, y, t_ref, f, models, jit=jit)
+    want = [_direct_rss(t, y, t_ref, f, *m) for m in models]
+    # the first model is the truth: its residual is the added noise
+    assert got[0] == pytest.approx(t.size * 1e-12, rel=0.01)
+    np.testing.assert_allclose(got, want, rtol=1e-9)
+
+
+def test_the_fit_is_the_same_with_either_twin(monkeypatch):
+    # a record so clean that the normal equations cannot resolve the residual: it is summed
+    rng = np.random.default_rng(1)
+    t = np.arange(400_000) / 20_000.0
+    y = 0.5 * np.sin(2 * math.pi * 0.7 * t) + 0.005 * np.sin(2 * math.pi * 1.4 * t + 0.3)
+    y += 2e-7 * rng.standard_normal(t.size) + 3e-4 * t
+    monkeypatch.setenv("ROTACAL_NUMBA", "0")
+    plain = fit_harmonics(t, y, 0.7, harmonics=10, drift_check=True)
+    plain_d = fit_harmonics(t, y, 0.7, harmonics=10, drift=True)
+    monkeypatch.delenv("ROTACAL_NUMBA")
+    monkeypatch.setattr(_jit, "MIN_SAMPLES", 0)
+    assert _jit.use_numba(t.size)
+    fast = fit_harmonics(t, y, 0.7, harmonics=10, drift_check=True)
+    fast_d = fit_harmonics(t, y, 0.7, harmonics=10, drift=True)
+    assert fast.residual_rms == pytest.approx(plain.residual_rms, rel=1e-12)
+    assert fast.drift_check is not None and plain.drift_check is not None
+    assert fast.drift_check.residual_rms == pytest.approx(plain.drift_check.residual_rms, rel=1e-12)
+    # the uncertainties also carry the frequency's iteration, which stops at a step of 1e-12
+    # relative: a rounding-level change of the block moments moves them by ~1e-11
+    np.testing.assert_allclose(fast.amplitudes_u, plain.amplitudes_u, rtol=1e-10)
+    assert fast_d.residual_rms == pytest.approx(plain_d.residual_rms, rel=1e-12)
+    # truth: with the drift fitted, the residual is the added noise
+    assert fast_d.residual_rms == pytest.approx(2e-7, rel=0.02)
+    assert fast_d.drift == pytest.approx(3e-4, rel=1e-3)
+
+
+def test_block_moments_of_a_fast_motion_match_with_either_twin(monkeypatch):
+    # 40 Hz sampled at 50 kHz: blocks of a few dozen samples, thousands of them
+    rng = np.random.default_rng(5)
+    t = np.arange(500_000) / 50_000.0
+    amp = (0.5, 0.01, 0.002)
+    y = sum(a * np.sin(2 * math.pi * 40.0 * (h + 1) * t + h) for h, a in enumerate(amp))
+    y = y + 1e-5 * rng.standard_normal(t.size)
+    monkeypatch.setenv("ROTACAL_NUMBA", "0")
+    plain = fit_harmonics(t, y, 40.0, harmonics=10)
+    monkeypatch.delenv("ROTACAL_NUMBA")
+    monkeypatch.setattr(_jit, "MIN_SAMPLES", 0)
+    fast = fit_harmonics(t, y, 40.0, harmonics=10)
+    assert fast.frequency_hz == pytest.approx(plain.frequency_hz, rel=1e-12)
+    # on the scale of the fundamental: harmonics 4..10 are noise of ~1e-8
+    np.testing.assert_allclose(fast.amplitudes, plain.amplitudes, rtol=0, atol=1e-12 * amp[0])
+    assert fast.residual_rms == pytest.approx(plain.residual_rms, rel=1e-12)
+    # truth: the amplitudes put in, the noise as the residual
+    np.testing.assert_allclose(fast.amplitudes[:3], amp, rtol=0, atol=3e-7)
+    assert fast.residual_rms == pytest.approx(1e-5, rel=0.01)
