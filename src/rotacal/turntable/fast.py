@@ -29,12 +29,12 @@ Seed 001 (``../shared/seeds/001_4a387eb674e238f2.txt``), §3.2, eqs. (17)–(24)
 from __future__ import annotations
 
 import functools
-import os
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rotacal._jit import use_numba
 from rotacal.errors import ConfigError
 from rotacal.turntable.chain import _FAST_CHUNK, _LinkPlan, _Plan
 from rotacal.turntable.matrices import _fast_kernel, _one_point_kernel
@@ -58,24 +58,12 @@ COMPILE_FROM_DRAWS = 2_000_000
 def use_compiled(draws: int) -> bool:
     """Whether ``draws`` draws go through the compiled kernels (the numbers are the same).
 
-    ``ROTACAL_NUMBA=0``: never; ``ROTACAL_NUMBA=1``: always (when Numba is installed); otherwise
-    from :data:`COMPILE_FROM_DRAWS` draws, or for any number once the kernels are loaded in this
-    process.
+    :func:`rotacal._jit.use_numba` with :data:`COMPILE_FROM_DRAWS` as its threshold
+    (``ROTACAL_NUMBA=0``: never, ``=1``: always), and for any number of draws once the kernels
+    are loaded in this process.
     """
-    setting = os.environ.get("ROTACAL_NUMBA", "").strip()
-    if setting == "0":
-        return False
-    wanted = setting == "1" or draws >= COMPILE_FROM_DRAWS or _jit.cache_info().currsize > 0
-    return wanted and _numba_available()  # Numba imported only when wanted
-
-
-@functools.cache
-def _numba_available() -> bool:
-    try:
-        import numba  # noqa: F401
-    except ImportError:  # pragma: no cover - numba is a dependency
-        return False
-    return True
+    loaded = _jit.cache_info().currsize > 0
+    return use_numba(draws, True if loaded else None, threshold=COMPILE_FROM_DRAWS)
 
 
 def chain_arrays(links: Sequence[Any]) -> tuple[np.ndarray, ...]:
