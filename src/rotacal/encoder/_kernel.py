@@ -92,6 +92,12 @@ def phase_pass(
     Returns
     -------
     ChunkPhase
+
+    References
+    ----------
+    Heydemann, P. L. M. 1981, Appl. Opt. 20:3382–3384, eqs. (1)–(2) solved for cos φ and sin φ;
+    Feng et al. 2023, Sensors 23:4876, §3.1, eqs. (3)–(4) (arctangent subdivision, 30°
+    subintervals).
     """
     check_correction(correction)
     a = np.asarray(a, dtype=np.float64)

@@ -52,6 +52,11 @@ def residual_sums(
     -------
     list of float
         One residual sum of squares per model (unit of y squared).
+
+    References
+    ----------
+    IEEE Std 1057-2017, §4.1.3 (the residual of the sine fits, from which s² = RSS/(N − p));
+    Feng et al. 2023, Sensors 23:4876, eq. (9) (the multi-harmonic model).
     """
     omega = 2.0 * math.pi * frequency_hz
     if len(models) <= 2 and use_numba(t.size, jit):
