@@ -145,15 +145,34 @@ class TopValues:
         if self.keep == 0:
             return
         if self.values.shape[0] == self.keep:  # full: only values above a column's least can enter
-            columns = []
-            for j in range(self.values.shape[1]):
-                kept = self.values[:, j]
-                column = chunk[:, j]
-                both = np.concatenate((kept, column[column > kept.min()]))
-                columns.append(np.partition(both, both.size - self.keep)[-self.keep :])
-            self.values = np.stack(columns, axis=1)
+            floor = self.floor()
+            self.add_columns([chunk[:, j][chunk[:, j] > floor[j]] for j in range(chunk.shape[1])])
             return
         both = np.concatenate((self.values, chunk), axis=0)
         if both.shape[0] > self.keep:
             both = np.partition(both, both.shape[0] - self.keep, axis=0)[-self.keep :]
         self.values = both
+
+    def floor(self) -> np.ndarray:
+        """Per column, the value a new one must exceed to enter: the least kept once ``keep``
+        values are kept, −∞ before (+∞ when none are kept)."""
+        columns = self.values.shape[1]
+        if self.keep == 0:
+            return np.full(columns, np.inf)
+        if self.values.shape[0] < self.keep:
+            return np.full(columns, -np.inf)
+        return self.values.min(axis=0)
+
+    def add_columns(self, candidates: list[np.ndarray]) -> None:
+        """Merge, per column, the values of ``candidates[j]`` that exceed :meth:`floor` (all of
+        them before ``keep`` are kept: then every column gets the same number)."""
+        if self.keep == 0:
+            return
+        if self.values.shape[0] < self.keep:
+            self.add(np.stack(candidates, axis=1))
+            return
+        columns = []
+        for j, column in enumerate(candidates):
+            both = np.concatenate((self.values[:, j], column))
+            columns.append(np.partition(both, both.size - self.keep)[-self.keep :])
+        self.values = np.stack(columns, axis=1)

@@ -29,6 +29,7 @@ Seed 001 (``../shared/seeds/001_4a387eb674e238f2.txt``), §3.2, eqs. (17)–(24)
 from __future__ import annotations
 
 import functools
+import sys
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -44,6 +45,7 @@ __all__ = [
     "chain_arrays",
     "compiled_draws",
     "compiled_kernel",
+    "compiled_monte_carlo",
     "compiled_tally",
     "use_compiled",
 ]
@@ -62,7 +64,7 @@ def use_compiled(draws: int) -> bool:
     (``ROTACAL_NUMBA=0``: never, ``=1``: always), and for any number of draws once the kernels
     are loaded in this process.
     """
-    loaded = _jit.cache_info().currsize > 0
+    loaded = _jit.cache_info().currsize > 0 or "rotacal.turntable._mc_jit" in sys.modules
     return use_numba(draws, True if loaded else None, threshold=COMPILE_FROM_DRAWS)
 
 
@@ -103,7 +105,21 @@ def compiled_kernel() -> Callable[..., None]:
     ``angles`` (N, n_angles) rad, ``chi`` (N, n_angular) rad, ``out`` (N, 3) receives (Δψ, Δθ, Δγ)
     in rad (seed 001, eqs. (17)–(24)).
     """
-    return _jit(_kernel)
+    return _compiled_module().orientation_kernel  # type: ignore[no-any-return]
+
+
+def compiled_monte_carlo() -> Callable[..., int]:
+    """The Monte Carlo's fused chunk kernel ``monte_carlo_chunk`` of
+    :mod:`rotacal.turntable._mc_jit` (the draws of the Philox stream, the model and the tallies in
+    one pass, over the cores), compiled on first use."""
+    return _compiled_module().monte_carlo_chunk  # type: ignore[no-any-return]
+
+
+def _compiled_module() -> Any:
+    """:mod:`rotacal.turntable._mc_jit`, imported (with Numba) on first use."""
+    from rotacal.turntable import _mc_jit
+
+    return _mc_jit
 
 
 def compiled_draws() -> Callable[..., None]:
@@ -177,112 +193,6 @@ def _tally(
         if out:
             outside += 1
     return outside
-
-
-def _kernel(
-    angles: np.ndarray,
-    chi: np.ndarray,
-    axis: np.ndarray,
-    angle: np.ndarray,
-    start: np.ndarray,
-    error: np.ndarray,
-    error_axis: np.ndarray,
-    last_link: np.ndarray,
-    out: np.ndarray,
-) -> None:
-    """D ← A_kᵀ·D·A_k·E_k for blocks of draws, the operations of ``_fast_kernel`` in its order.
-
-    Link by link over a block of 256 draws (D as nine rows of the block, in the first-level
-    cache): each loop over the block does one kind of step for every draw without a branch, so
-    the compiler runs it on several draws at once. The conjugation by a rotation about the axis
-    with plane (i, j) mixes columns i, j of every row of D (D·A), then rows i, j of every column
-    (Aᵀ·(D·A)), each pair (a, b) becoming (a·c + b·s, b·c − a·s).
-    """
-    n = angles.shape[0]
-    n_links = axis.shape[0]
-    last = last_link[0]
-    block = 256
-    d = np.empty((9, block))
-    e = np.empty((3, block))
-    cos = np.empty(block)
-    sin = np.empty(block)
-    for lo in range(0, n, block):
-        m = min(block, n - lo)
-        started = False
-        for k in range(n_links):
-            ax = axis[k]
-            if ax >= 0 and started:
-                column = angle[k]
-                for r in range(m):
-                    phi = angles[lo + r, column]
-                    cos[r] = np.cos(phi)
-                    sin[r] = np.sin(phi)
-                i = (ax + 1) % 3
-                j = (ax + 2) % 3
-                for p in range(6):
-                    if p < 3:
-                        a = d[3 * p + i]
-                        b = d[3 * p + j]
-                    else:
-                        a = d[3 * i + p - 3]
-                        b = d[3 * j + p - 3]
-                    for r in range(m):
-                        x = a[r]
-                        y = b[r]
-                        a[r] = x * cos[r] + y * sin[r]
-                        b[r] = y * cos[r] - x * sin[r]
-            if start[k + 1] == start[k]:
-                continue
-            ex = e[0]
-            ey = e[1]
-            ez = e[2]
-            for r in range(m):
-                ex[r] = 0.0
-                ey[r] = 0.0
-                ez[r] = 0.0
-            for q in range(start[k], start[k + 1]):
-                acc = e[error_axis[q]]
-                column = error[q]
-                for r in range(m):
-                    acc[r] = acc[r] + chi[lo + r, column]
-            if not started:
-                for r in range(m):
-                    d[0, r] = 1.0
-                    d[1, r] = 0.0 - ez[r]
-                    d[2, r] = ey[r]
-                    d[3, r] = ez[r]
-                    d[4, r] = 1.0
-                    d[5, r] = 0.0 - ex[r]
-                    d[6, r] = 0.0 - ey[r]
-                    d[7, r] = ex[r]
-                    d[8, r] = 1.0
-                started = True
-            elif k == last:
-                for r in range(m):
-                    d[2, r] = d[2, r] + (d[0, r] * ey[r] - d[1, r] * ex[r])
-                    d[3, r] = d[3, r] + (d[4, r] * ez[r] - d[5, r] * ey[r])
-                    d[7, r] = d[7, r] + (d[8, r] * ex[r] - d[6, r] * ez[r])
-            else:
-                for p in range(3):
-                    a0 = d[3 * p]
-                    a1 = d[3 * p + 1]
-                    a2 = d[3 * p + 2]
-                    for r in range(m):
-                        x0 = a0[r]
-                        x1 = a1[r]
-                        x2 = a2[r]
-                        a0[r] = x0 + (x1 * ez[r] - x2 * ey[r])
-                        a1[r] = x1 + (x2 * ex[r] - x0 * ez[r])
-                        a2[r] = x2 + (x0 * ey[r] - x1 * ex[r])
-        for r in range(m):
-            if started:
-                out[lo + r, 0] = d[2, r]
-                out[lo + r, 1] = d[3, r]
-                out[lo + r, 2] = d[7, r]
-            else:
-                out[lo + r, 0] = 0.0
-                out[lo + r, 1] = 0.0
-                out[lo + r, 2] = 0.0
 
 
 class _FastPath:
@@ -362,14 +272,40 @@ class _FastPath:
         for start in range(0, n, _FAST_CHUNK):
             stop = min(n, start + _FAST_CHUNK)
             a_t = angles[start:stop].T
-            c_t = np.ascontiguousarray(chi[start:stop].T)
             trig = {
                 k: (np.cos(a_t[k]), np.sin(a_t[k])) for k in needs_angle
             }  # only angles that do not cancel
-            psi, theta, gamma = _fast_kernel(self._p.links, trig, c_t)
-            out[start:stop, 0] = psi
-            out[start:stop, 1] = theta
-            out[start:stop, 2] = gamma
+            out[start:stop] = self.fast_orientation_error_trig(trig, chi[start:stop])
+        return out
+
+    def fast_orientation_error_trig(
+        self, trig: dict[int, tuple[np.ndarray, np.ndarray]], chi: np.ndarray
+    ) -> np.ndarray:
+        """(Δψ, Δθ, Δγ) of N draws from the cos and sin of their angles: the NumPy path of
+        :meth:`fast_orientation_error` (seed model, eqs. (17)–(24)) after its cos and sin, in
+        chunks of 16 384 draws.
+
+        Parameters
+        ----------
+        trig : dict
+            Angle index → (cos, sin), each of shape (N,), for every index of :meth:`_fast_angles`.
+        chi : ndarray, shape (N, n_angular)
+            Angular errors (rad), columns :attr:`angular_error_names`.
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+            (Δψ, Δθ, Δγ) in rad.
+        """
+        n = chi.shape[0]
+        out = np.empty((n, 3))
+        for start in range(0, n, _FAST_CHUNK):
+            stop = min(n, start + _FAST_CHUNK)
+            part = {k: (c[start:stop], s[start:stop]) for k, (c, s) in trig.items()}
+            c_t = np.ascontiguousarray(chi[start:stop].T)
+            out[start:stop, 0], out[start:stop, 1], out[start:stop, 2] = _fast_kernel(
+                self._p.links, part, c_t
+            )
         return out
 
     def fast_angle_trig(self, angles: np.ndarray) -> dict[int, tuple[np.ndarray, np.ndarray]]:

@@ -17,6 +17,7 @@ import dataclasses
 import math
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -25,8 +26,15 @@ from rotacal.errors import ConfigError
 from rotacal.results import Result
 from rotacal.turntable.chain import ARCMIN_PER_RAD, COMPONENTS
 from rotacal.turntable.draws import QUANTILE, TopValues, quantile_interval, top_values_needed
-from rotacal.turntable.fast import compiled_draws, compiled_tally, use_compiled
+from rotacal.turntable.fast import (
+    _chain_arrays,
+    compiled_draws,
+    compiled_monte_carlo,
+    compiled_tally,
+    use_compiled,
+)
 from rotacal.turntable.geometry import Turntable
+from rotacal.turntable.stream import STREAMS, philox_key, turn_sin_cos
 from rotacal.turntable.worstcase import (
     _TWO_PI,
     _bounds_vector,
@@ -50,7 +58,7 @@ class MonteCarloCheck(Result):
     Attributes
     ----------
     runs, seed : int
-        Number of draws and the seed of ``numpy.random.Generator(PCG64(seed))``.
+        Number of draws and the seed of the stream.
     signs : str
         ``"random"`` (χ_i = ±U(LB_i, UB_i)) or ``"positive"`` (the paper's literal Ω_χ).
     max_abs_rad, max_abs_arcmin : dict
@@ -72,6 +80,9 @@ class MonteCarloCheck(Result):
         ``{j: (value, low, high)}``: the q-quantile of |Δ_j| over the draws and its
         distribution-free 95 % coverage interval (:func:`rotacal.turntable.draws.quantile_interval`);
         ``None`` when there are too few draws for one.
+    stream : str
+        The random stream: ``"philox"`` (``Generator(Philox(seed))``, counter-based) or
+        ``"pcg64"`` (``Generator(PCG64(seed))``, the stream of earlier versions).
     """
 
     runs: int
@@ -86,6 +97,7 @@ class MonteCarloCheck(Result):
     histograms: dict[str, dict[str, list[float]]]
     quantile: float = QUANTILE
     quantile_abs_rad: dict[str, tuple[float, float, float]] | None = None
+    stream: str = "philox"
 
 
 def monte_carlo_check(
@@ -97,15 +109,27 @@ def monte_carlo_check(
     signs: str = "random",
     chunk: int = 262_144,
     progress: Callable[[int, int], None] | None = None,
+    stream: str = "philox",
+    threads: int = 1,
 ) -> MonteCarloCheck:
     """Monte Carlo check of an allocation with the full orientation-error model (Figure 9).
 
     Each draw takes every angle uniform on [0, 2π) and every angular error χ_i = s_i·U(LB_i, UB_i)
     (s_i = ±1 with equal odds for ``signs="random"``; +1 for ``"positive"``, the paper's literal
-    Ω_χ), and evaluates the full model ``table.fast_orientation_error`` (eqs. (17)–(24)). The draws
-    come from ``numpy.random.Generator(PCG64(seed))``, one row of uniforms per draw (errors first,
-    then angles; for random signs one uniform v on [−1, 1) gives both sign and magnitude |v|), in
-    chunks of ``chunk`` rows: memory stays flat and the result is the same for any chunk size.
+    Ω_χ), and evaluates the full model of eqs. (17)–(24) (the recursion of
+    ``table.fast_orientation_error``). The draws come from ``numpy.random.Generator(Philox(seed))``
+    (or, with ``stream="pcg64"``, ``Generator(PCG64(seed))`` as in earlier versions), one row of
+    uniforms per draw (errors first, then angles; for random signs one uniform v = 2u − 1 on
+    [−1, 1) gives both sign and magnitude |v|; φ = 2π·u), in chunks of ``chunk`` rows: memory
+    stays flat and the result is the same for any chunk size.
+
+    The Philox stream is counter-based (:mod:`rotacal.turntable.stream`): from
+    :data:`~rotacal.turntable.fast.COMPILE_FROM_DRAWS` draws (``ROTACAL_NUMBA``) one compiled pass
+    makes each block's numbers, model and tallies on every core
+    (:mod:`rotacal.turntable._mc_jit`), and gives the NumPy path's result to the last bit on any
+    number of threads. With it cos φ and sin φ come from
+    :func:`rotacal.turntable.stream.turn_sin_cos` (within 2.3·10⁻¹⁶ of the exact values; the
+    PCG64 path takes the C library's of 2π·u).
 
     Parameters
     ----------
@@ -124,6 +148,11 @@ def monte_carlo_check(
         Draws per chunk.
     progress : callable, optional
         ``progress(done, total)`` after every chunk.
+    stream : {"philox", "pcg64"}
+        The random stream (:data:`rotacal.turntable.stream.STREAMS`).
+    threads : int
+        Threads the compiled Philox path runs each chunk on (≥ 1; the result is the same for
+        any number). One by default: on a machine whose cores are busy, more only wait.
 
     Returns
     -------
@@ -135,8 +164,8 @@ def monte_carlo_check(
     Raises
     ------
     ConfigError
-        runs or chunk not an integer ≥ 1, seed not an integer ≥ 0 (booleans and floats such as
-        1.5 are refused, not truncated), an unknown ``signs``, LB_i > UB_i.
+        runs, chunk or threads not an integer ≥ 1, seed not an integer ≥ 0 (booleans and floats such as
+        1.5 are refused, not truncated), an unknown ``signs`` or ``stream``, LB_i > UB_i.
 
     References
     ----------
@@ -145,8 +174,11 @@ def monte_carlo_check(
     _require_angular(table)
     runs_i, seed_i = check_draws(runs, seed)
     chunk_i = _integer("chunk", chunk, 1)
+    threads_i = _integer("threads", threads, 1)
     if signs not in ("random", "positive"):
         raise ConfigError(f"signs must be 'random' or 'positive', got {signs!r}.")
+    if stream not in STREAMS:
+        raise ConfigError(f"stream must be 'philox' or 'pcg64', got {stream!r}.")
     names = tuple(table.angular_error_names)
     ub = _bounds_vector(table, allocation.upper_bounds_rad, "the upper bound")
     lb = _bounds_vector(table, allocation.lower_bounds_rad, "the lower bound")
@@ -158,58 +190,17 @@ def monte_carlo_check(
         )
     req = _requirement(table, allocation.requirement_rad)
     req_v = np.array([req[c] for c in COMPONENTS])
-    n_err = len(names)
-    n_angles = len(tuple(table.angle_names))
-    width = ub - lb
-    rng = np.random.Generator(np.random.PCG64(seed_i))
-    max_abs = np.zeros(3)
-    counts = np.zeros((3, _HIST_BINS), dtype=np.int64)
-    outside = 0
-    bins_per_rad = _HIST_BINS / (2.0 * req_v)
-    largest = TopValues(top_values_needed(runs_i), 3)  # for the 99.9 % quantile of |Δ|
+    tallies = _Tallies(req_v, top_values_needed(runs_i))
     t0 = time.perf_counter()
-    done = 0
-    compiled = use_compiled(runs_i)
-    if compiled:  # the same numbers, each chunk's draws and tallies in one pass
-        draws, tally = compiled_draws(), compiled_tally()
-        rows = min(chunk_i, runs_i)  # buffers filled again for every chunk
-        chi_buffer, angle_buffer = np.empty((rows, n_err)), np.empty((rows, n_angles))
-        uniforms = np.empty((rows, n_err + n_angles))
-    while done < runs_i:
-        m = min(chunk_i, runs_i - done)
-        if compiled:
-            u = rng.random(out=uniforms[:m])  # the same numbers as rng.random((m, ·))
-            chi, angles = chi_buffer[:m], angle_buffer[:m]
-            draws(u, lb, width, signs == "random", chi, angles)
-            d = _fast(table, angles, chi)
-            outside += tally(d, req_v, bins_per_rad, max_abs, counts)
-            largest.add(np.abs(d))
-            done += m
-            if progress is not None:
-                progress(done, runs_i)
-            continue
-        u = rng.random((m, n_err + n_angles))
-        if signs == "random":
-            v = 2.0 * u[:, :n_err] - 1.0
-            chi = np.copysign(lb + width * np.abs(v), v)
-        else:
-            chi = lb + width * u[:, :n_err]
-        angles = _TWO_PI * u[:, n_err:]
-        d = _fast(table, angles, chi)
-        a = np.abs(d)
-        np.maximum(max_abs, a.max(axis=0), out=max_abs)
-        largest.add(a)
-        out_mask = a > req_v
-        outside += int(np.count_nonzero(out_mask.any(axis=1)))
-        idx = np.floor((d + req_v) * bins_per_rad).astype(np.int64)
-        idx = np.minimum(idx, _HIST_BINS - 1)  # +I_j exactly falls in the last bin
-        for j in range(3):
-            keep = idx[~out_mask[:, j], j]
-            counts[j] += np.bincount(keep, minlength=_HIST_BINS)[:_HIST_BINS]
-        done += m
-        if progress is not None:
-            progress(done, runs_i)
+    if stream == "philox" and use_compiled(runs_i):
+        _philox_compiled(
+            table, tallies, runs_i, seed_i, lb, ub - lb, signs, chunk_i, progress, threads_i
+        )
+    else:
+        _numpy_generator(table, tallies, runs_i, seed_i, lb, ub - lb, signs, chunk_i, progress,
+                         stream)  # fmt: skip
     elapsed = time.perf_counter() - t0
+    max_abs, counts, outside = tallies.max_abs, tallies.counts, tallies.outside
     histograms = {
         c: {
             "edges_rad": np.linspace(-req_v[j], req_v[j], _HIST_BINS + 1).tolist(),
@@ -218,7 +209,7 @@ def monte_carlo_check(
         for j, c in enumerate(COMPONENTS)
     }
     quantiles = {
-        c: quantile_interval(largest.values[:, j], runs_i) for j, c in enumerate(COMPONENTS)
+        c: quantile_interval(tallies.largest.values[:, j], runs_i) for j, c in enumerate(COMPONENTS)
     }
     return MonteCarloCheck(
         runs=runs_i,
@@ -231,6 +222,7 @@ def monte_carlo_check(
         outside=outside,
         draws_per_second=runs_i / elapsed if elapsed > 0 else math.inf,
         histograms=histograms,
+        stream=stream,
         quantile_abs_rad=(
             None if any(v is None for v in quantiles.values()) else quantiles  # type: ignore[arg-type]
         ),
@@ -251,3 +243,143 @@ def _integer(name: str, value: Any, minimum: int) -> int:
     if int(value) < minimum:
         raise ConfigError(f"{name} must be an integer ≥ {minimum}, got {value!r}.")
     return int(value)
+
+
+class _Tallies:
+    """What the Monte Carlo keeps of its draws, chunk by chunk: the largest |Δ_j|, the
+    histograms over ±I_j, the draws outside the requirement and the largest values for the
+    quantile (carried state; the same whatever the chunks)."""
+
+    def __init__(self, requirement: np.ndarray, keep: int) -> None:
+        self.requirement = requirement
+        self.bins_per_rad = _HIST_BINS / (2.0 * requirement)
+        self.max_abs = np.zeros(3)
+        self.counts = np.zeros((3, _HIST_BINS), dtype=np.int64)
+        self.outside = 0
+        self.largest = TopValues(keep, 3)
+
+    def add(self, d: np.ndarray) -> None:
+        """Tally the (Δψ, Δθ, Δγ) rows of ``d`` (rad) with NumPy."""
+        a = np.abs(d)
+        np.maximum(self.max_abs, a.max(axis=0), out=self.max_abs)
+        self.largest.add(a)
+        out_mask = a > self.requirement
+        self.outside += int(np.count_nonzero(out_mask.any(axis=1)))
+        idx = np.floor((d + self.requirement) * self.bins_per_rad).astype(np.int64)
+        idx = np.minimum(idx, _HIST_BINS - 1)  # +I_j exactly falls in the last bin
+        for j in range(3):
+            keep = idx[~out_mask[:, j], j]
+            self.counts[j] += np.bincount(keep, minlength=_HIST_BINS)[:_HIST_BINS]
+
+
+def _philox_compiled(
+    table: Turntable,
+    tallies: _Tallies,
+    runs: int,
+    seed: int,
+    lower: np.ndarray,
+    width: np.ndarray,
+    signs: str,
+    chunk: int,
+    progress: Callable[[int, int], None] | None,
+    threads: int,
+) -> None:
+    """The Philox stream's draws, model and tallies in the fused compiled kernel, chunk by chunk,
+    each chunk cut into ``threads`` ranges run at once (the kernel releases the GIL), each with
+    its own maxima and histograms; only the candidates for the largest values come back."""
+    kernel = compiled_monte_carlo()
+    key = philox_key(seed)
+    chain = _chain_arrays(table._p.links)
+    n_angles = len(tuple(table.angle_names))
+    rows = -(-min(chunk, runs) // threads)  # the longest range of a chunk
+    parts = [
+        (np.zeros(3), np.zeros_like(tallies.counts), np.empty((3, rows)), np.zeros(3, np.int64))
+        for _ in range(threads)
+    ]
+    common = (n_angles, lower, width, signs == "random", *chain)
+    pool = ThreadPoolExecutor(threads) if threads > 1 else None
+    try:
+        done = 0
+        while done < runs:
+            m = min(chunk, runs - done)
+            floor = tallies.largest.floor()
+            cuts = [done + m * p // threads for p in range(threads + 1)]
+            calls = [
+                (key, cuts[p], cuts[p + 1] - cuts[p], *common, tallies.requirement,
+                 tallies.bins_per_rad, floor, *parts[p])
+                for p in range(threads)
+            ]  # fmt: skip
+            if pool is None:
+                tallies.outside += kernel(*calls[0])
+            else:
+                tallies.outside += sum(pool.map(lambda args: kernel(*args), calls))
+            tallies.largest.add_columns(
+                [np.concatenate([c[j, : f[j]] for _, _, c, f in parts]) for j in range(3)]
+            )
+            done += m
+            if progress is not None:
+                progress(done, runs)
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    for part_max, part_counts, _, _ in parts:
+        np.maximum(tallies.max_abs, part_max, out=tallies.max_abs)
+        tallies.counts += part_counts
+
+
+def _numpy_generator(
+    table: Turntable,
+    tallies: _Tallies,
+    runs: int,
+    seed: int,
+    lower: np.ndarray,
+    width: np.ndarray,
+    signs: str,
+    chunk: int,
+    progress: Callable[[int, int], None] | None,
+    stream: str,
+) -> None:
+    """Rows of uniforms from NumPy's generator of ``stream``, chunk by chunk: the NumPy twin of
+    :func:`_philox_compiled` (Philox; angles' cos and sin by
+    :func:`rotacal.turntable.stream.turn_sin_cos`), or the PCG64 stream of earlier versions
+    (angles 2π·u through :meth:`Turntable.fast_orientation_error`; its draws and tallies
+    compiled from :data:`rotacal.turntable.fast.COMPILE_FROM_DRAWS` draws, the same numbers)."""
+    n_err = lower.shape[0]
+    n_angles = len(tuple(table.angle_names))
+    bit_generator = np.random.Philox(seed) if stream == "philox" else np.random.PCG64(seed)
+    rng = np.random.Generator(bit_generator)
+    compiled = stream == "pcg64" and use_compiled(runs)
+    rows = min(chunk, runs)  # buffers filled again for every chunk
+    uniforms = np.empty((rows, n_err + n_angles))
+    if compiled:
+        draws, tally = compiled_draws(), compiled_tally()
+        chi_buffer, angle_buffer = np.empty((rows, n_err)), np.empty((rows, n_angles))
+    done = 0
+    while done < runs:
+        m = min(chunk, runs - done)
+        u = rng.random(out=uniforms[:m])  # the same numbers as rng.random((m, ·))
+        if compiled:
+            chi, angles = chi_buffer[:m], angle_buffer[:m]
+            draws(u, lower, width, signs == "random", chi, angles)
+            d = _fast(table, angles, chi)
+            tallies.outside += tally(d, tallies.requirement, tallies.bins_per_rad,
+                                     tallies.max_abs, tallies.counts)  # fmt: skip
+            tallies.largest.add(np.abs(d))
+        else:
+            if signs == "random":
+                v = 2.0 * u[:, :n_err] - 1.0
+                chi = np.copysign(lower + width * np.abs(v), v)
+            else:
+                chi = lower + width * u[:, :n_err]
+            if stream == "philox":
+                trig = {}
+                for k in table._fast_angles():
+                    sin, cos = turn_sin_cos(u[:, n_err + k])
+                    trig[k] = (cos, sin)
+                d = table.fast_orientation_error_trig(trig, chi)
+            else:
+                d = _fast(table, _TWO_PI * u[:, n_err:], chi)
+            tallies.add(d)
+        done += m
+        if progress is not None:
+            progress(done, runs)
