@@ -9,9 +9,12 @@ rotary axis, a chain whose only errors come before every axis, and the single-dr
 
 from __future__ import annotations
 
+import types
+
 import numpy as np
 import pytest
 
+from rotacal.turntable.allocation import monte_carlo_check
 from rotacal.turntable.fast import COMPILE_FROM_DRAWS, use_compiled
 from rotacal.turntable.model import ErrorSpec, Link, Turntable, seed_table
 
@@ -98,3 +101,21 @@ def test_numba_can_be_switched_off_and_forced(monkeypatch: pytest.MonkeyPatch) -
     assert use_compiled(1)
     monkeypatch.delenv("ROTACAL_NUMBA")
     assert use_compiled(COMPILE_FROM_DRAWS)
+
+
+@pytest.mark.parametrize("name", list(CHAINS))
+def test_fused_kernel_equals_the_numpy_twin_on_every_chain(name: str, monkeypatch) -> None:
+    table = CHAINS[name]
+    names = table.angular_error_names
+    bounds = types.SimpleNamespace(
+        upper_bounds_rad={n: 2e-3 * (1 + i) for i, n in enumerate(names)},
+        lower_bounds_rad={n: 2e-4 for n in names},
+        requirement_rad={"psi": 6e-3, "theta": 6e-3, "gamma": 6e-3},  # some draws outside
+    )
+    results = []
+    for flag, threads in (("0", 1), ("1", 1), ("1", 2)):
+        monkeypatch.setenv("ROTACAL_NUMBA", flag)
+        res = monte_carlo_check(table, bounds, runs=30_011, seed=9, chunk=8_000, threads=threads)
+        results.append({**res.to_dict(), "draws_per_second": 0})
+    assert results[0] == results[1] == results[2]
+    assert 0 < results[0]["outside"] < 30_011 or name == "errors before every axis only"
