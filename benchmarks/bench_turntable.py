@@ -5,9 +5,10 @@ On the seed's two-axis table (seed 001) with rotacal's allocation for eq. (16)'s
 ``bench_turntable_requirement.py``; the stated one keeps these figures comparable between runs):
 
 1. ``monte_carlo_check`` with ``--runs`` draws (default 10⁶): random generator, full model, maxima,
-   histograms and largest values — draws/s with the compiled (Numba) path and with the NumPy path
-   (``ROTACAL_NUMBA=0``), the same numbers; and its generator alone (the same stream of uniforms,
-   one row per draw: no faster Monte Carlo gives the same draws);
+   histograms and largest values — draws/s of the Philox stream's fused compiled pass (one thread,
+   two threads), of its NumPy twin (``ROTACAL_NUMBA=0``; the same numbers), and of the OLD path
+   measured in this run (``stream="pcg64"``: NumPy's PCG64 generator, then the compiled kernel and
+   tallies, as before), with the ratio new/old; and the PCG64 generator alone (the old floor);
 2. the same draws (same generator and seed) evaluated five ways, all measured in this run:
    a. ``table.fast_orientation_error``, compiled kernel (turntable/fast.py),
    b. the same, NumPy path (``ROTACAL_NUMBA=0``: the code of c, through the method),
@@ -18,15 +19,16 @@ On the seed's two-axis table (seed 001) with rotacal's allocation for eq. (16)'s
    e. a per-draw Python loop building the 4×4 matrices of eqs. (17)–(22) with NumPy (on 10⁴
       draws, time scaled to ``--runs``),
    with draws/s, the speed-up over (c) and the largest difference from (a);
-3. seconds and peak RSS of ``monte_carlo_check`` (compiled) at 10⁷ and 10⁸ draws, each in a
-   fresh process (``--sizes``; peak RSS: that process's VmHWM), after importing Numba and loading
-   (or compiling) the kernels, whose time is printed apart;
+3. seconds, draws/s and peak RSS of ``monte_carlo_check`` (compiled, one thread) at 10⁶, 10⁷ and
+   10⁸ draws, new stream and old path back to back, each in a fresh process (``--sizes``; peak RSS:
+   that process's VmHWM), after importing Numba and loading (or compiling) the kernels, whose
+   time is printed apart; the ratio new/old of draws/s;
 4. rotacal's upper bounds next to Table 4 (arcmin) and the worst cases (linear and full model).
 
 Best of ``--repeat`` (default 3) with ``time.perf_counter``; no asserts. ``--quick``: 2·10⁵ draws,
 one repeat, sizes 10⁶ only.
 
-Run: ``python benchmarks/bench_turntable.py [--runs N] [--repeat R] [--sizes 1e7,1e8] [--quick]``
+Run: ``python benchmarks/bench_turntable.py [--runs N] [--repeat R] [--sizes 1e6,1e7,1e8] [--quick]``
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ import subprocess  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 from collections.abc import Callable  # noqa: E402
+from functools import partial  # noqa: E402
 from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -126,17 +129,19 @@ def peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def child(runs: int) -> None:
+def child(runs: int, stream: str) -> None:
     """Allocate, then time ``monte_carlo_check`` of ``runs`` draws; print seconds and peak RSS."""
     table = seed_table()
     alloc = allocate(table, math.radians(EQ16_DEG))
     t0 = time.perf_counter()
-    warm = with_numba("1", lambda: monte_carlo_check(table, alloc, runs=1_000, seed=1))
+    warm = with_numba(
+        "1", lambda: monte_carlo_check(table, alloc, runs=1_000, seed=1, stream=stream)
+    )
     warm()  # import Numba and compile (or load) the kernels: timed apart
     load = time.perf_counter() - t0
     before = peak_rss_mb()
     t0 = time.perf_counter()
-    monte_carlo_check(table, alloc, runs=runs, seed=2026)
+    monte_carlo_check(table, alloc, runs=runs, seed=2026, stream=stream)
     elapsed = time.perf_counter() - t0
     peak = peak_rss_mb()
     print(json.dumps({"seconds": elapsed, "peak_mb": peak, "before_mb": before, "load": load}))
@@ -185,12 +190,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=1_000_000)
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--sizes", default="1e7,1e8", help="draws for the seconds/peak-RSS table")
+    ap.add_argument("--sizes", default="1e6,1e7,1e8", help="draws for the seconds/peak-RSS table")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--child", type=float, help=argparse.SUPPRESS)
+    ap.add_argument("--stream", default="philox", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
-        child(int(args.child))
+        child(int(args.child), args.stream)
         return
     if args.quick:
         args.runs, args.repeat, args.sizes = 200_000, 1, "1e6"
@@ -198,13 +204,20 @@ def main() -> None:
 
     table = seed_table()
     t_alloc, alloc = best_of(lambda: allocate(table, math.radians(EQ16_DEG)), 1)
-    with_numba("1", lambda: monte_carlo_check(table, alloc, runs=1_000, seed=1))()  # compile first
+    for name in ("philox", "pcg64"):  # compile (or load) first
+        warm = partial(monte_carlo_check, table, alloc, runs=1_000, seed=1, stream=name)
+        with_numba("1", warm)()
 
-    def mc() -> Any:
-        return monte_carlo_check(table, alloc, runs=runs, seed=seed)
+    def mc(stream: str = "philox", threads: int = 1) -> Callable[[], Any]:
+        return lambda: monte_carlo_check(
+            table, alloc, runs=runs, seed=seed, stream=stream, threads=threads
+        )
 
-    t_mc, result = best_of(with_numba("1", mc), args.repeat)
-    t_mc_np, result_np = best_of(with_numba("0", mc), args.repeat)
+    t_mc, result = best_of(with_numba("1", mc()), args.repeat)
+    t_mc2, result2 = best_of(with_numba("1", mc(threads=2)), args.repeat)
+    t_mc_np, result_np = best_of(with_numba("0", mc()), args.repeat)
+    t_old, result_old = best_of(with_numba("1", mc("pcg64")), args.repeat)
+    t_old_np, _ = best_of(with_numba("0", mc("pcg64")), args.repeat)
     width = len(table.angular_error_names) + len(table.angle_names)
 
     def uniforms_only() -> None:
@@ -213,10 +226,11 @@ def main() -> None:
             rng.random(out=buffer[: min(262_144, runs - start)])
 
     t_rng, _ = best_of(uniforms_only, args.repeat)
-    same_mc = {**result.to_dict(), "draws_per_second": 0} == {
-        **result_np.to_dict(),
-        "draws_per_second": 0,
-    }
+    same_mc = (
+        {**result.to_dict(), "draws_per_second": 0}
+        == {**result_np.to_dict(), "draws_per_second": 0}
+        == {**result2.to_dict(), "draws_per_second": 0}
+    )
     angles, chi = draws(table, alloc, runs, seed)
     fast = lambda: table.fast_orientation_error(angles, chi)  # noqa: E731
     t_fast, d_fast = best_of(with_numba("1", fast), args.repeat)
@@ -227,16 +241,30 @@ def main() -> None:
     t_loop_part, d_loop = best_of(lambda: per_draw_loop(angles[:n_loop], chi[:n_loop]), 1)
     t_loop = t_loop_part * runs / n_loop
     same = all(
-        float(np.max(np.abs(d_fast[:, j]))) == result.max_abs_rad[c]
+        float(np.max(np.abs(d_fast[:, j]))) == result_old.max_abs_rad[c]
         for j, c in enumerate(("psi", "theta", "gamma"))
     )
 
-    print(f"turntable Monte Carlo, seed 001 table, {runs:,} draws, one core")
+    print(f"turntable Monte Carlo, seed 001 table, {runs:,} draws, one core unless stated")
+    print(f"{'monte_carlo_check (whole: RNG + model + tallies)':66s} {'time':>9s} {'draws/s':>12s} "
+          f"{'× old':>7s}")  # fmt: skip
+    for label, t in (
+        ("NEW: Philox stream, fused compiled pass, 1 thread", t_mc),
+        ("NEW: the same, 2 threads (threads=2)", t_mc2),
+        ("NEW: its NumPy twin (ROTACAL_NUMBA=0)", t_mc_np),
+        ("OLD: PCG64 stream, compiled kernel and tallies (stream='pcg64')", t_old),
+        ("OLD: PCG64 stream, NumPy path", t_old_np),
+        (f"   the old floor: PCG64 alone, {width} uniforms per draw", t_rng),
+    ):
+        print(f"{label:66s} {t:8.3f}s {runs / t:12,.0f} {t_old / t:7.2f}")
+    print(
+        f"× old: draws/s over the old compiled path, measured in this run; the new stream's result "
+        f"is the same on the compiled path, 1 and 2 threads, and its NumPy twin: {same_mc}"
+    )
+    print()
+    print("the model alone on the old stream's draws:")
     print(f"{'case':66s} {'time':>9s} {'draws/s':>12s} {'× (c)':>7s}  max |Δ − (a)| (rad)")
     rows = [
-        ("monte_carlo_check, compiled (RNG + model + tallies)", t_mc, None),
-        ("monte_carlo_check, NumPy path (ROTACAL_NUMBA=0)", t_mc_np, None),
-        (f"   its generator alone: PCG64, {width} uniforms per draw (the floor)", t_rng, None),
         ("a. fast_orientation_error, compiled kernel", t_fast, 0.0),
         ("b. fast_orientation_error, NumPy path (the code of c)", t_np,
          float(np.max(np.abs(d_np - d_fast)))),
@@ -253,26 +281,31 @@ def main() -> None:
             + ("" if diff is None else f"{diff:.1e}")
         )
     print(
-        f"× (c): draws/s over the baseline (c), measured in this run; the Monte Carlo's result "
-        f"is the same on both paths: {same_mc}; its maxima are (a)'s: {same}"
+        f"× (c): draws/s over the baseline (c), measured in this run; the old path's maxima are "
+        f"(a)'s: {same}"
     )
     print()
     print(
-        f"{'monte_carlo_check draws':>24s} {'seconds':>9s} {'draws/s':>12s} {'peak RSS':>10s} "
-        f"{'before it (imports, allocation)':>32s} {'kernels loaded in':>18s}"
+        f"{'monte_carlo_check draws':>24s} {'stream':>7s} {'seconds':>9s} {'draws/s':>12s} "
+        f"{'× old':>6s} {'peak RSS':>10s} {'before it (imports, allocation)':>32s} "
+        f"{'kernels loaded in':>18s}"
     )
     for size in (int(float(x)) for x in args.sizes.split(",") if x):
-        out = subprocess.run(
-            [sys.executable, __file__, "--child", str(size)],
-            check=True,
-            capture_output=True,
-            text=True,
-        ).stdout
-        got = json.loads(out.strip().splitlines()[-1])
-        print(
-            f"{size:24,d} {got['seconds']:9.2f} {size / got['seconds']:12,.0f} "
-            f"{got['peak_mb']:7.0f} MB {got['before_mb']:29.0f} MB {got['load']:16.2f} s"
-        )
+        seconds = {}
+        for stream in ("pcg64", "philox"):  # back to back, each in a fresh process
+            out = subprocess.run(
+                [sys.executable, __file__, "--child", str(size), "--stream", stream],
+                check=True,
+                capture_output=True,
+                text=True,
+            ).stdout
+            got = json.loads(out.strip().splitlines()[-1])
+            seconds[stream] = got["seconds"]
+            print(
+                f"{size:24,d} {stream:>7s} {got['seconds']:9.2f} {size / got['seconds']:12,.0f} "
+                f"{seconds['pcg64'] / got['seconds']:6.2f} {got['peak_mb']:7.0f} MB "
+                f"{got['before_mb']:29.0f} MB {got['load']:16.2f} s"
+            )
     print()
     print(f"allocation (SLSQP + exchange, full-model guard) in {t_alloc:.2f} s; arcmin:")
     print(f"{'error':10s} {'Table 4':>9s} {'rotacal':>9s} {'ratio':>7s}  binding")
