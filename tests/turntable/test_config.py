@@ -320,6 +320,7 @@ FAULTS = [
         r"link 1 has an unknown key 'rotation' \(did you mean 'rotations'\?\)",
     ),
     ("[monte_carlo]", '[monte_carlo]\nsigns = "both"', r"signs = 'both' is unknown"),
+    ("[monte_carlo]", '[monte_carlo]\nstream = "mt"', r"stream = 'mt' is unknown; use 'philox'"),
     ("runs = 1000", "runs = 0", r"\[monte_carlo\] runs must be an integer ≥ 1"),
     ("runs = 1000", "runs = true", r"\[monte_carlo\] runs must be an integer ≥ 1, got True"),
     ("runs = 1000", "runs = 1.5", r"\[monte_carlo\] runs must be an integer ≥ 1, got 1.5"),

@@ -23,6 +23,7 @@ from scipy.stats import chi2_contingency
 from rotacal.errors import ConfigError
 from rotacal.turntable import _mc_jit
 from rotacal.turntable.allocation import allocate, monte_carlo_check, worst_case
+from rotacal.turntable.config import load_turntable, seed_table_toml
 from rotacal.turntable.draws import TopValues
 from rotacal.turntable.model import Turntable, seed_table
 from rotacal.turntable.seed001 import EQ16_DEG
@@ -177,3 +178,9 @@ def test_top_values_from_candidates_equal_those_from_chunks() -> None:
     np.testing.assert_array_equal(np.sort(whole.values, axis=0), np.sort(parts.values, axis=0))
     every = np.concatenate(chunks)
     np.testing.assert_array_equal(np.sort(parts.values, axis=0), np.sort(every, axis=0)[-120:])
+
+
+def test_config_chooses_the_stream() -> None:
+    text = seed_table_toml().replace('signs = "random"', 'signs = "random"\nstream = "pcg64"')
+    assert load_turntable(text).settings["monte_carlo"]["stream"] == "pcg64"
+    assert "stream" not in seed_table().settings["monte_carlo"]  # the default: philox

@@ -424,6 +424,7 @@ def turntable_budget(
         seed=seed,
         signs=str(mc_settings.get("signs", "random")),
         progress=progress,
+        stream=str(mc_settings.get("stream", "philox")),
     )
 
     calibration: dict[str, Any] | None = None
@@ -503,6 +504,7 @@ def turntable_budget(
             "runs": mc.runs,
             "seed": mc.seed,
             "signs": mc.signs,
+            "stream": mc.stream,
             "max_abs_arcmin": dict(mc.max_abs_arcmin),
             "all_within": bool(mc.all_within),
             "outside": int(mc.outside),

@@ -36,7 +36,7 @@ mm); the loaded :class:`Turntable` is in rad and m. Example (the GyroWheel study
     # … every chain error exactly once (an ISO symbol generated from the chain is accepted as key)
 
     [monte_carlo]                # optional: runs (integer ≥ 1), seed (integer ≥ 0),
-                                 # signs = "random" | "positive"
+                                 # signs = "random" | "positive", stream = "philox" | "pcg64"
     [calibration]                # optional: latitude_deg, outer_steps, inner_steps, required_deg_h
                                  # (the calibration accuracy to check the allocated table against)
     [sensitivity]                # optional: how eq. (28)'s sensitivities are averaged
@@ -103,6 +103,7 @@ from rotacal.turntable.chain import (
     generated_aliases,
 )
 from rotacal.turntable.geometry import Turntable
+from rotacal.turntable.stream import STREAMS
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -138,8 +139,9 @@ _TOP_KEYS = (
 _LINK_KEYS = ("axis", "angle", "rotations", "translations")
 _ERROR_KEYS = ("lower", "iso", "label", "weight")
 _REQUIREMENT_KEYS = (*COMPONENTS, "calibration_deg_h", "derivation")
-#: Keys of ``[monte_carlo]`` (defaults applied by the consumers: 1 000 000, 2026, "random").
-MONTE_CARLO_KEYS = ("runs", "seed", "signs")
+#: Keys of ``[monte_carlo]`` (defaults applied by the consumers: 1 000 000, 2026, "random",
+#: "philox").
+MONTE_CARLO_KEYS = ("runs", "seed", "signs", "stream")
 #: Keys of ``[calibration]`` (defaults applied by the consumers: 45.75, 8, 8).
 CALIBRATION_KEYS = ("latitude_deg", "outer_steps", "inner_steps", "required_deg_h")
 #: Keys of ``[sensitivity]`` (defaults: a 1° step without the endpoint, see
@@ -389,6 +391,13 @@ def parse_turntable(
                     f"[monte_carlo] signs = {mc['signs']!r} is unknown; use 'random' or 'positive'."
                 )
             checked["signs"] = str(mc["signs"])
+        if "stream" in mc:
+            if mc["stream"] not in STREAMS:
+                raise rd.fail(
+                    f"[monte_carlo] stream = {mc['stream']!r} is unknown; use 'philox' (the "
+                    "default) or 'pcg64' (the stream of earlier versions)."
+                )
+            checked["stream"] = str(mc["stream"])
         settings["monte_carlo"] = checked
     if "calibration" in data:
         cal = rd.table(data["calibration"], "[calibration]")

@@ -24,7 +24,7 @@ import numpy as np
 
 from rotacal.errors import ConfigError
 from rotacal.results import Result
-from rotacal.turntable.chain import ARCMIN_PER_RAD, COMPONENTS
+from rotacal.turntable.chain import _FAST_CHUNK, ARCMIN_PER_RAD, COMPONENTS
 from rotacal.turntable.draws import QUANTILE, TopValues, quantile_interval, top_values_needed
 from rotacal.turntable.fast import (
     _chain_arrays,
@@ -372,11 +372,14 @@ def _numpy_generator(
             else:
                 chi = lower + width * u[:, :n_err]
             if stream == "philox":
-                trig = {}
-                for k in table._fast_angles():
-                    sin, cos = turn_sin_cos(u[:, n_err + k])
-                    trig[k] = (cos, sin)
-                d = table.fast_orientation_error_trig(trig, chi)
+                d = np.empty((m, 3))
+                for lo in range(0, m, _FAST_CHUNK):  # cache-sized: sin and cos are 25 passes
+                    hi = min(m, lo + _FAST_CHUNK)
+                    trig = {}
+                    for k in table._fast_angles():
+                        sin, cos = turn_sin_cos(u[lo:hi, n_err + k])
+                        trig[k] = (cos, sin)
+                    d[lo:hi] = table.fast_orientation_error_trig(trig, chi[lo:hi])
             else:
                 d = _fast(table, _TWO_PI * u[:, n_err:], chi)
             tallies.add(d)
