@@ -115,7 +115,14 @@ def test_fused_kernel_equals_the_numpy_twin_on_every_chain(name: str, monkeypatc
     results = []
     for flag, threads in (("0", 1), ("1", 1), ("1", 2)):
         monkeypatch.setenv("ROTACAL_NUMBA", flag)
-        res = monte_carlo_check(table, bounds, runs=30_011, seed=9, chunk=8_000, threads=threads)
+        res = monte_carlo_check(
+            table,
+            bounds,  # type: ignore[arg-type]
+            runs=30_011,
+            seed=9,
+            chunk=8_000,
+            threads=threads,
+        )
         results.append({**res.to_dict(), "draws_per_second": 0})
     assert results[0] == results[1] == results[2]
     assert 0 < results[0]["outside"] < 30_011 or name == "errors before every axis only"

@@ -112,6 +112,7 @@ def test_new_stream_has_the_old_streams_statistics(seed, alloc, monkeypatch) -> 
         counts = np.array([new.histograms[c]["counts"], old.histograms[c]["counts"]])
         counts = counts[:, counts.sum(axis=0) > 0]
         assert chi2_contingency(counts).pvalue > 1e-3, c
+        assert new.quantile_abs_rad is not None and old.quantile_abs_rad is not None
         q_new, lo_new, hi_new = new.quantile_abs_rad[c]
         q_old, lo_old, hi_old = old.quantile_abs_rad[c]
         assert lo_old - (hi_new - lo_new) <= q_new <= hi_old + (hi_new - lo_new), c
@@ -135,7 +136,7 @@ def test_pcg64_stream_gives_the_numbers_of_earlier_versions(seed, monkeypatch) -
     )
     for flag in ("0", "1"):
         monkeypatch.setenv("ROTACAL_NUMBA", flag)
-        res = monte_carlo_check(seed, bounds, runs=20_000, seed=3, stream="pcg64")
+        res = monte_carlo_check(seed, bounds, runs=20_000, seed=3, stream="pcg64")  # type: ignore[arg-type]
         assert res.max_abs_rad == {
             "psi": 0.0017519088903007506,
             "theta": 0.000592197750270303,

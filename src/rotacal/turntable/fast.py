@@ -4,11 +4,13 @@
 method of the table through :class:`_FastPath`) evaluates ΔR = R_dᵀ·R_t (seed 001,
 eqs. (17)–(24)) by the recursion D ← A_kᵀ·D·A_k·E_k of :func:`rotacal.turntable.matrices._fast_kernel`.
 That kernel runs on whole arrays, one NumPy operation per entry product (about 75 for the seed
-table), so every draw's numbers go through memory 75 times. Here the same recursion also runs in
-compiled code (Numba) over blocks of 256 draws: D is nine rows of the block, kept in the
-first-level cache, each step a loop without branches over the block; cos and sin of an angle are
-taken only where D is no longer the identity (as there). The Monte Carlo's draws from its
-uniforms and its tallies (maxima, histograms, draws outside the requirement) are compiled too.
+table), so every draw's numbers go through memory 75 times. The same recursion also runs in
+compiled code (Numba, :mod:`rotacal.turntable._mc_jit`) over blocks of 256 draws: D is nine rows
+of the block, kept in the first-level cache, each step a loop without branches over the block;
+cos and sin of an angle are taken only where D is no longer the identity (as there). The Monte
+Carlo's Philox stream runs in one fused compiled pass there (:func:`compiled_monte_carlo`); the
+PCG64 stream's draws from its uniforms and its tallies (maxima, histograms, draws outside the
+requirement) are compiled here (:func:`compiled_draws`, :func:`compiled_tally`).
 
 The operations are those of ``_fast_kernel`` in the same order. Where that kernel skips a
 constant (a product with an exact 0 or 1, a sum with an exact 0), the compiled one does the
@@ -17,9 +19,9 @@ finite x); only the sign of an exact zero may differ. cos and sin are the C libr
 NumPy's are on this platform; the tests compare the two paths draw by draw, to the last bit.
 
 Numba compiles the kernels on first use (cached on disk). Loading Numba and the cached kernels
-costs a fresh process about 1 s, so they are used from :data:`COMPILE_FROM_DRAWS` draws (or once
-loaded); ``ROTACAL_NUMBA=1`` uses them always, ``ROTACAL_NUMBA=0`` never (and without Numba the
-NumPy path is used).
+costs a fresh process about 0.3–0.6 s, so they are used from :data:`COMPILE_FROM_DRAWS` draws (or
+once loaded); ``ROTACAL_NUMBA=1`` uses them always, ``ROTACAL_NUMBA=0`` never (and without Numba
+the NumPy path is used).
 
 References
 ----------
@@ -52,8 +54,8 @@ __all__ = [
 
 
 #: Draws from which the compiled path pays for loading Numba and the kernels in a fresh process
-#: (about 1 s and 100 MB; the NumPy path runs ~10⁶ draws/s, the compiled one ~3.5·10⁶ with the
-#: Monte Carlo's generator, so the two meet near 1.5·10⁶ draws on the development machine).
+#: (0.3–0.6 s and ~60 MB; the NumPy path runs 1.5–5·10⁶ draws/s, the fused compiled pass
+#: 2–4·10⁷ on one core, so the two meet near 2·10⁶ draws on the development machine).
 COMPILE_FROM_DRAWS = 2_000_000
 
 
@@ -105,14 +107,14 @@ def compiled_kernel() -> Callable[..., None]:
     ``angles`` (N, n_angles) rad, ``chi`` (N, n_angular) rad, ``out`` (N, 3) receives (Δψ, Δθ, Δγ)
     in rad (seed 001, eqs. (17)–(24)).
     """
-    return _compiled_module().orientation_kernel  # type: ignore[no-any-return]
+    return _compiled_module().orientation_kernel
 
 
 def compiled_monte_carlo() -> Callable[..., int]:
     """The Monte Carlo's fused chunk kernel ``monte_carlo_chunk`` of
     :mod:`rotacal.turntable._mc_jit` (the draws of the Philox stream, the model and the tallies in
     one pass, over the cores), compiled on first use."""
-    return _compiled_module().monte_carlo_chunk  # type: ignore[no-any-return]
+    return _compiled_module().monte_carlo_chunk
 
 
 def _compiled_module() -> Any:

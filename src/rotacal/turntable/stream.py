@@ -74,10 +74,10 @@ def turn_sin_cos(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     q = np.floor(t + 0.5)
     x = (t - q) * _HALF_PI
     x2 = x * x
-    ps = _SIN[7]
+    ps: np.ndarray | float = _SIN[7]
     for coefficient in _SIN[6::-1]:
         ps = coefficient + x2 * ps
-    pc = _COS[6]
+    pc: np.ndarray | float = _COS[6]
     for coefficient in _COS[5::-1]:
         pc = coefficient + x2 * pc
     s = x + x * (x2 * ps)
