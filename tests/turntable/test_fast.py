@@ -117,7 +117,7 @@ def test_fused_kernel_equals_the_numpy_twin_on_every_chain(name: str, monkeypatc
         monkeypatch.setenv("ROTACAL_NUMBA", flag)
         res = monte_carlo_check(
             table,
-            bounds,  # type: ignore[arg-type]
+            bounds,
             runs=30_011,
             seed=9,
             chunk=8_000,

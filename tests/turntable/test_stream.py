@@ -136,7 +136,7 @@ def test_pcg64_stream_gives_the_numbers_of_earlier_versions(seed, monkeypatch) -
     )
     for flag in ("0", "1"):
         monkeypatch.setenv("ROTACAL_NUMBA", flag)
-        res = monte_carlo_check(seed, bounds, runs=20_000, seed=3, stream="pcg64")  # type: ignore[arg-type]
+        res = monte_carlo_check(seed, bounds, runs=20_000, seed=3, stream="pcg64")
         assert res.max_abs_rad == {
             "psi": 0.0017519088903007506,
             "theta": 0.000592197750270303,
