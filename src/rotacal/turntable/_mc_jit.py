@@ -273,6 +273,86 @@ def _needed_angles(axis: np.ndarray, angle: np.ndarray, start: np.ndarray, n: in
     return needed
 
 
+@numba.njit(inline="always")
+def _tally_draw(
+    psi: float,
+    theta: float,
+    gamma: float,
+    requirement: np.ndarray,
+    bins_per_rad: np.ndarray,
+    floor: np.ndarray,
+    max_abs: np.ndarray,
+    counts: np.ndarray,
+    candidates: np.ndarray,
+    found: np.ndarray,
+) -> int:
+    """One draw's (Δψ, Δθ, Δγ) (rad) into the running max |Δ_j|, the histograms over ±I_j of the
+    components within it (+I_j in the last bin), and the candidates |Δ_j| > floor[j]; 1 when some
+    |Δ_j| > I_j, else 0."""
+    bins = counts.shape[1]
+    out = 0
+    for j in range(3):
+        value = psi if j == 0 else (theta if j == 1 else gamma)
+        size = np.abs(value)
+        if size > max_abs[j]:
+            max_abs[j] = size
+        if size > floor[j]:
+            candidates[j, found[j]] = size
+            found[j] += 1
+        if size > requirement[j]:
+            out = 1
+            continue
+        index = int(np.floor((value + requirement[j]) * bins_per_rad[j]))
+        counts[j, min(index, bins - 1)] += 1
+    return out
+
+
+@_jit
+def tally(
+    d: np.ndarray,
+    requirement: np.ndarray,
+    bins_per_rad: np.ndarray,
+    max_abs: np.ndarray,
+    counts: np.ndarray,
+) -> int:
+    """The PCG64 path's tallies of a chunk of (Δψ, Δθ, Δγ) rows (rad): running max |Δ_j| (in
+    ``max_abs``), histograms over ±I_j of the components within it (in ``counts``), and the
+    number of draws with some |Δ_j| > I_j (returned)."""
+    no_floor = np.full(3, np.inf)
+    no_candidates = np.empty((3, 0))
+    found = np.zeros(3, dtype=np.int64)
+    outside = 0
+    for row in range(d.shape[0]):
+        outside += _tally_draw(d[row, 0], d[row, 1], d[row, 2], requirement, bins_per_rad,
+                               no_floor, max_abs, counts, no_candidates, found)  # fmt: skip
+    return outside
+
+
+@_jit
+def pcg64_draws(
+    u: np.ndarray,
+    lower: np.ndarray,
+    width: np.ndarray,
+    random_signs: bool,
+    chi: np.ndarray,
+    angles: np.ndarray,
+) -> None:
+    """The PCG64 path's χ_i = s_i·(LB_i + (UB_i − LB_i)·|v|) with v = 2u − 1 (random signs) or
+    LB_i + width·u, and φ = 2π·u, from the row of uniforms u = (errors…, angles…) of each draw
+    (rad)."""
+    n_err = chi.shape[1]
+    two_pi = 2.0 * np.pi
+    for row in range(u.shape[0]):
+        for i in range(n_err):
+            if random_signs:
+                v = 2.0 * u[row, i] - 1.0
+                chi[row, i] = np.copysign(lower[i] + width[i] * np.abs(v), v)
+            else:
+                chi[row, i] = lower[i] + width[i] * u[row, i]
+        for k in range(angles.shape[1]):
+            angles[row, k] = two_pi * u[row, n_err + k]
+
+
 @_jit
 def monte_carlo_chunk(
     key: np.ndarray,
@@ -303,7 +383,6 @@ def monte_carlo_chunk(
     φ = 2π·u. Releases the GIL: ranges of a chunk may run on several threads."""
     n_err = lower.shape[0]
     row = n_err + n_angles
-    bins = counts.shape[1]
     needed = _needed_angles(axis, angle, start, n_angles)
     last = last_link[0]
     n_words = (BLOCK * row) // 4 * 4 + 8
@@ -341,24 +420,12 @@ def monte_carlo_chunk(
                     )
         started = chain_block(cos, sin, chi, axis, angle, start, error, error_axis, last, d, e, mb)
         for r in range(mb):
-            out = False
-            for j in range(3):
-                value = 0.0
-                if started:
-                    value = d[2, r] if j == 0 else (d[3, r] if j == 1 else d[7, r])
-                size = np.abs(value)
-                if size > max_abs[j]:
-                    max_abs[j] = size
-                if size > floor[j]:
-                    candidates[j, n_found[j]] = size
-                    n_found[j] += 1
-                if size > requirement[j]:
-                    out = True
-                    continue
-                index = int(np.floor((value + requirement[j]) * bins_per_rad[j]))
-                counts[j, min(index, bins - 1)] += 1
-            if out:
-                outside += 1
+            if started:
+                outside += _tally_draw(d[2, r], d[3, r], d[7, r], requirement, bins_per_rad,
+                                       floor, max_abs, counts, candidates, n_found)  # fmt: skip
+            else:
+                outside += _tally_draw(0.0, 0.0, 0.0, requirement, bins_per_rad, floor,
+                                       max_abs, counts, candidates, n_found)  # fmt: skip
     for j in range(3):
         found[j] = n_found[j]
     return outside

@@ -10,7 +10,7 @@ of the block, kept in the first-level cache, each step a loop without branches o
 cos and sin of an angle are taken only where D is no longer the identity (as there). The Monte
 Carlo's Philox stream runs in one fused compiled pass there (:func:`compiled_monte_carlo`); the
 PCG64 stream's draws from its uniforms and its tallies (maxima, histograms, draws outside the
-requirement) are compiled here (:func:`compiled_draws`, :func:`compiled_tally`).
+requirement) are compiled there too (:func:`compiled_draws`, :func:`compiled_tally`).
 
 The operations are those of ``_fast_kernel`` in the same order. Where that kernel skips a
 constant (a product with an exact 0 or 1, a sum with an exact 0), the compiled one does the
@@ -66,7 +66,7 @@ def use_compiled(draws: int) -> bool:
     (``ROTACAL_NUMBA=0``: never, ``=1``: always), and for any number of draws once the kernels
     are loaded in this process.
     """
-    loaded = _jit.cache_info().currsize > 0 or "rotacal.turntable._mc_jit" in sys.modules
+    loaded = "rotacal.turntable._mc_jit" in sys.modules
     return use_numba(draws, True if loaded else None, threshold=COMPILE_FROM_DRAWS)
 
 
@@ -128,7 +128,7 @@ def compiled_draws() -> Callable[..., None]:
     """``draws(u, lower, width, random_signs, chi, angles)``: the Monte Carlo's χ and angles from
     its uniforms, as :func:`rotacal.turntable.allocation.monte_carlo_check` makes them with NumPy
     (the same operations), compiled on first use."""
-    return _jit(_draws)
+    return _compiled_module().pcg64_draws
 
 
 def compiled_tally() -> Callable[..., int]:
@@ -136,65 +136,7 @@ def compiled_tally() -> Callable[..., int]:
     running maxima and histograms of one chunk of (Δψ, Δθ, Δγ), as
     :func:`rotacal.turntable.allocation.monte_carlo_check` keeps them with NumPy, compiled on first
     use."""
-    return _jit(_tally)
-
-
-@functools.cache
-def _jit(function: Callable[..., Any]) -> Callable[..., Any]:
-    import numba
-
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(function)
-
-
-def _draws(
-    u: np.ndarray,
-    lower: np.ndarray,
-    width: np.ndarray,
-    random_signs: bool,
-    chi: np.ndarray,
-    angles: np.ndarray,
-) -> None:
-    """χ_i = s_i·(LB_i + (UB_i − LB_i)·|v|) with v = 2u − 1 (random signs) or LB_i + width·u, and
-    φ = 2π·u, from the row of uniforms u = (errors…, angles…) of each draw (rad)."""
-    n_err = chi.shape[1]
-    two_pi = 2.0 * np.pi
-    for row in range(u.shape[0]):
-        for i in range(n_err):
-            if random_signs:
-                v = 2.0 * u[row, i] - 1.0
-                chi[row, i] = np.copysign(lower[i] + width[i] * np.abs(v), v)
-            else:
-                chi[row, i] = lower[i] + width[i] * u[row, i]
-        for k in range(angles.shape[1]):
-            angles[row, k] = two_pi * u[row, n_err + k]
-
-
-def _tally(
-    d: np.ndarray,
-    requirement: np.ndarray,
-    bins_per_rad: np.ndarray,
-    max_abs: np.ndarray,
-    counts: np.ndarray,
-) -> int:
-    """Running max |Δ_j| (in ``max_abs``), histograms over ±I_j of the draws within it (in
-    ``counts``, +I_j in the last bin), and the number of draws with some |Δ_j| > I_j (returned)."""
-    bins = counts.shape[1]
-    outside = 0
-    for row in range(d.shape[0]):
-        out = False
-        for j in range(3):
-            value = d[row, j]
-            size = np.abs(value)
-            if size > max_abs[j]:
-                max_abs[j] = size
-            if size > requirement[j]:
-                out = True
-                continue
-            index = int(np.floor((value + requirement[j]) * bins_per_rad[j]))
-            counts[j, min(index, bins - 1)] += 1
-        if out:
-            outside += 1
-    return outside
+    return _compiled_module().tally
 
 
 class _FastPath:

@@ -192,13 +192,11 @@ def monte_carlo_check(
     req_v = np.array([req[c] for c in COMPONENTS])
     tallies = _Tallies(req_v, top_values_needed(runs_i))
     t0 = time.perf_counter()
+    run = _Run(table, runs_i, seed_i, lb, ub - lb, signs == "random", chunk_i, progress)
     if stream == "philox" and use_compiled(runs_i):
-        _philox_compiled(
-            table, tallies, runs_i, seed_i, lb, ub - lb, signs, chunk_i, progress, threads_i
-        )
+        _philox_compiled(run, tallies, threads_i)
     else:
-        _numpy_generator(table, tallies, runs_i, seed_i, lb, ub - lb, signs, chunk_i, progress,
-                         stream)  # fmt: skip
+        _numpy_generator(run, tallies, stream)
     elapsed = time.perf_counter() - t0
     max_abs, counts, outside = tallies.max_abs, tallies.counts, tallies.outside
     histograms = {
@@ -245,6 +243,26 @@ def _integer(name: str, value: Any, minimum: int) -> int:
     return int(value)
 
 
+@dataclasses.dataclass(frozen=True)
+class _Run:
+    """What every chunk of one run needs: the table, the number of draws and the seed, the errors'
+    lower bounds and widths UB − LB (rad), the signs, the chunk size and the progress callback."""
+
+    table: Turntable
+    runs: int
+    seed: int
+    lower: np.ndarray
+    width: np.ndarray
+    random_signs: bool
+    chunk: int
+    progress: Callable[[int, int], None] | None
+
+    def report(self, done: int) -> None:
+        """Tell the progress callback, if any, that ``done`` draws are done."""
+        if self.progress is not None:
+            self.progress(done, self.runs)
+
+
 class _Tallies:
     """What the Monte Carlo keeps of its draws, chunk by chunk: the largest |Δ_j|, the
     histograms over ±I_j, the draws outside the requirement and the largest values for the
@@ -272,36 +290,25 @@ class _Tallies:
             self.counts[j] += np.bincount(keep, minlength=_HIST_BINS)[:_HIST_BINS]
 
 
-def _philox_compiled(
-    table: Turntable,
-    tallies: _Tallies,
-    runs: int,
-    seed: int,
-    lower: np.ndarray,
-    width: np.ndarray,
-    signs: str,
-    chunk: int,
-    progress: Callable[[int, int], None] | None,
-    threads: int,
-) -> None:
+def _philox_compiled(run: _Run, tallies: _Tallies, threads: int) -> None:
     """The Philox stream's draws, model and tallies in the fused compiled kernel, chunk by chunk,
     each chunk cut into ``threads`` ranges run at once (the kernel releases the GIL), each with
     its own maxima and histograms; only the candidates for the largest values come back."""
     kernel = compiled_monte_carlo()
-    key = philox_key(seed)
-    chain = _chain_arrays(table._p.links)
-    n_angles = len(tuple(table.angle_names))
-    rows = -(-min(chunk, runs) // threads)  # the longest range of a chunk
+    key = philox_key(run.seed)
+    chain = _chain_arrays(run.table._p.links)
+    n_angles = len(tuple(run.table.angle_names))
+    rows = -(-min(run.chunk, run.runs) // threads)  # the longest range of a chunk
     parts = [
         (np.zeros(3), np.zeros_like(tallies.counts), np.empty((3, rows)), np.zeros(3, np.int64))
         for _ in range(threads)
     ]
-    common = (n_angles, lower, width, signs == "random", *chain)
+    common = (n_angles, run.lower, run.width, run.random_signs, *chain)
     pool = ThreadPoolExecutor(threads) if threads > 1 else None
     try:
         done = 0
-        while done < runs:
-            m = min(chunk, runs - done)
+        while done < run.runs:
+            m = min(run.chunk, run.runs - done)
             floor = tallies.largest.floor()
             cuts = [done + m * p // threads for p in range(threads + 1)]
             calls = [
@@ -317,8 +324,7 @@ def _philox_compiled(
                 [np.concatenate([c[j, : f[j]] for _, _, c, f in parts]) for j in range(3)]
             )
             done += m
-            if progress is not None:
-                progress(done, runs)
+            run.report(done)
     finally:
         if pool is not None:
             pool.shutdown()
@@ -327,46 +333,36 @@ def _philox_compiled(
         tallies.counts += part_counts
 
 
-def _numpy_generator(
-    table: Turntable,
-    tallies: _Tallies,
-    runs: int,
-    seed: int,
-    lower: np.ndarray,
-    width: np.ndarray,
-    signs: str,
-    chunk: int,
-    progress: Callable[[int, int], None] | None,
-    stream: str,
-) -> None:
+def _numpy_generator(run: _Run, tallies: _Tallies, stream: str) -> None:
     """Rows of uniforms from NumPy's generator of ``stream``, chunk by chunk: the NumPy twin of
     :func:`_philox_compiled` (Philox; angles' cos and sin by
     :func:`rotacal.turntable.stream.turn_sin_cos`), or the PCG64 stream of earlier versions
     (angles 2π·u through :meth:`Turntable.fast_orientation_error`; its draws and tallies
     compiled from :data:`rotacal.turntable.fast.COMPILE_FROM_DRAWS` draws, the same numbers)."""
+    table, lower, width = run.table, run.lower, run.width
     n_err = lower.shape[0]
     n_angles = len(tuple(table.angle_names))
-    bit_generator = np.random.Philox(seed) if stream == "philox" else np.random.PCG64(seed)
+    bit_generator = np.random.Philox(run.seed) if stream == "philox" else np.random.PCG64(run.seed)
     rng = np.random.Generator(bit_generator)
-    compiled = stream == "pcg64" and use_compiled(runs)
-    rows = min(chunk, runs)  # buffers filled again for every chunk
+    compiled = stream == "pcg64" and use_compiled(run.runs)
+    rows = min(run.chunk, run.runs)  # buffers filled again for every chunk
     uniforms = np.empty((rows, n_err + n_angles))
     if compiled:
         draws, tally = compiled_draws(), compiled_tally()
         chi_buffer, angle_buffer = np.empty((rows, n_err)), np.empty((rows, n_angles))
     done = 0
-    while done < runs:
-        m = min(chunk, runs - done)
+    while done < run.runs:
+        m = min(run.chunk, run.runs - done)
         u = rng.random(out=uniforms[:m])  # the same numbers as rng.random((m, ·))
         if compiled:
             chi, angles = chi_buffer[:m], angle_buffer[:m]
-            draws(u, lower, width, signs == "random", chi, angles)
+            draws(u, lower, width, run.random_signs, chi, angles)
             d = _fast(table, angles, chi)
             tallies.outside += tally(d, tallies.requirement, tallies.bins_per_rad,
                                      tallies.max_abs, tallies.counts)  # fmt: skip
             tallies.largest.add(np.abs(d))
         else:
-            if signs == "random":
+            if run.random_signs:
                 v = 2.0 * u[:, :n_err] - 1.0
                 chi = np.copysign(lower + width * np.abs(v), v)
             else:
@@ -384,5 +380,4 @@ def _numpy_generator(
                 d = _fast(table, _TWO_PI * u[:, n_err:], chi)
             tallies.add(d)
         done += m
-        if progress is not None:
-            progress(done, runs)
+        run.report(done)
