@@ -19,14 +19,15 @@ On the seed's two-axis table (seed 001) with rotacal's allocation for eq. (16)'s
    e. a per-draw Python loop building the 4×4 matrices of eqs. (17)–(22) with NumPy (on 10⁴
       draws, time scaled to ``--runs``),
    with draws/s, the speed-up over (c) and the largest difference from (a);
-3. seconds, draws/s and peak RSS of ``monte_carlo_check`` (compiled, one thread) at 10⁶, 10⁷ and
-   10⁸ draws, new stream and old path back to back, each in a fresh process (``--sizes``; peak RSS:
-   that process's VmHWM), after importing Numba and loading (or compiling) the kernels, whose
-   time is printed apart; the ratio new/old of draws/s;
+3. seconds, draws/s (wall clock and per CPU-second) and peak RSS of ``monte_carlo_check``
+   (compiled, one thread) at 10⁶, 10⁷ and 10⁸ draws, new stream and old path back to back, each
+   in a fresh process (``--sizes``; peak RSS: that process's VmHWM), after importing Numba and
+   loading (or compiling) the kernels, whose time is printed apart; the ratios new/old;
 4. rotacal's upper bounds next to Table 4 (arcmin) and the worst cases (linear and full model).
 
-Best of ``--repeat`` (default 3) with ``time.perf_counter``; no asserts. ``--quick``: 2·10⁵ draws,
-one repeat, sizes 10⁶ only.
+Best of ``--repeat`` (default 3) with ``time.perf_counter`` (and ``time.process_time`` for the CPU
+time: on a machine others load, the wall clock counts their time too); no asserts. ``--quick``:
+2·10⁵ draws, one repeat, sizes 10⁶ only.
 
 Run: ``python benchmarks/bench_turntable.py [--runs N] [--repeat R] [--sizes 1e6,1e7,1e8] [--quick]``
 """
@@ -160,11 +161,12 @@ def child(runs: int, stream: str) -> None:
     warm()  # import Numba and compile (or load) the kernels: timed apart
     load = time.perf_counter() - t0
     before = peak_rss_mb()
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     monte_carlo_check(table, alloc, runs=runs, seed=2026, stream=stream)
-    elapsed = time.perf_counter() - t0
+    elapsed, cpu = time.perf_counter() - t0, time.process_time() - c0
     peak = peak_rss_mb()
-    print(json.dumps({"seconds": elapsed, "peak_mb": peak, "before_mb": before, "load": load}))
+    print(json.dumps({"seconds": elapsed, "cpu": cpu, "peak_mb": peak, "before_mb": before,
+                      "load": load}))  # fmt: skip
 
 
 def via_transform(table: Turntable, angles: np.ndarray, chi: np.ndarray) -> np.ndarray:
@@ -314,11 +316,11 @@ def main() -> None:
     print()
     print(
         f"{'monte_carlo_check draws':>24s} {'stream':>7s} {'seconds':>9s} {'draws/s':>12s} "
-        f"{'× old':>6s} {'peak RSS':>10s} {'before it (imports, allocation)':>32s} "
-        f"{'kernels loaded in':>18s}"
+        f"{'× old':>6s} {'draws/CPU-s':>12s} {'× old':>6s} {'peak RSS':>10s} "
+        f"{'before it (imports, allocation)':>32s} {'kernels loaded in':>18s}"
     )
     for size in (int(float(x)) for x in args.sizes.split(",") if x):
-        seconds = {}
+        seconds, cpu = {}, {}
         for stream in ("pcg64", "philox"):  # back to back, each in a fresh process
             out = subprocess.run(
                 [sys.executable, __file__, "--child", str(size), "--stream", stream],
@@ -327,10 +329,11 @@ def main() -> None:
                 text=True,
             ).stdout
             got = json.loads(out.strip().splitlines()[-1])
-            seconds[stream] = got["seconds"]
+            seconds[stream], cpu[stream] = got["seconds"], got["cpu"]
             print(
                 f"{size:24,d} {stream:>7s} {got['seconds']:9.2f} {size / got['seconds']:12,.0f} "
-                f"{seconds['pcg64'] / got['seconds']:6.2f} {got['peak_mb']:7.0f} MB "
+                f"{seconds['pcg64'] / got['seconds']:6.2f} {size / got['cpu']:12,.0f} "
+                f"{cpu['pcg64'] / got['cpu']:6.2f} {got['peak_mb']:7.0f} MB "
                 f"{got['before_mb']:29.0f} MB {got['load']:16.2f} s"
             )
     print()
