@@ -37,6 +37,7 @@ import dataclasses
 import numpy as np
 
 from rotacal.errors import ConfigError
+from rotacal.gyro.scale_factor_requirement import _positive as _positive_option
 from rotacal.results import Result
 
 __all__ = ["OutputResolution", "output_resolution"]
@@ -138,9 +139,6 @@ def output_resolution(
     ----------
     Seed 004, §2 and Table 1 (FMVSS 126: resolution < 0.004 deg/s).
     """
-    # scale_factor imports this module, so its checker of positive options is imported here
-    from rotacal.gyro.scale_factor import _positive as _positive_option
-
     unit = f" {output_unit}" if output_unit else ""
     fs = (
         None
