@@ -51,6 +51,7 @@ with a guard band).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from typing import Any
@@ -59,7 +60,13 @@ import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.plausibility import scale_factor_warnings
-from rotacal.gyro.resolution import output_resolution
+from rotacal.gyro.resolution import (
+    NoiseBlock,
+    _block_noise,
+    check_blocks_fit,
+    noise_block,
+    resolution_from_noise,
+)
 from rotacal.gyro.scale_factor_budget import (
     DEFAULT_MC_TRIALS,
     _point_uncertainties,
@@ -67,6 +74,7 @@ from rotacal.gyro.scale_factor_budget import (
 )
 from rotacal.gyro.scale_factor_points import (
     DEFAULT_RATE_TOLERANCE_DEG_S,
+    PointData,
     _check_saturation,
     _fmt_rate,
     _group,
@@ -195,7 +203,18 @@ def calibrate_scale_factor(
     (FMVSS 126). IEEE Std 952-1997, Annex C. JCGM 100:2008 (GUM), §5.1.2, G.4.1, H.3 (straight-line
     fit and its uncertainties); JCGM 101:2008 §7–8 (Monte Carlo, validation); ILAC-G8:09/2019 §4.2.
     """
-    unit = f" {output_unit}" if output_unit else ""
+    opts = _check_options(
+        full_scale_deg_s=full_scale_deg_s,
+        requirement=requirement,
+        rate_tolerance_deg_s=rate_tolerance_deg_s,
+        nan_policy=nan_policy,
+        output_unit=output_unit,
+        specs=specs,
+        mc_trials=mc_trials,
+        sample_rate_hz=sample_rate_hz,
+        bandwidth_hz=bandwidth_hz,
+        allow_clipped=allow_clipped,
+    )
     rate = np.asarray(rate_deg_s, dtype=float).reshape(-1)
     y = np.asarray(output, dtype=float).reshape(-1)
     if rate.size != y.size:
@@ -205,6 +224,89 @@ def calibrate_scale_factor(
         )
     if rate.size == 0:
         raise CaptureError("the capture has no rows: it needs rate_deg_s and output samples.")
+    bad_rate = np.flatnonzero(~np.isfinite(rate))
+    if bad_rate.size:
+        raise CaptureError(_bad_rates(bad_rate.size, bad_rate))
+    check_magnitudes("rate_deg_s", rate, what="a set rate")
+    gid, rates, spread = _group(rate, opts.tol)
+    ng = rates.size
+    _refuse_one_rate(rates)
+    ok = np.isfinite(y)
+    counts = np.bincount(gid, weights=ok, minlength=ng).astype(np.int64)
+    empty = np.flatnonzero(counts == 0)
+    if empty.size:
+        raise CaptureError(_empty_point(rates[empty[0]], np.flatnonzero(gid == empty[0])))
+    bad_out = np.flatnonzero(~ok)
+    notes = _nonfinite_outputs(bad_out.size, bad_out, opts.nan_policy)
+    check_magnitudes("output", y[ok] if bad_out.size else y, what="a gyro output")
+    check_not_copies({"rate_deg_s": rate, "output": y}, _COPY_WHY)
+
+    yz = np.where(ok, y, 0.0)
+    means = np.bincount(gid, weights=yz, minlength=ng) / counts
+    dev = np.where(ok, y - means[gid], 0.0)
+    ss = np.bincount(gid, weights=dev * dev, minlength=ng)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        std = np.where(counts > 1, np.sqrt(ss / np.maximum(counts - 1, 1)), np.nan)
+    _refuse_flat_output(means, opts.unit)
+    # samples at the rails: the one detector, with the rate points as groups and the rows at
+    # zero rate as rest (rotacal.signal.clipping)
+    clipped = check_clipping(
+        {"output": y}, allow_clipped=opts.allow_clipped, groups=gid, rest=rates[gid] == 0
+    )
+    yf, gf = (y[ok], gid[ok]) if bad_out.size else (y, gid)
+    check_blocks_fit(opts.noise, counts)
+    points = PointData(
+        rates=rates,
+        spread=spread,
+        counts=counts,
+        means=means,
+        std=std,
+        quantum=output_quantum(y, gid),
+        noise=_block_noise(yf, gf, ng, opts.noise.block),
+        output_abs_max=float(np.max(np.abs(yf), initial=0.0)),
+        clipped=clipped,
+        notes=tuple(notes),
+    )
+    return _finish(points, opts)
+
+
+# ------------------------------------------------------------------------------- shared steps
+_COPY_WHY = "a DUT's output differs from the set rate by its noise at least; map the DUT's output"
+
+
+@dataclasses.dataclass(frozen=True)
+class _Options:
+    """The options of a calibration, checked (see :func:`calibrate_scale_factor`)."""
+
+    tol: float
+    nan_policy: str
+    req: dict[str, Any] | None
+    spec: InstrumentSpecs | None
+    trials: int
+    fs_user: float | None
+    noise: NoiseBlock
+    allow_clipped: bool
+    output_unit: str
+
+    @property
+    def unit(self) -> str:
+        return f" {self.output_unit}" if self.output_unit else ""
+
+
+def _check_options(
+    *,
+    full_scale_deg_s: float | None,
+    requirement: str | Mapping[str, Any] | None,
+    rate_tolerance_deg_s: float,
+    nan_policy: str,
+    output_unit: str,
+    specs: InstrumentSpecs | None,
+    mc_trials: int,
+    sample_rate_hz: float | None,
+    bandwidth_hz: float | None,
+    allow_clipped: bool,
+) -> _Options:
+    """Every option checked before a sample is read (ConfigError naming the option)."""
     if nan_policy not in ("raise", "omit"):
         raise ConfigError(f"nan_policy must be 'raise' or 'omit', got {nan_policy!r}.")
     try:
@@ -225,7 +327,6 @@ def calibrate_scale_factor(
         raise ConfigError(
             f"mc_trials must be at least 2000 for a 95 % interval (JCGM 101 §7.2), got {mc_trials}."
         )
-    trials = int(mc_trials)
     fs_user = (
         None
         if full_scale_deg_s is None
@@ -233,69 +334,75 @@ def calibrate_scale_factor(
     )
     if fs_user is not None:
         check_setting("--full-scale-deg-s", fs_user, unit="deg/s")
-
-    bad_rate = np.flatnonzero(~np.isfinite(rate))
-    if bad_rate.size:
-        raise CaptureError(
-            f"column rate_deg_s has {bad_rate.size} non-finite value(s) (NaN or inf) at rows "
-            f"{_rows(bad_rate)} (counted from 0): every row needs the table's set rate."
-        )
-    check_magnitudes("rate_deg_s", rate, what="a set rate")
-    gid, rates, spread = _group(rate, tol)
-    ng = rates.size
-    if ng == 1:
-        raise CaptureError(
-            f"every row of column rate_deg_s has the same set rate ({_fmt_rate(rates[0])}): a "
-            f"scale factor needs at least two rates (Kokuyama et al. 2015 recommend ≥ {MIN_POINTS_RECOMMENDED})."
-        )
-    ok = np.isfinite(y)
-    counts = np.bincount(gid, weights=ok, minlength=ng).astype(np.int64)
-    empty = np.flatnonzero(counts == 0)
-    if empty.size:
-        rows = np.flatnonzero(gid == empty[0])
-        raise CaptureError(
-            f"the rate point {_fmt_rate(rates[empty[0]])} has no samples: all {rows.size} of its "
-            f"outputs are NaN or empty (rows {_rows(rows)}, counted from 0); fix column output or "
-            "remove that rate."
-        )
-    notes: list[str] = []
-    bad_out = np.flatnonzero(~ok)
-    if bad_out.size:
-        if nan_policy == "raise":
-            raise CaptureError(
-                f"column output has {bad_out.size} non-finite value(s) (NaN or inf) at rows "
-                f"{_rows(bad_out)} (counted from 0): remove those rows from the capture."
-            )
-        notes.append(
-            f"{bad_out.size} non-finite output value(s) left out (rows {_rows(bad_out)}, counted "
-            "from 0)."
-        )
-    check_magnitudes("output", y[ok] if bad_out.size else y, what="a gyro output")
-    check_not_copies(
-        {"rate_deg_s": rate, "output": y},
-        "a DUT's output differs from the set rate by its noise at least; map the DUT's output",
+    return _Options(
+        tol=tol,
+        nan_policy=nan_policy,
+        req=req,
+        spec=spec,
+        trials=int(mc_trials),
+        fs_user=fs_user,
+        noise=noise_block(sample_rate_hz, bandwidth_hz),
+        allow_clipped=bool(allow_clipped),
+        output_unit=output_unit,
     )
 
-    yz = np.where(ok, y, 0.0)
-    means = np.bincount(gid, weights=yz, minlength=ng) / counts
-    dev = np.where(ok, y - means[gid], 0.0)
-    ss = np.bincount(gid, weights=dev * dev, minlength=ng)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        std = np.where(counts > 1, np.sqrt(ss / np.maximum(counts - 1, 1)), np.nan)
-        se = std / np.sqrt(counts)
 
+def _bad_rates(count: int, first_rows: np.ndarray) -> str:
+    return (
+        f"column rate_deg_s has {count} non-finite value(s) (NaN or inf) at rows "
+        f"{_rows(first_rows, count)} (counted from 0): every row needs the table's set rate."
+    )
+
+
+def _refuse_one_rate(rates: np.ndarray) -> None:
+    if rates.size == 1:
+        raise CaptureError(
+            f"every row of column rate_deg_s has the same set rate ({_fmt_rate(rates[0])}): a "
+            f"scale factor needs at least two rates (Kokuyama et al. 2015 recommend ≥ "
+            f"{MIN_POINTS_RECOMMENDED})."
+        )
+
+
+def _empty_point(rate: float, rows: np.ndarray, count: int | None = None) -> str:
+    n = rows.size if count is None else count
+    return (
+        f"the rate point {_fmt_rate(rate)} has no samples: all {n} of its outputs are NaN or "
+        f"empty (rows {_rows(rows, n)}, counted from 0); fix column output or remove that rate."
+    )
+
+
+def _nonfinite_outputs(count: int, first_rows: np.ndarray, nan_policy: str) -> list[str]:
+    """Refuse non-finite outputs, or the note that they were left out."""
+    if not count:
+        return []
+    if nan_policy == "raise":
+        raise CaptureError(
+            f"column output has {count} non-finite value(s) (NaN or inf) at rows "
+            f"{_rows(first_rows, count)} (counted from 0): remove those rows from the capture."
+        )
+    return [
+        f"{count} non-finite output value(s) left out (rows {_rows(first_rows, count)}, counted "
+        "from 0)."
+    ]
+
+
+def _refuse_flat_output(means: np.ndarray, unit: str) -> None:
     if np.ptp(means) == 0:
         raise CaptureError(
             "column output does not change with the set rate (every rate point has the same mean "
             f"{means[0]:.6g}{unit}): check that the right output column is mapped."
         )
-    # samples at the rails: the one detector, with the rate points as groups and the rows at
-    # zero rate as rest (rotacal.signal.clipping)
-    clipped = check_clipping(
-        {"output": y}, allow_clipped=allow_clipped, groups=gid, rest=rates[gid] == 0
-    )
-    _check_saturation(rates, means, std, counts, unit)
 
+
+def _finish(points: PointData, opts: _Options) -> ScaleFactorResult:
+    """From the rate points' statistics on: saturation, the line, NL, resolution, budgets, verdict."""
+    unit, output_unit, spec = opts.unit, opts.output_unit, opts.spec
+    rates, means, std, counts = points.rates, points.means, points.std, points.counts
+    ng = rates.size
+    with np.errstate(invalid="ignore", divide="ignore"):
+        se = std / np.sqrt(counts)
+    notes = list(points.notes)
+    _check_saturation(rates, means, std, counts, unit)
     # Unweighted least-squares line through the point means (centred for accuracy), against the
     # set rates; the table's stated mean rate error ε̄ (realised rate Ω·(1 + ε̄)) corrects S.
     eps_dist = spec_distribution(spec, "table.set_rate_relative")
@@ -317,6 +424,7 @@ def calibrate_scale_factor(
             "two rate points fit the line exactly: the residuals, the nonlinearity and the "
             "uncertainties mean nothing."
         )
+    fs_user, tol = opts.fs_user, opts.tol
     fs = fs_user if fs_user is not None else float(np.max(np.abs(rates)))
     scale = abs(s) * fs
     res_pct = 100.0 * resid / scale
@@ -331,10 +439,10 @@ def calibrate_scale_factor(
             f"the tested rates reach {float(np.max(np.abs(rates))):g} °/s, beyond the full scale "
             f"{fs_user:g} °/s that NL refers to."
         )
-    if float(spread.max()) > 0:
+    if float(points.spread.max()) > 0:
         notes.append(
             f"set rates within {tol:g} °/s were merged into one point; the largest spread within "
-            f"a point is {float(spread.max()):.3g} °/s."
+            f"a point is {float(points.spread.max()):.3g} °/s."
         )
     if eps_mean != 0.0:
         notes.append(
@@ -342,14 +450,13 @@ def calibrate_scale_factor(
             f"corrects S: S = S₀/(1 + ε̄), S₀ = {s_fit:.8g} against the set rates."
         )
 
-    q = output_quantum(y, gid)
-    res = output_resolution(
-        y,
-        gid,
+    q = points.quantum
+    res = resolution_from_noise(
+        points.noise,
+        points.output_abs_max,
         s,
         quantum=q,
-        sample_rate_hz=sample_rate_hz,
-        bandwidth_hz=bandwidth_hz,
+        settings=opts.noise,
         output_unit=output_unit,
     )
     resolution, basis = res.resolution_deg_s, res.basis
@@ -381,7 +488,7 @@ def calibrate_scale_factor(
             spec=spec,
             eps_dist=eps_dist,
             output_unit=output_unit,
-            mc_trials=trials,
+            mc_trials=opts.trials,
         )
         nl_corr = max(nl - nl_bias, 0.0) if math.isfinite(nl_bias) else math.nan
         if lof:
@@ -390,6 +497,7 @@ def calibrate_scale_factor(
     v0_u = budgets["bias"].u if budgets else math.nan
 
     decision: DecisionWithU | None = None
+    req = opts.req
     if req is not None:
         verdict: RequirementVerdict | None = evaluate_requirement(
             req,
@@ -408,7 +516,7 @@ def calibrate_scale_factor(
     else:
         verdict = None
 
-    points = tuple(
+    table = tuple(
         RatePoint(
             float(rates[i]),
             int(counts[i]),
@@ -430,7 +538,7 @@ def calibrate_scale_factor(
         bias_u=v0_u,
         residuals_percent_fs=res_pct,
         rates_deg_s=rates,
-        points=points,
+        points=table,
         n_points=ng,
         samples_used=int(counts.sum()),
         residual_std=res_std,
@@ -448,7 +556,7 @@ def calibrate_scale_factor(
         resolution=res,
         _budgets=budgets,
         warnings=(
-            *clipped,
+            *points.clipped,
             *scale_factor_warnings(
                 scale_factor=s,
                 nonlinearity_percent_fs=nl,

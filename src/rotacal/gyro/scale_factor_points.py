@@ -8,13 +8,14 @@ linkage, ``_group``); :func:`output_quantum` finds the grid the recorded values 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from rotacal.errors import CaptureError
 
-__all__ = ["DEFAULT_RATE_TOLERANCE_DEG_S", "output_quantum"]
+__all__ = ["DEFAULT_RATE_TOLERANCE_DEG_S", "PointData", "output_quantum"]
 
 #: Set rates closer than this (°/s) to their sorted neighbour are one rate point.
 DEFAULT_RATE_TOLERANCE_DEG_S = 1e-3
@@ -27,10 +28,37 @@ _SAT_SLOPE_FRACTION = 0.5
 _SAT_SIGMAS = 5.0
 
 
-def _rows(idx: np.ndarray) -> str:
+def _rows(idx: np.ndarray, count: int | None = None) -> str:
+    """The first rows of ``idx`` and how many more (``count``: all of them, default idx.size)."""
+    n = idx.size if count is None else count
     shown = ", ".join(str(int(i)) for i in idx[:_SHOW_ROWS])
-    more = f" and {idx.size - _SHOW_ROWS} more" if idx.size > _SHOW_ROWS else ""
+    more = f" and {n - _SHOW_ROWS} more" if n > _SHOW_ROWS else ""
     return f"{shown}{more}"
+
+
+@dataclasses.dataclass(frozen=True)
+class PointData:
+    """What the line, NL, the budgets and the resolution need of the samples, per rate point.
+
+    ``rates`` mean set rate (°/s), ``spread`` max − min set rate (°/s), ``counts`` finite outputs,
+    ``means`` and ``std`` (ddof 1, NaN for one sample) of the output (output units), ``quantum``
+    q (output units, None: no grid; :func:`output_quantum`), ``noise`` σ_B of each point's block
+    means (output units, NaN below two blocks; :mod:`rotacal.gyro.resolution`),
+    ``output_abs_max`` the largest finite |output|, ``clipped`` the clipping warnings (analysed
+    with ``allow_clipped``), ``notes`` what the reading left out. The same from the whole arrays
+    and from a capture streamed in chunks.
+    """
+
+    rates: np.ndarray
+    spread: np.ndarray
+    counts: np.ndarray
+    means: np.ndarray
+    std: np.ndarray
+    quantum: float | None
+    noise: np.ndarray
+    output_abs_max: float
+    clipped: tuple[str, ...]
+    notes: tuple[str, ...]
 
 
 def _fmt_rate(r: float) -> str:
@@ -110,8 +138,12 @@ def _group(rate: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray, np.nda
     starts = np.flatnonzero(new)
     ng = starts.size
     counts = np.diff(np.append(starts, rs.size))
-    rate_mean = np.add.reduceat(rs, starts) / counts
-    spread = np.maximum.reduceat(rs, starts) - np.minimum.reduceat(rs, starts)
+    low = rs[starts]
+    # the mean as the lowest rate plus the mean excess: exact for a rate written identically on
+    # every row, and the same sum a streamed capture accumulates
+    excess = rs - np.repeat(low, counts)
+    rate_mean = low + np.add.reduceat(excess, starts) / counts
+    spread = np.maximum.reduceat(rs, starts) - low
     assert rate_mean.size == ng
     return gid, rate_mean, spread
 
