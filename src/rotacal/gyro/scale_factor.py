@@ -241,10 +241,15 @@ def calibrate_scale_factor(
     check_magnitudes("output", y[ok] if bad_out.size else y, what="a gyro output")
     check_not_copies({"rate_deg_s": rate, "output": y}, _COPY_WHY)
 
-    yz = np.where(ok, y, 0.0)
-    means = np.bincount(gid, weights=yz, minlength=ng) / counts
-    dev = np.where(ok, y - means[gid], 0.0)
+    # each point's samples less its first finite one (exact for nearby values): the means and
+    # the spread keep their digits on a large offset, and a streamed capture does the same
+    first = np.full(ng, y.size)
+    np.minimum.at(first, gid[ok], np.flatnonzero(ok))
+    d = np.where(ok, y - y[first][gid], 0.0)
+    means_d = np.bincount(gid, weights=d, minlength=ng) / counts
+    dev = np.where(ok, d - means_d[gid], 0.0)
     ss = np.bincount(gid, weights=dev * dev, minlength=ng)
+    means = y[first] + means_d
     with np.errstate(invalid="ignore", divide="ignore"):
         std = np.where(counts > 1, np.sqrt(ss / np.maximum(counts - 1, 1)), np.nan)
     _refuse_flat_output(means, opts.unit)

@@ -108,6 +108,12 @@ def output_quantum(
         stride = np.repeat(-(-sizes // _QUANTUM_SAMPLES), sizes)
         keep = by_g[within % stride == 0]
         y, g = y[keep], g[keep]
+    return _grid_step(y, g, max_median_steps)
+
+
+def _grid_step(y: np.ndarray, g: np.ndarray, max_median_steps: float = 4.0) -> float | None:
+    """The quantum test of :func:`output_quantum` on finite samples ``y`` with their groups ``g``
+    (already thinned to at most ``_QUANTUM_SAMPLES`` per group)."""
     order = np.lexsort((y, g))
     ys, gs = y[order], g[order]
     d = np.diff(ys)
