@@ -281,22 +281,36 @@ class _Levels:
         self.known = np.full((ng, _LEVELS_CAP), np.nan)
         self.count = np.zeros(ng, dtype=np.int64)
 
-    def add(self, gs: np.ndarray, ys: np.ndarray) -> None:
-        open_ = self.count[gs] < _LEVELS_CAP
-        if not open_.any():
-            return
-        g, v = gs[open_], ys[open_]
-        fresh = ~np.any(v[:, None] == self.known[g], axis=1)
-        if not fresh.any():
-            return
-        pairs = np.unique(np.column_stack((g[fresh], v[fresh])), axis=0)
-        pg = pairs[:, 0].astype(np.int64)
-        first = np.flatnonzero(np.r_[True, pg[1:] != pg[:-1]])
-        rank = np.arange(pg.size) - np.repeat(first, np.diff(np.r_[first, pg.size]))
-        slot = self.count[pg] + rank
-        keep = slot < _LEVELS_CAP
-        self.known[pg[keep], slot[keep]] = pairs[keep, 1]
-        np.add.at(self.count, pg[keep], 1)
+    def add(self, gs: np.ndarray, ys: np.ndarray, starts: np.ndarray) -> None:
+        """``ys`` sorted by point ``gs`` (segments from ``starts``). A noisy point shows its
+        levels in its first samples: the first 64, then 4096, then all samples of each point
+        still open are searched for values not yet counted."""
+        sizes = np.diff(np.r_[starts, gs.size])
+        seg_g = gs[starts]
+        for window in (64, 4096, gs.size):
+            open_ = self.count[seg_g] < _LEVELS_CAP
+            if not open_.any():
+                return
+            take = np.minimum(sizes[open_], window)
+            rows = np.repeat(starts[open_], take) + (
+                np.arange(int(take.sum())) - np.repeat(np.cumsum(take) - take, take)
+            )
+            g, v = gs[rows], ys[rows]
+            fresh = ~np.any(v[:, None] == self.known[g], axis=1)
+            g, v = g[fresh], v[fresh]
+            if g.size == 0:
+                continue
+            order = np.lexsort((v, g))
+            g, v = g[order], v[order]
+            new = np.r_[True, (g[1:] != g[:-1]) | (v[1:] != v[:-1])]
+            g, v = g[new], v[new]  # distinct (point, value) pairs, by point
+            first = np.flatnonzero(np.r_[True, g[1:] != g[:-1]])
+            slot = (
+                self.count[g] + np.arange(g.size) - np.repeat(first, np.diff(np.r_[first, g.size]))
+            )
+            keep = slot < _LEVELS_CAP
+            self.known[g[keep], slot[keep]] = v[keep]
+            self.count += np.bincount(g[keep], minlength=self.count.size)
 
 
 class _Blocks:
@@ -403,8 +417,9 @@ class _PointSums:
         _chan_merge(self.n, self.mean, self.m2, seg_g, sizes, seg_mean, seg_m2)
         self.highs.add(seg_g, ys, starts)
         self.lows.add(seg_g, ys, starts)
-        self.levels.add(gs, ys)
-        self.blocks.add(gs, d, within)
+        self.levels.add(gs, ys, starts)
+        if self.blocks.block > 1:  # blocks of one sample: the point statistics themselves
+            self.blocks.add(gs, d, within)
         keep = within % self.stride[gs] == 0
         self.kept.append((gs[keep], ys[keep]))
 
@@ -614,7 +629,7 @@ mc_trials, sample_rate_hz, bandwidth_hz, allow_clipped
         means=sums.shift + sums.mean,
         std=std,
         quantum=sums.quantum(),
-        noise=sums.blocks.noise(),
+        noise=std if opts.noise.block == 1 else sums.blocks.noise(),
         output_abs_max=sums.abs_max,
         clipped=clipped,
         notes=tuple(notes),
