@@ -248,5 +248,7 @@ def test_a_capture_that_changes_between_passes_is_refused():
 
     with pytest.raises(CaptureError, match="changed between the passes"):
         calibrate_scale_factor_chunked(growing)
+    with pytest.raises(ConfigError, match="unknown option 'mc_trails'"):
+        calibrate_scale_factor_chunked(scale_factor_chunks(rate, out), mc_trails=2000)
     with pytest.raises(ConfigError, match="callable"):
         calibrate_scale_factor_chunked([rate, out])  # type: ignore[arg-type]

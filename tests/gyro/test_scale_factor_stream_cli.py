@@ -89,7 +89,7 @@ def test_the_command_streams_by_itself_above_a_size(tmp_path, monkeypatch):
     monkeypatch.setattr(rotacal.gyro, "calibrate_scale_factor_chunked", spy)
     _json("gyro", "scale-factor", str(path))
     assert calls == []
-    monkeypatch.setattr(gyro_cli, "_IN_MEMORY_MAX_SAMPLES", 1000)
+    monkeypatch.setattr(gyro_cli, "_SCALE_FACTOR_IN_MEMORY_MAX_ROWS", 1000)
     _json("gyro", "scale-factor", str(path))
     assert calls == [1]
 

@@ -300,18 +300,24 @@ class _Options:
 
 def _check_options(
     *,
-    full_scale_deg_s: float | None,
-    requirement: str | Mapping[str, Any] | None,
-    rate_tolerance_deg_s: float,
-    nan_policy: str,
-    output_unit: str,
-    specs: InstrumentSpecs | None,
-    mc_trials: int,
-    sample_rate_hz: float | None,
-    bandwidth_hz: float | None,
-    allow_clipped: bool,
+    full_scale_deg_s: float | None = None,
+    requirement: str | Mapping[str, Any] | None = None,
+    rate_tolerance_deg_s: float = DEFAULT_RATE_TOLERANCE_DEG_S,
+    nan_policy: str = "raise",
+    output_unit: str = "",
+    specs: InstrumentSpecs | None = None,
+    mc_trials: int = DEFAULT_MC_TRIALS,
+    sample_rate_hz: float | None = None,
+    bandwidth_hz: float | None = None,
+    allow_clipped: bool = False,
+    **unknown: Any,
 ) -> _Options:
     """Every option checked before a sample is read (ConfigError naming the option)."""
+    if unknown:
+        raise ConfigError(
+            f"unknown option {next(iter(unknown))!r} of the scale-factor calibration; the options "
+            "are those of calibrate_scale_factor."
+        )
     if nan_policy not in ("raise", "omit"):
         raise ConfigError(f"nan_policy must be 'raise' or 'omit', got {nan_policy!r}.")
     try:

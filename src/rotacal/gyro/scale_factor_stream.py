@@ -62,11 +62,9 @@ from rotacal.gyro.scale_factor import (
     _refuse_flat_output,
     _refuse_one_rate,
 )
-from rotacal.gyro.scale_factor_budget import DEFAULT_MC_TRIALS
 from rotacal.gyro.scale_factor_points import (
     _QUANTUM_SAMPLES,
     _SHOW_ROWS,
-    DEFAULT_RATE_TOLERANCE_DEG_S,
     PointData,
     _grid_step,
 )
@@ -82,7 +80,6 @@ from rotacal.signal.clipping import (
     RailDetector,
     check_clipping,
 )
-from rotacal.uncertainty.specs import InstrumentSpecs
 
 __all__ = ["ScaleFactorChunks", "calibrate_scale_factor_chunked", "scale_factor_chunks"]
 
@@ -535,17 +532,8 @@ class _Reader:
 def calibrate_scale_factor_chunked(
     chunks: ScaleFactorChunks,
     *,
-    full_scale_deg_s: float | None = None,
-    requirement: str | Mapping[str, Any] | None = None,
-    rate_tolerance_deg_s: float = DEFAULT_RATE_TOLERANCE_DEG_S,
-    nan_policy: str = "raise",
-    output_unit: str = "",
-    specs: InstrumentSpecs | None = None,
-    mc_trials: int = DEFAULT_MC_TRIALS,
-    sample_rate_hz: float | None = None,
-    bandwidth_hz: float | None = None,
-    allow_clipped: bool = False,
     progress: Callable[[int], None] | None = None,
+    **options: Any,
 ) -> ScaleFactorResult:
     """Scale factor, bias and nonlinearity of a gyro from a rate-table log read in chunks.
 
@@ -564,31 +552,27 @@ def calibrate_scale_factor_chunked(
         the CLI's file reader).
     progress : callable, optional
         Called after each chunk with the rows read so far, summed over the passes (2·N, or 3·N).
-    full_scale_deg_s, requirement, rate_tolerance_deg_s, nan_policy, output_unit, specs, \
-mc_trials, sample_rate_hz, bandwidth_hz, allow_clipped
-        As for :func:`~rotacal.gyro.scale_factor.calibrate_scale_factor` (same units).
+    **options
+        The keywords of :func:`~rotacal.gyro.scale_factor.calibrate_scale_factor`
+        (``full_scale_deg_s`` in °/s, ``requirement``, ``rate_tolerance_deg_s`` in °/s,
+        ``nan_policy``, ``output_unit``, ``specs``, ``mc_trials``, ``sample_rate_hz`` and
+        ``bandwidth_hz`` in Hz, ``allow_clipped``), with the same defaults.
 
     Returns
     -------
     ScaleFactorResult
         Equal to the in-memory result to rounding (≤ 1e-9 relative).
 
+    Raises
+    ------
+    ConfigError
+        An option that is not one of those, or a bad value (as in memory).
+
     References
     ----------
     Kokuyama et al. (2015), §4; IEEE Std 952-1997, Annex C; Chan, Golub & LeVeque (1983), eq. 2.1.
     """
-    opts = _check_options(
-        full_scale_deg_s=full_scale_deg_s,
-        requirement=requirement,
-        rate_tolerance_deg_s=rate_tolerance_deg_s,
-        nan_policy=nan_policy,
-        output_unit=output_unit,
-        specs=specs,
-        mc_trials=mc_trials,
-        sample_rate_hz=sample_rate_hz,
-        bandwidth_hz=bandwidth_hz,
-        allow_clipped=allow_clipped,
-    )
+    opts = _check_options(**options)
     reader = _Reader(chunks, progress)
     points = _RatePoints(opts.tol)
     for _, (rate,) in reader.run((_RATE,)):
