@@ -52,6 +52,7 @@ with a guard band).
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from collections.abc import Mapping
 from typing import Any
@@ -203,18 +204,9 @@ def calibrate_scale_factor(
     (FMVSS 126). IEEE Std 952-1997, Annex C. JCGM 100:2008 (GUM), §5.1.2, G.4.1, H.3 (straight-line
     fit and its uncertainties); JCGM 101:2008 §7–8 (Monte Carlo, validation); ILAC-G8:09/2019 §4.2.
     """
-    opts = _check_options(
-        full_scale_deg_s=full_scale_deg_s,
-        requirement=requirement,
-        rate_tolerance_deg_s=rate_tolerance_deg_s,
-        nan_policy=nan_policy,
-        output_unit=output_unit,
-        specs=specs,
-        mc_trials=mc_trials,
-        sample_rate_hz=sample_rate_hz,
-        bandwidth_hz=bandwidth_hz,
-        allow_clipped=allow_clipped,
-    )
+    options = dict(locals())  # every keyword after the two columns
+    del options["rate_deg_s"], options["output"]
+    opts = _check_options(**options)
     rate = np.asarray(rate_deg_s, dtype=float).reshape(-1)
     y = np.asarray(output, dtype=float).reshape(-1)
     if rate.size != y.size:
@@ -298,26 +290,25 @@ class _Options:
         return f" {self.output_unit}" if self.output_unit else ""
 
 
-def _check_options(
-    *,
-    full_scale_deg_s: float | None = None,
-    requirement: str | Mapping[str, Any] | None = None,
-    rate_tolerance_deg_s: float = DEFAULT_RATE_TOLERANCE_DEG_S,
-    nan_policy: str = "raise",
-    output_unit: str = "",
-    specs: InstrumentSpecs | None = None,
-    mc_trials: int = DEFAULT_MC_TRIALS,
-    sample_rate_hz: float | None = None,
-    bandwidth_hz: float | None = None,
-    allow_clipped: bool = False,
-    **unknown: Any,
-) -> _Options:
-    """Every option checked before a sample is read (ConfigError naming the option)."""
+def _check_options(**options: Any) -> _Options:
+    """Every option of :func:`calibrate_scale_factor` (its defaults for those not given) checked
+    before a sample is read (ConfigError naming the option)."""
+    signature = inspect.signature(calibrate_scale_factor)
+    unknown = [k for k in options if k not in signature.parameters or k in ("rate_deg_s", "output")]
     if unknown:
         raise ConfigError(
-            f"unknown option {next(iter(unknown))!r} of the scale-factor calibration; the options "
-            "are those of calibrate_scale_factor."
+            f"unknown option {unknown[0]!r} of the scale-factor calibration; the options are "
+            "those of calibrate_scale_factor."
         )
+    bound = signature.bind(None, None, **options)
+    bound.apply_defaults()
+    o = bound.arguments
+    nan_policy, rate_tolerance_deg_s, mc_trials = (
+        o["nan_policy"],
+        o["rate_tolerance_deg_s"],
+        o["mc_trials"],
+    )
+    full_scale_deg_s, requirement = o["full_scale_deg_s"], o["requirement"]
     if nan_policy not in ("raise", "omit"):
         raise ConfigError(f"nan_policy must be 'raise' or 'omit', got {nan_policy!r}.")
     try:
@@ -331,7 +322,7 @@ def _check_options(
             f"rate_tolerance_deg_s must be a number ≥ 0 °/s, got {rate_tolerance_deg_s!r}."
         )
     req = None if requirement is None else resolve_requirement(requirement)
-    spec = as_specs(specs)
+    spec = as_specs(o["specs"])
     if isinstance(mc_trials, bool) or not isinstance(mc_trials, (int, np.integer)):
         raise ConfigError(f"mc_trials must be an integer ≥ 2000, got {mc_trials!r}.")
     if mc_trials < 2000:
@@ -352,9 +343,9 @@ def _check_options(
         spec=spec,
         trials=int(mc_trials),
         fs_user=fs_user,
-        noise=noise_block(sample_rate_hz, bandwidth_hz),
-        allow_clipped=bool(allow_clipped),
-        output_unit=output_unit,
+        noise=noise_block(o["sample_rate_hz"], o["bandwidth_hz"]),
+        allow_clipped=bool(o["allow_clipped"]),
+        output_unit=o["output_unit"],
     )
 
 
