@@ -179,6 +179,15 @@ class _RatePoints:
         if self.bad.count:
             return  # refused at the end, with the count of all of them
         self.magnitudes.add(rate, offset)
+        if self.lo.size:
+            # a rate within a group's span joins that group and links no other (they lie more
+            # than the tolerance beyond its ends): only the rates outside every span are sorted
+            g = np.searchsorted(self.lo, rate, side="right") - 1
+            inside = (g >= 0) & (rate <= self.hi[np.maximum(g, 0)])
+            self.rows += np.bincount(g[inside], minlength=self.lo.size)
+            rate = rate[~inside]
+            if rate.size == 0:
+                return
         rs = np.sort(rate)
         new = np.empty(rs.size, dtype=bool)
         new[:1] = True
