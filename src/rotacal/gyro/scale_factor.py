@@ -38,6 +38,13 @@ Choices (documented in :func:`calibrate_scale_factor`):
   scatter about the line more than their noise explains (nonlinearity, or drift between the
   points).
 
+Where the parts live (along the data's path): :mod:`~rotacal.gyro.scale_factor_points` (rate
+points, output quantum, saturation), this module (the checks, the point statistics, the line and
+NL), :mod:`~rotacal.gyro.scale_factor_budget` (GUM budgets, Monte Carlo, the interval for NL),
+:mod:`~rotacal.gyro.scale_factor_requirement` (requirements and verdicts),
+:mod:`~rotacal.gyro.scale_factor_result` (the result); a long log read in chunks:
+:mod:`~rotacal.gyro.scale_factor_stream`. Every public name is importable from here.
+
 References
 ----------
 Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity calibration facility
