@@ -43,7 +43,8 @@ points, output quantum, saturation), this module (the checks, the point statisti
 NL), :mod:`~rotacal.gyro.scale_factor_budget` (GUM budgets, Monte Carlo, the interval for NL),
 :mod:`~rotacal.gyro.scale_factor_requirement` (requirements and verdicts),
 :mod:`~rotacal.gyro.scale_factor_result` (the result); a long log read in chunks:
-:mod:`~rotacal.gyro.scale_factor_stream`. Every public name is importable from here.
+:mod:`~rotacal.gyro.scale_factor_stream`. The names this module held before the split stay
+importable from here.
 
 References
 ----------
