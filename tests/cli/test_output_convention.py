@@ -328,6 +328,7 @@ def test_provenance_of_an_analysis(captures, tmp_path):
         "output-unit": "",
         "sample-rate-hz": None,
         "bandwidth-hz": None,
+        "chunked": None,  # streamed or in memory: chosen by the log's length
         "allow-clipped": False,
         "column": ["output=output"],
         "group": None,

@@ -26,6 +26,10 @@ from rotacal.gyro.scale_factor import (
     evaluate_requirement,
     resolve_requirement,
 )
+from rotacal.gyro.scale_factor_stream import (
+    calibrate_scale_factor_chunked,
+    scale_factor_chunks,
+)
 from rotacal.gyro.triad import (
     RATE_COLUMNS,
     TRIAD_OUTPUT_COLUMNS,
@@ -54,6 +58,7 @@ __all__ = [
     "apply_triad_calibration",
     "calibrate_multiposition",
     "calibrate_scale_factor",
+    "calibrate_scale_factor_chunked",
     "calibrate_triad",
     "calibrate_triad_columns",
     "calibrate_triad_rotations",
@@ -68,6 +73,7 @@ __all__ = [
     "gyro_noise_from_angle",
     "multiposition_plan",
     "resolve_requirement",
+    "scale_factor_chunks",
     "triad_plan",
     "triad_plan_check",
 ]
