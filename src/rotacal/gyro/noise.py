@@ -354,9 +354,15 @@ def _noise_budgets(
     rate_unit = _RATE_UNIT_TEXT[unit]
     fs = adev.fs_hz
     n_phase = adev.n_phase
-    adev_of_m = dict(
-        zip(np.asarray(adev.cluster_sizes).tolist(), np.asarray(adev.adev), strict=True)
-    )
+    sizes = np.asarray(adev.cluster_sizes)  # sorted, unique
+    deviations = np.asarray(adev.adev, dtype=np.float64)
+
+    def adev_at(ms: np.ndarray) -> np.ndarray:
+        """σ at cluster sizes ``ms``, NaN where the curve has no such size (a lookup table of
+        every τ would cost seconds for 5·10⁶ of them)."""
+        idx = np.minimum(np.searchsorted(sizes, ms), sizes.size - 1)
+        return np.where(sizes[idx] == ms, deviations[idx], np.nan)
+
     timebase = spec_input(specs, "timebase.relative_error", name="DAQ timebase relative error")
     for name, term in terms.terms.items():
         key = _TERM_KEY[name]
@@ -413,7 +419,7 @@ def _noise_budgets(
                 description=how,
             )
         ]
-        sigma_pts = np.array([adev_of_m.get(int(m), np.nan) for m in ms])
+        sigma_pts = adev_at(ms)
         leak = 0.0
         used: list[str] = []
         dropped: list[str] = []
@@ -640,10 +646,10 @@ def noise_of_deviation(
         if low is not None and high is not None:
             intervals[name] = [float(low) * scale, float(high) * scale]
     return GyroNoise(
-        tau_s=[float(x) for x in adev.tau_s],
-        adev_deg_s=[float(x) for x in adev.adev],
-        adev_low_deg_s=[float(x) for x in adev.adev_low],
-        adev_high_deg_s=[float(x) for x in adev.adev_high],
+        tau_s=np.asarray(adev.tau_s, dtype=np.float64).tolist(),
+        adev_deg_s=np.asarray(adev.adev, dtype=np.float64).tolist(),
+        adev_low_deg_s=np.asarray(adev.adev_low, dtype=np.float64).tolist(),
+        adev_high_deg_s=np.asarray(adev.adev_high, dtype=np.float64).tolist(),
         arw_deg_rt_h=values["arw_deg_rt_h"],
         bias_instability_deg_h=values["bias_instability_deg_h"],
         rrw_deg_h_rt_h=values["rrw_deg_h_rt_h"],
