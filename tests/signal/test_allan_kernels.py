@@ -80,3 +80,23 @@ def test_all_sums_with_the_numba_direct_path_equal_the_long_double_sum(jit):
     ref = exact_sums(z, pick)
     rel = np.abs(sums[pick - 1] / ref - 1.0).astype(np.float64)
     assert rel.max() < 1e-11, f"max relative error {rel.max():.2e} at m = {pick[np.argmax(rel)]}"
+
+
+@pytest.mark.parametrize("jit", [False, True])
+def test_direct_sums_from_a_first_term(jit):
+    """Sums that start at term f (a chunk's new second differences) equal the long-double sum
+    of those terms, on both paths."""
+    x = red_phase(9_001, seed=6)
+    ms = np.array([1, 3, 64, 2000, 4000])
+    firsts = np.array([0, 17, 4095, 5000, 999])
+    got = direct_sums(x, ms, firsts=firsts, jit=jit)
+    n = x.size
+    xl = x.astype(np.longdouble)
+    ref = np.array(
+        [
+            np.sum((xl[f + 2 * m :] - 2 * xl[f + m : n - m] + xl[f : n - 2 * m]) ** 2)
+            for m, f in zip(ms.tolist(), firsts.tolist(), strict=True)
+        ]
+    )
+    rel = np.abs(got / ref - 1.0).astype(np.float64)
+    assert rel.max() < 1e-12, rel

@@ -74,13 +74,17 @@ _EPS = float(np.finfo(np.float64).eps)
 
 
 # ------------------------------------------------------------------------------ direct method
-def direct_sums(z: np.ndarray, ms: np.ndarray, *, jit: bool | None = None) -> np.ndarray:
+def direct_sums(
+    z: np.ndarray, ms: np.ndarray, *, firsts: np.ndarray | None = None, jit: bool | None = None
+) -> np.ndarray:
     """``S(m)`` by the definition, O(N − 2m) per cluster size (chunked, whole-array).
 
     Parameters
     ----------
     z : phase samples (any unit u; a straight line may have been removed).
     ms : cluster sizes (samples), each with ``N − 2m ≥ 1``.
+    firsts : the first term i of each sum (default 0): a record read in chunks sums only the
+        second differences that end in the newest chunk.
     jit : run the Numba twin (:mod:`rotacal.signal._allan_jit`, ≤ 1e-12 relative from this
         path); ``None`` asks :func:`rotacal._jit.use_numba` with the record's length.
 
@@ -95,16 +99,22 @@ def direct_sums(z: np.ndarray, ms: np.ndarray, *, jit: bool | None = None) -> np
     if ms.size and use_numba(z.size, jit):
         from rotacal.signal._allan_jit import direct_sums_jit
 
+        starts = np.zeros(ms.size, dtype=np.int64) if firsts is None else firsts
         return np.asarray(
-            direct_sums_jit(np.ascontiguousarray(z, dtype=np.float64), ms.astype(np.int64))
+            direct_sums_jit(
+                np.ascontiguousarray(z, dtype=np.float64),
+                ms.astype(np.int64),
+                np.asarray(starts, dtype=np.int64),
+            )
         )
     n = z.size
     out = np.empty(ms.size)
     buf = np.empty(min(_DIRECT_CHUNK, n))
+    starts_at = [0] * ms.size if firsts is None else np.asarray(firsts).tolist()
     for k, m in enumerate(ms.tolist()):
         L = n - 2 * m
         acc = 0.0
-        for s in range(0, L, _DIRECT_CHUNK):
+        for s in range(starts_at[k], L, _DIRECT_CHUNK):
             e = min(L, s + _DIRECT_CHUNK)
             b = buf[: e - s]
             np.multiply(z[s + m : e + m], -2.0, out=b)

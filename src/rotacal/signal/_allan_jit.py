@@ -36,8 +36,11 @@ def _block_sum(z: np.ndarray, m: int, start: int, stop: int) -> float:  # pragma
 
 
 @njit(cache=True, nogil=True)
-def direct_sums_jit(z: np.ndarray, ms: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
-    """``S(m) = Σ_{i<N−2m} (z[i+2m] − 2·z[i+m] + z[i])²`` for each cluster size of ``ms``.
+def direct_sums_jit(
+    z: np.ndarray, ms: np.ndarray, firsts: np.ndarray
+) -> np.ndarray:  # pragma: no cover - compiled
+    """``S(m) = Σ_{i=f}^{N−2m−1} (z[i+2m] − 2·z[i+m] + z[i])²`` for each cluster size of ``ms``
+    and its first term ``f`` of ``firsts``.
 
     NIST SP 1065 (Riley 2008), eq. (11): the overlapping Allan variance's sum from phase data
     ``z`` (any unit u; result u²); cluster sizes in samples, each with ``N − 2m ≥ 1``.
@@ -47,7 +50,8 @@ def direct_sums_jit(z: np.ndarray, ms: np.ndarray) -> np.ndarray:  # pragma: no 
     for start in range(0, n, _BLOCK):
         for k in range(ms.size):
             m = ms[k]
+            begin = max(start, firsts[k])
             stop = min(n - 2 * m, start + _BLOCK)
-            if stop > start:
-                out[k] += _block_sum(z, m, start, stop)
+            if stop > begin:
+                out[k] += _block_sum(z, m, begin, stop)
     return out

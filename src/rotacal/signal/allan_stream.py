@@ -89,18 +89,22 @@ class _PhaseCarry:
             self.offset = float(np.mean(rate))
         self.low = min(self.low, float(rate.min()))
         self.high = max(self.high, float(rate.max()))
-        phase = np.cumsum(rate - self.offset)  # in rate × sample interval: fs comes at the end
-        phase += self.tail[-1]
-        self.file.write(phase.tobytes())
-        ext = np.concatenate((self.tail, phase))
-        first = self.count  # global index of phase[0]; ext[0] has index first − tail.size
         back = self.tail.size
-        for k, m in enumerate(self.short_ms.tolist()):
-            # second differences whose last point x_{i+2m} is in this chunk (i ≥ 0)
-            start = max(back - 2 * m, back - first)  # ext index of x_i for the first new term
-            if start + 2 * m >= ext.size:
-                continue
-            self.sums[k] += float(direct_sums(ext[start:], np.array([m]))[0])
+        ext = np.empty(back + rate.size)
+        ext[:back] = self.tail
+        phase = ext[back:]
+        np.subtract(rate, self.offset, out=phase)
+        np.cumsum(phase, out=phase)  # in rate × sample interval: fs comes at the end
+        phase += self.tail[-1]
+        phase.tofile(self.file)
+        first = self.count  # global index of phase[0]; ext[0] has index first − tail.size
+        # the second differences whose last point x_{i+2m} is in this chunk (i ≥ 0): from ext
+        # index max(back − 2m, back − first) on; all sizes in one pass over the chunk
+        ms = self.short_ms
+        firsts = np.maximum(back - 2 * ms, back - first)
+        live = firsts + 2 * ms < ext.size
+        if live.any():
+            self.sums[live] += direct_sums(ext, ms[live], firsts=firsts[live])
         self.count += phase.size
         self.tail = ext[-self.history :].copy()
 
