@@ -25,13 +25,14 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import zipfile
 from pathlib import Path
 
 import numpy as np
+
+from bench_encoder_command import best  # wall time and peak RSS of one command
 
 FS = 100.0
 PIECE = 1 << 22
@@ -66,28 +67,6 @@ def write_npz(path: Path, n: int, seed: int = 1) -> None:
             member.write(w.tobytes())
 
 
-def measure(cmd: list[str], env: dict[str, str], repeats: int) -> tuple[float, float]:
-    """Wall time (s) and peak RSS (MB) of the command, best of ``repeats``; each run inside a
-    fresh wrapper process, whose RUSAGE_CHILDREN peak is that command's alone."""
-    wrapper = [
-        sys.executable,
-        "-c",
-        "import resource, subprocess, sys, time\n"
-        "t0 = time.perf_counter(); subprocess.run(sys.argv[1:], check=True, "
-        "stdout=subprocess.DEVNULL)\n"
-        "print(time.perf_counter() - t0, "
-        "resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)",
-        *cmd,
-    ]
-    best_s, best_mb = float("inf"), 0.0
-    for _ in range(repeats):
-        out = subprocess.run(wrapper, check=True, capture_output=True, text=True, env=env)
-        seconds, mb = (float(v) for v in out.stdout.split())
-        if seconds < best_s:
-            best_s, best_mb = seconds, mb
-    return best_s, best_mb
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="1e7,1e8,1e9", help="comma-separated sample counts")
@@ -106,7 +85,7 @@ def main() -> None:
             try:
                 write_npz(path, n)
                 out = folder / "out.json"
-                read_s, read_mb = measure([sys.executable, "-c", _READ, str(path)], env, 1)
+                read_s, read_mb = best([sys.executable, "-c", _READ, str(path)], env, 1)
                 rows = [("read the file (iter_capture_chunks)  [baseline]", read_s, read_mb)]
                 base = [sys.executable, "-m", "rotacal", "allan", str(path), "--fs-hz", str(FS)]
                 base += ["--json", str(out), "--overwrite"]
@@ -115,7 +94,7 @@ def main() -> None:
                     cases += [("rotacal allan --taus all", ["--taus", "all"])]
                     cases += [("rotacal allan --chunked", ["--chunked", "--taus", "octave"])]
                 for label, extra in cases:
-                    s, mb = measure(base + extra, env, args.repeat)
+                    s, mb = best(base + extra, env, args.repeat)
                     rows.append((label, s, mb))
                 for label, s, mb in rows:
                     print(

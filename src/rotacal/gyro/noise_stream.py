@@ -23,7 +23,7 @@ import numpy as np
 
 from rotacal.errors import CaptureError
 from rotacal.gyro.noise import GyroNoise, _check_fs_hz, _constant_rate, noise_of_deviation
-from rotacal.signal._checks import MAX_GAP, TYPICAL_STEPS, gap_error
+from rotacal.signal._checks import MAX_GAP, TYPICAL_STEPS, gap_error, order_error
 from rotacal.signal._values import check_time_span
 from rotacal.signal.allan_stream import DEFAULT_HISTORY, ChunkedAdev
 from rotacal.signal.clipping import RailDetector, check_clipping
@@ -56,11 +56,7 @@ class _TimeSteps:
             bad = np.flatnonzero(~(steps > 0))
             if bad.size:
                 i = int(bad[0])
-                raise CaptureError(
-                    f"column '{self.name}' is not strictly increasing at sample {base + i + 1} "
-                    f"({float(joined[i]):.9g} s then {float(joined[i + 1]):.9g} s); sort or fix "
-                    "the time stamps."
-                )
+                raise order_error(self.name, base + i + 1, float(joined[i]), float(joined[i + 1]))
             if self.typical is None:
                 self.typical = float(np.median(steps[:TYPICAL_STEPS]))
             gaps = np.flatnonzero(steps > MAX_GAP * self.typical)
