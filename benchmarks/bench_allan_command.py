@@ -89,7 +89,7 @@ def main() -> None:
                 rows = [("read the file (iter_capture_chunks)  [baseline]", read_s, read_mb)]
                 base = [sys.executable, "-m", "rotacal", "allan", str(path), "--fs-hz", str(FS)]
                 base += ["--json", str(out), "--overwrite"]
-                cases = [("rotacal allan (chunked above 3e7)", [])]
+                cases: list[tuple[str, list[str]]] = [("rotacal allan (chunked above 3e7)", [])]
                 if n <= 10_000_000:
                     cases += [("rotacal allan --taus all", ["--taus", "all"])]
                     cases += [("rotacal allan --chunked", ["--chunked", "--taus", "octave"])]
