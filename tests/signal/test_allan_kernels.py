@@ -100,3 +100,18 @@ def test_direct_sums_from_a_first_term(jit):
     )
     rel = np.abs(got / ref - 1.0).astype(np.float64)
     assert rel.max() < 1e-12, rel
+
+
+@pytest.mark.parametrize("jit", [False, True])
+def test_half_products_equal_the_triangle_sums(jit):
+    """H[m] = Σ_rows Σ_{j<m} z[j]·z[j+m] by the divide and conquer (leaves by NumPy or by the
+    Numba twin, which gives the same bits) against the sums written out."""
+    k, leaf = _allan_fast._smooth_size(700)
+    rng = np.random.default_rng(7)
+    zs = np.zeros((2, 2 * k + k // 2 + leaf))
+    zs[:, : 2 * k] = rng.standard_normal((2, 2 * k))
+    got = _allan_fast._half_products(zs, k, leaf, jit)
+    ref = np.array([sum(float(zs[r, :m] @ zs[r, m : 2 * m]) for r in range(2)) for m in range(k)])
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-11 * float(np.sum(zs * zs)))
+    other = _allan_fast._half_products(zs, k, leaf, not jit)
+    np.testing.assert_array_equal(got, other)

@@ -209,7 +209,7 @@ def _smooth_size(k: int) -> tuple[int, int]:
 _LEAVES = (16, 18, 20, 24, 25, 27, 30)
 
 
-def _half_products(zs: np.ndarray, k: int, leaf: int) -> np.ndarray:
+def _half_products(zs: np.ndarray, k: int, leaf: int, jit: bool = False) -> np.ndarray:
     """``H[m] = Σ_rows Σ_{j<m} zs[r, j]·zs[r, j + m]`` for ``m < k`` (``k = leaf·2^j``).
 
     ``zs`` has one signal per row (the head, and the reversed tail, of the record) and at least
@@ -229,6 +229,11 @@ def _half_products(zs: np.ndarray, k: int, leaf: int) -> np.ndarray:
         v = zs[:, half : half + 2 * k].reshape(ns, nodes, 2 * s)[:, :, :s]
         h.reshape(nodes, s)[:, half:] += _correlate_rows(u, v, s, half)
         s = half
+    if jit:  # the leaves by the Numba twin: the same terms in the same order, no temporaries
+        from rotacal.signal._allan_jit import leaf_products_jit
+
+        h += leaf_products_jit(np.ascontiguousarray(zs), k, leaf)
+        return h
     nodes = k // leaf
     u = zs[:, :k].reshape(ns, nodes, leaf)
     v = zs[:, : 2 * k].reshape(ns, nodes, 2 * leaf)
@@ -240,7 +245,9 @@ def _half_products(zs: np.ndarray, k: int, leaf: int) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------------ one group
-def _group_sums(x: np.ndarray, ms: np.ndarray, m_hi: int) -> tuple[np.ndarray, np.ndarray]:
+def _group_sums(
+    x: np.ndarray, ms: np.ndarray, m_hi: int, jit: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
     """``S(m)`` and a rounding-magnitude estimate for cluster sizes ``ms`` (all ``< m_hi``)."""
     n = x.size
     seg = 4 * m_hi
@@ -269,7 +276,7 @@ def _group_sums(x: np.ndarray, ms: np.ndarray, m_hi: int) -> tuple[np.ndarray, n
     zs = np.zeros((2, 2 * k + k // 2 + leaf))
     zs[0, :width] = z[:width]
     zs[1, :width] = z[::-1][:width]
-    ht = _half_products(zs, k, leaf)
+    ht = _half_products(zs, k, leaf, jit)
     s = sq - 4.0 * (2.0 * r[ms] - ht[ms]) + 2.0 * r[2 * ms]
     mag = np.full(ms.size, c2[n])
     if delta.size:
@@ -363,7 +370,7 @@ def second_difference_sums(
             w, curvature = _without_parabola(z)
             parabola = (w, _RampTerms(w, curvature, nlog) if curvature else None)
         w, ramp = parabola
-        s, mag = _group_sums(w, group, m_hi)
+        s, mag = _group_sums(w, group, m_hi, jit)
         if ramp is not None:
             ramp.add_to(group, s, mag)
         bad = ~(s > 0) | (_ERR_FACTOR * _EPS * nlog * mag > FAST_RTOL * s)

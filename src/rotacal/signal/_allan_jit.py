@@ -55,3 +55,27 @@ def direct_sums_jit(
             if stop > begin:
                 out[k] += _block_sum(z, m, begin, stop)
     return out
+
+
+@njit(cache=True, nogil=True)
+def leaf_products_jit(zs: np.ndarray, k: int, leaf: int) -> np.ndarray:  # pragma: no cover
+    """The leaves of :func:`rotacal.signal._allan_fast._half_products`: for each node ``t`` of
+    ``leaf`` cluster sizes, ``h[t·leaf + m] = Σ_rows Σ_{j<m} zs[r, t·leaf + j]·zs[r, 2t·leaf + j + m]``,
+    the terms in the NumPy path's order (j, then the rows)."""
+    rows = zs.shape[0]
+    out = np.zeros(k)
+    part = np.empty(leaf)
+    for t in range(k // leaf):
+        u0 = t * leaf
+        v0 = 2 * t * leaf
+        total = np.zeros(leaf)
+        for r in range(rows):
+            part[:] = 0.0
+            for j in range(leaf - 1):
+                uj = zs[r, u0 + j]
+                for m in range(j + 1, leaf):
+                    part[m] += uj * zs[r, v0 + j + m]
+            for m in range(leaf):
+                total[m] += part[m]
+        out[u0 : u0 + leaf] = total
+    return out
