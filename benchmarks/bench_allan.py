@@ -6,7 +6,9 @@ points (default 10⁷):
 1. octave τ: ``overlapping_adev(y, fs, taus="octave")`` and ``allantools.oadev(..., taus="octave")``
    on the same data in the same run — times, their ratio and the largest relative difference;
 2. every τ (m = 1 … ⌊N/2⌋): ``overlapping_adev(y, fs, taus="all")`` timed, also with a rate ramp
-   added (the case that used to fall back to the direct method), and with ``--cli`` the whole
+   added (the case that used to fall back to the direct method), each checked against the
+   literal sum at 40 cluster sizes (NumPy, the plain path); with ``--numpy-twin`` also without
+   Numba (``ROTACAL_NUMBA=0``); with ``--cli`` the whole
    ``rotacal allan --taus all`` command on an NPZ of the record; allantools is not run
    at that size (O(N²)): its ``taus="all"`` cost is measured at 10⁴ and 10⁵ samples and
    extrapolated both with the exponent those two give (≈ 1.5: overheads still count there) and
@@ -67,6 +69,28 @@ def fmt(seconds: float) -> str:
     return f"{seconds / 3600:10.1f} h"
 
 
+def literal_check(y: np.ndarray, res: Any, count: int = 40) -> float:
+    """Largest relative difference of σ at ``count`` cluster sizes (the first and last ten, and
+    twenty log-spaced between) from the literal sum of squared second differences."""
+    from rotacal.signal._allan_fast import direct_sums
+    from rotacal.signal.allan import _phase
+
+    x = _phase(y, FS_HZ, "rate")
+    ms = np.asarray(res.cluster_sizes)
+    pick = np.unique(
+        np.concatenate(
+            [
+                np.arange(10),
+                np.geomspace(10, ms.size - 11, count - 20).astype(int),
+                ms.size - 1 - np.arange(10),
+            ]
+        )
+    )
+    ref = direct_sums(x, ms[pick], jit=False)
+    adev = np.sqrt(ref / (2.0 * (x.size - 2 * ms[pick]))) / (ms[pick] / FS_HZ)
+    return float(np.max(np.abs(res.adev[pick] / adev - 1.0)))
+
+
 def time_cli(y: np.ndarray) -> float:
     """Seconds of ``rotacal allan FILE --taus all --json OUT`` in a subprocess (NPZ input)."""
     with tempfile.TemporaryDirectory() as folder:
@@ -85,6 +109,9 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--quick", action="store_true", help="10⁶ samples")
     ap.add_argument("--cli", action="store_true", help="also time the whole rotacal allan command")
+    ap.add_argument(
+        "--numpy-twin", action="store_true", help="also every τ with ROTACAL_NUMBA=0 (NumPy only)"
+    )
     args = ap.parse_args()
     n = 1_000_000 if args.quick else args.samples
     try:
@@ -112,14 +139,23 @@ def main() -> None:
     t_all, res_all = best_of(lambda: overlapping_adev(y, fs=FS_HZ, taus="all"), args.repeat)
     print(
         f"{'every τ: rotacal overlapping_adev(taus=all)':44s} {fmt(t_all)}  {t_all / t_rc:8.2f}  "
-        f"{res_all.tau_s.size:,} τ, {res_all._n_direct} computed directly"
+        f"{res_all.tau_s.size:,} τ, {res_all._n_direct} computed directly; "
+        f"max |rel diff| from the literal sum {literal_check(y, res_all):.1e}"
     )
     ramp = y + RAMP_DEG_S2 * np.arange(n) / FS_HZ
     t_ramp, res_ramp = best_of(lambda: overlapping_adev(ramp, fs=FS_HZ, taus="all"), args.repeat)
     print(
         f"{'every τ, with a rate ramp':44s} {fmt(t_ramp)}  {t_ramp / t_rc:8.2f}  "
-        f"{res_ramp._n_direct} computed directly"
+        f"{res_ramp._n_direct} computed directly; "
+        f"max |rel diff| {literal_check(ramp, res_ramp):.1e}"
     )
+    if args.numpy_twin:
+        os.environ["ROTACAL_NUMBA"] = "0"
+        t_np, _ = best_of(lambda: overlapping_adev(y, fs=FS_HZ, taus="all"), args.repeat)
+        del os.environ["ROTACAL_NUMBA"]
+        print(
+            f"{'every τ, ROTACAL_NUMBA=0 (NumPy direct sums)':44s} {fmt(t_np)}  {t_np / t_rc:8.2f}"
+        )
     if args.cli:
         t_cli = time_cli(y)
         print(

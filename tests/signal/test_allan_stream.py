@@ -91,3 +91,13 @@ def test_bad_records_one_clear_line():
         octave_adev_chunks([np.ones(50)], fs=100.0, history=1000)
     with pytest.raises(ConfigError, match="fs"):
         octave_adev_chunks([gyro_rate(50)], fs=0.0)
+
+
+def test_numba_direct_sums_give_the_same_deviation(monkeypatch):
+    """ROTACAL_NUMBA=1: the chunks' sums by the Numba twin (one pass for all sizes)."""
+    y = gyro_rate(100_003, seed=5)
+    ref = octave_adev_chunks(pieces(y, [9_999]), fs=100.0, history=1 << 12)
+    monkeypatch.setenv("ROTACAL_NUMBA", "1")
+    res = octave_adev_chunks(pieces(y, [9_999]), fs=100.0, history=1 << 12)
+    np.testing.assert_allclose(res.adev, ref.adev, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(res.adev, overlapping_adev(y, fs=100.0).adev, rtol=1e-9, atol=0)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -13,12 +14,14 @@ from rotacal.numbers import quantity_of
 
 from ._app import cli
 from ._common import (
+    _IN_MEMORY_MAX_SAMPLES,
     INPUT_FILE,
     _analysis_options,
     _check_outputs,
     _clipping_option,
     _emit_warnings,
     _names_capture,
+    _sample_progress,
     _status,
     _summary_wanted,
     _write_json,
@@ -50,9 +53,15 @@ from ._reading import current_read_options
 @click.option(
     "--taus",
     type=click.Choice(["log", "octave", "decade", "all"]),
-    default="log",
-    show_default=True,
-    help="τ grid: 'all' computes every cluster size (O(N log² N)).",
+    default=None,
+    help="τ grid: 'all' computes every cluster size (O(N log² N)); 'log' and 'all' need the "
+    "record in memory. [default: log; octave for a capture read in chunks]",
+)
+@click.option(
+    "--chunked/--in-memory",
+    default=None,
+    help="Read the capture in chunks (flat memory; τ at octaves or decades) or load it whole "
+    f"[default: chunked above {_IN_MEMORY_MAX_SAMPLES:.0e} samples].",
 )
 @click.option(
     "--angle",
@@ -68,7 +77,8 @@ def allan_cmd(
     capture: str,
     fs_hz: float | None,
     unit: str,
-    taus: str,
+    taus: str | None,
+    chunked: bool | None,
     is_angle: bool,
     columns: Sequence[str],
     group: str | None,
@@ -83,7 +93,7 @@ def allan_cmd(
     column is an angle record (an integrating gyro, or phase data), differenced to a rate.
     """
     from rotacal.gyro.noise import gyro_noise, gyro_noise_from_angle
-    from rotacal.io import capture_columns, parse_column_mapping, read_capture
+    from rotacal.io import capture_columns, capture_length, parse_column_mapping, read_capture
     from rotacal.io._common import name_list
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
@@ -103,6 +113,18 @@ def allan_cmd(
         )
     # only the columns the analysis uses: other arrays of the file may have other lengths
     wanted = [rate_column, *(["time_s"] if "time_s" in available else [])]
+    n = None
+    if chunked is None:
+        n = capture_length(
+            capture, rate_column, mapping=mapping, group=group, read_options=read_options
+        )
+        chunked = n > _IN_MEMORY_MAX_SAMPLES
+    if chunked:
+        result = _chunked_noise(
+            capture, n, wanted, rate_column, fs_hz, unit, taus, is_angle, mapping, group, kw
+        )
+        _finish(result, capture, json_path, report_path)
+        return
     with _status(f"reading {capture}"):
         cap = read_capture(
             capture,
@@ -120,11 +142,80 @@ def allan_cmd(
             fs_hz=fs_hz,
             time_s=time_s,
             unit=unit,
-            taus=taus,
+            taus=taus or "log",
             column=rate_column,
             specs=kw.pop("specs"),
             allow_clipped=kw.pop("allow_clipped"),
         )
+    _finish(result, capture, json_path, report_path)
+
+
+#: Rows read at a time on the chunked path, and the phase values it carries (32 MB; longer τ
+#: are summed from a temporary file): ~200 MB in all.
+_CHUNK_ROWS = 1 << 22
+_CHUNK_HISTORY = 1 << 22
+
+
+def _chunked_noise(
+    capture: str,
+    n: int | None,
+    wanted: list[str],
+    rate_column: str,
+    fs_hz: float | None,
+    unit: str,
+    taus: str | None,
+    is_angle: bool,
+    mapping: Any,
+    group: str | None,
+    kw: dict[str, Any],
+) -> Any:
+    """The noise of a capture read in chunks (:func:`rotacal.gyro.noise_stream.gyro_noise_chunks`)."""
+    from rotacal.gyro.noise_stream import gyro_noise_chunks
+    from rotacal.io import capture_length, iter_capture_chunks
+
+    if taus in ("all", "log"):
+        raise ConfigError(
+            f"--taus {taus} needs the whole record in memory; this capture is read in chunks: "
+            "give --taus octave or decade, or --in-memory (if the record fits in memory)"
+        )
+    if is_angle:
+        raise ConfigError(
+            "--angle is analysed in memory only; give --in-memory (if the record fits in "
+            "memory), or difference the angle to a rate column first"
+        )
+    read_options = current_read_options()
+    if n is None:
+        n = capture_length(
+            capture, rate_column, mapping=mapping, group=group, read_options=read_options
+        )
+    chunks = iter_capture_chunks(
+        capture,
+        wanted,
+        chunk_rows=_CHUNK_ROWS,
+        mapping=mapping,
+        group=group,
+        read_options=read_options,
+    )
+    with _sample_progress(2 * n, "Allan deviation (chunked)") as progress:
+        result = gyro_noise_chunks(
+            chunks,
+            column=rate_column,
+            fs_hz=fs_hz,
+            unit=unit,
+            taus=taus or "octave",
+            specs=kw.pop("specs"),
+            allow_clipped=kw.pop("allow_clipped"),
+            history=_CHUNK_HISTORY,
+            progress=progress,
+        )
+    if taus is None:  # the log grid, the default in memory, needs the record's length up front
+        note = f"read in chunks ({n} samples): τ at octaves (--taus octave)"
+        result = dataclasses.replace(result, notes=[note, *result.notes])
+    return result
+
+
+def _finish(result: Any, capture: str, json_path: str | None, report_path: str | None) -> None:
+    """Warnings, JSON, report and the terminal summary of one noise result."""
     _emit_warnings(result)
     data = result.to_dict()
     _write_json(data, json_path)

@@ -48,7 +48,7 @@ from rotacal.uncertainty.budget import UncertaintyBudget, uncertainty_keys
 from rotacal.uncertainty.gum import Input, propagate
 from rotacal.uncertainty.specs import TYPE_A_ONLY_NOTE, InstrumentSpecs, spec_input
 
-__all__ = ["GyroNoise", "gyro_noise", "line_level_variance"]
+__all__ = ["GyroNoise", "gyro_noise", "line_level_variance", "noise_of_deviation"]
 
 #: Relative spread of the sampling steps above which a time column is not a constant rate.
 _MAX_STEP_SPREAD = 1e-3
@@ -354,9 +354,15 @@ def _noise_budgets(
     rate_unit = _RATE_UNIT_TEXT[unit]
     fs = adev.fs_hz
     n_phase = adev.n_phase
-    adev_of_m = dict(
-        zip(np.asarray(adev.cluster_sizes).tolist(), np.asarray(adev.adev), strict=True)
-    )
+    sizes = np.asarray(adev.cluster_sizes)  # sorted, unique
+    deviations = np.asarray(adev.adev, dtype=np.float64)
+
+    def adev_at(ms: np.ndarray) -> np.ndarray:
+        """σ at cluster sizes ``ms``, NaN where the curve has no such size (a lookup table of
+        every τ would cost seconds for 5·10⁶ of them)."""
+        idx = np.minimum(np.searchsorted(sizes, ms), sizes.size - 1)
+        return np.where(sizes[idx] == ms, deviations[idx], np.nan)
+
     timebase = spec_input(specs, "timebase.relative_error", name="DAQ timebase relative error")
     for name, term in terms.terms.items():
         key = _TERM_KEY[name]
@@ -413,7 +419,7 @@ def _noise_budgets(
                 description=how,
             )
         ]
-        sigma_pts = np.array([adev_of_m.get(int(m), np.nan) for m in ms])
+        sigma_pts = adev_at(ms)
         leak = 0.0
         used: list[str] = []
         dropped: list[str] = []
@@ -485,25 +491,23 @@ def _gap_free_record(values: ArrayLike, column: str) -> np.ndarray:
     return y
 
 
-def _sampling_rate(time_s: ArrayLike | None, fs_hz: float | None, n: int) -> float:
+def _check_fs_hz(fs_hz: float | None) -> None:
     if fs_hz is not None:
         fs = float(fs_hz)
         if not math.isfinite(fs) or fs <= 0:
             raise ConfigError(f"fs_hz must be > 0, got {fs_hz!r}.")
         check_setting("--fs-hz", fs, unit="Hz")
-    if time_s is None:
-        if fs_hz is None:
-            raise ConfigError("give the sampling rate (fs_hz, --fs-hz) or a time_s column.")
-        return fs
-    t = np.asarray(time_s, dtype=np.float64)
-    if t.shape != (n,):
-        raise CaptureError(f"time_s has {t.size} values, the rate column {n}; they must match.")
-    check_sampling(t, "time_s")
-    if n < 2:
-        raise CaptureError(f"the record holds {n} sample(s): too short for an Allan deviation.")
-    steps = np.diff(t)
-    step = float(np.median(steps))
-    spread = float(np.max(np.abs(steps - step))) / step
+
+
+def _constant_rate(
+    first: float, last: float, n: int, min_step: float, max_step: float, fs_hz: float | None
+) -> float:
+    """The sampling rate of ``n`` time stamps from ``first`` to ``last`` (s), their mean step,
+    refused when a step differs from it by more than 10 % (not a constant rate) or when it
+    contradicts ``fs_hz``. The mean step, not the median: a record read in chunks gets the same
+    number (:mod:`rotacal.gyro.noise_stream`), and it is the less rounded of the two."""
+    step = (last - first) / (n - 1)
+    spread = max(max_step - step, step - min_step) / step
     if spread > _MAX_STEP_SPREAD * 100:
         raise CaptureError(
             f"time_s is not sampled at a constant rate (steps vary by {100 * spread:.3g} %): the "
@@ -515,6 +519,24 @@ def _sampling_rate(time_s: ArrayLike | None, fs_hz: float | None, n: int) -> flo
             f"--fs-hz {fs_hz:g} contradicts the time column ({fs:.6g} Hz); give one of them."
         )
     return fs
+
+
+def _sampling_rate(time_s: ArrayLike | None, fs_hz: float | None, n: int) -> float:
+    _check_fs_hz(fs_hz)
+    if time_s is None:
+        if fs_hz is None:
+            raise ConfigError("give the sampling rate (fs_hz, --fs-hz) or a time_s column.")
+        return float(fs_hz)
+    t = np.asarray(time_s, dtype=np.float64)
+    if t.shape != (n,):
+        raise CaptureError(f"time_s has {t.size} values, the rate column {n}; they must match.")
+    check_sampling(t, "time_s")
+    if n < 2:
+        raise CaptureError(f"the record holds {n} sample(s): too short for an Allan deviation.")
+    steps = np.diff(t)
+    return _constant_rate(
+        float(t[0]), float(t[-1]), n, float(steps.min()), float(steps.max()), fs_hz
+    )
 
 
 def gyro_noise(
@@ -590,6 +612,20 @@ def gyro_noise(
     clipped = check_clipping({column: y}, allow_clipped=allow_clipped)
     # clipping is judged above, under the column's name
     adev = overlapping_adev(y, fs=fs, taus=taus, data_type="rate", allow_clipped=True)
+    return noise_of_deviation(adev, unit=unit, column=column, specs=specs, warnings=clipped)
+
+
+def noise_of_deviation(
+    adev: AllanDeviation,
+    *,
+    unit: str,
+    column: str,
+    specs: InstrumentSpecs | None,
+    warnings: tuple[str, ...] = (),
+) -> GyroNoise:
+    """The :class:`GyroNoise` of an Allan deviation of a rate record (the part of
+    :func:`gyro_noise` after the deviation: noise terms, budgets, plausibility warnings), for a
+    deviation computed in memory or from a record read in chunks."""
     terms = noise_terms(adev, unit=unit)
     named = {
         "angle_random_walk": "arw_deg_rt_h",
@@ -610,19 +646,19 @@ def gyro_noise(
         if low is not None and high is not None:
             intervals[name] = [float(low) * scale, float(high) * scale]
     return GyroNoise(
-        tau_s=[float(x) for x in adev.tau_s],
-        adev_deg_s=[float(x) for x in adev.adev],
-        adev_low_deg_s=[float(x) for x in adev.adev_low],
-        adev_high_deg_s=[float(x) for x in adev.adev_high],
+        tau_s=np.asarray(adev.tau_s, dtype=np.float64).tolist(),
+        adev_deg_s=np.asarray(adev.adev, dtype=np.float64).tolist(),
+        adev_low_deg_s=np.asarray(adev.adev_low, dtype=np.float64).tolist(),
+        adev_high_deg_s=np.asarray(adev.adev_high, dtype=np.float64).tolist(),
         arw_deg_rt_h=values["arw_deg_rt_h"],
         bias_instability_deg_h=values["bias_instability_deg_h"],
         rrw_deg_h_rt_h=values["rrw_deg_h_rt_h"],
         quantization_deg=values["quantization_deg"],
         rate_ramp_deg_h2=values["rate_ramp_deg_h2"],
         intervals=intervals,
-        fs_hz=fs,
-        samples=int(y.size),
-        duration_s=float(y.size / fs),
+        fs_hz=adev.fs_hz,
+        samples=int(adev.n_samples),
+        duration_s=float(adev.n_samples / adev.fs_hz),
         column=column,
         notes=[*adev.notes, *terms.notes],
         _adev=adev,
@@ -630,7 +666,7 @@ def gyro_noise(
         _budgets=budgets,
         _slope_bias=leaks,
         warnings=(
-            *clipped,
+            *warnings,
             *allan_warnings(
                 bias_instability=values["bias_instability_deg_h"],
                 local_slope=terms.local_slope,

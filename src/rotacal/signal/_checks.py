@@ -98,16 +98,21 @@ def check_sampling(t: np.ndarray, name: str = "time_s", *, max_gap: float = MAX_
     bad = np.flatnonzero(~(steps > 0))
     if bad.size:
         i = int(bad[0])
-        raise CaptureError(
-            f"column '{name}' is not strictly increasing at sample {i + 1} "
-            f"({float(t[i]):.9g} s then {float(t[i + 1]):.9g} s); sort or fix the time stamps."
-        )
+        raise order_error(name, i + 1, float(t[i]), float(t[i + 1]))
     typical = float(np.median(steps[:TYPICAL_STEPS]))
     gaps = np.flatnonzero(steps > max_gap * typical)
     if gaps.size:
         i = int(gaps[0])
         raise gap_error(name, i + 1, float(steps[i]), typical)
     check_time_span(name, float(t[0]), float(t[-1]), typical)
+
+
+def order_error(name: str, sample: int, before: float, after: float) -> CaptureError:
+    """The one message for time stamps that do not increase (in-memory and chunked paths)."""
+    return CaptureError(
+        f"column '{name}' is not strictly increasing at sample {sample} "
+        f"({before:.9g} s then {after:.9g} s); sort or fix the time stamps."
+    )
 
 
 def gap_error(name: str, sample: int, step: float, typical: float) -> CaptureError:

@@ -10,7 +10,8 @@ equivalent degrees of freedom and a chi-squared confidence interval for each τ.
   sum of squared second differences expanded into prefix sums and lagged products from FFT
   correlations, with local piecewise-linear detrending so that it keeps ≤ 1e-9 relative precision
   for any noise colour (derivation: :mod:`rotacal.signal._allan_fast`). 10⁷ samples (5·10⁶ τ)
-  take about 12 s on one core, where the O(N²) definition would take hours.
+  take seconds on one core (``benchmarks/bench_allan.py``), where the O(N²) definition would
+  take hours. A record read in chunks: :mod:`rotacal.signal.allan_stream` (octave or decade τ).
 
 :func:`noise_terms` reads the IEEE Std 952-1997 Annex C terms off a curve: quantization Q (slope
 −1), angle random walk N (−½), bias instability B (0), rate random walk K (+½) and rate ramp R (+1),

@@ -1,13 +1,16 @@
-"""Overlapping Allan deviation at octave τ of a rate record read in chunks, in bounded memory.
+"""Overlapping Allan deviation at octave (or decade) τ of a rate record read in chunks.
 
 :func:`octave_adev_chunks` takes the record as an iterable of rate chunks (any sizes) and gives
 the :class:`~rotacal.signal.allan.AllanDeviation` that
 ``overlapping_adev(whole, fs=fs, taus="octave")`` gives, to rounding (≤ 1e-9 relative, tested),
-holding a few chunks and a carried history instead of the record:
+holding a few chunks and a carried history instead of the record. :class:`ChunkedAdev` does the
+same fed chunk by chunk, with the sampling rate given only at the end (a time column's rate is
+known once the whole column has been read), and ``taus="decade"`` too:
 
 * The phase (the rate's running integral, x_0 = 0) is carried from chunk to chunk: each chunk's
   rate, less the first chunk's mean (an offset the second difference annihilates; it keeps the
-  phase small), is summed onto the last phase value.
+  phase small), is summed onto the last phase value, in units of rate × sample interval (the
+  sums are divided by fs² at the end: the sampling rate need not be known while reading).
 * Cluster sizes with 2m ≤ ``history`` are summed as the chunks arrive: the last ``history``
   phase values are carried, and each chunk adds the second differences x_{i+2m} − 2x_{i+m} + x_i
   whose last point x_{i+2m} lies in it.
@@ -17,14 +20,15 @@ holding a few chunks and a carried history instead of the record:
   and 2m.
 
 Memory: the carried history (``history`` phase values, 32 MB by default), a chunk and its
-temporaries; not the record.
+temporaries; not the record. Every τ (``taus="all"``) or the log grid (which depends on the
+record's length and costs a pass per τ) are not available here.
 """
 
 from __future__ import annotations
 
 import math
 import tempfile
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from typing import Any, BinaryIO
 
 import numpy as np
@@ -43,21 +47,34 @@ from rotacal.signal.allan import (
     deviation_from_sums,
 )
 
-__all__ = ["DEFAULT_HISTORY", "octave_adev_chunks"]
+__all__ = ["DEFAULT_HISTORY", "STREAMED_TAUS", "ChunkedAdev", "octave_adev_chunks"]
 
 #: Phase values carried between chunks: cluster sizes up to half of it are summed in the pass.
 DEFAULT_HISTORY = 1 << 22
 #: Samples read at a time from the phase file for the long cluster sizes.
 _READ = 1 << 20
+#: The τ grids a record read in chunks can have (they do not depend on the record's length).
+STREAMED_TAUS = ("octave", "decade")
+
+Progress = Callable[[int], None]
+
+
+def _candidate_sizes(taus: str, largest: int) -> np.ndarray:
+    """Every cluster size of the ``taus`` grid up to ``largest`` (the record's length unknown)."""
+    if taus == "octave":
+        ms = 2 ** np.arange(int(math.log2(largest)) + 1, dtype=np.int64)
+    else:  # decade: 1, 2, 4, 10, 20, 40, … as rotacal.signal.allan._cluster_sizes
+        dec = 10 ** np.arange(int(math.log10(largest)) + 1, dtype=np.int64)
+        ms = (dec[:, None] * np.array([1, 2, 4])).ravel()
+    return np.unique(ms[ms <= largest])
 
 
 class _PhaseCarry:
     """The running phase, its carried tail, and the sums of the short cluster sizes."""
 
-    def __init__(self, fs: float, history: int, phase_file: BinaryIO) -> None:
-        self.fs = fs
+    def __init__(self, short_ms: np.ndarray, history: int, phase_file: BinaryIO) -> None:
         self.history = history
-        self.short_ms = 2 ** np.arange(int(math.log2(history // 2)) + 1, dtype=np.int64)
+        self.short_ms = short_ms
         self.sums = np.zeros(self.short_ms.size)
         self.tail = np.zeros(1)  # x_0 = 0: the phase before the first sample
         self.count = 1  # phase points so far
@@ -72,29 +89,35 @@ class _PhaseCarry:
             self.offset = float(np.mean(rate))
         self.low = min(self.low, float(rate.min()))
         self.high = max(self.high, float(rate.max()))
-        phase = np.cumsum(rate - self.offset)
-        phase /= self.fs
-        phase += self.tail[-1]
-        self.file.write(phase.tobytes())
-        ext = np.concatenate((self.tail, phase))
-        first = self.count  # global index of phase[0]; ext[0] has index first − tail.size
         back = self.tail.size
-        for k, m in enumerate(self.short_ms.tolist()):
-            # second differences whose last point x_{i+2m} is in this chunk (i ≥ 0)
-            start = max(back - 2 * m, back - first)  # ext index of x_i for the first new term
-            if start + 2 * m >= ext.size:
-                continue
-            self.sums[k] += float(direct_sums(ext[start:], np.array([m]))[0])
+        ext = np.empty(back + rate.size)
+        ext[:back] = self.tail
+        phase = ext[back:]
+        np.subtract(rate, self.offset, out=phase)
+        np.cumsum(phase, out=phase)  # in rate × sample interval: fs comes at the end
+        phase += self.tail[-1]
+        phase.tofile(self.file)
+        first = self.count  # global index of phase[0]; ext[0] has index first − tail.size
+        # the second differences whose last point x_{i+2m} is in this chunk (i ≥ 0): from ext
+        # index max(back − 2m, back − first) on; all sizes in one pass over the chunk
+        ms = self.short_ms
+        firsts = np.maximum(back - 2 * ms, back - first)
+        live = firsts + 2 * ms < ext.size
+        if live.any():
+            self.sums[live] += direct_sums(ext, ms[live], firsts=firsts[live])
         self.count += phase.size
         self.tail = ext[-self.history :].copy()
 
 
-def _long_sums(f: BinaryIO, n_phase: int, ms: list[int]) -> np.ndarray:
+def _long_sums(
+    f: BinaryIO, n_phase: int, ms: list[int], progress: Progress | None = None
+) -> np.ndarray:
     """S(m) of the long cluster sizes in one pass over the phase file: one sequential reader at
     each offset 0, m and 2m (shared between the sizes), ``_READ`` points at a time."""
     offsets = sorted({0, *ms, *(2 * m for m in ms)})
     sums = np.zeros(len(ms))
-    for i in range(0, n_phase - 2 * min(ms), _READ):
+    end = n_phase - 2 * min(ms)
+    for i in range(0, end, _READ):
         at = {}
         for o in offsets:
             f.seek(8 * (i + o))
@@ -107,7 +130,133 @@ def _long_sums(f: BinaryIO, n_phase: int, ms: list[int]) -> np.ndarray:
             d = at[2 * m][:c] - 2.0 * at[m][:c]
             d += at[0][:c]
             sums[k] += float(np.dot(d, d))
+        if progress is not None:
+            progress(min(end, i + _READ))
     return sums
+
+
+class ChunkedAdev:
+    """Overlapping Allan deviation of a rate record fed in chunks (bounded memory).
+
+    ``add(rate)`` for each chunk in order (rate in any unit u: °/s, fractional frequency, …),
+    then ``result(fs=…)``; use it as a context manager (it holds a temporary phase file, deleted
+    on exit). The result is ``overlapping_adev(whole, fs=fs, taus=taus)``'s, to rounding
+    (≤ 1e-9 relative, tested): see the module for how.
+
+    Parameters
+    ----------
+    taus : "octave" or "decade" — the τ grid (:data:`STREAMED_TAUS`).
+    history : int — phase values carried between chunks (a power of two ≥ 4); longer cluster
+        sizes are summed from the temporary phase file.
+    column : str — the column's name, for messages.
+    progress : callable, optional — called with the samples done so far (the reading pass, then
+        the pass over the phase file for the long cluster sizes: 2·N in all at most).
+    """
+
+    def __init__(
+        self,
+        *,
+        taus: str = "octave",
+        history: int = DEFAULT_HISTORY,
+        column: str = "data",
+        progress: Progress | None = None,
+    ) -> None:
+        if taus not in STREAMED_TAUS:
+            raise ConfigError(
+                f"taus must be 'octave' or 'decade' for a record read in chunks; got {taus!r} "
+                "(every τ, or the log grid, needs the whole record in memory)."
+            )
+        if history < 4 or history & (history - 1):
+            raise ConfigError(
+                f"history must be a power of two of at least 4 phase values; got {history!r}."
+            )
+        self.taus = taus
+        self.history = history
+        self.column = column
+        self.progress = progress
+        self._file = tempfile.TemporaryFile(prefix="rotacal-phase-")
+        self._carry = _PhaseCarry(_candidate_sizes(taus, history // 2), history, self._file)
+
+    def __enter__(self) -> ChunkedAdev:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Delete the temporary phase file."""
+        self._file.close()
+
+    @property
+    def n_samples(self) -> int:
+        """Rate samples fed so far."""
+        return self._carry.count - 1
+
+    def add(self, chunk: Any) -> None:
+        """Feed the next rate samples (1-D; NaN/inf and out-of-range values are refused, the
+        sample counted from the start of the record)."""
+        rate = np.asarray(chunk, dtype=np.float64)
+        if rate.ndim != 1:
+            raise CaptureError(
+                f"{self.column} must be one-dimensional; a chunk has shape {rate.shape}."
+            )
+        if not rate.size:
+            return
+        check_magnitudes(self.column, rate, what="rate data", offset=self.n_samples)
+        self._carry.add(rate)
+        if self.progress is not None:
+            self.progress(self.n_samples)
+
+    def result(
+        self, *, fs: float, confidence: float = ONE_SIGMA, noise_alpha: Any = 0
+    ) -> AllanDeviation:
+        """The deviation of everything fed (fs in Hz; ±1σ interval and white-FM edf by default).
+
+        Raises
+        ------
+        CaptureError — fewer than 10 phase points, a constant record.
+        ConfigError — a bad fs, confidence or α.
+        """
+        fs_hz = _check_fs(fs)
+        conf = _check_confidence(confidence)
+        carry = self._carry
+        n_phase = carry.count
+        n_samples = n_phase - 1
+        if n_phase < MIN_SAMPLES:
+            raise CaptureError(
+                f"the record holds {n_samples} rate samples; the Allan deviation needs at least "
+                f"{MIN_SAMPLES - 1}: supply a longer record."
+            )
+        if carry.low == carry.high:
+            raise CaptureError(
+                f"the rate record is constant ({carry.high!r} in all {n_samples} samples): the "
+                "sensor is stuck or saturated, or the column is a set value; supply the sensor "
+                "output."
+            )
+        ms, notes = _cluster_sizes(self.taus, n_phase, fs_hz)
+        sums = np.empty(ms.size)
+        self._file.flush()
+        short = 2 * ms <= self.history
+        index = {m: k for k, m in enumerate(carry.short_ms.tolist())}
+        sums[short] = carry.sums[[index[m] for m in ms[short].tolist()]]
+        if not short.all():
+            done = self.progress
+            report = None if done is None else (lambda i: done(n_samples + i))
+            sums[~short] = _long_sums(self._file, n_phase, ms[~short].tolist(), report)
+        sums /= fs_hz * fs_hz  # the phase was summed in rate × sample interval
+        return deviation_from_sums(
+            sums,
+            ms,
+            n_phase=n_phase,
+            n_samples=n_samples,
+            fs_hz=fs_hz,
+            data_type="rate",
+            confidence=conf,
+            alphas=_check_alpha(noise_alpha, ms.size),
+            notes=tuple(notes),
+            warnings=(),
+            n_direct=int(ms.size),
+        )
 
 
 def octave_adev_chunks(
@@ -160,53 +309,8 @@ def octave_adev_chunks(
     IEEE Std 952-1997, Annex C.
     """
     fs_hz = _check_fs(fs)
-    conf = _check_confidence(confidence)
-    if history < 4 or history & (history - 1):
-        raise ConfigError(
-            f"history must be a power of two of at least 4 phase values; got {history!r}."
-        )
-    with tempfile.TemporaryFile(prefix="rotacal-phase-") as phase_file:
-        carry = _PhaseCarry(fs_hz, history, phase_file)
+    _check_confidence(confidence)
+    with ChunkedAdev(taus="octave", history=history, column=column) as acc:
         for chunk in chunks:
-            rate = np.asarray(chunk, dtype=np.float64)
-            if rate.ndim != 1:
-                raise CaptureError(
-                    f"{column} must be one-dimensional; a chunk has shape {rate.shape}."
-                )
-            if not rate.size:
-                continue
-            check_magnitudes(column, rate, what="rate data", offset=carry.count - 1)
-            carry.add(rate)
-        n_phase = carry.count
-        n_samples = n_phase - 1
-        if n_phase < MIN_SAMPLES:
-            raise CaptureError(
-                f"the record holds {n_samples} rate samples; the Allan deviation needs at least "
-                f"{MIN_SAMPLES - 1}: supply a longer record."
-            )
-        if carry.low == carry.high:
-            raise CaptureError(
-                f"the rate record is constant ({carry.high!r} in all {n_samples} samples): the "
-                "sensor is stuck or saturated, or the column is a set value; supply the sensor "
-                "output."
-            )
-        ms, notes = _cluster_sizes("octave", n_phase, fs_hz)
-        sums = np.empty(ms.size)
-        phase_file.flush()
-        short = 2 * ms <= history
-        sums[short] = carry.sums[np.log2(ms[short]).astype(np.int64)]
-        if not short.all():
-            sums[~short] = _long_sums(phase_file, n_phase, ms[~short].tolist())
-    return deviation_from_sums(
-        sums,
-        ms,
-        n_phase=n_phase,
-        n_samples=n_samples,
-        fs_hz=fs_hz,
-        data_type="rate",
-        confidence=conf,
-        alphas=_check_alpha(noise_alpha, ms.size),
-        notes=tuple(notes),
-        warnings=(),
-        n_direct=int(ms.size),
-    )
+            acc.add(chunk)
+        return acc.result(fs=fs_hz, confidence=confidence, noise_alpha=noise_alpha)

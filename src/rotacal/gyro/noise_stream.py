@@ -1,0 +1,160 @@
+"""Noise terms of a gyro from a rate record read in chunks (bounded memory; IEEE Std 952 Annex C).
+
+:func:`gyro_noise_chunks` is :func:`rotacal.gyro.noise.gyro_noise` for a record too long to hold:
+it takes the chunks of the rate column (and of its time column) in order, checks each as the
+in-memory path checks the whole — NaN/inf and out-of-range samples, a constant record, time
+stamps that are not increasing, have a gap or are not at a constant rate, clipping (the rails
+found with carried state, :class:`~rotacal.signal.clipping.RailDetector`) — and feeds the rate to
+:class:`~rotacal.signal.allan_stream.ChunkedAdev`. The sampling rate of a time column is its mean
+step, known once the column has been read: the same number the in-memory path takes. The noise
+terms, their budgets and warnings come from the deviation as in memory
+(:func:`~rotacal.gyro.noise.noise_of_deviation`), so the result equals ``gyro_noise`` of the whole
+record at the same τ grid to ≤ 1e-9 relative (tested). The τ grid is octave or decade: every τ,
+or the log grid, needs the whole record.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+import numpy as np
+
+from rotacal.errors import CaptureError
+from rotacal.gyro.noise import GyroNoise, _check_fs_hz, _constant_rate, noise_of_deviation
+from rotacal.signal._checks import MAX_GAP, TYPICAL_STEPS, gap_error, order_error
+from rotacal.signal._values import check_time_span
+from rotacal.signal.allan_stream import DEFAULT_HISTORY, ChunkedAdev
+from rotacal.signal.clipping import RailDetector, check_clipping
+from rotacal.uncertainty.specs import InstrumentSpecs
+
+__all__ = ["gyro_noise_chunks"]
+
+
+class _TimeSteps:
+    """The checks of :func:`rotacal.signal.check_sampling` and the constant-rate test of the
+    in-memory path on a time column fed in chunks: order and gaps are refused as soon as seen
+    (sample numbers from the start), the span and the rate at the end."""
+
+    def __init__(self, name: str = "time_s") -> None:
+        self.name = name
+        self.count = 0
+        self.first = math.nan
+        self.last = math.nan
+        self.typical: float | None = None  # median of the first TYPICAL_STEPS steps
+        self.min_step = math.inf
+        self.max_step = -math.inf
+
+    def add(self, t: np.ndarray) -> None:
+        if not t.size:
+            return
+        joined = t if self.count == 0 else np.concatenate(([self.last], t))
+        base = self.count - (self.count > 0)  # sample number of joined[0]
+        steps = np.diff(joined)
+        if steps.size:
+            bad = np.flatnonzero(~(steps > 0))
+            if bad.size:
+                i = int(bad[0])
+                raise order_error(self.name, base + i + 1, float(joined[i]), float(joined[i + 1]))
+            if self.typical is None:
+                self.typical = float(np.median(steps[:TYPICAL_STEPS]))
+            gaps = np.flatnonzero(steps > MAX_GAP * self.typical)
+            if gaps.size:
+                i = int(gaps[0])
+                raise gap_error(self.name, base + i + 1, float(steps[i]), self.typical)
+            self.min_step = min(self.min_step, float(steps.min()))
+            self.max_step = max(self.max_step, float(steps.max()))
+        if self.count == 0:
+            self.first = float(t[0])
+        self.last = float(t[-1])
+        self.count += t.size
+
+    def rate(self, n: int, fs_hz: float | None) -> float:
+        """The sampling rate (Hz), as the in-memory path computes it."""
+        if self.count != n:
+            raise CaptureError(
+                f"{self.name} has {self.count} values, the rate column {n}; they must match."
+            )
+        if n < 2:
+            raise CaptureError(f"the record holds {n} sample(s): too short for an Allan deviation.")
+        assert self.typical is not None
+        check_time_span(self.name, self.first, self.last, self.typical)
+        return _constant_rate(self.first, self.last, n, self.min_step, self.max_step, fs_hz)
+
+
+def gyro_noise_chunks(
+    chunks: Iterable[Mapping[str, Any]],
+    *,
+    column: str = "rate_deg_s",
+    fs_hz: float | None = None,
+    unit: str = "deg/s",
+    taus: str = "octave",
+    specs: InstrumentSpecs | None = None,
+    allow_clipped: bool = False,
+    history: int = DEFAULT_HISTORY,
+    progress: Callable[[int], None] | None = None,
+) -> GyroNoise:
+    """Overlapping Allan deviation and IEEE 952 noise terms of a rate record read in chunks.
+
+    Parameters
+    ----------
+    chunks : iterable of mappings
+        Consecutive row ranges of the capture: ``column`` (rate, in ``unit``) and, unless
+        ``fs_hz`` is given, ``time_s`` (s), of equal lengths (e.g. from
+        :func:`rotacal.io.iter_capture_chunks`).
+    column : str
+        The rate column's name (also for messages).
+    fs_hz : float, Hz, optional
+        Sampling rate; when a ``time_s`` column comes too, it must agree (0.1 %).
+    unit, specs, allow_clipped
+        As :func:`rotacal.gyro.noise.gyro_noise`.
+    taus : "octave" or "decade"
+        The τ grid (every τ and the log grid need the whole record).
+    history : int
+        Phase values carried between chunks (see :class:`~rotacal.signal.allan_stream.ChunkedAdev`).
+    progress : callable, optional
+        Called with the samples done so far (2·N in all: the reading pass, then the long τ).
+
+    Returns
+    -------
+    GyroNoise
+        As ``gyro_noise(whole, taus=taus)`` to ≤ 1e-9 relative.
+
+    Raises
+    ------
+    CaptureError, ConfigError
+        As :func:`rotacal.gyro.noise.gyro_noise` (the same checks, the same messages).
+
+    References
+    ----------
+    IEEE Std 952-1997, Annex C; NIST SP 1065 (Riley 2008), eq. (11) and §5.3.
+    """
+    _check_fs_hz(fs_hz)
+    times: _TimeSteps | None = None
+    rails = RailDetector(column)
+    with ChunkedAdev(taus=taus, history=history, column=column, progress=progress) as acc:
+        for chunk in chunks:
+            rate = np.asarray(chunk[column], dtype=np.float64)
+            t = chunk.get("time_s")
+            if times is None and t is not None:
+                times = _TimeSteps()
+            if times is not None:
+                if t is None or np.shape(t) != rate.shape:
+                    raise CaptureError(
+                        f"time_s and {column} must come in chunks of equal lengths; got "
+                        f"{None if t is None else np.shape(t)} and {rate.shape}."
+                    )
+                times.add(np.asarray(t, dtype=np.float64))
+            acc.add(rate)
+            rails.add(rate)
+        n = acc.n_samples
+        if times is not None:
+            fs = times.rate(n, fs_hz)
+        elif fs_hz is None:
+            raise CaptureError("give the sampling rate (fs_hz, --fs-hz) or a time_s column.")
+        else:
+            fs = float(fs_hz)
+        adev = acc.result(fs=fs)
+    clipped = check_clipping({column: rails.result()}, allow_clipped=allow_clipped)
+    return noise_of_deviation(adev, unit=unit, column=column, specs=specs, warnings=clipped)
