@@ -104,6 +104,35 @@ def bound_by_permissions() -> Callable[..., Any]:
     return run
 
 
+@pytest.fixture
+def unrendered_figures(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Reports made in the test are written with every figure a one-pixel PNG.
+
+    For tests of where outputs go and what the JSON says, not of what a report shows: drawing a
+    figure (matplotlib's layout pass and raster pass) is ~0.1–0.4 s, most of a report's cost.
+    The figures themselves are checked by the tests that look at them (tests/report renders every
+    command's report in a browser; tests/gyro/test_report_wording.py reads them); everything else
+    of the report — its sections, tables, the PNG's palette step, the file written — still runs.
+    """
+    import io
+
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    pixel = io.BytesIO()
+    Image.new("RGB", (1, 1), "white").save(pixel, format="PNG")
+
+    drawn = Figure.savefig
+
+    def savefig(self: Figure, fname: Any, *args: Any, **kwargs: Any) -> None:
+        if kwargs.get("format") != "png":  # the certificate's SVG figures are drawn as ever
+            return drawn(self, fname, *args, **kwargs)
+        fname.write(pixel.getvalue())
+        return None
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+
+
 @pytest.fixture(scope="session")
 def demo_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any]:
     """``rotacal demo`` run once per test session (it takes about a minute): its folder and the
