@@ -20,7 +20,7 @@ os.environ["ROTACAL_DATA_DIR"] = tempfile.mkdtemp(prefix="rotacal-test-state-")
 atexit.register(shutil.rmtree, os.environ["ROTACAL_DATA_DIR"], ignore_errors=True)
 os.environ.pop("ROTACAL_DB", None)
 
-from collections.abc import Callable  # noqa: E402
+from collections.abc import Callable, Iterator  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -102,6 +102,48 @@ def bound_by_permissions() -> Callable[..., Any]:
         return child(argv)
 
     return run
+
+
+def _one_pixel_figures(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Make every PNG figure that ``rotacal.report`` saves a one-pixel image (what
+    ``unrendered_figures`` does)."""
+    import io
+
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    pixel = io.BytesIO()
+    Image.new("RGB", (1, 1), "white").save(pixel, format="PNG")
+    drawn = Figure.savefig
+
+    def savefig(self: Figure, fname: Any, *args: Any, **kwargs: Any) -> None:
+        if kwargs.get("format") != "png":  # the certificate's SVG figures are drawn as ever
+            return drawn(self, fname, *args, **kwargs)
+        fname.write(pixel.getvalue())
+        return None
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+
+
+@pytest.fixture
+def unrendered_figures(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Reports made in the test are written with every figure a one-pixel PNG.
+
+    For tests of where outputs go and what a report's text says, not of what its figures show:
+    drawing a figure (matplotlib's layout pass and raster pass) takes 0.1–0.4 s, most of a
+    report's cost. The figures themselves are checked by the tests that look at them
+    (tests/report renders every command's report in a browser); everything else of the report —
+    its text, tables, captions, the PNG's palette step, the file written — still runs.
+    """
+    _one_pixel_figures(monkeypatch)
+
+
+@pytest.fixture(scope="module")
+def unrendered_figures_in_module() -> Iterator[None]:
+    """``unrendered_figures`` for the module-scoped fixtures of one module."""
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        _one_pixel_figures(monkeypatch)
+        yield
 
 
 @pytest.fixture(scope="session")

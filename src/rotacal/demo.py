@@ -589,9 +589,8 @@ def _scenario_page(
     )
     primary_section = motion_section(results[0], f"By {_LONG_NAMES[primary]}")
     fog_section = motion_section(results[1], f"By {_LONG_NAMES['fog']}", figures=False)
-    fog_section.figures = [
-        f for f in motion_figures(results[1]) if "position" not in f.title.lower()
-    ]
+    # the position error is the primary scheme's figure
+    fog_section.figures = motion_figures(results[1], position_error=False)
     sections = [
         intro,
         primary_section,

@@ -149,9 +149,12 @@ def _analysis_argv(path: tuple[str, ...], captures: dict[str, Path]) -> list[str
     ],
     ids=" ".join,
 )
-def test_analysis_wrote_lines_overwrite_and_identical_json(captures, tmp_path, path):
+def test_analysis_wrote_lines_overwrite_and_identical_json(
+    captures, tmp_path, path, unrendered_figures
+):
     """One ``wrote`` line per file; a second run refuses to replace them without --overwrite
-    (before any work, leaving them as they were); with it, the JSON comes out byte-identical."""
+    (before any work, leaving them as they were); with it, the JSON comes out byte-identical.
+    (The reports' figures are one pixel here: tests/report draws and looks at them.)"""
     argv = _analysis_argv(path, captures)
     out_json, out_html = tmp_path / "r.json", tmp_path / "r.html"
     first = run(*argv, "--json", str(out_json), "--report", str(out_html))
@@ -276,7 +279,7 @@ def test_swapped_json_and_report_are_refused_naming_both(tmp_path, path):
     one_line_error(r, f"--json {json_name}", f"--report {report_name}", "swapped")
 
 
-def test_extensions_are_case_blind_and_htm_is_html(captures, tmp_path):
+def test_extensions_are_case_blind_and_htm_is_html(captures, tmp_path, unrendered_figures):
     argv = _analysis_argv(("gyro", "scale-factor"), captures)
     r = run(*argv, "--json", str(tmp_path / "R.JSON"), "--report", str(tmp_path / "r.htm"))
     assert r.exit_code == 0, r.output

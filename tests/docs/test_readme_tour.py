@@ -135,10 +135,15 @@ def test_the_tour_covers_every_analysis_and_writes_nothing_twice() -> None:
     ["rest", pytest.param("turntable", marks=pytest.mark.xdist_group("demo"))],
 )
 def test_the_readme_tour_runs_line_by_line(
-    part: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    part: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    unrendered_figures: None,
 ) -> None:
     """Each part in an empty folder of its own: the turntable's part reads only what it makes,
-    and the rest runs in order without it."""
+    and the rest runs in order without it. (The reports' figures are one pixel here, as in the
+    tutorials' test: tests/report draws and looks at every command's figures.)"""
     commands, snippets = tour(part)
     assert commands
     monkeypatch.chdir(tmp_path)

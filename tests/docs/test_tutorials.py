@@ -93,9 +93,13 @@ def test_every_calibration_has_a_tutorial_with_checked_numbers() -> None:
     ],
     ids=lambda page: page.stem,
 )
-def test_page_runs_and_states_what_rotacal_gives(page: Path, tmp_path: Path, shared_data) -> None:
+def test_page_runs_and_states_what_rotacal_gives(
+    page: Path, tmp_path: Path, shared_data, unrendered_figures
+) -> None:
     """The page's sections in order, in one folder (a later section reads what an earlier one
-    wrote); the sections on real recordings come last, and skip when the recordings are absent."""
+    wrote); the sections on real recordings come last, and skip when the recordings are absent.
+    The reports' figures are one pixel here (tests/conftest.py): every command's figures are
+    drawn and looked at in tests/report; this test checks that the commands run and the numbers."""
     for _title, text in sections(page):
         for folder in sorted(set(_SHARED.findall(text))):
             shared_data(folder)  # skips, saying why, when the recordings are absent

@@ -30,6 +30,16 @@ from rotacal.uncertainty import load_specs
 from rotacal.uncertainty.specs import TYPE_A_ONLY_NOTE
 
 RUNS = 40  # twin repeats per honesty check
+#: Monte Carlo trials of each calibration in the honesty and coverage runs (the single-run checks
+#: keep 20 000 or the default). Why 5 000 still catches a defect: the checks compare the spread of
+#: RUNS or COVERAGE_RUNS estimates with u, or count misses of the 95 % interval, and what they
+#: must catch is u off by ~30 % or a missing budget term. The trials only set the Monte Carlo
+#: noise of each run's u(NL) and interval: a standard deviation from N draws has a relative
+#: standard error of 1/√(2N) = 1.0 % at N = 5 000, the 2.5 % and 97.5 % quantiles one of about
+#: 0.04 σ (√(p(1 − p)/N)/φ(z_p)), i.e. 2 % of U, and both are averaged again over the runs — far
+#: below the χ² bounds of s/σ for 40 runs ([0.6, 1.5] at 99.9 %) and the binomial bounds of the
+#: misses. Each calibration takes a third of the time it took with 20 000 trials.
+HONESTY_MC_TRIALS = 5_000
 
 
 def _bounds(n: int, p: float = 0.999) -> tuple[float, float]:
@@ -179,9 +189,14 @@ def test_a_dominant_rectangular_rate_error_takes_the_monte_carlo_interval() -> N
 def test_a_stated_mean_rate_error_corrects_s() -> None:
     eps = 4e-4
     cap = simulate_gyro_rates(rate_relative_error=eps, samples_per_point=500, seed=2)
-    plain = calibrate_scale_factor(cap.columns["rate_deg_s"], cap.columns["output"])
+    # 20 000 trials: the checks below read S, its u (GUM) and the plain NL, not the MC's tails
+    plain = calibrate_scale_factor(
+        cap.columns["rate_deg_s"], cap.columns["output"], mc_trials=20_000
+    )
     specs = _specs(table__set_rate_relative={"distribution": "normal", "value": eps, "u": 1e-6})
-    r = calibrate_scale_factor(cap.columns["rate_deg_s"], cap.columns["output"], specs=specs)
+    r = calibrate_scale_factor(
+        cap.columns["rate_deg_s"], cap.columns["output"], specs=specs, mc_trials=20_000
+    )
     truth = cap.truth["ls_scale_factor"]
     assert abs(plain.scale_factor / truth - 1 - eps) < 5 * plain.scale_factor_u / truth
     assert abs(r.scale_factor / truth - 1) < 5 * r.scale_factor_u / truth
@@ -417,7 +432,10 @@ def _sf_runs(specs=None, half_width: float = 0.0, **twin) -> dict[str, np.ndarra
         eps = float(rng.uniform(-half_width, half_width)) if half_width else 0.0
         cap = simulate_gyro_rates(seed=seed, rate_relative_error=eps, **twin)
         r = calibrate_scale_factor(
-            cap.columns["rate_deg_s"], cap.columns["output"], specs=specs, mc_trials=20_000
+            cap.columns["rate_deg_s"],
+            cap.columns["output"],
+            specs=specs,
+            mc_trials=HONESTY_MC_TRIALS,
         )
         out["eS"].append(r.scale_factor - cap.truth["ls_scale_factor"])
         out["uS"].append(r.scale_factor_u)
@@ -503,7 +521,7 @@ def test_nonlinearity_interval_covers_the_true_nl(case: str, nonlinearity) -> No
     for seed in range(n):
         cap = simulate_gyro_rates(seed=seed, nonlinearity=nonlinearity, samples_per_point=50)
         r = calibrate_scale_factor(
-            cap.columns["rate_deg_s"], cap.columns["output"], mc_trials=20_000
+            cap.columns["rate_deg_s"], cap.columns["output"], mc_trials=HONESTY_MC_TRIALS
         )
         b = r._budgets["nonlinearity_percent_fs"]
         lo, hi = b.interval

@@ -40,8 +40,9 @@ def _summary_rows(path: Path) -> list[str]:
 
 
 @pytest.fixture(scope="module")
-def reports(tmp_path_factory) -> dict[str, Path]:
-    """Every report of this part, each from a twin capture through the command line."""
+def reports(tmp_path_factory, unrendered_figures_in_module) -> dict[str, Path]:
+    """Every report of this part, each from a twin capture through the command line (its
+    figures one pixel each: these tests read the text; tests/report looks at the figures)."""
     d = tmp_path_factory.mktemp("reports")
     out = {
         name: d / f"{name}.html"

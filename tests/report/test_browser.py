@@ -107,6 +107,7 @@ def test_every_commands_report_reads_in_a_browser(browser, cli_reports) -> None:
             raise AssertionError(f"{command}: {exc}") from None
 
 
+@pytest.mark.xdist_group("demo")  # the demo worker's browser: one chromium per session
 def test_the_checks_catch_a_page_that_breaks_them(browser, tmp_path) -> None:
     """The browser checks can fail: a wide table outside a scroller, a missing image, a fetch."""
     from rotacal.report.html import Report, Section, Table, render_html

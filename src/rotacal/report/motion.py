@@ -225,15 +225,17 @@ def _position_error_figure(r: MotionResult) -> Figure | None:
     )
 
 
-def motion_figures(r: MotionResult) -> list[Figure]:
-    """Every figure of one motion calibration, in reading order."""
+def motion_figures(r: MotionResult, *, position_error: bool = True) -> list[Figure]:
+    """Every figure of one motion calibration, in reading order; ``position_error=False`` leaves
+    out the angular position error (a page that shows it for another scheme of the same run need
+    not draw it twice: each figure costs a few tenths of a second)."""
     figs = [
         _motion_figure(r),
         _zoom_figure(r),
         _residual_figure(r),
         _spectrum_figure(r),
         _lissajous_figure(r),
-        _position_error_figure(r),
+        _position_error_figure(r) if position_error else None,
     ]
     return [f for f in figs if f is not None]
 
