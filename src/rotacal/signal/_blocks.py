@@ -21,6 +21,7 @@ import numpy as np
 
 from rotacal._jit import use_numba
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.signal._blocks_sums import SUM_ROWS, block_sums
 from rotacal.signal._checks import (
     as_pair,
     check_finite,
@@ -36,27 +37,15 @@ from rotacal.signal._normal import solve_normal
 from rotacal.signal._residual import residual_sums
 from rotacal.signal._result import SineFit, build_drift_check, build_sine_fit
 
-_X_PLAN = 0.25  # planned largest in-block phase (rad) of harmonic 2H at 1.25·f
+_X_PLAN = 0.5  # planned largest in-block phase (rad) of harmonic 2H at 1.25·f (≤ 16 terms)
 _F_MARGIN = 1.25
 _MAX_BLOCK = 4096
-_MIN_BLOCK = 8
-_TRUNC = 1e-17
+_MIN_BLOCK = 4
 _SUB_BLOCKS = 256
 _SUB_SAMPLES = 1 << 16
-_SUM_ROWS = 8192
 # The residual from the normal equations, yᵀy − bᵀp, loses its digits when it is this small a
 # part of yᵀy; below it a fit that still has the samples sums the residual itself.
 _RSS_ROUNDING = 1e-9
-
-
-def taylor_terms(x: float, limit: int) -> int:
-    """Smallest L with x^L/L! ≤ 1e-17 (the exponential series cut after L terms), or limit+1."""
-    term = 1.0
-    for ell in range(1, limit + 1):
-        term *= x / ell
-        if term <= _TRUNC:
-            return ell
-    return limit + 1
 
 
 def _unit_powers(e1: np.ndarray, kmax: int) -> np.ndarray:
@@ -352,19 +341,17 @@ class HarmonicFitAccumulator:
         return estimate_frequency_unchecked(tm, ym)
 
     def _sums_fn(self, nh: int, t_ref: float) -> Any:
-        a, b, c = self._merge()
         kmax_s = 2 * nh
-
         if self._explicit:
-            tt, yy = a, b
+            tt, yy, _ = self._merge()
 
             def sums_explicit(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
                 np_ = 3 if deriv else 1
                 s = np.zeros((np_, kmax_s + 1), dtype=np.complex128)
                 yv = np.zeros((2 if deriv else 1, nh + 1), dtype=np.complex128)
-                for r in range(0, tt.size, _SUM_ROWS):
-                    d = tt[r : r + _SUM_ROWS] - t_ref
-                    ycs = yy[r : r + _SUM_ROWS]
+                for r in range(0, tt.size, SUM_ROWS):
+                    d = tt[r : r + SUM_ROWS] - t_ref
+                    ycs = yy[r : r + SUM_ROWS]
                     e = _unit_powers(np.exp(1j * omega * d), kmax_s)
                     s[0] += e.sum(axis=0)
                     yv[0] += ycs @ e[:, : nh + 1]
@@ -376,51 +363,15 @@ class HarmonicFitAccumulator:
                 return s, yv
 
             return sums_explicit
-
-        j, p, q = a, b, c
-        half = 0.5 * self._tb
-        dvec = (self._tg - t_ref) + (j + 0.5) * self._tb
-        kmax_y = nh
-
-        def sums_blocks(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
-            x = kmax_s * abs(omega) * half
-            nterm = taylor_terms(x, self._k)
-            if nterm > self._k:
-                f = abs(omega) / (2.0 * math.pi)
-                raise CaptureError(
-                    f"harmonic {kmax_s} of {f:.6g} Hz turns by {x:.3g} rad within one block of "
-                    f"{self._m} samples, too much for the {self._k} stored moments; create the "
-                    f"HarmonicFitAccumulator with frequency_hz≈{f:.6g} and harmonics={nh}."
-                )
-            ks = np.arange(kmax_s + 1)
-            ell = np.arange(nterm)
-            fact = np.array([math.factorial(int(i)) for i in ell], dtype=np.float64)
-            cm = (1j * omega * half * ks[:, None]) ** ell[None, :] / fact[None, :]
-            np_ = 3 if deriv else 1
-            ny = 2 if deriv else 1
-            s = np.zeros((np_, kmax_s + 1), dtype=np.complex128)
-            yv = np.zeros((ny, kmax_y + 1), dtype=np.complex128)
-            cmt = cm.T
-            cmy = cm[: kmax_y + 1].T
-            for r in range(0, j.size, _SUM_ROWS):
-                d = dvec[r : r + _SUM_ROWS]
-                e = np.exp(1j * np.outer(omega * d, ks))
-                pr = p[r : r + _SUM_ROWS]
-                qr = q[r : r + _SUM_ROWS]
-                f0 = e * (pr[:, :nterm] @ cmt)
-                s[0] += f0.sum(axis=0)
-                g0 = e[:, : kmax_y + 1] * (qr[:, :nterm] @ cmy)
-                yv[0] += g0.sum(axis=0)
-                if deriv:
-                    f1 = e * (pr[:, 1 : 1 + nterm] @ cmt)
-                    f2 = e * (pr[:, 2 : 2 + nterm] @ cmt)
-                    s[1] += d @ f0 + half * f1.sum(axis=0)
-                    s[2] += (d * d) @ f0 + 2.0 * half * (d @ f1) + half * half * f2.sum(axis=0)
-                    g1 = e[:, : kmax_y + 1] * (qr[:, 1 : 1 + nterm] @ cmy)
-                    yv[1] += d @ g0 + half * g1.sum(axis=0)
-            return s, yv
-
-        return sums_blocks
+        return block_sums(
+            self._merge(),
+            self._cumv[self._m],
+            self._tg - t_ref,
+            self._tb,
+            nh,
+            self._k,
+            self._m,
+        )
 
     def fit(
         self,
