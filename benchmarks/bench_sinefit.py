@@ -82,7 +82,6 @@ def run(args: argparse.Namespace, periods: float) -> None:
     t, y, amps = make_signal(args.samples, f_hz, rng)
     n = t.size
     print(f"signal: {n:.3g} samples, {f_hz * n / FS_HZ:.1f} periods, {H} harmonics, noise {NOISE}")
-    fit_harmonics(t[:100_000], y[:100_000], harmonics=H)  # warm-up (imports, Numba's cache)
 
     t_fit, fit = best_of(lambda: fit_harmonics(t, y, harmonics=H, refine_frequency=True))
     print(
