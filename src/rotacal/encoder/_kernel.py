@@ -19,14 +19,8 @@ import math
 import numpy as np
 
 from rotacal._jit import use_numba
-from rotacal.encoder.quadrature import (
-    PhaseState,
-    QuadratureCorrection,
-    check_correction,
-    correct_quadrature,
-    subinterval_transitions,
-    unwrapped_phase,
-)
+from rotacal.encoder.heydemann import QuadratureCorrection, check_correction, correct_quadrature
+from rotacal.encoder.phase import PhaseState, subinterval_transitions, unwrapped_phase
 
 #: Samples per block: the block's signals and phase stay in the CPU cache between the steps.
 BLOCK = 1 << 15
