@@ -115,12 +115,74 @@ def reversal_time_u_argmax(
     rng = np.random.default_rng(seed)
     phi0 = rng.uniform(0.0, 2.0 * math.pi, draws)
     s_eff = sigma / np.maximum(np.abs(np.sin(phi0)), np.abs(np.cos(phi0)))
+    return argmax_error_rms(s_eff, kappa, dt, rng)
+
+
+def reversal_time_u_argmax_tabulated(
+    noise_deg: float, curvature_deg_s2: float, sample_interval_s: float
+) -> float:
+    """:func:`reversal_time_u_argmax` from its tabulated Monte Carlo, in microseconds.
+
+    ``u/dt`` depends on ``g = σ/(κ·dt²)`` only (:mod:`rotacal.table._argmax_table`, where the
+    Monte Carlo of :func:`argmax_error_rms` was run once with 40,000 draws a point); the mixture
+    over the signal's phase at the reversal is a Gauss–Legendre average. Beyond the table's
+    largest g (10⁷: a noise ten million times the parabola's drop over one sample) the Monte
+    Carlo of :func:`reversal_time_u_argmax` runs instead.
+
+    Parameters
+    ----------
+    noise_deg : float
+        σ of the demodulated angle's noise (deg).
+    curvature_deg_s2 : float
+        |θ''| at the reversal (deg/s²), > 0.
+    sample_interval_s : float
+        dt (s), > 0.
+
+    Returns
+    -------
+    float
+        u(t_rev) (s).
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.2, eqs. (7)–(8); JCGM 101:2008 §7.
+    """
+    from rotacal.table import _argmax_table
+
+    dt = float(sample_interval_s)
+    kappa = float(curvature_deg_s2)
+    sigma = float(noise_deg)
+    if not (dt > 0 and kappa > 0 and sigma >= 0):
+        raise ConfigError(
+            "reversal_time_u_argmax_tabulated needs dt > 0, curvature > 0 and noise ≥ 0; got "
+            f"{dt!r}, {kappa!r}, {sigma!r}."
+        )
+    g = sigma / (kappa * dt * dt)
+    if not _argmax_table.in_range(g * math.sqrt(2.0)):
+        return reversal_time_u_argmax(sigma, kappa, dt)
+    return dt * _argmax_table.u_over_dt(g)
+
+
+def argmax_error_rms(
+    s_eff: np.ndarray,
+    kappa: float,
+    dt: float,
+    rng: np.random.Generator,
+    *,
+    max_work: int = 4_000_000,
+) -> float:
+    """rms error (s) of the arg max of ``−κτ²/2 + s_eff[i]·z`` on the sampling grid, one draw per
+    entry of ``s_eff`` (the noise σ/|s′| of each draw, deg), the grid's offset uniform.
+
+    The Monte Carlo of :func:`reversal_time_u_argmax` (JCGM 101 §7), also used to tabulate it
+    (:mod:`rotacal.table._argmax_table`). At most ``max_work`` normal draws (fewer draws for very
+    wide windows, at least 100).
+    """
     # beyond a drop of 10 σ_eff the parabola's samples never win the arg max
     half = math.sqrt(2.0 * 10.0 * float(s_eff.max()) / kappa) + 2.0 * dt
     k = np.arange(-math.ceil(half / dt), math.ceil(half / dt) + 1, dtype=float)
-    # bounded work: at most ~4·10⁶ samples (fewer draws for very wide windows, ≥ 100)
-    draws = min(draws, max(100, 4_000_000 // k.size))
-    phi0, s_eff = phi0[:draws], s_eff[:draws]
+    draws = min(s_eff.size, max(100, max_work // k.size))
+    s_eff = s_eff[:draws]
     offset = rng.uniform(-0.5, 0.5, draws)
     block = max(1, 2_000_000 // k.size)
     sq = 0.0
@@ -272,10 +334,10 @@ def _reversal_budget(
             k_med = float(np.median(kappa)) if kappa.size else 0.0
             if not k_med > 0:
                 k_med = float(fit.amplitudes[0]) * (2 * math.pi * fit.frequency_hz) ** 2
-            u_r = np.array([reversal_time_u_argmax(s, k_med, dt, seed=fit.n_samples % 2**31)])
+            u_r = np.array([reversal_time_u_argmax_tabulated(s, k_med, dt)])
             how = (
-                f"extreme sample of eqs. (7)–(8) (Monte Carlo of that estimator, "
-                f"{REVERSAL_DRAWS} draws), angle noise s = {s:.3g} °, sampled every {dt:.3g} s"
+                "extreme sample of eqs. (7)–(8) (Monte Carlo of that estimator, tabulated over "
+                f"σ/(κ·dt²)), angle noise s = {s:.3g} °, sampled every {dt:.3g} s"
             )
     u_r = u_r[np.isfinite(u_r)]
     u_det = float(np.sqrt(np.mean(u_r**2))) if u_r.size else 0.0

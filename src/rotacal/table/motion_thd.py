@@ -25,10 +25,14 @@ from rotacal.uncertainty import (
     propagate,
 )
 
-#: Monte Carlo draws of the THD (belt and spread; ~30 ms). Each tail probability of the belt is
-#: then known to √(α(1−α)/M) ≈ 7·10⁻⁴ (coverage 95 ± 0.1 %); the standard error of U that
+#: Most Monte Carlo draws of the THD (belt and spread; ~30 ms). Each tail probability of the belt
+#: is then known to √(α(1−α)/M) ≈ 7·10⁻⁴ (coverage 95 ± 0.1 %); the standard error of U that
 #: follows is stated in the budget (typically well under 1 % of U).
 THD_TRIALS = 50_000
+#: Draws of the first run of the adaptive choice of M (JCGM 101 §7.9): enough when U's Monte Carlo
+#: standard error is within the numerical tolerance of its two significant digits.
+THD_FIRST_TRIALS = 10_000
+_TRIALS_STEP = 10_000
 #: Seed of the THD Monte Carlo (the same capture always gives the same budget).
 THD_SEED = 4876
 
@@ -132,15 +136,28 @@ class _ThdDraws:
         return t
 
 
-@functools.lru_cache(maxsize=4)
 def _thd_normals(trials: int, nh: int, seed: int) -> tuple[np.ndarray, ...]:
-    """The standard normal draws of :class:`_ThdDraws` (z₁, z₁² + z₂², z_a, z_b): one seed, so the
-    same for every capture with ``nh`` harmonics above the fundamental — drawn once and kept,
-    read-only, instead of again in every calibration (a tenth of a motion calibration's time)."""
-    rng = np.random.default_rng(seed)
-    z1 = rng.standard_normal((trials, nh))
-    z2 = rng.standard_normal((trials, nh))
-    za, zb = rng.standard_normal((2, trials))
+    """The standard normal draws of :class:`_ThdDraws` (z₁, z₁² + z₂², z_a, z_b), in batches of
+    10,000 from one seed each (:func:`_thd_batch`): the adaptive choice of M draws only the
+    batches it adds, and every capture with ``nh`` harmonics above the fundamental reads the same
+    draws."""
+    step = _TRIALS_STEP
+    parts = [
+        _thd_batch(i, min(step, trials - i * step), nh, seed) for i in range(-(-trials // step))
+    ]
+    if len(parts) == 1:
+        return parts[0]
+    return tuple(np.concatenate([part[j] for part in parts]) for j in range(4))
+
+
+@functools.lru_cache(maxsize=8)
+def _thd_batch(index: int, size: int, nh: int, seed: int) -> tuple[np.ndarray, ...]:
+    """Batch ``index`` of :func:`_thd_normals`, drawn once and kept, read-only, instead of again
+    in every calibration (a tenth of a motion calibration's time)."""
+    rng = np.random.default_rng([seed, index])
+    z1 = rng.standard_normal((size, nh))
+    z2 = rng.standard_normal((size, nh))
+    za, zb = rng.standard_normal((2, size))
     drawn = (z1, z1 * z1 + z2 * z2, za, zb)
     for z in drawn:
         z.flags.writeable = False
@@ -246,7 +263,7 @@ def thd_uncertainty(
     dof: float = math.inf,
     unit: str = _DEG,
     p: float = _P,
-    trials: int = THD_TRIALS,
+    trials: int | None = None,
     seed: int = THD_SEED,
 ) -> ThdUncertainty:
     """THD (eq. (1)) with its standard uncertainty, bias, bias-corrected value and the 95 %
@@ -278,7 +295,10 @@ def thd_uncertainty(
     dof : float — ν of the u_h (N − p of the fit; the first-order rows only).
     unit : str — unit of the amplitudes (budget text).
     p : float — coverage probability.
-    trials : int — Monte Carlo draws M.
+    trials : int, optional — Monte Carlo draws M. Default: chosen by the precision the budget
+        needs (JCGM 101 §7.9): M = 10,000 first; when twice the Monte Carlo standard error of U
+        exceeds the numerical tolerance of U's two significant digits, M is raised (in steps of
+        10,000) to what that error predicts, at most :data:`THD_TRIALS`.
     seed : int — seed of the draws (the same capture always gives the same budget).
 
     Returns
@@ -299,8 +319,11 @@ def thd_uncertainty(
         raise ConfigError("amplitudes and amplitudes_u must be 1-D arrays of the same length.")
     if not a[0] > 0 or np.any(a < 0) or np.any(u < 0) or not np.all(np.isfinite(a + u)):
         raise ConfigError("amplitudes must be finite with A_1 > 0, their u finite and ≥ 0.")
-    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1000:
+    if trials is not None and (
+        isinstance(trials, bool) or not isinstance(trials, int) or trials < 1000
+    ):
         raise ConfigError(f"trials must be an integer ≥ 1000, got {trials!r}.")
+    adaptive = trials is None
     nh = a.size
     tail = 0.5 * (1.0 - p)
     root = math.sqrt(float(a[1:] @ a[1:]))
@@ -309,16 +332,27 @@ def thd_uncertainty(
     uh = u[1:]
     noise_free = nh < 2 or not (float(uh @ uh) > 0 or u[0] > 0)
     if noise_free:
+        trials = 0 if trials is None else trials
         lo = hi = plain
         u_thd, mc_mean, u_mc = 0.0, plain, 0.0
     else:
-        draws = _ThdDraws(a, u, _power_split(a[1:], uh), trials, seed)
+        weights = _power_split(a[1:], uh)
+        p_star = 4.0 * math.sqrt(float(np.sum(uh**4)))  # 2 standard deviations of T at P = 0
+        scale = max(100.0 * (math.sqrt(2.0 * float(uh @ uh)) + plain * u[0]) / float(a[0]), 1e-300)
+        m = THD_FIRST_TRIALS if trials is None else trials
+        while True:
+            draws = _ThdDraws(a, u, weights, m, seed)
+            lo, hi, u_mc = _thd_interval(draws, plain, p, p_star, scale)
+            delta = numerical_tolerance(0.5 * (hi - lo), 2)
+            if trials is not None or m >= THD_TRIALS or not 2.0 * u_mc > delta > 0:
+                break
+            # the standard error falls as 1/√M: the M that brings 2·u_mc within δ
+            need = m * (2.0 * u_mc / delta) ** 2
+            m = min(THD_TRIALS, _TRIALS_STEP * math.ceil(need / _TRIALS_STEP))
+        trials = m
         at_corrected = draws.plain(corrected)
         mc_mean = float(np.mean(at_corrected))
         u_thd = float(np.std(at_corrected, ddof=1))
-        p_star = 4.0 * math.sqrt(float(np.sum(uh**4)))  # 2 standard deviations of T at P = 0
-        scale = 100.0 * (math.sqrt(2.0 * float(uh @ uh)) + plain * u[0]) / float(a[0])
-        lo, hi, u_mc = _thd_interval(draws, plain, p, p_star, max(scale, 1e-300))
     big_u = 0.5 * (hi - lo)
     k = big_u / u_thd if u_thd > 0 else float(stats.norm.isf(tail))
     bias = mc_mean - corrected
@@ -341,8 +375,11 @@ def thd_uncertainty(
     side = "two-sided"
     if lo == 0:
         side = "one-sided: the measured harmonic power is consistent with noise"
+    how_many = f"M = {trials}" + (
+        " (chosen so that U holds 2 significant digits, §7.9)" if adaptive else ""
+    )
     notes = [
-        f"Monte Carlo (JCGM 101), M = {trials} draws of every harmonic's in-phase and quadrature "
+        f"Monte Carlo (JCGM 101), {how_many} draws of every harmonic's in-phase and quadrature "
         "components from N(A_h, u_h²) (the fit's white-noise covariance), A_h at the "
         f"bias-corrected THD {corrected:.4g} % (noise power 2Σu_h² subtracted; split over the "
         "harmonics as detected, the undetected part on the noisiest): u is the standard deviation of the plain THD of eq. (1), "

@@ -39,7 +39,8 @@ value and u, and a note says so.
   consistent with noise — with U its half-width and k = U/u (:func:`thd_uncertainty`).
 * Reversing moments: the estimator's noise over the motion's curvature κ = |θ''| at the extremes
   (OSE: arg max of a noisy sampled parabola — the Chp of eqs. (7)–(8) —, evaluated by a Monte
-  Carlo of that estimator; LTS: vertex of the least-squares parabola over ±T/20,
+  Carlo of that estimator, run once and tabulated over σ/(κ·dt²); LTS: vertex of the
+  least-squares parabola over ±T/20,
   ``u = s·√3/(κ·W·√n)``, plus that parabola's own error on extremes made asymmetric by the
   harmonics (the estimator applied to the fitted motion); FOG: zero crossing of the fitted rate,
   ``u² = s²(1 + 2H)/(N·κ²) + (τ·u(f)/f)²``), and the timebase: ``t = t₀ + (t_stamp − t₀)/(1 + e)``,
@@ -95,6 +96,7 @@ from rotacal.table.motion_reversal_u import (  # noqa: F401  (re-exported)
     _reversal_budget,
     parabola_vertex_bias,
     reversal_time_u_argmax,
+    reversal_time_u_argmax_tabulated,
     reversal_time_u_parabola,
     reversal_time_u_rate_zero,
 )
@@ -125,6 +127,7 @@ __all__ = [
     "motion_budgets",
     "parabola_vertex_bias",
     "reversal_time_u_argmax",
+    "reversal_time_u_argmax_tabulated",
     "reversal_time_u_parabola",
     "reversal_time_u_rate_zero",
     "thd_bias_corrected_percent",
