@@ -17,9 +17,9 @@ Regenerate (a few minutes on one core): ``python -m rotacal.table._argmax_table`
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 
 #: log₁₀ g of the table (g = σ/(κ·dt²)).
 LOG_G = np.arange(-4.0, 7.01, 0.25)
@@ -42,7 +42,7 @@ _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(24)
 # |s′| = max(|sin φ₀|, |cos φ₀|) for φ₀ uniform: the law of cos φ, φ uniform on [0, π/4]
 _S_PRIME = np.cos(0.125 * math.pi * (_NODES + 1.0))
 _MIX_WEIGHTS = 0.5 * _WEIGHTS
-_interp: PchipInterpolator | None = None
+_interp: Any = None  # scipy.interpolate.PchipInterpolator, built (and imported) on first use
 
 
 def in_range(g_max: float) -> bool:
@@ -55,6 +55,8 @@ def u_over_dt(g: float) -> float:
     reversal (the mixture over |s′|), from the table; ``g`` within :func:`in_range`."""
     global _interp
     if _interp is None:
+        from scipy.interpolate import PchipInterpolator
+
         _interp = PchipInterpolator(LOG_G, LOG_F)
     g_eff = g / _S_PRIME
     log_g = np.log10(np.maximum(g_eff, 1e-300))

@@ -63,6 +63,18 @@ class ReversalDetection:
     half_window_s: float = math.nan
 
 
+def _argmax_inputs(
+    name: str, noise_deg: float, curvature_deg_s2: float, sample_interval_s: float
+) -> tuple[float, float, float]:
+    """σ (deg), κ (deg/s²) and dt (s) as floats, refused unless dt > 0, κ > 0 and σ ≥ 0."""
+    sigma, kappa, dt = float(noise_deg), float(curvature_deg_s2), float(sample_interval_s)
+    if not (dt > 0 and kappa > 0 and sigma >= 0):
+        raise ConfigError(
+            f"{name} needs dt > 0, curvature > 0 and noise ≥ 0; got {dt!r}, {kappa!r}, {sigma!r}."
+        )
+    return sigma, kappa, dt
+
+
 def reversal_time_u_argmax(
     noise_deg: float,
     curvature_deg_s2: float,
@@ -102,14 +114,9 @@ def reversal_time_u_argmax(
     ----------
     Feng et al. 2023, Sensors 23:4876, §3.2, eqs. (7)–(8); JCGM 101:2008 §7.
     """
-    dt = float(sample_interval_s)
-    kappa = float(curvature_deg_s2)
-    sigma = float(noise_deg)
-    if not (dt > 0 and kappa > 0 and sigma >= 0):
-        raise ConfigError(
-            "reversal_time_u_argmax needs dt > 0, curvature > 0 and noise ≥ 0; got "
-            f"{dt!r}, {kappa!r}, {sigma!r}."
-        )
+    sigma, kappa, dt = _argmax_inputs(
+        "reversal_time_u_argmax", noise_deg, curvature_deg_s2, sample_interval_s
+    )
     if sigma == 0.0:
         return dt / math.sqrt(12.0)
     rng = np.random.default_rng(seed)
@@ -149,14 +156,9 @@ def reversal_time_u_argmax_tabulated(
     """
     from rotacal.table import _argmax_table
 
-    dt = float(sample_interval_s)
-    kappa = float(curvature_deg_s2)
-    sigma = float(noise_deg)
-    if not (dt > 0 and kappa > 0 and sigma >= 0):
-        raise ConfigError(
-            "reversal_time_u_argmax_tabulated needs dt > 0, curvature > 0 and noise ≥ 0; got "
-            f"{dt!r}, {kappa!r}, {sigma!r}."
-        )
+    sigma, kappa, dt = _argmax_inputs(
+        "reversal_time_u_argmax_tabulated", noise_deg, curvature_deg_s2, sample_interval_s
+    )
     g = sigma / (kappa * dt * dt)
     if not _argmax_table.in_range(g * math.sqrt(2.0)):
         return reversal_time_u_argmax(sigma, kappa, dt)
