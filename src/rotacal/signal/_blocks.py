@@ -6,8 +6,10 @@ the moments ``P_bk = Σ u^k`` and ``Q_bk = Σ (y − y0)·u^k`` (k = 0..K+1) are
 frequency, ``exp(j·m·ω·τ) = exp(j·m·ω·d_b)·Σ_l (j·m·ω·T_b/2)^l/l!·u^l`` (``d_b = c_b − t_ref``)
 turns every exponential sum of the normal equations into a sum over blocks; the series is cut
 where its terms fall below 1e-17, and the block length is chosen so that the highest phase
-``2H·ω·T_b/2`` stays near 0.25 rad. Moments add, so chunks can be fed one after another and a block
-cut by a chunk boundary is simply summed twice. For uniformly sampled chunks the moments of all
+``2H·ω·T_b/2`` at 1.25·f is the largest the K stored moments hold (:func:`planned_phase`: 1.5 rad
+for the default K = 22; fewer, longer blocks make every frequency's sums cheaper, see
+:mod:`rotacal.signal._blocks_sums`). Moments add, so chunks can be fed one after another and a
+block cut by a chunk boundary is simply summed twice. For uniformly sampled chunks the moments of all
 full blocks are one BLAS product of the (blocks × M) sample matrix with a fixed (M × K+2)
 Vandermonde matrix.
 """
@@ -21,7 +23,7 @@ import numpy as np
 
 from rotacal._jit import use_numba
 from rotacal.errors import CaptureError, ConfigError
-from rotacal.signal._blocks_sums import SUM_ROWS, block_sums
+from rotacal.signal._blocks_sums import SUM_ROWS, block_sums, taylor_terms
 from rotacal.signal._checks import (
     as_pair,
     check_finite,
@@ -37,7 +39,6 @@ from rotacal.signal._normal import solve_normal
 from rotacal.signal._residual import residual_sums
 from rotacal.signal._result import SineFit, build_drift_check, build_sine_fit
 
-_X_PLAN = 0.5  # planned largest in-block phase (rad) of harmonic 2H at 1.25·f (≤ 16 terms)
 _F_MARGIN = 1.25
 _MAX_BLOCK = 4096
 _MIN_BLOCK = 4
@@ -59,12 +60,22 @@ def _unit_powers(e1: np.ndarray, kmax: int) -> np.ndarray:
     return out
 
 
+def planned_phase(n_moments: int) -> float:
+    """Largest in-block phase (rad, on a 0.05 grid) of harmonic 2H at 1.25·f whose exponential
+    series the ``n_moments`` stored moments hold to 1e-17: the block length is planned for it
+    (1.5 rad for 22 moments; longer blocks, fewer of them, more terms each — fewer blocks win)."""
+    x = 0.05
+    while taylor_terms(x + 0.05, n_moments) <= n_moments:
+        x += 0.05
+    return x
+
+
 class HarmonicFitAccumulator:
     """Accumulate a long capture chunk by chunk, then fit a sine with harmonics to all of it.
 
-    Memory stays flat: each chunk is reduced to block moments (about 1/100 of its size for
-    well-sampled signals) as it is added. ``fit()`` gives the same least-squares solution as an
-    explicit multi-harmonic fit of all samples (IEEE Std 1057-2017, §4.1.3; Feng et al. 2023,
+    Memory stays flat: each chunk is reduced to block moments (K + 2 numbers per block of up to
+    4096 samples; about 1/100 of its size for well-sampled signals) as it is added. ``fit()``
+    gives the same least-squares solution as an explicit multi-harmonic fit of all samples (IEEE Std 1057-2017, §4.1.3; Feng et al. 2023,
     Sensors 23:4876, eq. (9)).
 
     Parameters
@@ -93,7 +104,7 @@ class HarmonicFitAccumulator:
         *,
         harmonics: int = 10,
         block_samples: int | None = None,
-        n_moments: int = 16,
+        n_moments: int = 22,
     ) -> None:
         self._f_hint = None if frequency_hz is None else check_frequency(frequency_hz)
         self._h_plan = check_harmonics(harmonics)
@@ -218,7 +229,7 @@ class HarmonicFitAccumulator:
                         "pass frequency_hz= to HarmonicFitAccumulator."
                     ) from None
             w = 2.0 * math.pi * f * _F_MARGIN
-            m = int(min(_MAX_BLOCK, 2.0 * _X_PLAN / (2 * self._h_plan * w * dt)))
+            m = int(min(_MAX_BLOCK, 2.0 * planned_phase(self._k) / (2 * self._h_plan * w * dt)))
             if m < _MIN_BLOCK:
                 m = 1
         self._ready = True
