@@ -326,6 +326,8 @@ class HarmonicFitAccumulator:
                 tt = np.concatenate([r[0] for r in self._records])
                 yy = np.concatenate([r[1] for r in self._records])
                 self._merged = (tt, yy, np.empty(0))
+            elif len(self._records) == 1:  # one chunk: its blocks are distinct already
+                self._merged = self._records[0]
             else:
                 j = np.concatenate([r[0] for r in self._records])
                 p = np.concatenate([r[1] for r in self._records], axis=0)
