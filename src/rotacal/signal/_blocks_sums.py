@@ -27,8 +27,8 @@ import numpy as np
 
 from rotacal.errors import CaptureError
 
-#: Blocks per BLAS product (their exponentials, 2·(2H+1) rows of doubles, stay in cache).
-SUM_ROWS = 8192
+#: Blocks per BLAS product (their exponentials, 2·(2H+1) rows of doubles, stay in the L2 cache).
+SUM_ROWS = 2048
 #: The exponential series is cut where its terms fall below this.
 TRUNC = 1e-17
 
