@@ -14,7 +14,9 @@ Rows: the fused pass (:func:`rotacal.encoder._kernel.phase_pass`: Heydemann corr
 cycle count, subinterval transitions, extremes) with its Numba and its NumPy twin; the same with
 the harmonic fit's block moments added (``HarmonicFitAccumulator``, the accumulation the fit
 needs); ``demodulate`` (checks, Heydemann fit, fused pass, reversals) and the whole
-``calibrate_encoder_motion`` (fit, residual, budgets), each with Numba on and off. One core:
+``calibrate_encoder_motion`` (fit, residual, budgets), each with Numba on and off; and the
+budgets alone (``motion_budgets`` inside the calibration) on their first call, with the cached
+Monte Carlo draws and tables cleared: the fixed cost a command pays (the issue: ≤ 10 ms). One core:
 BLAS is held to one thread. Machines here are shared and noisy: the ratios are the figures.
 """
 
@@ -89,6 +91,30 @@ def limit(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
+def budgets_cold(t: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """Seconds spent in ``motion_budgets`` by one calibration whose caches start empty."""
+    import rotacal.table.motion as motion_module
+    from rotacal.table import _argmax_table, motion_thd
+
+    spent: list[float] = []
+    plain = motion_module.motion_budgets
+
+    def timed(**kwargs: Any) -> Any:
+        t0 = time.perf_counter()
+        out = plain(**kwargs)
+        spent.append(time.perf_counter() - t0)
+        return out
+
+    motion_thd._thd_batch.cache_clear()
+    _argmax_table._interp = None
+    motion_module.motion_budgets = timed  # type: ignore[assignment]
+    try:
+        calibrate_encoder_motion(t, a, b, lines=LINES)
+    finally:
+        motion_module.motion_budgets = plain
+    return spent[0]
+
+
 def run_periods(n: int, periods: float, repeats: int) -> None:
     """Time every row on one capture of ``periods`` motion periods and print them."""
     motion, t, a, b = capture(n, periods)
@@ -135,6 +161,9 @@ def run_periods(n: int, periods: float, repeats: int) -> None:
     rows.append(("demodulate (NumPy)", best_of(numba_off(demod), repeats)))
     rows.append(("calibrate_encoder_motion (Numba by size)", best_of(calib, repeats)))
     rows.append(("calibrate_encoder_motion (NumPy)", best_of(numba_off(calib), repeats)))
+    rows.append(
+        ("  of which motion budgets, cold", min(budgets_cold(t, a, b) for _ in range(repeats)))
+    )
     for name, sec in rows:
         print(
             f"{periods:7.0f}  {name:<44s} {sec * 1e3:8.1f} {n / sec / 1e6:6.1f} "

@@ -29,6 +29,7 @@ from rotacal.table import (
 )
 from rotacal.table.motion_uncertainty import (
     reversal_time_u_argmax,
+    reversal_time_u_argmax_tabulated,
     reversal_time_u_parabola,
     thd_bias_corrected_percent,
     thd_uncertainty,
@@ -228,6 +229,29 @@ def test_argmax_estimator_without_noise_is_the_sampling_quantisation():
     assert 2e-5 / math.sqrt(12) < u < math.sqrt(2 * 10 * 1e-5 / 80.0)
 
 
+@pytest.mark.parametrize("g", [3e-4, 0.05, 0.7, 30.0, 2.4e3, 1e5])
+def test_tabulated_argmax_u_equals_a_fresh_monte_carlo(g):
+    # truth: the estimator simulated anew (another seed than the table's), σ = g·κ·dt²
+    kappa, dt = 80.0, 2e-5
+    sigma = g * kappa * dt * dt
+    draws = 20_000 if g < 1e3 else 3_000
+    mc = reversal_time_u_argmax(sigma, kappa, dt, draws=draws, seed=11)
+    tab = reversal_time_u_argmax_tabulated(sigma, kappa, dt)
+    # the rms of draws has a relative standard error ≈ 1/√(2·draws)·√(kurtosis-ish): 4 of them
+    assert tab == pytest.approx(mc, rel=4.0 * 1.5 / math.sqrt(2 * draws) + 0.01)
+
+
+def test_tabulated_argmax_u_limits():
+    # no noise: the quantisation; beyond the table: the Monte Carlo itself
+    assert reversal_time_u_argmax_tabulated(0.0, 80.0, 2e-5) == pytest.approx(
+        2e-5 / math.sqrt(12), rel=1e-3
+    )
+    sigma = 1e8 * 80.0 * 1e-10
+    assert reversal_time_u_argmax_tabulated(sigma, 80.0, 1e-5) == reversal_time_u_argmax(
+        sigma, 80.0, 1e-5
+    )
+
+
 # ------------------------------------------------------------------------------ THD
 def test_jcgm102_magnitude_example_through_the_thd_code_path():
     """|Z| with Re ~ N(0.001, 0.01²), Im ~ N(0, 0.01²): as a THD of A_2 over A_1 = 1 (JCGM 102).
@@ -295,7 +319,10 @@ def test_thd_interval_is_the_noncentral_chi2_belt_for_equal_u(harmonics):
     u = np.array([0.0, *([1e-4] * len(harmonics))])
     t = thd_uncertainty(a, u)
     lo, hi = _belt_by_ncx2(t.plain, 0.5, 1e-4, a.size)
-    assert t.interval[1] == pytest.approx(hi, rel=0.01)
+    # within the Monte Carlo's stated error (M chosen for U's two significant digits; the
+    # error of an end is at most twice that of U = (hi − lo)/2), and that error is small
+    assert t.U_mc_error <= 0.015 * t.U
+    assert t.interval[1] == pytest.approx(hi, abs=3 * 2 * t.U_mc_error)
     if lo == 0.0:
         assert t.interval[0] == 0.0
     else:

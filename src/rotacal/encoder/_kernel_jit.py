@@ -1,15 +1,16 @@
-"""Numba twin of the per-sample encoder chain in :mod:`rotacal.encoder._kernel` (imports Numba).
+"""Numba twin of the sequential part of the encoder chain in :mod:`rotacal.encoder._kernel`
+(imports Numba).
 
 Imported only for long captures (:func:`rotacal._jit.use_numba`), compiled on first use and cached
-on disk. Per sample it does, in the same floating-point operations and order, what the NumPy path
-does per array: the Heydemann correction of ``_apply``, ``arctan2``, the integer cycle count of
-``unwrapped_phase``, the subinterval count of ``subinterval_transitions`` and the extremes of φ.
-Only ``atan2`` may differ from NumPy's by an ulp (libm against NumPy's own loop).
+on disk. The per-sample arithmetic that vectorises (the Heydemann correction and ``arctan2``)
+stays in NumPy, whose SIMD ``arctan2`` is several times faster than the scalar libm ``atan2`` a
+compiled loop calls (that call made the former all-Numba pass slower than NumPy); this loop does
+what carries state from sample to sample: the integer cycle count of ``unwrapped_phase``, the
+subinterval count of ``subinterval_transitions`` and the extremes of φ, in the same
+floating-point operations, so both paths give the same numbers bit for bit.
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 from numba import njit
@@ -17,9 +18,8 @@ from numba import njit
 
 @njit(cache=True, nogil=True)
 def phase_block(
-    a: np.ndarray,
-    b: np.ndarray,
-    coefs: np.ndarray,
+    wrapped: np.ndarray,
+    consts: np.ndarray,
     carry: np.ndarray,
     has_prev: bool,
     offset: int,
@@ -29,31 +29,21 @@ def phase_block(
 ) -> int:  # pragma: no cover - compiled
     """One block: φ into ``phase``, transitions into ``trans_idx``/``trans_k``; returns their count.
 
-    ``coefs = [p, q, 1/R_a, 1/(R_b·cos α), tan α, α ≠ 0, 2π, 1/(π/6), π]``;
-    ``carry = [last wrapped phase, cycles, k of the last sample, min φ, max φ]`` is read (when
-    ``has_prev``) and updated in place.
+    ``wrapped`` is ``arctan2(v, u)`` of the block's corrected signals (rad);
+    ``consts = [2π, 1/(π/6), π]``; ``carry = [last wrapped phase, cycles, k of the last sample,
+    min φ, max φ]`` is read (when ``has_prev``) and updated in place.
     """
-    p = coefs[0]
-    q = coefs[1]
-    inv_ra = coefs[2]
-    inv_rb = coefs[3]
-    tan_a = coefs[4]
-    tilted = coefs[5] != 0.0
-    two_pi = coefs[6]
-    inv_sub = coefs[7]
-    pi = coefs[8]
+    two_pi = consts[0]
+    inv_sub = consts[1]
+    pi = consts[2]
     last = carry[0]
     cycles = np.int64(carry[1])
     k_prev = carry[2]
     lo = carry[3]
     hi = carry[4]
     count = 0
-    for i in range(a.size):
-        u = (a[i] - p) * inv_ra
-        v = (b[i] - q) * inv_rb
-        if tilted:
-            v = v - u * tan_a
-        w = math.atan2(v, u)
+    for i in range(wrapped.size):
+        w = wrapped[i]
         if has_prev or i > 0:
             d = w - last
             if d < -pi:

@@ -6,8 +6,10 @@ the moments ``P_bk = Σ u^k`` and ``Q_bk = Σ (y − y0)·u^k`` (k = 0..K+1) are
 frequency, ``exp(j·m·ω·τ) = exp(j·m·ω·d_b)·Σ_l (j·m·ω·T_b/2)^l/l!·u^l`` (``d_b = c_b − t_ref``)
 turns every exponential sum of the normal equations into a sum over blocks; the series is cut
 where its terms fall below 1e-17, and the block length is chosen so that the highest phase
-``2H·ω·T_b/2`` stays near 0.25 rad. Moments add, so chunks can be fed one after another and a block
-cut by a chunk boundary is simply summed twice. For uniformly sampled chunks the moments of all
+``2H·ω·T_b/2`` at 1.25·f is the largest the K stored moments hold (:func:`planned_phase`: 1.5 rad
+for the default K = 22; fewer, longer blocks make every frequency's sums cheaper, see
+:mod:`rotacal.signal._blocks_sums`). Moments add, so chunks can be fed one after another and a
+block cut by a chunk boundary is simply summed twice. For uniformly sampled chunks the moments of all
 full blocks are one BLAS product of the (blocks × M) sample matrix with a fixed (M × K+2)
 Vandermonde matrix.
 """
@@ -21,6 +23,7 @@ import numpy as np
 
 from rotacal._jit import use_numba
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.signal._blocks_sums import SUM_ROWS, block_sums, taylor_terms
 from rotacal.signal._checks import (
     as_pair,
     check_finite,
@@ -36,27 +39,14 @@ from rotacal.signal._normal import solve_normal
 from rotacal.signal._residual import residual_sums
 from rotacal.signal._result import SineFit, build_drift_check, build_sine_fit
 
-_X_PLAN = 0.25  # planned largest in-block phase (rad) of harmonic 2H at 1.25·f
 _F_MARGIN = 1.25
 _MAX_BLOCK = 4096
-_MIN_BLOCK = 8
-_TRUNC = 1e-17
+_MIN_BLOCK = 4
 _SUB_BLOCKS = 256
 _SUB_SAMPLES = 1 << 16
-_SUM_ROWS = 8192
 # The residual from the normal equations, yᵀy − bᵀp, loses its digits when it is this small a
 # part of yᵀy; below it a fit that still has the samples sums the residual itself.
 _RSS_ROUNDING = 1e-9
-
-
-def taylor_terms(x: float, limit: int) -> int:
-    """Smallest L with x^L/L! ≤ 1e-17 (the exponential series cut after L terms), or limit+1."""
-    term = 1.0
-    for ell in range(1, limit + 1):
-        term *= x / ell
-        if term <= _TRUNC:
-            return ell
-    return limit + 1
 
 
 def _unit_powers(e1: np.ndarray, kmax: int) -> np.ndarray:
@@ -70,12 +60,22 @@ def _unit_powers(e1: np.ndarray, kmax: int) -> np.ndarray:
     return out
 
 
+def planned_phase(n_moments: int) -> float:
+    """Largest in-block phase (rad, on a 0.05 grid) of harmonic 2H at 1.25·f whose exponential
+    series the ``n_moments`` stored moments hold to 1e-17: the block length is planned for it
+    (1.5 rad for 22 moments; longer blocks, fewer of them, more terms each — fewer blocks win)."""
+    x = 0.05
+    while taylor_terms(x + 0.05, n_moments) <= n_moments:
+        x += 0.05
+    return x
+
+
 class HarmonicFitAccumulator:
     """Accumulate a long capture chunk by chunk, then fit a sine with harmonics to all of it.
 
-    Memory stays flat: each chunk is reduced to block moments (about 1/100 of its size for
-    well-sampled signals) as it is added. ``fit()`` gives the same least-squares solution as an
-    explicit multi-harmonic fit of all samples (IEEE Std 1057-2017, §4.1.3; Feng et al. 2023,
+    Memory stays flat: each chunk is reduced to block moments (K + 2 numbers per block of up to
+    4096 samples; about 1/100 of its size for well-sampled signals) as it is added. ``fit()``
+    gives the same least-squares solution as an explicit multi-harmonic fit of all samples (IEEE Std 1057-2017, §4.1.3; Feng et al. 2023,
     Sensors 23:4876, eq. (9)).
 
     Parameters
@@ -104,7 +104,7 @@ class HarmonicFitAccumulator:
         *,
         harmonics: int = 10,
         block_samples: int | None = None,
-        n_moments: int = 16,
+        n_moments: int = 22,
     ) -> None:
         self._f_hint = None if frequency_hz is None else check_frequency(frequency_hz)
         self._h_plan = check_harmonics(harmonics)
@@ -229,7 +229,7 @@ class HarmonicFitAccumulator:
                         "pass frequency_hz= to HarmonicFitAccumulator."
                     ) from None
             w = 2.0 * math.pi * f * _F_MARGIN
-            m = int(min(_MAX_BLOCK, 2.0 * _X_PLAN / (2 * self._h_plan * w * dt)))
+            m = int(min(_MAX_BLOCK, 2.0 * planned_phase(self._k) / (2 * self._h_plan * w * dt)))
             if m < _MIN_BLOCK:
                 m = 1
         self._ready = True
@@ -326,6 +326,8 @@ class HarmonicFitAccumulator:
                 tt = np.concatenate([r[0] for r in self._records])
                 yy = np.concatenate([r[1] for r in self._records])
                 self._merged = (tt, yy, np.empty(0))
+            elif len(self._records) == 1:  # one chunk: its blocks are distinct already
+                self._merged = self._records[0]
             else:
                 j = np.concatenate([r[0] for r in self._records])
                 p = np.concatenate([r[1] for r in self._records], axis=0)
@@ -352,19 +354,17 @@ class HarmonicFitAccumulator:
         return estimate_frequency_unchecked(tm, ym)
 
     def _sums_fn(self, nh: int, t_ref: float) -> Any:
-        a, b, c = self._merge()
         kmax_s = 2 * nh
-
         if self._explicit:
-            tt, yy = a, b
+            tt, yy, _ = self._merge()
 
             def sums_explicit(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
                 np_ = 3 if deriv else 1
                 s = np.zeros((np_, kmax_s + 1), dtype=np.complex128)
                 yv = np.zeros((2 if deriv else 1, nh + 1), dtype=np.complex128)
-                for r in range(0, tt.size, _SUM_ROWS):
-                    d = tt[r : r + _SUM_ROWS] - t_ref
-                    ycs = yy[r : r + _SUM_ROWS]
+                for r in range(0, tt.size, SUM_ROWS):
+                    d = tt[r : r + SUM_ROWS] - t_ref
+                    ycs = yy[r : r + SUM_ROWS]
                     e = _unit_powers(np.exp(1j * omega * d), kmax_s)
                     s[0] += e.sum(axis=0)
                     yv[0] += ycs @ e[:, : nh + 1]
@@ -376,51 +376,15 @@ class HarmonicFitAccumulator:
                 return s, yv
 
             return sums_explicit
-
-        j, p, q = a, b, c
-        half = 0.5 * self._tb
-        dvec = (self._tg - t_ref) + (j + 0.5) * self._tb
-        kmax_y = nh
-
-        def sums_blocks(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
-            x = kmax_s * abs(omega) * half
-            nterm = taylor_terms(x, self._k)
-            if nterm > self._k:
-                f = abs(omega) / (2.0 * math.pi)
-                raise CaptureError(
-                    f"harmonic {kmax_s} of {f:.6g} Hz turns by {x:.3g} rad within one block of "
-                    f"{self._m} samples, too much for the {self._k} stored moments; create the "
-                    f"HarmonicFitAccumulator with frequency_hz≈{f:.6g} and harmonics={nh}."
-                )
-            ks = np.arange(kmax_s + 1)
-            ell = np.arange(nterm)
-            fact = np.array([math.factorial(int(i)) for i in ell], dtype=np.float64)
-            cm = (1j * omega * half * ks[:, None]) ** ell[None, :] / fact[None, :]
-            np_ = 3 if deriv else 1
-            ny = 2 if deriv else 1
-            s = np.zeros((np_, kmax_s + 1), dtype=np.complex128)
-            yv = np.zeros((ny, kmax_y + 1), dtype=np.complex128)
-            cmt = cm.T
-            cmy = cm[: kmax_y + 1].T
-            for r in range(0, j.size, _SUM_ROWS):
-                d = dvec[r : r + _SUM_ROWS]
-                e = np.exp(1j * np.outer(omega * d, ks))
-                pr = p[r : r + _SUM_ROWS]
-                qr = q[r : r + _SUM_ROWS]
-                f0 = e * (pr[:, :nterm] @ cmt)
-                s[0] += f0.sum(axis=0)
-                g0 = e[:, : kmax_y + 1] * (qr[:, :nterm] @ cmy)
-                yv[0] += g0.sum(axis=0)
-                if deriv:
-                    f1 = e * (pr[:, 1 : 1 + nterm] @ cmt)
-                    f2 = e * (pr[:, 2 : 2 + nterm] @ cmt)
-                    s[1] += d @ f0 + half * f1.sum(axis=0)
-                    s[2] += (d * d) @ f0 + 2.0 * half * (d @ f1) + half * half * f2.sum(axis=0)
-                    g1 = e[:, : kmax_y + 1] * (qr[:, 1 : 1 + nterm] @ cmy)
-                    yv[1] += d @ g0 + half * g1.sum(axis=0)
-            return s, yv
-
-        return sums_blocks
+        return block_sums(
+            self._merge(),
+            self._cumv[self._m],
+            self._tg - t_ref,
+            self._tb,
+            nh,
+            self._k,
+            self._m,
+        )
 
     def fit(
         self,

@@ -48,6 +48,20 @@ class NormalFit:
     check: tuple[np.ndarray, float, np.ndarray] | None = None
 
 
+#: The refinement ends when the step of f falls below this fraction of f's standard uncertainty
+#: (or below ``rtol``·f): nothing the fit reports moves by more than 1e-4 of its u then, and the steps that rounding makes
+#: (~1e-16·f) lie orders of magnitude below it, so twins of the sums that add in another order
+#: take the same steps (a tolerance near rounding would let rounding decide one more step).
+STEP_OF_U = 1e-4
+
+
+def _frequency_u(inv: np.ndarray, rss: float, n: int) -> float:
+    """Standard uncertainty of f (Hz) from (JᵀJ)⁻¹ (f last) and the residual: s²·(JᵀJ)⁻¹_ff."""
+    dof = n - inv.shape[0]
+    var = inv[-1, -1] * max(rss, 0.0) / dof if dof > 0 else 0.0
+    return math.sqrt(var) if math.isfinite(var) and var > 0 else 0.0
+
+
 #: Accepted steps in a row that lower the residual by no more than rounding, after which a
 #: refinement that has not met its step tolerance is taken to sit at the minimum.
 STALL_STEPS = 3
@@ -220,8 +234,9 @@ def solve_normal(
         for _ in range(max_iter):
             iterations += 1
             jtj, jtr = full_system(lin)
-            step, _, cond = solve_spd(jtj, jtr)
+            step, inv, cond = solve_spd(jtj, jtr)
             df = float(step[-1])
+            tol = max(rtol * abs(lin.f), STEP_OF_U * _frequency_u(inv, lin.rss, n))
             if not (math.isfinite(df) and cond < MAX_COND):
                 raise CaptureError(
                     f"the frequency refinement at {lin.f:.6g} Hz is ill-conditioned; supply a "
@@ -242,7 +257,7 @@ def solve_normal(
                 break
             stall.step(lin.rss, new.rss)
             lin = new
-            if abs(lam * df) <= rtol * abs(lin.f):
+            if abs(lam * df) <= tol:
                 converged = True
                 break
         if not converged and not stall.at_minimum:

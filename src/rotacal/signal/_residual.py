@@ -16,8 +16,8 @@ import numpy as np
 from rotacal._jit import use_numba
 from rotacal.signal._result import harmonic_series_many
 
-#: Samples per chunk of the NumPy path (the whole record below it: the same sums as one piece).
-_CHUNK = 1 << 20
+#: Samples per chunk of the NumPy path: the cosines, sines and model of a chunk stay in cache.
+_CHUNK = 1 << 14
 
 
 def residual_sums(

@@ -1,0 +1,555 @@
+"""Reversing moments of the motion from the subinterval transitions (Feng et al. 2023, §3.1–3.3).
+
+The third step of the chain of :mod:`rotacal.encoder.quadrature`: the odd/even rule of trend
+changes (eqs. (5)–(6)), rotacal's cluster pruning by hysteresis, the reversing point of eqs.
+(7)–(8) and the whole motion periods between 2n+1 reversals (§3.3).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rotacal.encoder.phase import _transitions
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.results import Result
+
+FloatArray = NDArray[np.floating[Any]]
+_TWO_PI = 2.0 * math.pi
+
+
+#: Largest phase step (in 30° subintervals) between samples that is still demodulated.
+_MAX_SAFE_STEP = 5
+
+
+class SubdivisionWarning(UserWarning):
+    """The sampling is too slow for the 12-fold subdivision (subintervals were skipped)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Reversals(Result):
+    """Reversing moments of the motion (Feng et al. 2023, §3.1–3.2).
+
+    Attributes
+    ----------
+    indices : ndarray of int
+        Sample index of each reversing moment (Chp of eqs. (7)–(8)).
+    times_s : ndarray of float
+        Time of each reversing moment (s).
+    kinds : ndarray of int
+        +1 for a maximum of θ, −1 for a minimum; they alternate.
+    candidates : int
+        Reversals found by the odd/even rule (eqs. (5)–(6)) before cluster pruning.
+    hysteresis_subintervals : int
+        Excursion (in subintervals) below which neighbouring candidates were treated as one cluster.
+    transitions : int
+        Subinterval transitions in the capture.
+    skipped_transitions : int
+        Transitions that jumped over one subinterval or more (sampling too slow for the
+        subdivision).
+    max_step_subintervals : int
+        Largest jump between two samples (subintervals); 1 is the normal value.
+    """
+
+    indices: np.ndarray
+    times_s: np.ndarray
+    kinds: np.ndarray
+    candidates: int
+    hysteresis_subintervals: int
+    transitions: int = 0
+    skipped_transitions: int = 0
+    max_step_subintervals: int = 0
+
+    def __len__(self) -> int:
+        return int(self.indices.size)
+
+
+# --------------------------------------------------------------------------------------------
+# reversals
+# --------------------------------------------------------------------------------------------
+
+
+def _odd_runs(direction: NDArray[np.int8]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """First transition and length of each run of an odd number of consecutive trend changes."""
+    change = direction[1:] != direction[:-1]  # change[j-1]: transition j turns the trend
+    padded = np.concatenate(([False], change, [False]))
+    edges = np.flatnonzero(padded[1:] != padded[:-1])
+    starts = edges[0::2]
+    lengths = edges[1::2] - starts
+    odd = (lengths % 2) == 1
+    return starts[odd] + 1, lengths[odd]
+
+
+def _no_reversals(hyst: int, n_trans: int, skipped: int, max_step: int) -> ReversalPlan:
+    """The plan of a capture in which no reversing moment was found."""
+    no_windows = np.empty((0, 2), dtype=np.intp)
+    return ReversalPlan(
+        no_windows,
+        no_windows.copy(),
+        np.empty(0, dtype=np.int8),
+        0,
+        hyst,
+        n_trans,
+        skipped,
+        max_step,
+    )
+
+
+def _candidates(
+    k_after: FloatArray, dk: FloatArray
+) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.int8], FloatArray]:
+    """Reversal candidates of eqs. (5)–(6): runs of an odd number of consecutive trend changes.
+
+    Transition j leads from subinterval visit j to visit j+1; visit m ≥ 1 holds the count
+    ``k_after[m-1]``. A trend change at transition j makes visit j a turning visit, so a run of L
+    changes starting at transition j0 has the turning visits j0 .. j0+L-1.
+
+    Returns the first transition j0 and length L of each odd run, its kind (+1: a maximum of θ,
+    the direction before the run was increasing) and its level (the extreme k of its turning
+    visits: the highest for a maximum, the lowest for a minimum).
+    """
+    direction = np.sign(dk).astype(np.int8)
+    first_change, run_len = _odd_runs(direction)
+    if first_change.size == 0:
+        return first_change, run_len, np.empty(0, dtype=np.int8), np.empty(0)
+    kinds = direction[first_change - 1]
+    seg = np.empty(2 * first_change.size, dtype=np.intp)
+    seg[0::2] = first_change - 1
+    seg[1::2] = first_change - 1 + run_len
+    hi = np.maximum.reduceat(k_after, seg)[0::2]
+    lo = np.minimum.reduceat(k_after, seg)[0::2]
+    return first_change, run_len, kinds, np.where(kinds > 0, hi, lo)
+
+
+def reversing_subintervals(
+    phase_rad: ArrayLike,
+) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.int8]]:
+    """The subintervals holding a reversing moment, exactly as the paper identifies them.
+
+    Runs of an even number of consecutive trend changes hold no reversal (eq. (5)); a run of an
+    odd number holds one, in its middle subinterval visit (eq. (6): in {4,5,6,7,8,7,8,7,6,5} the
+    second 7). No cluster pruning is applied here (see :func:`find_reversals`).
+
+    Parameters
+    ----------
+    phase_rad : array_like
+        Unwrapped signal phase φ (rad).
+
+    Returns
+    -------
+    sub_minus, sub_plus : ndarray of int
+        First and last sample index (inclusive) of each reversing subinterval visit.
+    kinds : ndarray of int8
+        +1 where the reversal is a maximum of θ, −1 a minimum.
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.1, eqs. (5)–(6).
+    """
+    idx, k_after, dk, _ = _transitions(np.asarray(phase_rad, dtype=np.float64))
+    if idx.size < 2:
+        empty = np.empty(0, dtype=np.intp)
+        return empty, empty.copy(), np.empty(0, dtype=np.int8)
+    first_change, run_len, kinds, _ = _candidates(k_after, dk)
+    middle = first_change + (run_len - 1) // 2
+    return idx[middle - 1], idx[middle] - 1, kinds
+
+
+#: ``(lo, hi) → (u, v)`` of samples lo..hi (inclusive): the corrected signals of a window.
+WindowSignals = Callable[[int, int], tuple[FloatArray, FloatArray]]
+
+
+def _reversal_point(signals: WindowSignals, n: int, first: int, last: int) -> int:
+    """Chp of eqs. (7)–(8): the extreme sample of the faster-changing signal in [Sub⁻, Sub⁺]."""
+    if last <= first:
+        return first
+    lo, hi = reversal_window(first, last, n)
+    return lo + reversal_point_in_window(*signals(lo, hi))
+
+
+def _pinned(plan: ReversalPlan, t: FloatArray, signals: WindowSignals) -> Reversals:
+    """The reversals of a plan, each pinned to its Chp (eqs. (7)–(8)) with its time (s)."""
+    chp = [_reversal_point(signals, t.size, int(f), int(last)) for f, last in plan.windows.tolist()]
+    indices = plan.indices(chp)
+    return Reversals(
+        indices=indices,
+        times_s=t[indices],
+        kinds=plan.kinds,
+        candidates=plan.candidates,
+        hysteresis_subintervals=plan.hysteresis_subintervals,
+        transitions=plan.transitions,
+        skipped_transitions=plan.skipped_transitions,
+        max_step_subintervals=plan.max_step_subintervals,
+    )
+
+
+def reversal_window(first: int, last: int, n_samples: int) -> tuple[int, int]:
+    """Samples that eqs. (7)–(8) read for the reversing subinterval visit ``[first, last]``.
+
+    rotacal takes the sums of eqs. (7)–(8) with the samples just outside [Sub⁻, Sub⁺] as
+    endpoints (both lie in the subinterval the motion came from and returned to), so that the
+    sign of q stays right when [Sub⁻, Sub⁺] spans several visits of the extreme subinterval.
+
+    Parameters
+    ----------
+    first, last : int
+        Sub⁻ and Sub⁺, first and last sample index (inclusive) of the visit.
+    n_samples : int
+        Samples in the capture.
+
+    Returns
+    -------
+    lo, hi : int
+        First and last sample index (inclusive) to read; ``lo == hi == first`` when the visit is
+        a single sample (its Chp is that sample, nothing needs reading).
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.2, eqs. (7)–(8).
+    """
+    if last <= first:
+        return first, first
+    return max(first - 1, 0), min(last + 1, n_samples - 1)
+
+
+def reversal_point_in_window(u_window: ArrayLike, v_window: ArrayLike) -> int:
+    """Chp of eqs. (7)–(8) within the samples of :func:`reversal_window`, as an offset.
+
+    ``qu = Σ u − n·(u_first + u_last)/2`` and likewise ``qv``; the signal with the larger |q|
+    changes most; Chp is its maximum if q > 0, its minimum if q < 0 (the middle sample if q = 0).
+
+    Parameters
+    ----------
+    u_window, v_window : array_like
+        Corrected signals (dimensionless) at samples ``lo .. hi`` of :func:`reversal_window`.
+
+    Returns
+    -------
+    int
+        Chp − lo (samples).
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.2, eqs. (7)–(8).
+    """
+    us = np.asarray(u_window, dtype=np.float64)
+    vs = np.asarray(v_window, dtype=np.float64)
+    if us.size < 2:
+        return 0
+    qu = float(np.sum(us)) - us.size * 0.5 * (us[0] + us[-1])
+    qv = float(np.sum(vs)) - vs.size * 0.5 * (vs[0] + vs[-1])
+    seg, q = (us, qu) if abs(qu) >= abs(qv) else (vs, qv)
+    if q > 0:
+        return int(np.argmax(seg))
+    if q < 0:
+        return int(np.argmin(seg))
+    return (us.size - 1) // 2
+
+
+@dataclasses.dataclass(frozen=True)
+class ReversalPlan:
+    """Reversing moments found from the subinterval transitions, before their precise point.
+
+    Everything of :func:`find_reversals` except eqs. (7)–(8), which need the signals: a chunked
+    caller reads the samples of each window in a later pass over the capture.
+
+    Attributes
+    ----------
+    windows : ndarray of int, shape (m, 2)
+        ``[Sub⁻, Sub⁺]`` (sample indices, inclusive) of each reversing subinterval visit whose
+        Chp is needed; see :func:`reversal_window` for the samples to read.
+    pairs : ndarray of int, shape (r, 2)
+        Rows of ``windows`` for each reversal: its index is ``(chp[p0] + chp[p1]) // 2``
+        (``p0 == p1`` for a reversal that is a single candidate).
+    kinds : ndarray of int8
+        +1 for a maximum of θ, −1 for a minimum.
+    candidates, hysteresis_subintervals, transitions, skipped_transitions, max_step_subintervals
+        As in :class:`Reversals`.
+    """
+
+    windows: np.ndarray
+    pairs: np.ndarray
+    kinds: np.ndarray
+    candidates: int
+    hysteresis_subintervals: int
+    transitions: int
+    skipped_transitions: int
+    max_step_subintervals: int
+
+    def indices(self, chp: ArrayLike) -> NDArray[np.intp]:
+        """Sample index of each reversal from the Chp (sample index) of every window."""
+        c = np.asarray(chp, dtype=np.intp)
+        if self.pairs.shape[0] == 0:
+            return np.empty(0, dtype=np.intp)
+        return (c[self.pairs[:, 0]] + c[self.pairs[:, 1]]) // 2
+
+
+def plan_reversals(
+    transition_indices: ArrayLike,
+    k_after: ArrayLike,
+    k_start: float,
+    *,
+    hysteresis_subintervals: int | None = None,
+    stacklevel: int = 2,
+) -> ReversalPlan:
+    """Reversing moments from the list of subinterval transitions (steps 1–3 of find_reversals).
+
+    Parameters
+    ----------
+    transition_indices : array_like of int
+        Sample index of every transition of the capture, increasing.
+    k_after : array_like
+        Subinterval count k after each transition.
+    k_start : float
+        k of the capture's first sample.
+    hysteresis_subintervals : int, optional
+        See :func:`find_reversals`.
+    stacklevel : int
+        Passed to :func:`warnings.warn` for the :class:`SubdivisionWarning`.
+
+    Returns
+    -------
+    ReversalPlan
+        Windows whose Chp (eqs. (7)–(8)) is still to be found, and how they make reversals.
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.1 eqs. (3)–(6).
+    """
+    idx = np.asarray(transition_indices, dtype=np.intp)
+    ka = np.asarray(k_after, dtype=np.float64)
+    k0 = float(k_start)
+    if hysteresis_subintervals is not None and (
+        isinstance(hysteresis_subintervals, bool)
+        or int(hysteresis_subintervals) != hysteresis_subintervals
+        or hysteresis_subintervals < 1
+    ):
+        raise ConfigError(
+            f"hysteresis_subintervals={hysteresis_subintervals!r} must be a whole number ≥ 1."
+        )
+    n_trans = int(idx.size)
+    dk = np.diff(ka, prepend=k0) if n_trans else np.empty(0)
+    step = np.abs(dk)
+    skipped = int(np.count_nonzero(step > 1.0))
+    max_step = int(step.max()) if n_trans else 0
+    if max_step >= _MAX_SAFE_STEP:
+        # A jump of 5 subintervals is 150° of the signal period: one more and the unwrapping
+        # cannot tell forward from backward, so the angle would be silently wrong.
+        raise CaptureError(
+            f"the encoder phase jumps by up to {30 * max_step}° of a signal period between two "
+            "samples: the capture is sampled too slowly for the motion (or too noisy) to be "
+            "demodulated — sample faster (at least 12 samples per signal period at the highest "
+            "rate)."
+        )
+    if skipped:
+        warnings.warn(
+            f"{skipped} of {n_trans} subinterval transitions skipped subintervals (largest jump "
+            f"{max_step} of 12 per signal period): the sampling is too slow for the subdivision"
+            + ("; above 5 the phase unwrapping itself is ambiguous." if max_step > 5 else "."),
+            SubdivisionWarning,
+            stacklevel=stacklevel,
+        )
+    if n_trans:
+        k_lo = min(k0, float(ka.min()))
+        k_hi = max(k0, float(ka.max()))
+    else:
+        k_lo = k_hi = k0
+    if hysteresis_subintervals is None:
+        hyst = max(2, round(0.1 * (k_hi - k_lo)))
+    else:
+        hyst = int(hysteresis_subintervals)
+
+    if n_trans < 2:
+        return _no_reversals(hyst, n_trans, skipped, max_step)
+    first_change, run_len, kinds, level = _candidates(ka, dk)
+    n_cand = int(first_change.size)
+    if n_cand == 0:
+        return _no_reversals(hyst, n_trans, skipped, max_step)
+
+    # rotacal's extension: clusters of candidates closer than the hysteresis.
+    linked = np.abs(np.diff(level)) < hyst
+    cluster_start = np.flatnonzero(np.concatenate(([True], ~linked)))
+    cluster_size = np.diff(np.append(cluster_start, n_cand))
+    keep = cluster_size % 2 == 1
+    rev_kinds = kinds[cluster_start[keep]].astype(np.int8)
+
+    def window(c: int) -> tuple[int, int]:
+        j0 = int(first_change[c])
+        levels = ka[j0 - 1 : j0 - 1 + int(run_len[c])]
+        at_extreme = np.flatnonzero(levels == level[c])
+        return int(idx[j0 - 1 + int(at_extreme[0])]), int(idx[j0 + int(at_extreme[-1])]) - 1
+
+    windows: list[tuple[int, int]] = []
+    pairs = np.empty((int(np.count_nonzero(keep)), 2), dtype=np.intp)
+    for i, (start, size) in enumerate(
+        zip(cluster_start[keep].tolist(), cluster_size[keep].tolist(), strict=True)
+    ):
+        windows.append(window(start))
+        if size == 1:
+            pairs[i] = len(windows) - 1
+        else:
+            # A cluster straddles the reversal symmetrically: take the middle of its
+            # outermost extremes (both of the cluster's kind).
+            windows.append(window(start + size - 1))
+            pairs[i] = (len(windows) - 2, len(windows) - 1)
+    return ReversalPlan(
+        windows=np.asarray(windows, dtype=np.intp).reshape(-1, 2),
+        pairs=pairs,
+        kinds=rev_kinds,
+        candidates=n_cand,
+        hysteresis_subintervals=hyst,
+        transitions=n_trans,
+        skipped_transitions=skipped,
+        max_step_subintervals=max_step,
+    )
+
+
+def find_reversals(
+    t: ArrayLike,
+    u: ArrayLike,
+    v: ArrayLike,
+    phase_rad: ArrayLike,
+    *,
+    hysteresis_subintervals: int | None = None,
+) -> Reversals:
+    """Reversing moments of the motion, each pinned to one sample.
+
+    1. Subinterval count ``k = ⌊φ/(π/6)⌋``; a transition is a sample where k changes, its
+       direction the sign of the change (eqs. (3)–(4)).
+    2. A trend change is a transition whose direction differs from the previous one. A run of an
+       even number of consecutive trend changes holds no reversal (eq. (5)); an odd run holds one
+       (eq. (6)): a *candidate*, a maximum of θ if the direction before the run was increasing,
+       else a minimum. Its *level* is the extreme k of the run's turning visits (the highest for
+       a maximum, the lowest for a minimum).
+    3. *rotacal's extension* (not in the paper): a vibration superposed on the motion near a
+       reversal moves it back and forth by more than one subinterval, so the candidates of step 2
+       come in extra max/min pairs. Neighbouring candidates (which alternate max/min) whose levels
+       differ by less than ``hysteresis_subintervals`` are linked into a cluster; a cluster of an
+       odd number of candidates is one reversal, of the kind of its first candidate, an even
+       number none.
+    4. Where the reversal lies: for a single candidate, the window ``[Sub⁻, Sub⁺]`` runs from the
+       first to the last of its turning visits that sit at its level (in eq. (6)'s
+       {4,5,6,7,8,7,8,7,6,5} that is 8-7-8, the two visits of 8 and the 7 between them); for a
+       cluster, the windows of its first and last candidate (both of the cluster's kind).
+    5. In each window the sums ``qu``, ``qv`` of eqs. (7)–(8), with the samples just outside
+       ``[Sub⁻, Sub⁺]`` as endpoints (:func:`reversal_window`), pick the signal that changes
+       most; Chp is its minimum if q < 0 and its maximum if q > 0. Within a run of trend changes
+       k alternates between two neighbouring levels, so a window spans at most 60° of φ, over
+       which at least one signal is monotonic in φ (the one that changes most, unless the other
+       is near its own extreme), and then its extreme is that of φ. The
+       sign of q is set against the endpoints, which lie in the neighbouring level: when most of
+       a long window sits in that level too, q can point to the dip instead (2 of 977 reversals
+       of a noisy synthetic capture with a vibration faster than the motion). A single
+       candidate's reversing moment is its Chp; a cluster's is the sample midway between the
+       Chp of its first and last candidate (the cluster straddles the reversal symmetrically).
+
+    How this differs from the paper's literal rule, also with the pruning off: the paper takes
+    the *middle* turning visit of an odd run as the reversing subinterval (eq. (6): the second
+    7) and searches eqs. (7)–(8) between that visit's own endpoints; rotacal searches the visits
+    at the run's extreme level, where θ is extreme (in the example the paper's 7 lies in the dip
+    between the two visits of 8), with one sample more on each side (:func:`reversal_window`).
+    :func:`reversing_subintervals` gives the paper's middle visits exactly.
+
+    The hysteresis. Neighbouring candidates always differ by at least 2 subintervals (between a
+    maximum and the next minimum the motion goes down twice in a row), so a hysteresis of 1 or 2
+    links none: every candidate of step 2 is a reversal, which is the paper's odd/even rule of
+    eqs. (5)–(6) — with the reversing point of steps 4–5, not the paper's. The default is not
+    that rule: it is 10 % of the span of k over the capture (at least 2), which prunes vibration
+    pairs up to a tenth of the stroke. A table that drifts spans more than it swings, so the
+    sinusoidal-motion calibration with ``drift=True`` passes 10 % of the span without the drift
+    (:func:`demodulate`'s ``hysteresis_from``).
+
+    Parameters
+    ----------
+    t : array_like
+        Time of each sample (s).
+    u, v : array_like
+        Corrected signals ≈ (cos φ, sin φ) (dimensionless).
+    phase_rad : array_like
+        Unwrapped phase φ (rad) from :func:`unwrapped_phase`.
+    hysteresis_subintervals : int, optional
+        Smallest difference in level (30° subintervals of the signal period) between a maximum
+        and a neighbouring minimum that keeps them apart (step 3); 1 or 2 turns the pruning off.
+        Default: 10 % of the peak-to-peak of k, at least 2.
+
+    Returns
+    -------
+    Reversals
+        Sample indices, times (s) and kinds (+1 maximum of θ, −1 minimum).
+
+    Warns
+    -----
+    SubdivisionWarning
+        When k jumps by more than one subinterval between samples (sampling too slow for the
+        subdivision); directions stay valid while jumps are below 6 subintervals (π).
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.1 eqs. (3)–(6) and §3.2 eqs. (7)–(8).
+    """
+    tt = np.asarray(t, dtype=np.float64)
+    uu = np.asarray(u, dtype=np.float64)
+    vv = np.asarray(v, dtype=np.float64)
+    phase = np.asarray(phase_rad, dtype=np.float64)
+    if not (tt.shape == uu.shape == vv.shape == phase.shape) or phase.ndim != 1:
+        raise CaptureError(
+            "t, u, v and phase_rad must be one-dimensional and of equal length, got "
+            f"{tt.shape}, {uu.shape}, {vv.shape} and {phase.shape}."
+        )
+    idx, k_after, _, k0 = _transitions(phase)
+    plan = plan_reversals(
+        idx, k_after, k0, hysteresis_subintervals=hysteresis_subintervals, stacklevel=3
+    )
+    return _pinned(plan, tt, lambda lo, hi: (uu[lo : hi + 1], vv[lo : hi + 1]))
+
+
+def intercept_periods(reversals: Reversals, n_periods: int | None = None) -> tuple[int, int, int]:
+    """Sample range of n whole motion periods, bounded by 2n+1 reversing moments.
+
+    The first ``2n+1`` reversals are used; the range runs from the first of them to the last,
+    inclusive.
+
+    Parameters
+    ----------
+    reversals : Reversals
+        From :func:`find_reversals`.
+    n_periods : int, optional
+        Number of motion periods wanted; None takes as many as the capture holds.
+
+    Returns
+    -------
+    first, last, n : int
+        First and last (inclusive) sample index, and the number of periods n.
+
+    Raises
+    ------
+    CaptureError
+        Fewer than 2n+1 reversals (fewer than 3 when ``n_periods`` is None).
+    ConfigError
+        ``n_periods`` below 1.
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.3.
+    """
+    count = len(reversals.indices)
+    available = (count - 1) // 2 if count else 0
+    if n_periods is not None:
+        if isinstance(n_periods, bool) or int(n_periods) != n_periods or n_periods < 1:
+            raise ConfigError(f"n_periods={n_periods!r} must be a whole number ≥ 1.")
+        n = int(n_periods)
+    else:
+        n = max(available, 1)
+    if n > available:
+        raise CaptureError(
+            f"the capture holds {count} reversing moments, enough for {available} whole motion "
+            f"periods, but {n} were asked for ({2 * n + 1} reversals needed); record a longer "
+            "capture or ask for fewer periods."
+        )
+    return int(reversals.indices[0]), int(reversals.indices[2 * n]), n
