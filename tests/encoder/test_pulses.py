@@ -86,3 +86,15 @@ def test_head_columns():
     assert [h[0] for h in heads] == [0.5, 1.0]
     with pytest.raises(CaptureError, match="no head_0"):
         head_columns({"a": [1.0]})
+
+
+@pytest.mark.parametrize("n", [129, 200, 4097, 100_003])
+def test_local_period_by_rows_is_np_interp_to_the_bit(n):
+    """The block medians interpolated row by row are np.interp's values, bit for bit."""
+    from rotacal.encoder.pulses import _PERIOD_BLOCK, _local_period
+
+    dt = 1.0 + 0.01 * np.random.default_rng(n).standard_normal(n)
+    nb = n // _PERIOD_BLOCK
+    medians = np.median(dt[: nb * _PERIOD_BLOCK].reshape(nb, _PERIOD_BLOCK), axis=1)
+    centres = (np.arange(nb) + 0.5) * _PERIOD_BLOCK
+    np.testing.assert_array_equal(_local_period(dt), np.interp(np.arange(n), centres, medians))
