@@ -137,3 +137,19 @@ def test_single_head_period_check_on_a_prefix_still_refuses_a_wrong_count(long_h
     monkeypatch.setattr(rate_module, "PERIOD_CHECK_PULSES", 10)
     with pytest.raises(CaptureError, match="repeats every 600 pulses"):
         calibrate_rate([long_head], pulses_per_rev=500)
+
+
+@pytest.mark.parametrize("block", [5, 1 << 16])
+def test_blocked_timing_jitter_equals_the_whole_array_filter(train, monkeypatch, block):
+    """The same-line and pulse differences block by block give the whole-array convolution's
+    mean square (≤ 1e-12 relative) and the same number of terms."""
+    import rotacal.table.rate_jitter as rate_jitter
+
+    t, _ = train
+    m = 900
+    monkeypatch.setattr(rate_jitter, "_JITTER_BLOCK", block)
+    count, mean_square = rate_jitter._same_line_mean_square(t, m)
+    d = t[2 * m :] - 2.0 * t[m:-m] + t[: -2 * m]
+    e = np.convolve(d, np.array([1.0, -3.0, 3.0, -1.0])[::-1], mode="valid")
+    assert count == e.size
+    assert mean_square == pytest.approx(float(np.mean(e * e)), rel=1e-12)

@@ -14,7 +14,7 @@ from rotacal.signal.allan import adev_confidence_interval, edf_overlapping_adev
 from rotacal.table.rate_allan_sums import (
     ALLAN_FULL_CLUSTERS,
     allan_stride,
-    allan_sum,
+    allan_sums,
     decimated_grid,
     grid_stride,
 )
@@ -79,17 +79,17 @@ def allan_versus_angle(
     n = t.size
     pitch = float(pitch_deg) if pitch_deg is not None else float((a[-1] - a[0]) / (n - 1))
     ks = allan_clusters(n, pitch, angles_deg)
-    strides = [allan_stride(int(k)) for k in ks]
+    strides = np.array([allan_stride(int(k)) for k in ks], dtype=np.int64)
     jit = use_numba(n)
-    decimated: dict[int, tuple[FloatArray, FloatArray]] = {1: (t, a)}
     s = np.empty(ks.size)
-    for idx, (k, d) in enumerate(zip(ks.tolist(), strides, strict=True)):
-        if d not in decimated:
-            decimated[d] = (np.ascontiguousarray(t[::d]), np.ascontiguousarray(a[::d]))
-        td, ad = decimated[d]
-        count = td.size - 2 * (k // d)
-        mean_square = allan_sum(td, ad, k // d, 0, count, jit=jit) / count
-        s[idx] = math.sqrt(0.5 * mean_square) / abs(mean_rate_deg_s)
+    for d in np.unique(strides).tolist():  # one pass over each decimated record
+        sel = np.flatnonzero(strides == d)
+        td, ad = (t, a) if d == 1 else (t[::d].copy(), a[::d].copy())
+        kd = ks[sel] // d
+        counts = td.size - 2 * kd
+        sums = allan_sums(td, ad, kd.tolist(), [0] * sel.size, counts.tolist(), jit=jit)
+        mean_square = np.asarray(sums) / counts
+        s[sel] = np.sqrt(0.5 * mean_square) / abs(mean_rate_deg_s)
     return np.asarray(ks * pitch, dtype=np.float64), s
 
 

@@ -82,35 +82,55 @@ def _block_sums_numpy(
     return np.asarray(out, dtype=np.float64)
 
 
-def allan_sum(
-    t: FloatArray, a: FloatArray, k: int, first: int, stop: int, *, jit: bool | None = None
-) -> float:
-    """Σ_{j=first}^{stop−1} (ω_{j+k} − ω_j)², ω_j = (a[j+k] − a[j])/(t[j+k] − t[j]) (deg/s)².
+def allan_sums(
+    t: FloatArray,
+    a: FloatArray,
+    ks: Sequence[int],
+    firsts: Sequence[int],
+    stops: Sequence[int],
+    *,
+    jit: bool | None = None,
+) -> list[float]:
+    """Σ_{j=first}^{stop−1} (ω_{j+k} − ω_j)², ω_j = (a[j+k] − a[j])/(t[j+k] − t[j]), (deg/s)²,
+    for every cluster size k with its own range of terms.
 
     Parameters
     ----------
     t, a : ndarray, s and deg
         Pulse times and angles (needs indices up to stop − 1 + 2k).
-    k : int
-        Cluster size (pulses of t).
-    first, stop : int
-        The terms summed.
+    ks : sequence of int
+        Cluster sizes (pulses of t).
+    firsts, stops : sequence of int
+        The terms summed for each.
     jit : bool, optional
-        Force (True) or refuse (False) the Numba twin; default from the number of terms.
+        Force (True) or refuse (False) the Numba twin (one pass over the record for all cluster
+        sizes); default from the number of terms.
 
     References
     ----------
     Kokuyama et al. (2015), §5: ω_i = (θ_{i+k} − θ_i)/(kΔt), σ²(τ) = ½⟨(ω_{i+k} − ω_i)²⟩.
     """
-    if stop <= first:
-        return 0.0
-    if use_numba(stop - first, jit):
+    k_arr = np.asarray(ks, dtype=np.int64)
+    lo = np.asarray(firsts, dtype=np.int64)
+    hi = np.maximum(np.asarray(stops, dtype=np.int64), lo)
+    if k_arr.size == 0:
+        return []
+    if use_numba(int(np.max(hi - lo)), jit):
         from rotacal.table._rate_allan_jit import block_sums
 
-        parts = block_sums(t, a, int(k), int(first), int(stop), ALLAN_BLOCK)
-    else:
-        parts = _block_sums_numpy(t, a, int(k), int(first), int(stop), ALLAN_BLOCK)
-    return math.fsum(parts.tolist())
+        parts = block_sums(t, a, k_arr, lo, hi, ALLAN_BLOCK)
+        return [math.fsum(row) for row in parts.tolist()]
+    return [
+        math.fsum(_block_sums_numpy(t, a, int(k), int(f), int(s), ALLAN_BLOCK).tolist())
+        for k, f, s in zip(k_arr, lo, hi, strict=True)
+    ]
+
+
+def allan_sum(
+    t: FloatArray, a: FloatArray, k: int, first: int, stop: int, *, jit: bool | None = None
+) -> float:
+    """:func:`allan_sums` of one cluster size k over terms first … stop − 1."""
+    return allan_sums(t, a, [k], [first], [stop], jit=jit)[0]
 
 
 class AllanSums:
@@ -150,16 +170,15 @@ class AllanSums:
             bt = np.concatenate((tt, t[first::d]))
             ba = np.concatenate((aa, a[first::d]))
             end = base + bt.size  # one past the last decimated index
-            for idx in members:
-                kd = self.ks[idx] // d
-                stop = end - 2 * kd
-                start = self._next[idx]
+            kds = [self.ks[idx] // d for idx in members]
+            starts = [self._next[idx] - base for idx in members]
+            stops = [end - base - 2 * kd for kd in kds]
+            sums = allan_sums(bt, ba, kds, starts, stops, jit=self.jit)
+            for idx, start, stop, total in zip(members, starts, stops, sums, strict=True):
                 if stop > start:
-                    self.parts[idx].append(
-                        allan_sum(bt, ba, kd, start - base, stop - base, jit=self.jit)
-                    )
+                    self.parts[idx].append(total)
                     self.counts[idx] += stop - start
-                    self._next[idx] = stop
+                    self._next[idx] = base + stop
             keep = max(0, min(self._next[idx] for idx in members) - base)
             self._tails[d] = (bt[keep:].copy(), ba[keep:].copy(), base + keep)
         self._seen += t.size
