@@ -153,3 +153,17 @@ def test_blocked_timing_jitter_equals_the_whole_array_filter(train, monkeypatch,
     e = np.convolve(d, np.array([1.0, -3.0, 3.0, -1.0])[::-1], mode="valid")
     assert count == e.size
     assert mean_square == pytest.approx(float(np.mean(e * e)), rel=1e-12)
+
+
+def test_requested_angles_keep_whole_revolutions_and_round_poor_clusters():
+    """A whole revolution is kept to the pulse; a cluster with no small stride (a prime number
+    of pulses) is rounded to the decimated grid, by less than 1/64 of itself."""
+    m = 18000
+    pitch = 360.0 / m
+    prime = 1_000_003  # no divisor: its stride would be 1
+    ks = allan_clusters(10_000_000, pitch, [360.0, 720.0, prime * pitch])
+    assert ks[0] == m and ks[1] == 2 * m
+    assert ks[2] != prime and abs(ks[2] - prime) < prime / 64
+    assert ks[2] // allan_stride(int(ks[2])) < 2 * 64 + 1
+    # decreasing angles (a negative mean step) hold no whole revolution: no negative cluster
+    assert (allan_clusters(1000, -0.4) > 0).all()

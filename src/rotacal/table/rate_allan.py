@@ -122,7 +122,7 @@ def allan_clusters(
         decades = max(math.log10(kmax), 0.0)
         grid = np.rint(np.logspace(0.0, decades, int(decades * ALLAN_POINTS_PER_DECADE) + 1))
         # one revolution, where the scale's deviation cancels (Kokuyama et al.'s Figure 10 dip)
-        extra = [whole] if whole <= kmax else []
+        extra = [whole] if 1 <= whole <= kmax else []
         points = [_grid_point(int(k), kmax) for k in grid]
         return np.unique(np.asarray([*points, *extra], dtype=np.int64))
     req = np.atleast_1d(np.asarray(angles_deg, dtype=np.float64))
@@ -138,7 +138,8 @@ def allan_clusters(
     out = []
     for k in ks.tolist():
         poor = k // allan_stride(k) > 8 * ALLAN_FULL_CLUSTERS
-        out.append(k if (k % whole == 0 or not poor) else _grid_point(k, kmax))
+        revolutions = whole >= 1 and k % whole == 0
+        out.append(k if (revolutions or not poor) else _grid_point(k, kmax))
     return np.unique(np.asarray(out, dtype=np.int64))
 
 
