@@ -411,6 +411,7 @@ def calibrate_rate(
         if deviation is not None
         else angle_nom
     )
+    del count  # record-long: not needed past the angles
 
     if n == 1 and times.size > m:
         # one head: nothing else checks m; its angle error must repeat once per revolution.
