@@ -86,3 +86,33 @@ def test_head_columns():
     assert [h[0] for h in heads] == [0.5, 1.0]
     with pytest.raises(CaptureError, match="no head_0"):
         head_columns({"a": [1.0]})
+
+
+@pytest.mark.parametrize("n", [129, 200, 4097, 100_003])
+def test_local_period_by_rows_is_np_interp_to_the_bit(n):
+    """The block medians interpolated row by row are np.interp's values, bit for bit."""
+    from rotacal.encoder.pulses import _PERIOD_BLOCK, _local_period
+
+    dt = 1.0 + 0.01 * np.random.default_rng(n).standard_normal(n)
+    nb = n // _PERIOD_BLOCK
+    medians = np.median(dt[: nb * _PERIOD_BLOCK].reshape(nb, _PERIOD_BLOCK), axis=1)
+    centres = (np.arange(nb) + 0.5) * _PERIOD_BLOCK
+    np.testing.assert_array_equal(_local_period(dt), np.interp(np.arange(n), centres, medians))
+
+
+@pytest.mark.parametrize("chunk", [1, 37, 1 << 18])
+def test_pulse_rate_chunk_by_chunk_is_the_whole_array_formula_to_the_bit(monkeypatch, chunk):
+    """Rate points made a few blocks at a time are the whole-record reshape means, bit for bit."""
+    import rotacal.encoder.pulses as pulses
+
+    rng = np.random.default_rng(chunk)
+    t = np.cumsum(1e-3 * (1.0 + 0.01 * rng.standard_normal(10_007)))
+    a = np.arange(t.size) * 0.02 + 1e-5 * rng.standard_normal(t.size)
+    monkeypatch.setattr(pulses, "_RATE_CHUNK", chunk)
+    time_s, rate = pulse_rate(t, a, average=10)
+    dt = np.diff(t)
+    n = (dt.size // 10) * 10
+    np.testing.assert_array_equal(rate, (np.diff(a) / dt)[:n].reshape(-1, 10).mean(axis=1))
+    np.testing.assert_array_equal(time_s, (t[:-1] + 0.5 * dt)[:n].reshape(-1, 10).mean(axis=1))
+    with pytest.raises(ConfigError, match="one angle per pulse"):
+        pulse_rate(t, a[:-1], average=10)

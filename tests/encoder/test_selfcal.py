@@ -259,3 +259,24 @@ def test_a_short_record_says_m_was_not_confirmed():
     )
     r = self_calibrate(_heads(cap), pulses_per_rev=3000)
     assert any("cannot confirm" in n for n in r.notes)
+
+
+@pytest.mark.parametrize("block", [1, 2])
+def test_fit_block_by_block_of_revolutions_equals_the_whole_fit(monkeypatch, block):
+    """Fitting the revolutions a block at a time gives the all-at-once fit (≤ 1e-12 relative)."""
+    import rotacal.encoder.selfcal_fit as selfcal_fit
+
+    cap = simulate_pulses(heads=4, pulses_per_rev=600, revolutions=5.2, seed=31)
+    monkeypatch.setattr(selfcal_fit, "FIT_REVOLUTIONS", 1000)  # one block: the whole record
+    whole = self_calibrate(_heads(cap), pulses_per_rev=600)
+    monkeypatch.setattr(selfcal_fit, "FIT_REVOLUTIONS", block)
+    blocks = self_calibrate(_heads(cap), pulses_per_rev=600)
+    assert whole.revolutions_used == 5 and blocks.rotation == whole.rotation
+    scale = float(np.max(np.abs(whole.deviation_arcsec)))
+    np.testing.assert_allclose(blocks.deviation_arcsec, whole.deviation_arcsec, atol=1e-12 * scale)
+    np.testing.assert_allclose(
+        blocks.per_revolution_arcsec, whole.per_revolution_arcsec, atol=1e-12 * scale
+    )
+    assert blocks.closure_residual_rms_arcsec == pytest.approx(
+        whole.closure_residual_rms_arcsec, rel=1e-12
+    )

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rotacal.encoder.selfcal import _autocorrelation
+from rotacal.encoder.selfcal_checks import _autocorrelation
 
 
 @pytest.mark.parametrize("n", [1, 7, 1000, 4099])

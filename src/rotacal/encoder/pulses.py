@@ -46,6 +46,8 @@ MISSING_PULSE_RATIO = 1.5
 EXTRA_PULSE_RATIO = 0.75
 #: Intervals per block when estimating the local pulse period (robust to slow rate changes).
 _PERIOD_BLOCK = 64
+#: Pulse intervals :func:`pulse_rate` turns into rate points at a time.
+_RATE_CHUNK = 1 << 18
 
 
 def check_pulses_per_rev(pulses_per_rev: Any) -> int:
@@ -106,10 +108,22 @@ def _local_period(dt: FloatArray) -> FloatArray:
     n = dt.size
     if n <= 2 * _PERIOD_BLOCK:
         return np.full(n, float(np.median(dt)))
-    nb = n // _PERIOD_BLOCK
-    medians = np.median(dt[: nb * _PERIOD_BLOCK].reshape(nb, _PERIOD_BLOCK), axis=1)
-    centres = (np.arange(nb) + 0.5) * _PERIOD_BLOCK
-    return np.interp(np.arange(n), centres, medians)
+    size = _PERIOD_BLOCK
+    nb = n // size
+    medians = np.median(dt[: nb * size].reshape(nb, size), axis=1)
+    centres = (np.arange(nb) + 0.5) * size
+    # np.interp(arange(n), centres, medians) by rows: the centres are evenly spaced, so the
+    # intervals between them are whole rows of `size` intervals (the same operations, the
+    # same bits, without a binary search per interval)
+    slope = (medians[1:] - medians[:-1]) / (centres[1:] - centres[:-1])
+    half = size // 2
+    out = np.empty(n)
+    out[:half] = medians[0]
+    inner = out[half : half + (nb - 1) * size].reshape(nb - 1, size)
+    np.multiply(slope[:, None], np.arange(size, dtype=np.float64)[None, :], out=inner)
+    inner += medians[:-1, None]
+    out[half + (nb - 1) * size :] = medians[-1]
+    return out
 
 
 def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
@@ -154,7 +168,8 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
         )
     typical = float(np.median(dt[:TYPICAL_STEPS]))
     check_time_span(name, float(t[0]), float(t[-1]), typical, "pulse interval")
-    ratio = dt / _local_period(dt)
+    ratio = _local_period(dt)
+    np.divide(dt, ratio, out=ratio)  # in place: one record-long array less at the peak
     long_ = np.flatnonzero(ratio >= MISSING_PULSE_RATIO)
     if long_.size:
         i = int(long_[0])
@@ -444,19 +459,26 @@ def pulse_rate(
     a = np.asarray(angle_deg, dtype=np.float64)
     if isinstance(average, bool) or not isinstance(average, int | np.integer) or average < 1:
         raise ConfigError(f"average must be a whole number of intervals ≥ 1, got {average!r}.")
-    dt = np.diff(t)
-    rate = np.diff(a) / dt
-    mid = t[:-1] + 0.5 * dt
-    blocks = rate.size // int(average)
+    size = int(average)
+    intervals = max(t.size - 1, 0)
+    if a.shape != t.shape:
+        raise ConfigError(f"{a.size} angles for {t.size} pulse times; give one angle per pulse.")
+    blocks = intervals // size
     if blocks < 1:
         raise CaptureError(
-            f"{rate.size} pulse intervals cannot make one average of {average}; lower --average."
+            f"{intervals} pulse intervals cannot make one average of {average}; lower --average."
         )
-    n = blocks * int(average)
-    return (
-        mid[:n].reshape(blocks, -1).mean(axis=1),
-        rate[:n].reshape(blocks, -1).mean(axis=1),
-    )
+    # the same arithmetic per block as on the whole record (the same bits), a few thousand
+    # blocks at a time: no record-long temporaries
+    time_s, rate_deg_s = np.empty(blocks), np.empty(blocks)
+    step = max(1, _RATE_CHUNK // size)
+    for b0 in range(0, blocks, step):
+        b1 = min(b0 + step, blocks)
+        tt, aa = t[b0 * size : b1 * size + 1], a[b0 * size : b1 * size + 1]
+        dt = np.diff(tt)
+        rate_deg_s[b0:b1] = (np.diff(aa) / dt).reshape(b1 - b0, size).mean(axis=1)
+        time_s[b0:b1] = (tt[:-1] + 0.5 * dt).reshape(b1 - b0, size).mean(axis=1)
+    return time_s, rate_deg_s
 
 
 def whole_revolution_rate(

@@ -8,22 +8,26 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rotacal._jit import use_numba
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.signal.allan import adev_confidence_interval, edf_overlapping_adev
+from rotacal.table.rate_allan_sums import (
+    ALLAN_FULL_CLUSTERS,
+    allan_stride,
+    allan_sums,
+    decimated_grid,
+    grid_stride,
+)
 from rotacal.uncertainty.summaries import (
     COVERAGE,
 )
 
-__all__ = ["allan_uncertainty", "allan_versus_angle"]
+__all__ = ["allan_clusters", "allan_uncertainty", "allan_versus_angle"]
 
 FloatArray = NDArray[np.float64]
 
 #: Allan points per decade of rotation angle.
 ALLAN_POINTS_PER_DECADE = 12
-#: Terms up to which :func:`allan_mean_square` takes the whole-array mean (as it always did:
-#: the same bits; three temporaries of 8 MB at most), and per block beyond.
-ALLAN_WHOLE_MAX = 1 << 20
-ALLAN_BLOCK = 1 << 16
 
 
 def allan_versus_angle(
@@ -40,6 +44,10 @@ def allan_versus_angle(
     − t_i), the Allan variance σ²(τ) = ½⟨(ω_{i+k} − ω_i)²⟩ (overlapping, averaged over every i)
     and s(φ) = √σ²(φ/ω_m)/ω_m. The seed samples the angle at equal times; here it is sampled at
     equal angles (the pulses), so φ = k·Δθ is exact and τ = φ/ω_m as Kokuyama et al. (2015) convert it.
+    From 128 pulses on, the terms are taken every d-th pulse (d divides k, k/d ≥ 64: the
+    overlapping Allan variance of the record decimated to every d-th pulse, see
+    :mod:`rotacal.table.rate_allan_sums`), so that a stream needs a bounded state and the work
+    stays a few passes over the record.
 
     Parameters
     ----------
@@ -70,74 +78,69 @@ def allan_versus_angle(
     a = np.asarray(angle_deg, dtype=np.float64)
     n = t.size
     pitch = float(pitch_deg) if pitch_deg is not None else float((a[-1] - a[0]) / (n - 1))
+    ks = allan_clusters(n, pitch, angles_deg)
+    strides = np.array([allan_stride(int(k)) for k in ks], dtype=np.int64)
+    jit = use_numba(n)
+    s = np.empty(ks.size)
+    for d in np.unique(strides).tolist():  # one pass over each decimated record
+        sel = np.flatnonzero(strides == d)
+        td, ad = (t, a) if d == 1 else (t[::d].copy(), a[::d].copy())
+        kd = ks[sel] // d
+        counts = td.size - 2 * kd
+        sums = allan_sums(td, ad, kd.tolist(), [0] * sel.size, counts.tolist(), jit=jit)
+        mean_square = np.asarray(sums) / counts
+        s[sel] = np.sqrt(0.5 * mean_square) / abs(mean_rate_deg_s)
+    return np.asarray(ks * pitch, dtype=np.float64), s
+
+
+def _grid_point(k: int, kmax: int) -> int:
+    """k on the decimated grid (:func:`decimated_grid`), not beyond kmax."""
+    g = decimated_grid(k)
+    if g <= kmax:
+        return g
+    d = grid_stride(k)
+    return d * (kmax // d) if d <= kmax else kmax
+
+
+def allan_clusters(
+    n: int, pitch_deg: float, angles_deg: ArrayLike | None = None
+) -> NDArray[np.int64]:
+    """Cluster sizes k (pulses) of s(φ) for a record of n pulses: 12 per decade from one pitch
+    to a third of the record, plus one revolution, or the requested angles rounded to pulses.
+
+    From 2·:data:`~rotacal.table.rate_allan_sums.ALLAN_FULL_CLUSTERS` pulses on, the grid's
+    points are rounded to a multiple of their stride (:func:`decimated_grid`); a requested angle
+    whose pulses have no divisor that keeps the stride's work small is rounded the same way,
+    one of whole revolutions is kept exact (the scale's deviation cancels there).
+    """
+    pitch = float(pitch_deg)
     kmax = (n - 1) // 3
     if kmax < 1:
         raise CaptureError(f"{n} pulses are too few for an Allan variance; record more.")
+    whole = int(np.rint(360.0 / pitch))
     if angles_deg is None:
         decades = max(math.log10(kmax), 0.0)
         grid = np.rint(np.logspace(0.0, decades, int(decades * ALLAN_POINTS_PER_DECADE) + 1))
         # one revolution, where the scale's deviation cancels (Kokuyama et al.'s Figure 10 dip)
-        whole = np.rint(360.0 / pitch)
-        extra = [whole] if whole <= kmax else []
-        ks = np.unique(np.concatenate((grid, extra))).astype(np.int64)
-    else:
-        req = np.atleast_1d(np.asarray(angles_deg, dtype=np.float64))
-        if not np.all(np.isfinite(req)) or np.any(req <= 0):
-            raise ConfigError("Allan angles must be finite and > 0 deg.")
-        ks = np.unique(np.maximum(1, np.rint(req / pitch)).astype(np.int64))
-        too_long = ks[ks > kmax]
-        if too_long.size:
-            raise ConfigError(
-                f"an Allan angle of {too_long[0] * pitch:.6g} deg needs more than a third of the "
-                f"record ({kmax * pitch:.6g} deg); drop it or record longer."
-            )
-    s = np.empty(ks.size)
-    for idx, k in enumerate(int(x) for x in ks):
-        mean_square = allan_mean_square(t, a, k)
-        s[idx] = math.sqrt(0.5 * mean_square) / abs(mean_rate_deg_s)
-    return np.asarray(ks * pitch, dtype=np.float64), s
-
-
-def allan_mean_square(times_s: FloatArray, angle_deg: FloatArray, k: int) -> float:
-    """⟨(ω_{i+k} − ω_i)²⟩ over i = 0 … N − 2k − 1, ω_i = (θ_{i+k} − θ_i)/(t_{i+k} − t_i).
-
-    Up to :data:`ALLAN_WHOLE_MAX` terms, the whole-array mean; more are taken in blocks of
-    :data:`ALLAN_BLOCK`, so the temporaries stay a few MB at any N (the whole arrays were three
-    N-long temporaries per k), and the block sums are added exactly (``math.fsum``): the mean
-    then equals the whole-array one to ~1e-15 relative.
-
-    Parameters
-    ----------
-    times_s : ndarray, shape (N,), s
-        Pulse times.
-    angle_deg : ndarray, shape (N,), deg
-        Angle at each pulse.
-    k : int
-        Cluster size (pulses), 1 ≤ k, 2k < N.
-
-    Returns
-    -------
-    float, (deg/s)²
-
-    References
-    ----------
-    Kokuyama et al. (2015), §5: ω_i = (θ_{i+k} − θ_i)/(kΔt), σ²(τ) = ½⟨(ω_{i+k} − ω_i)²⟩.
-    """
-    t, a = times_s, angle_deg
-    count = t.size - 2 * k
-    if count <= ALLAN_WHOLE_MAX:
-        omega = (a[k:] - a[:-k]) / (t[k:] - t[:-k])
-        d = omega[k:] - omega[:-k]
-        return float(np.mean(d * d))
-    parts = []
-    for start in range(0, count, ALLAN_BLOCK):
-        stop = min(start + ALLAN_BLOCK, count)
-        mid, end = slice(start + k, stop + k), slice(start + 2 * k, stop + 2 * k)
-        first = (a[mid] - a[start:stop]) / (t[mid] - t[start:stop])
-        second = (a[end] - a[mid]) / (t[end] - t[mid])
-        d = second - first
-        parts.append(float(np.dot(d, d)))
-    return math.fsum(parts) / count
+        extra = [whole] if 1 <= whole <= kmax else []
+        points = [_grid_point(int(k), kmax) for k in grid]
+        return np.unique(np.asarray([*points, *extra], dtype=np.int64))
+    req = np.atleast_1d(np.asarray(angles_deg, dtype=np.float64))
+    if not np.all(np.isfinite(req)) or np.any(req <= 0):
+        raise ConfigError("Allan angles must be finite and > 0 deg.")
+    ks = np.unique(np.maximum(1, np.rint(req / pitch)).astype(np.int64))
+    too_long = ks[ks > kmax]
+    if too_long.size:
+        raise ConfigError(
+            f"an Allan angle of {too_long[0] * pitch:.6g} deg needs more than a third of the "
+            f"record ({kmax * pitch:.6g} deg); drop it or record longer."
+        )
+    out = []
+    for k in ks.tolist():
+        poor = k // allan_stride(k) > 8 * ALLAN_FULL_CLUSTERS
+        revolutions = whole >= 1 and k % whole == 0
+        out.append(k if (revolutions or not poor) else _grid_point(k, kmax))
+    return np.unique(np.asarray(out, dtype=np.int64))
 
 
 def _noise_alpha(phi: FloatArray, s: FloatArray) -> NDArray[np.int64]:
@@ -164,7 +167,9 @@ def allan_uncertainty(
 
     The angle is sampled at the pulses (equal angles), so the pulse times play the part of the
     phase and φ = k·Δθ the part of τ = m·τ₀: σ²(φ) is the overlapping Allan variance of cluster
-    size k over N pulses. Its edf (Greenhall & Riley 2003) depends on the noise type, taken from
+    size k over N pulses (of k/d over the ⌈N/d⌉ pulses at stride d when the terms are taken
+    every d-th pulse, :func:`allan_versus_angle`). Its edf (Greenhall & Riley 2003) depends on
+    the noise type, taken from
     the local slope of s(φ). ν·ŝ²/s² ~ χ²(ν), so u(ŝ) = ŝ/√(2ν) and the 95 % interval is
     [ŝ·√(ν/χ²₀.₉₇₅), ŝ·√(ν/χ²₀.₀₂₅)].
 
@@ -196,10 +201,14 @@ def allan_uncertainty(
     phi = np.asarray(angles_deg, dtype=np.float64)
     ks = np.maximum(1, np.rint(phi / pitch_deg)).astype(np.int64)
     alpha = _noise_alpha(phi, sv)
+    # a cluster taken every d-th pulse is the overlapping variance of the decimated record
+    strides = np.array([allan_stride(int(k)) for k in ks], dtype=np.int64)
     edf = np.empty(sv.size)
-    for a in np.unique(alpha):  # one whole-array call per noise type
-        sel = alpha == a
-        edf[sel] = edf_overlapping_adev(int(pulses), ks[sel], int(a))
+    for a in np.unique(alpha):
+        for d in np.unique(strides[alpha == a]):  # one whole-array call per type and stride
+            sel = (alpha == a) & (strides == d)
+            n_d = -(-int(pulses) // int(d))  # pulses whose index is a multiple of d
+            edf[sel] = edf_overlapping_adev(n_d, ks[sel] // d, int(a))
     u = sv / np.sqrt(2.0 * edf)
     low, high = adev_confidence_interval(sv, edf, COVERAGE)
     return u, 0.5 * (high - low), edf, low, high, alpha

@@ -36,6 +36,23 @@ def _dof_of_mean_square(n: int, lags: NDArray[np.int64], rho: FloatArray) -> flo
     return float(n) ** 2 / float(np.sum(weight * rho**2))
 
 
+#: Filtered values per block of :func:`_same_line_mean_square` (blocks added exactly).
+_JITTER_BLOCK = 1 << 16
+
+
+def _same_line_mean_square(t: FloatArray, m: int) -> tuple[int, float]:
+    """Number and mean square of E_j = D_{j+3} − 3D_{j+2} + 3D_{j+1} − D_j, D_j = t_{j+2m} −
+    2t_{j+m} + t_j (s²), block by block: no record-long temporaries."""
+    count = t.size - 2 * m - (_PULSE_FILTER.size - 1)
+    parts = []
+    for start in range(0, count, _JITTER_BLOCK):
+        stop = min(start + _JITTER_BLOCK, count) + _PULSE_FILTER.size - 1  # D's this block needs
+        d = t[start + 2 * m : stop + 2 * m] - 2.0 * t[start + m : stop + m] + t[start:stop]
+        e = d[3:] - 3.0 * d[2:-1] + 3.0 * d[1:-2] - d[:-3]
+        parts.append(float(np.dot(e, e)))
+    return count, math.fsum(parts) / count
+
+
 def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float, bool]:
     """Standard deviation of the white timing noise of a pulse train, from the train itself.
 
@@ -83,18 +100,18 @@ def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float
     m = check_pulses_per_rev(pulses_per_rev)
     h = _PULSE_FILTER
     if t.size >= 2 * m + 2 * h.size:
-        d = t[2 * m :] - 2.0 * t[m:-m] + t[: -2 * m]
-        e = np.convolve(d, h[::-1], mode="valid")
+        count, mean_square = _same_line_mean_square(t, m)
         norm = float(np.sum(_REV_FILTER**2) * np.sum(h**2))
         # the same-line difference correlates values m and 2m apart, the pulse filter 1 … 3
         lag_r = (np.arange(_REV_FILTER.size * 2 - 1) - (_REV_FILTER.size - 1)) * m
         lag_p = np.arange(h.size * 2 - 1) - (h.size - 1)
         lags = (lag_r[:, None] + lag_p[None, :]).ravel()
         rho = np.outer(_rho(_REV_FILTER), _rho(h)).ravel()
-        dof = _dof_of_mean_square(e.size, lags, rho)
+        dof = _dof_of_mean_square(count, lags, rho)
         exact = True
     elif t.size >= 2 * h.size:
         e = np.convolve(t, h[::-1], mode="valid")
+        mean_square = float(np.mean(e * e))
         norm = float(np.sum(h**2))
         dof = _dof_of_mean_square(e.size, np.arange(h.size * 2 - 1) - (h.size - 1), _rho(h))
         exact = False
@@ -102,5 +119,5 @@ def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float
         raise CaptureError(
             f"{t.size} pulses are too few to estimate the timing noise; record more."
         )
-    sigma = math.sqrt(float(np.mean(e * e)) / norm)
+    sigma = math.sqrt(mean_square / norm)
     return sigma, dof, exact

@@ -1,0 +1,190 @@
+"""The sums behind s(φ): Σ(ω_{j+k} − ω_j)² over a pulse record, whole or chunk by chunk.
+
+Cluster sizes from 2·:data:`ALLAN_FULL_CLUSTERS` pulses on are taken on the record decimated to
+every d-th pulse (d a divisor of k, k/d ≥ :data:`ALLAN_FULL_CLUSTERS`): the overlapping Allan
+variance of the pulses at stride d, of cluster size k/d (NIST SP 1065 §5.2.4: τ = k/d·(d·τ₀)).
+Terms d pulses apart are nearly the same term when d ≪ k (they share all but 2d/k of their
+pulses), so the estimate keeps its degrees of freedom (its edf is that of the decimated record,
+Greenhall & Riley 2003) and the work falls from N per cluster size to N/d; above all, a cluster
+of k pulses then needs only the last 2k/d decimated pulses, so a stream is summed with a bounded
+carried state (:class:`AllanSums`) and gives the in-memory sums to rounding.
+
+Whole-array NumPy here; the Numba twin (:mod:`rotacal.table._rate_allan_jit`) for long records
+(:func:`rotacal._jit.use_numba`), both to ≤ 1e-12 relative.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rotacal._jit import use_numba
+
+__all__ = [
+    "ALLAN_FULL_CLUSTERS",
+    "AllanSums",
+    "allan_stride",
+    "allan_sum",
+    "decimated_grid",
+    "grid_stride",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: Cluster sizes below twice this are summed over every pulse; larger ones over every d-th pulse
+#: with at least this many decimated pulses per cluster.
+ALLAN_FULL_CLUSTERS = 64
+#: Terms per block sum (the blocks are added exactly, ``math.fsum``).
+ALLAN_BLOCK = 1 << 14
+
+
+def allan_stride(k: int) -> int:
+    """The stride d of cluster size k: its largest divisor with k/d ≥ :data:`ALLAN_FULL_CLUSTERS`
+    (1 below twice that)."""
+    limit = k // ALLAN_FULL_CLUSTERS
+    if limit < 2:
+        return 1
+    i = np.arange(1, math.isqrt(k) + 1, dtype=np.int64)
+    small = i[k % i == 0]
+    divisors = np.concatenate((small, k // small))
+    return int(divisors[divisors <= limit].max())
+
+
+def decimated_grid(k: int) -> int:
+    """k rounded to a multiple of the power of two 2^⌊log₂(k/K₀)⌋ (K₀ =
+    :data:`ALLAN_FULL_CLUSTERS`), so that its stride keeps K₀ … 2K₀ decimated pulses per cluster
+    (a change of k by less than 1/K₀ of itself: a point of a logarithmic grid)."""
+    d = grid_stride(k)
+    return d * max(1, round(k / d))
+
+
+def grid_stride(k: int) -> int:
+    """The power of two 2^⌊log₂(k/K₀)⌋ a grid point k is rounded to a multiple of (1 below 2K₀)."""
+    if k < 2 * ALLAN_FULL_CLUSTERS:
+        return 1
+    return 1 << math.floor(math.log2(k / ALLAN_FULL_CLUSTERS))
+
+
+def _block_sums_numpy(
+    t: FloatArray, a: FloatArray, k: int, first: int, stop: int, block: int
+) -> FloatArray:
+    out = []
+    for start in range(first, stop, block):
+        end = min(start + block, stop)
+        omega = (a[start + k : end + 2 * k] - a[start : end + k]) / (
+            t[start + k : end + 2 * k] - t[start : end + k]
+        )
+        d = omega[k:] - omega[:-k]
+        out.append(float(np.dot(d, d)))
+    return np.asarray(out, dtype=np.float64)
+
+
+def allan_sums(
+    t: FloatArray,
+    a: FloatArray,
+    ks: Sequence[int],
+    firsts: Sequence[int],
+    stops: Sequence[int],
+    *,
+    jit: bool | None = None,
+) -> list[float]:
+    """Σ_{j=first}^{stop−1} (ω_{j+k} − ω_j)², ω_j = (a[j+k] − a[j])/(t[j+k] − t[j]), (deg/s)²,
+    for every cluster size k with its own range of terms.
+
+    Parameters
+    ----------
+    t, a : ndarray, s and deg
+        Pulse times and angles (needs indices up to stop − 1 + 2k).
+    ks : sequence of int
+        Cluster sizes (pulses of t).
+    firsts, stops : sequence of int
+        The terms summed for each.
+    jit : bool, optional
+        Force (True) or refuse (False) the Numba twin (one pass over the record for all cluster
+        sizes); default from the number of terms.
+
+    References
+    ----------
+    Kokuyama et al. (2015), §5: ω_i = (θ_{i+k} − θ_i)/(kΔt), σ²(τ) = ½⟨(ω_{i+k} − ω_i)²⟩.
+    """
+    k_arr = np.asarray(ks, dtype=np.int64)
+    lo = np.asarray(firsts, dtype=np.int64)
+    hi = np.maximum(np.asarray(stops, dtype=np.int64), lo)
+    if k_arr.size == 0:
+        return []
+    if use_numba(int(np.max(hi - lo)), jit):
+        from rotacal.table._rate_allan_jit import block_sums
+
+        parts = block_sums(t, a, k_arr, lo, hi, ALLAN_BLOCK)
+        return [math.fsum(row) for row in parts.tolist()]
+    return [
+        math.fsum(_block_sums_numpy(t, a, int(k), int(f), int(s), ALLAN_BLOCK).tolist())
+        for k, f, s in zip(k_arr, lo, hi, strict=True)
+    ]
+
+
+def allan_sum(
+    t: FloatArray, a: FloatArray, k: int, first: int, stop: int, *, jit: bool | None = None
+) -> float:
+    """:func:`allan_sums` of one cluster size k over terms first … stop − 1."""
+    return allan_sums(t, a, [k], [first], [stop], jit=jit)[0]
+
+
+class AllanSums:
+    """Σ(ω_{j+k} − ω_j)² and the number of terms, per cluster size, over a stream of pulses.
+
+    Each stride d keeps the last 2·max(k/d) decimated pulses of the chunks seen (all a later term
+    needs): memory bounded by the cluster sizes, whatever the record's length.
+
+    Parameters
+    ----------
+    ks, strides : sequence of int
+        Cluster sizes (pulses) and their strides (each divides its k).
+    jit : bool, optional
+        Force or refuse the Numba twin.
+    """
+
+    def __init__(self, ks: Sequence[int], strides: Sequence[int], jit: bool | None = None) -> None:
+        self.ks = [int(k) for k in ks]
+        self.strides = [int(d) for d in strides]
+        self.jit = jit
+        self.parts: list[list[float]] = [[] for _ in self.ks]
+        self.counts = np.zeros(len(self.ks), dtype=np.int64)
+        self._seen = 0  # pulses fed so far
+        groups: dict[int, list[int]] = {}
+        for idx, d in enumerate(self.strides):
+            groups.setdefault(d, []).append(idx)
+        self._groups = groups
+        # per stride: decimated tail (t, a), its first decimated index, next term per k
+        self._tails = {d: (np.zeros(0), np.zeros(0), 0) for d in groups}
+        self._next = [0] * len(self.ks)
+
+    def update(self, t: FloatArray, a: FloatArray) -> None:
+        """Add the next chunk of pulse times (s) and angles (deg)."""
+        for d, members in self._groups.items():
+            first = (-self._seen) % d  # the chunk's first pulse whose index is a multiple of d
+            tt, aa, base = self._tails[d]
+            bt = np.concatenate((tt, t[first::d]))
+            ba = np.concatenate((aa, a[first::d]))
+            end = base + bt.size  # one past the last decimated index
+            kds = [self.ks[idx] // d for idx in members]
+            starts = [self._next[idx] - base for idx in members]
+            stops = [end - base - 2 * kd for kd in kds]
+            sums = allan_sums(bt, ba, kds, starts, stops, jit=self.jit)
+            for idx, start, stop, total in zip(members, starts, stops, sums, strict=True):
+                if stop > start:
+                    self.parts[idx].append(total)
+                    self.counts[idx] += stop - start
+                    self._next[idx] = base + stop
+            keep = max(0, min(self._next[idx] for idx in members) - base)
+            self._tails[d] = (bt[keep:].copy(), ba[keep:].copy(), base + keep)
+        self._seen += t.size
+
+    def mean_squares(self) -> FloatArray:
+        """⟨(ω_{j+k} − ω_j)²⟩ per cluster size, (deg/s)² (NaN where no term was complete)."""
+        sums = np.array([math.fsum(p) for p in self.parts])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(self.counts > 0, sums / np.maximum(self.counts, 1), np.nan)
