@@ -26,4 +26,10 @@ def open_db(url: str | None, *, check_schema: bool = True) -> Store:
     """The store of ``--db`` (a fault becomes one line and exit 2 through the command group)."""
     from rotacal.records import open_store
 
-    return open_store(url, check_schema=check_schema)
+    store = open_store(url, check_schema=check_schema)
+    # the pool's connections close with the command, not whenever the store is collected: a
+    # PostgreSQL connection left to the garbage collector is an unclosed socket (ResourceWarning)
+    context = click.get_current_context(silent=True)
+    if context is not None:
+        context.call_on_close(store.close)
+    return store

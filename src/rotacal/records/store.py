@@ -121,6 +121,10 @@ class Store:
         self.timeout_s = timeout_s
 
     # -- plumbing ----------------------------------------------------------------------------
+    def close(self) -> None:
+        """Close the store's pooled connections (the store opens new ones if used again)."""
+        self.engine.dispose()
+
     def errors(self) -> contextlib.AbstractContextManager[None]:
         """Database faults as one-line :class:`StoreError` naming this store."""
         return store_errors(self.url, self.timeout_s)
