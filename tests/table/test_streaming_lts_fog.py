@@ -9,6 +9,7 @@ import rotacal.table.streaming as streaming
 from rotacal import sim
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.io import write_capture
+from rotacal.table import _stream_lts as lts
 from rotacal.table import (
     calibrate_fog_motion,
     calibrate_fog_motion_chunked,
@@ -17,7 +18,6 @@ from rotacal.table import (
     fog_chunks_from_file,
     lts_chunks_from_file,
 )
-from rotacal.table import _stream_lts as lts
 
 DISTORTED = sim.SineMotion(
     amplitude_deg=0.5,
@@ -261,5 +261,5 @@ def test_chunks_missing_the_signal_are_refused(fog_capture):
     def missing():
         yield {"time_s": fog_capture["time_s"]}
 
-    with pytest.raises(CaptureError, match="no column 'rate_deg_s'.*time_s and rate_deg_s"):
+    with pytest.raises(CaptureError, match=r"no column 'rate_deg_s'.*time_s and rate_deg_s"):
         calibrate_fog_motion_chunked(missing)

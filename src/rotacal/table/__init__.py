@@ -35,8 +35,8 @@ __all__ = [
     "calibrate_rate",
     "compare_schemes",
     "encoder_chunks_from_file",
-    "fog_chunks_from_file",
     "extreme_reversals",
+    "fog_chunks_from_file",
     "lts_chunks_from_file",
     "position_error",
 ]
