@@ -263,3 +263,54 @@ def test_chunks_missing_the_signal_are_refused(fog_capture):
 
     with pytest.raises(CaptureError, match=r"no column 'rate_deg_s'.*time_s and rate_deg_s"):
         calibrate_fog_motion_chunked(missing)
+
+
+@pytest.mark.parametrize("scheme", ["lts", "fog"])
+def test_the_cli_streams_a_large_capture_by_itself(
+    lts_capture, fog_capture, tmp_path, monkeypatch, scheme
+):
+    """Above the in-memory limit (lowered here) the command streams; same JSON as --in-memory;
+    a fault names the file."""
+    import json
+
+    from click.testing import CliRunner
+
+    import rotacal.cli.motion as cli_motion
+    from rotacal.cli import cli
+
+    cap = lts_capture if scheme == "lts" else fog_capture
+    path = write_capture(tmp_path / f"{scheme}.npz", cap)
+    args = [
+        "motion",
+        scheme,
+        str(path),
+        "--json",
+        "-",
+        *(["--radius-mm", "100"] * (scheme == "lts")),
+    ]
+
+    def run(*more):
+        r = CliRunner().invoke(cli, [*args, *more], prog_name="rotacal")
+        assert r.exit_code == 0, r.output
+        return json.loads(r.stdout)
+
+    whole = run("--in-memory")
+    calls = []
+    real = (
+        streaming.calibrate_lts_motion_chunked
+        if scheme == "lts"
+        else streaming.calibrate_fog_motion_chunked
+    )
+    name = real.__name__
+    monkeypatch.setattr(f"rotacal.table.{name}", lambda *a, **k: calls.append(1) or real(*a, **k))
+    monkeypatch.setattr(cli_motion, "_IN_MEMORY_MAX_SAMPLES", 1000)
+    streamed = run()
+    assert calls == [1]
+    assert streamed["reversal_times_s"] == pytest.approx(whole["reversal_times_s"], abs=1e-12)
+    assert streamed["thd_percent"] == pytest.approx(whole["thd_percent"], rel=1e-9)
+    bad = dict(cap)
+    bad["time_s"] = cap["time_s"].copy()
+    bad["time_s"][5000:] += 1.0
+    bad_path = write_capture(tmp_path / "gap.npz", bad)
+    r = CliRunner().invoke(cli, ["motion", scheme, str(bad_path), *args[3:]], prog_name="rotacal")
+    assert r.exit_code != 0 and "gap.npz" in r.stderr and "gap" in r.stderr
