@@ -43,6 +43,29 @@ Fed = tuple[HarmonicFitAccumulator, Callable[[np.ndarray], np.ndarray] | None]
 _FIRST_ADD_SAMPLES = 1 << 16
 
 
+#: Long blocks for the accumulated fits: harmonic 2H of 1.25·f may turn by up to _BLOCK_PHASE rad
+#: within a block, its exponential kept to _BLOCK_MOMENTS Taylor terms (3³²/32! < 1e-20). The
+#: accumulator's own default (0.25 rad, 16 moments) holds ~12 times more blocks, whose moments
+#: are what grows with a long capture and what each step of the frequency refinement sums over.
+_BLOCK_PHASE = 3.0
+_BLOCK_MOMENTS = 32
+
+
+def accumulator(f0: float, harmonics: int, dt: float | None = None) -> HarmonicFitAccumulator:
+    """A :class:`~rotacal.signal.HarmonicFitAccumulator` for a fit at about ``f0`` (Hz) with
+    ``harmonics``, of samples ``dt`` (s) apart: blocks as long as the Taylor series of its
+    block moments allows with 32 moments (the same least-squares solution, fewer blocks)."""
+    if dt is None or not dt > 0:
+        return HarmonicFitAccumulator(f0, harmonics=harmonics)
+    w = 2.0 * math.pi * f0 * 1.25
+    m = int(2.0 * _BLOCK_PHASE / (2 * harmonics * w * dt))
+    if m < 64:  # too few samples a block to gain: the accumulator's own plan
+        return HarmonicFitAccumulator(f0, harmonics=harmonics)
+    return HarmonicFitAccumulator(
+        f0, harmonics=harmonics, block_samples=m, n_moments=_BLOCK_MOMENTS
+    )
+
+
 @dataclasses.dataclass
 class SegmentFit:
     """The analysis fit of samples ``first..last`` and what the result needs of the segment."""
@@ -75,10 +98,12 @@ def fit_segment(
     gather_max: int,
     rate: bool = False,
     beside: list[Fed] | None = None,
+    dt: float | None = None,
 ) -> SegmentFit:
     """The fit of :func:`~rotacal.table.motion_drift.fit_motion` (start frequency ``f0``, Hz)
     on the segment, in one pass. ``beside``: further accumulators fed the same pieces in the
-    same pass when the segment is not gathered (eq. (2)'s three-parameter fit)."""
+    same pass when the segment is not gathered (eq. (2)'s three-parameter fit); ``dt``: the
+    sample interval (s), for the blocks of :func:`accumulator`."""
     n_seg = last + 1 - first
     step = _plot_stride(n_seg)
     if n_seg <= gather_max:
@@ -89,7 +114,7 @@ def fit_segment(
         fit = fit_motion(t_seg, y_seg, f0, harmonics, drift, rate=rate)
         t_plot = t_seg[::step]
         return SegmentFit(fit, t_seg, y_seg, t_plot, y_seg[::step] - fit.evaluate(t_plot), n_seg)
-    acc = HarmonicFitAccumulator(f0, harmonics=harmonics)
+    acc = accumulator(f0, harmonics, dt)
     dec_t: list[np.ndarray] = []
     dec_y: list[np.ndarray] = []
     ends: list[float] = []
@@ -169,12 +194,13 @@ def position_error_pass(
     *,
     acc3: HarmonicFitAccumulator | None = None,
     to_true: Callable[[np.ndarray], np.ndarray] | None = None,
+    dt: float | None = None,
 ) -> tuple[float, float, np.ndarray]:
     """Eq. (2) against the ideal sinusoid of :func:`~rotacal.table.position_error`: its maximum
     and rms (deg) and a decimated copy. ``acc3``: the three-parameter fit's accumulator, already
     fed the segment (t through ``to_true``); None: fed in a pass of its own first."""
     if acc3 is None:
-        acc3 = HarmonicFitAccumulator(set_frequency_hz, harmonics=1)
+        acc3 = accumulator(set_frequency_hz, 1, dt)
         accumulate([(acc3, to_true)], segment())
     fit3 = acc3.fit(set_frequency_hz, 1, False, max_iter=1, rtol=1e-12)
     phase0 = float(fit3.phases_rad[0])

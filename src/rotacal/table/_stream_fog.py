@@ -20,9 +20,9 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from rotacal.signal import HarmonicFitAccumulator, SineFit
+from rotacal.signal import SineFit
 from rotacal.signal._result import harmonic_series
-from rotacal.table._stream_fit import Fed, Segment, accumulate, decimate
+from rotacal.table._stream_fit import Fed, Segment, accumulate, accumulator, decimate
 from rotacal.table._stream_source import Passes
 from rotacal.table.motion import _plot_stride, fog_angle_steps, model_zero_crossings
 
@@ -42,11 +42,11 @@ def rate_segment(passes: Passes, first: int, last: int) -> Segment:
 
 
 def whole_fit(
-    passes: Passes, n: int, f_start: float, harmonics: int, drift: bool
+    passes: Passes, n: int, f_start: float, harmonics: int, drift: bool, dt: float | None
 ) -> tuple[SineFit, np.ndarray, np.ndarray]:
     """The fit of the whole capture's rate (as :func:`~rotacal.signal.fit_harmonics` from
-    ``f_start``, Hz) and every _plot_stride(n)-th sample (t, rate) for the figures."""
-    acc = HarmonicFitAccumulator(f_start, harmonics=harmonics)
+    ``f_start``, Hz; samples ``dt`` s apart) and every _plot_stride(n)-th sample (t, rate) for the figures."""
+    acc = accumulator(f_start, harmonics, dt)
     step = _plot_stride(n)
     dec_t: list[np.ndarray] = []
     dec_w: list[np.ndarray] = []

@@ -23,9 +23,8 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
-from rotacal.signal import HarmonicFitAccumulator
 from rotacal.table._stream_checks import Checked, start_frequency
-from rotacal.table._stream_fit import Segment, accumulate
+from rotacal.table._stream_fit import Segment, accumulate, accumulator
 from rotacal.table._stream_source import Passes
 from rotacal.table.motion import (
     _plot_stride,
@@ -74,7 +73,7 @@ def prefit_drift_chunked(passes: Passes, found: Checked, radius_mm: float, harmo
         (ts, lts_angle(ds, radius_mm) - slope * (ts - t_mid)),
         whole=found.strided.stride == 1 and ts.size == t1.size,
     )
-    acc = HarmonicFitAccumulator(f0, harmonics=harmonics)
+    acc = accumulator(f0, harmonics, found.typical)
 
     def less_line() -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
         for g0, t, x in whole():

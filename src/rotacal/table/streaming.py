@@ -55,6 +55,7 @@ from rotacal.table._stream_checks import (
 from rotacal.table._stream_fit import (
     Segment,
     SegmentFit,
+    accumulator,
     detrended,
     fit_segment,
     position_error_pass,
@@ -220,6 +221,7 @@ def calibrate_encoder_motion_chunked(
         set_amplitude_deg,
         set_frequency_hz,
         true_time(specs, t0),
+        found.typical,
     )
     plot = {
         "t": demod.plot_t,
@@ -275,6 +277,7 @@ def _fit_and_error(
     set_amplitude_deg: float | None,
     set_frequency_hz: float | None,
     to_true: Callable[[np.ndarray], np.ndarray] | None,
+    dt: float | None,
 ) -> tuple[SegmentFit, tuple[float, float, np.ndarray] | None]:
     """The analysis fit of an angle segment (OSE, LTS) and, when it was not gathered and set
     values are given, the position error of eq. (2) on θ less any fitted drift: without a drift
@@ -284,12 +287,18 @@ def _fit_and_error(
     acc3 = None
     beside = []
     if with_set and not drift:
-        from rotacal.signal import HarmonicFitAccumulator
-
-        acc3 = HarmonicFitAccumulator(set_frequency_hz, harmonics=1)
+        acc3 = accumulator(set_frequency_hz, 1, dt)
         beside.append((acc3, to_true))
     seg = fit_segment(
-        segment, first, last, f0, harmonics, drift, gather_max=_GATHER_MAX_SAMPLES, beside=beside
+        segment,
+        first,
+        last,
+        f0,
+        harmonics,
+        drift,
+        gather_max=_GATHER_MAX_SAMPLES,
+        beside=beside,
+        dt=dt,
     )
     if seg.gathered or set_amplitude_deg is None or set_frequency_hz is None:
         return seg, None
@@ -301,6 +310,7 @@ def _fit_and_error(
         set_frequency_hz,
         acc3=acc3,
         to_true=to_true,
+        dt=dt,
     )
     return seg, error
 
@@ -411,6 +421,7 @@ def calibrate_lts_motion_chunked(
         set_amplitude_deg,
         set_frequency_hz,
         true_time(specs, t0),
+        found.typical,
     )
     plot = {
         "t": ext.plot_t,
@@ -520,7 +531,7 @@ def calibrate_fog_motion_chunked(
         strided,
         whole=found.strided.stride == 1 and strided[0].size == found.first_samples[0].size,
     )
-    first_fit, plot_t, plot_w = fog.whole_fit(passes, n, f_start, harmonics, drift)
+    first_fit, plot_t, plot_w = fog.whole_fit(passes, n, f_start, harmonics, drift, found.typical)
     rev_times, rev_idx = fog.zero_crossings(passes, first_fit, n)
     first, last, n_periods = _cut(rev_idx, periods, "FOG capture")
     rates = fog.rate_segment(passes, first, last)
@@ -533,15 +544,14 @@ def calibrate_fog_motion_chunked(
         drift,
         gather_max=_GATHER_MAX_SAMPLES,
         rate=True,
+        dt=found.typical,
     )
     fit = seg.fit
     to_true = true_time(specs, t0)
     with_set = set_amplitude_deg is not None and set_frequency_hz is not None
     acc3 = None
     if with_set and not seg.gathered:
-        from rotacal.signal import HarmonicFitAccumulator
-
-        acc3 = HarmonicFitAccumulator(set_frequency_hz, harmonics=1)
+        acc3 = accumulator(set_frequency_hz, 1, found.typical)
     angle = fog.integrate(rates, fit, first, last, [] if acc3 is None else [(acc3, to_true)])
     error = None
     if acc3 is not None and set_amplitude_deg is not None and set_frequency_hz is not None:
