@@ -298,9 +298,11 @@ def refined_reversals(
         while nxt < m and lo[nxt] <= t[-1]:
             active[nxt] = []
             nxt += 1
-        for j in list(active):
-            a = int(np.searchsorted(t, lo[j]))
-            b = int(np.searchsorted(t, hi[j], side="right"))
+        open_now = np.fromiter(active, dtype=np.intp, count=len(active))
+        # all windows at once: one binary search per bound and chunk
+        starts = np.searchsorted(t, lo[open_now])
+        stops = np.searchsorted(t, hi[open_now], side="right")
+        for j, a, b in zip(open_now.tolist(), starts.tolist(), stops.tolist(), strict=True):
             if b > a:
                 active[j].append((off + a, np.array(t[a:b]), np.array(x[a:b])))
             if hi[j] < t[-1]:
