@@ -19,7 +19,6 @@ Heydemann P. L. M. (1981). Appl. Opt. 20, 3382 (signal correction).
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 from collections.abc import Iterator
 from typing import Any
@@ -219,25 +218,17 @@ def segment(
     scale: float,
     first: int,
     last: int,
-) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
-    """θ (deg) of samples ``first..last``, recomputed chunk by chunk from the saved phase state:
-    ``(global index of the piece's first sample, t, θ)``."""
-    for number, off, cols in passes.run(first, last + 1):
-        phase = phase_pass(
-            cols["a"], cols["b"], corr, state=states[number], jit=use_numba(last + 1 - first)
-        ).phase_rad
-        s = max(first - off, 0)
-        e = min(last + 1 - off, phase.size)
-        yield off + s, cols["time_s"][s:e], phase[s:e] * scale
-
-
-def segment_of(
-    passes: Passes,
-    states: list[PhaseState | None],
-    corr: QuadratureCorrection,
-    scale: float,
-    first: int,
-    last: int,
 ) -> Segment:
-    """:func:`segment` as a callable that starts a fresh pass over the analysed samples."""
-    return functools.partial(segment, passes, states, corr, scale, first, last)
+    """θ (deg) of samples ``first..last``, recomputed chunk by chunk from the saved phase state,
+    each call a fresh pass: ``(global index of the piece's first sample, t, θ)``."""
+
+    def pieces() -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+        for number, off, cols in passes.run(first, last + 1):
+            phase = phase_pass(
+                cols["a"], cols["b"], corr, state=states[number], jit=use_numba(last + 1 - first)
+            ).phase_rad
+            s = max(first - off, 0)
+            e = min(last + 1 - off, phase.size)
+            yield off + s, cols["time_s"][s:e], phase[s:e] * scale
+
+    return pieces

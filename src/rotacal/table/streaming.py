@@ -209,7 +209,7 @@ def calibrate_encoder_motion_chunked(
         rev_idx, periods, "encoder capture", demod.span_deg, None if drift else demod.net_deg
     )
     f0 = n_periods / (rev_times[2 * n_periods] - rev_times[0])
-    segment = enc.segment_of(passes, demod.states, corr, scale, first, last)
+    segment = enc.segment(passes, demod.states, corr, scale, first, last)
     t0 = float(found.first_t)
     seg, error = _fit_and_error(
         segment,
@@ -240,8 +240,38 @@ def calibrate_encoder_motion_chunked(
         sample_interval_s=_sample_interval(seg, first, last),
         capture_start_s=t0,
     )
-    result = _finish(
-        scheme="encoder",
+    result = _finish_angle(
+        "encoder",
+        seg,
+        detection,
+        rev_times,
+        n_periods,
+        plot,
+        [f"quadrature correction: {corr.method}"],
+        set_amplitude_deg,
+        set_frequency_hz,
+        specs,
+    )
+    return with_segment(result, seg, error, clipped)
+
+
+def _finish_angle(
+    scheme: str,
+    seg: SegmentFit,
+    detection: ReversalDetection,
+    rev_times: np.ndarray,
+    n_periods: int,
+    plot: dict[str, object],
+    notes: list[str],
+    set_amplitude_deg: float | None,
+    set_frequency_hz: float | None,
+    specs: InstrumentSpecs | None,
+    radius_mm: float | None = None,
+) -> MotionResult:
+    """``_finish`` of a scheme that fits the angle itself (OSE, LTS): the fit's amplitudes,
+    offset and residual are the displacement's."""
+    return _finish(
+        scheme=scheme,
         fit=seg.fit,
         displacement_amplitudes=seg.fit.amplitudes,
         displacement_amplitudes_u=seg.fit.amplitudes_u,
@@ -253,13 +283,13 @@ def calibrate_encoder_motion_chunked(
         angle_used=seg.y_used,
         set_amplitude_deg=set_amplitude_deg,
         set_frequency_hz=set_frequency_hz,
-        notes=[f"quadrature correction: {corr.method}"],
+        notes=notes,
         snr=None,
         plot=plot,
         detection=detection,
         specs=specs,
+        radius_mm=radius_mm,
     )
-    return with_segment(result, seg, error, clipped)
 
 
 def _sample_interval(seg: SegmentFit, first: int, last: int) -> float:
@@ -286,7 +316,7 @@ def _fit_and_error(
     with_set = set_amplitude_deg is not None and set_frequency_hz is not None
     acc3 = None
     beside = []
-    if with_set and not drift:
+    if set_frequency_hz is not None and with_set and not drift:
         acc3 = accumulator(set_frequency_hz, 1, dt)
         beside.append((acc3, to_true))
     seg = fit_segment(
@@ -437,24 +467,17 @@ def calibrate_lts_motion_chunked(
         capture_start_s=t0,
         half_window_s=1.0 / (20.0 * seg.fit.frequency_hz),  # extreme_reversals: ±period/20
     )
-    result = _finish(
-        scheme="lts",
-        fit=seg.fit,
-        displacement_amplitudes=seg.fit.amplitudes,
-        displacement_amplitudes_u=seg.fit.amplitudes_u,
-        offset_deg=seg.fit.offset,
-        residual_rms_deg=seg.fit.residual_rms,
-        reversal_times=rev_times,
-        periods=n_periods,
-        t_used=seg.t_used,
-        angle_used=seg.y_used,
-        set_amplitude_deg=set_amplitude_deg,
-        set_frequency_hz=set_frequency_hz,
-        notes=[f"θ = arctan(D/R), R = {radius_mm:g} mm"],
-        snr=None,
-        plot=plot,
-        detection=detection,
-        specs=specs,
+    result = _finish_angle(
+        "lts",
+        seg,
+        detection,
+        rev_times,
+        n_periods,
+        plot,
+        [f"θ = arctan(D/R), R = {radius_mm:g} mm"],
+        set_amplitude_deg,
+        set_frequency_hz,
+        specs,
         radius_mm=float(radius_mm),
     )
     return with_segment(result, seg, error, clipped)
@@ -550,7 +573,7 @@ def calibrate_fog_motion_chunked(
     to_true = true_time(specs, t0)
     with_set = set_amplitude_deg is not None and set_frequency_hz is not None
     acc3 = None
-    if with_set and not seg.gathered:
+    if set_frequency_hz is not None and with_set and not seg.gathered:
         acc3 = accumulator(set_frequency_hz, 1, found.typical)
     angle = fog.integrate(rates, fit, first, last, [] if acc3 is None else [(acc3, to_true)])
     error = None
