@@ -24,7 +24,8 @@ from rotacal.signal import SineFit
 from rotacal.signal._result import harmonic_series
 from rotacal.table._stream_fit import Fed, Segment, accumulate, accumulator, decimate
 from rotacal.table._stream_source import Passes
-from rotacal.table.motion import _plot_stride, fog_angle_steps, model_zero_crossings
+from rotacal.table.motion import _plot_stride
+from rotacal.table.motion_lts_fog import fog_angle_steps, model_zero_crossings
 
 _SIGNAL = "rate_deg_s"
 

@@ -26,12 +26,8 @@ import numpy as np
 from rotacal.table._stream_checks import Checked, start_frequency
 from rotacal.table._stream_fit import Segment, accumulate, accumulator
 from rotacal.table._stream_source import Passes
-from rotacal.table.motion import (
-    _plot_stride,
-    lts_angle,
-    refine_extreme,
-    reversal_half_window,
-)
+from rotacal.table.motion import _plot_stride
+from rotacal.table.motion_lts_fog import lts_angle, refine_extreme, reversal_half_window
 
 _SIGNAL = "displacement_mm"
 #: Bins of each histogram of :func:`order_statistics`, and the most values it gathers per rank.

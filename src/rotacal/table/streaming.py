@@ -72,20 +72,22 @@ from rotacal.table._stream_source import (
     chunks_from_file,
 )
 from rotacal.table.motion import (
-    TRIGGER_PERCENTILES,
     MotionResult,
     _check_set_values,
     _check_settings,
     _cut,
     _finish,
     check_lts_settings,
+)
+from rotacal.table.motion_drift import drift_free_hysteresis
+from rotacal.table.motion_lts_fog import (
+    TRIGGER_PERCENTILES,
     check_reach,
     fog_angle,
     fog_bias_note,
     lts_angle,
     trigger_levels,
 )
-from rotacal.table.motion_drift import drift_free_hysteresis
 from rotacal.table.motion_uncertainty import ReversalDetection
 from rotacal.uncertainty import InstrumentSpecs
 
