@@ -44,17 +44,18 @@ _FIRST_ADD_SAMPLES = 1 << 16
 
 
 #: Long blocks for the accumulated fits: harmonic 2H of 1.25·f may turn by up to _BLOCK_PHASE rad
-#: within a block, its exponential kept to _BLOCK_MOMENTS Taylor terms (3³²/32! < 1e-20). The
-#: accumulator's own default (0.25 rad, 16 moments) holds ~12 times more blocks, whose moments
-#: are what grows with a long capture and what each step of the frequency refinement sums over.
-_BLOCK_PHASE = 3.0
-_BLOCK_MOMENTS = 32
+#: within a block, its exponential kept to _BLOCK_MOMENTS Taylor terms (5.5⁴⁰/40! < 1e-18). The
+#: accumulator's own default (0.25 rad, 16 moments) holds 22 times more blocks, whose moments
+#: are what grows with a long capture and what each step of the frequency refinement sums over
+#: (per sample ~9 times the bytes of these).
+_BLOCK_PHASE = 5.5
+_BLOCK_MOMENTS = 40
 
 
 def accumulator(f0: float, harmonics: int, dt: float | None = None) -> HarmonicFitAccumulator:
     """A :class:`~rotacal.signal.HarmonicFitAccumulator` for a fit at about ``f0`` (Hz) with
     ``harmonics``, of samples ``dt`` (s) apart: blocks as long as the Taylor series of its
-    block moments allows with 32 moments (the same least-squares solution, fewer blocks)."""
+    block moments allows with 40 moments (the same least-squares solution, fewer blocks)."""
     if dt is None or not dt > 0:
         return HarmonicFitAccumulator(f0, harmonics=harmonics)
     w = 2.0 * math.pi * f0 * 1.25
