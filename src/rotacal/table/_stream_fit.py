@@ -52,15 +52,21 @@ _BLOCK_PHASE = 5.5
 _BLOCK_MOMENTS = 40
 
 
+def block_length(f0: float, harmonics: int, dt: float | None) -> int | None:
+    """Samples a block of :func:`accumulator` (None: the accumulator's own plan)."""
+    if dt is None or not dt > 0:
+        return None
+    w = 2.0 * math.pi * f0 * 1.25
+    m = int(2.0 * _BLOCK_PHASE / (2 * harmonics * w * dt))
+    return m if m >= 64 else None  # too few samples a block to gain: the accumulator's plan
+
+
 def accumulator(f0: float, harmonics: int, dt: float | None = None) -> HarmonicFitAccumulator:
     """A :class:`~rotacal.signal.HarmonicFitAccumulator` for a fit at about ``f0`` (Hz) with
     ``harmonics``, of samples ``dt`` (s) apart: blocks as long as the Taylor series of its
     block moments allows with 40 moments (the same least-squares solution, fewer blocks)."""
-    if dt is None or not dt > 0:
-        return HarmonicFitAccumulator(f0, harmonics=harmonics)
-    w = 2.0 * math.pi * f0 * 1.25
-    m = int(2.0 * _BLOCK_PHASE / (2 * harmonics * w * dt))
-    if m < 64:  # too few samples a block to gain: the accumulator's own plan
+    m = block_length(f0, harmonics, dt)
+    if m is None:
         return HarmonicFitAccumulator(f0, harmonics=harmonics)
     return HarmonicFitAccumulator(
         f0, harmonics=harmonics, block_samples=m, n_moments=_BLOCK_MOMENTS
@@ -128,7 +134,7 @@ def fit_segment(
             ends[:] = [ends[0] if ends else float(t_piece[0]), float(t_piece[-1])]
             yield g0, t_piece, y_piece
 
-    accumulate([(acc, None), *(beside or [])], tap())
+    accumulate([(acc, None), *(beside or [])], tap(), block_length(f0, harmonics, dt))
     fit = explained_fit(
         lambda with_term: acc.fit(
             f0, harmonics, True, max_iter=50, rtol=1e-12, drift=with_term, drift_check=not with_term
@@ -142,27 +148,46 @@ def fit_segment(
     )
 
 
-def accumulate(accs: list[Fed], pieces: Iterator[tuple[int, np.ndarray, np.ndarray]]) -> None:
+def accumulate(
+    accs: list[Fed], pieces: Iterator[tuple[int, np.ndarray, np.ndarray]], block: int | None = None
+) -> None:
     """Feed the pieces to each accumulator (t through its map), the first 2¹⁶ samples as one
-    piece (the in-memory fit takes its working offset from them)."""
+    piece (the in-memory fit takes its working offset from them).
+
+    ``block``: the first accumulator's block length (:func:`block_length`); each add then ends
+    on a block boundary (the rest carried to the next), so that no block is split between two
+    adds and the accumulator's merge needs no second copy of its moments to sum the halves.
+    """
 
     def add(t_piece: np.ndarray, y_piece: np.ndarray) -> None:
         for acc, to_t in accs:
             acc.add(t_piece if to_t is None else to_t(t_piece), y_piece)
 
-    held: list[tuple[np.ndarray, np.ndarray]] = []
-    n_held = 0
+    m = block or 1
+    first = -(-_FIRST_ADD_SAMPLES // m) * m  # ≥ 2¹⁶ samples, whole blocks
+    carry_t: list[np.ndarray] = []
+    carry_y: list[np.ndarray] = []
+    n_carry = 0
+    started = False
     for _, t_piece, y_piece in pieces:
-        if n_held < _FIRST_ADD_SAMPLES:
-            held.append((np.array(t_piece), np.array(y_piece)))
-            n_held += t_piece.size
-            if n_held >= _FIRST_ADD_SAMPLES:
-                add(np.concatenate([h[0] for h in held]), np.concatenate([h[1] for h in held]))
-                held = []
-        else:
-            add(t_piece, y_piece)
-    if held:
-        add(np.concatenate([h[0] for h in held]), np.concatenate([h[1] for h in held]))
+        want = first if not started else m
+        if n_carry + t_piece.size < want:
+            carry_t.append(np.array(t_piece))
+            carry_y.append(np.array(y_piece))
+            n_carry += t_piece.size
+            continue
+        i = 0
+        if n_carry or not started:  # complete the first add, or the block the last one began
+            i = want - n_carry
+            add(np.concatenate([*carry_t, t_piece[:i]]), np.concatenate([*carry_y, y_piece[:i]]))
+            started = True
+        cut = i + (t_piece.size - i) // m * m
+        if cut > i:
+            add(t_piece[i:cut], y_piece[i:cut])
+        carry_t, carry_y = [np.array(t_piece[cut:])], [np.array(y_piece[cut:])]
+        n_carry = t_piece.size - cut
+    if n_carry:
+        add(np.concatenate(carry_t), np.concatenate(carry_y))
 
 
 def detrended(segment: Segment, fit: SineFit) -> Segment:
@@ -202,7 +227,7 @@ def position_error_pass(
     fed the segment (t through ``to_true``); None: fed in a pass of its own first."""
     if acc3 is None:
         acc3 = accumulator(set_frequency_hz, 1, dt)
-        accumulate([(acc3, to_true)], segment())
+        accumulate([(acc3, to_true)], segment(), block_length(set_frequency_hz, 1, dt))
     fit3 = acc3.fit(set_frequency_hz, 1, False, max_iter=1, rtol=1e-12)
     phase0 = float(fit3.phases_rad[0])
     step = _plot_stride(last + 1 - first)

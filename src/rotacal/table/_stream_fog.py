@@ -22,7 +22,14 @@ import numpy as np
 
 from rotacal.signal import SineFit
 from rotacal.signal._result import harmonic_series
-from rotacal.table._stream_fit import Fed, Segment, accumulate, accumulator, decimate
+from rotacal.table._stream_fit import (
+    Fed,
+    Segment,
+    accumulate,
+    accumulator,
+    block_length,
+    decimate,
+)
 from rotacal.table._stream_source import Passes
 from rotacal.table.motion import _plot_stride
 from rotacal.table.motion_lts_fog import fog_angle_steps, model_zero_crossings
@@ -59,7 +66,7 @@ def whole_fit(
             dec_w.append(decimate(g0, 0, step, w))
             yield g0, t, w
 
-    accumulate([(acc, None)], tap())
+    accumulate([(acc, None)], tap(), block_length(f_start, harmonics, dt))
     fit = acc.fit(f_start, harmonics, True, max_iter=50, rtol=1e-12, drift=drift)
     return fit, np.concatenate(dec_t), np.concatenate(dec_w)
 

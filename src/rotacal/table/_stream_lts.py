@@ -24,7 +24,7 @@ from collections.abc import Callable, Iterator
 import numpy as np
 
 from rotacal.table._stream_checks import Checked, start_frequency
-from rotacal.table._stream_fit import Segment, accumulate, accumulator
+from rotacal.table._stream_fit import Segment, accumulate, accumulator, block_length
 from rotacal.table._stream_source import Passes
 from rotacal.table.motion import _plot_stride
 from rotacal.table.motion_lts_fog import lts_angle, refine_extreme, reversal_half_window
@@ -75,7 +75,7 @@ def prefit_drift_chunked(passes: Passes, found: Checked, radius_mm: float, harmo
         for g0, t, x in whole():
             yield g0, t, x - slope * (t - t_mid)
 
-    accumulate([(acc, None)], less_line())
+    accumulate([(acc, None)], less_line(), block_length(f0, harmonics, found.typical))
     fit = acc.fit(f0, harmonics, True, max_iter=50, rtol=1e-12, drift=True)
     assert fit.drift is not None
     return slope + fit.drift
