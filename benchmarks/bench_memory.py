@@ -18,55 +18,20 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import shutil
 import subprocess
 import sys
 import tempfile
 import time
-import zipfile
 from pathlib import Path
 
-import numpy as np
-
-FS_HZ = 1_000_000.0
-LINES = 36000
-PIECE = 2_000_000
-HARMONICS = {2: (0.010, 0.4), 3: (0.008, 1.1), 5: (0.002, 2.0)}
-
-
-def _motion():
-    from rotacal import sim
-
-    return sim.SineMotion(amplitude_deg=0.5, frequency_hz=2.0, harmonics=HARMONICS)
-
-
-def _column(name: str, lo: int, hi: int, motion) -> np.ndarray:
-    """Rows lo..hi-1 of one column of the twin encoder (same model as sim.simulate_encoder)."""
-    t = np.arange(lo, hi, dtype=np.float64) / FS_HZ
-    if name == "time_s":
-        return t
-    phi = (2.0 * math.pi * LINES / 360.0) * motion.angle_deg(t)
-    rng = np.random.default_rng([7, lo, 0 if name == "a" else 1])
-    if name == "a":
-        x = 0.03 + np.cos(phi)
-    else:
-        x = -0.02 + 0.97 * np.sin(phi + math.radians(1.5))
-    x += rng.normal(0.0, 0.004, x.size)
-    lsb = 2.5 / 2**16  # 16-bit ADC over ±1.25
-    return -1.25 + (np.clip(np.floor((x + 1.25) / lsb), 0, 2**16 - 1) + 0.5) * lsb
+from bench_motion_stream import LINES
+from bench_motion_stream import write_npz as _write_npz
 
 
 def write_npz(path: Path, n: int) -> None:
-    """An uncompressed NPZ (memory-mappable), each member written in pieces of PIECE rows."""
-    motion = _motion()
-    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
-        for name in ("time_s", "a", "b"):
-            with zf.open(name + ".npy", "w", force_zip64=True) as fp:
-                header = {"descr": "<f8", "fortran_order": False, "shape": (n,)}
-                np.lib.format.write_array_header_1_0(fp, header)
-                for lo in range(0, n, PIECE):
-                    fp.write(_column(name, lo, min(n, lo + PIECE), motion).tobytes())
+    """An uncompressed NPZ encoder capture (1 MHz, 2 Hz motion), written piece by piece."""
+    _write_npz(path, "encoder", n)
 
 
 def child(mode: str, path: str) -> None:

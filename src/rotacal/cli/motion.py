@@ -241,16 +241,74 @@ def motion_encoder(
     _finish_motion(result, capture, json_path, report_path)
 
 
+def _chunked_option(func: F) -> F:
+    """``--chunked/--in-memory``: stream the capture or load it whole (default by its size)."""
+    return click.option(
+        "--chunked/--in-memory",
+        default=None,
+        help="Stream the capture in chunks (flat memory) or load it whole "
+        f"[default: chunked above {_IN_MEMORY_MAX_SAMPLES:.0e} samples].",
+    )(func)
+
+
+def _streams(
+    capture: str, column: str, chunked: bool | None, columns: Sequence[str], group: str | None
+) -> bool:
+    """Whether to stream ``capture``: as asked, else when ``column`` holds more samples than
+    are read whole (``_IN_MEMORY_MAX_SAMPLES``)."""
+    if chunked is not None:
+        return chunked
+    from rotacal.io import capture_length, parse_column_mapping
+
+    n = capture_length(
+        capture,
+        column,
+        mapping=parse_column_mapping(columns),
+        group=group,
+        read_options=current_read_options(),
+    )
+    return n > _IN_MEMORY_MAX_SAMPLES
+
+
+def _stream_calibration(
+    capture: str,
+    column: str,
+    columns: Sequence[str],
+    group: str | None,
+    passes: int,
+    calibrate: Any,
+    source_of: Any,
+    **kw: Any,
+) -> Any:
+    """``calibrate(source_of(capture, ...), progress=..., **kw)`` with a progress bar over the
+    samples of up to ``passes`` passes."""
+    from rotacal.io import capture_length, parse_column_mapping
+
+    mapping = parse_column_mapping(columns)
+    n = capture_length(
+        capture, column, mapping=mapping, group=group, read_options=current_read_options()
+    )
+    source = source_of(capture, mapping=mapping, group=group)
+    with _sample_progress(passes * n, "calibrating (chunked)") as progress:
+        return calibrate(source, progress=progress, **kw)
+
+
 @motion.command(
     "lts",
     epilog=example("rotacal motion lts lts.csv --radius-mm 100 --set-amplitude-deg 0.1"),
 )
 @click.argument("capture", type=INPUT_FILE)
 @click.option("--radius-mm", type=float, required=True, help="R: laser spot to table axis (mm).")
+@_chunked_option
 @_motion_common
 @_names_capture
 def motion_lts(
-    capture: str, radius_mm: float, columns: Sequence[str], group: str | None, **kw: Any
+    capture: str,
+    radius_mm: float,
+    chunked: bool | None,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
 ) -> None:
     """Laser triangulation sensor (LTS) scheme: time_s, displacement_mm.
 
@@ -261,11 +319,28 @@ def motion_lts(
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    cap = _read(capture, list(MOTION_LTS.required), columns, group)
-    with _status("fitting"):
-        result = calibrate_lts_motion(
-            cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw
+    if _streams(capture, "displacement_mm", chunked, columns, group):
+        from rotacal.table import calibrate_lts_motion_chunked, lts_chunks_from_file
+
+        # checks, levels (2 with a drift: its fit), swings, parabolas, fit, position error
+        passes = 10 if kw["drift"] else 7
+        result = _stream_calibration(
+            capture,
+            "displacement_mm",
+            columns,
+            group,
+            passes,
+            calibrate_lts_motion_chunked,
+            lts_chunks_from_file,
+            radius_mm=radius_mm,
+            **kw,
         )
+    else:
+        cap = _read(capture, list(MOTION_LTS.required), columns, group)
+        with _status("fitting"):
+            result = calibrate_lts_motion(
+                cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw
+            )
     _finish_motion(result, capture, json_path, report_path)
 
 
@@ -277,9 +352,12 @@ def motion_lts(
     ),
 )
 @click.argument("capture", type=INPUT_FILE)
+@_chunked_option
 @_motion_common
 @_names_capture
-def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: Any) -> None:
+def motion_fog(
+    capture: str, chunked: bool | None, columns: Sequence[str], group: str | None, **kw: Any
+) -> None:
     """Fibre-optic gyro (FOG) scheme: columns time_s, rate_deg_s.
 
     The gyro's rate is fitted with the harmonics of the motion; THD and amplitude are those of
@@ -289,7 +367,22 @@ def motion_fog(capture: str, columns: Sequence[str], group: str | None, **kw: An
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    cap = _read(capture, list(MOTION_FOG.required), columns, group)
-    with _status("fitting"):
-        result = calibrate_fog_motion(cap["time_s"], cap["rate_deg_s"], **kw)
+    if _streams(capture, "rate_deg_s", chunked, columns, group):
+        from rotacal.table import calibrate_fog_motion_chunked, fog_chunks_from_file
+
+        # checks, fit of the whole rate, zero crossings, fit, angle, position error
+        result = _stream_calibration(
+            capture,
+            "rate_deg_s",
+            columns,
+            group,
+            6,
+            calibrate_fog_motion_chunked,
+            fog_chunks_from_file,
+            **kw,
+        )
+    else:
+        cap = _read(capture, list(MOTION_FOG.required), columns, group)
+        with _status("fitting"):
+            result = calibrate_fog_motion(cap["time_s"], cap["rate_deg_s"], **kw)
     _finish_motion(result, capture, json_path, report_path)

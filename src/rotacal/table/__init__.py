@@ -11,7 +11,14 @@ from rotacal.table.motion import (
     position_error,
 )
 from rotacal.table.rate import RateResult, align_deviation, allan_versus_angle, calibrate_rate
-from rotacal.table.streaming import calibrate_encoder_motion_chunked, encoder_chunks_from_file
+from rotacal.table.streaming import (
+    calibrate_encoder_motion_chunked,
+    calibrate_fog_motion_chunked,
+    calibrate_lts_motion_chunked,
+    encoder_chunks_from_file,
+    fog_chunks_from_file,
+    lts_chunks_from_file,
+)
 
 __all__ = [
     "MotionResult",
@@ -22,10 +29,14 @@ __all__ = [
     "calibrate_encoder_motion",
     "calibrate_encoder_motion_chunked",
     "calibrate_fog_motion",
+    "calibrate_fog_motion_chunked",
     "calibrate_lts_motion",
+    "calibrate_lts_motion_chunked",
     "calibrate_rate",
     "compare_schemes",
     "encoder_chunks_from_file",
     "extreme_reversals",
+    "fog_chunks_from_file",
+    "lts_chunks_from_file",
     "position_error",
 ]

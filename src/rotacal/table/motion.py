@@ -49,6 +49,14 @@ from rotacal.table.motion_drift import (
     fit_motion,
     prefit_drift,
 )
+from rotacal.table.motion_lts_fog import (
+    check_reach,
+    extreme_reversals,
+    fog_angle,
+    fog_bias_note,
+    lts_angle,
+    model_zero_crossings,
+)
 from rotacal.table.motion_plausibility import motion_warnings
 from rotacal.table.motion_uncertainty import (
     ReversalDetection,
@@ -525,86 +533,12 @@ def calibrate_encoder_motion(
     return with_warnings(result, demod.warnings)
 
 
-def extreme_reversals(
-    t: np.ndarray, x: np.ndarray, *, hysteresis: float | None = None, drift: float = 0.0
-) -> np.ndarray:
-    """Reversing moments of a displacement signal by its extreme values.
-
-    The LTS signal is proportional to the displacement, so its reversing moments are its extremes
-    (Feng et al. 2023, §5). Each swing of the signal above or below its mid level is found with a
-    Schmitt trigger (hysteresis ``hysteresis``, default 10 % of the 2–98 % range, so noise cannot
-    start a swing); the extreme of each complete swing is then refined by a least-squares parabola
-    through the samples within ±1/20 of a period, which averages the noise down. With ``drift``
-    the trigger (its mid level, range and hysteresis) works on ``x − drift·(t − t₀)``, so that a
-    drifting signal still crosses its mid level every swing; the extremes are those of x itself
-    (a drifting table reverses where its rate, drift included, is zero).
-
-    Parameters
-    ----------
-    t : array, s
-    x : array — displacement in any unit.
-    hysteresis : float, optional — in the unit of x.
-    drift : float — the signal's drift (unit of x per s), e.g. from a fit with a linear term.
-
-    Returns
-    -------
-    array of float, s — the reversing moments, in time order, alternately maxima and minima.
-
-    References
-    ----------
-    Feng et al. (2023), Sensors 23:4876, §5 (reversals of the LTS signal by extreme values).
-    """
-    xt = x if drift == 0.0 else x - drift * (t - t[0])  # what the trigger sees
-    lo, hi = np.percentile(xt, [2.0, 98.0])
-    mid = 0.5 * (lo + hi)
-    h = 0.1 * (hi - lo) if hysteresis is None else float(hysteresis)
-    if not hi - lo > 0:
-        raise CaptureError("the signal does not move: no reversing moments can be found")
-    state = np.where(xt > mid + h, 1, np.where(xt < mid - h, -1, 0)).astype(np.int8)
-    set_at = np.flatnonzero(state)
-    if set_at.size == 0:
-        return np.empty(0)
-    # Forward-fill the Schmitt trigger's state; samples before the first decision take that one.
-    filled = state[
-        set_at[np.maximum(np.searchsorted(set_at, np.arange(x.size), side="right") - 1, 0)]
-    ]
-    edges = np.flatnonzero(np.diff(filled)) + 1
-    # Swings lie between state changes. The first and last ones are cut by the record's ends: their
-    # extreme counts only if the signal is at least `h` away from it at that end (zigzag rule).
-    starts = np.concatenate(([0], edges))
-    stops = np.concatenate((edges, [x.size]))
-    signs = filled[starts]
-    signed = x * filled  # maxima of a "+" swing and minima of a "−" swing both become maxima
-    seg_max = np.maximum.reduceat(signed, starts)
-    seg_id = np.repeat(np.arange(starts.size), stops - starts)
-    hit = np.flatnonzero(signed == seg_max[seg_id])
-    extreme = hit[np.unique(seg_id[hit], return_index=True)[1]]
-    keep = np.ones(starts.size, dtype=bool)
-    keep[0] = signed[0] < seg_max[0] - h and extreme[0] > 0
-    keep[-1] = signed[-1] < seg_max[-1] - h and extreme[-1] < x.size - 1
-    extreme, signs = extreme[keep], signs[keep]
-    if extreme.size == 0:
-        return np.empty(0)
-    period = 2 * float(np.median(np.diff(t[extreme]))) if extreme.size > 1 else t[-1] - t[0]
-    half_window = period / 20
-    times = t[extreme].astype(float)
-    for j, s in enumerate(signs):
-        centre = times[j]
-        for _ in range(2):  # fit, then re-centre the window on the vertex and fit again
-            lo_i = np.searchsorted(t, centre - half_window)
-            hi_i = np.searchsorted(t, centre + half_window, side="right")
-            if hi_i - lo_i < 5:
-                break
-            tt = t[lo_i:hi_i] - centre
-            c2, c1, _ = np.polyfit(tt, x[lo_i:hi_i], 2)
-            if c2 * s >= 0:  # not a maximum (or minimum) of the expected kind: keep the sample
-                break
-            vertex = -c1 / (2 * c2)
-            if abs(vertex) > half_window:
-                break
-            centre += vertex
-        times[j] = centre
-    return times
+def check_lts_settings(harmonics: int, periods: int | None, radius_mm: float) -> None:
+    """The LTS scheme's settings: harmonics, periods and a finite, positive R (mm)."""
+    _check_settings(harmonics, periods)
+    if not radius_mm > 0:
+        raise ConfigError(f"--radius-mm must be positive, got {radius_mm}")
+    check_setting("--radius-mm", radius_mm, unit="mm")
 
 
 def calibrate_lts_motion(
@@ -643,20 +577,11 @@ def calibrate_lts_motion(
     Feng et al. (2023), Sensors 23:4876, §5, eqs. (1), (2), (15); IEEE Std 1057-2017, §4.1.3;
     JCGM 100:2008 and JCGM 101:2008 (budgets).
     """
-    _check_settings(harmonics, periods)
-    if not radius_mm > 0:
-        raise ConfigError(f"--radius-mm must be positive, got {radius_mm}")
-    check_setting("--radius-mm", radius_mm, unit="mm")
+    check_lts_settings(harmonics, periods, radius_mm)
     t, d = _check_samples(t, "displacement_mm", displacement_mm)
     clipped = check_clipping({"displacement_mm": d}, allow_clipped=allow_clipped)
-    reach = float(np.max(np.abs(d)))
-    if reach > radius_mm:
-        # beyond 45° eq. (15) is no longer a small-angle sensor reading: a wrong R or unit
-        raise CaptureError(
-            f"displacement_mm reaches {reach:.6g} mm, more than R = {radius_mm:g} mm: check "
-            "--radius-mm and that D is in mm, measured from the table's zero position"
-        )
-    angle = np.degrees(np.arctan(d / radius_mm))
+    check_reach(float(np.max(np.abs(d))), radius_mm)
+    angle = lts_angle(d, radius_mm)
     trend = prefit_drift(t, angle, harmonics) if drift else 0.0
     rev_times = extreme_reversals(t, angle, drift=trend)
     rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
@@ -694,15 +619,6 @@ def calibrate_lts_motion(
         radius_mm=float(radius_mm),
     )
     return with_warnings(result, clipped)
-
-
-def _model_zero_crossings(fit: SineFit, t: np.ndarray) -> np.ndarray:
-    """Times where the fitted rate model crosses zero: the reversing moments of the motion."""
-    # D0 is the gyro's bias (eq. 9), not motion; so is a fitted drift D0 + D1·τ
-    rate = fit.evaluate(t) - (fit.offset if fit.drift is None else fit.trend(t))
-    i = np.flatnonzero(np.signbit(rate[:-1]) != np.signbit(rate[1:]))
-    r0, r1 = rate[i], rate[i + 1]
-    return np.asarray(t[i] + (t[i + 1] - t[i]) * r0 / (r0 - r1))
 
 
 def calibrate_fog_motion(
@@ -750,7 +666,7 @@ def calibrate_fog_motion(
     clipped = check_clipping({"rate_deg_s": w}, allow_clipped=allow_clipped)
     f_start = estimate_frequency(t, w)
     first_fit = fit_harmonics(t, w, frequency_hz=f_start, harmonics=harmonics, drift=drift)
-    rev_times = _model_zero_crossings(first_fit, t)
+    rev_times = model_zero_crossings(first_fit, t)[0]
     rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
     first, last, n = _cut(rev_idx, periods, "FOG capture")
     seg = slice(first, last + 1)
@@ -758,13 +674,7 @@ def calibrate_fog_motion(
     disp = displacement_amplitudes_from_rate(fit.amplitudes, fit.frequency_hz)
     disp_u = displacement_amplitudes_from_rate(fit.amplitudes_u, fit.frequency_hz)
     tt, ww = t[seg], w[seg]
-    if fit.drift is None:
-        rate_sum = ww[1:] + ww[:-1] - 2 * fit.offset
-    else:
-        motion_rate = ww - fit.trend(tt)
-        rate_sum = motion_rate[1:] + motion_rate[:-1]
-    angle = np.concatenate(([0.0], np.cumsum(0.5 * rate_sum * np.diff(tt))))
-    angle -= angle.mean()
+    angle = fog_angle(tt, ww, fit)
     snr = snr_db(ww, fit, tt)
     step = _plot_stride(t.size)
     seg_step = _plot_stride(tt.size)
@@ -795,9 +705,7 @@ def calibrate_fog_motion(
         angle_used=angle,
         set_amplitude_deg=set_amplitude_deg,
         set_frequency_hz=set_frequency_hz,
-        notes=[
-            f"rate bias D0 = {fit.offset:.6g} deg/s (fitted, removed by the analytic integration)"
-        ],
+        notes=[fog_bias_note(fit)],
         snr=float(snr),
         plot=plot,
         detection=detection,

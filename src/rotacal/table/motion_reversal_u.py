@@ -267,13 +267,17 @@ def parabola_vertex_bias(
     n_half = max(int(half_window_s / dt), 2)
     k = np.arange(-n_half, n_half + 1, dtype=float) * dt
     centre = t.copy()
-    for _ in range(2):
-        tau = np.broadcast_to(k, (t.size, k.size))
-        y = np.asarray(fit.evaluate(centre[:, None] + tau))
-        q = k**2 - np.mean(k**2)
-        c1 = (y @ k) / float(k @ k)
-        c2 = (y @ q) / float(q @ q)
-        centre = centre + np.where(c2 != 0, -c1 / (2.0 * np.where(c2 != 0, c2, 1.0)), 0.0)
+    q = k**2 - np.mean(k**2)
+    # a batch of reversals at a time, ~2²⁰ model samples each: memory bounded on long captures
+    batch = max(1, (1 << 20) // k.size)
+    for s in range(0, t.size, batch):
+        c = centre[s : s + batch]
+        for _ in range(2):
+            y = np.asarray(fit.evaluate(c[:, None] + k))
+            c1 = (y @ k) / float(k @ k)
+            c2 = (y @ q) / float(q @ q)
+            c = c + np.where(c2 != 0, -c1 / (2.0 * np.where(c2 != 0, c2, 1.0)), 0.0)
+        centre[s : s + batch] = c
     return np.asarray(centre - t)
 
 

@@ -1,0 +1,264 @@
+"""The fit and position-error passes shared by the chunked motion calibrations (private).
+
+Every scheme ends the same way once its reversals have cut n whole periods, samples
+``first..last``: the IEEE 1057 multi-harmonic fit of the analysed signal with the frequency
+refined (Feng et al. 2023, eq. (1); eq. (9) for the FOG's rate), and with set values the angular
+position error of eq. (2) against the ideal sinusoid of a three-parameter fit at the set
+frequency. A scheme hands over its segment as a callable that starts a fresh pass over it,
+yielding ``(global index of the piece's first sample, t, y)``.
+
+A segment of at most ``gather_max`` samples is gathered and fitted exactly as in memory
+(:func:`~rotacal.table.motion_drift.fit_motion`; the result then equals the in-memory one to
+the bit); a longer one is fed to :class:`~rotacal.signal.HarmonicFitAccumulator` (normal
+equations accumulated over the chunks, the first 2¹⁶ samples as one piece so that its working
+offset is the in-memory one), keeping decimated copies for the figures.
+
+References
+----------
+Feng et al. (2023), Sensors 23:4876, eqs. (1), (2), (9); IEEE Std 1057-2017, §4.1.3.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import numpy as np
+
+from rotacal.results import with_warnings
+from rotacal.signal import HarmonicFitAccumulator, SineFit
+from rotacal.table.motion import MotionResult, _plot_stride
+from rotacal.table.motion_drift import detrended_angle, explained_fit, fit_motion
+from rotacal.uncertainty import InstrumentSpecs
+
+#: A fresh pass over the analysed samples: ``(global index of the first sample, t, y)`` pieces.
+Segment = Callable[[], Iterator[tuple[int, np.ndarray, np.ndarray]]]
+#: An accumulator and the map of t it is fed (None: t itself).
+Fed = tuple[HarmonicFitAccumulator, Callable[[np.ndarray], np.ndarray] | None]
+
+#: Samples held back before the first ``HarmonicFitAccumulator.add`` (the in-memory fit takes its
+#: working offset from the first 2¹⁶ samples; the same samples give the same offset here).
+_FIRST_ADD_SAMPLES = 1 << 16
+
+
+#: Long blocks for the accumulated fits: harmonic 2H of 1.25·f may turn by up to _BLOCK_PHASE rad
+#: within a block, its exponential kept to _BLOCK_MOMENTS Taylor terms (5.5⁴⁰/40! < 1e-18). The
+#: accumulator's own default (0.25 rad, 16 moments) holds 22 times more blocks, whose moments
+#: are what grows with a long capture and what each step of the frequency refinement sums over
+#: (per sample ~9 times the bytes of these).
+_BLOCK_PHASE = 5.5
+_BLOCK_MOMENTS = 40
+
+
+def block_length(f0: float, harmonics: int, dt: float | None) -> int | None:
+    """Samples a block of :func:`accumulator` (None: the accumulator's own plan)."""
+    if dt is None or not dt > 0:
+        return None
+    w = 2.0 * math.pi * f0 * 1.25
+    m = int(2.0 * _BLOCK_PHASE / (2 * harmonics * w * dt))
+    return m if m >= 64 else None  # too few samples a block to gain: the accumulator's plan
+
+
+def accumulator(f0: float, harmonics: int, dt: float | None = None) -> HarmonicFitAccumulator:
+    """A :class:`~rotacal.signal.HarmonicFitAccumulator` for a fit at about ``f0`` (Hz) with
+    ``harmonics``, of samples ``dt`` (s) apart: blocks as long as the Taylor series of its
+    block moments allows with 40 moments (the same least-squares solution, fewer blocks)."""
+    m = block_length(f0, harmonics, dt)
+    if m is None:
+        return HarmonicFitAccumulator(f0, harmonics=harmonics)
+    return HarmonicFitAccumulator(
+        f0, harmonics=harmonics, block_samples=m, n_moments=_BLOCK_MOMENTS
+    )
+
+
+@dataclasses.dataclass
+class SegmentFit:
+    """The analysis fit of samples ``first..last`` and what the result needs of the segment."""
+
+    fit: SineFit
+    t_used: np.ndarray  # the segment's t when gathered, else its first and last t
+    y_used: np.ndarray | None  # the segment's y when gathered
+    t_plot: np.ndarray  # every _plot_stride-th t of the segment
+    residual_plot: np.ndarray  # y − model there
+    samples: int
+
+    @property
+    def gathered(self) -> bool:
+        return self.y_used is not None
+
+
+def decimate(g0: int, first: int, step: int, x: np.ndarray) -> np.ndarray:
+    """Samples of ``x`` (first global index ``g0``) whose index − first is a multiple of step."""
+    return np.array(x[(first - g0) % step :: step])
+
+
+def fit_segment(
+    segment: Segment,
+    first: int,
+    last: int,
+    f0: float,
+    harmonics: int,
+    drift: bool,
+    *,
+    gather_max: int,
+    rate: bool = False,
+    beside: list[Fed] | None = None,
+    dt: float | None = None,
+) -> SegmentFit:
+    """The fit of :func:`~rotacal.table.motion_drift.fit_motion` (start frequency ``f0``, Hz)
+    on the segment, in one pass. ``beside``: further accumulators fed the same pieces in the
+    same pass when the segment is not gathered (eq. (2)'s three-parameter fit); ``dt``: the
+    sample interval (s), for the blocks of :func:`accumulator`."""
+    n_seg = last + 1 - first
+    step = _plot_stride(n_seg)
+    if n_seg <= gather_max:
+        pieces = [(np.array(t), np.array(y)) for _, t, y in segment()]
+        t_seg = np.concatenate([p[0] for p in pieces])
+        y_seg = np.concatenate([p[1] for p in pieces])
+        del pieces
+        fit = fit_motion(t_seg, y_seg, f0, harmonics, drift, rate=rate)
+        t_plot = t_seg[::step]
+        return SegmentFit(fit, t_seg, y_seg, t_plot, y_seg[::step] - fit.evaluate(t_plot), n_seg)
+    acc = accumulator(f0, harmonics, dt)
+    dec_t: list[np.ndarray] = []
+    dec_y: list[np.ndarray] = []
+    ends: list[float] = []
+
+    def tap() -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+        """The segment's pieces, keeping decimated copies and the end times on the way."""
+        for g0, t_piece, y_piece in segment():
+            dec_t.append(decimate(g0, first, step, t_piece))
+            dec_y.append(decimate(g0, first, step, y_piece))
+            ends[:] = [ends[0] if ends else float(t_piece[0]), float(t_piece[-1])]
+            yield g0, t_piece, y_piece
+
+    accumulate([(acc, None), *(beside or [])], tap(), block_length(f0, harmonics, dt))
+    fit = explained_fit(
+        lambda with_term: acc.fit(
+            f0, harmonics, True, max_iter=50, rtol=1e-12, drift=with_term, drift_check=not with_term
+        ),
+        drift,
+        rate,
+    )
+    t_plot = np.concatenate(dec_t)
+    return SegmentFit(
+        fit, np.array(ends), None, t_plot, np.concatenate(dec_y) - fit.evaluate(t_plot), n_seg
+    )
+
+
+def accumulate(
+    accs: list[Fed], pieces: Iterator[tuple[int, np.ndarray, np.ndarray]], block: int | None = None
+) -> None:
+    """Feed the pieces to each accumulator (t through its map), the first 2¹⁶ samples as one
+    piece (the in-memory fit takes its working offset from them).
+
+    ``block``: the first accumulator's block length (:func:`block_length`); each add then ends
+    on a block boundary (the rest carried to the next), so that no block is split between two
+    adds and the accumulator's merge needs no second copy of its moments to sum the halves.
+    """
+
+    def add(t_piece: np.ndarray, y_piece: np.ndarray) -> None:
+        for acc, to_t in accs:
+            acc.add(t_piece if to_t is None else to_t(t_piece), y_piece)
+
+    m = block or 1
+    first = -(-_FIRST_ADD_SAMPLES // m) * m  # ≥ 2¹⁶ samples, whole blocks
+    carry_t: list[np.ndarray] = []
+    carry_y: list[np.ndarray] = []
+    n_carry = 0
+    started = False
+    for _, t_piece, y_piece in pieces:
+        want = first if not started else m
+        if n_carry + t_piece.size < want:
+            carry_t.append(np.array(t_piece))
+            carry_y.append(np.array(y_piece))
+            n_carry += t_piece.size
+            continue
+        i = 0
+        if n_carry or not started:  # complete the first add, or the block the last one began
+            i = want - n_carry
+            add(np.concatenate([*carry_t, t_piece[:i]]), np.concatenate([*carry_y, y_piece[:i]]))
+            started = True
+        cut = i + (t_piece.size - i) // m * m
+        if cut > i:
+            add(t_piece[i:cut], y_piece[i:cut])
+        carry_t, carry_y = [np.array(t_piece[cut:])], [np.array(y_piece[cut:])]
+        n_carry = t_piece.size - cut
+    if n_carry:
+        add(np.concatenate(carry_t), np.concatenate(carry_y))
+
+
+def detrended(segment: Segment, fit: SineFit) -> Segment:
+    """The segment with y less the fitted drift (:func:`~rotacal.table.motion_drift.detrended_angle`)."""
+
+    def pieces() -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+        for g0, t_piece, y_piece in segment():
+            yield g0, t_piece, detrended_angle(fit, t_piece, y_piece)
+
+    return pieces
+
+
+def true_time(
+    specs: InstrumentSpecs | None, capture_start_s: float
+) -> Callable[[np.ndarray], np.ndarray] | None:
+    """The map of capture time to true time for eq. (2) when the timebase has a stated mean
+    fractional error e₀ (``t₀ + (t − t₀)/(1 + e₀)``, as in memory), else None."""
+    e0 = 0.0 if specs is None else float(specs.mean("timebase.relative_error"))
+    if e0 == 0.0:
+        return None
+    return lambda t: capture_start_s + (t - capture_start_s) / (1.0 + e0)
+
+
+def position_error_pass(
+    segment: Segment,
+    first: int,
+    last: int,
+    set_amplitude_deg: float,
+    set_frequency_hz: float,
+    *,
+    acc3: HarmonicFitAccumulator | None = None,
+    to_true: Callable[[np.ndarray], np.ndarray] | None = None,
+    dt: float | None = None,
+) -> tuple[float, float, np.ndarray]:
+    """Eq. (2) against the ideal sinusoid of :func:`~rotacal.table.position_error`: its maximum
+    and rms (deg) and a decimated copy. ``acc3``: the three-parameter fit's accumulator, already
+    fed the segment (t through ``to_true``); None: fed in a pass of its own first."""
+    if acc3 is None:
+        acc3 = accumulator(set_frequency_hz, 1, dt)
+        accumulate([(acc3, to_true)], segment(), block_length(set_frequency_hz, 1, dt))
+    fit3 = acc3.fit(set_frequency_hz, 1, False, max_iter=1, rtol=1e-12)
+    phase0 = float(fit3.phases_rad[0])
+    step = _plot_stride(last + 1 - first)
+    worst = 0.0
+    total = 0.0
+    dec: list[np.ndarray] = []
+    for g0, t_piece, y_piece in segment():
+        t_true = t_piece if to_true is None else to_true(t_piece)
+        ideal = fit3.offset + set_amplitude_deg * np.sin(
+            2 * np.pi * set_frequency_hz * (t_true - fit3.t_ref_s) + phase0
+        )
+        err = y_piece - ideal
+        worst = max(worst, float(np.max(np.abs(err))))
+        total += float(err @ err)
+        dec.append(decimate(g0, first, step, err))
+    return worst, math.sqrt(total / (last + 1 - first)), np.concatenate(dec)
+
+
+def with_segment(
+    result: MotionResult,
+    seg: SegmentFit,
+    error: tuple[float, float, np.ndarray] | None,
+    warnings: tuple[str, ...],
+) -> MotionResult:
+    """The result of ``_finish`` with what it could not see of an accumulated segment: the
+    samples used and the position error (from :func:`position_error_pass`)."""
+    if not seg.gathered:
+        extra: dict[str, Any] = {"samples_used": seg.samples}
+        if error is not None:
+            worst, rms, err_dec = error
+            result._plot["position_error_deg"] = err_dec
+            extra.update(position_error_max_deg=worst, position_error_rms_deg=rms)
+        result = dataclasses.replace(result, **extra)
+    return with_warnings(result, warnings)
