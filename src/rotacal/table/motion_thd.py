@@ -12,8 +12,6 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from scipy import stats
-from scipy.optimize import brentq
 
 from rotacal.errors import ConfigError
 from rotacal.table._motion_helpers import _DEG, _P
@@ -204,6 +202,8 @@ def _thd_interval(
         if edge(0.0) >= observed:
             return 0.0
         b = bracket(edge)
+        from scipy.optimize import brentq  # SciPy's modules are imported where used (start-up)
+
         return float(brentq(lambda th: edge(th) - observed, 0.0, b, xtol=1e-9 * b, rtol=1e-10))
 
     lo = root(upper_edge)
@@ -354,7 +354,12 @@ def thd_uncertainty(
         mc_mean = float(np.mean(at_corrected))
         u_thd = float(np.std(at_corrected, ddof=1))
     big_u = 0.5 * (hi - lo)
-    k = big_u / u_thd if u_thd > 0 else float(stats.norm.isf(tail))
+    if u_thd > 0:
+        k = big_u / u_thd
+    else:
+        from scipy import stats
+
+        k = float(stats.norm.isf(tail))
     bias = mc_mean - corrected
 
     # first-order GUM for the rows and the comparison with the interval
