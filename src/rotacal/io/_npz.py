@@ -300,7 +300,7 @@ class NpzReader:
         offset = mapped.offset if isinstance(mapped, np.memmap) else 0
         with open(self.path, "rb") as fh:
             fh.seek(offset)
-            got = fh.readinto(memoryview(data.view(np.uint8)))
+            got = fh.readinto(data.view(np.uint8).data)
         if got != data.nbytes:
             raise damaged(self.fname, f"member {name + '.npy'!r} ends early (truncated)")
         data.flags.writeable = False  # as the mapping was: a capture's columns are read-only
