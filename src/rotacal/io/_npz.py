@@ -148,11 +148,6 @@ class _DeflatedCrc:
         self.checked = True
 
 
-def _misaligned(mapped: np.ndarray) -> bool:
-    """A mapped 1-D member whose first byte is not aligned for its type (see ``_read_aligned``)."""
-    return mapped.ndim == 1 and mapped.size > 0 and not mapped.flags.aligned
-
-
 class NpzReader:
     """Reader of one NPZ capture: member names, their .npy declarations and raw arrays."""
 
@@ -289,27 +284,6 @@ class NpzReader:
         self._mapped_arrays[name] = arr
         return arr
 
-    def _read_aligned(self, name: str, mapped: np.ndarray) -> np.ndarray:
-        """A stored 1-D member whose bytes are not aligned in the file (``np.savez`` does not
-        align them), read into a fresh aligned, read-only array: one copy in place of the
-        mapping. NumPy's reductions, BLAS and the Numba kernels take slow element-wise paths on
-        unaligned data (a sum of squares of 2·10⁷ samples: ~70 ms against ~10 ms), so reading the
-        bytes once costs less than every later pass. 2-D members stay mapped (their columns are
-        strided views, and copying would load every column of the matrix)."""
-        data = np.empty(mapped.size, dtype=mapped.dtype)
-        offset = mapped.offset if isinstance(mapped, np.memmap) else 0
-        with open(self.path, "rb") as fh:
-            fh.seek(offset)
-            got = fh.readinto(data.view(np.uint8).data)
-        if got != data.nbytes:
-            raise damaged(self.fname, f"member {name + '.npy'!r} ends early (truncated)")
-        data.flags.writeable = False  # as the mapping was: a capture's columns are read-only
-        crc = self._integrity[name]
-        if isinstance(crc, _StoredCrc) and crc.done == 0:
-            crc.data = data  # the CRC runs over the same bytes, now in memory
-        self._mapped_arrays[name] = data
-        return data
-
     def integrity(self, name: str) -> _StoredCrc | _DeflatedCrc:
         """The CRC-32 check of a member (see :class:`_StoredCrc`, :class:`_DeflatedCrc`)."""
         if name not in self._integrity and self._mapped(name) is None:
@@ -321,7 +295,7 @@ class NpzReader:
         for name in names:
             mapped = self._mapped(name)
             if mapped is not None:
-                out[name] = self._read_aligned(name, mapped) if _misaligned(mapped) else mapped
+                out[name] = mapped
                 continue
             check = self.integrity(name)
             info = self._member(name).info
