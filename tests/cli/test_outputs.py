@@ -39,7 +39,8 @@ def one_line_error(result, *needles: str) -> str:
 
 
 def _commands(group: click.Group, prefix: tuple[str, ...] = ()) -> Iterator[tuple[str, ...]]:
-    for name, cmd in sorted(group.commands.items()):
+    for name in group.list_commands(None):  # type: ignore[arg-type]  # (the lazy group's too)
+        cmd = group.get_command(None, name)  # type: ignore[arg-type]
         if isinstance(cmd, click.Group):
             yield from _commands(cmd, (*prefix, name))
         else:
@@ -50,7 +51,9 @@ def _command(path: tuple[str, ...]) -> click.Command:
     cmd: click.Command = cli
     for name in path:
         assert isinstance(cmd, click.Group)
-        cmd = cmd.commands[name]
+        sub = cmd.get_command(None, name)  # type: ignore[arg-type]
+        assert sub is not None, path
+        cmd = sub
     return cmd
 
 

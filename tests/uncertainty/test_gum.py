@@ -432,6 +432,18 @@ def test_coverage_factor_large_and_infinite_dof():
     published(coverage_factor(16, 0.99), 2.92, 2)
 
 
+def test_coverage_factor_equals_scipy_stats_bit_for_bit():
+    # the quantiles come from scipy.special (cheaper to import); scipy.stats' t and normal
+    # distributions must give the very same numbers, or every reported U would shift
+    stats = pytest.importorskip("scipy.stats")
+    for p in (*P_G2, 0.5, 0.999):
+        tail = 0.5 * (1.0 - p)
+        assert coverage_factor(math.inf, p) == float(stats.norm.isf(tail))
+        for nu in (1, 2, 3, 16, 50, 1e4, 18_000_391.0):
+            assert coverage_factor(nu, p) == float(stats.t.isf(tail, nu))
+        assert coverage_factor(7.3, p, truncate=False) == float(stats.t.isf(tail, 7.3))
+
+
 def test_coverage_factor_truncates_fractional_dof():
     assert coverage_factor(16.7521, 0.99) == coverage_factor(16, 0.99)
     assert coverage_factor(16.7521, 0.99, truncate=False) < coverage_factor(16, 0.99)

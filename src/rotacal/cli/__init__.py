@@ -7,17 +7,20 @@ traceback.
 
 from rotacal.errors import CaptureError
 
-from . import (  # noqa: F401  (registers the commands)
-    allan,
-    certify,
-    gyro,
-    inspect,
-    motion,
-    pulses,
-    records,
-    simulate,
-    turntable,
-)
 from ._app import cli, main
 
+# The command modules (allan, motion, …) are imported when their command is used (see
+# _app.COMMAND_MODULES): `import rotacal.cli.motion` or `cli.get_command(ctx, "motion")`.
+
 __all__ = ["CaptureError", "cli", "main"]
+
+
+def __getattr__(name: str) -> object:
+    """``rotacal.cli.motion`` and the other command modules, imported on first use (PEP 562)."""
+    import importlib
+
+    from ._app import COMMAND_MODULES
+
+    if name in COMMAND_MODULES.values():
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

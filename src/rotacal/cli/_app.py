@@ -7,6 +7,7 @@ traceback.
 
 from __future__ import annotations
 
+import importlib
 import os
 import sys
 import warnings
@@ -23,8 +24,42 @@ from ._help import example
 F = TypeVar("F", bound=Callable[..., Any])
 
 
+#: The module of ``rotacal.cli`` that defines each top-level command. A command's module is
+#: imported when the command is looked up, so ``rotacal motion encoder`` does not import the
+#: Allan, gyro, pulse, simulation and records commands (and what they import) at start-up.
+COMMAND_MODULES = {
+    "allan": "allan",
+    "certify": "certify",
+    "demo": "simulate",
+    "gyro": "gyro",
+    "inspect": "inspect",
+    "motion": "motion",
+    "rate": "pulses",
+    "records": "records",
+    "selfcal": "pulses",
+    "simulate": "simulate",
+    "specs": "turntable",
+    "turntable": "turntable",
+}
+
+
 class _Group(click.Group):
-    """Turns every error into one line: exit 2 for the user's, 1 for ours."""
+    """Turns every error into one line: exit 2 for the user's, 1 for ours; loads each command's
+    module when the command is first looked up (:data:`COMMAND_MODULES`)."""
+
+    def list_commands(self, ctx: click.Context | None) -> list[str]:
+        return sorted(set(self.commands) | set(COMMAND_MODULES))
+
+    def get_command(self, ctx: click.Context | None, cmd_name: str) -> click.Command | None:
+        if cmd_name not in self.commands and cmd_name in COMMAND_MODULES:
+            # the module registers its commands on `cli` as it is imported
+            importlib.import_module(f"rotacal.cli.{COMMAND_MODULES[cmd_name]}")
+        return self.commands.get(cmd_name)
+
+    def load_all(self) -> None:
+        """Import every command module (``commands`` then holds every command)."""
+        for name in COMMAND_MODULES:
+            self.get_command(None, name)
 
     def main(self, *args: Any, **kwargs: Any) -> Any:
         try:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import os
+import sys
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -21,9 +22,22 @@ if TYPE_CHECKING:
 F = TypeVar("F", bound=Callable[..., Any])
 
 
+def _stderr_may_be_terminal() -> bool:
+    """False when rich would not draw on stderr either (not a TTY, and neither FORCE_COLOR nor
+    TTY_INTERACTIVE set): then the progress bars and spinners skip importing rich (~40 ms)."""
+    env = os.environ
+    if env.get("TTY_INTERACTIVE") == "1" or env.get("FORCE_COLOR") is not None:
+        return True
+    isatty = getattr(sys.stderr, "isatty", None)
+    return bool(isatty is not None and isatty())
+
+
 @contextlib.contextmanager
 def _progress(total: int, description: str) -> Iterator[Callable[[str], None]]:
     """A progress bar on a terminal (stderr), silent otherwise. Yields ``advance(label)``."""
+    if not _stderr_may_be_terminal():
+        yield lambda label: None
+        return
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -53,6 +67,9 @@ _IN_MEMORY_MAX_SAMPLES = 30_000_000
 @contextlib.contextmanager
 def _sample_progress(total: int, description: str) -> Iterator[Callable[[int], None]]:
     """A progress bar over samples processed, on a terminal (stderr); silent otherwise."""
+    if not _stderr_may_be_terminal():
+        yield lambda done: None
+        return
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
@@ -73,6 +90,9 @@ def _sample_progress(total: int, description: str) -> Iterator[Callable[[int], N
 @contextlib.contextmanager
 def _status(message: str) -> Iterator[None]:
     """A spinner with a message on a terminal (stderr) while a long step runs; silent otherwise."""
+    if not _stderr_may_be_terminal():
+        yield
+        return
     from rich.console import Console
 
     console = Console(stderr=True)

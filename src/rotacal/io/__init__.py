@@ -3,17 +3,22 @@
 See the "Captures (input files)" section of INTERFACE.md for the contract.
 """
 
-from ._common import FORMATS, check_time
-from .capture import (
-    Capture,
-    capture_columns,
-    capture_length,
-    iter_capture_chunks,
-    parse_column_mapping,
-    read_capture,
-)
-from .read_options import ReadOptions
-from .write import write_capture
+from typing import TYPE_CHECKING
+
+from rotacal._lazy import attach
+
+if TYPE_CHECKING:
+    from ._common import FORMATS, check_time
+    from .capture import (
+        Capture,
+        capture_columns,
+        capture_length,
+        iter_capture_chunks,
+        parse_column_mapping,
+        read_capture,
+    )
+    from .read_options import ReadOptions
+    from .write import write_capture
 
 __all__ = [
     "FORMATS",
@@ -27,3 +32,5 @@ __all__ = [
     "read_capture",
     "write_capture",
 ]
+
+__getattr__, __dir__ = attach(__name__, __file__, __all__)

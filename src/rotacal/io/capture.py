@@ -29,9 +29,7 @@ from ._common import (
     open_checked,
 )
 from ._csv import CsvReader
-from ._hdf5 import Hdf5Reader
 from ._npz import NpzReader
-from ._tdms import TdmsReader
 from ._validate import (
     Reader,
     check_file_names,
@@ -166,12 +164,18 @@ def _normalise_mapping(mapping: MappingArg) -> dict[str, str]:
     return parse_column_mapping(mapping)
 
 
-_READERS: dict[str, Any] = {
-    "csv": CsvReader,
-    "npz": NpzReader,
-    "hdf5": Hdf5Reader,
-    "tdms": TdmsReader,
-}
+def _reader_class(fmt: str) -> Any:
+    """The reader of a format. HDF5's and TDMS's import h5py and nptdms (~60 and ~35 ms), so they
+    are imported when such a file is opened, not with the package."""
+    if fmt == "hdf5":
+        from ._hdf5 import Hdf5Reader
+
+        return Hdf5Reader
+    if fmt == "tdms":
+        from ._tdms import TdmsReader
+
+        return TdmsReader
+    return {"csv": CsvReader, "npz": NpzReader}[fmt]
 
 
 def _open_reader(
@@ -189,7 +193,7 @@ def _open_reader(
             f"--delimiter, --decimal and --names apply to text captures, not to {p.name} "
             f"({fmt.upper()}, whose columns are named in the file); leave them out"
         )
-    cls = _READERS[fmt]
+    cls = _reader_class(fmt)
     if fmt in ("csv", "npz"):
         check_group_unused(p, group)
     with library_errors(p.name, fmt.upper()):

@@ -33,7 +33,7 @@ def command_of(name: str) -> click.Command:
     command: click.Command = cli
     for word in name.split():
         assert isinstance(command, click.Group)
-        found = command.commands.get(word)
+        found = command.get_command(click.Context(command), word)  # loads the command's module
         if found is None:  # read_plan admits only MEASUREMENT_COMMANDS
             raise ConfigError(f"no such command: rotacal {name}")
         command = found

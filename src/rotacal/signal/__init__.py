@@ -1,36 +1,41 @@
 """rotacal.signal — instrument-independent signal maths: IEEE 1057 sine fits, THD, SNR, Allan
 deviation and IEEE 952 noise terms, and the detector of clipped (saturated) signals."""
 
-from rotacal.signal._checks import check_sampling
-from rotacal.signal.allan import (
-    AllanDeviation,
-    NoiseTerm,
-    NoiseTerms,
-    adev_confidence_interval,
-    edf_overlapping_adev,
-    noise_terms,
-    overlapping_adev,
-)
-from rotacal.signal.clipping import (
-    ClippedSignalError,
-    Clipping,
-    RailDetector,
-    check_clipping,
-    find_clipping,
-)
-from rotacal.signal.sinefit import (
-    DriftCheck,
-    HarmonicFitAccumulator,
-    SineFit,
-    displacement_amplitudes_from_rate,
-    estimate_frequency,
-    fit_harmonics,
-    fit_sine_3p,
-    fit_sine_4p,
-    snr_db,
-    thd_percent,
-    thd_standard_uncertainty_percent,
-)
+from typing import TYPE_CHECKING
+
+from rotacal._lazy import attach
+
+if TYPE_CHECKING:
+    from rotacal.signal._checks import check_sampling
+    from rotacal.signal.allan import (
+        AllanDeviation,
+        NoiseTerm,
+        NoiseTerms,
+        adev_confidence_interval,
+        edf_overlapping_adev,
+        noise_terms,
+        overlapping_adev,
+    )
+    from rotacal.signal.clipping import (
+        ClippedSignalError,
+        Clipping,
+        RailDetector,
+        check_clipping,
+        find_clipping,
+    )
+    from rotacal.signal.sinefit import (
+        DriftCheck,
+        HarmonicFitAccumulator,
+        SineFit,
+        displacement_amplitudes_from_rate,
+        estimate_frequency,
+        fit_harmonics,
+        fit_sine_3p,
+        fit_sine_4p,
+        snr_db,
+        thd_percent,
+        thd_standard_uncertainty_percent,
+    )
 
 __all__ = [
     "AllanDeviation",
@@ -58,3 +63,5 @@ __all__ = [
     "thd_percent",
     "thd_standard_uncertainty_percent",
 ]
+
+__getattr__, __dir__ = attach(__name__, __file__, __all__)

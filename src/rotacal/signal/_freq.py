@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from rotacal.errors import CaptureError
 from rotacal.signal._checks import MIN_PERIODS
@@ -71,6 +70,8 @@ def _ls_refine(t: np.ndarray, y: np.ndarray, f_c: float, span: float) -> float:
     rss = np.array([_sine_rss(tc, yc, f) for f in grid])
     i = int(np.argmin(rss))
     a, b = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    from scipy.optimize import minimize_scalar  # ~0.3 s to import: only when a fit needs it
+
     res = minimize_scalar(
         lambda f: _sine_rss(tc, yc, f),
         bounds=(a, b),

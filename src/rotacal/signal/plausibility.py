@@ -34,7 +34,6 @@ import math
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 __all__ = [
     "LACK_OF_FIT_P",
@@ -189,6 +188,8 @@ def chi_square_test(residuals: Any, u: Any, dof: int) -> FitTest | None:
     chi2 = float(np.sum((r / uu) ** 2))
     if not math.isfinite(chi2):
         return None
+    from scipy import stats  # ~0.4 s to import: only when a test is made
+
     return FitTest(chi2, int(dof), float(stats.chi2.sf(chi2, dof)))
 
 
@@ -264,4 +265,6 @@ def replicate_lack_of_fit(
         return None
     s2 = ss_pe / df_pe
     f = float(np.sum(means**2 / (s2 / counts[present] + max(extra_variance, 0.0)))) / df_lof
+    from scipy import stats  # ~0.4 s to import: only when a test is made
+
     return FitTest(f * df_lof, df_lof, float(stats.f.sf(f, df_lof, df_pe)), "F")

@@ -1,24 +1,29 @@
 """Rotary-table calibrations: sinusoidal motion (Feng et al. 2023), constant rate (Kokuyama et al. 2015)."""
 
-from rotacal.table.motion import (
-    MotionResult,
-    SchemeComparison,
-    calibrate_encoder_motion,
-    calibrate_fog_motion,
-    calibrate_lts_motion,
-    compare_schemes,
-    extreme_reversals,
-    position_error,
-)
-from rotacal.table.rate import RateResult, align_deviation, allan_versus_angle, calibrate_rate
-from rotacal.table.streaming import (
-    calibrate_encoder_motion_chunked,
-    calibrate_fog_motion_chunked,
-    calibrate_lts_motion_chunked,
-    encoder_chunks_from_file,
-    fog_chunks_from_file,
-    lts_chunks_from_file,
-)
+from typing import TYPE_CHECKING
+
+from rotacal._lazy import attach
+
+if TYPE_CHECKING:
+    from rotacal.table.motion import (
+        MotionResult,
+        SchemeComparison,
+        calibrate_encoder_motion,
+        calibrate_fog_motion,
+        calibrate_lts_motion,
+        compare_schemes,
+        extreme_reversals,
+        position_error,
+    )
+    from rotacal.table.rate import RateResult, align_deviation, allan_versus_angle, calibrate_rate
+    from rotacal.table.streaming import (
+        calibrate_encoder_motion_chunked,
+        calibrate_fog_motion_chunked,
+        calibrate_lts_motion_chunked,
+        encoder_chunks_from_file,
+        fog_chunks_from_file,
+        lts_chunks_from_file,
+    )
 
 __all__ = [
     "MotionResult",
@@ -40,3 +45,5 @@ __all__ = [
     "lts_chunks_from_file",
     "position_error",
 ]
+
+__getattr__, __dir__ = attach(__name__, __file__, __all__)

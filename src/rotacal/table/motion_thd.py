@@ -12,9 +12,8 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from scipy import stats
-from scipy.optimize import brentq
 
+from rotacal._brentq import brentq
 from rotacal.errors import ConfigError
 from rotacal.table._motion_helpers import _DEG, _P
 from rotacal.uncertainty import (
@@ -354,7 +353,12 @@ def thd_uncertainty(
         mc_mean = float(np.mean(at_corrected))
         u_thd = float(np.std(at_corrected, ddof=1))
     big_u = 0.5 * (hi - lo)
-    k = big_u / u_thd if u_thd > 0 else float(stats.norm.isf(tail))
+    if u_thd > 0:
+        k = big_u / u_thd
+    else:
+        from scipy import stats
+
+        k = float(stats.norm.isf(tail))
     bias = mc_mean - corrected
 
     # first-order GUM for the rows and the comparison with the interval

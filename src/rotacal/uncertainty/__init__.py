@@ -6,44 +6,49 @@ Validated on the worked examples of JCGM 100 Annex H, JCGM 101 §9 and JCGM 102 
 ``../shared/UNCERTAINTY-EXAMPLES.md``).
 """
 
-from rotacal.uncertainty.budget import (
-    BudgetRow,
-    UncertaintyBudget,
-    result_keys,
-    round_ilac,
-    uncertainty_keys,
-)
-from rotacal.uncertainty.distributions import (
-    Arcsine,
-    Constant,
-    CurvilinearTrapezoid,
-    Distribution,
-    MultivariateNormal,
-    Normal,
-    Rectangular,
-    StudentT,
-    Trapezoidal,
-    Triangular,
-    distribution_from_spec,
-)
-from rotacal.uncertainty.gum import (
-    GUMResult,
-    Input,
-    LinearFit,
-    correlation_matrix,
-    coverage_factor,
-    linear_fit_uncertainty,
-    propagate,
-    welch_satterthwaite,
-)
-from rotacal.uncertainty.montecarlo import (
-    MonteCarloResult,
-    coverage_interval,
-    monte_carlo,
-    numerical_tolerance,
-    validate_gum,
-)
-from rotacal.uncertainty.specs import KNOWN_SPECS, InstrumentSpecs, load_specs
+from typing import TYPE_CHECKING
+
+from rotacal._lazy import attach
+
+if TYPE_CHECKING:
+    from rotacal.uncertainty.budget import (
+        BudgetRow,
+        UncertaintyBudget,
+        result_keys,
+        round_ilac,
+        uncertainty_keys,
+    )
+    from rotacal.uncertainty.distributions import (
+        Arcsine,
+        Constant,
+        CurvilinearTrapezoid,
+        Distribution,
+        MultivariateNormal,
+        Normal,
+        Rectangular,
+        StudentT,
+        Trapezoidal,
+        Triangular,
+        distribution_from_spec,
+    )
+    from rotacal.uncertainty.gum import (
+        GUMResult,
+        Input,
+        LinearFit,
+        correlation_matrix,
+        coverage_factor,
+        linear_fit_uncertainty,
+        propagate,
+        welch_satterthwaite,
+    )
+    from rotacal.uncertainty.montecarlo import (
+        MonteCarloResult,
+        coverage_interval,
+        monte_carlo,
+        numerical_tolerance,
+        validate_gum,
+    )
+    from rotacal.uncertainty.specs import KNOWN_SPECS, InstrumentSpecs, load_specs
 
 __all__ = [
     "KNOWN_SPECS",
@@ -79,3 +84,5 @@ __all__ = [
     "validate_gum",
     "welch_satterthwaite",
 ]
+
+__getattr__, __dir__ = attach(__name__, __file__, __all__)
