@@ -42,7 +42,7 @@ _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(24)
 # |s′| = max(|sin φ₀|, |cos φ₀|) for φ₀ uniform: the law of cos φ, φ uniform on [0, π/4]
 _S_PRIME = np.cos(0.125 * math.pi * (_NODES + 1.0))
 _MIX_WEIGHTS = 0.5 * _WEIGHTS
-_interp: Any = None  # the PCHIP interpolant of the table, built on first use
+_interp: Any = None  # scipy.interpolate.PchipInterpolator, built (and imported) on first use
 
 
 def in_range(g_max: float) -> bool:
@@ -55,9 +55,9 @@ def u_over_dt(g: float) -> float:
     reversal (the mixture over |s′|), from the table; ``g`` within :func:`in_range`."""
     global _interp
     if _interp is None:
-        from rotacal.table._pchip import pchip  # SciPy's PCHIP, bit for bit, without its import
+        from scipy.interpolate import PchipInterpolator
 
-        _interp = pchip(LOG_G, LOG_F)
+        _interp = PchipInterpolator(LOG_G, LOG_F)
     g_eff = g / _S_PRIME
     log_g = np.log10(np.maximum(g_eff, 1e-300))
     inside = log_g >= LOG_G[0]
