@@ -13,7 +13,6 @@ from typing import Any
 
 import numpy as np
 
-from rotacal._brentq import brentq
 from rotacal.errors import ConfigError
 from rotacal.table._motion_helpers import _DEG, _P
 from rotacal.uncertainty import (
@@ -203,6 +202,8 @@ def _thd_interval(
         if edge(0.0) >= observed:
             return 0.0
         b = bracket(edge)
+        from scipy.optimize import brentq  # SciPy's modules are imported where used (start-up)
+
         return float(brentq(lambda th: edge(th) - observed, 0.0, b, xtol=1e-9 * b, rtol=1e-10))
 
     lo = root(upper_edge)
