@@ -101,10 +101,11 @@ def test_the_parser_joins_continuations_and_drops_comments() -> None:
 def _analysis_commands(command: click.Command, path: tuple[str, ...]) -> list[str]:
     """The commands that read a file: those with a CAPTURE or CONFIG argument."""
     if isinstance(command, click.Group):
+        ctx = click.Context(command)  # the group's own look-up: top-level commands load on demand
         return [
             found
-            for name, sub in sorted(command.commands.items())
-            for found in _analysis_commands(sub, (*path, name))
+            for name in command.list_commands(ctx)
+            for found in _analysis_commands(command.get_command(ctx, name), (*path, name))
         ]
     names = {p.name for p in command.params if isinstance(p, click.Argument)}
     return [" ".join(path)] if names & {"capture", "config"} else []
