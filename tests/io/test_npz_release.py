@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from rotacal.io import iter_capture_chunks
-from rotacal.io._npz import _release
+from rotacal.io.capture import release_pages
 
 
 def test_released_rows_read_back_the_same(tmp_path):
@@ -19,5 +19,5 @@ def test_released_rows_read_back_the_same(tmp_path):
     np.save(tmp_path / "r.npy", data)
     mapped = np.load(tmp_path / "r.npy", mmap_mode="r")
     before = np.array(mapped[1000:200_000])
-    _release(mapped, 0, 300_001)  # the whole array: every page dropped, then faulted back in
+    release_pages({"x": mapped[:]})  # the whole array: every page dropped, then faulted back in
     np.testing.assert_array_equal(mapped[1000:200_000], before)

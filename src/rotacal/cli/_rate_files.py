@@ -202,22 +202,18 @@ CHUNK_ROWS = 2_000_000
 def _file_chunks(
     path: str, names: Sequence[str], columns: Sequence[str], group: str | None
 ) -> Iterator[Mapping[str, np.ndarray]]:
-    """The named canonical columns of one file in chunks; the pages of each chunk of a memory
-    map are handed back once the next one is asked for (flat memory over a long file; the chunks
-    stay valid: a page handed back is read again from the file when touched)."""
+    """The named canonical columns of one file in chunks (the reader hands each chunk's mapped
+    pages back once the next one is asked for: flat memory over a long file)."""
     from rotacal.io import iter_capture_chunks, parse_column_mapping
-    from rotacal.table.streaming import _release_pages
 
-    for chunk in iter_capture_chunks(
+    yield from iter_capture_chunks(
         path,
         list(names),
         chunk_rows=CHUNK_ROWS,
         mapping=parse_column_mapping(columns),
         group=group,
         read_options=current_read_options(),
-    ):
-        yield chunk
-        _release_pages(chunk)  # the consumer is done with it once it asks for the next one
+    )
 
 
 def _length(path: str, column: str, columns: Sequence[str], group: str | None) -> int:

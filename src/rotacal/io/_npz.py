@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import io
 import json
-import mmap
 import struct
 import warnings
 import zipfile
@@ -71,23 +70,6 @@ def _read_exact(fp: IO[bytes], nbytes: int) -> bytes:
         parts.append(piece)
         nbytes -= len(piece)
     return b"".join(parts)
-
-
-def _release(mapped: np.memmap, lo: int, hi: int) -> None:
-    """Drop the pages of rows [lo, hi) of a read-only memory map from the process's memory once
-    a chunk has been used (they stay in the page cache; touching them again reads them back):
-    without this a streamed file of 8 GB ends up resident in the process, whose peak memory then
-    grows with the file. Whole pages inside the rows only; a no-op where madvise is missing."""
-    mm = getattr(mapped, "_mmap", None)
-    if mm is None or not hasattr(mm, "madvise") or not hasattr(mmap, "MADV_DONTNEED"):
-        return
-    row = mapped.itemsize * int(np.prod(mapped.shape[1:], dtype=np.int64))
-    skip = mapped.offset % mmap.ALLOCATIONGRANULARITY  # where the array starts in the mapping
-    page = mmap.PAGESIZE
-    start = -(-(skip + lo * row) // page) * page
-    stop = (skip + hi * row) // page * page
-    if stop > start:
-        mm.madvise(mmap.MADV_DONTNEED, start, stop - start)
 
 
 class _StoredCrc:
@@ -342,10 +324,7 @@ class NpzReader:
                     out[name] = np.frombuffer(buf, dtype=m.dtype).reshape((hi - lo, *m.shape[1:]))
                     if hi == n:
                         self.integrity(name).checked = True
-                yield out
-                for src in sources.values():
-                    if isinstance(src, np.memmap):
-                        _release(src, lo, hi)
+                yield out  # iter_capture_chunks hands the mapped pages back
 
     def locate(self, index: int) -> str:
         return f"row {index} (0-based)"

@@ -10,6 +10,7 @@ NaN/inf, empty columns, columns of unequal length.
 from __future__ import annotations
 
 import contextlib
+import mmap
 import os
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -433,6 +434,8 @@ def iter_capture_chunks(
             }
             start += next(iter(out.values())).shape[0]
             yield out
+            # the consumer asked for the next chunk: hand the pages of this one back (flat memory)
+            release_pages(raw)
         if start == 0:
             raise CaptureError(f"{fname} has no data rows; give a capture with data in it")
         for check in checks.values():
@@ -440,6 +443,33 @@ def iter_capture_chunks(
                 check.check()
     finally:
         _close(reader)
+
+
+def release_pages(arrays: Mapping[str, np.ndarray]) -> None:
+    """Drop the pages of memory-mapped chunks from this process once they have been used.
+
+    Pages of a file mapping that were read stay resident (and counted in the process's memory)
+    until the kernel needs them; over a long capture that would look like the whole file in
+    memory. ``madvise(MADV_DONTNEED)`` gives them back; the data stay in the page cache and a
+    later read maps them again. Best effort: nothing happens where madvise is not available.
+    """
+    dontneed = getattr(mmap, "MADV_DONTNEED", None)
+    if dontneed is None:
+        return
+    for arr in arrays.values():
+        base: Any = arr
+        while isinstance(base, np.ndarray):
+            base = base.base
+        if not isinstance(base, mmap.mmap) or arr.nbytes == 0:
+            continue
+        try:
+            anchor = np.frombuffer(base, dtype=np.uint8)
+            start = arr.__array_interface__["data"][0] - anchor.__array_interface__["data"][0]
+            del anchor
+            page_start = start - start % mmap.PAGESIZE
+            base.madvise(dontneed, page_start, start + arr.nbytes - page_start)
+        except (AttributeError, BufferError, OSError, ValueError):
+            continue
 
 
 def capture_length(

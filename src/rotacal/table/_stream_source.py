@@ -9,7 +9,6 @@ chunk handed back once it has been used, so the process's memory stays flat).
 
 from __future__ import annotations
 
-import mmap
 import os
 from collections.abc import Callable, Iterator, Mapping
 from typing import Any
@@ -137,33 +136,6 @@ def _columns(raw: Any, offset: int, names: tuple[str, ...]) -> dict[str, np.ndar
     return out
 
 
-def _release_pages(arrays: Mapping[str, np.ndarray]) -> None:
-    """Drop the pages of memory-mapped chunks from this process once they have been used.
-
-    Pages of a file mapping that were read stay resident (and counted in the process's memory)
-    until the kernel needs them; over a long capture that would look like the whole file in
-    memory. ``madvise(MADV_DONTNEED)`` gives them back; the data stay in the page cache and a
-    later read maps them again. Best effort: nothing happens where madvise is not available.
-    """
-    dontneed = getattr(mmap, "MADV_DONTNEED", None)
-    if dontneed is None:
-        return
-    for arr in arrays.values():
-        base: Any = arr
-        while isinstance(base, np.ndarray):
-            base = base.base
-        if not isinstance(base, mmap.mmap) or arr.nbytes == 0:
-            continue
-        try:
-            anchor = np.frombuffer(base, dtype=np.uint8)
-            start = arr.__array_interface__["data"][0] - anchor.__array_interface__["data"][0]
-            del anchor
-            page_start = start - start % mmap.PAGESIZE
-            base.madvise(dontneed, page_start, start + arr.nbytes - page_start)
-        except (AttributeError, BufferError, OSError, ValueError):
-            continue
-
-
 def chunks_from_file(
     path: str | os.PathLike[str],
     columns: tuple[str, ...],
@@ -176,8 +148,8 @@ def chunks_from_file(
 
     Each call of the returned function streams the columns with
     :func:`rotacal.io.iter_capture_chunks` (CSV, NPZ, HDF5, TDMS; uncompressed NPZ members and
-    contiguous HDF5 datasets are memory-mapped, and the pages of each chunk are handed back to
-    the system once the next chunk is asked for). ``chunk_rows`` must be a whole number ≥ 1
+    contiguous HDF5 datasets are memory-mapped; the reader hands each chunk's pages back once
+    the next chunk is asked for). ``chunk_rows`` must be a whole number ≥ 1
     (ConfigError); file errors are raised by the first pass.
     """
     if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int | np.integer):
@@ -187,17 +159,6 @@ def chunks_from_file(
     rows = int(chunk_rows)
 
     def chunks() -> Iterator[dict[str, np.ndarray]]:
-        previous: dict[str, np.ndarray] | None = None
-        try:
-            for chunk in iter_capture_chunks(
-                path, columns, chunk_rows=rows, mapping=mapping, group=group
-            ):
-                if previous is not None:
-                    _release_pages(previous)
-                previous = chunk
-                yield chunk
-        finally:
-            if previous is not None:
-                _release_pages(previous)
+        yield from iter_capture_chunks(path, columns, chunk_rows=rows, mapping=mapping, group=group)
 
     return chunks

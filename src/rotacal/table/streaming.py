@@ -68,7 +68,6 @@ from rotacal.table._stream_source import (
     LTS_COLUMNS,
     ChunkSource,
     Passes,
-    _release_pages,
     chunks_from_file,
 )
 from rotacal.table.motion import (
@@ -101,8 +100,6 @@ __all__ = [
     "lts_chunks_from_file",
 ]
 
-# _release_pages is re-exported: it lived here before the split
-_ = _release_pages
 
 #: Analysed spans up to this many samples are gathered and fitted exactly as in memory (16 MB).
 _GATHER_MAX_SAMPLES = 1_000_000
