@@ -23,7 +23,8 @@ from scipy import stats
 from rotacal.gyro.uncertainty import TScale, linear_gum, monte_carlo_budget, validated
 from rotacal.uncertainty.budget import BudgetRow, UncertaintyBudget
 from rotacal.uncertainty.distributions import Distribution, Normal
-from rotacal.uncertainty.gum import Input, linear_fit_uncertainty, welch_satterthwaite
+from rotacal.uncertainty.gum import Input, welch_satterthwaite
+from rotacal.uncertainty.linear_fit import linear_fit_uncertainty
 from rotacal.uncertainty.montecarlo import MonteCarloResult, monte_carlo
 from rotacal.uncertainty.specs import InstrumentSpecs, spec_input, type_a_note
 

@@ -18,6 +18,8 @@ if TYPE_CHECKING:
         round_ilac,
         uncertainty_keys,
     )
+    from rotacal.uncertainty.correlation import correlation_matrix
+    from rotacal.uncertainty.coverage import coverage_factor, welch_satterthwaite
     from rotacal.uncertainty.distributions import (
         Arcsine,
         Constant,
@@ -31,16 +33,8 @@ if TYPE_CHECKING:
         Triangular,
         distribution_from_spec,
     )
-    from rotacal.uncertainty.gum import (
-        GUMResult,
-        Input,
-        LinearFit,
-        correlation_matrix,
-        coverage_factor,
-        linear_fit_uncertainty,
-        propagate,
-        welch_satterthwaite,
-    )
+    from rotacal.uncertainty.gum import GUMResult, Input, propagate
+    from rotacal.uncertainty.linear_fit import LinearFit, linear_fit_uncertainty
     from rotacal.uncertainty.montecarlo import (
         MonteCarloResult,
         coverage_interval,

@@ -13,8 +13,10 @@ A measurement model ``y = f(x_1, …, x_n)`` (one or several outputs) and its in
   k = t_p(ν_eff) (GUM G.3–G.4, ν_eff truncated to an integer as G.4.1 note 1 allows) and the
   expanded uncertainty U = k·u_c (GUM §6).
 
-:func:`linear_fit_uncertainty` is the straight-line calibration of GUM H.3 (intercept, slope,
-their uncertainties and correlation), the same shape as a gyro scale-factor fit.
+The correlation matrix of the inputs is checked in :mod:`rotacal.uncertainty.correlation`, k and
+ν_eff come from :mod:`rotacal.uncertainty.coverage`; the straight-line calibration of GUM H.3
+(:func:`~rotacal.uncertainty.linear_fit.linear_fit_uncertainty`, the shape of a gyro
+scale-factor fit) is :mod:`rotacal.uncertainty.linear_fit`. Their names stay importable from here.
 
 References
 ----------
@@ -25,20 +27,23 @@ Table G.2); Annex H.1–H.3. JCGM 101:2008 §5 (the GUM uncertainty framework).
 from __future__ import annotations
 
 import dataclasses
-import functools
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rotacal.errors import CaptureError, ConfigError
+from rotacal.errors import ConfigError
 from rotacal.results import Result
+from rotacal.uncertainty._checked import _frozen, _number
 from rotacal.uncertainty.budget import BudgetRow, UncertaintyBudget
+from rotacal.uncertainty.correlation import correlation_matrix
+from rotacal.uncertainty.coverage import coverage_factor, welch_satterthwaite
 
 if TYPE_CHECKING:
     from rotacal.uncertainty.distributions import Distribution
+    from rotacal.uncertainty.linear_fit import LinearFit, linear_fit_uncertainty
 
 __all__ = [
     "GUMResult",
@@ -51,10 +56,6 @@ __all__ = [
     "welch_satterthwaite",
 ]
 
-#: Smallest eigenvalue a correlation matrix may have (round-off of a valid PSD matrix).
-PSD_TOLERANCE = 1e-12
-#: Tolerance of the checks for symmetry, unit diagonal and |r| ≤ 1.
-_R_TOLERANCE = 1e-12
 #: Relative and absolute-by-u steps of the central differences for the Jacobian.
 _STEP_U = 1e-3
 _STEP_X = 1e-9
@@ -63,15 +64,6 @@ _NU_NOTE_MAX = 1e6
 #: Steps of the second- and third-order differences for GUM §5.1.2 note, as fractions of u(x_i).
 _STEP_SECOND = 0.02
 _STEP_THIRD = 0.5
-
-
-def _number(value: Any, what: str) -> float:
-    if isinstance(value, bool):
-        raise ConfigError(f"{what} = {value!r} is not a number; give a float.")
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{what} = {value!r} is not a number; give a float.") from None
 
 
 # ---------------------------------------------------------------------------------------- input
@@ -185,261 +177,6 @@ class Input:
             source=source,
             description=str(dist.describe()),
         )
-
-
-# ------------------------------------------------------------------------- correlation matrix
-def correlation_matrix(r: Any, n: int, *, names: Sequence[str] | None = None) -> np.ndarray:
-    """A validated n×n correlation matrix of the inputs.
-
-    Parameters
-    ----------
-    r : None, array_like (n, n) or mapping
-        ``None`` → uncorrelated (identity). An n×n matrix of correlation coefficients r(x_i, x_k)
-        (dimensionless). Or a mapping ``{(a, b): r_ab}`` whose keys are pairs of input names (with
-        ``names``) or of indices; unnamed pairs are uncorrelated.
-    n : int
-        Number of inputs.
-    names : sequence of str, optional
-        Names of the inputs, for the keys of a mapping and for the error messages.
-
-    Returns
-    -------
-    numpy.ndarray
-        (n, n) float64, symmetric, unit diagonal, |r| ≤ 1, positive semi-definite (smallest
-        eigenvalue ≥ −1e-12). A new array.
-
-    Raises
-    ------
-    ConfigError
-        One line naming the offending entry: wrong shape, non-finite, not symmetric, diagonal ≠ 1,
-        |r| > 1, or not positive semi-definite.
-
-    References
-    ----------
-    JCGM 100:2008 (GUM), §5.2.2 (r(x_i, x_j) = u(x_i, x_j)/(u(x_i)·u(x_j)), |r| ≤ 1),
-    C.3.6 (correlation coefficient); JCGM 101:2008 §6.4.8 (the covariance matrix is positive
-    semi-definite).
-    """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ConfigError(f"the number of inputs must be an integer ≥ 1; got {n!r}.")
-    n = int(n)
-    labels = [str(s) for s in names] if names is not None else [str(i) for i in range(n)]
-    if len(labels) != n:
-        raise ConfigError(f"{len(labels)} names were given for {n} inputs; give one per input.")
-    if r is None:
-        return np.eye(n)
-    if isinstance(r, Mapping):
-        mat = _from_pairs(r, n, labels)
-    else:
-        try:
-            mat = np.array(r, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ConfigError(
-                "the correlation matrix is not numeric; give an n×n array of numbers."
-            ) from None
-        if mat.shape != (n, n):
-            raise ConfigError(
-                f"the correlation matrix has shape {mat.shape}; give an {n}×{n} matrix "
-                f"(one row and column per input: {', '.join(labels)})."
-            )
-    if not np.all(np.isfinite(mat)):
-        i, j = np.argwhere(~np.isfinite(mat))[0]
-        raise ConfigError(
-            f"correlation r[{labels[i]}, {labels[j]}] = {mat[i, j]!r} is not finite; give a number "
-            "in [−1, 1]."
-        )
-    diag_err = np.abs(np.diag(mat) - 1.0)
-    if np.any(diag_err > _R_TOLERANCE):
-        i = int(np.argmax(diag_err))
-        raise ConfigError(
-            f"correlation r[{labels[i]}, {labels[i]}] = {mat[i, i]:g}; the diagonal of a "
-            "correlation matrix must be 1."
-        )
-    asym = np.abs(mat - mat.T)
-    if np.any(asym > _R_TOLERANCE):
-        i, j = np.unravel_index(int(np.argmax(asym)), asym.shape)
-        raise ConfigError(
-            f"the correlation matrix is not symmetric: r[{labels[i]}, {labels[j]}] = "
-            f"{mat[i, j]:g} but r[{labels[j]}, {labels[i]}] = {mat[j, i]:g}; give the same value."
-        )
-    excess = np.abs(mat) - 1.0
-    if np.any(excess > _R_TOLERANCE):
-        i, j = np.unravel_index(int(np.argmax(excess)), excess.shape)
-        raise ConfigError(
-            f"correlation r[{labels[i]}, {labels[j]}] = {mat[i, j]:g} is outside [−1, 1]."
-        )
-    mat = 0.5 * (mat + mat.T)
-    np.fill_diagonal(mat, 1.0)
-    lam_min = float(np.linalg.eigvalsh(mat)[0]) if n > 1 else 1.0
-    if lam_min < -PSD_TOLERANCE:
-        raise ConfigError(
-            f"the correlation matrix of {', '.join(labels)} is not positive semi-definite "
-            f"(smallest eigenvalue {lam_min:.3g}); the correlations contradict each other — "
-            "derive them from one covariance estimate."
-        )
-    return mat
-
-
-def _from_pairs(r: Mapping[Any, Any], n: int, labels: list[str]) -> np.ndarray:
-    index = {name: i for i, name in enumerate(labels)}
-    mat = np.eye(n)
-    given = np.eye(n, dtype=bool)
-
-    def position(key: Any) -> int:
-        if isinstance(key, str):
-            if key not in index:
-                raise ConfigError(
-                    f"correlation names unknown input '{key}'; the inputs are {', '.join(labels)}."
-                )
-            return index[key]
-        if isinstance(key, (int, np.integer)) and not isinstance(key, bool) and 0 <= key < n:
-            return int(key)
-        raise ConfigError(
-            f"correlation key {key!r} is neither an input name nor an index 0…{n - 1}."
-        )
-
-    for key, val in r.items():
-        if not (isinstance(key, tuple) and len(key) == 2):
-            raise ConfigError(
-                f"correlation key {key!r} must be a pair (a, b) of input names; e.g. "
-                "{('V', 'I'): -0.36}."
-            )
-        a, b = position(key[0]), position(key[1])
-        v = _number(val, f"correlation r[{labels[a]}, {labels[b]}]")
-        if a == b:
-            if v != 1.0:
-                raise ConfigError(
-                    f"correlation r[{labels[a]}, {labels[a]}] = {v:g}; the correlation of an "
-                    "input with itself is 1."
-                )
-            continue
-        if given[a, b] and mat[a, b] != v:
-            raise ConfigError(
-                f"correlation r[{labels[a]}, {labels[b]}] is given twice ({mat[a, b]:g} and {v:g}); "
-                "give it once."
-            )
-        mat[a, b] = mat[b, a] = v
-        given[a, b] = given[b, a] = True
-    return mat
-
-
-# ----------------------------------------------------------------- coverage factor and ν_eff
-def coverage_factor(dof: float, p: float = 0.95, *, truncate: bool = True) -> float:
-    """The coverage factor k_p = t_p(ν) of a two-sided interval with coverage probability p.
-
-    Parameters
-    ----------
-    dof : float
-        Degrees of freedom ν (> 0; ``math.inf`` gives the normal quantile, 1.959964 for p = 0.95).
-    p : float, optional
-        Coverage probability, 0 < p < 1 (e.g. 0.95, 0.99). Default 0.95.
-    truncate : bool, optional
-        Truncate a non-integer ν to the next lower integer before taking the t quantile, as GUM
-        G.4.1 note 1 allows (the other option it names is interpolating Table G.2); the
-        conservative choice, and the one the GUM's own examples use (H.1: ν_eff = 16.75 →
-        t_99(16) = 2.92). A ν within 1e-9 (relative) below an integer counts as that integer.
-        Default True; False uses the t distribution at the fractional ν.
-
-    Returns
-    -------
-    float
-        k_p (dimensionless), so that U_p = k_p·u_c.
-
-    Raises
-    ------
-    ConfigError
-        When p is not in (0, 1), ν is NaN or ≤ 0, or ν < 1 with ``truncate``.
-
-    References
-    ----------
-    JCGM 100:2008 (GUM), G.3.2–G.3.4, G.4.1 (step 3 and note 1), Table G.2; §6.3.
-    """
-    pf = _number(p, "coverage probability p")
-    if not 0.0 < pf < 1.0:
-        raise ConfigError(f"coverage probability p = {pf!r} must be in (0, 1), e.g. 0.95.")
-    nu = _number(dof, "degrees of freedom ν")
-    if math.isnan(nu) or nu <= 0.0:
-        raise ConfigError(f"degrees of freedom ν = {nu!r} must be > 0 (math.inf for none).")
-    tail = 0.5 * (1.0 - pf)
-    if math.isinf(nu):
-        return _upper_quantile(tail, math.inf)
-    if truncate:
-        nu_t = math.floor(nu + 1e-9 * max(1.0, nu))
-        if nu_t < 1:
-            raise ConfigError(
-                f"ν = {nu:g} truncates to 0 (GUM G.4.1 note 1); an uncertainty with fewer than one "
-                "degree of freedom has no t-based coverage factor — give k or more readings."
-            )
-        nu = float(nu_t)
-    return _upper_quantile(tail, nu)
-
-
-@functools.lru_cache(maxsize=4096)
-def _upper_quantile(tail: float, nu: float) -> float:
-    """The upper ``tail`` quantile of Student's t with ν degrees of freedom (the normal's for
-    ν = inf), kept by its arguments: scipy takes ~0.3 ms a call, and the budgets of every
-    calibration ask for the same few (p = 0.95, integer ν) again and again."""
-    # scipy.special, not scipy.stats: the same functions (stats.norm.isf(q) is -ndtri(q),
-    # stats.t.isf(q, ν) is -stdtrit(ν, q), bit for bit; a test checks it) at ~0.2 s of import
-    # instead of ~0.6 s, paid only when a quantile is computed
-    from scipy import special
-
-    if math.isinf(nu):
-        return float(-special.ndtri(tail))
-    return float(-special.stdtrit(nu, tail))
-
-
-def welch_satterthwaite(contributions: Any, dofs: Any) -> float:
-    """The effective degrees of freedom of a sum of independent uncertainty components.
-
-    ``ν_eff = u_c⁴ / Σ_i (u_i⁴/ν_i)`` with ``u_c² = Σ_i u_i²``, where u_i = c_i·u(x_i).
-
-    Parameters
-    ----------
-    contributions : array_like (n,)
-        The components u_i(y) = c_i·u(x_i) (same unit as y; signs are ignored).
-    dofs : array_like (n,)
-        Their degrees of freedom ν_i (> 0; ``math.inf`` for exactly known ones).
-
-    Returns
-    -------
-    float
-        ν_eff ≥ min ν_i; ``math.inf`` when every ν_i with a non-zero component is infinite (or
-        every component is 0).
-
-    Raises
-    ------
-    ConfigError
-        Different lengths, no components, a non-finite component, or ν ≤ 0 / NaN.
-
-    References
-    ----------
-    JCGM 100:2008 (GUM), G.4.1, eq. (G.2b); Welch (1947), Satterthwaite (1946).
-    """
-    c = np.asarray(contributions, dtype=np.float64).ravel()
-    nu = np.asarray(dofs, dtype=np.float64).ravel()
-    if c.size != nu.size:
-        raise ConfigError(
-            f"welch_satterthwaite got {c.size} contributions and {nu.size} degrees of freedom; "
-            "give one ν per contribution."
-        )
-    if c.size == 0:
-        raise ConfigError("welch_satterthwaite needs at least one contribution.")
-    if not np.all(np.isfinite(c)):
-        i = int(np.flatnonzero(~np.isfinite(c))[0])
-        raise ConfigError(f"contribution {i} = {float(c[i])!r} is not finite; give c_i·u(x_i).")
-    if np.any(np.isnan(nu)) or np.any(nu <= 0.0):
-        i = int(np.flatnonzero(np.isnan(nu) | (nu <= 0.0))[0])
-        raise ConfigError(f"degrees of freedom ν_{i} = {nu[i]!r} must be > 0 (math.inf for none).")
-    scale = float(np.max(np.abs(c)))
-    if scale == 0.0:
-        return math.inf
-    w = (c / scale) ** 2
-    finite = np.isfinite(nu)
-    den = float(np.sum(w[finite] ** 2 / nu[finite]))
-    if den == 0.0:
-        return math.inf
-    return float(np.sum(w) ** 2 / den)
 
 
 # -------------------------------------------------------------------------------- the result
@@ -583,10 +320,6 @@ class GUMResult(Result):
 
 
 # ----------------------------------------------------------------------------- propagation
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    a.setflags(write=False)
-    return a
 
 
 class _Model:
@@ -1012,132 +745,11 @@ def propagate(
     )
 
 
-# ------------------------------------------------------------------------ straight-line fit
-@dataclasses.dataclass(frozen=True, eq=False)
-class LinearFit(Result):
-    """A least-squares straight line ``y = intercept + slope·(x − x0)`` with Type A uncertainties.
+def __getattr__(name: str) -> Any:
+    # the straight-line fit of GUM H.3 lives in rotacal.uncertainty.linear_fit, which builds on
+    # Input; its names stay importable from here, loaded on first use (no import cycle)
+    if name in ("LinearFit", "linear_fit_uncertainty"):
+        from rotacal.uncertainty import linear_fit
 
-    Attributes
-    ----------
-    intercept : y_1, the value at x = x0 (unit of y).
-    slope : y_2 (unit of y per unit of x).
-    u_intercept, u_slope : their standard uncertainties (same units).
-    correlation : r(y_1, y_2) (dimensionless).
-    covariance : (2, 2) covariance matrix of (y_1, y_2).
-    residual_std : s, the standard deviation of the residuals, √(Σr²/(n − 2)) (unit of y).
-    dof : n − 2.
-    n : number of points.
-    x0 : the reference abscissa (unit of x).
-
-    References
-    ----------
-    JCGM 100:2008 (GUM), Annex H.3 (calibration of a thermometer by a straight line).
-    """
-
-    intercept: float
-    slope: float
-    u_intercept: float
-    u_slope: float
-    correlation: float
-    covariance: np.ndarray
-    residual_std: float
-    dof: int
-    n: int
-    x0: float
-
-    def inputs(
-        self,
-        names: tuple[str, str] = ("y1", "y2"),
-        *,
-        unit_y: str = "",
-        unit_x: str = "",
-    ) -> tuple[tuple[Input, Input], np.ndarray]:
-        """The two fitted parameters as :class:`Input` objects and their 2×2 correlation matrix.
-
-        Ready for :func:`propagate` (``propagate(f, ins, correlation=r)``); both carry ν = n − 2,
-        so ν_eff of a prediction is n − 2 as in GUM H.3.
-        """
-        slope_unit = f"{unit_y or '1'}/{unit_x}" if unit_x else unit_y
-        origin = f"least-squares line, {self.n} points"
-        ins = (
-            Input(names[0], self.intercept, self.u_intercept, self.dof, "normal", unit_y, origin),
-            Input(names[1], self.slope, self.u_slope, self.dof, "normal", slope_unit, origin),
-        )
-        r = np.array([[1.0, self.correlation], [self.correlation, 1.0]])
-        return ins, r
-
-
-def linear_fit_uncertainty(x: Any, y: Any, *, x0: float = 0.0) -> LinearFit:
-    """Fit ``y = y_1 + y_2·(x − x0)`` by least squares, with the uncertainties of GUM H.3.
-
-    The variances and covariance of (y_1, y_2) are s²·(AᵀA)⁻¹ with s² = Σ r_k²/(n − 2), computed
-    from the centred abscissae; their degrees of freedom are n − 2.
-
-    Parameters
-    ----------
-    x : array_like (n,)
-        Abscissae (e.g. temperature in °C, or reference rate in °/s for a gyro scale factor).
-    y : array_like (n,)
-        Ordinates (any unit).
-    x0 : float, optional
-        Reference abscissa (unit of x); the intercept is the line's value there. Default 0.
-
-    Returns
-    -------
-    LinearFit
-
-    Raises
-    ------
-    CaptureError
-        Different lengths, fewer than 3 points, NaN/inf, or all x equal.
-
-    References
-    ----------
-    JCGM 100:2008 (GUM), Annex H.3: least-squares estimates of y_1 and y_2, s², their variances
-    and correlation coefficient, and a predicted correction with ν = n − 2.
-    """
-    xa = np.asarray(x, dtype=np.float64).ravel()
-    ya = np.asarray(y, dtype=np.float64).ravel()
-    if xa.size != ya.size:
-        raise CaptureError(f"x has {xa.size} points but y has {ya.size}; give one y per x.")
-    if xa.size < 3:
-        raise CaptureError(
-            f"a straight line with an uncertainty needs at least 3 points; got {xa.size}."
-        )
-    for name, arr in (("x", xa), ("y", ya)):
-        if not np.all(np.isfinite(arr)):
-            i = int(np.flatnonzero(~np.isfinite(arr))[0])
-            raise CaptureError(f"{name}[{i}] = {arr[i]!r} is not finite; remove or fix that point.")
-    x0f = _number(x0, "x0")
-    if not math.isfinite(x0f):
-        raise ConfigError(f"x0 = {x0f!r} is not finite.")
-    n = xa.size
-    t = xa - x0f
-    t_mean = float(np.mean(t))
-    dt = t - t_mean
-    sxx = float(dt @ dt)
-    if not sxx > 0.0 or sxx <= (1e-13 * max(1.0, float(np.max(np.abs(t))))) ** 2 * n:
-        raise CaptureError("all x values are equal; a slope needs at least two different x.")
-    y_mean = float(np.mean(ya))
-    slope = float(dt @ (ya - y_mean)) / sxx
-    intercept = y_mean - slope * t_mean
-    resid = ya - (intercept + slope * t)
-    dof = n - 2
-    s2 = float(resid @ resid) / dof
-    var_slope = s2 / sxx
-    var_int = s2 * (1.0 / n + t_mean * t_mean / sxx)
-    cov = -t_mean * s2 / sxx
-    denom = math.sqrt(var_int * var_slope)
-    r = cov / denom if denom > 0.0 else 0.0
-    return LinearFit(
-        intercept=intercept,
-        slope=slope,
-        u_intercept=math.sqrt(var_int),
-        u_slope=math.sqrt(var_slope),
-        correlation=float(np.clip(r, -1.0, 1.0)),
-        covariance=_frozen(np.array([[var_int, cov], [cov, var_slope]])),
-        residual_std=math.sqrt(s2),
-        dof=dof,
-        n=n,
-        x0=x0f,
-    )
+        return getattr(linear_fit, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
