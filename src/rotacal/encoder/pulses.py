@@ -321,18 +321,8 @@ def pair_heads(heads: Sequence[FloatArray], names: Sequence[str] | None = None) 
             f"{worst[i] / period:.2f} pulse periods away, so it has a different number of pulses "
             "per revolution or lost/extra pulses; every head must read the same scale."
         )
-    notes: list[str] = []
-    for i, ti in enumerate(heads):
-        if i and (-int(offsets[i]) == lo and lo > 0):
-            notes.append(
-                f"{names[i]} starts {lo} pulses after head_0 (at {ti[0]:.6g} s); the pulses of "
-                "head_0 before it are not used for comparing heads."
-            )
-        if ti.size - int(offsets[i]) == hi and hi < t0.size:
-            notes.append(
-                f"{names[i]} stops {t0.size - hi} pulses before head_0 (at {ti[-1]:.6g} s); the "
-                "pulses of head_0 after it are not used for comparing heads."
-            )
+    spans = [(float(ti[0]), float(ti[-1]), ti.size) for ti in heads]
+    notes = pairing_notes(names, spans, offsets, lo, hi)
     mean_times = t0[j] + delays.mean(axis=0)
     return HeadPairing(
         index_offsets=offsets,
@@ -342,6 +332,31 @@ def pair_heads(heads: Sequence[FloatArray], names: Sequence[str] | None = None) 
         mean_times_s=mean_times,
         notes=tuple(notes),
     )
+
+
+def pairing_notes(
+    names: Sequence[str],
+    spans: Sequence[tuple[float, float, int]],
+    offsets: NDArray[np.int64],
+    lo: int,
+    hi: int,
+) -> list[str]:
+    """What a pairing leaves out: heads (``spans``: first and last time, s, and pulse count of
+    each) that start after head 0 or stop before it; ``lo``/``hi``: the paired head-0 range."""
+    notes: list[str] = []
+    size0 = spans[0][2]
+    for i, (first, last, size) in enumerate(spans):
+        if i and (-int(offsets[i]) == lo and lo > 0):
+            notes.append(
+                f"{names[i]} starts {lo} pulses after head_0 (at {first:.6g} s); the pulses of "
+                "head_0 before it are not used for comparing heads."
+            )
+        if size - int(offsets[i]) == hi and hi < size0:
+            notes.append(
+                f"{names[i]} stops {size0 - hi} pulses before head_0 (at {last:.6g} s); the "
+                "pulses of head_0 after it are not used for comparing heads."
+            )
+    return notes
 
 
 def check_heads_not_copies(heads: Sequence[FloatArray], names: Sequence[str] | None = None) -> None:
