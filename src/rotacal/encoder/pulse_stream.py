@@ -112,26 +112,34 @@ class TrainCheck:
         size, half = _PERIOD_BLOCK, _PERIOD_BLOCK // 2
         intervals = self.pulses - 1
         known = self._med0 + self._meds.size  # blocks whose median is known
-        end = intervals if final else half + size * (known - 1)
+        last_centre = half + size * (known - 1)
+        end = intervals if final else last_centre
         if end <= self._p0:
             return
-        i = np.arange(self._p0, end)
         t = self._pend[: end - self._p0 + 1]
         dt = np.diff(t)
         if intervals <= 2 * size:  # a short train (final only): one median, as in memory
             period = np.full(dt.size, float(np.median(dt)))
         else:
-            # the same operations as rotacal.encoder.pulses._local_period (the same bits)
+            # the local period of rotacal.encoder.pulses._local_period, by the same operations
+            # (the same bits): flat before the first block centre and after the last, else
+            # rows of `size` intervals between two centres; self._p0 is 0 or half + k·size
             period = np.empty(dt.size)
-            last_centre = half + size * (known - 1)
-            inner = (i >= half) & (i < last_centre)
-            b = (i[inner] - half) // size
-            m0 = self._meds[b - self._med0]
-            slope = (self._meds[b + 1 - self._med0] - m0) / float(size)
-            period[inner] = slope * (i[inner] - half - b * size).astype(np.float64) + m0
-            period[i < half] = self._meds[0]  # judged in the first call only (block 0 kept)
-            period[i >= last_centre] = self._meds[-1]  # final only
-        ratio = dt / period
+            p = self._p0
+            if p == 0:
+                period[:half] = self._meds[0]
+                p = half
+            rows = (min(end, last_centre) - p) // size
+            if rows > 0:
+                b0 = (p - half) // size - self._med0
+                meds = self._meds[b0 : b0 + rows + 1]
+                slope = (meds[1:] - meds[:-1]) / float(size)
+                inner = period[p - self._p0 : p - self._p0 + rows * size].reshape(rows, size)
+                np.multiply(slope[:, None], np.arange(size, dtype=np.float64)[None, :], out=inner)
+                inner += meds[:-1, None]
+                p += rows * size
+            period[p - self._p0 :] = self._meds[-1]  # after the last centre (final only)
+        ratio = np.divide(dt, period, out=period)
         self._refuse(ratio, t, int(self._p0))
         self._pend = self._pend[end - self._p0 :].copy()
         self._p0 = end
