@@ -191,3 +191,30 @@ def test_progress_reaches_twice_the_time_stamps(ragged):
     total = sum(h.size for h in ragged)
     assert seen == sorted(seen) and total <= seen[-1] <= 2 * total
     assert math.isclose(seen[-1], total + 5 * (ragged[0].size - 40 - 1), rel_tol=0.05)
+
+
+@pytest.mark.parametrize("pulses", [50, 129, 130, 5000])
+@pytest.mark.parametrize("size", [1, 63, 64, 1000])
+def test_the_train_check_judges_every_interval_by_the_in_memory_local_period(
+    monkeypatch, pulses, size
+):
+    """The same period at every interval, bit for bit, whatever the chunks (the refusals at
+    1.5 and 0.75 periods then fall alike)."""
+    from rotacal.encoder.pulse_stream import TrainCheck
+    from rotacal.encoder.pulses import _local_period
+
+    rng = np.random.default_rng(pulses + size)
+    dt = (
+        1e-3 * (1 + 0.2 * np.sin(np.arange(pulses - 1) / 300)) * (1 + 0.01 * rng.random(pulses - 1))
+    )
+    t = np.concatenate(([0.5], 0.5 + np.cumsum(dt)))
+    seen = []
+    monkeypatch.setattr(
+        TrainCheck, "_refuse", lambda self, ratio, tt, i0: seen.append(ratio.copy())
+    )
+    check = TrainCheck("head_0")
+    for k in range(0, t.size, size):
+        check.feed(t[k : k + size])
+    check.finish()
+    expected = np.diff(t) / _local_period(np.diff(t))
+    np.testing.assert_array_equal(np.concatenate(seen), expected)

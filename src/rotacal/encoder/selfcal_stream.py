@@ -160,7 +160,7 @@ def self_calibrate_chunked(
     _check_head0_length(pairing.sizes[0], m)
     revs = _whole_revolutions(pairing.pulses, m, pairing.notes)
     done = pairing.timestamps
-    candidates = ["forward", "reverse"] if rotation == "auto" else [rotation]
+    candidates: list[str] = ["forward", "reverse"] if rotation == "auto" else [rotation]
     shifts: dict[str, NDArray[np.int64]] | None = None
     while True:
         senses, rev_offsets, prefix = _fit_pass(
@@ -185,6 +185,9 @@ def self_calibrate_chunked(
     sense = _choose_sense({c: float(np.sum(senses[c].ss)) for c in candidates}, rotation, n, notes)
     _pulses_per_rev_notes(np.concatenate(prefix.diff, axis=1), m, period_checked, notes)
     chosen = senses[sense]
+    for other in senses.values():
+        if other is not chosen:
+            other.spill.close()
     return _assemble(
         _Fitted(
             heads=n,
