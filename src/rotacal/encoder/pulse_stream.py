@@ -16,11 +16,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from rotacal.encoder.pulses import (
     _PERIOD_BLOCK,
-    EXTRA_PULSE_RATIO,
-    MISSING_PULSE_RATIO,
     _sorted_search,
     check_heads_not_copies,
     pairing_notes,
+    refuse_bad_intervals,
 )
 from rotacal.errors import CaptureError
 from rotacal.signal._checks import TYPICAL_STEPS
@@ -148,23 +147,8 @@ class TrainCheck:
             self._meds = self._meds[keep:].copy()
             self._med0 += keep
 
-    def _refuse(self, ratio: FloatArray, t: FloatArray, i0: int) -> None:
-        long_ = np.flatnonzero(ratio >= MISSING_PULSE_RATIO)
-        if long_.size:
-            k = int(long_[0])
-            lost = max(1, round(float(ratio[k])) - 1)
-            raise CaptureError(
-                f"column '{self.name}': about {lost} pulse(s) missing after pulse {i0 + k} at "
-                f"t = {t[k]:.9g} s (an interval of {ratio[k]:.2f} pulse periods); every pulse is "
-                "needed to count the lines — cut the capture before the gap or re-record."
-            )
-        short = np.flatnonzero(ratio <= EXTRA_PULSE_RATIO)
-        if short.size:
-            k = int(short[0])
-            raise CaptureError(
-                f"column '{self.name}': an extra pulse edge at t = {t[k + 1]:.9g} s (an interval "
-                f"of {ratio[k]:.2f} pulse periods); check the comparator or remove spurious edges."
-            )
+    def _refuse(self, ratio: FloatArray, t: FloatArray, first: int) -> None:
+        refuse_bad_intervals(self.name, ratio, t, first)
 
 
 class HeadStream:

@@ -170,15 +170,23 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
     check_time_span(name, float(t[0]), float(t[-1]), typical, "pulse interval")
     ratio = _local_period(dt)
     np.divide(dt, ratio, out=ratio)  # in place: one record-long array less at the peak
+    refuse_bad_intervals(name, ratio, t)
+    return t
+
+
+def refuse_bad_intervals(name: str, ratio: FloatArray, t: FloatArray, first: int = 0) -> None:
+    """Refuse missing pulses (an interval ≥ MISSING_PULSE_RATIO local periods) or an extra edge
+    (≤ EXTRA_PULSE_RATIO); ``ratio``: intervals over their local period, ``t``: the pulse times
+    (s) around them, ``first``: the index of ``t[0]`` in the train (for messages)."""
     long_ = np.flatnonzero(ratio >= MISSING_PULSE_RATIO)
     if long_.size:
         i = int(long_[0])
         lost = max(1, round(float(ratio[i])) - 1)
         more = f" (and {long_.size - 1} more gaps)" if long_.size > 1 else ""
         raise CaptureError(
-            f"column '{name}': about {lost} pulse(s) missing after pulse {i} at t = {t[i]:.9g} s "
-            f"(an interval of {ratio[i]:.2f} pulse periods){more}; every pulse is needed to count "
-            "the lines — cut the capture before the gap or re-record."
+            f"column '{name}': about {lost} pulse(s) missing after pulse {first + i} at "
+            f"t = {t[i]:.9g} s (an interval of {ratio[i]:.2f} pulse periods){more}; every pulse "
+            "is needed to count the lines — cut the capture before the gap or re-record."
         )
     short = np.flatnonzero(ratio <= EXTRA_PULSE_RATIO)
     if short.size:
@@ -187,7 +195,6 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
             f"column '{name}': an extra pulse edge at t = {t[i + 1]:.9g} s (an interval of "
             f"{ratio[i]:.2f} pulse periods); check the comparator or remove spurious edges."
         )
-    return t
 
 
 @dataclasses.dataclass(frozen=True)
