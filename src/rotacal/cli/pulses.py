@@ -4,15 +4,14 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
 import click
-import numpy as np
 
 from rotacal.columns import HEAD_NAME
-from rotacal.errors import ConfigError
+from rotacal.errors import CaptureError, ConfigError
 from rotacal.numbers import element_of, format_plain, quantity_of
 
 from ._app import cli
@@ -64,6 +63,7 @@ _SELFCAL_CHUNK_ROWS = 1 << 19
     "--chunked/--in-memory",
     default=None,
     help="Read the heads in chunks (flat memory, two passes over the file) or load them whole "
+    "(heads padded with empty cells or trailing NaNs need it) "
     f"[default: chunked above {_SELFCAL_IN_MEMORY_MAX:.0e} pulse times in all, except CSV].",
 )
 @_analysis_options
@@ -153,25 +153,6 @@ def _head_lengths(capture: str, columns: Sequence[str], group: str | None) -> di
     }
 
 
-def _without_padding(chunks: Iterable[Any]) -> Iterator[Any]:
-    """A head's chunks without the trailing NaNs that pad it to the file's longest head (as
-    ``read_capture(ragged=True)`` drops them); a NaN with a number after it is passed on, for
-    the pulse-train check to refuse at its place."""
-    padded = False
-    for x in chunks:
-        if padded:
-            if np.isfinite(x).any():
-                yield np.full(1, np.nan)
-                return
-            continue
-        bad = np.flatnonzero(~np.isfinite(x))
-        if bad.size and np.isnan(x[bad[0] :]).all():
-            padded = True
-            x = x[: bad[0]]
-        if x.size:
-            yield x
-
-
 def _selfcal_chunked(
     capture: str,
     columns: Sequence[str],
@@ -198,18 +179,24 @@ def _selfcal_chunked(
             mapping=mapping,
             group=group,
             read_options=options,
-            allow_nonfinite=True,  # trailing NaNs pad a short head; others the checks refuse
         )
-        return _without_padding(chunk[name] for chunk in chunks)
+        # NaN is refused as it is read (the reader checks each chunk's bytes as it goes: a head
+        # padded with trailing NaNs is read with --in-memory, which drops the padding)
+        return (chunk[name] for chunk in chunks)
 
     with _sample_progress(2 * sum(lengths.values()), "self-calibration (chunked)") as progress:
-        return self_calibrate_chunked(
-            lambda: [one_head(name) for name in lengths],
-            pulses_per_rev=pulses_per_rev,
-            rotation=rotation,  # type: ignore[arg-type]
-            specs=specs,
-            progress=progress,
-        )
+        try:
+            return self_calibrate_chunked(
+                lambda: [one_head(name) for name in lengths],
+                pulses_per_rev=pulses_per_rev,
+                rotation=rotation,  # type: ignore[arg-type]
+                specs=specs,
+                progress=progress,
+            )
+        except CaptureError as e:
+            if "not a finite number" not in str(e):
+                raise
+            raise CaptureError(f"{e} (if NaNs pad a shorter head: give --in-memory)") from None
 
 
 @cli.command(

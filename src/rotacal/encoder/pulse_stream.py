@@ -350,7 +350,14 @@ def _nearest_offsets(si: HeadStream, t0: FloatArray, j0: int, counts: dict[int, 
         local = k - si.start
         nearer_left = (q - si.buf[local - 1]) < (si.buf[local] - q)
         k = k - nearer_left.astype(np.int64)
-        values, n = np.unique(k - (inside + j0), return_counts=True)
+        diff = k - (inside + j0)
+        low, high = int(diff.min()), int(diff.max())
+        if high - low <= 4 * diff.size:  # nearly always one or two values: count, not sort
+            n = np.bincount(diff - low)
+            values = np.flatnonzero(n)
+            n, values = n[values], values + low
+        else:
+            values, n = np.unique(diff, return_counts=True)
         for v, c in zip(values.tolist(), n.tolist(), strict=True):
             counts[v] = counts.get(v, 0) + c
     # the next head-0 pulses come after this chunk's last one
