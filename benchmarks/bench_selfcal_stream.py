@@ -15,7 +15,8 @@ seconds, CPU seconds, M pulse times/s and the peak RSS (``ru_maxrss``):
 3. at 10⁷ also ``--in-memory``, and the largest difference of every JSON number between the two
    (relative; the curve's points against the curve's size).
 
-Ratios: the command's time per pulse time against the baseline's in the same run, at each size.
+Ratios: the command's wall and CPU time against the baseline's in the same run, at each size (on
+a shared machine the CPU ratio is the steadier one).
 No asserts. Run: ``python benchmarks/bench_selfcal_stream.py [--big] [--dir DIR] [--keep]``
 (``--big`` adds 6.5·10⁸: a 5.2 GB file in DIR, default a temporary directory).
 """
@@ -159,7 +160,7 @@ def main() -> None:
     print(f"{HEADS} heads x {M} pulses/rev at {RATE_DEG_S} deg/s; files in {work}")
     print(
         f"{'case':24s} {'pulse times':>12s} {'s':>8s} {'CPU s':>8s} {'M/s':>7s} "
-        f"{'peak MB':>8s} {'x baseline':>10s}"
+        f"{'peak MB':>8s} {'x base':>7s} {'x base CPU':>10s}"
     )
     for size in sizes:
         path = work / f"heads_{size}.npz"
@@ -177,7 +178,7 @@ def main() -> None:
             print(
                 f"{label:24s} {n:12,d} {c['seconds']:8.2f} {c['cpu']:8.2f} "
                 f"{n / c['seconds'] / 1e6:7.1f} {c['peak'] / 2**20:8.0f} "
-                f"{c['seconds'] / base['seconds']:10.2f}"
+                f"{c['seconds'] / base['seconds']:7.2f} {c['cpu'] / base['cpu']:10.2f}"
             )
         if size == "1e7":
             print(

@@ -320,6 +320,10 @@ def self_calibrate(
         whole revolution covered by all heads, a pulses_per_rev that does not match the period of
         the data.
 
+    See Also
+    --------
+    rotacal.encoder.self_calibrate_chunked : the same from heads read in chunks (flat memory).
+
     References
     ----------
     Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity calibration
