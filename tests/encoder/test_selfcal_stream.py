@@ -218,3 +218,12 @@ def test_the_train_check_judges_every_interval_by_the_in_memory_local_period(
     check.finish()
     expected = np.diff(t) / _local_period(np.diff(t))
     np.testing.assert_array_equal(np.concatenate(seen), expected)
+
+
+def test_block_medians_are_numpys_medians_bit_for_bit():
+    from rotacal.encoder.pulses import block_medians
+
+    rng = np.random.default_rng(5)
+    for scale in (1e-6, 1.0, 1e3):
+        x = scale * rng.random(64 * 40) + 1e-3 * rng.integers(0, 3, 64 * 40)  # ties too
+        np.testing.assert_array_equal(block_medians(x), np.median(x.reshape(-1, 64), axis=1))

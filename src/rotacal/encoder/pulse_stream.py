@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 from rotacal.encoder.pulses import (
     _PERIOD_BLOCK,
     _sorted_search,
+    block_medians,
     check_heads_not_copies,
     pairing_notes,
     refuse_bad_intervals,
@@ -88,7 +89,7 @@ class TrainCheck:
             self._typical_n += take.size
         c = np.concatenate((self._carry, dt))
         full = c.size // _PERIOD_BLOCK * _PERIOD_BLOCK
-        meds = np.median(c[:full].reshape(-1, _PERIOD_BLOCK), axis=1)
+        meds = block_medians(c[:full])
         self._meds = np.concatenate((self._meds, meds))
         self._carry = c[full:]
         self._pend = (
@@ -342,15 +343,17 @@ def _nearest_offsets(si: HeadStream, t0: FloatArray, j0: int, counts: dict[int, 
         return
     first_i = si.check.first
     last_i = si.buf[-1] if si.done else np.inf  # not done: a later pulse of head i exists
-    inside = np.flatnonzero((t0 >= first_i) & (t0 <= last_i))
-    if inside.size:
-        q = t0[inside]
-        k = _sorted_search(si.buf, q) + si.start
-        k = np.maximum(k, 1)  # the record's second pulse at the earliest, as pair_heads clips
-        local = k - si.start
+    # t0 increases: the pulses inside head i's record are one run of them
+    a = int(np.searchsorted(t0, first_i, side="left"))
+    b = int(np.searchsorted(t0, last_i, side="right"))
+    if b > a:
+        q = t0[a:b]
+        local = _sorted_search(si.buf, q)
+        np.maximum(local, 1 - si.start, out=local)  # pair_heads clips at the record's pulse 1
         nearer_left = (q - si.buf[local - 1]) < (si.buf[local] - q)
-        k = k - nearer_left.astype(np.int64)
-        diff = k - (inside + j0)
+        diff = local - nearer_left  # the nearest pulse (window index)
+        diff -= np.arange(b - a)
+        diff += si.start - j0 - a  # − the head-0 pulse's index
         low, high = int(diff.min()), int(diff.max())
         if high - low <= 4 * diff.size:  # nearly always one or two values: count, not sort
             n = np.bincount(diff - low)

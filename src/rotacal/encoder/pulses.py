@@ -103,6 +103,18 @@ def head_columns(columns: Mapping[str, ArrayLike]) -> list[FloatArray]:
     return [np.asarray(found[k], dtype=np.float64) for k in range(len(found))]
 
 
+def block_medians(dt: FloatArray) -> FloatArray:
+    """Medians of consecutive blocks of _PERIOD_BLOCK intervals (``dt.size`` a multiple of it).
+
+    ``np.median`` row by row, by the same arithmetic (the mean of the two middle values of each
+    sorted row: the same bits), from a sort of the short rows, several times faster than the
+    partition np.median does.
+    """
+    rows = np.sort(dt.reshape(-1, _PERIOD_BLOCK), axis=1)
+    half = _PERIOD_BLOCK // 2
+    return np.asarray((rows[:, half - 1] + rows[:, half]) / 2.0)
+
+
 def _local_period(dt: FloatArray) -> FloatArray:
     """Robust local pulse period at every interval: block medians, linearly interpolated."""
     n = dt.size
@@ -110,7 +122,7 @@ def _local_period(dt: FloatArray) -> FloatArray:
         return np.full(n, float(np.median(dt)))
     size = _PERIOD_BLOCK
     nb = n // size
-    medians = np.median(dt[: nb * size].reshape(nb, size), axis=1)
+    medians = block_medians(dt[: nb * size])
     centres = (np.arange(nb) + 0.5) * size
     # np.interp(arange(n), centres, medians) by rows: the centres are evenly spaced, so the
     # intervals between them are whole rows of `size` intervals (the same operations, the
