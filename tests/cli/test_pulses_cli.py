@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from tests.encoder.test_selfcal_stream import _leaves
 
 from rotacal.cli import cli
 from rotacal.io import read_capture
@@ -155,17 +156,6 @@ def test_bad_input_is_one_line(pulses, tmp_path):
     )
 
 
-def _numbers(d, path=""):
-    if isinstance(d, dict):
-        for k, v in d.items():
-            yield from _numbers(v, f"{path}/{k}")
-    elif isinstance(d, list):
-        for i, v in enumerate(d):
-            yield from _numbers(v, f"{path}[{i}]")
-    else:
-        yield path, d
-
-
 def test_selfcal_reads_a_large_capture_in_chunks_with_the_same_json(pulses, tmp_path, monkeypatch):
     import rotacal.cli.pulses as pulses_cli
     import rotacal.encoder.selfcal_stream as stream
@@ -186,8 +176,8 @@ def test_selfcal_reads_a_large_capture_in_chunks_with_the_same_json(pulses, tmp_
     assert r.exit_code == 0, r.output
     assert calls == [1]
     # the provenance says how each was run (the options differ); the results must not
-    a = dict(_numbers({**json.loads(mem.read_text()), "provenance": None}))
-    b = dict(_numbers({**json.loads(auto.read_text()), "provenance": None}))
+    a = dict(_leaves({**json.loads(mem.read_text()), "provenance": None}))
+    b = dict(_leaves({**json.loads(auto.read_text()), "provenance": None}))
     assert a.keys() == b.keys()
     scale = max(abs(v) for k, v in a.items() if k.startswith("/deviation_arcsec["))
     for key, x in a.items():
