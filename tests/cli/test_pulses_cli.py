@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from tests.encoder.test_selfcal_stream import _leaves
 
 from rotacal.cli import cli
 from rotacal.io import read_capture
@@ -153,3 +154,35 @@ def test_bad_input_is_one_line(pulses, tmp_path):
     one_line_error(
         run("rate", str(pulses), "--pulses-per-rev", "3600", "--head", "9"), "head 9 does not exist"
     )
+
+
+def test_selfcal_reads_a_large_capture_in_chunks_with_the_same_json(pulses, tmp_path, monkeypatch):
+    import rotacal.cli.pulses as pulses_cli
+    import rotacal.encoder.selfcal_stream as stream
+
+    calls = []
+    real = stream.self_calibrate_chunked
+    monkeypatch.setattr(
+        stream, "self_calibrate_chunked", lambda *a, **k: calls.append(1) or real(*a, **k)
+    )
+    monkeypatch.setattr(pulses_cli, "_SELFCAL_IN_MEMORY_MAX", 1000)  # this capture is "large"
+    monkeypatch.setattr(pulses_cli, "_SELFCAL_CHUNK_ROWS", 1777)  # chunks across revolutions
+    auto, mem = tmp_path / "auto.json", tmp_path / "mem.json"
+    args = [str(pulses), "--pulses-per-rev", "3600", "--json"]
+    r = run("selfcal", *args, str(auto), "--report", str(tmp_path / "sc.html"))
+    assert r.exit_code == 0, r.output
+    assert calls == [1] and (tmp_path / "sc.html").read_text().count("<img") == 3
+    r = run("selfcal", *args, str(mem), "--in-memory")
+    assert r.exit_code == 0, r.output
+    assert calls == [1]
+    # the provenance says how each was run (the options differ); the results must not
+    a = dict(_leaves({**json.loads(mem.read_text()), "provenance": None}))
+    b = dict(_leaves({**json.loads(auto.read_text()), "provenance": None}))
+    assert a.keys() == b.keys()
+    scale = max(abs(v) for k, v in a.items() if k.startswith("/deviation_arcsec["))
+    for key, x in a.items():
+        if isinstance(x, float):
+            curve = key.startswith(("/deviation_arcsec[", "/harmonic_amplitudes_arcsec["))
+            assert abs(b[key] - x) <= 1e-9 * (scale if curve else abs(x)), key
+        else:
+            assert b[key] == x, key

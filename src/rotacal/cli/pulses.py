@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
 import click
 
-from rotacal.errors import ConfigError
+from rotacal.columns import HEAD_NAME
+from rotacal.errors import CaptureError, ConfigError
 from rotacal.numbers import element_of, format_plain, quantity_of
 
 from ._app import cli
@@ -21,12 +22,14 @@ from ._common import (
     _emit_warnings,
     _names_capture,
     _read_heads,
+    _sample_progress,
     _status,
     _summary_wanted,
     _write_json,
     _write_report,
 )
 from ._help import example
+from ._reading import current_read_options
 
 _PULSES_PER_REV = click.option(
     "--pulses-per-rev", type=int, required=True, help="m: pulses per revolution of one head."
@@ -34,6 +37,13 @@ _PULSES_PER_REV = click.option(
 _KOKUYAMA2015_TITLE = (
     "Kokuyama et al. (2015): angular-velocity standard with a self-calibratable encoder"
 )
+
+
+#: Above this many pulse times (all heads) ``rotacal selfcal`` reads the heads in chunks: in
+#: memory it holds ~50 bytes per pulse time (the trains, the delays, the angle differences).
+_SELFCAL_IN_MEMORY_MAX = 10_000_000
+#: Pulse times read at a time from each head on the chunked path.
+_SELFCAL_CHUNK_ROWS = 1 << 19
 
 
 @cli.command(
@@ -49,12 +59,20 @@ _KOKUYAMA2015_TITLE = (
     show_default=True,
     help="Whether head i lies i·360/n ahead of head 0 in the sense of rotation (forward).",
 )
+@click.option(
+    "--chunked/--in-memory",
+    default=None,
+    help="Read the heads in chunks (flat memory, two passes over the file) or load them whole "
+    "(heads padded with empty cells or trailing NaNs need it) "
+    f"[default: chunked above {_SELFCAL_IN_MEMORY_MAX:.0e} pulse times in all, except CSV].",
+)
 @_analysis_options
 @_names_capture
 def selfcal_cmd(
     capture: str,
     pulses_per_rev: int,
     rotation: str,
+    chunked: bool | None,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -69,14 +87,25 @@ def selfcal_cmd(
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    heads = _read_heads(capture, columns, group)
-    with _status("self-calibrating"):
-        result = self_calibrate(
-            heads,
-            pulses_per_rev=pulses_per_rev,
-            rotation=rotation,  # type: ignore[arg-type]
-            specs=kw.pop("specs"),
+    lengths = None
+    if chunked is None and Path(capture).suffix.lower() in (".csv", ".txt"):
+        chunked = False  # CSV pulse files pad short heads with empty cells: read in memory
+    if chunked is None:
+        lengths = _head_lengths(capture, columns, group)
+        chunked = sum(lengths.values()) > _SELFCAL_IN_MEMORY_MAX
+    if chunked:
+        result = _selfcal_chunked(
+            capture, columns, group, lengths, pulses_per_rev, rotation, kw.pop("specs")
         )
+    else:
+        heads = _read_heads(capture, columns, group)
+        with _status("self-calibrating"):
+            result = self_calibrate(
+                heads,
+                pulses_per_rev=pulses_per_rev,
+                rotation=rotation,  # type: ignore[arg-type]
+                specs=kw.pop("specs"),
+            )
     _emit_warnings(result)
     data = result.to_dict()
     _write_json(data, json_path)
@@ -104,6 +133,70 @@ def selfcal_cmd(
         click.echo(f"note                  {result.undetectable_harmonics_note}")
         for note in result.notes:
             click.echo(f"note                  {note}")
+
+
+def _head_lengths(capture: str, columns: Sequence[str], group: str | None) -> dict[str, int]:
+    """The pulses of every head column (``head_0`` … in order), from the file's metadata where
+    it has them."""
+    from rotacal.encoder.pulses import head_columns
+    from rotacal.io import capture_columns, capture_length, parse_column_mapping
+
+    mapping = parse_column_mapping(columns)
+    options = current_read_options()
+    names = capture_columns(capture, mapping=mapping, group=group, read_options=options)
+    heads = [n for n in names if HEAD_NAME.match(n)]
+    head_columns({n: () for n in heads})  # numbered head_0 … head_{n-1} without a hole
+    heads.sort(key=lambda n: int(n.split("_")[1]))
+    return {
+        n: capture_length(capture, n, mapping=mapping, group=group, read_options=options)
+        for n in heads
+    }
+
+
+def _selfcal_chunked(
+    capture: str,
+    columns: Sequence[str],
+    group: str | None,
+    lengths: dict[str, int] | None,
+    pulses_per_rev: int,
+    rotation: str,
+    specs: Any,
+) -> Any:
+    """The self-calibration of heads read in chunks, one reader per head (heads are ragged)."""
+    from rotacal.encoder.selfcal_stream import self_calibrate_chunked
+    from rotacal.io import iter_capture_chunks, parse_column_mapping
+
+    if lengths is None:
+        lengths = _head_lengths(capture, columns, group)
+    mapping = parse_column_mapping(columns)
+    options = current_read_options()
+
+    def one_head(name: str) -> Iterator[Any]:
+        chunks = iter_capture_chunks(
+            capture,
+            [name],
+            chunk_rows=_SELFCAL_CHUNK_ROWS,
+            mapping=mapping,
+            group=group,
+            read_options=options,
+        )
+        # NaN is refused as it is read (the reader checks each chunk's bytes as it goes: a head
+        # padded with trailing NaNs is read with --in-memory, which drops the padding)
+        return (chunk[name] for chunk in chunks)
+
+    with _sample_progress(2 * sum(lengths.values()), "self-calibration (chunked)") as progress:
+        try:
+            return self_calibrate_chunked(
+                lambda: [one_head(name) for name in lengths],
+                pulses_per_rev=pulses_per_rev,
+                rotation=rotation,  # type: ignore[arg-type]
+                specs=specs,
+                progress=progress,
+            )
+        except CaptureError as e:
+            if "not a finite number" not in str(e):
+                raise
+            raise CaptureError(f"{e} (if NaNs pad a shorter head: give --in-memory)") from None
 
 
 @cli.command(

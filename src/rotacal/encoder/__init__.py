@@ -45,6 +45,7 @@ if TYPE_CHECKING:
         self_calibrate,
         undetectable_orders,
     )
+    from rotacal.encoder.selfcal_stream import self_calibrate_chunked
 
 __all__ = [
     "Demodulation",
@@ -75,6 +76,7 @@ __all__ = [
     "reversing_subintervals",
     "rotation_direction",
     "self_calibrate",
+    "self_calibrate_chunked",
     "subinterval_transitions",
     "subintervals",
     "undetectable_orders",

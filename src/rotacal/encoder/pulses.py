@@ -103,6 +103,18 @@ def head_columns(columns: Mapping[str, ArrayLike]) -> list[FloatArray]:
     return [np.asarray(found[k], dtype=np.float64) for k in range(len(found))]
 
 
+def block_medians(dt: FloatArray) -> FloatArray:
+    """Medians of consecutive blocks of _PERIOD_BLOCK intervals (``dt.size`` a multiple of it).
+
+    ``np.median`` row by row, by the same arithmetic (the mean of the two middle values of each
+    sorted row: the same bits), from a sort of the short rows, several times faster than the
+    partition np.median does.
+    """
+    rows = np.sort(dt.reshape(-1, _PERIOD_BLOCK), axis=1)
+    half = _PERIOD_BLOCK // 2
+    return np.asarray((rows[:, half - 1] + rows[:, half]) / 2.0)
+
+
 def _local_period(dt: FloatArray) -> FloatArray:
     """Robust local pulse period at every interval: block medians, linearly interpolated."""
     n = dt.size
@@ -110,7 +122,7 @@ def _local_period(dt: FloatArray) -> FloatArray:
         return np.full(n, float(np.median(dt)))
     size = _PERIOD_BLOCK
     nb = n // size
-    medians = np.median(dt[: nb * size].reshape(nb, size), axis=1)
+    medians = block_medians(dt[: nb * size])
     centres = (np.arange(nb) + 0.5) * size
     # np.interp(arange(n), centres, medians) by rows: the centres are evenly spaced, so the
     # intervals between them are whole rows of `size` intervals (the same operations, the
@@ -170,15 +182,23 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
     check_time_span(name, float(t[0]), float(t[-1]), typical, "pulse interval")
     ratio = _local_period(dt)
     np.divide(dt, ratio, out=ratio)  # in place: one record-long array less at the peak
+    refuse_bad_intervals(name, ratio, t)
+    return t
+
+
+def refuse_bad_intervals(name: str, ratio: FloatArray, t: FloatArray, first: int = 0) -> None:
+    """Refuse missing pulses (an interval ≥ MISSING_PULSE_RATIO local periods) or an extra edge
+    (≤ EXTRA_PULSE_RATIO); ``ratio``: intervals over their local period, ``t``: the pulse times
+    (s) around them, ``first``: the index of ``t[0]`` in the train (for messages)."""
     long_ = np.flatnonzero(ratio >= MISSING_PULSE_RATIO)
     if long_.size:
         i = int(long_[0])
         lost = max(1, round(float(ratio[i])) - 1)
         more = f" (and {long_.size - 1} more gaps)" if long_.size > 1 else ""
         raise CaptureError(
-            f"column '{name}': about {lost} pulse(s) missing after pulse {i} at t = {t[i]:.9g} s "
-            f"(an interval of {ratio[i]:.2f} pulse periods){more}; every pulse is needed to count "
-            "the lines — cut the capture before the gap or re-record."
+            f"column '{name}': about {lost} pulse(s) missing after pulse {first + i} at "
+            f"t = {t[i]:.9g} s (an interval of {ratio[i]:.2f} pulse periods){more}; every pulse "
+            "is needed to count the lines — cut the capture before the gap or re-record."
         )
     short = np.flatnonzero(ratio <= EXTRA_PULSE_RATIO)
     if short.size:
@@ -187,7 +207,6 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
             f"column '{name}': an extra pulse edge at t = {t[i + 1]:.9g} s (an interval of "
             f"{ratio[i]:.2f} pulse periods); check the comparator or remove spurious edges."
         )
-    return t
 
 
 @dataclasses.dataclass(frozen=True)
@@ -321,18 +340,8 @@ def pair_heads(heads: Sequence[FloatArray], names: Sequence[str] | None = None) 
             f"{worst[i] / period:.2f} pulse periods away, so it has a different number of pulses "
             "per revolution or lost/extra pulses; every head must read the same scale."
         )
-    notes: list[str] = []
-    for i, ti in enumerate(heads):
-        if i and (-int(offsets[i]) == lo and lo > 0):
-            notes.append(
-                f"{names[i]} starts {lo} pulses after head_0 (at {ti[0]:.6g} s); the pulses of "
-                "head_0 before it are not used for comparing heads."
-            )
-        if ti.size - int(offsets[i]) == hi and hi < t0.size:
-            notes.append(
-                f"{names[i]} stops {t0.size - hi} pulses before head_0 (at {ti[-1]:.6g} s); the "
-                "pulses of head_0 after it are not used for comparing heads."
-            )
+    spans = [(float(ti[0]), float(ti[-1]), ti.size) for ti in heads]
+    notes = pairing_notes(names, spans, offsets, lo, hi)
     mean_times = t0[j] + delays.mean(axis=0)
     return HeadPairing(
         index_offsets=offsets,
@@ -342,6 +351,31 @@ def pair_heads(heads: Sequence[FloatArray], names: Sequence[str] | None = None) 
         mean_times_s=mean_times,
         notes=tuple(notes),
     )
+
+
+def pairing_notes(
+    names: Sequence[str],
+    spans: Sequence[tuple[float, float, int]],
+    offsets: NDArray[np.int64],
+    lo: int,
+    hi: int,
+) -> list[str]:
+    """What a pairing leaves out: heads (``spans``: first and last time, s, and pulse count of
+    each) that start after head 0 or stop before it; ``lo``/``hi``: the paired head-0 range."""
+    notes: list[str] = []
+    size0 = spans[0][2]
+    for i, (first, last, size) in enumerate(spans):
+        if i and (-int(offsets[i]) == lo and lo > 0):
+            notes.append(
+                f"{names[i]} starts {lo} pulses after head_0 (at {first:.6g} s); the pulses of "
+                "head_0 before it are not used for comparing heads."
+            )
+        if size - int(offsets[i]) == hi and hi < size0:
+            notes.append(
+                f"{names[i]} stops {size0 - hi} pulses before head_0 (at {last:.6g} s); the "
+                "pulses of head_0 after it are not used for comparing heads."
+            )
+    return notes
 
 
 def check_heads_not_copies(heads: Sequence[FloatArray], names: Sequence[str] | None = None) -> None:

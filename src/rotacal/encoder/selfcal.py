@@ -38,6 +38,7 @@ noise drawn with the spectrum the revolutions show.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any, Literal
 
@@ -71,6 +72,8 @@ from rotacal.encoder.selfcal_uncertainty import (
     _bias,
     _deviation_uncertainty,
     _head_offsets_u,
+    _order_spread,
+    _repeatability_rms,
     undetectable_input,
 )
 from rotacal.errors import CaptureError, ConfigError
@@ -317,6 +320,10 @@ def self_calibrate(
         whole revolution covered by all heads, a pulses_per_rev that does not match the period of
         the data.
 
+    See Also
+    --------
+    rotacal.encoder.self_calibrate_chunked : the same from heads read in chunks (flat memory).
+
     References
     ----------
     Kokuyama W., Watanabe T., Nozato H., Ota A., "Development of angular velocity calibration
@@ -327,39 +334,19 @@ def self_calibrate(
     JCGM 100:2008 (GUM) §4.2, G.4; JCGM 101:2008 §7 (the uncertainty of the curve and its
     summaries).
     """
-    m = check_pulses_per_rev(pulses_per_rev)
-    if specs is not None and not isinstance(specs, InstrumentSpecs):
-        raise ConfigError(
-            f"specs must be the InstrumentSpecs of load_specs(...), got {type(specs).__name__}."
-        )
-    if rotation not in ("auto", "forward", "reverse"):
-        raise ConfigError(f"rotation must be 'auto', 'forward' or 'reverse', got {rotation!r}.")
+    m = _check_settings(pulses_per_rev, rotation, specs)
     if isinstance(heads, Mapping):
         trains = head_columns(heads)
     else:
         trains = [np.asarray(h, dtype=np.float64) for h in heads]
     n = len(trains)
-    if n < 2:
-        raise CaptureError(
-            f"self-calibration needs at least 2 heads, the capture has {n}; give head_0 … head_{{n-1}}."
-        )
-    if m < n:
-        raise ConfigError(f"pulses_per_rev ({m}) must be at least the number of heads ({n}).")
+    _check_heads(n, m)
     names = [f"head_{i}" for i in range(n)]
     trains = [check_pulse_times(t, name) for t, name in zip(trains, names, strict=True)]
-    if trains[0].size - 1 < m:
-        raise CaptureError(
-            f"head_0 has {trains[0].size} pulses, less than one revolution of {m}: record at least "
-            "one whole revolution (or check --pulses-per-rev)."
-        )
+    _check_head0_length(trains[0].size, m)
     check_heads_not_copies(trains, names)
     pairing = pair_heads(trains, names)
-    revs = pairing.pulses // m
-    if revs < 1:
-        raise CaptureError(
-            f"all heads together cover only {pairing.pulses} pulses of head_0, less than one "
-            f"revolution of {m} ({'; '.join(pairing.notes) or 'the heads overlap too little'})."
-        )
+    revs = _whole_revolutions(pairing.pulses, m, pairing.notes)
     pitch = 360.0 / m
     rate = _local_rate_deg_s(pairing.mean_times_s, pitch)
     angle_diff = pairing.delays_s[1:]  # s → arcsec in place, shape (n−1, J)
@@ -367,58 +354,194 @@ def self_calibrate(
     # the pairing's per-pulse delays (now angles) and mean times are not needed past here
     first_paired, pairing_notes = pairing.first, pairing.notes
     del pairing, rate
-    period_checked = check_period(angle_diff.mean(axis=0), m)
+    period_checked = check_period(angle_diff.mean(axis=0)[: period_check_pulses(m)], m)
 
     used = angle_diff[:, : revs * m].reshape(n - 1, revs, m).transpose(1, 0, 2)  # (R, n−1, m)
+    rev_offsets = used.mean(axis=2)  # (R, n−1)
     offsets_mean = used.mean(axis=(0, 2))
-
-    notes = list(pairing_notes)
     candidates = ["forward", "reverse"] if rotation == "auto" else [rotation]
     fits = fit_revolutions(used, {c: _data_shifts(n, m, c, offsets_mean) for c in candidates}, m)
-    sense = min(fits, key=lambda k: fits[k][1])
+    notes = list(pairing_notes)
+    sense = _choose_sense({c: fits[c][1] for c in fits}, rotation, n, notes)
+    _pulses_per_rev_notes(angle_diff, m, period_checked, notes)
+    a, ss, shifts = fits[sense]
+    unrolled = np.fft.irfft(a, m, axis=-1)  # (R, m), index j' = head-0 pulse first + r·m + j'
+    per_rev = np.roll(unrolled, first_paired % m, axis=1)
+    return _assemble(
+        _Fitted(
+            heads=n,
+            pulses_per_rev=m,
+            sense=sense,
+            shifts=shifts,
+            ss=ss,
+            mean_curve=unrolled.mean(axis=0),
+            per_rev=per_rev,
+            spread=None,
+            rev_offsets=rev_offsets,
+            first_paired=first_paired,
+            first_time_s=float(trains[0][0]),
+            last_time_s=float(trains[0][-1]),
+            head0_pulses=int(trains[0].size),
+        ),
+        notes,
+        specs,
+    )
+
+
+#: Head-averaged differences (pulses of head 0, from the first paired one) on which the period
+#: of the data is checked: the check's FFT is then bounded whatever the record's length (a long
+#: record repeats the same revolutions; at least two revolutions are always looked at).
+PERIOD_CHECK_PULSES = 1 << 21
+
+
+def period_check_pulses(m: int) -> int:
+    """How many head-averaged differences :func:`check_period` is given (see PERIOD_CHECK_PULSES)."""
+    return max(PERIOD_CHECK_PULSES, 2 * m)
+
+
+def closure_check_pulses(m: int) -> int:
+    """How many head differences the closure check of m can use (it tries counts up to 4m + 3)."""
+    return 4 * m + 4
+
+
+def _check_settings(pulses_per_rev: Any, rotation: Any, specs: Any) -> int:
+    m = check_pulses_per_rev(pulses_per_rev)
+    if specs is not None and not isinstance(specs, InstrumentSpecs):
+        raise ConfigError(
+            f"specs must be the InstrumentSpecs of load_specs(...), got {type(specs).__name__}."
+        )
+    if rotation not in ("auto", "forward", "reverse"):
+        raise ConfigError(f"rotation must be 'auto', 'forward' or 'reverse', got {rotation!r}.")
+    return m
+
+
+def _check_heads(n: int, m: int) -> None:
+    if n < 2:
+        raise CaptureError(
+            f"self-calibration needs at least 2 heads, the capture has {n}; give head_0 … head_{{n-1}}."
+        )
+    if m < n:
+        raise ConfigError(f"pulses_per_rev ({m}) must be at least the number of heads ({n}).")
+
+
+def _check_head0_length(pulses: int, m: int) -> None:
+    if pulses - 1 < m:
+        raise CaptureError(
+            f"head_0 has {pulses} pulses, less than one revolution of {m}: record at least "
+            "one whole revolution (or check --pulses-per-rev)."
+        )
+
+
+def _whole_revolutions(paired: int, m: int, notes: Sequence[str]) -> int:
+    revs = paired // m
+    if revs < 1:
+        raise CaptureError(
+            f"all heads together cover only {paired} pulses of head_0, less than one "
+            f"revolution of {m} ({'; '.join(notes) or 'the heads overlap too little'})."
+        )
+    return revs
+
+
+def _choose_sense(ss: Mapping[str, float], rotation: str, n: int, notes: list[str]) -> str:
+    """The sense of rotation whose fit leaves the least (closure sums of squares ``ss``)."""
+    sense = min(ss, key=lambda k: ss[k])
     if rotation == "auto" and n == 2:
         sense = "forward"
     if rotation == "auto" and n > 2:
         other = "reverse" if sense == "forward" else "forward"
-        if fits[other][1] < 2.0 * fits[sense][1]:
+        if ss[other] < 2.0 * ss[sense]:
             notes.append(
                 "the sense of rotation against the head numbering is unclear from the data (both "
                 f"fit about as well); took '{sense}'. Give rotation= (--rotation) if you know it."
             )
+    return sense
+
+
+def _pulses_per_rev_notes(
+    angle_diff: FloatArray, m: int, period_checked: bool, notes: list[str]
+) -> None:
+    """The closure check of m (three or more heads) and the notes on what could not be checked.
+    ``angle_diff``: head differences (arcsec) from the first paired pulse, at least the first
+    :func:`closure_check_pulses` of them (all when the record is shorter)."""
     if not period_checked:
         notes.append(
             f"the data cannot confirm {m} pulses per revolution from their own period (a record "
             "under 1.25 revolutions shared by all heads, or a weak deviation); only near and "
             "whole-ratio mistakes are caught."
         )
-    if n >= 3:
-        _check_pulses_per_rev_by_closure(angle_diff, m, near=not period_checked)
+    if angle_diff.shape[0] >= 2:
+        _check_pulses_per_rev_by_closure(
+            angle_diff[:, : closure_check_pulses(m)], m, near=not period_checked
+        )
     else:
         notes.append(
             "with two heads every curve fits the head differences exactly: neither the pulses per "
             "revolution nor the fit can be checked from the data."
         )
-    a, ss, shifts = fits[sense]
-    closure_rms = float(np.sqrt(ss / (revs * (n - 1) * m)))
 
-    per_rev = np.fft.irfft(a, m, axis=-1)  # (R, m), index j' = head-0 pulse first + r·m + j'
-    mean_curve = per_rev.mean(axis=0)
-    roll = first_paired % m
-    deviation = np.roll(mean_curve, roll)
-    per_rev = np.roll(per_rev, roll, axis=1)
 
+@dataclasses.dataclass(frozen=True)
+class _Fitted:
+    """What the result is made of, from either path (in memory, or streamed in chunks).
+
+    ``mean_curve``: the mean over the R revolutions of each one's fitted curve, indexed from the
+    first paired head-0 pulse (arcsec, shape (m,)); ``per_rev``: each revolution's curve indexed
+    like ``deviation_arcsec`` (shape (R, m), possibly a memory map); ``spread``: Σ_r |A_r − Ā|²
+    per rfft order (:func:`_order_spread`; None: computed from ``per_rev``); ``rev_offsets``:
+    each revolution's mean head difference (arcsec, shape (R, n − 1)); ``ss``: the closure sum
+    of squares of the chosen sense (arcsec²).
+    """
+
+    heads: int
+    pulses_per_rev: int
+    sense: str
+    shifts: NDArray[np.int64]
+    ss: float
+    mean_curve: FloatArray
+    per_rev: FloatArray
+    spread: FloatArray | None
+    rev_offsets: FloatArray
+    first_paired: int
+    first_time_s: float
+    last_time_s: float
+    head0_pulses: int
+
+
+#: Revolutions whose repeatability is formed at a time (the curves may be a memory map).
+_REP_BLOCK = 64
+
+
+def _repeatability_pp(per_rev: FloatArray, deviation: FloatArray) -> float:
+    """Largest peak-to-peak over the revolutions of each one's curve minus the mean (arcsec)."""
+    worst = -math.inf
+    for r0 in range(0, per_rev.shape[0], _REP_BLOCK):
+        rep = per_rev[r0 : r0 + _REP_BLOCK] - deviation
+        worst = max(worst, float(np.max(rep.max(axis=1) - rep.min(axis=1))))
+        if isinstance(per_rev, np.memmap):  # curves spilled by the chunked path: flat memory
+            from rotacal.io.capture import release_pages
+
+            release_pages({"curves": per_rev[r0 : r0 + _REP_BLOCK]})
+    return worst
+
+
+def _assemble(fit: _Fitted, notes: list[str], specs: InstrumentSpecs | None) -> SelfCalibration:
+    """The SelfCalibration from the fitted revolutions: curve, repeatability, budgets, notes."""
+    n, m, sense, shifts = fit.heads, fit.pulses_per_rev, fit.sense, fit.shifts
+    revs = fit.rev_offsets.shape[0]
+    closure_rms = float(np.sqrt(fit.ss / (revs * (n - 1) * m)))
+    deviation = np.roll(fit.mean_curve, fit.first_paired % m)
     undetect = undetectable_orders(n, m, shifts)
+    spread = _order_spread(fit.per_rev, deviation) if fit.spread is None else fit.spread
     if revs >= 2:
-        rep = per_rev - deviation
-        rep_rms: float | None = float(np.sqrt(np.mean(rep**2)))
-        rep_pp: float | None = float(np.max(rep.max(axis=1) - rep.min(axis=1)))
+        rep_rms: float | None = _repeatability_rms(spread, revs, m)
+        rep_pp: float | None = _repeatability_pp(fit.per_rev, deviation)
     else:
         rep_rms = rep_pp = None
         notes.append(
             "one whole revolution only: no repeatability and no uncertainty from the data; "
             "record several revolutions."
         )
-    noise, point, summaries = _deviation_uncertainty(per_rev, deviation, undetect, specs)
+    noise, point, summaries = _deviation_uncertainty(spread, revs, deviation, undetect, specs)
     budgets = {key: sm.budget for key, sm in summaries.items()}
     # one truth: the JSON values are the budgets' values (the plain summaries of the curve)
     pp = budgets["deviation_pp_arcsec"].value if budgets else float(np.ptp(deviation))
@@ -444,14 +567,15 @@ def self_calibrate(
         )
     else:
         note = "every Fourier order 1 … m/2 is detectable with these head shifts."
-    pitch_arcsec = pitch * 3600.0
+    pitch_arcsec = 360.0 / m * 3600.0
     nominal = np.arange(n) * 360.0 / n * 3600.0
+    offsets_mean = fit.rev_offsets.mean(axis=0)
     placed = shifts * pitch_arcsec - np.concatenate(([0.0], offsets_mean))
     if sense == "reverse":
         placed = -placed
     head_off = (placed - nominal + pitch_arcsec / 2) % pitch_arcsec - pitch_arcsec / 2
     head_off[0] = 0.0
-    offsets_u, offsets_dof = _head_offsets_u(used)
+    offsets_u, offsets_dof = _head_offsets_u(fit.rev_offsets)
     return SelfCalibration(
         deviation_arcsec=deviation,
         heads=n,
@@ -474,13 +598,13 @@ def self_calibrate(
         harmonic_amplitudes_arcsec=[float(x) for x in amp[1 : min(m // 2, 100) + 1]],
         rotation=sense,
         head_line_shifts=[int(x) for x in shifts],
-        first_pulse_time_s=float(trains[0][0]),
-        last_pulse_time_s=float(trains[0][-1]),
-        head0_pulses=int(trains[0].size),
+        first_pulse_time_s=fit.first_time_s,
+        last_pulse_time_s=fit.last_time_s,
+        head0_pulses=fit.head0_pulses,
         notes=notes,
         head_offsets_arcsec_u=offsets_u,
         head_offsets_dof=offsets_dof,
-        _per_revolution_arcsec=per_rev,
+        _per_revolution_arcsec=fit.per_rev,
         _spectrum_arcsec=amp,
         _noise=noise,
         _point_budget=point,

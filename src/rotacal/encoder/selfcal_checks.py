@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 from scipy import fft as sp_fft
-from scipy.signal import find_peaks
 
 from rotacal.encoder.selfcal_fit import _data_shifts, _gls, _parseval_ss
 from rotacal.errors import CaptureError
@@ -73,6 +72,8 @@ def check_period(signal: FloatArray, m: int, *, coarse: bool = True) -> bool:
         return spike_at_m or at_m >= _PERIODIC
     # the shortest lag at a local peak (nearly) as high as the best one: a smooth deviation
     # gives broad peaks, so the flank of a peak must not count
+    from scipy.signal import find_peaks  # only to name the period found: a 1–2 s import
+
     peaks, _ = find_peaks(corr, height=best - 0.02, prominence=0.1)
     first = int(peaks[0]) if peaks.size else int(np.argmax(corr))
     near = slice(max(0, first - m // 20), first + m // 20 + 1)

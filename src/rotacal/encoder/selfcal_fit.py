@@ -34,7 +34,26 @@ def head_shifts(heads: int, pulses_per_rev: int, rotation: str = "forward") -> N
 
 
 def _information(shifts: NDArray[np.int64], m: int) -> tuple[np.ndarray, np.ndarray]:
-    """Per-order GLS weights g_i = exp(2πi q s_i/m) − 1 (heads 1 … n−1) and the information."""
+    """Per-order GLS weights g_i = exp(2πi q s_i/m) − 1 (heads 1 … n−1) and the information.
+
+    Kept for the last two line shifts asked for: a fit block by block of revolutions asks for
+    the same ones every block (read-only arrays, shared)."""
+    key = (np.asarray(shifts, dtype=np.int64).tobytes(), int(m))
+    found = _INFORMATION.get(key)
+    if found is None:
+        found = _information_of(np.asarray(shifts, dtype=np.int64), int(m))
+        for arr in found:
+            arr.flags.writeable = False
+        if len(_INFORMATION) >= 2:  # the two senses of rotation; a large m makes them big
+            _INFORMATION.pop(next(iter(_INFORMATION)))
+        _INFORMATION[key] = found
+    return found
+
+
+_INFORMATION: dict[tuple[bytes, int], tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _information_of(shifts: NDArray[np.int64], m: int) -> tuple[np.ndarray, np.ndarray]:
     q = np.arange(m // 2 + 1)
     g = np.exp(2j * np.pi * np.outer(shifts[1:], q) / m) - 1.0
     n = shifts.size

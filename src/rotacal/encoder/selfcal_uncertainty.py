@@ -149,16 +149,31 @@ def _smooth_spectrum(var: FloatArray, keep: NDArray[np.bool_]) -> FloatArray:
     return out
 
 
+def _order_spread(per_rev: FloatArray, deviation: FloatArray) -> FloatArray:
+    """Σ_r |rfft(per_rev[r] − deviation)|² per order (arcsec²): the revolutions' spread about
+    their mean, order by order — all the budget needs of the single-revolution curves."""
+    resid = np.fft.rfft(per_rev - deviation, axis=-1)
+    return np.asarray(np.sum(np.abs(resid) ** 2, axis=0), dtype=np.float64)
+
+
+def _repeatability_rms(spread: FloatArray, revs: int, m: int) -> float:
+    """rms over revolutions and lines of each revolution's curve minus the mean (arcsec), from
+    :func:`_order_spread` by Parseval: Σ_j x_j² = Σ_q w_q |X_q|²/m."""
+    return math.sqrt(float(np.sum(_order_weights(m) * spread)) / (m * m * revs))
+
+
 def _deviation_uncertainty(
-    per_rev: FloatArray,
+    spread: FloatArray,
+    revs: int,
     deviation: FloatArray,
     undetect: list[int],
     specs: InstrumentSpecs | None,
 ) -> tuple[DeviationNoise | None, UncertaintyBudget | None, dict[str, Any]]:
     """Noise model, per-point budget and the budgets of the peak-to-peak and rms.
 
-    With two or more revolutions the curve's noise comes from their spread (Type A); with one,
-    only a stated ``encoder.undetectable_harmonics_arcsec`` can be budgeted (no budget without).
+    With two or more revolutions the curve's noise comes from their spread (Type A; ``spread``
+    is :func:`_order_spread` of the R single-revolution curves); with one, only a stated
+    ``encoder.undetectable_harmonics_arcsec`` can be budgeted (no budget without).
 
     Returns
     -------
@@ -173,7 +188,7 @@ def _deviation_uncertainty(
     JCGM 100:2008 (GUM) §4.2 (Type A: the mean of R revolutions, s²/R), §4.3 (Type B), G.4
     (Welch–Satterthwaite over the orders); JCGM 101:2008 §7 (Monte Carlo of the peak-to-peak).
     """
-    revs, m = per_rev.shape
+    m = deviation.size
     w = _order_weights(m)
     und = np.zeros(m // 2 + 1, dtype=bool)
     und[np.asarray(undetect, dtype=np.int64)] = True
@@ -184,8 +199,7 @@ def _deviation_uncertainty(
     noise: DeviationNoise | None = None
     nu_a = math.inf
     if revs >= 2:
-        resid = np.fft.rfft(per_rev - deviation, axis=-1)
-        var = np.sum(np.abs(resid) ** 2, axis=0) / ((revs - 1) * revs)  # of the mean's orders
+        var = spread / ((revs - 1) * revs)  # of the mean's orders
         keep = ~und
         keep[0] = False
         var = np.where(keep, var, 0.0)
@@ -280,18 +294,17 @@ def _deviation_uncertainty(
     return noise, point, summaries
 
 
-def _head_offsets_u(used: FloatArray) -> tuple[list[float] | None, float | None]:
+def _head_offsets_u(per_rev: FloatArray) -> tuple[list[float] | None, float | None]:
     """Type A standard uncertainty (arcsec) of each head's placement and its degrees of freedom.
 
-    ``used`` holds the head differences (arcsec) of heads 1 … n−1 against head 0 over R whole
-    revolutions, shape (R, n−1, m). Over a whole revolution the scale deviation averages out, so
+    ``per_rev`` holds each whole revolution's mean head difference (arcsec) of heads 1 … n−1
+    against head 0, shape (R, n−1). Over a whole revolution the scale deviation averages out, so
     each revolution's mean difference is one reading of the placement; u = s/√R with s their
     standard deviation, ν = R − 1 (GUM §4.2.2–4.2.3). Head 0 is the reference: u = 0.
     """
-    revs = used.shape[0]
+    revs = per_rev.shape[0]
     if revs < 2:
         return None, None
-    per_rev = used.mean(axis=2)  # (R, n−1)
     u = per_rev.std(axis=0, ddof=1) / math.sqrt(revs)
     return [0.0, *(float(x) for x in u)], float(revs - 1)
 
