@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -36,9 +36,6 @@ from rotacal.encoder.pulses import (
     check_pulses_per_rev,
     head_columns,
     pair_heads,
-    pulse_angle_deg,
-    pulse_rate,
-    whole_revolution_rate,
 )
 from rotacal.encoder.selfcal import (
     SelfCalibration,
@@ -67,11 +64,13 @@ from rotacal.table.rate_budgets import (
 )
 from rotacal.table.rate_jitter import timing_jitter
 from rotacal.table.rate_plausibility import rate_warnings
+from rotacal.table.rate_stream import rate_passes
 from rotacal.uncertainty import (
     InstrumentSpecs,
     UncertaintyBudget,
     uncertainty_keys,
 )
+from rotacal.uncertainty.summaries import ErrorProcess
 
 __all__ = [
     "RateResult",
@@ -84,6 +83,9 @@ __all__ = [
 
 #: Pulses of a single head on which its period (the pulses per revolution) is checked.
 PERIOD_CHECK_PULSES = 1 << 19
+#: Pulses per chunk when an in-memory train goes through the streamed passes (bounded
+#: temporaries; the results do not depend on it).
+_ARRAY_CHUNK = 1 << 22
 
 FloatArray = NDArray[np.float64]
 
@@ -404,62 +406,126 @@ def calibrate_rate(
     else:
         times = trains[k]
         label = f"head_{k}"
-    count = np.arange(times.size)
-    angle_nom = pulse_angle_deg(count, m)
-    angle = (
-        pulse_angle_deg(count, m, deviation, line_offset=shift or 0)
-        if deviation is not None
-        else angle_nom
-    )
-    del count  # record-long: not needed past the angles
+    chunk = _ARRAY_CHUNK
 
-    if n == 1 and times.size > m:
+    def chunks() -> Iterator[FloatArray]:
+        for start in range(0, times.size, chunk):
+            yield times[start : start + chunk]
+
+    return _rate_result(
+        chunks,
+        int(times.size),
+        m=m,
+        heads=n,
+        k=k,
+        use_all=use_all,
+        label=label,
+        selfcal=selfcal,
+        made=made,
+        deviation=deviation,
+        shift=shift,
+        correlation=correlation,
+        own=(
+            None
+            if own_shifts is None or own_revs is None or use_all
+            else (own_shifts, k, own_revs, min(1.0, own_revs * m / max(times.size - 1, 1)))
+        ),
+        average=average,
+        set_rate_deg_s=set_rate_deg_s,
+        allan_angles_deg=allan_angles_deg,
+        specs=specs,
+        notes=notes,
+        keep_series=True,
+    )
+
+
+def _rate_result(
+    chunks: Callable[[], Iterator[FloatArray]],
+    pulses: int,
+    *,
+    m: int,
+    heads: int,
+    k: int,
+    use_all: bool,
+    label: str,
+    selfcal: Any,
+    made: SelfCalibration | None,
+    deviation: FloatArray | None,
+    shift: int | None,
+    correlation: float | None,
+    own: tuple[list[int], int, int, float] | None,
+    average: int,
+    set_rate_deg_s: float | None,
+    allan_angles_deg: ArrayLike | None,
+    specs: InstrumentSpecs | None,
+    notes: list[str],
+    keep_series: bool,
+    progress: Callable[[int], None] | None = None,
+) -> RateResult:
+    """The analysis of one train of ``pulses`` times given chunk by chunk (both passes of
+    :func:`rotacal.table.rate_stream.rate_passes`), its budgets and the result."""
+    n = heads
+
+    def sources_for(omega: float, jitter: tuple[float, float, bool]) -> list[ErrorProcess]:
+        found, more = _deviation_sources(
+            m=m,
+            heads=n,
+            use_all=use_all,
+            compensated=deviation is not None,
+            selfcal=selfcal,
+            specs=specs,
+            average=int(average),
+            omega=omega,
+            jitter=jitter,
+            own=own,
+        )
+        source_notes[:] = more
+        return found
+
+    source_notes: list[str] = []
+    passes = rate_passes(
+        chunks,
+        pulses,
+        pulses_per_rev=m,
+        average=average,
+        deviation=deviation,
+        shift=shift or 0,
+        allan_angles_deg=allan_angles_deg,
+        sources_for=sources_for,
+        prefix_pulses=max(PERIOD_CHECK_PULSES, 8 * m) if n == 1 else 0,
+        keep_series=keep_series,
+        progress=progress,
+    )
+    if n == 1 and pulses > m:
         # one head: nothing else checks m; its angle error must repeat once per revolution.
         # Judged on the first PERIOD_CHECK_PULSES pulses (8 revolutions at least; 29 of 18,000
         # pulses): as much evidence as any record of that length, and the whole-record FFT of a
         # long capture was its largest array and a third of its time.
         used = max(PERIOD_CHECK_PULSES, 8 * m)
-        head_t, head_angle = times[:used], angle_nom[:used]
+        head_t, head_angle = passes.prefix
         t_rel = head_t - head_t[0]
         err = head_angle - np.polyval(np.polyfit(t_rel, head_angle, 1), t_rel)
-        del t_rel
         if not check_period(-err, m, coarse=False):
-            judged = f" (judged on its first {used} pulses)" if times.size > used else ""
+            judged = f" (judged on its first {used} pulses)" if pulses > used else ""
             notes.append(
                 f"one head: {m} pulses per revolution cannot be confirmed from the data's own "
                 f"period{judged} (too short a record, or too weak a graduation pattern); a wrong "
                 "count scales the rate."
             )
-        del err
-    mean_rate, revs = whole_revolution_rate(times, m)
-    window = [float(times[0]), float(times[revs * m] if revs else times[-1])]
-    if mean_rate is None:
-        mean_rate = float(np.polyfit(times - times[0], angle, 1)[0])
+    mean_rate, revs = passes.mean_rate, passes.revolutions
+    window = [passes.first_t, passes.window_end]
+    if revs < 1:
         notes.append(
-            f"less than one whole revolution ({times.size} pulses of {m}): the mean rate is a "
+            f"less than one whole revolution ({pulses} pulses of {m}): the mean rate is a "
             "straight-line fit of the compensated angle, not exact over revolutions."
         )
-    jitter = timing_jitter(times, m)
+    jitter = passes.jitter
     if not jitter[2]:
         notes.append(
             "fewer than two whole revolutions: the timing jitter is estimated along the pulses "
             "and holds the graduation error too (an upper bound)."
         )
-
-    t_avg, rate = pulse_rate(times, angle, average=average)
-    rate_nom = rate if deviation is None else pulse_rate(times, angle_nom, average=average)[1]
-    dev_pct = 100.0 * (rate - mean_rate) / mean_rate
-    dev_nom_pct = 100.0 * (rate_nom - mean_rate) / mean_rate
-
-    phi, s = allan_versus_angle(
-        times, angle, mean_rate_deg_s=mean_rate, angles_deg=allan_angles_deg, pitch_deg=360.0 / m
-    )
-    if deviation is not None:
-        _, s_nom = allan_versus_angle(
-            times, angle_nom, mean_rate_deg_s=mean_rate, angles_deg=phi, pitch_deg=360.0 / m
-        )
-    else:
-        s_nom = s
+    phi, s, s_nom = passes.phi, passes.s, passes.s_nom
     set_rate: float | None = None
     if set_rate_deg_s is not None:
         set_rate = abs(float(set_rate_deg_s))
@@ -477,42 +543,32 @@ def calibrate_rate(
             f"multiplied by 1 + δ̂ = {1 + correction:.10g}."
         )
     raw_rate = mean_rate  # in the DAQ's seconds, as the rate points
-    budgets = _mean_rate_budgets(times, angle, m, revs, set_rate, specs, jitter)
+    budgets = _mean_rate_budgets(passes.rev_times, passes.short, m, revs, set_rate, specs, jitter)
     mean_rate = budgets["mean_rate_deg_s"].value  # one truth: the field is the budget's value
     bias = bias_pct = None
     if set_rate is not None:
         bias = budgets["rate_bias_deg_s"].value
         bias_pct = budgets["rate_bias_percent"].value
-    sources, source_notes = _deviation_sources(
-        m=m,
-        heads=n,
-        use_all=use_all,
-        compensated=deviation is not None,
-        selfcal=selfcal,
-        specs=specs,
-        average=int(average),
-        omega=raw_rate,
-        jitter=jitter,
-        own=(
-            None
-            if own_shifts is None or own_revs is None or use_all
-            else (own_shifts, k, own_revs, min(1.0, own_revs * m / max(times.size - 1, 1)))
-        ),
-    )
-    dev_sum = _rate_deviation_budgets(dev_pct, sources, source_notes, specs)
+    sources = sources_for(raw_rate, jitter)
+    assert passes.peak is not None  # the timing jitter is always a source
+    dev_sum = _rate_deviation_budgets(passes.rms_stats, passes.peak, sources, source_notes, specs)
     budgets.update({key: sm.budget for key, sm in dev_sum.items()})
     rms_sum = dev_sum["rate_deviation_rms_percent"]
     peak_sum = dev_sum["rate_deviation_peak_percent"]
-    a_u, a_big_u, a_edf, a_lo, a_hi, a_alpha = allan_uncertainty(s, phi, 360.0 / m, times.size)
+    a_u, a_big_u, a_edf, a_lo, a_hi, a_alpha = allan_uncertainty(s, phi, 360.0 / m, pulses)
     factor = 1.0 + correction
-    rate = rate * factor
-    rate_nom = rate_nom * factor
+    if passes.series is not None:
+        t_avg, rate, rate_nom = passes.series
+        rate = rate * factor
+        rate_nom = rate_nom * factor
+    else:
+        t_avg = rate = rate_nom = np.zeros(0)
     return RateResult(
         mean_rate_deg_s=float(mean_rate),
         rate_deviation_rms_percent=rms_sum.budget.value,  # one truth: the budgets' values
         rate_deviation_peak_percent=peak_sum.budget.value,
-        rate_deviation_rms_percent_uncompensated=float(np.sqrt(np.mean(dev_nom_pct**2))),
-        rate_deviation_peak_percent_uncompensated=float(np.max(np.abs(dev_nom_pct))),
+        rate_deviation_rms_percent_uncompensated=passes.rms_nom,
+        rate_deviation_peak_percent_uncompensated=passes.peak_nom,
         allan_angle_deg=[float(x) for x in phi],
         allan_tau_s=[float(x / abs(mean_rate)) for x in phi],
         allan_relative=[float(x) for x in s],
@@ -524,7 +580,7 @@ def calibrate_rate(
         average=int(average),
         revolutions=int(revs),
         mean_rate_window_s=window,
-        duration_s=float(times[-1] - times[0]),
+        duration_s=float(passes.last_t - passes.first_t),
         compensated=deviation is not None,
         deviation_shift_pulses=shift,
         alignment_correlation=correlation,
@@ -550,8 +606,8 @@ def calibrate_rate(
             rate_warnings(
                 mean_rate_deg_s=float(mean_rate),
                 set_rate_deg_s=set_rate,
-                time_s=t_avg,
-                deviation_percent=dev_pct,
+                trend=passes.trend,
+                trend_scale=passes.trend_scale,
             )
         ),
     )
