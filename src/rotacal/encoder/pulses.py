@@ -126,7 +126,7 @@ def _local_period(dt: FloatArray) -> FloatArray:
     return out
 
 
-def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
+def check_pulse_times(t: ArrayLike, name: str = "head_0", *, first_index: int = 0) -> FloatArray:
     """Check one head's pulse times and return them as float64.
 
     A pulse train must be finite and strictly increasing, and every interval must be one pulse
@@ -140,6 +140,8 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
         Pulse edge times of one head.
     name : str
         The column name, for messages.
+    first_index : int
+        Pulse number of ``t[0]`` in the whole train (a chunk of a stream), for messages.
 
     Returns
     -------
@@ -155,7 +157,7 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
         raise CaptureError(f"column '{name}' must be 1-D pulse times, got shape {t.shape}.")
     bad = np.flatnonzero(~np.isfinite(t))
     if bad.size:
-        raise CaptureError(f"column '{name}' has a NaN or inf at pulse {int(bad[0])}.")
+        raise CaptureError(f"column '{name}' has a NaN or inf at pulse {int(bad[0]) + first_index}.")
     if t.size < 3:
         raise CaptureError(f"column '{name}' has {t.size} pulse(s); a pulse train needs more.")
     dt = np.diff(t)
@@ -163,7 +165,7 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
     if bad.size:
         i = int(bad[0])
         raise CaptureError(
-            f"column '{name}' is not strictly increasing at pulse {i + 1} "
+            f"column '{name}' is not strictly increasing at pulse {i + 1 + first_index} "
             f"({t[i]:.9g} s then {t[i + 1]:.9g} s); pulse times must be sorted and distinct."
         )
     typical = float(np.median(dt[:TYPICAL_STEPS]))
@@ -176,7 +178,7 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
         lost = max(1, round(float(ratio[i])) - 1)
         more = f" (and {long_.size - 1} more gaps)" if long_.size > 1 else ""
         raise CaptureError(
-            f"column '{name}': about {lost} pulse(s) missing after pulse {i} at t = {t[i]:.9g} s "
+            f"column '{name}': about {lost} pulse(s) missing after pulse {i + first_index} at t = {t[i]:.9g} s "
             f"(an interval of {ratio[i]:.2f} pulse periods){more}; every pulse is needed to count "
             "the lines — cut the capture before the gap or re-record."
         )

@@ -234,6 +234,33 @@ class RateResult(Result):
         return self._selfcal
 
 
+def _check_settings(specs: Any, set_rate_deg_s: float | None) -> None:
+    """Refuse specs that are not InstrumentSpecs and a set rate that is not finite and non-zero."""
+    if specs is not None and not isinstance(specs, InstrumentSpecs):
+        raise ConfigError(
+            f"specs must be the InstrumentSpecs of load_specs(...), got {type(specs).__name__}."
+        )
+    if set_rate_deg_s is not None:
+        if not math.isfinite(float(set_rate_deg_s)) or float(set_rate_deg_s) == 0:
+            raise ConfigError(
+                f"set_rate_deg_s must be finite and non-zero, got {set_rate_deg_s!r}."
+            )
+        check_setting("--set-rate-deg-s", set_rate_deg_s, positive=False, unit="deg/s")
+
+
+def _head_index(head: int | str, n: int) -> int:
+    """The head number of ``head`` (k, "k" or "head_k"), checked against n heads."""
+    if isinstance(head, str) and head.startswith("head_"):
+        head = head[5:]
+    try:
+        k = int(head)
+    except (TypeError, ValueError):
+        raise ConfigError(f"head must be a head number or 'all', got {head!r}.") from None
+    if not 0 <= k < n:
+        raise ConfigError(f"head {k} does not exist; the capture has head_0 … head_{n - 1}.")
+    return k
+
+
 def calibrate_rate(
     heads: Sequence[ArrayLike] | Mapping[str, ArrayLike],
     *,
@@ -299,10 +326,7 @@ def calibrate_rate(
     & Riley 2003 (edf of s(φ)).
     """
     m = check_pulses_per_rev(pulses_per_rev)
-    if specs is not None and not isinstance(specs, InstrumentSpecs):
-        raise ConfigError(
-            f"specs must be the InstrumentSpecs of load_specs(...), got {type(specs).__name__}."
-        )
+    _check_settings(specs, set_rate_deg_s)
     if isinstance(heads, Mapping):
         trains = head_columns(heads)
     else:
@@ -312,23 +336,8 @@ def calibrate_rate(
     names = [f"head_{i}" for i in range(len(trains))]
     trains = [check_pulse_times(t, name) for t, name in zip(trains, names, strict=True)]
     n = len(trains)
-    if set_rate_deg_s is not None:
-        if not math.isfinite(float(set_rate_deg_s)) or float(set_rate_deg_s) == 0:
-            raise ConfigError(
-                f"set_rate_deg_s must be finite and non-zero, got {set_rate_deg_s!r}."
-            )
-        check_setting("--set-rate-deg-s", set_rate_deg_s, positive=False, unit="deg/s")
     use_all = isinstance(head, str) and head == "all"
-    k = 0
-    if not use_all:
-        if isinstance(head, str) and head.startswith("head_"):
-            head = head[5:]
-        try:
-            k = int(head)
-        except (TypeError, ValueError):
-            raise ConfigError(f"head must be a head number or 'all', got {head!r}.") from None
-        if not 0 <= k < n:
-            raise ConfigError(f"head {k} does not exist; the capture has head_0 … head_{n - 1}.")
+    k = 0 if use_all else _head_index(head, n)
     notes: list[str] = []
 
     made: SelfCalibration | None = None

@@ -17,8 +17,9 @@ from rotacal.encoder.selfcal import (
 )
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.signal._values import LARGEST
+from rotacal.table.rate_plausibility import TrendSums
 
-__all__ = ["align_deviation"]
+__all__ = ["FoldSums", "align_deviation"]
 
 FloatArray = NDArray[np.float64]
 
@@ -79,11 +80,57 @@ def align_deviation(
             "aligning a deviation curve from another capture needs at least one whole revolution "
             f"of the head ({m} pulses); this one has {times_s.size}."
         )
-    count = np.arange(revs * m)
-    t = times_s[: revs * m]
-    slope, icpt = np.polyfit(t - t[0], count * (360.0 / m), 1)
-    err = (count * (360.0 / m) - (icpt + slope * (t - t[0]))) * 3600.0
-    folded = -err.reshape(revs, m).mean(axis=0)
+    fold = FoldSums(times_s.size, m)
+    fold.update(times_s)
+    return _phase_shift(fold.folded(), deviation_arcsec, m)
+
+
+class FoldSums:
+    """The angle error of one head against a straight line in time, folded over its whole
+    revolutions (arcsec, sign of a deviation), summed over a stream of its n pulse times: the
+    line's normal equations (centred, merged chunk by chunk) and Σ over revolutions of each
+    line's time."""
+
+    def __init__(self, n: int, pulses_per_rev: int) -> None:
+        self.m = int(pulses_per_rev)
+        self.revs = (int(n) - 1) // self.m
+        self.used = self.revs * self.m
+        self.seen = 0
+        self.t0 = math.nan
+        self.last = math.nan
+        self._time_sums = np.zeros(self.m)
+        self._fit = TrendSums()
+
+    def update(self, t: FloatArray) -> None:
+        """Add the next pulse times (s)."""
+        if self.seen == 0 and t.size:
+            self.t0 = float(t[0])
+        if t.size:
+            self.last = float(t[-1])
+        take = t[: max(self.used - self.seen, 0)]
+        if take.size:
+            count = np.arange(self.seen, self.seen + take.size)
+            x = take - self.t0
+            self._fit.update(x, count * (360.0 / self.m))
+            pad = np.concatenate((np.zeros(self.seen % self.m), x))  # whole turns of the lines
+            full = np.zeros(-(-pad.size // self.m) * self.m)
+            full[: pad.size] = pad
+            self._time_sums += full.reshape(-1, self.m).sum(axis=0)
+        self.seen += t.size
+
+    def folded(self) -> FloatArray:
+        """−(mean over the revolutions of count·Δθ − line(t)), arcsec, line by line."""
+        fit = self._fit
+        slope = fit.ctd / fit.ctt
+        icpt = fit.mean_d - slope * fit.mean_t
+        line_angle = np.arange(self.m) * (360.0 / self.m) + 360.0 * (self.revs - 1) / 2.0
+        mean_err = line_angle - (icpt + slope * self._time_sums / self.revs)
+        return np.asarray(-mean_err * 3600.0, dtype=np.float64)
+
+
+def _phase_shift(folded: FloatArray, deviation_arcsec: FloatArray, m: int) -> tuple[int, float]:
+    """Shift of ``deviation_arcsec`` that matches a single head's folded angle error, by phase
+    correlation without the first order, and its significance on the correlation's scale."""
     # Phase correlation: every order weighs the same, so the many orders carried by the
     # graduation errors outvote the few where the table's rate fluctuation sits.
     cross = np.conj(np.fft.rfft(folded)) * np.fft.rfft(deviation_arcsec)
