@@ -10,7 +10,7 @@ from typing import Any
 
 import click
 
-from rotacal.errors import ConfigError
+from rotacal.errors import CaptureError, ConfigError
 from rotacal.numbers import element_of, format_plain, quantity_of
 
 from ._app import cli
@@ -20,17 +20,22 @@ from ._common import (
     _check_outputs,
     _emit_warnings,
     _names_capture,
+    _naming_file,
     _read_heads,
+    _sample_progress,
     _status,
     _summary_wanted,
     _write_json,
     _write_report,
 )
 from ._help import example
+from ._reading import current_read_options
 
 _PULSES_PER_REV = click.option(
     "--pulses-per-rev", type=int, required=True, help="m: pulses per revolution of one head."
 )
+#: Pulses of one head above which ``rotacal rate`` streams it from the file by default.
+_IN_MEMORY_MAX_PULSES = 20_000_000
 _KOKUYAMA2015_TITLE = (
     "Kokuyama et al. (2015): angular-velocity standard with a self-calibratable encoder"
 )
@@ -137,6 +142,13 @@ def selfcal_cmd(
 @click.option(
     "--no-compensation", is_flag=True, help="Use the nominal pitch only (no self-calibration)."
 )
+@click.option(
+    "--chunked/--in-memory",
+    default=None,
+    help="Stream the head from the file (flat memory; one head, with --selfcal or nothing to "
+    "compensate with) or load the capture whole "
+    f"[default: chunked above {_IN_MEMORY_MAX_PULSES:.0e} pulses when it can].",
+)
 @_analysis_options
 @_names_capture
 def rate_cmd(
@@ -147,6 +159,7 @@ def rate_cmd(
     average: int,
     set_rate_deg_s: float | None,
     no_compensation: bool,
+    chunked: bool | None,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -172,6 +185,23 @@ def rate_cmd(
             ) from None
         if not isinstance(selfcal, dict):
             raise ConfigError(f"--selfcal {selfcal_path} is not a `rotacal selfcal --json` result")
+    if chunked is None:
+        chunked = _stream_by_default(capture, columns, group, head, selfcal, no_compensation)
+    if chunked:
+        result = _streamed_rate(
+            capture,
+            columns,
+            group,
+            pulses_per_rev=pulses_per_rev,
+            selfcal=selfcal,
+            head=head,
+            average=average,
+            set_rate_deg_s=set_rate_deg_s,
+            compensate=not no_compensation,
+            specs=kw.pop("specs"),
+        )
+        _finish_rate(result, capture, json_path, report_path)
+        return
     heads = _read_heads(capture, columns, group)
     with _status("timing the pulses"):
         result = calibrate_rate(
@@ -184,6 +214,75 @@ def rate_cmd(
             compensate=not no_compensation,
             specs=kw.pop("specs"),
         )
+    _finish_rate(result, capture, json_path, report_path)
+
+
+def _stream_by_default(
+    capture: str,
+    columns: Sequence[str],
+    group: str | None,
+    head: str,
+    selfcal: Any,
+    no_compensation: bool,
+) -> bool:
+    """Whether the capture is large and the streamed path can take it (one head's times, with a
+    given deviation or nothing to compensate; several heads to self-calibrate stay in memory)."""
+    from rotacal.io import capture_length, parse_column_mapping
+    from rotacal.table.rate_file import file_heads
+
+    if head == "all":
+        return False
+    mapping = parse_column_mapping(columns)
+    read_options = current_read_options()
+    with _naming_file(capture):
+        heads = file_heads(capture, mapping=mapping, group=group)
+    if heads >= 2 and not no_compensation and (selfcal is None or head not in ("0", "head_0")):
+        return False
+    column = head if head.startswith("head_") else f"head_{head}"
+    try:
+        n = capture_length(capture, column, mapping=mapping, group=group, read_options=read_options)
+    except (CaptureError, ConfigError):
+        return False  # the in-memory path names what is wrong
+    return n > _IN_MEMORY_MAX_PULSES
+
+
+def _streamed_rate(capture: str, columns: Sequence[str], group: str | None, **kw: Any) -> Any:
+    """calibrate_rate_file with a progress bar over the pulses read (every pass)."""
+    from rotacal.io import capture_length, parse_column_mapping
+    from rotacal.table.rate_file import calibrate_rate_file, file_heads
+
+    mapping = parse_column_mapping(columns)
+    read_options = current_read_options()
+    with _naming_file(capture):
+        file_heads(capture, mapping=mapping, group=group)
+        head = str(kw["head"])
+        column = head if head.startswith("head_") else f"head_{head}"
+        try:
+            n = capture_length(
+                capture, column, mapping=mapping, group=group, read_options=read_options
+            )
+        except (CaptureError, ConfigError):
+            n = 0  # the analysis names what is wrong
+        passes = 3 if kw["selfcal"] is not None and kw["compensate"] else 2
+        with _sample_progress(passes * n, "rate (streamed)") as progress:
+            done = [0]
+
+            def step(pulses: int) -> None:
+                done[0] += pulses
+                progress(done[0])
+
+            return calibrate_rate_file(
+                capture,
+                mapping=mapping,
+                group=group,
+                read_options=read_options,
+                progress=step,
+                **kw,
+            )
+
+
+def _finish_rate(result: Any, capture: str, json_path: Any, report_path: Any) -> None:
+    """Warnings, JSON, report and the summary of a rate result."""
     _emit_warnings(result)
     data = result.to_dict()
     _write_json(data, json_path)
