@@ -88,8 +88,9 @@ def align_deviation(
 class FoldSums:
     """The angle error of one head against a straight line in time, folded over its whole
     revolutions (arcsec, sign of a deviation), summed over a stream of its n pulse times: the
-    line's normal equations (centred, merged chunk by chunk) and Σ over revolutions of each
-    line's time."""
+    line's normal equations (centred, merged chunk by chunk) and, per line, the sums over the
+    revolutions of its time and of its angle less a provisional line (the first interval's
+    rate): small numbers, so that any chunking gives the same folded curve to rounding."""
 
     def __init__(self, n: int, pulses_per_rev: int) -> None:
         self.m = int(pulses_per_rev)
@@ -98,24 +99,35 @@ class FoldSums:
         self.seen = 0
         self.t0 = math.nan
         self.last = math.nan
-        self._time_sums = np.zeros(self.m)
+        self._rate0 = math.nan
+        self._x_sums = np.zeros(self.m)
+        self._y_sums = np.zeros(self.m)
         self._fit = TrendSums()
+
+    def _fold(self, sums: FloatArray, values: FloatArray) -> None:
+        pad = np.concatenate((np.zeros(self.seen % self.m), values))  # whole turns of the lines
+        full = np.zeros(-(-pad.size // self.m) * self.m)
+        full[: pad.size] = pad
+        sums += full.reshape(-1, self.m).sum(axis=0)
 
     def update(self, t: FloatArray) -> None:
         """Add the next pulse times (s)."""
-        if self.seen == 0 and t.size:
+        if t.size == 0:
+            return
+        if self.seen == 0:
             self.t0 = float(t[0])
-        if t.size:
-            self.last = float(t[-1])
+        if math.isnan(self._rate0) and self.seen + t.size >= 2:
+            t1 = float(t[1 - self.seen])
+            self._rate0 = (360.0 / self.m) / (t1 - self.t0)
+        self.last = float(t[-1])
         take = t[: max(self.used - self.seen, 0)]
         if take.size:
             count = np.arange(self.seen, self.seen + take.size)
             x = take - self.t0
-            self._fit.update(x, count * (360.0 / self.m))
-            pad = np.concatenate((np.zeros(self.seen % self.m), x))  # whole turns of the lines
-            full = np.zeros(-(-pad.size // self.m) * self.m)
-            full[: pad.size] = pad
-            self._time_sums += full.reshape(-1, self.m).sum(axis=0)
+            y = count * (360.0 / self.m) - self._rate0 * x  # the angle less the provisional line
+            self._fit.update(x, y)
+            self._fold(self._x_sums, x)
+            self._fold(self._y_sums, y)
         self.seen += t.size
 
     def folded(self) -> FloatArray:
@@ -123,8 +135,7 @@ class FoldSums:
         fit = self._fit
         slope = fit.ctd / fit.ctt
         icpt = fit.mean_d - slope * fit.mean_t
-        line_angle = np.arange(self.m) * (360.0 / self.m) + 360.0 * (self.revs - 1) / 2.0
-        mean_err = line_angle - (icpt + slope * self._time_sums / self.revs)
+        mean_err = (self._y_sums - slope * self._x_sums) / self.revs - icpt
         return np.asarray(-mean_err * 3600.0, dtype=np.float64)
 
 
