@@ -36,8 +36,8 @@ def _dof_of_mean_square(n: int, lags: NDArray[np.int64], rho: FloatArray) -> flo
     return float(n) ** 2 / float(np.sum(weight * rho**2))
 
 
-#: Filtered values per block of :func:`_same_line_mean_square` (blocks added exactly).
-_JITTER_BLOCK = 1 << 16
+#: Pulses per block of :class:`JitterSums` (the 2m + 3 carried pulses are joined to each).
+_JITTER_BLOCK = 1 << 18
 
 
 def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float, bool]:
@@ -85,8 +85,7 @@ def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float
     """
     t = np.asarray(times_s, dtype=np.float64)
     sums = JitterSums(t.size, pulses_per_rev)
-    for start in range(0, t.size, _JITTER_BLOCK):  # blocks: no record-long temporaries
-        sums.update(t[start : start + _JITTER_BLOCK])
+    sums.update(t)
     return sums.result()
 
 
@@ -111,7 +110,11 @@ class JitterSums:
         self.count = 0
 
     def update(self, t: FloatArray) -> None:
-        """Add the next pulse times (s)."""
+        """Add the next pulse times (s), in blocks that stay in cache."""
+        for start in range(0, t.size, _JITTER_BLOCK):
+            self._update(t[start : start + _JITTER_BLOCK])
+
+    def _update(self, t: FloatArray) -> None:
         x = np.concatenate((self._tail, t))
         if x.size > self.span:
             m = self.m

@@ -30,6 +30,7 @@ from collections.abc import Callable, Iterator
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rotacal._jit import use_numba
 from rotacal.encoder.pulses import pulse_angle_deg
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.table.rate_allan import allan_clusters
@@ -189,8 +190,9 @@ def rate_passes(
     pitch = 360.0 / m
     ks = allan_clusters(n, pitch, allan_angles_deg)
     strides = [allan_stride(int(k)) for k in ks]
-    allan = AllanSums(ks.tolist(), strides)
-    allan_nom = AllanSums(ks.tolist(), strides) if deviation is not None else None
+    jit = use_numba(n)  # once for the record: every stride's sums in the compiled twin
+    allan = AllanSums(ks.tolist(), strides, jit=jit)
+    allan_nom = AllanSums(ks.tolist(), strides, jit=jit) if deviation is not None else None
     jitter = JitterSums(n, m)
     rp = _RatePoints(m, average, deviation, shift)
     periods: tuple[int, ...] = (m // math.gcd(int(average), m),)
