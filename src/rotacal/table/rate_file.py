@@ -65,10 +65,14 @@ def _checked(
     chunk_rows: int,
 ) -> Callable[[], Iterator[FloatArray]]:
     """A fresh iterator over the column's chunks, each checked as a pulse train with the last
-    pulse before it (the same checks as check_pulse_times; pulse numbers of the whole train)."""
+    pulse before it (the same checks as check_pulse_times; pulse numbers of the whole train) on
+    the first pass only: the file does not change between passes."""
     from rotacal.io import iter_capture_chunks
 
+    checked = [False]
+
     def chunks() -> Iterator[FloatArray]:
+        check = not checked[0]
         last: FloatArray = np.zeros(0)
         start = 0
         for part in iter_capture_chunks(
@@ -80,12 +84,14 @@ def _checked(
             read_options=read_options,
         ):
             t = part[column]
-            joined = np.concatenate((last, t))
-            if joined.size >= 3:
-                check_pulse_times(joined, column, first_index=start - last.size)
+            if check:
+                joined = np.concatenate((last, t))
+                if joined.size >= 3:
+                    check_pulse_times(joined, column, first_index=start - last.size)
+                last = t[-1:].copy()
             start += t.size
-            last = t[-1:].copy()
             yield t
+        checked[0] = checked[0] or check
 
     return chunks
 
