@@ -187,34 +187,42 @@ def rate_cmd(
             raise ConfigError(f"--selfcal {selfcal_path} is not a `rotacal selfcal --json` result")
     if chunked is None:
         chunked = _stream_by_default(capture, columns, group, head, selfcal, no_compensation)
+    settings: dict[str, Any] = {
+        "pulses_per_rev": pulses_per_rev,
+        "selfcal": selfcal,
+        "head": head,
+        "average": average,
+        "set_rate_deg_s": set_rate_deg_s,
+        "compensate": not no_compensation,
+        "specs": kw.pop("specs"),
+    }
     if chunked:
-        result = _streamed_rate(
-            capture,
-            columns,
-            group,
-            pulses_per_rev=pulses_per_rev,
-            selfcal=selfcal,
-            head=head,
-            average=average,
-            set_rate_deg_s=set_rate_deg_s,
-            compensate=not no_compensation,
-            specs=kw.pop("specs"),
-        )
-        _finish_rate(result, capture, json_path, report_path)
-        return
-    heads = _read_heads(capture, columns, group)
-    with _status("timing the pulses"):
-        result = calibrate_rate(
-            heads,
-            pulses_per_rev=pulses_per_rev,
-            selfcal=selfcal,
-            head=head,
-            average=average,
-            set_rate_deg_s=set_rate_deg_s,
-            compensate=not no_compensation,
-            specs=kw.pop("specs"),
-        )
+        result = _streamed_rate(capture, columns, group, **settings)
+    else:
+        heads = _read_heads(capture, columns, group)
+        with _status("timing the pulses"):
+            result = calibrate_rate(heads, **settings)
     _finish_rate(result, capture, json_path, report_path)
+
+
+def _head_file(
+    capture: str, columns: Sequence[str], group: str | None, head: str
+) -> tuple[Any, Any, int, int]:
+    """The column mapping, reading options, number of heads and the pulses of ``head`` (0 when
+    its length cannot be read: the analysis then names what is wrong)."""
+    from rotacal.io import capture_length, parse_column_mapping
+    from rotacal.table.rate_file import file_heads
+
+    mapping = parse_column_mapping(columns)
+    read_options = current_read_options()
+    with _naming_file(capture):
+        heads = file_heads(capture, mapping=mapping, group=group)
+    column = head if head.startswith("head_") else f"head_{head}"
+    try:
+        n = capture_length(capture, column, mapping=mapping, group=group, read_options=read_options)
+    except (CaptureError, ConfigError):
+        n = 0
+    return mapping, read_options, heads, n
 
 
 def _stream_by_default(
@@ -227,58 +235,30 @@ def _stream_by_default(
 ) -> bool:
     """Whether the capture is large and the streamed path can take it (one head's times, with a
     given deviation or nothing to compensate; several heads to self-calibrate stay in memory)."""
-    from rotacal.io import capture_length, parse_column_mapping
-    from rotacal.table.rate_file import file_heads
-
     if head == "all":
         return False
-    mapping = parse_column_mapping(columns)
-    read_options = current_read_options()
-    with _naming_file(capture):
-        heads = file_heads(capture, mapping=mapping, group=group)
+    _, _, heads, n = _head_file(capture, columns, group, head)
     if heads >= 2 and not no_compensation and (selfcal is None or head not in ("0", "head_0")):
         return False
-    column = head if head.startswith("head_") else f"head_{head}"
-    try:
-        n = capture_length(capture, column, mapping=mapping, group=group, read_options=read_options)
-    except (CaptureError, ConfigError):
-        return False  # the in-memory path names what is wrong
     return n > _IN_MEMORY_MAX_PULSES
 
 
 def _streamed_rate(capture: str, columns: Sequence[str], group: str | None, **kw: Any) -> Any:
     """calibrate_rate_file with a progress bar over the pulses read (every pass)."""
-    from rotacal.io import capture_length, parse_column_mapping
-    from rotacal.table.rate_file import calibrate_rate_file, file_heads
+    from rotacal.table.rate_file import calibrate_rate_file
 
-    mapping = parse_column_mapping(columns)
-    read_options = current_read_options()
-    with _naming_file(capture):
-        file_heads(capture, mapping=mapping, group=group)
-        head = str(kw["head"])
-        column = head if head.startswith("head_") else f"head_{head}"
-        try:
-            n = capture_length(
-                capture, column, mapping=mapping, group=group, read_options=read_options
-            )
-        except (CaptureError, ConfigError):
-            n = 0  # the analysis names what is wrong
-        passes = 3 if kw["selfcal"] is not None and kw["compensate"] else 2
-        with _sample_progress(passes * n, "rate (streamed)") as progress:
-            done = [0]
+    mapping, read_options, _, n = _head_file(capture, columns, group, str(kw["head"]))
+    passes = 3 if kw["selfcal"] is not None and kw["compensate"] else 2
+    with _naming_file(capture), _sample_progress(passes * n, "rate (streamed)") as progress:
+        done = [0]
 
-            def step(pulses: int) -> None:
-                done[0] += pulses
-                progress(done[0])
+        def step(pulses: int) -> None:
+            done[0] += pulses
+            progress(done[0])
 
-            return calibrate_rate_file(
-                capture,
-                mapping=mapping,
-                group=group,
-                read_options=read_options,
-                progress=step,
-                **kw,
-            )
+        return calibrate_rate_file(
+            capture, mapping=mapping, group=group, read_options=read_options, progress=step, **kw
+        )
 
 
 def _finish_rate(result: Any, capture: str, json_path: Any, report_path: Any) -> None:

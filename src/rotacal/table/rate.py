@@ -47,10 +47,11 @@ from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 from rotacal.signal._values import check_setting
 from rotacal.table.rate_alignment import (
-    MIN_ALIGNMENT_CORRELATION,
     _as_deviation,
-    _json_number,
+    accept_alignment,
     align_deviation,
+    own_revolutions,
+    same_capture,
 )
 from rotacal.table.rate_allan import (
     allan_uncertainty,
@@ -366,30 +367,14 @@ def calibrate_rate(
             dev = _as_deviation(selfcal, m)
             deviation = dev.values
             here = (float(trains[0][0]), float(trains[0][-1]), int(trains[0].size))
-            same = dev.fingerprint is not None and (
-                math.isclose(dev.fingerprint[0], here[0], abs_tol=1e-12)
-                and math.isclose(dev.fingerprint[1], here[1], abs_tol=1e-12)
-                and dev.fingerprint[2] == here[2]
-            )
+            same = same_capture(dev, here)
             shift = 0  # deviation index of head 0's first pulse
             if same and dev.shifts is not None and len(dev.shifts) == n:
                 own_shifts = dev.shifts
-                if isinstance(selfcal, SelfCalibration):
-                    own_revs = selfcal.revolutions_used
-                elif isinstance(selfcal, Mapping):
-                    own_revs = _json_number(selfcal, "revolutions_used", int)
+                own_revs = own_revolutions(selfcal)
             if not same:
                 shift, correlation = align_deviation(trains, deviation, m)
-                if correlation < MIN_ALIGNMENT_CORRELATION:
-                    raise CaptureError(
-                        f"the deviation curve does not match this capture (best correlation "
-                        f"{correlation:.2f} < {MIN_ALIGNMENT_CORRELATION}): self-calibrate this "
-                        "capture, or give a self-calibration of the same encoder."
-                    )
-                notes.append(
-                    f"the deviation comes from another capture; aligned by correlation "
-                    f"(head_0 starts at its index {shift}, correlation {correlation:.3f})."
-                )
+                accept_alignment(shift, correlation, notes)
             if k != 0:
                 # head k's first pulse sees the line s_k ahead of the head-0 pulse it pairs with
                 pairing = pair_heads(trains, names)

@@ -236,3 +236,37 @@ def _as_deviation(selfcal: Any, m: int) -> _Deviation:
                 "the self-calibration's 'head_line_shifts' must be integers."
             ) from None
     return _Deviation(values, fingerprint, str(rotation), shifts)
+
+
+def same_capture(dev: _Deviation, here: tuple[float, float, int]) -> bool:
+    """Whether a deviation's fingerprint (head 0's first and last time, pulse count) is this
+    capture's ``here``: then it indexes the capture as it is, no alignment."""
+    fp = dev.fingerprint
+    return fp is not None and (
+        math.isclose(fp[0], here[0], abs_tol=1e-12)
+        and math.isclose(fp[1], here[1], abs_tol=1e-12)
+        and fp[2] == here[2]
+    )
+
+
+def own_revolutions(selfcal: Any) -> int | None:
+    """Revolutions a self-calibration (its result or JSON) was made from, when it says."""
+    if isinstance(selfcal, SelfCalibration):
+        return selfcal.revolutions_used
+    if isinstance(selfcal, Mapping):
+        return _json_number(selfcal, "revolutions_used", int)  # type: ignore[no-any-return]
+    return None
+
+
+def accept_alignment(shift: int, correlation: float, notes: list[str]) -> None:
+    """Refuse an alignment below :data:`MIN_ALIGNMENT_CORRELATION`, else note it."""
+    if correlation < MIN_ALIGNMENT_CORRELATION:
+        raise CaptureError(
+            f"the deviation curve does not match this capture (best correlation "
+            f"{correlation:.2f} < {MIN_ALIGNMENT_CORRELATION}): self-calibrate this "
+            "capture, or give a self-calibration of the same encoder."
+        )
+    notes.append(
+        f"the deviation comes from another capture; aligned by correlation "
+        f"(head_0 starts at its index {shift}, correlation {correlation:.3f})."
+    )

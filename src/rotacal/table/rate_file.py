@@ -13,7 +13,6 @@ like any given curve).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterator, Mapping
 from os import PathLike
 from typing import Any
@@ -26,11 +25,12 @@ from rotacal.encoder.selfcal import SelfCalibration
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.table.rate import RateResult, _check_settings, _head_index, _rate_result
 from rotacal.table.rate_alignment import (
-    MIN_ALIGNMENT_CORRELATION,
     FoldSums,
     _as_deviation,
-    _json_number,
     _phase_shift,
+    accept_alignment,
+    own_revolutions,
+    same_capture,
 )
 from rotacal.uncertainty import InstrumentSpecs
 
@@ -167,21 +167,11 @@ def calibrate_rate_file(
             fold.update(t)
             if progress is not None:
                 progress(t.size)
-        here = (fold.t0, fold.last, pulses)
-        same = dev.fingerprint is not None and (
-            math.isclose(dev.fingerprint[0], here[0], abs_tol=1e-12)
-            and math.isclose(dev.fingerprint[1], here[1], abs_tol=1e-12)
-            and dev.fingerprint[2] == here[2]
-        )
+        same = same_capture(dev, (fold.t0, fold.last, pulses))
         shift = 0
-        if same and dev.shifts is not None and len(dev.shifts) == heads:
-            revs = None
-            if isinstance(selfcal, SelfCalibration):
-                revs = selfcal.revolutions_used
-            elif isinstance(selfcal, Mapping):
-                revs = _json_number(selfcal, "revolutions_used", int)
-            if revs is not None:
-                own = (dev.shifts, k, revs, min(1.0, revs * m / max(pulses - 1, 1)))
+        revs = own_revolutions(selfcal) if same else None
+        if same and dev.shifts is not None and len(dev.shifts) == heads and revs is not None:
+            own = (dev.shifts, k, revs, min(1.0, revs * m / max(pulses - 1, 1)))
         if not same:
             if fold.revs < 1:
                 raise CaptureError(
@@ -194,16 +184,7 @@ def calibrate_rate_file(
                     "by self-calibrating it, in memory: give --in-memory."
                 )
             shift, correlation = _phase_shift(fold.folded(), deviation, m)
-            if correlation < MIN_ALIGNMENT_CORRELATION:
-                raise CaptureError(
-                    f"the deviation curve does not match this capture (best correlation "
-                    f"{correlation:.2f} < {MIN_ALIGNMENT_CORRELATION}): self-calibrate this "
-                    "capture, or give a self-calibration of the same encoder."
-                )
-            notes.append(
-                f"the deviation comes from another capture; aligned by correlation "
-                f"(head_0 starts at its index {shift}, correlation {correlation:.3f})."
-            )
+            accept_alignment(shift, correlation, notes)
     elif compensate and heads == 1:
         notes.append("one head and no self-calibration given: the rate is not compensated.")
     return _rate_result(

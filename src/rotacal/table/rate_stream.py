@@ -190,9 +190,9 @@ def rate_passes(
     pitch = 360.0 / m
     ks = allan_clusters(n, pitch, allan_angles_deg)
     strides = [allan_stride(int(k)) for k in ks]
-    jit = use_numba(n)  # once for the record: every stride's sums in the compiled twin
-    allan = AllanSums(ks.tolist(), strides, jit=jit)
-    allan_nom = AllanSums(ks.tolist(), strides, jit=jit) if deviation is not None else None
+    compiled = use_numba(n)  # once for the record: every stride's sums in the compiled twin
+    allan = AllanSums(ks.tolist(), strides, jit=compiled)
+    allan_nom = AllanSums(ks.tolist(), strides, jit=compiled) if deviation is not None else None
     jitter = JitterSums(n, m)
     rp = _RatePoints(m, average, deviation, shift)
     periods: tuple[int, ...] = (m // math.gcd(int(average), m),)
@@ -290,9 +290,10 @@ def rate_passes(
     with np.errstate(invalid="ignore"):
         s = np.sqrt(0.5 * allan.mean_squares()) / abs(mean_rate)
         s_nom = s if allan_nom is None else np.sqrt(0.5 * allan_nom.mean_squares()) / abs(mean_rate)
-    kept = None
+    kept: tuple[FloatArray, FloatArray, FloatArray] | None = None
     if keep_series:
-        kept = tuple(np.concatenate([x[i] for x in series]) for i in range(3))  # type: ignore[assignment]
+        t_all, r_all, n_all = (np.concatenate([x[i] for x in series]) for i in range(3))
+        kept = (t_all, r_all, n_all)
     return RatePasses(
         pulses=n,
         points=points,
