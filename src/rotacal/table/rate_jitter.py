@@ -8,6 +8,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rotacal._jit import use_numba
 from rotacal.encoder.pulses import (
     check_pulses_per_rev,
 )
@@ -93,9 +94,10 @@ class JitterSums:
     """:func:`timing_jitter` over a stream of the n pulse times of one train, fed in order:
     the same filtered values (the last 2m + 3 pulses carried), their squares summed per chunk."""
 
-    def __init__(self, n: int, pulses_per_rev: int) -> None:
+    def __init__(self, n: int, pulses_per_rev: int, *, jit: bool | None = None) -> None:
         self.m = check_pulses_per_rev(pulses_per_rev)
         self.n = int(n)
+        self.jit = use_numba(self.n, jit)
         h = _PULSE_FILTER
         if self.n >= 2 * self.m + 2 * h.size:
             self.span = 2 * self.m + h.size - 1  # pulses one filtered value reaches past its own
@@ -111,6 +113,16 @@ class JitterSums:
 
     def update(self, t: FloatArray) -> None:
         """Add the next pulse times (s), in blocks that stay in cache."""
+        if self.jit:
+            from rotacal.table._rate_stream_jit import jitter_square_sum
+
+            x = np.concatenate((self._tail, t))
+            total, count = jitter_square_sum(x, self.m, self.span > _PULSE_FILTER.size - 1)
+            if count > 0:
+                self._parts.append(total)
+                self.count += count
+            self._tail = x[max(x.size - self.span, 0) :].copy()
+            return
         for start in range(0, t.size, _JITTER_BLOCK):
             self._update(t[start : start + _JITTER_BLOCK])
 

@@ -58,8 +58,11 @@ class _RatePoints:
     """Angles and block rates of a pulse train fed in chunks (the pulses of an unfinished block
     carried): the same arithmetic per block as :func:`rotacal.encoder.pulses.pulse_rate`."""
 
-    def __init__(self, m: int, average: int, deviation: FloatArray | None, shift: int) -> None:
+    def __init__(
+        self, m: int, average: int, deviation: FloatArray | None, shift: int, jit: bool = False
+    ) -> None:
         self.m, self.a, self.dev, self.shift = m, int(average), deviation, int(shift)
+        self.jit = jit
         self.seen = 0
         self._t = np.zeros(0)
         self._ang = np.zeros(0)
@@ -84,7 +87,11 @@ class _RatePoints:
         nn = np.concatenate((self._nom, nom)) if self.dev is not None else aa
         blocks = max(tt.size - 1, 0) // self.a
         used = blocks * self.a
-        if blocks:
+        if blocks and self.jit:
+            from rotacal.table._rate_stream_jit import block_rates
+
+            t_avg, rate, rate_nom = block_rates(tt, aa, nn, self.a, blocks, self.dev is not None)
+        elif blocks:
             dt = np.diff(tt[: used + 1])
             t_avg = (tt[:used] + 0.5 * dt).reshape(blocks, self.a).mean(axis=1)
             rate = (np.diff(aa[: used + 1]) / dt).reshape(blocks, self.a).mean(axis=1)
@@ -193,8 +200,8 @@ def rate_passes(
     compiled = use_numba(n)  # once for the record: every stride's sums in the compiled twin
     allan = AllanSums(ks.tolist(), strides, jit=compiled)
     allan_nom = AllanSums(ks.tolist(), strides, jit=compiled) if deviation is not None else None
-    jitter = JitterSums(n, m)
-    rp = _RatePoints(m, average, deviation, shift)
+    jitter = JitterSums(n, m, jit=compiled)
+    rp = _RatePoints(m, average, deviation, shift, compiled)
     periods: tuple[int, ...] = (m // math.gcd(int(average), m),)
     stats = SeriesStats.empty(periods)
     welch = WelchSums(points)
@@ -278,7 +285,7 @@ def rate_passes(
         gains = [welch_gain(power, noise_periodogram(g, points)) for g in (present, noise_only)]
         plain = max(abs(a * hi0 + b), abs(a * lo0 + b))
         collector = PeakCollector(points, _candidate_floor(plain, points, sources), gains)
-        rp2 = _RatePoints(m, average, deviation, shift)
+        rp2 = _RatePoints(m, average, deviation, shift, compiled)
         for t in chunks():  # pass 2: the deviation about the mean rate, exactly
             t = np.asarray(t, dtype=np.float64)
             _, ang = rp2.angles(t)
