@@ -236,3 +236,19 @@ def test_compiled_per_pulse_loops_equal_the_numpy_ones(capture, same_line):
     assert out[True][0] == pytest.approx(out[False][0], rel=1e-12)
     for compiled, plain in zip(out[True][1], out[False][1], strict=True):
         np.testing.assert_allclose(compiled, plain, rtol=1e-12)
+
+
+def test_monte_carlo_batches_draw_the_same_rows():
+    """Batches of trials (the peak's memory bound) give the rows of one whole draw."""
+    from rotacal.uncertainty.summaries import iter_statistic_samples, statistic_samples
+
+    rng = np.random.default_rng(8)
+    sources = _sources(rng, 60)
+    pos = np.array([3, 4, 5, 70, 71, 400, 999], dtype=np.int64)
+    whole = statistic_samples(pos, 1000, sources, trials=50, seed=3)
+    parts = list(iter_statistic_samples(pos, 1000, sources, trials=50, seed=3, batch=7))
+    assert len(parts) == 8
+    for group in ("noise", "other"):
+        np.testing.assert_allclose(
+            np.concatenate([x[group] for x in parts]), whole[group], rtol=1e-12, atol=1e-15
+        )

@@ -63,7 +63,7 @@ from __future__ import annotations
 import abc
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Literal
 
 import numpy as np
@@ -98,6 +98,7 @@ __all__ = [
     "denoised",
     "drop_large_dof_notes",
     "expected_periodogram",
+    "iter_statistic_samples",
     "mc_budget",
     "monte_carlo_statistics",
     "noise_periodogram",
@@ -384,15 +385,33 @@ def statistic_samples(
     of the others ("bound" and "absent"), independent of each other. Every source is drawn
     exactly: its own way (a whole circulant period, the white values a filter needs), or, when
     only a few of the many elements are needed, jointly with the others of its group through
-    the Cholesky factor of their covariance among the K elements.
+    the Cholesky factor of their covariance among the K elements. The rows are those of
+    :func:`iter_statistic_samples` (the same draws, batch by batch).
 
     References
     ----------
     JCGM 101:2008 §6.4.8 (multivariate Gaussian by a Cholesky factor), §7.2–7.4.
     """
+    parts = list(iter_statistic_samples(positions, n, sources, trials=trials, seed=seed))
+    return {g: np.concatenate([x[g] for x in parts], axis=0) for g in ("noise", "other")}
+
+
+def iter_statistic_samples(
+    positions: NDArray[np.int64],
+    n: int,
+    sources: Sequence[ErrorProcess],
+    *,
+    trials: int = MC_TRIALS,
+    seed: int = MC_SEED,
+    batch: int | None = None,
+) -> Iterator[dict[str, FloatArray]]:
+    """:func:`statistic_samples` in batches of ``batch`` trials (default: about
+    :data:`_CHUNK_ELEMENTS` values per array): each source's generator carries on from batch to
+    batch, so the rows are the same whatever the batch, and memory is bounded by the batch."""
     k = positions.size
-    out = {"noise": np.zeros((trials, k)), "other": np.zeros((trials, k))}
+    step = max(1, batch if batch is not None else _CHUNK_ELEMENTS // max(k, 1))
     streams = np.random.SeedSequence(seed).spawn(len(sources) + 2)
+    plans = []
     for group, ss in zip(("noise", "other"), streams[-2:], strict=True):
         members = [
             (s, st)
@@ -404,18 +423,31 @@ def statistic_samples(
             joint_ids = {id(s) for s, _ in members}  # the correction needs the joint factor
         else:
             joint_ids = {id(s) for s, _ in members if s.drawable and s.local_cost(k) < 1.0}
-        for s, st in members:
-            if id(s) not in joint_ids and s.drawable:
-                out[group] += s.draw_at(np.random.default_rng(st), trials, positions, n)
+        own = [
+            (s, np.random.default_rng(st))
+            for s, st in members
+            if id(s) not in joint_ids and s.drawable
+        ]
+        factor = None
         if joint_ids:
             lag = np.abs(positions[:, None] - positions[None, :])
             cov = np.zeros((k, k))
             for s, _ in members:
                 if id(s) in joint_ids:
                     cov += s.lags(int(lag.max()) + 1)[lag]
-            z = np.random.default_rng(ss).standard_normal((trials, k))
-            out[group] += z @ _factor(cov).T
-    return out
+            factor = (np.random.default_rng(ss), _factor(cov).T)
+        plans.append((group, own, factor))
+    for start in range(0, trials, step):
+        size = min(step, trials - start)
+        out = {}
+        for group, own, factor in plans:
+            acc = np.zeros((size, k))
+            for s, rng in own:
+                acc += s.draw_at(rng, size, positions, n)
+            if factor is not None:
+                acc += factor[0].standard_normal((size, k)) @ factor[1]
+            out[group] = acc
+        yield out
 
 
 def corrections_drawn(sources: Sequence[ErrorProcess], k: int) -> bool:
@@ -589,26 +621,32 @@ def mc_budget(
 
     # many candidates (a curve near zero): fewer trials, the Monte Carlo error is stated
     trials = min(trials, max(250, _CHUNK_ELEMENTS // (2 * pos.size)))
-    draws = statistic_samples(pos, n, sources, trials=trials, seed=seed)
     noisy = any(s.role == "noise" for s in sources)
-    total = draws["noise"] + draws["other"]
     # u: the spread of the statistic re-measured with every error — from the data themselves
     # (their noise then counts twice: too large where the noise sets the extremes) and from the
     # denoised curve (its extremes too flat: too small where single elements set them); their
     # geometric mean lies within the square root of either's error
     g_present = sum((g[id(s)] for s in present), np.zeros(support))
     f_all = inputs.denoised[0] if np.any(g_present) else base
-    y_den, y_data = (
-        monte_carlo_statistics(f_all, total, stat),
-        monte_carlo_statistics(base, total, stat),
-    )
-    u_den, u_data = float(np.std(y_den[0], ddof=1)), float(np.std(y_data[0], ddof=1))
+    f_n = inputs.denoised[1]
+    # per trial, batch by batch (memory bounded by a batch, whatever the candidates)
+    rows: dict[str, list[FloatArray]] = {"den": [], "data": [], "worst": [], "noise": []}
+    for draws in iter_statistic_samples(pos, n, sources, trials=trials, seed=seed):
+        total = draws["noise"] + draws["other"]
+        rows["den"].append(monte_carlo_statistics(f_all, total, stat)[0])
+        rows["data"].append(monte_carlo_statistics(base, total, stat)[0])
+        # upper error bound: the largest error the candidate elements carry
+        if statistic == "peak":
+            rows["worst"].append(np.max(np.abs(total), axis=-1))
+        else:
+            rows["worst"].append(
+                np.max(total[:, is_hi], axis=-1) - np.min(total[:, is_lo], axis=-1)
+            )
+        if noisy:
+            rows["noise"].append(monte_carlo_statistics(f_n, draws["noise"], stat)[0])
+    y_den, y_data, worst = (np.concatenate(rows[key]) for key in ("den", "data", "worst"))
+    u_den, u_data = float(np.std(y_den, ddof=1)), float(np.std(y_data, ddof=1))
     u = math.sqrt(u_den * u_data)
-    # upper error bound: the largest error the candidate elements carry
-    if statistic == "peak":
-        worst = np.max(np.abs(total), axis=-1)
-    else:
-        worst = np.max(total[:, is_hi], axis=-1) - np.min(total[:, is_lo], axis=-1)
     q_hi = float(np.quantile(worst, 0.5 + 0.5 * p))
     lo = max(plain - q_hi, 0.0)
     # lower error bound: the error at the true extreme(s), Gaussian with this variance
@@ -633,8 +671,7 @@ def mc_budget(
     ]
     if noisy:
         # the bias the known noise gives: re-measure the denoised curve with that noise alone
-        f_n = inputs.denoised[1]
-        (y_n,) = monte_carlo_statistics(f_n, draws["noise"], stat)
+        y_n = np.concatenate(rows["noise"])
         bias = float(np.mean(y_n)) - float(stat(f_n))
         corrected = plain - bias
         se_b = float(np.std(y_n, ddof=1)) / math.sqrt(trials)
