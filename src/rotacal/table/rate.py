@@ -19,6 +19,10 @@ the single-revolution rates (Type A); both budgets are validated by the same Mon
 the capture gives (never of a bound or a specification), and a 95 % interval for the true value.
 Each s(φ) point has the χ² uncertainty of its equivalent degrees of freedom (Greenhall & Riley
 2003).
+
+Every figure comes from two passes over the chosen pulse train with carried state
+(:mod:`rotacal.table.rate_stream`): over an array in chunks here, over the capture file in
+:func:`rotacal.table.rate_file.calibrate_rate_file` — the same numbers, in bounded memory.
 """
 
 from __future__ import annotations
@@ -153,6 +157,10 @@ class RateResult(Result):
         Correlation of the capture's own angle error with the deviation when it had to be
         aligned by correlation (None when the deviation came from the same capture).
     notes : list of str
+
+    :attr:`time_s`, :attr:`rate_deg_s` and :attr:`rate_uncompensated_deg_s` (the rate points,
+    for figures) are empty when the capture was streamed from its file
+    (:func:`rotacal.table.rate_file.calibrate_rate_file`): they would grow with the record.
 
     ``to_dict()`` adds ``<name>_u``/``<name>_U`` for ``mean_rate_deg_s``, ``rate_bias_deg_s``,
     ``rate_bias_percent`` (with a set rate), ``rate_deviation_rms_percent`` and
