@@ -254,7 +254,7 @@ def own_revolutions(selfcal: Any) -> int | None:
     if isinstance(selfcal, SelfCalibration):
         return selfcal.revolutions_used
     if isinstance(selfcal, Mapping):
-        return _json_number(selfcal, "revolutions_used", int)  # type: ignore[no-any-return]
+        return _json_number(selfcal, "revolutions_used", int)
     return None
 
 

@@ -630,21 +630,21 @@ def mc_budget(
     f_all = inputs.denoised[0] if np.any(g_present) else base
     f_n = inputs.denoised[1]
     # per trial, batch by batch (memory bounded by a batch, whatever the candidates)
-    rows: dict[str, list[FloatArray]] = {"den": [], "data": [], "worst": [], "noise": []}
+    per_trial: dict[str, list[FloatArray]] = {"den": [], "data": [], "worst": [], "noise": []}
     for draws in iter_statistic_samples(pos, n, sources, trials=trials, seed=seed):
         total = draws["noise"] + draws["other"]
-        rows["den"].append(monte_carlo_statistics(f_all, total, stat)[0])
-        rows["data"].append(monte_carlo_statistics(base, total, stat)[0])
+        per_trial["den"].append(monte_carlo_statistics(f_all, total, stat)[0])
+        per_trial["data"].append(monte_carlo_statistics(base, total, stat)[0])
         # upper error bound: the largest error the candidate elements carry
         if statistic == "peak":
-            rows["worst"].append(np.max(np.abs(total), axis=-1))
+            per_trial["worst"].append(np.max(np.abs(total), axis=-1))
         else:
-            rows["worst"].append(
+            per_trial["worst"].append(
                 np.max(total[:, is_hi], axis=-1) - np.min(total[:, is_lo], axis=-1)
             )
         if noisy:
-            rows["noise"].append(monte_carlo_statistics(f_n, draws["noise"], stat)[0])
-    y_den, y_data, worst = (np.concatenate(rows[key]) for key in ("den", "data", "worst"))
+            per_trial["noise"].append(monte_carlo_statistics(f_n, draws["noise"], stat)[0])
+    y_den, y_data, worst = (np.concatenate(per_trial[key]) for key in ("den", "data", "worst"))
     u_den, u_data = float(np.std(y_den, ddof=1)), float(np.std(y_data, ddof=1))
     u = math.sqrt(u_den * u_data)
     q_hi = float(np.quantile(worst, 0.5 + 0.5 * p))
@@ -671,7 +671,7 @@ def mc_budget(
     ]
     if noisy:
         # the bias the known noise gives: re-measure the denoised curve with that noise alone
-        y_n = np.concatenate(rows["noise"])
+        y_n = np.concatenate(per_trial["noise"])
         bias = float(np.mean(y_n)) - float(stat(f_n))
         corrected = plain - bias
         se_b = float(np.std(y_n, ddof=1)) / math.sqrt(trials)
