@@ -10,8 +10,11 @@ times included: 8 bytes per timestamp), on a twin made in the child:
   on the same N timestamps written to ``/tmp/bench-pulses/`` (deleted after the case), against
   ``np.load`` plus the bare rate points of the file in a child of its own (same run).
 
-The 6.5·10⁸-timestamp case of issue 17 needs a streaming path that ``calibrate_rate`` does not
-have yet (the rate deviation's budgets take the whole series of rate points): not offered here.
+- ``stream N``: ``calibrate_rate_file`` of one head of N timestamps streamed from an HDF5 file
+  (written chunk by chunk to ``/tmp/bench-pulses/``, deleted after the case; the same twin,
+  its jitter drawn per chunk), against the same child reading the file through the same chunk
+  reader and computing the bare rate points of every chunk (best of three, same run). The
+  peak RSS is the whole child's: the flat-memory claim of issue 17 (< 1 GB at 6.5·10⁸).
 
 Printed per case: timestamps, seconds (wall, and the child's CPU time: on a shared machine the
 steadier figure), timestamps/s (wall), peak RSS (MB) and bytes per timestamp
@@ -23,6 +26,7 @@ every head against head 0 (``np.searchsorted``) for ``selfcal``. No asserts on t
     python benchmarks/bench_rate.py            # rate 1e6, 1e7; command 1e7; selfcal 10, 30 rev
     python benchmarks/bench_rate.py --quick    # rate 1e6; selfcal 10 revolutions
     python benchmarks/bench_rate.py --big      # adds rate and command 1e8, selfcal 100 rev
+    python benchmarks/bench_rate.py --stream   # stream 1e7, 1e8, 6.5e8 (a 5.2 GB file)
 """
 
 from __future__ import annotations
@@ -59,6 +63,38 @@ def one_head(n: int) -> np.ndarray:
     t = angle / RATE_DEG_S
     t += 1e-4 / (2 * np.pi * 0.5) * np.sin(2 * np.pi * 0.5 * t)  # 0.01 % at 0.5 Hz
     return t + rng.normal(0.0, 1e-9, n)
+
+
+def write_h5(path: str, n: int) -> None:
+    """:func:`one_head`'s twin written chunk by chunk (bounded memory): the same graduation,
+    fluctuation and 1 ns jitter (drawn per chunk)."""
+    import h5py
+
+    m = PULSES_PER_REV
+    pitch = 360.0 / m
+    rng = np.random.default_rng(17)
+    err = rng.normal(0.0, 0.03, m)
+    step = 1 << 23
+    with h5py.File(path, "w") as f:
+        ds = f.create_dataset("head_0", shape=(n,), dtype="f8")
+        for start in range(0, n, step):
+            idx = np.arange(start, min(start + step, n))
+            line = idx % m
+            grad = err[line] + 3.0 * np.cos(2 * np.pi * line / m + 0.3)
+            t = (idx * pitch + grad / 3600.0) / RATE_DEG_S
+            t += 1e-4 / (2 * np.pi * 0.5) * np.sin(2 * np.pi * 0.5 * t)
+            ds[start : start + idx.size] = t + np.random.default_rng(start).normal(
+                0, 1e-9, idx.size
+            )
+
+
+def read_rate_points(path: str) -> None:
+    """The stream baseline: every chunk of the file through the same reader, its rate points."""
+    from rotacal.io import iter_capture_chunks
+
+    for part in iter_capture_chunks(path, ["head_0"], chunk_rows=1 << 22):
+        t = part["head_0"]
+        _ = (360.0 * AVERAGE / PULSES_PER_REV) / (t[AVERAGE:] - t[:-AVERAGE])
 
 
 def best_of_three(work: Any) -> tuple[float, float]:
@@ -101,6 +137,19 @@ def child(case: str, size: float) -> None:
             lambda: [np.searchsorted(h, heads[0]) for h in heads[1:]]
         )
         out["timestamps"] = sum(h.size for h in heads)
+    elif case == "stream":
+        from rotacal.table.rate_file import calibrate_rate_file
+
+        path = path_of(size).replace(".npz", ".h5")
+        t0, c0 = time.perf_counter(), time.process_time()
+        r = calibrate_rate_file(path, pulses_per_rev=PULSES_PER_REV, average=AVERAGE)
+        out["seconds"], out["cpu_s"] = time.perf_counter() - t0, time.process_time() - c0
+        out["baseline_s"], out["baseline_cpu_s"] = best_of_three(lambda: read_rate_points(path))
+        out["timestamps"] = int(size)
+        out["mean_rate_deg_s"] = r.mean_rate_deg_s
+    elif case == "write_h5":
+        write_h5(path_of(size).replace(".npz", ".h5"), int(size))
+        out["timestamps"] = int(size)
     elif case == "idle":  # the interpreter and the imports of the analysis cases
         import rotacal.encoder.selfcal
         import rotacal.sim.pulses
@@ -149,6 +198,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="rate 1e6 and selfcal 10 revolutions")
     ap.add_argument("--big", action="store_true", help="add rate 1e8 and selfcal 100 revolutions")
+    ap.add_argument(
+        "--stream", action="store_true", help="only the streamed cases: 1e7, 1e8, 6.5e8 timestamps"
+    )
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
@@ -161,6 +213,8 @@ def main() -> None:
     if args.big:
         cases[3:3] = [("rate", 1e8), ("command", 1e8)]
         cases.append(("selfcal", 100.0))
+    if args.stream:
+        cases = [("stream", 1e7), ("stream", 1e8), ("stream", 6.5e8)]
     idle = run("idle", 0.0)["peak_rss_mb"]
     print(f"idle child (interpreter + imports): {idle:.0f} MB")
     print(
@@ -171,7 +225,12 @@ def main() -> None:
         if case == "command":
             command_case(size, idle)
             continue
-        r = run(case, size)
+        if case == "stream":
+            r = stream_case(size)
+            if r is None:
+                continue
+        else:
+            r = run(case, size)
         label = f"{case} {size:g}" + (" rev" if case == "selfcal" else "")
         per_ts = (r["peak_rss_mb"] - idle) * 2**20 / r["timestamps"]
         print(
@@ -183,8 +242,24 @@ def main() -> None:
     print(
         "baselines: rate — the rate points over the whole record; selfcal — np.searchsorted of "
         "every head at head 0's times (same child, same run); command — np.load of the file and "
-        "the rate points, in a child of its own (same run)."
+        "the rate points, in a child of its own (same run); stream — reading the HDF5 file in "
+        "chunks and the bare rate points of each (same child, same run)."
     )
+
+
+def stream_case(size: float) -> dict[str, float] | None:
+    """The streamed analysis of an HDF5 file of ``size`` timestamps (made first, deleted after)."""
+    os.makedirs(BENCH_DIR, exist_ok=True)
+    if shutil.disk_usage(BENCH_DIR).free < 2 * size * 8:
+        print(f"{'stream ' + format(size, 'g'):>16} skipped: too little space in {BENCH_DIR}")
+        return None
+    path = path_of(size).replace(".npz", ".h5")
+    try:
+        run("write_h5", size)
+        return run("stream", size)
+    finally:
+        if os.path.exists(path):
+            os.remove(path)
 
 
 def command_case(size: float, idle: float) -> None:

@@ -140,19 +140,23 @@ def test_single_head_period_check_on_a_prefix_still_refuses_a_wrong_count(long_h
 
 
 @pytest.mark.parametrize("block", [5, 1 << 16])
-def test_blocked_timing_jitter_equals_the_whole_array_filter(train, monkeypatch, block):
+def test_blocked_timing_jitter_equals_the_whole_array_filter(train, block):
     """The same-line and pulse differences block by block give the whole-array convolution's
     mean square (≤ 1e-12 relative) and the same number of terms."""
     import rotacal.table.rate_jitter as rate_jitter
 
     t, _ = train
     m = 900
-    monkeypatch.setattr(rate_jitter, "_JITTER_BLOCK", block)
-    count, mean_square = rate_jitter._same_line_mean_square(t, m)
+    sums = rate_jitter.JitterSums(t.size, m)
+    for start in range(0, t.size, block):  # chunks that cut the 2m + 3 overlap many times
+        sums.update(t[start : start + block])
     d = t[2 * m :] - 2.0 * t[m:-m] + t[: -2 * m]
     e = np.convolve(d, np.array([1.0, -3.0, 3.0, -1.0])[::-1], mode="valid")
-    assert count == e.size
-    assert mean_square == pytest.approx(float(np.mean(e * e)), rel=1e-12)
+    assert sums.count == e.size
+    sigma, _, exact = sums.result()
+    assert exact
+    assert sigma**2 * 120.0 == pytest.approx(float(np.mean(e * e)), rel=1e-12)
+    assert sums.result() == pytest.approx(rate_jitter.timing_jitter(t, m), rel=1e-12)
 
 
 def test_requested_angles_keep_whole_revolutions_and_round_poor_clusters():

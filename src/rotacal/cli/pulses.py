@@ -21,6 +21,7 @@ from ._common import (
     _check_outputs,
     _emit_warnings,
     _names_capture,
+    _naming_file,
     _read_heads,
     _sample_progress,
     _status,
@@ -34,6 +35,8 @@ from ._reading import current_read_options
 _PULSES_PER_REV = click.option(
     "--pulses-per-rev", type=int, required=True, help="m: pulses per revolution of one head."
 )
+#: Pulses of one head above which ``rotacal rate`` streams it from the file by default.
+_IN_MEMORY_MAX_PULSES = 20_000_000
 _KOKUYAMA2015_TITLE = (
     "Kokuyama et al. (2015): angular-velocity standard with a self-calibratable encoder"
 )
@@ -230,6 +233,13 @@ def _selfcal_chunked(
 @click.option(
     "--no-compensation", is_flag=True, help="Use the nominal pitch only (no self-calibration)."
 )
+@click.option(
+    "--chunked/--in-memory",
+    default=None,
+    help="Stream the head from the file (flat memory; one head, with --selfcal or nothing to "
+    "compensate with) or load the capture whole "
+    f"[default: chunked above {_IN_MEMORY_MAX_PULSES:.0e} pulses when it can].",
+)
 @_analysis_options
 @_names_capture
 def rate_cmd(
@@ -240,6 +250,7 @@ def rate_cmd(
     average: int,
     set_rate_deg_s: float | None,
     no_compensation: bool,
+    chunked: bool | None,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -265,18 +276,84 @@ def rate_cmd(
             ) from None
         if not isinstance(selfcal, dict):
             raise ConfigError(f"--selfcal {selfcal_path} is not a `rotacal selfcal --json` result")
-    heads = _read_heads(capture, columns, group)
-    with _status("timing the pulses"):
-        result = calibrate_rate(
-            heads,
-            pulses_per_rev=pulses_per_rev,
-            selfcal=selfcal,
-            head=head,
-            average=average,
-            set_rate_deg_s=set_rate_deg_s,
-            compensate=not no_compensation,
-            specs=kw.pop("specs"),
+    if chunked is None:
+        chunked = _stream_by_default(capture, columns, group, head, selfcal, no_compensation)
+    settings: dict[str, Any] = {
+        "pulses_per_rev": pulses_per_rev,
+        "selfcal": selfcal,
+        "head": head,
+        "average": average,
+        "set_rate_deg_s": set_rate_deg_s,
+        "compensate": not no_compensation,
+        "specs": kw.pop("specs"),
+    }
+    if chunked:
+        result = _streamed_rate(capture, columns, group, **settings)
+    else:
+        heads = _read_heads(capture, columns, group)
+        with _status("timing the pulses"):
+            result = calibrate_rate(heads, **settings)
+    _finish_rate(result, capture, json_path, report_path)
+
+
+def _head_file(
+    capture: str, columns: Sequence[str], group: str | None, head: str
+) -> tuple[Any, Any, int, int]:
+    """The column mapping, reading options, number of heads and the pulses of ``head`` (0 when
+    its length cannot be read: the analysis then names what is wrong)."""
+    from rotacal.io import capture_length, parse_column_mapping
+    from rotacal.table.rate_file import file_heads
+
+    mapping = parse_column_mapping(columns)
+    read_options = current_read_options()
+    with _naming_file(capture):
+        heads = file_heads(capture, mapping=mapping, group=group)
+    column = head if head.startswith("head_") else f"head_{head}"
+    try:
+        n = capture_length(capture, column, mapping=mapping, group=group, read_options=read_options)
+    except (CaptureError, ConfigError):
+        n = 0
+    return mapping, read_options, heads, n
+
+
+def _stream_by_default(
+    capture: str,
+    columns: Sequence[str],
+    group: str | None,
+    head: str,
+    selfcal: Any,
+    no_compensation: bool,
+) -> bool:
+    """Whether the capture is large and the streamed path can take it (one head's times, with a
+    given deviation or nothing to compensate; several heads to self-calibrate stay in memory)."""
+    if head == "all":
+        return False
+    _, _, heads, n = _head_file(capture, columns, group, head)
+    if heads >= 2 and not no_compensation and (selfcal is None or head not in ("0", "head_0")):
+        return False
+    return n > _IN_MEMORY_MAX_PULSES
+
+
+def _streamed_rate(capture: str, columns: Sequence[str], group: str | None, **kw: Any) -> Any:
+    """calibrate_rate_file with a progress bar over the pulses read (every pass)."""
+    from rotacal.table.rate_file import calibrate_rate_file
+
+    mapping, read_options, _, n = _head_file(capture, columns, group, str(kw["head"]))
+    passes = 3 if kw["selfcal"] is not None and kw["compensate"] else 2
+    with _naming_file(capture), _sample_progress(passes * n, "rate (streamed)") as progress:
+        done = [0]
+
+        def step(pulses: int) -> None:
+            done[0] += pulses
+            progress(done[0])
+
+        return calibrate_rate_file(
+            capture, mapping=mapping, group=group, read_options=read_options, progress=step, **kw
         )
+
+
+def _finish_rate(result: Any, capture: str, json_path: Any, report_path: Any) -> None:
+    """Warnings, JSON, report and the summary of a rate result."""
     _emit_warnings(result)
     data = result.to_dict()
     _write_json(data, json_path)

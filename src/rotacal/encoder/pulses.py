@@ -138,7 +138,7 @@ def _local_period(dt: FloatArray) -> FloatArray:
     return out
 
 
-def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
+def check_pulse_times(t: ArrayLike, name: str = "head_0", *, first_index: int = 0) -> FloatArray:
     """Check one head's pulse times and return them as float64.
 
     A pulse train must be finite and strictly increasing, and every interval must be one pulse
@@ -152,6 +152,8 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
         Pulse edge times of one head.
     name : str
         The column name, for messages.
+    first_index : int
+        Pulse number of ``t[0]`` in the whole train (a chunk of a stream), for messages.
 
     Returns
     -------
@@ -167,7 +169,9 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
         raise CaptureError(f"column '{name}' must be 1-D pulse times, got shape {t.shape}.")
     bad = np.flatnonzero(~np.isfinite(t))
     if bad.size:
-        raise CaptureError(f"column '{name}' has a NaN or inf at pulse {int(bad[0])}.")
+        raise CaptureError(
+            f"column '{name}' has a NaN or inf at pulse {int(bad[0]) + first_index}."
+        )
     if t.size < 3:
         raise CaptureError(f"column '{name}' has {t.size} pulse(s); a pulse train needs more.")
     dt = np.diff(t)
@@ -175,14 +179,14 @@ def check_pulse_times(t: ArrayLike, name: str = "head_0") -> FloatArray:
     if bad.size:
         i = int(bad[0])
         raise CaptureError(
-            f"column '{name}' is not strictly increasing at pulse {i + 1} "
+            f"column '{name}' is not strictly increasing at pulse {i + 1 + first_index} "
             f"({t[i]:.9g} s then {t[i + 1]:.9g} s); pulse times must be sorted and distinct."
         )
     typical = float(np.median(dt[:TYPICAL_STEPS]))
     check_time_span(name, float(t[0]), float(t[-1]), typical, "pulse interval")
     ratio = _local_period(dt)
     np.divide(dt, ratio, out=ratio)  # in place: one record-long array less at the peak
-    refuse_bad_intervals(name, ratio, t)
+    refuse_bad_intervals(name, ratio, t, first=first_index)
     return t
 
 

@@ -461,7 +461,8 @@ def rate_section(r: RateResult, title: str = "Constant-rate stability") -> Secti
             *(paragraph(n) for n in r.notes),
         ],
         tables=tables,
-        figures=[_rate_figure(r), _allan_figure(r)],
+        # a capture streamed from its file keeps no record-long rate series to plot
+        figures=[*([_rate_figure(r)] if r.time_s.size else []), _allan_figure(r)],
         results=results,
         details=readable_tables(budget_details(r.budgets)),
         references=["kokuyama2015", "fmvss126", "greenhall2003", "gum"],

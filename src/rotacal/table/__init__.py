@@ -16,6 +16,7 @@ if TYPE_CHECKING:
         position_error,
     )
     from rotacal.table.rate import RateResult, align_deviation, allan_versus_angle, calibrate_rate
+    from rotacal.table.rate_file import calibrate_rate_file
     from rotacal.table.streaming import (
         calibrate_encoder_motion_chunked,
         calibrate_fog_motion_chunked,
@@ -38,6 +39,7 @@ __all__ = [
     "calibrate_lts_motion",
     "calibrate_lts_motion_chunked",
     "calibrate_rate",
+    "calibrate_rate_file",
     "compare_schemes",
     "encoder_chunks_from_file",
     "extreme_reversals",

@@ -19,13 +19,17 @@ the single-revolution rates (Type A); both budgets are validated by the same Mon
 the capture gives (never of a bound or a specification), and a 95 % interval for the true value.
 Each s(φ) point has the χ² uncertainty of its equivalent degrees of freedom (Greenhall & Riley
 2003).
+
+Every figure comes from two passes over the chosen pulse train with carried state
+(:mod:`rotacal.table.rate_stream`): over an array in chunks here, over the capture file in
+:func:`rotacal.table.rate_file.calibrate_rate_file` — the same numbers, in bounded memory.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -36,9 +40,6 @@ from rotacal.encoder.pulses import (
     check_pulses_per_rev,
     head_columns,
     pair_heads,
-    pulse_angle_deg,
-    pulse_rate,
-    whole_revolution_rate,
 )
 from rotacal.encoder.selfcal import (
     SelfCalibration,
@@ -50,10 +51,11 @@ from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 from rotacal.signal._values import check_setting
 from rotacal.table.rate_alignment import (
-    MIN_ALIGNMENT_CORRELATION,
     _as_deviation,
-    _json_number,
+    accept_alignment,
     align_deviation,
+    own_revolutions,
+    same_capture,
 )
 from rotacal.table.rate_allan import (
     allan_uncertainty,
@@ -67,11 +69,13 @@ from rotacal.table.rate_budgets import (
 )
 from rotacal.table.rate_jitter import timing_jitter
 from rotacal.table.rate_plausibility import rate_warnings
+from rotacal.table.rate_stream import rate_passes
 from rotacal.uncertainty import (
     InstrumentSpecs,
     UncertaintyBudget,
     uncertainty_keys,
 )
+from rotacal.uncertainty.summaries import ErrorProcess
 
 __all__ = [
     "RateResult",
@@ -84,6 +88,9 @@ __all__ = [
 
 #: Pulses of a single head on which its period (the pulses per revolution) is checked.
 PERIOD_CHECK_PULSES = 1 << 19
+#: Pulses per chunk when an in-memory train goes through the streamed passes (bounded
+#: temporaries; the results do not depend on it).
+_ARRAY_CHUNK = 1 << 22
 
 FloatArray = NDArray[np.float64]
 
@@ -150,6 +157,10 @@ class RateResult(Result):
         Correlation of the capture's own angle error with the deviation when it had to be
         aligned by correlation (None when the deviation came from the same capture).
     notes : list of str
+
+    :attr:`time_s`, :attr:`rate_deg_s` and :attr:`rate_uncompensated_deg_s` (the rate points,
+    for figures) are empty when the capture was streamed from its file
+    (:func:`rotacal.table.rate_file.calibrate_rate_file`): they would grow with the record.
 
     ``to_dict()`` adds ``<name>_u``/``<name>_U`` for ``mean_rate_deg_s``, ``rate_bias_deg_s``,
     ``rate_bias_percent`` (with a set rate), ``rate_deviation_rms_percent`` and
@@ -232,6 +243,33 @@ class RateResult(Result):
         return self._selfcal
 
 
+def _check_settings(specs: Any, set_rate_deg_s: float | None) -> None:
+    """Refuse specs that are not InstrumentSpecs and a set rate that is not finite and non-zero."""
+    if specs is not None and not isinstance(specs, InstrumentSpecs):
+        raise ConfigError(
+            f"specs must be the InstrumentSpecs of load_specs(...), got {type(specs).__name__}."
+        )
+    if set_rate_deg_s is not None:
+        if not math.isfinite(float(set_rate_deg_s)) or float(set_rate_deg_s) == 0:
+            raise ConfigError(
+                f"set_rate_deg_s must be finite and non-zero, got {set_rate_deg_s!r}."
+            )
+        check_setting("--set-rate-deg-s", set_rate_deg_s, positive=False, unit="deg/s")
+
+
+def _head_index(head: int | str, n: int) -> int:
+    """The head number of ``head`` (k, "k" or "head_k"), checked against n heads."""
+    if isinstance(head, str) and head.startswith("head_"):
+        head = head[5:]
+    try:
+        k = int(head)
+    except (TypeError, ValueError):
+        raise ConfigError(f"head must be a head number or 'all', got {head!r}.") from None
+    if not 0 <= k < n:
+        raise ConfigError(f"head {k} does not exist; the capture has head_0 … head_{n - 1}.")
+    return k
+
+
 def calibrate_rate(
     heads: Sequence[ArrayLike] | Mapping[str, ArrayLike],
     *,
@@ -297,10 +335,7 @@ def calibrate_rate(
     & Riley 2003 (edf of s(φ)).
     """
     m = check_pulses_per_rev(pulses_per_rev)
-    if specs is not None and not isinstance(specs, InstrumentSpecs):
-        raise ConfigError(
-            f"specs must be the InstrumentSpecs of load_specs(...), got {type(specs).__name__}."
-        )
+    _check_settings(specs, set_rate_deg_s)
     if isinstance(heads, Mapping):
         trains = head_columns(heads)
     else:
@@ -310,23 +345,8 @@ def calibrate_rate(
     names = [f"head_{i}" for i in range(len(trains))]
     trains = [check_pulse_times(t, name) for t, name in zip(trains, names, strict=True)]
     n = len(trains)
-    if set_rate_deg_s is not None:
-        if not math.isfinite(float(set_rate_deg_s)) or float(set_rate_deg_s) == 0:
-            raise ConfigError(
-                f"set_rate_deg_s must be finite and non-zero, got {set_rate_deg_s!r}."
-            )
-        check_setting("--set-rate-deg-s", set_rate_deg_s, positive=False, unit="deg/s")
     use_all = isinstance(head, str) and head == "all"
-    k = 0
-    if not use_all:
-        if isinstance(head, str) and head.startswith("head_"):
-            head = head[5:]
-        try:
-            k = int(head)
-        except (TypeError, ValueError):
-            raise ConfigError(f"head must be a head number or 'all', got {head!r}.") from None
-        if not 0 <= k < n:
-            raise ConfigError(f"head {k} does not exist; the capture has head_0 … head_{n - 1}.")
+    k = 0 if use_all else _head_index(head, n)
     notes: list[str] = []
 
     made: SelfCalibration | None = None
@@ -355,30 +375,14 @@ def calibrate_rate(
             dev = _as_deviation(selfcal, m)
             deviation = dev.values
             here = (float(trains[0][0]), float(trains[0][-1]), int(trains[0].size))
-            same = dev.fingerprint is not None and (
-                math.isclose(dev.fingerprint[0], here[0], abs_tol=1e-12)
-                and math.isclose(dev.fingerprint[1], here[1], abs_tol=1e-12)
-                and dev.fingerprint[2] == here[2]
-            )
+            same = same_capture(dev, here)
             shift = 0  # deviation index of head 0's first pulse
             if same and dev.shifts is not None and len(dev.shifts) == n:
                 own_shifts = dev.shifts
-                if isinstance(selfcal, SelfCalibration):
-                    own_revs = selfcal.revolutions_used
-                elif isinstance(selfcal, Mapping):
-                    own_revs = _json_number(selfcal, "revolutions_used", int)
+                own_revs = own_revolutions(selfcal)
             if not same:
                 shift, correlation = align_deviation(trains, deviation, m)
-                if correlation < MIN_ALIGNMENT_CORRELATION:
-                    raise CaptureError(
-                        f"the deviation curve does not match this capture (best correlation "
-                        f"{correlation:.2f} < {MIN_ALIGNMENT_CORRELATION}): self-calibrate this "
-                        "capture, or give a self-calibration of the same encoder."
-                    )
-                notes.append(
-                    f"the deviation comes from another capture; aligned by correlation "
-                    f"(head_0 starts at its index {shift}, correlation {correlation:.3f})."
-                )
+                accept_alignment(shift, correlation, notes)
             if k != 0:
                 # head k's first pulse sees the line s_k ahead of the head-0 pulse it pairs with
                 pairing = pair_heads(trains, names)
@@ -404,62 +408,126 @@ def calibrate_rate(
     else:
         times = trains[k]
         label = f"head_{k}"
-    count = np.arange(times.size)
-    angle_nom = pulse_angle_deg(count, m)
-    angle = (
-        pulse_angle_deg(count, m, deviation, line_offset=shift or 0)
-        if deviation is not None
-        else angle_nom
-    )
-    del count  # record-long: not needed past the angles
+    chunk = _ARRAY_CHUNK
 
-    if n == 1 and times.size > m:
+    def chunks() -> Iterator[FloatArray]:
+        for start in range(0, times.size, chunk):
+            yield times[start : start + chunk]
+
+    return _rate_result(
+        chunks,
+        int(times.size),
+        m=m,
+        heads=n,
+        k=k,
+        use_all=use_all,
+        label=label,
+        selfcal=selfcal,
+        made=made,
+        deviation=deviation,
+        shift=shift,
+        correlation=correlation,
+        own=(
+            None
+            if own_shifts is None or own_revs is None or use_all
+            else (own_shifts, k, own_revs, min(1.0, own_revs * m / max(times.size - 1, 1)))
+        ),
+        average=average,
+        set_rate_deg_s=set_rate_deg_s,
+        allan_angles_deg=allan_angles_deg,
+        specs=specs,
+        notes=notes,
+        keep_series=True,
+    )
+
+
+def _rate_result(
+    chunks: Callable[[], Iterator[FloatArray]],
+    pulses: int,
+    *,
+    m: int,
+    heads: int,
+    k: int,
+    use_all: bool,
+    label: str,
+    selfcal: Any,
+    made: SelfCalibration | None,
+    deviation: FloatArray | None,
+    shift: int | None,
+    correlation: float | None,
+    own: tuple[list[int], int, int, float] | None,
+    average: int,
+    set_rate_deg_s: float | None,
+    allan_angles_deg: ArrayLike | None,
+    specs: InstrumentSpecs | None,
+    notes: list[str],
+    keep_series: bool,
+    progress: Callable[[int], None] | None = None,
+) -> RateResult:
+    """The analysis of one train of ``pulses`` times given chunk by chunk (both passes of
+    :func:`rotacal.table.rate_stream.rate_passes`), its budgets and the result."""
+    n = heads
+
+    def sources_for(omega: float, jitter: tuple[float, float, bool]) -> list[ErrorProcess]:
+        found, more = _deviation_sources(
+            m=m,
+            heads=n,
+            use_all=use_all,
+            compensated=deviation is not None,
+            selfcal=selfcal,
+            specs=specs,
+            average=int(average),
+            omega=omega,
+            jitter=jitter,
+            own=own,
+        )
+        source_notes[:] = more
+        return found
+
+    source_notes: list[str] = []
+    passes = rate_passes(
+        chunks,
+        pulses,
+        pulses_per_rev=m,
+        average=average,
+        deviation=deviation,
+        shift=shift or 0,
+        allan_angles_deg=allan_angles_deg,
+        sources_for=sources_for,
+        prefix_pulses=max(PERIOD_CHECK_PULSES, 8 * m) if n == 1 else 0,
+        keep_series=keep_series,
+        progress=progress,
+    )
+    if n == 1 and pulses > m:
         # one head: nothing else checks m; its angle error must repeat once per revolution.
         # Judged on the first PERIOD_CHECK_PULSES pulses (8 revolutions at least; 29 of 18,000
         # pulses): as much evidence as any record of that length, and the whole-record FFT of a
         # long capture was its largest array and a third of its time.
         used = max(PERIOD_CHECK_PULSES, 8 * m)
-        head_t, head_angle = times[:used], angle_nom[:used]
+        head_t, head_angle = passes.prefix
         t_rel = head_t - head_t[0]
         err = head_angle - np.polyval(np.polyfit(t_rel, head_angle, 1), t_rel)
-        del t_rel
         if not check_period(-err, m, coarse=False):
-            judged = f" (judged on its first {used} pulses)" if times.size > used else ""
+            judged = f" (judged on its first {used} pulses)" if pulses > used else ""
             notes.append(
                 f"one head: {m} pulses per revolution cannot be confirmed from the data's own "
                 f"period{judged} (too short a record, or too weak a graduation pattern); a wrong "
                 "count scales the rate."
             )
-        del err
-    mean_rate, revs = whole_revolution_rate(times, m)
-    window = [float(times[0]), float(times[revs * m] if revs else times[-1])]
-    if mean_rate is None:
-        mean_rate = float(np.polyfit(times - times[0], angle, 1)[0])
+    mean_rate, revs = passes.mean_rate, passes.revolutions
+    window = [passes.first_t, passes.window_end]
+    if revs < 1:
         notes.append(
-            f"less than one whole revolution ({times.size} pulses of {m}): the mean rate is a "
+            f"less than one whole revolution ({pulses} pulses of {m}): the mean rate is a "
             "straight-line fit of the compensated angle, not exact over revolutions."
         )
-    jitter = timing_jitter(times, m)
+    jitter = passes.jitter
     if not jitter[2]:
         notes.append(
             "fewer than two whole revolutions: the timing jitter is estimated along the pulses "
             "and holds the graduation error too (an upper bound)."
         )
-
-    t_avg, rate = pulse_rate(times, angle, average=average)
-    rate_nom = rate if deviation is None else pulse_rate(times, angle_nom, average=average)[1]
-    dev_pct = 100.0 * (rate - mean_rate) / mean_rate
-    dev_nom_pct = 100.0 * (rate_nom - mean_rate) / mean_rate
-
-    phi, s = allan_versus_angle(
-        times, angle, mean_rate_deg_s=mean_rate, angles_deg=allan_angles_deg, pitch_deg=360.0 / m
-    )
-    if deviation is not None:
-        _, s_nom = allan_versus_angle(
-            times, angle_nom, mean_rate_deg_s=mean_rate, angles_deg=phi, pitch_deg=360.0 / m
-        )
-    else:
-        s_nom = s
+    phi, s, s_nom = passes.phi, passes.s, passes.s_nom
     set_rate: float | None = None
     if set_rate_deg_s is not None:
         set_rate = abs(float(set_rate_deg_s))
@@ -477,42 +545,32 @@ def calibrate_rate(
             f"multiplied by 1 + δ̂ = {1 + correction:.10g}."
         )
     raw_rate = mean_rate  # in the DAQ's seconds, as the rate points
-    budgets = _mean_rate_budgets(times, angle, m, revs, set_rate, specs, jitter)
+    budgets = _mean_rate_budgets(passes.rev_times, passes.short, m, revs, set_rate, specs, jitter)
     mean_rate = budgets["mean_rate_deg_s"].value  # one truth: the field is the budget's value
     bias = bias_pct = None
     if set_rate is not None:
         bias = budgets["rate_bias_deg_s"].value
         bias_pct = budgets["rate_bias_percent"].value
-    sources, source_notes = _deviation_sources(
-        m=m,
-        heads=n,
-        use_all=use_all,
-        compensated=deviation is not None,
-        selfcal=selfcal,
-        specs=specs,
-        average=int(average),
-        omega=raw_rate,
-        jitter=jitter,
-        own=(
-            None
-            if own_shifts is None or own_revs is None or use_all
-            else (own_shifts, k, own_revs, min(1.0, own_revs * m / max(times.size - 1, 1)))
-        ),
-    )
-    dev_sum = _rate_deviation_budgets(dev_pct, sources, source_notes, specs)
+    sources = sources_for(raw_rate, jitter)
+    assert passes.peak is not None  # the timing jitter is always a source
+    dev_sum = _rate_deviation_budgets(passes.rms_stats, passes.peak, sources, source_notes, specs)
     budgets.update({key: sm.budget for key, sm in dev_sum.items()})
     rms_sum = dev_sum["rate_deviation_rms_percent"]
     peak_sum = dev_sum["rate_deviation_peak_percent"]
-    a_u, a_big_u, a_edf, a_lo, a_hi, a_alpha = allan_uncertainty(s, phi, 360.0 / m, times.size)
+    a_u, a_big_u, a_edf, a_lo, a_hi, a_alpha = allan_uncertainty(s, phi, 360.0 / m, pulses)
     factor = 1.0 + correction
-    rate = rate * factor
-    rate_nom = rate_nom * factor
+    if passes.series is not None:
+        t_avg, rate, rate_nom = passes.series
+        rate = rate * factor
+        rate_nom = rate_nom * factor
+    else:
+        t_avg = rate = rate_nom = np.zeros(0)
     return RateResult(
         mean_rate_deg_s=float(mean_rate),
         rate_deviation_rms_percent=rms_sum.budget.value,  # one truth: the budgets' values
         rate_deviation_peak_percent=peak_sum.budget.value,
-        rate_deviation_rms_percent_uncompensated=float(np.sqrt(np.mean(dev_nom_pct**2))),
-        rate_deviation_peak_percent_uncompensated=float(np.max(np.abs(dev_nom_pct))),
+        rate_deviation_rms_percent_uncompensated=passes.rms_nom,
+        rate_deviation_peak_percent_uncompensated=passes.peak_nom,
         allan_angle_deg=[float(x) for x in phi],
         allan_tau_s=[float(x / abs(mean_rate)) for x in phi],
         allan_relative=[float(x) for x in s],
@@ -524,7 +582,7 @@ def calibrate_rate(
         average=int(average),
         revolutions=int(revs),
         mean_rate_window_s=window,
-        duration_s=float(times[-1] - times[0]),
+        duration_s=float(passes.last_t - passes.first_t),
         compensated=deviation is not None,
         deviation_shift_pulses=shift,
         alignment_correlation=correlation,
@@ -550,8 +608,8 @@ def calibrate_rate(
             rate_warnings(
                 mean_rate_deg_s=float(mean_rate),
                 set_rate_deg_s=set_rate,
-                time_s=t_avg,
-                deviation_percent=dev_pct,
+                trend=passes.trend,
+                trend_scale=passes.trend_scale,
             )
         ),
     )

@@ -17,8 +17,9 @@ from rotacal.encoder.selfcal import (
 )
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.signal._values import LARGEST
+from rotacal.table.rate_plausibility import TrendSums
 
-__all__ = ["align_deviation"]
+__all__ = ["FoldSums", "align_deviation"]
 
 FloatArray = NDArray[np.float64]
 
@@ -79,11 +80,68 @@ def align_deviation(
             "aligning a deviation curve from another capture needs at least one whole revolution "
             f"of the head ({m} pulses); this one has {times_s.size}."
         )
-    count = np.arange(revs * m)
-    t = times_s[: revs * m]
-    slope, icpt = np.polyfit(t - t[0], count * (360.0 / m), 1)
-    err = (count * (360.0 / m) - (icpt + slope * (t - t[0]))) * 3600.0
-    folded = -err.reshape(revs, m).mean(axis=0)
+    fold = FoldSums(times_s.size, m)
+    fold.update(times_s)
+    return _phase_shift(fold.folded(), deviation_arcsec, m)
+
+
+class FoldSums:
+    """The angle error of one head against a straight line in time, folded over its whole
+    revolutions (arcsec, sign of a deviation), summed over a stream of its n pulse times: the
+    line's normal equations (centred, merged chunk by chunk) and, per line, the sums over the
+    revolutions of its time and of its angle less a provisional line (the first interval's
+    rate): small numbers, so that any chunking gives the same folded curve to rounding."""
+
+    def __init__(self, n: int, pulses_per_rev: int) -> None:
+        self.m = int(pulses_per_rev)
+        self.revs = (int(n) - 1) // self.m
+        self.used = self.revs * self.m
+        self.seen = 0
+        self.t0 = math.nan
+        self.last = math.nan
+        self._rate0 = math.nan
+        self._x_sums = np.zeros(self.m)
+        self._y_sums = np.zeros(self.m)
+        self._fit = TrendSums()
+
+    def _fold(self, sums: FloatArray, values: FloatArray) -> None:
+        pad = np.concatenate((np.zeros(self.seen % self.m), values))  # whole turns of the lines
+        full = np.zeros(-(-pad.size // self.m) * self.m)
+        full[: pad.size] = pad
+        sums += full.reshape(-1, self.m).sum(axis=0)
+
+    def update(self, t: FloatArray) -> None:
+        """Add the next pulse times (s)."""
+        if t.size == 0:
+            return
+        if self.seen == 0:
+            self.t0 = float(t[0])
+        if math.isnan(self._rate0) and self.seen + t.size >= 2:
+            t1 = float(t[1 - self.seen])
+            self._rate0 = (360.0 / self.m) / (t1 - self.t0)
+        self.last = float(t[-1])
+        take = t[: max(self.used - self.seen, 0)]
+        if take.size:
+            count = np.arange(self.seen, self.seen + take.size)
+            x = take - self.t0
+            y = count * (360.0 / self.m) - self._rate0 * x  # the angle less the provisional line
+            self._fit.update(x, y)
+            self._fold(self._x_sums, x)
+            self._fold(self._y_sums, y)
+        self.seen += t.size
+
+    def folded(self) -> FloatArray:
+        """−(mean over the revolutions of count·Δθ − line(t)), arcsec, line by line."""
+        fit = self._fit
+        slope = fit.ctd / fit.ctt
+        icpt = fit.mean_d - slope * fit.mean_t
+        mean_err = (self._y_sums - slope * self._x_sums) / self.revs - icpt
+        return np.asarray(-mean_err * 3600.0, dtype=np.float64)
+
+
+def _phase_shift(folded: FloatArray, deviation_arcsec: FloatArray, m: int) -> tuple[int, float]:
+    """Shift of ``deviation_arcsec`` that matches a single head's folded angle error, by phase
+    correlation without the first order, and its significance on the correlation's scale."""
     # Phase correlation: every order weighs the same, so the many orders carried by the
     # graduation errors outvote the few where the table's rate fluctuation sits.
     cross = np.conj(np.fft.rfft(folded)) * np.fft.rfft(deviation_arcsec)
@@ -178,3 +236,37 @@ def _as_deviation(selfcal: Any, m: int) -> _Deviation:
                 "the self-calibration's 'head_line_shifts' must be integers."
             ) from None
     return _Deviation(values, fingerprint, str(rotation), shifts)
+
+
+def same_capture(dev: _Deviation, here: tuple[float, float, int]) -> bool:
+    """Whether a deviation's fingerprint (head 0's first and last time, pulse count) is this
+    capture's ``here``: then it indexes the capture as it is, no alignment."""
+    fp = dev.fingerprint
+    return fp is not None and (
+        math.isclose(fp[0], here[0], abs_tol=1e-12)
+        and math.isclose(fp[1], here[1], abs_tol=1e-12)
+        and fp[2] == here[2]
+    )
+
+
+def own_revolutions(selfcal: Any) -> int | None:
+    """Revolutions a self-calibration (its result or JSON) was made from, when it says."""
+    if isinstance(selfcal, SelfCalibration):
+        return selfcal.revolutions_used
+    if isinstance(selfcal, Mapping):
+        return _json_number(selfcal, "revolutions_used", int)
+    return None
+
+
+def accept_alignment(shift: int, correlation: float, notes: list[str]) -> None:
+    """Refuse an alignment below :data:`MIN_ALIGNMENT_CORRELATION`, else note it."""
+    if correlation < MIN_ALIGNMENT_CORRELATION:
+        raise CaptureError(
+            f"the deviation curve does not match this capture (best correlation "
+            f"{correlation:.2f} < {MIN_ALIGNMENT_CORRELATION}): self-calibrate this "
+            "capture, or give a self-calibration of the same encoder."
+        )
+    notes.append(
+        f"the deviation comes from another capture; aligned by correlation "
+        f"(head_0 starts at its index {shift}, correlation {correlation:.3f})."
+    )

@@ -44,6 +44,8 @@ from rotacal.uncertainty.summaries import (
     CovarianceCorrection,
     ErrorProcess,
     FilteredWhite,
+    PeakInputs,
+    SeriesStats,
     Summary,
     drop_large_dof_notes,
     mc_budget,
@@ -122,8 +124,8 @@ def _validated(
 
 
 def _mean_rate_budgets(
-    times: FloatArray,
-    angle: FloatArray,
+    rev_times: FloatArray,
+    short: tuple[FloatArray, FloatArray] | None,
     m: int,
     revs: int,
     set_rate: float | None,
@@ -138,7 +140,8 @@ def _mean_rate_budgets(
     JCGM 100:2008 (GUM) §3.2.4 (correction for a stated systematic effect), §4.2–4.3, §5.1
     eq. (10), G.4 (Welch–Satterthwaite); JCGM 101:2008 §6.4.9 (a Type A input with ν degrees of
     freedom as a scaled t), §8 (validation of the GUM uncertainty framework); Kokuyama et al.
-    (2015) §3, §5.
+    (2015) §3, §5. ``rev_times`` are the times of pulses 0, m, …, R·m; ``short`` the times and
+    angles of a record of less than one revolution.
     """
     sigma_t, sigma_dof, graduation_free = jitter
     tb = spec_input(specs, _TIMEBASE, name="timebase relative error", unit="")
@@ -146,7 +149,7 @@ def _mean_rate_budgets(
     dists: dict[str, Distribution] = {}
     notes: list[str] = []
     if revs >= 1:
-        span = float(times[revs * m] - times[0])
+        span = float(rev_times[revs] - rev_times[0])
         inputs.append(
             Input(
                 name="pulse timing jitter at the window's two ends",
@@ -193,6 +196,8 @@ def _mean_rate_budgets(
         dists["e"] = Normal(0.0, math.sqrt(2.0) * sigma_t)
         dists["g"] = Constant(0.0)
     else:
+        assert short is not None
+        times, angle = short
         fit = linear_fit_uncertainty(times - times[0], angle)
         inputs.append(
             Input(
@@ -251,7 +256,7 @@ def _mean_rate_budgets(
         return budgets
 
     # the bias is the table's: its mean rate at this setting, not only in this record
-    per_rev = 360.0 / np.diff(times[: revs * m + 1 : m]) if revs >= 1 else np.zeros(0)
+    per_rev = 360.0 / np.diff(rev_times[: revs + 1]) if revs >= 1 else np.zeros(0)
     wander: list[Input] = []
     bias_notes: list[str] = []
     bias_dists = dict(dists)
@@ -485,7 +490,8 @@ def _deviation_sources(
 
 
 def _rate_deviation_budgets(
-    dev_pct: FloatArray,
+    dev_stats: SeriesStats,
+    dev_peak: PeakInputs,
     sources: list[ErrorProcess],
     notes: list[str],
     specs: InstrumentSpecs | None,
@@ -511,9 +517,9 @@ def _rate_deviation_budgets(
         extra.append(TYPE_A_ONLY_NOTE)
     return {
         "rate_deviation_rms_percent": rms_budget(
-            "rate_deviation_rms_percent", "%", dev_pct, sources, notes=extra
+            "rate_deviation_rms_percent", "%", dev_stats, sources, notes=extra
         ),
         "rate_deviation_peak_percent": mc_budget(
-            "rate_deviation_peak_percent", "%", dev_pct, sources, statistic="peak", notes=extra
+            "rate_deviation_peak_percent", "%", dev_peak, sources, statistic="peak", notes=extra
         ),
     }

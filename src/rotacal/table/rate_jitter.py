@@ -8,12 +8,13 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rotacal._jit import use_numba
 from rotacal.encoder.pulses import (
     check_pulses_per_rev,
 )
 from rotacal.errors import CaptureError
 
-__all__ = ["timing_jitter"]
+__all__ = ["JitterSums", "timing_jitter"]
 
 FloatArray = NDArray[np.float64]
 
@@ -36,21 +37,8 @@ def _dof_of_mean_square(n: int, lags: NDArray[np.int64], rho: FloatArray) -> flo
     return float(n) ** 2 / float(np.sum(weight * rho**2))
 
 
-#: Filtered values per block of :func:`_same_line_mean_square` (blocks added exactly).
-_JITTER_BLOCK = 1 << 16
-
-
-def _same_line_mean_square(t: FloatArray, m: int) -> tuple[int, float]:
-    """Number and mean square of E_j = D_{j+3} − 3D_{j+2} + 3D_{j+1} − D_j, D_j = t_{j+2m} −
-    2t_{j+m} + t_j (s²), block by block: no record-long temporaries."""
-    count = t.size - 2 * m - (_PULSE_FILTER.size - 1)
-    parts = []
-    for start in range(0, count, _JITTER_BLOCK):
-        stop = min(start + _JITTER_BLOCK, count) + _PULSE_FILTER.size - 1  # D's this block needs
-        d = t[start + 2 * m : stop + 2 * m] - 2.0 * t[start + m : stop + m] + t[start:stop]
-        e = d[3:] - 3.0 * d[2:-1] + 3.0 * d[1:-2] - d[:-3]
-        parts.append(float(np.dot(e, e)))
-    return count, math.fsum(parts) / count
+#: Pulses per block of :class:`JitterSums` (the 2m + 3 carried pulses are joined to each).
+_JITTER_BLOCK = 1 << 18
 
 
 def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float, bool]:
@@ -97,10 +85,70 @@ def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float
     8 (1946) — the variance of a variance estimate from correlated values.
     """
     t = np.asarray(times_s, dtype=np.float64)
-    m = check_pulses_per_rev(pulses_per_rev)
+    sums = JitterSums(t.size, pulses_per_rev)
+    sums.update(t)
+    return sums.result()
+
+
+class JitterSums:
+    """:func:`timing_jitter` over a stream of the n pulse times of one train, fed in order:
+    the same filtered values (the last 2m + 3 pulses carried), their squares summed per chunk."""
+
+    def __init__(self, n: int, pulses_per_rev: int, *, jit: bool | None = None) -> None:
+        self.m = check_pulses_per_rev(pulses_per_rev)
+        self.n = int(n)
+        self.jit = use_numba(self.n, jit)
+        h = _PULSE_FILTER
+        if self.n >= 2 * self.m + 2 * h.size:
+            self.span = 2 * self.m + h.size - 1  # pulses one filtered value reaches past its own
+        elif self.n >= 2 * h.size:
+            self.span = h.size - 1
+        else:
+            raise CaptureError(
+                f"{self.n} pulses are too few to estimate the timing noise; record more."
+            )
+        self._tail = np.zeros(0)
+        self._parts: list[float] = []
+        self.count = 0
+
+    def update(self, t: FloatArray) -> None:
+        """Add the next pulse times (s), in blocks that stay in cache."""
+        if self.jit:
+            from rotacal.table._rate_stream_jit import jitter_square_sum
+
+            x = np.concatenate((self._tail, t))
+            total, count = jitter_square_sum(x, self.m, self.span > _PULSE_FILTER.size - 1)
+            if count > 0:
+                self._parts.append(total)
+                self.count += count
+            self._tail = x[max(x.size - self.span, 0) :].copy()
+            return
+        for start in range(0, t.size, _JITTER_BLOCK):
+            self._update(t[start : start + _JITTER_BLOCK])
+
+    def _update(self, t: FloatArray) -> None:
+        x = np.concatenate((self._tail, t))
+        if x.size > self.span:
+            m = self.m
+            if self.span > _PULSE_FILTER.size - 1:
+                d = x[2 * m :] - 2.0 * x[m:-m] + x[: -2 * m]
+                e = d[3:] - 3.0 * d[2:-1] + 3.0 * d[1:-2] - d[:-3]
+            else:
+                e = x[3:] - 3.0 * x[2:-1] + 3.0 * x[1:-2] - x[:-3]
+            self._parts.append(float(np.dot(e, e)))
+            self.count += e.size
+        self._tail = x[max(x.size - self.span, 0) :].copy()
+
+    def result(self) -> tuple[float, float, bool]:
+        """(σ_t, its degrees of freedom, graduation-free) as :func:`timing_jitter` returns."""
+        return _jitter_of(self.count, math.fsum(self._parts) / self.count, self.m, self.span > 3)
+
+
+def _jitter_of(
+    count: int, mean_square: float, m: int, same_line: bool
+) -> tuple[float, float, bool]:
     h = _PULSE_FILTER
-    if t.size >= 2 * m + 2 * h.size:
-        count, mean_square = _same_line_mean_square(t, m)
+    if same_line:
         norm = float(np.sum(_REV_FILTER**2) * np.sum(h**2))
         # the same-line difference correlates values m and 2m apart, the pulse filter 1 … 3
         lag_r = (np.arange(_REV_FILTER.size * 2 - 1) - (_REV_FILTER.size - 1)) * m
@@ -108,16 +156,7 @@ def timing_jitter(times_s: ArrayLike, pulses_per_rev: int) -> tuple[float, float
         lags = (lag_r[:, None] + lag_p[None, :]).ravel()
         rho = np.outer(_rho(_REV_FILTER), _rho(h)).ravel()
         dof = _dof_of_mean_square(count, lags, rho)
-        exact = True
-    elif t.size >= 2 * h.size:
-        e = np.convolve(t, h[::-1], mode="valid")
-        mean_square = float(np.mean(e * e))
-        norm = float(np.sum(h**2))
-        dof = _dof_of_mean_square(e.size, np.arange(h.size * 2 - 1) - (h.size - 1), _rho(h))
-        exact = False
     else:
-        raise CaptureError(
-            f"{t.size} pulses are too few to estimate the timing noise; record more."
-        )
-    sigma = math.sqrt(mean_square / norm)
-    return sigma, dof, exact
+        norm = float(np.sum(h**2))
+        dof = _dof_of_mean_square(count, np.arange(h.size * 2 - 1) - (h.size - 1), _rho(h))
+    return math.sqrt(mean_square / norm), dof, same_line

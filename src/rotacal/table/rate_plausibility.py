@@ -9,13 +9,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from rotacal.signal.plausibility import set_value_warning
 
-__all__ = ["TREND_LIMIT", "rate_warnings"]
+__all__ = ["TREND_LIMIT", "TrendSums", "rate_warnings"]
 
 #: Change of the rate over the record, over the rms scatter about its straight line, beyond which
 #: the rate is not constant.
@@ -23,12 +24,61 @@ TREND_LIMIT = 3.0
 _MIN_POINTS = 10
 
 
+@dataclasses.dataclass
+class TrendSums:
+    """Count, means and centred co-moments of (t, d) over a stream of rate points, merged chunk
+    by chunk (Chan, Golub & LeVeque 1983: no cancellation of large raw sums)."""
+
+    n: int = 0
+    mean_t: float = 0.0
+    mean_d: float = 0.0
+    ctt: float = 0.0
+    ctd: float = 0.0
+    cdd: float = 0.0
+    first_t: float = math.nan
+    last_t: float = math.nan
+
+    def update(self, t: np.ndarray, d: np.ndarray) -> None:
+        """Add rate points: times (s), deviations (%)."""
+        ok = np.isfinite(t) & np.isfinite(d)
+        t, d = t[ok], d[ok]
+        k = t.size
+        if k == 0:
+            return
+        if self.n == 0:
+            self.first_t = float(t[0])
+        self.last_t = float(t[-1])
+        mt, md = float(np.mean(t)), float(np.mean(d))
+        tc, dc = t - mt, d - md
+        n = self.n + k
+        dt, dd = mt - self.mean_t, md - self.mean_d
+        w = self.n * k / n
+        self.ctt += float(np.dot(tc, tc)) + w * dt * dt
+        self.ctd += float(np.dot(tc, dc)) + w * dt * dd
+        self.cdd += float(np.dot(dc, dc)) + w * dd * dd
+        self.mean_t += dt * k / n
+        self.mean_d += dd * k / n
+        self.n = n
+
+    def line(self, scale: float = 1.0) -> tuple[float, float, float]:
+        """(slope, rms scatter about the line, change over the record) of scale·d."""
+        slope = self.ctd / self.ctt if self.ctt > 0 else 0.0
+        resid = max(self.cdd - slope * self.ctd, 0.0) / max(self.n, 1)
+        return (
+            scale * slope,
+            abs(scale) * math.sqrt(resid),
+            scale * slope * (self.last_t - self.first_t),
+        )
+
+
 def rate_warnings(
     *,
     mean_rate_deg_s: float,
     set_rate_deg_s: float | None,
-    time_s: np.ndarray,
-    deviation_percent: np.ndarray,
+    time_s: np.ndarray | None = None,
+    deviation_percent: np.ndarray | None = None,
+    trend: TrendSums | None = None,
+    trend_scale: float = 1.0,
 ) -> list[str]:
     """The plausibility warnings of a rate calibration (empty when all is plausible).
 
@@ -44,6 +94,9 @@ def rate_warnings(
         |Set rate| (°/s), when given.
     time_s, deviation_percent : ndarray
         Times (s) and the rate's deviation from the mean (% of the mean rate), per rate point.
+    trend, trend_scale : TrendSums, float
+        Or their sums over a stream, of a deviation that ``trend_scale`` times gives this one
+        (its offset does not change the line's slope or scatter).
 
     References
     ----------
@@ -61,19 +114,17 @@ def rate_warnings(
         )
         if line is not None:
             out.append(line)
-    t = np.asarray(time_s, dtype=float)
-    d = np.asarray(deviation_percent, dtype=float)
-    ok = np.isfinite(t) & np.isfinite(d)
-    t, d = t[ok], d[ok]
-    if t.size < _MIN_POINTS or not t[-1] > t[0]:
+    if trend is None:
+        trend = TrendSums()
+        trend.update(np.asarray(time_s, dtype=float), np.asarray(deviation_percent, dtype=float))
+    if trend.n < _MIN_POINTS or not trend.last_t > trend.first_t:
         return out
-    slope, intercept = np.polyfit(t - t[0], d, 1)
-    scatter = float(np.sqrt(np.mean((d - intercept - slope * (t - t[0])) ** 2)))
-    change = float(slope * (t[-1] - t[0]))
+    _slope, scatter, change = trend.line(trend_scale)
+    span = trend.last_t - trend.first_t
     if scatter > 0 and math.isfinite(change) and abs(change) > TREND_LIMIT * scatter:
         out.append(
             f"the rate is not constant: it changes by {change:+.3g} % of the mean over the "
-            f"{t[-1] - t[0]:.4g} s recorded, {abs(change) / scatter:.3g} times its scatter about "
+            f"{span:.4g} s recorded, {abs(change) / scatter:.3g} times its scatter about "
             f"that trend (limit {TREND_LIMIT:g}) — the table was still spinning up or down; start "
             "recording once the rate has settled"
         )

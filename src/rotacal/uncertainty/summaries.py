@@ -63,16 +63,24 @@ from __future__ import annotations
 import abc
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import fft as sp_fft
 
 from rotacal.errors import ConfigError
 from rotacal.uncertainty.budget import BudgetRow, UncertaintyBudget
 from rotacal.uncertainty.gum import Input, coverage_factor, welch_satterthwaite
+from rotacal.uncertainty.summaries_peak import (
+    WINDOW,
+    PeakInputs,
+    WelchSums,
+    denoised_at,
+    welch_gain,
+    window_length,
+)
+from rotacal.uncertainty.summaries_rms import SeriesStats, rms_budget
 
 __all__ = [
     "COVERAGE",
@@ -82,14 +90,18 @@ __all__ = [
     "CovarianceCorrection",
     "ErrorProcess",
     "FilteredWhite",
+    "SeriesStats",
     "Summary",
     "candidate_positions",
     "corrections_drawn",
+    "denoise_gain",
     "denoised",
     "drop_large_dof_notes",
     "expected_periodogram",
+    "iter_statistic_samples",
     "mc_budget",
     "monte_carlo_statistics",
+    "noise_periodogram",
     "rms_budget",
     "statistic_samples",
 ]
@@ -251,14 +263,6 @@ class FilteredWhite(ErrorProcess):
         return self.sigma * (w @ h)
 
 
-def _autocorrelation(d: FloatArray) -> FloatArray:
-    """r(ℓ) = Σ_i d_i·d_{i+ℓ}, ℓ = 0 … N − 1 (zero-padded FFT)."""
-    n = d.size
-    size = sp_fft.next_fast_len(2 * n, real=True)
-    f = sp_fft.rfft(d, size)
-    return np.asarray(sp_fft.irfft(f * np.conj(f), size)[:n], dtype=np.float64)
-
-
 @dataclasses.dataclass(frozen=True)
 class CovarianceCorrection(CirculantError):
     """A correction of the covariance of the errors, circulant like :class:`CirculantError` but
@@ -276,18 +280,6 @@ class CovarianceCorrection(CirculantError):
         self, rng: np.random.Generator, size: int, positions: NDArray[np.int64], n: int
     ) -> FloatArray:
         raise ConfigError(f"'{self.input.name}' is a covariance correction, not a process.")
-
-
-def _quadratic(r: FloatArray, g: FloatArray) -> float:
-    """dᵀGd for the Toeplitz G with first column g, from d's autocorrelation r."""
-    return float(g[0] * r[0] + 2.0 * np.dot(g[1:], r[1:]))
-
-
-def _trace_product(g1: FloatArray, g2: FloatArray) -> float:
-    """tr(G₁G₂) for Toeplitz G₁, G₂ (first columns g₁, g₂) of size N = len(g₁)."""
-    n = g1.size
-    weights = n - np.arange(1, n, dtype=np.float64)
-    return float(n * g1[0] * g2[0] + 2.0 * np.dot(weights, g1[1:] * g2[1:]))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -342,161 +334,6 @@ def _dof(sources: Sequence[ErrorProcess], var: Sequence[float]) -> float:
     return welch_satterthwaite(np.sqrt(np.maximum(var, 0.0)), [s.input.dof for s in sources])
 
 
-# ------------------------------------------------------------------------------------ rms
-def rms_budget(
-    quantity: str,
-    unit: str,
-    data: FloatArray,
-    sources: Sequence[ErrorProcess],
-    *,
-    notes: Sequence[str] = (),
-    p: float = COVERAGE,
-) -> Summary:
-    """Budget of the rms of a measured vector: closed-form bias, u and interval for the truth.
-
-    Parameters
-    ----------
-    quantity, unit : str
-        JSON key and unit of the rms (the vector's unit).
-    data : ndarray, shape (N,)
-        The measured vector d (unit).
-    sources : sequence of ErrorProcess
-        Its errors, each with its role.
-    notes : sequence of str
-        Extra sentences for the budget.
-    p : float
-        Coverage probability.
-
-    Returns
-    -------
-    Summary
-        ``budget.method`` = "GUM" (exact mean and variance of the mean square, normal
-        approximation for its interval); the bias and the bias-corrected value when a source of
-        role "noise" is present.
-
-    References
-    ----------
-    Mathai & Provost (1992) Thm 3.2b.2: for x ~ N(μ, C), E xᵀx = μᵀμ + tr C and
-    Var xᵀx = 4μᵀCμ + 2 tr C²; JCGM 100:2008 §4.2 (variance of a Type A variance estimate,
-    2σ⁴/ν); JCGM 101:2008 §7.7 (coverage interval).
-    """
-    d = _check(data, sources)
-    n = d.size
-    ms = float(np.mean(d * d))
-    rms = math.sqrt(ms)
-    g = {id(s): s.lags(n) for s in sources}
-    present = [s for s in sources if s.role != "absent"]
-    absent = [s for s in sources if s.role == "absent"]
-    g_p = sum((g[id(s)] for s in present), np.zeros(n))
-    g_a = sum((g[id(s)] for s in absent), np.zeros(n))
-    mean_sq = {id(s): float(g[id(s)][0]) for s in sources}
-    r = _autocorrelation(d)
-    e_noise = sum(mean_sq[id(s)] for s in sources if s.role == "noise")
-    e_bound = sum(mean_sq[id(s)] for s in sources if s.role == "bound")
-    e_absent = sum(mean_sq[id(s)] for s in absent)
-    # each source's part of Var ms(d) − ms(f) (the parts add up to the whole, cross terms shared)
-    parts = []
-    for s in sources:
-        gs = g[id(s)]
-        other = g_p if s.role != "absent" else g_a
-        cross = _trace_product(gs, g_p)
-        signal = _quadratic(r, gs) - cross
-        if s.drawable:
-            signal = max(signal, 0.0)
-        v = (4.0 * signal + 2.0 * _trace_product(gs, other)) / n**2
-        if s.role == "noise" and s.drawable and math.isfinite(s.input.dof):
-            # the level is itself estimated: 2E²/ν, E the mean square of all it scales
-            shared = sum(
-                mean_sq[id(o)] for o in sources if o is s or (s.level and o.level == s.level)
-            )
-            v += 2.0 * shared**2 / s.input.dof
-        parts.append(v)
-    var = max(float(sum(parts)), 1e-300)
-    sd = math.sqrt(var)
-    centre = ms - e_noise + e_absent
-    nu = _dof(sources, parts)
-    z = coverage_factor(nu, p)
-    lo_ms = centre - e_bound - z * sd
-    hi_ms = centre + z * sd
-    lo, hi = math.sqrt(max(lo_ms, 0.0)), math.sqrt(max(hi_ms, 0.0))
-    # u: the error of the rms, ≈ that of the mean square over 2·rms (√ of the centre, kept off
-    # zero by its own spread: near zero the rms is known to about √(z·sd))
-    scale = 2.0 * math.sqrt(max(centre, sd, 1e-300))
-    u = sd / scale
-    big_u = 0.5 * (hi - lo)
-    rows = tuple(
-        BudgetRow(
-            source=s.input.name,
-            value=s.input.value,
-            unit=s.input.unit,
-            distribution=s.input.description or s.input.distribution,
-            u=s.input.u,
-            sensitivity=(math.sqrt(max(v, 0.0)) / scale) / s.input.u if s.input.u > 0 else 0.0,
-            contribution=math.sqrt(max(v, 0.0)) / scale,
-            share=v / var,
-            dof=s.input.dof,
-            origin=s.input.source,
-        )
-        for s, v in zip(sources, parts, strict=True)
-        if s.drawable
-    )
-    bias = corrected = None
-    text = [
-        f"closed form: the mean square of the data is {ms:.6g} {unit}²; "
-        + (
-            f"the noise of known level adds {e_noise:.3g} {unit}² to it on average; "
-            if e_noise
-            else ""
-        )
-        + (f"the bounded errors up to {e_bound:.3g} {unit}²; " if e_bound else "")
-        + (f"the parts the data lack add {e_absent:.3g} {unit}² to the truth; " if e_absent else "")
-        + f"its standard deviation is {sd:.3g} {unit}² (4fᵀCf/N² + 2tr C²/N², the level's own "
-        f"uncertainty included). 95 % interval for the true rms: [{lo:.6g}, {hi:.6g}] {unit} "
-        "(the square root of the mean square's normal interval, clipped at 0); u is the spread "
-        "of the rms's error, U half the interval's width, k = U/u."
-    ]
-    if e_noise:
-        corrected = math.sqrt(max(ms - e_noise, 0.0))
-        bias = rms - corrected
-        text.append(
-            f"bias from the noise of known level {bias:+.3g} {unit} (exact for a mean square); "
-            f"bias-corrected rms {corrected:.6g} {unit}."
-        )
-    else:
-        text.append(
-            "no noise of known level in the data: the plain value is not corrected for bias; the "
-            f"firm statement is the upper end, true rms ≤ {hi:.6g} {unit} (p ≈ 97.5 %)."
-        )
-    corrections = [(s, v) for s, v in zip(sources, parts, strict=True) if not s.drawable]
-    for s, v in corrections:
-        text.append(
-            f"{s.input.name}: a correlation between two of the errors, in the mean square "
-            f"({s.input.source}; it changes the noise's mean square by {mean_sq[id(s)]:+.3g} "
-            f"{unit}² and its variance by {v:+.3g} {unit}⁴), so it has no row of its own."
-        )
-    if len(sources) > 1:
-        text.append(
-            "each row's contribution is its part of the mean square's variance (cross terms "
-            "shared), so the shares add up to 100 %"
-            + (" with the correlation's part." if corrections else ".")
-        )
-    budget = UncertaintyBudget(
-        quantity=quantity,
-        unit=unit,
-        value=rms,
-        u=u,
-        dof_eff=nu,
-        k=big_u / u if u > 0 else coverage_factor(math.inf, p),
-        p=p,
-        U=big_u,
-        rows=rows,
-        method="GUM",
-        notes=(*text, *_role_notes(sources), *notes),
-        interval=(lo, hi),
-    )
-    return Summary(budget, bias, corrected)
-
-
 # ------------------------------------------------------------------------------ peak / pp
 def candidate_positions(
     data: FloatArray, g_total: FloatArray, statistic: Literal["pp", "peak"]
@@ -548,15 +385,33 @@ def statistic_samples(
     of the others ("bound" and "absent"), independent of each other. Every source is drawn
     exactly: its own way (a whole circulant period, the white values a filter needs), or, when
     only a few of the many elements are needed, jointly with the others of its group through
-    the Cholesky factor of their covariance among the K elements.
+    the Cholesky factor of their covariance among the K elements. The rows are those of
+    :func:`iter_statistic_samples` (the same draws, batch by batch).
 
     References
     ----------
     JCGM 101:2008 §6.4.8 (multivariate Gaussian by a Cholesky factor), §7.2–7.4.
     """
+    parts = list(iter_statistic_samples(positions, n, sources, trials=trials, seed=seed))
+    return {g: np.concatenate([x[g] for x in parts], axis=0) for g in ("noise", "other")}
+
+
+def iter_statistic_samples(
+    positions: NDArray[np.int64],
+    n: int,
+    sources: Sequence[ErrorProcess],
+    *,
+    trials: int = MC_TRIALS,
+    seed: int = MC_SEED,
+    batch: int | None = None,
+) -> Iterator[dict[str, FloatArray]]:
+    """:func:`statistic_samples` in batches of ``batch`` trials (default: about
+    :data:`_CHUNK_ELEMENTS` values per array): each source's generator carries on from batch to
+    batch, so the rows are the same whatever the batch, and memory is bounded by the batch."""
     k = positions.size
-    out = {"noise": np.zeros((trials, k)), "other": np.zeros((trials, k))}
+    step = max(1, batch if batch is not None else _CHUNK_ELEMENTS // max(k, 1))
     streams = np.random.SeedSequence(seed).spawn(len(sources) + 2)
+    plans = []
     for group, ss in zip(("noise", "other"), streams[-2:], strict=True):
         members = [
             (s, st)
@@ -568,18 +423,31 @@ def statistic_samples(
             joint_ids = {id(s) for s, _ in members}  # the correction needs the joint factor
         else:
             joint_ids = {id(s) for s, _ in members if s.drawable and s.local_cost(k) < 1.0}
-        for s, st in members:
-            if id(s) not in joint_ids and s.drawable:
-                out[group] += s.draw_at(np.random.default_rng(st), trials, positions, n)
+        own = [
+            (s, np.random.default_rng(st))
+            for s, st in members
+            if id(s) not in joint_ids and s.drawable
+        ]
+        factor = None
         if joint_ids:
             lag = np.abs(positions[:, None] - positions[None, :])
             cov = np.zeros((k, k))
             for s, _ in members:
                 if id(s) in joint_ids:
-                    cov += s.lags(n)[lag]
-            z = np.random.default_rng(ss).standard_normal((trials, k))
-            out[group] += z @ _factor(cov).T
-    return out
+                    cov += s.lags(int(lag.max()) + 1)[lag]
+            factor = (np.random.default_rng(ss), _factor(cov).T)
+        plans.append((group, own, factor))
+    for start in range(0, trials, step):
+        size = min(step, trials - start)
+        out = {}
+        for group, own, factor in plans:
+            acc = np.zeros((size, k))
+            for s, rng in own:
+                acc += s.draw_at(rng, size, positions, n)
+            if factor is not None:
+                acc += factor[0].standard_normal((size, k)) @ factor[1]
+            out[group] = acc
+        yield out
 
 
 def corrections_drawn(sources: Sequence[ErrorProcess], k: int) -> bool:
@@ -648,10 +516,36 @@ def _quantile_se(x: FloatArray, q: float) -> float:
     return 0.5 * float(srt[hi] - srt[lo])
 
 
+def _support(s: ErrorProcess) -> int:
+    """Lags beyond which a source's autocovariance only repeats (a period) or is zero (taps)."""
+    if isinstance(s, CirculantError):
+        return int(s.autocov.size) + 1
+    if isinstance(s, FilteredWhite):
+        return int(np.asarray(s.taps).size) + 1
+    return 1 << 62
+
+
+def noise_periodogram(sources: Sequence[ErrorProcess], n: int) -> FloatArray:
+    """E|X_q|² of one Welch window (:func:`~rotacal.uncertainty.summaries_peak.window_length`)
+    of the sum of ``sources`` over a vector of n elements."""
+    size = window_length(n)
+    g = sum((s.lags(size) for s in sources), np.zeros(size))
+    return expected_periodogram(g)
+
+
+def denoise_gain(
+    d: FloatArray, sources: Sequence[ErrorProcess], group: Sequence[ErrorProcess]
+) -> FloatArray:
+    """The Wiener gain that shrinks the errors ``group`` away from d (Welch spectrum of d)."""
+    welch = WelchSums(d.size)
+    welch.update(d)
+    return welch_gain(welch.power(), noise_periodogram(group, d.size))
+
+
 def mc_budget(
     quantity: str,
     unit: str,
-    data: FloatArray,
+    data: FloatArray | PeakInputs,
     sources: Sequence[ErrorProcess],
     *,
     statistic: Literal["pp", "peak"],
@@ -666,8 +560,9 @@ def mc_budget(
     ----------
     quantity, unit : str
         JSON key and unit (the vector's unit).
-    data : ndarray, shape (N,)
-        The measured vector d.
+    data : ndarray, shape (N,), or PeakInputs
+        The measured vector d, or (for ``"peak"``) what the budget needs of it, collected over
+        a stream (:mod:`rotacal.uncertainty.summaries_peak`: the same numbers).
     sources : sequence of ErrorProcess
         Its errors, each with its role.
     statistic : {"pp", "peak"}
@@ -692,45 +587,66 @@ def mc_budget(
     (1993) §6, §10 (bootstrap standard error and bias); David & Nagaraja (2003) §7.1 (Monte Carlo
     error of a quantile).
     """
-    d = _check(data, sources)
-    n = d.size
     if statistic not in ("pp", "peak"):
         raise ConfigError(f"statistic must be 'pp' or 'peak', got {statistic!r}.")
-    g = {id(s): s.lags(n) for s in sources}
+    if isinstance(data, PeakInputs):
+        if statistic != "peak" or data.n < 2 or not sources:
+            raise ConfigError("the candidates of a stream serve the peak of at least 2 values.")
+        n = data.n
+    else:
+        d = _check(data, sources)
+        n = d.size
+    # the autocovariances as far as they are not periodic repeats or zeros (and one window)
+    support = min(n, max([WINDOW, *(_support(s) for s in sources)]))
+    g = {id(s): s.lags(support) for s in sources}
     drawable = [s for s in sources if s.drawable]
     # the processes alone (a negative correction left out: conservative bounds and candidates)
-    g_total = sum((g[id(s)] for s in drawable), np.zeros(n))
-    pos, is_hi, is_lo = candidate_positions(d, g_total, statistic)
-    base = d[pos]
+    g_total = sum((g[id(s)] for s in drawable), np.zeros(support))
+    present = [s for s in sources if s.role != "absent"]
+    noise_only = [s for s in sources if s.role == "noise"]
+    if isinstance(data, PeakInputs):
+        inputs = data
+        is_hi = is_lo = np.ones(inputs.pos.size, dtype=bool)
+    else:
+        pos, is_hi, is_lo = candidate_positions(d, g_total, statistic)
+        gains = [denoise_gain(d, sources, group) for group in (present, noise_only)]
+        plain = float(np.ptp(d)) if statistic == "pp" else float(np.max(np.abs(d)))
+        inputs = PeakInputs(n, plain, pos, d[pos], denoised_at(d, pos, gains))
+    pos, base, plain = inputs.pos, inputs.base, inputs.plain
 
     def stat(x: FloatArray) -> FloatArray:
         if statistic == "peak":
             return np.max(np.abs(x), axis=-1)
         return np.max(x[..., is_hi], axis=-1) - np.min(x[..., is_lo], axis=-1)
 
-    plain = float(np.ptp(d)) if statistic == "pp" else float(np.max(np.abs(d)))
     # many candidates (a curve near zero): fewer trials, the Monte Carlo error is stated
     trials = min(trials, max(250, _CHUNK_ELEMENTS // (2 * pos.size)))
-    draws = statistic_samples(pos, n, sources, trials=trials, seed=seed)
     noisy = any(s.role == "noise" for s in sources)
-    total = draws["noise"] + draws["other"]
     # u: the spread of the statistic re-measured with every error — from the data themselves
     # (their noise then counts twice: too large where the noise sets the extremes) and from the
     # denoised curve (its extremes too flat: too small where single elements set them); their
     # geometric mean lies within the square root of either's error
-    g_present = sum((g[id(s)] for s in sources if s.role != "absent"), np.zeros(n))
-    f_all = denoised(d, g_present)[pos] if np.any(g_present) else base
-    y_den, y_data = (
-        monte_carlo_statistics(f_all, total, stat),
-        monte_carlo_statistics(base, total, stat),
-    )
-    u_den, u_data = float(np.std(y_den[0], ddof=1)), float(np.std(y_data[0], ddof=1))
+    g_present = sum((g[id(s)] for s in present), np.zeros(support))
+    f_all = inputs.denoised[0] if np.any(g_present) else base
+    f_n = inputs.denoised[1]
+    # per trial, batch by batch (memory bounded by a batch, whatever the candidates)
+    per_trial: dict[str, list[FloatArray]] = {"den": [], "data": [], "worst": [], "noise": []}
+    for draws in iter_statistic_samples(pos, n, sources, trials=trials, seed=seed):
+        total = draws["noise"] + draws["other"]
+        per_trial["den"].append(monte_carlo_statistics(f_all, total, stat)[0])
+        per_trial["data"].append(monte_carlo_statistics(base, total, stat)[0])
+        # upper error bound: the largest error the candidate elements carry
+        if statistic == "peak":
+            per_trial["worst"].append(np.max(np.abs(total), axis=-1))
+        else:
+            per_trial["worst"].append(
+                np.max(total[:, is_hi], axis=-1) - np.min(total[:, is_lo], axis=-1)
+            )
+        if noisy:
+            per_trial["noise"].append(monte_carlo_statistics(f_n, draws["noise"], stat)[0])
+    y_den, y_data, worst = (np.concatenate(per_trial[key]) for key in ("den", "data", "worst"))
+    u_den, u_data = float(np.std(y_den, ddof=1)), float(np.std(y_data, ddof=1))
     u = math.sqrt(u_den * u_data)
-    # upper error bound: the largest error the candidate elements carry
-    if statistic == "peak":
-        worst = np.max(np.abs(total), axis=-1)
-    else:
-        worst = np.max(total[:, is_hi], axis=-1) - np.min(total[:, is_lo], axis=-1)
     q_hi = float(np.quantile(worst, 0.5 + 0.5 * p))
     lo = max(plain - q_hi, 0.0)
     # lower error bound: the error at the true extreme(s), Gaussian with this variance
@@ -755,9 +671,7 @@ def mc_budget(
     ]
     if noisy:
         # the bias the known noise gives: re-measure the denoised curve with that noise alone
-        g_n = sum((g[id(s)] for s in sources if s.role == "noise"), np.zeros(n))
-        f_n = denoised(d, g_n)[pos]
-        (y_n,) = monte_carlo_statistics(f_n, draws["noise"], stat)
+        y_n = np.concatenate(per_trial["noise"])
         bias = float(np.mean(y_n)) - float(stat(f_n))
         corrected = plain - bias
         se_b = float(np.std(y_n, ddof=1)) / math.sqrt(trials)
@@ -792,7 +706,7 @@ def mc_budget(
         weights = [float(g[id(s)][0]) for s in drawable]
     else:
         lag = abs(int(np.argmax(d)) - int(np.argmin(d)))
-        weights = [2.0 * float(g[id(s)][0] - g[id(s)][lag]) for s in drawable]
+        weights = [2.0 * float(g[id(s)][0] - s.lags(lag + 1)[lag]) for s in drawable]
     w_sum = sum(weights)
     for s, w in zip(drawable, weights, strict=True):
         share = w / w_sum if w_sum > 0 else 0.0

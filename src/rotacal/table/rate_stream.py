@@ -1,0 +1,326 @@
+"""The pulse-timing rate analysis of one train over a stream of chunks, with carried state.
+
+:func:`rate_passes` runs everything :func:`rotacal.table.rate.calibrate_rate` computes from the
+pulse times of the chosen head (or the head-averaged times) in two passes over its chunks, each
+with bounded memory, so that a capture too large for memory is analysed from the file
+(:func:`rotacal.io.iter_capture_chunks`) and an array by the very same code:
+
+1. the angles (nominal and compensated) and the rate points of each block of ``average``
+   intervals (one pulse carried across chunks); the whole-revolution mean rate (the first pulse
+   and pulse R·m, R known from the record's length); the timing jitter (2m + 3 pulses carried,
+   :class:`~rotacal.table.rate_jitter.JitterSums`); s(φ)
+   (:class:`~rotacal.table.rate_allan_sums.AllanSums`); the rms's sufficient statistics, the
+   Welch spectrum and the trend of the rate deviation about a provisional reference (the first
+   rate point), moved onto the mean rate at the end (d = a·d₀ + b, exact algebra);
+2. the rate deviation again, now about the mean rate: the peak's candidates and their
+   Wiener-filtered values (:class:`~rotacal.uncertainty.summaries_peak.PeakCollector`).
+
+References
+----------
+Kokuyama et al. (2015) §5 (time-difference rate, 10-point averaging, s(φ)); Welch (1967) and
+Wiener (1949) for the peak's bias (:mod:`rotacal.uncertainty.summaries_peak`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Iterator
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rotacal._jit import use_numba
+from rotacal.encoder.pulses import pulse_angle_deg
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.table.rate_allan import allan_clusters
+from rotacal.table.rate_allan_sums import AllanSums, allan_stride
+from rotacal.table.rate_jitter import JitterSums
+from rotacal.table.rate_plausibility import TrendSums
+from rotacal.uncertainty.summaries import (
+    ErrorProcess,
+    PeakInputs,
+    SeriesStats,
+    noise_periodogram,
+)
+from rotacal.uncertainty.summaries_peak import PeakCollector, WelchSums, welch_gain
+
+__all__ = ["RatePasses", "rate_passes"]
+
+FloatArray = NDArray[np.float64]
+Chunks = Callable[[], Iterator[FloatArray]]
+
+#: Probability that the union bound behind the peak's candidates may fail (as in summaries).
+_CANDIDATE_RISK = 1e-3
+
+
+class _RatePoints:
+    """Angles and block rates of a pulse train fed in chunks (the pulses of an unfinished block
+    carried): the same arithmetic per block as :func:`rotacal.encoder.pulses.pulse_rate`."""
+
+    def __init__(
+        self, m: int, average: int, deviation: FloatArray | None, shift: int, jit: bool = False
+    ) -> None:
+        self.m, self.a, self.dev, self.shift = m, int(average), deviation, int(shift)
+        self.jit = jit
+        self.seen = 0
+        self._t = np.zeros(0)
+        self._ang = np.zeros(0)
+        self._nom = np.zeros(0)
+
+    def angles(self, t: FloatArray) -> tuple[FloatArray, FloatArray]:
+        count = np.arange(self.seen, self.seen + t.size)
+        nom = pulse_angle_deg(count, self.m)
+        ang = (
+            nom
+            if self.dev is None
+            else pulse_angle_deg(count, self.m, self.dev, line_offset=self.shift)
+        )
+        self.seen += t.size
+        return nom, ang
+
+    def push(
+        self, t: FloatArray, ang: FloatArray, nom: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        tt = np.concatenate((self._t, t))
+        aa = np.concatenate((self._ang, ang))
+        nn = np.concatenate((self._nom, nom)) if self.dev is not None else aa
+        blocks = max(tt.size - 1, 0) // self.a
+        used = blocks * self.a
+        if blocks and self.jit:
+            from rotacal.table._rate_stream_jit import block_rates
+
+            t_avg, rate, rate_nom = block_rates(tt, aa, nn, self.a, blocks, self.dev is not None)
+        elif blocks:
+            dt = np.diff(tt[: used + 1])
+            t_avg = (tt[:used] + 0.5 * dt).reshape(blocks, self.a).mean(axis=1)
+            rate = (np.diff(aa[: used + 1]) / dt).reshape(blocks, self.a).mean(axis=1)
+            rate_nom = (
+                rate
+                if self.dev is None
+                else (np.diff(nn[: used + 1]) / dt).reshape(blocks, self.a).mean(axis=1)
+            )
+        else:
+            t_avg = rate = rate_nom = np.zeros(0)
+        self._t, self._ang = tt[used:].copy(), aa[used:].copy()
+        self._nom = nn[used:].copy() if self.dev is not None else self._nom
+        return t_avg, rate, rate_nom
+
+
+@dataclasses.dataclass
+class RatePasses:
+    """What the two passes give (see the module docstring); units as in RateResult."""
+
+    pulses: int
+    points: int
+    mean_rate: float
+    revolutions: int
+    first_t: float
+    last_t: float
+    window_end: float
+    rev_times: FloatArray
+    short: tuple[FloatArray, FloatArray] | None
+    prefix: tuple[FloatArray, FloatArray]
+    jitter: tuple[float, float, bool]
+    phi: FloatArray
+    s: FloatArray
+    s_nom: FloatArray
+    rms_stats: SeriesStats
+    rms_nom: float
+    peak_nom: float
+    peak: PeakInputs | None
+    trend: TrendSums
+    trend_scale: float
+    series: tuple[FloatArray, FloatArray, FloatArray] | None
+
+
+def _candidate_floor(peak: float, n: int, sources: list[ErrorProcess]) -> float:
+    """max|d| − Δ of :func:`rotacal.uncertainty.summaries.candidate_positions` (Δ from the
+    sources alone: 2·z·σ_D, z = √(2 ln(N/10⁻³)))."""
+    drawable = [s for s in sources if s.drawable]
+    support = min(n, max(int(getattr(s, "autocov", np.zeros(0)).size) + 1 for s in drawable) + 4)
+    g = sum((s.lags(support) for s in drawable), np.zeros(support))
+    z = math.sqrt(2.0 * math.log(n / _CANDIDATE_RISK))
+    sigma_d = math.sqrt(max(2.0 * (float(g[0]) - float(np.min(g))), 0.0))
+    return peak - 2.0 * z * sigma_d
+
+
+def rate_passes(
+    chunks: Chunks,
+    pulses: int,
+    *,
+    pulses_per_rev: int,
+    average: int,
+    deviation: FloatArray | None,
+    shift: int,
+    allan_angles_deg: ArrayLike | None,
+    sources_for: Callable[[float, tuple[float, float, bool]], list[ErrorProcess]],
+    prefix_pulses: int,
+    keep_series: bool = False,
+    progress: Callable[[int], None] | None = None,
+) -> RatePasses:
+    """Run both passes over ``chunks()`` (called once per pass; pulse times in order, s).
+
+    Parameters
+    ----------
+    chunks : callable
+        Returns a fresh iterator over the train's chunks of pulse times.
+    pulses : int
+        N, the train's length (known from the file up front).
+    pulses_per_rev, average : int
+        m and the intervals per rate point.
+    deviation : ndarray (m,), arcsec, or None
+        The scale deviation to compensate with, and ``shift`` its index of the first pulse.
+    allan_angles_deg : array_like, deg, optional
+        s(φ) angles (default 12 per decade).
+    sources_for : callable
+        (mean rate in deg/s, timing jitter) → the rate points' error sources (% of rate).
+    prefix_pulses : int
+        Pulses kept from the start (the one-head period check).
+    keep_series : bool
+        Keep the rate points (times, rates, uncompensated rates): memory grows with N.
+    progress : callable, optional
+        Called with the pulses of each chunk handled (both passes).
+    """
+    m = int(pulses_per_rev)
+    n = int(pulses)
+    if n < 3:
+        raise CaptureError(f"{n} pulse(s) are too few; a pulse train needs more.")
+    if isinstance(average, bool) or not isinstance(average, int | np.integer) or average < 1:
+        raise ConfigError(f"average must be a whole number of intervals ≥ 1, got {average!r}.")
+    points = (n - 1) // int(average)
+    if points < 1:
+        raise CaptureError(
+            f"{n - 1} pulse intervals cannot make one average of {average}; lower --average."
+        )
+    revs = (n - 1) // m
+    pitch = 360.0 / m
+    ks = allan_clusters(n, pitch, allan_angles_deg)
+    strides = [allan_stride(int(k)) for k in ks]
+    compiled = use_numba(n)  # once for the record: every stride's sums in the compiled twin
+    allan = AllanSums(ks.tolist(), strides, jit=compiled)
+    allan_nom = AllanSums(ks.tolist(), strides, jit=compiled) if deviation is not None else None
+    jitter = JitterSums(n, m, jit=compiled)
+    rp = _RatePoints(m, average, deviation, shift, compiled)
+    periods: tuple[int, ...] = (m // math.gcd(int(average), m),)
+    stats = SeriesStats.empty(periods)
+    welch = WelchSums(points)
+    trend = TrendSums()
+    nom_sq = nom_sum = 0.0
+    lo0 = hi0 = lo_nom = hi_nom = math.nan
+    ref = math.nan
+    rev_times: list[FloatArray] = []
+    prefix_t: list[FloatArray] = []
+    prefix_a: list[FloatArray] = []
+    short_t: list[FloatArray] = []
+    short_a: list[FloatArray] = []
+    series: list[tuple[FloatArray, FloatArray, FloatArray]] = []
+    first_t = last_t = end_t = math.nan
+    for t in chunks():
+        t = np.asarray(t, dtype=np.float64)
+        if t.size == 0:
+            continue
+        i0 = rp.seen
+        if i0 == 0:
+            first_t = float(t[0])
+        last_t = float(t[-1])
+        nom, ang = rp.angles(t)
+        if i0 < prefix_pulses:
+            prefix_t.append(t[: prefix_pulses - i0].copy())
+            prefix_a.append(nom[: prefix_pulses - i0].copy())
+        if revs >= 1:
+            first = (-i0) % m
+            idx = np.arange(i0 + first, i0 + t.size, m)
+            keep = idx <= revs * m
+            rev_times.append(t[first::m][keep].copy())
+            if i0 <= revs * m < i0 + t.size:
+                end_t = float(t[revs * m - i0])
+        else:
+            short_t.append(t.copy())
+            short_a.append(ang.copy())
+        jitter.update(t)
+        allan.update(t, ang)
+        if allan_nom is not None:
+            allan_nom.update(t, nom)
+        t_avg, rate, rate_nom = rp.push(t, ang, nom)
+        if rate.size:
+            if math.isnan(ref):
+                ref = float(rate[0])  # the provisional reference (the same for any chunking)
+            d0 = 100.0 * (rate - ref) / ref
+            stats.update(d0)
+            welch.update(d0)
+            trend.update(t_avg, d0)
+            lo0, hi0 = np.nanmin([lo0, d0.min()]), np.nanmax([hi0, d0.max()])
+            dn = d0 if deviation is None else 100.0 * (rate_nom - ref) / ref
+            nom_sq += float(np.dot(dn, dn))
+            nom_sum += float(np.sum(dn))
+            lo_nom, hi_nom = np.nanmin([lo_nom, dn.min()]), np.nanmax([hi_nom, dn.max()])
+            if keep_series:
+                series.append((t_avg, rate, rate_nom))
+        if progress is not None:
+            progress(t.size)
+    if rp.seen != n:
+        raise CaptureError(f"the train held {rp.seen} pulses, not the {n} expected.")
+    short = None
+    if revs >= 1:
+        mean_rate = 360.0 * revs / (end_t - first_t)
+    else:
+        st, sa = np.concatenate(short_t), np.concatenate(short_a)
+        short = (st, sa)
+        mean_rate = float(np.polyfit(st - st[0], sa, 1)[0])
+        end_t = last_t
+    jit = jitter.result()
+    # d = a·d₀ + b moves the deviation from the provisional reference onto the mean rate
+    a = ref / mean_rate
+    b = 100.0 * (ref - mean_rate) / mean_rate
+    rms_stats = stats.affine(a, b)
+    ms_nom = (a * a * nom_sq + 2.0 * a * b * nom_sum + points * b * b) / points
+    peak_nom = max(abs(a * hi_nom + b), abs(a * lo_nom + b))
+    sources = sources_for(mean_rate, jit)
+    peak: PeakInputs | None = None
+    if sources:
+        present = [s for s in sources if s.role != "absent"]
+        noise_only = [s for s in sources if s.role == "noise"]
+        power = welch.power(a, b)
+        gains = [welch_gain(power, noise_periodogram(g, points)) for g in (present, noise_only)]
+        plain = max(abs(a * hi0 + b), abs(a * lo0 + b))
+        collector = PeakCollector(points, _candidate_floor(plain, points, sources), gains)
+        rp2 = _RatePoints(m, average, deviation, shift, compiled)
+        for t in chunks():  # pass 2: the deviation about the mean rate, exactly
+            t = np.asarray(t, dtype=np.float64)
+            _, ang = rp2.angles(t)
+            _, rate, _ = rp2.push(t, ang, ang)
+            collector.update(100.0 * (rate - mean_rate) / mean_rate)
+            if progress is not None:
+                progress(t.size)
+        peak = collector.result()
+    with np.errstate(invalid="ignore"):
+        s = np.sqrt(0.5 * allan.mean_squares()) / abs(mean_rate)
+        s_nom = s if allan_nom is None else np.sqrt(0.5 * allan_nom.mean_squares()) / abs(mean_rate)
+    kept: tuple[FloatArray, FloatArray, FloatArray] | None = None
+    if keep_series:
+        t_all, r_all, n_all = (np.concatenate([x[i] for x in series]) for i in range(3))
+        kept = (t_all, r_all, n_all)
+    return RatePasses(
+        pulses=n,
+        points=points,
+        mean_rate=mean_rate,
+        revolutions=revs,
+        first_t=first_t,
+        last_t=last_t,
+        window_end=end_t,
+        rev_times=np.concatenate(rev_times) if rev_times else np.zeros(0),
+        short=short,
+        prefix=(np.concatenate([np.zeros(0), *prefix_t]), np.concatenate([np.zeros(0), *prefix_a])),
+        jitter=jit,
+        phi=np.asarray(ks * pitch, dtype=np.float64),
+        s=s,
+        s_nom=s_nom,
+        rms_stats=rms_stats,
+        rms_nom=math.sqrt(max(ms_nom, 0.0)),
+        peak_nom=peak_nom,
+        peak=peak,
+        trend=trend,
+        trend_scale=a,
+        series=kept,
+    )
