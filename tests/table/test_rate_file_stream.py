@@ -84,8 +84,8 @@ def test_streamed_file_refuses_what_needs_every_head(tmp_path, capture):
     _, t, _ = capture
     path = tmp_path / "two.npz"
     np.savez(path, head_0=t, head_1=t + 1e-4)
-    with pytest.raises(ConfigError, match="every head in memory"):
-        calibrate_rate_file(path, pulses_per_rev=M)
+    with pytest.raises(ConfigError, match="head_0"):
+        calibrate_rate_file(path, pulses_per_rev=M, head=1)
     with pytest.raises(ConfigError, match="one head"):
         calibrate_rate_file(path, pulses_per_rev=M, head="all", compensate=False)
 
@@ -252,3 +252,51 @@ def test_monte_carlo_batches_draw_the_same_rows():
         np.testing.assert_allclose(
             np.concatenate([x[group] for x in parts]), whole[group], rtol=1e-12, atol=1e-15
         )
+
+
+def test_streamed_self_calibrated_rate_equals_in_memory(tmp_path):
+    """Several heads and nothing given: the capture self-calibrates in chunks (one reader per
+    head, a head starting later) and the rate of head 0 streams after it — every JSON number of
+    the in-memory calibrate_rate to 1e-9, the self-calibration's own covariance term included."""
+    cap = simulate_pulses(heads=3, pulses_per_rev=M, rate_deg_s=120.0, revolutions=12.0, seed=9)
+    heads = [np.asarray(cap.columns[f"head_{i}"]) for i in range(3)]
+    heads[2] = heads[2][50:]  # ragged: head 2 starts 50 pulses late
+    path = tmp_path / "three.npz"
+    np.savez(path, **{f"head_{i}": h for i, h in enumerate(heads)})
+    kw = dict(pulses_per_rev=M, average=10, set_rate_deg_s=120.0)
+    mem = calibrate_rate(heads, **kw)
+    streamed = calibrate_rate_file(path, chunk_rows=1234, **kw)
+    assert streamed.selfcal is not None and mem.selfcal is not None
+    assert any("self-calibrated from this capture" in n for n in streamed.notes)
+    _assert_same(mem.to_dict(), streamed.to_dict())
+    with pytest.raises(ConfigError, match="head_0"):
+        calibrate_rate_file(path, head=1, **kw)
+
+
+def test_cli_streams_a_capture_to_self_calibrate_by_itself(tmp_path, monkeypatch):
+    """Several heads above the self-calibration's threshold: `rotacal rate` streams both the
+    self-calibration and the rate unasked, and writes --in-memory's numbers."""
+    import rotacal.cli.pulses as pulses_cli
+    import rotacal.encoder.selfcal_stream as selfcal_stream
+
+    cap = simulate_pulses(heads=2, pulses_per_rev=M, rate_deg_s=120.0, revolutions=6.0, seed=4)
+    path = tmp_path / "two.npz"
+    np.savez(path, **{k: np.asarray(v) for k, v in cap.columns.items() if k.startswith("head_")})
+    monkeypatch.setattr(pulses_cli, "_SELFCAL_IN_MEMORY_MAX", 1000)
+    calls = []
+    real = selfcal_stream.self_calibrate_chunked
+    monkeypatch.setattr(
+        selfcal_stream, "self_calibrate_chunked", lambda *a, **k: calls.append(1) or real(*a, **k)
+    )
+    out = {}
+    for flag in ("", "--in-memory"):
+        dest = tmp_path / f"r{flag}.json"
+        args = ["rate", str(path), "--pulses-per-rev", str(M), "--json", str(dest)]
+        res = CliRunner().invoke(cli, args + ([flag] if flag else []), prog_name="rotacal")
+        assert res.exit_code == 0, res.output
+        out[flag] = json.loads(dest.read_text())
+    assert len(calls) == 1  # the chunked self-calibration ran once: for the unasked stream
+    for data in out.values():
+        data.pop("provenance")
+    assert out[""]["compensated"] is True
+    _assert_same(out["--in-memory"], out[""])

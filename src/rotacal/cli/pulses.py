@@ -236,9 +236,11 @@ def _selfcal_chunked(
 @click.option(
     "--chunked/--in-memory",
     default=None,
-    help="Stream the head from the file (flat memory; one head, with --selfcal or nothing to "
-    "compensate with) or load the capture whole "
-    f"[default: chunked above {_IN_MEMORY_MAX_PULSES:.0e} pulses when it can].",
+    help="Stream from the file (flat memory; head 0 or the only head, several heads "
+    "self-calibrated in chunks too) or load the capture whole (--head all, another head of "
+    "several, heads padded with empty cells or NaNs need it) "
+    f"[default: chunked above {_IN_MEMORY_MAX_PULSES:.0e} pulses of the head, or "
+    f"{_SELFCAL_IN_MEMORY_MAX:.0e} in all to self-calibrate, except CSV].",
 )
 @_analysis_options
 @_names_capture
@@ -324,12 +326,18 @@ def _stream_by_default(
     selfcal: Any,
     no_compensation: bool,
 ) -> bool:
-    """Whether the capture is large and the streamed path can take it (one head's times, with a
-    given deviation or nothing to compensate; several heads to self-calibrate stay in memory)."""
+    """Whether the capture is large and the streamed path can take it: head 0's times (or the
+    one head's) with a given deviation, nothing to compensate, or every head self-calibrated
+    in chunks; another head of several to compensate, or the head average, stay in memory."""
     if head == "all":
         return False
     _, _, heads, n = _head_file(capture, columns, group, head)
-    if heads >= 2 and not no_compensation and (selfcal is None or head not in ("0", "head_0")):
+    if heads >= 2 and not no_compensation and selfcal is None:
+        if head not in ("0", "head_0") or Path(capture).suffix.lower() in (".csv", ".txt"):
+            return False  # pairs heads in memory; CSV pads short heads with empty cells
+        every = sum(_head_lengths(capture, columns, group).values())
+        return n > _IN_MEMORY_MAX_PULSES or every > _SELFCAL_IN_MEMORY_MAX
+    if heads >= 2 and not no_compensation and head not in ("0", "head_0"):
         return False
     return n > _IN_MEMORY_MAX_PULSES
 
@@ -338,9 +346,12 @@ def _streamed_rate(capture: str, columns: Sequence[str], group: str | None, **kw
     """calibrate_rate_file with a progress bar over the pulses read (every pass)."""
     from rotacal.table.rate_file import calibrate_rate_file
 
-    mapping, read_options, _, n = _head_file(capture, columns, group, str(kw["head"]))
-    passes = 3 if kw["selfcal"] is not None and kw["compensate"] else 2
-    with _naming_file(capture), _sample_progress(passes * n, "rate (streamed)") as progress:
+    mapping, read_options, heads, n = _head_file(capture, columns, group, str(kw["head"]))
+    compensating = kw["compensate"] and (kw["selfcal"] is not None or heads >= 2)
+    total = (3 if compensating else 2) * n
+    if kw["compensate"] and kw["selfcal"] is None and heads >= 2:  # two passes over every head
+        total += 2 * sum(_head_lengths(capture, columns, group).values())
+    with _naming_file(capture), _sample_progress(total, "rate (streamed)") as progress:
         done = [0]
 
         def step(pulses: int) -> None:

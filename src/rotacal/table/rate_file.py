@@ -3,12 +3,11 @@
 :func:`calibrate_rate_file` gives what :func:`rotacal.table.rate.calibrate_rate` gives for the
 same head, to rounding (the same passes, :mod:`rotacal.table.rate_stream`), reading the file
 chunk by chunk (:func:`rotacal.io.iter_capture_chunks`, which hands each chunk's mapped pages
-back): no self-calibration (one head, or ``compensate=False``), or a given deviation curve (a
+back): no self-calibration (one head, or ``compensate=False``), a given deviation curve (a
 SelfCalibration, its JSON dict or m values), placed on the capture by a first pass of its own
-(:class:`~rotacal.table.rate_alignment.FoldSums`) unless it comes from this very capture.
-A capture of several heads that is to be self-calibrated needs all heads at once: the
-in-memory path (the hook for a chunked self-calibration is ``selfcal=``: its result streams
-like any given curve).
+(:class:`~rotacal.table.rate_alignment.FoldSums`) unless it comes from this very capture, or —
+several heads and nothing given — the capture's own self-calibration, streamed too
+(:func:`~rotacal.encoder.selfcal_stream.self_calibrate_chunked`, one reader per head).
 """
 
 from __future__ import annotations
@@ -96,6 +95,55 @@ def _checked(
     return chunks
 
 
+def _self_calibrate(
+    path: str | PathLike[str],
+    heads: int,
+    m: int,
+    specs: InstrumentSpecs | None,
+    *,
+    mapping: Any,
+    group: str | None,
+    read_options: Any,
+    chunk_rows: int,
+    progress: Callable[[int], None] | None,
+) -> SelfCalibration:
+    """The capture's own self-calibration, every head read in chunks (one reader per head: heads
+    are ragged), as :func:`~rotacal.table.rate.calibrate_rate` makes it in memory."""
+    from rotacal.encoder.selfcal_stream import self_calibrate_chunked
+    from rotacal.io import iter_capture_chunks
+
+    def one_head(name: str) -> Iterator[FloatArray]:
+        parts = iter_capture_chunks(
+            path,
+            [name],
+            chunk_rows=chunk_rows,
+            mapping=mapping,
+            group=group,
+            read_options=read_options,
+        )
+        return (part[name] for part in parts)
+
+    done = [0]
+
+    def step(total: int) -> None:  # self_calibrate_chunked counts cumulatively; progress per chunk
+        if progress is not None:
+            progress(total - done[0])
+        done[0] = total
+
+    try:
+        return self_calibrate_chunked(
+            lambda: [one_head(f"head_{i}") for i in range(heads)],
+            pulses_per_rev=m,
+            specs=specs,
+            progress=step,
+        )
+    except CaptureError as e:
+        raise CaptureError(
+            f"{e} (the rate is compensated with a self-calibration of this capture; "
+            "give one with --selfcal, or use --no-compensation)"
+        ) from None
+
+
 def calibrate_rate_file(
     path: str | PathLike[str],
     *,
@@ -123,8 +171,9 @@ def calibrate_rate_file(
     Raises
     ------
     CaptureError, ConfigError
-        As the in-memory path; also a capture of several heads with nothing to compensate with
-        (self-calibrating needs them all at once: use the in-memory path).
+        As the in-memory path; also a head other than head_0 of a capture of several heads to
+        be compensated, a deviation from another capture on one of several heads, and
+        ``head="all"`` (those pair the heads in memory: use the in-memory path).
 
     References
     ----------
@@ -141,12 +190,7 @@ def calibrate_rate_file(
         )
     heads = file_heads(path, mapping=mapping, group=group)
     k = _head_index(head, heads)
-    if compensate and selfcal is None and heads >= 2:
-        raise ConfigError(
-            "self-calibrating needs every head in memory: give --selfcal, --no-compensation, "
-            "or --in-memory."
-        )
-    if compensate and selfcal is not None and heads >= 2 and k != 0:
+    if compensate and heads >= 2 and k != 0:
         raise ConfigError(
             "a head other than head_0 is paired with head 0 in memory; give --head 0 or "
             "--in-memory."
@@ -157,6 +201,24 @@ def calibrate_rate_file(
         path, column, mapping=mapping, group=group, read_options=read_options, chunk_rows=chunk_rows
     )
     notes: list[str] = []
+    made: SelfCalibration | None = None
+    if compensate and selfcal is None and heads >= 2:
+        made = _self_calibrate(
+            path,
+            heads,
+            m,
+            specs,
+            mapping=mapping,
+            group=group,
+            read_options=read_options,
+            chunk_rows=chunk_rows,
+            progress=progress,
+        )
+        selfcal = made
+        notes.append(
+            f"compensated with the deviation self-calibrated from this capture "
+            f"({made.heads} heads, {made.revolutions_used} revolutions)."
+        )
     deviation = shift = correlation = None
     own = None
     if compensate and selfcal is not None:
@@ -196,7 +258,7 @@ def calibrate_rate_file(
         use_all=False,
         label=column,
         selfcal=selfcal if compensate else None,
-        made=None,
+        made=made,
         deviation=deviation,
         shift=shift,
         correlation=correlation,
