@@ -60,12 +60,19 @@ def residual_sums(
     """
     omega = 2.0 * math.pi * frequency_hz
     if len(models) <= 2 and use_numba(t.size, jit):
-        from rotacal.signal._residual_jit import residual_sums_jit
+        from rotacal.signal._residual_jit import residual_sums_grid, residual_sums_jit
 
         consts = np.array([float(m[0]) for m in models])
         ca = np.array([np.asarray(m[1], dtype=np.float64) for m in models])
         cb = np.array([np.asarray(m[2], dtype=np.float64) for m in models])
         drifts = np.array([float(m[3]) for m in models])
+        if t.size > 1:  # on a uniform grid: the table of cos/sin (falls back when off the grid)
+            dt = (float(t[-1]) - float(t[0])) / (t.size - 1)
+            out, on_grid = residual_sums_grid(
+                t, y, float(t_ref), omega, dt, consts, ca, cb, drifts
+            )
+            if on_grid:
+                return [float(x) for x in out]
         out = residual_sums_jit(t, y, float(t_ref), omega, consts, ca, cb, drifts)
         return [float(x) for x in out]
     sums = [0.0] * len(models)
