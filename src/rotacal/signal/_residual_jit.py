@@ -134,11 +134,6 @@ def residual_sums_jit(
     return out
 
 
-#: On a uniform grid a sample's angle may differ from its table angle by at most this (rad) times
-#: 1/H: the first-order correction then leaves (H·δ)²/2 ≤ 5e-17 of a harmonic's amplitude.
-_GRID_DELTA = 1e-8
-
-
 @njit(cache=True, nogil=True, fastmath={"contract"})
 def _add_harmonic(
     model: np.ndarray,
@@ -214,6 +209,7 @@ def residual_sums_grid(
     t_ref: float,
     omega: float,
     dt: float,
+    tol: float,
     consts: np.ndarray,
     ca: np.ndarray,
     cb: np.ndarray,
@@ -222,15 +218,16 @@ def residual_sums_grid(
     """:func:`residual_sums_jit` for samples on a uniform grid of step ``dt`` (s), without the
     sample-to-sample dependence of the rotation.
 
-    Within a block of :data:`_BLOCK` samples starting at θ_s = ω·(t_s − t_ref), sample q has
+    Within a block of :data:`_BLOCK` samples (:data:`rotacal.signal._residual.GRID_BLOCK`) starting at θ_s = ω·(t_s − t_ref), sample q has
     θ = θ_s + φ_q + δ with φ_q = q·ω·dt: cos(hφ_q), sin(hφ_q) come from a table made once
     (exact ``cos``/``sin``), cos(hθ_s), sin(hθ_s) exactly once per block, so the model is
     ``Σ_h α_h·cos(hφ_q) + β_h·sin(hφ_q)`` (α_h = a_h cos hθ_s + b_h sin hθ_s, β_h = b_h cos hθ_s −
     a_h sin hθ_s; angle addition) plus the first-order term in δ (θ as the NumPy path forms
     it, less its table angle: rounding of t, ~1e-12 rad), ``δ·Σ_h h·(β_h cos hφ_q − α_h sin hφ_q)``.
     The loops over a block's samples are free of dependences (vectorised). Returns the sums
-    and True, or False when some δ exceeds :data:`_GRID_DELTA`/H (the samples are not on the
-    grid: the caller uses :func:`residual_sums_jit`).
+    and True, or False when some |δ| exceeds ``tol`` (the samples are not on the
+    grid: the caller uses :func:`residual_sums_jit`); ``tol`` is that bound (rad). The NumPy
+    twin is :func:`rotacal.signal._residual.grid_residual_sums`.
     """
     n = t.size
     nh = ca.shape[1]
@@ -243,7 +240,6 @@ def residual_sums_grid(
             ang = (h + 1) * (q * wdt)
             cq[h, q] = math.cos(ang)
             sq[h, q] = math.sin(ang)
-    tol = _GRID_DELTA / nh
     delta = np.empty(_BLOCK)
     tau = np.empty(_BLOCK)
     slope = np.empty(_BLOCK)
