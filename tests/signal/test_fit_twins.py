@@ -143,3 +143,20 @@ def test_block_moments_of_a_fast_motion_match_with_either_twin(monkeypatch):
     # truth: the amplitudes put in, the noise as the residual
     np.testing.assert_allclose(fast.amplitudes[:3], amp, rtol=0, atol=3e-7)
     assert fast.residual_rms == pytest.approx(1e-5, rel=0.01)
+
+
+@pytest.mark.parametrize("count", [2, 7, 1000, 25_001])
+def test_grid_power_sums_match_the_sums_over_the_blocks(count):
+    # the closed form (Dirichlet kernel and its derivatives) against the sum it replaces
+    from rotacal.signal._blocks_sums import grid_power_sums
+
+    rng = np.random.default_rng(count)
+    block_s = 0.013
+    omega = rng.uniform(0.5, 3.0) / (20 * block_s)  # harmonic 20 turns < 3 rad per block
+    d_first = -0.5 * count * block_s + rng.uniform(-0.3, 0.3) * block_s
+    d = d_first + np.arange(count) * block_s
+    got = grid_power_sums(omega, d[0], d[-1], block_s, count, 20, 3)
+    for p in range(3):
+        want = np.array([np.sum(d**p * np.exp(1j * k * omega * d)) for k in range(21)])
+        scale = np.max(np.abs(d)) ** p * count
+        np.testing.assert_allclose(got[:, p], want, rtol=0, atol=1e-12 * scale)

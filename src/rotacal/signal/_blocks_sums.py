@@ -154,7 +154,9 @@ def block_sums(
     d_part = dvec[part]
     p_part = p[part]
     wfull = np.where(full, 1.0, 0.0)
-    contiguous = j.size > 1 and int(j[-1]) - int(j[0]) + 1 == j.size
+    # closed form for the full blocks' weights: blocks contiguous and most of them full (the
+    # others are subtracted from the closed form: few, so nothing large cancels)
+    closed_ok = j.size > 1 and int(j[-1]) - int(j[0]) + 1 == j.size and 4 * part.size <= j.size
 
     def sums(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
         x = kmax * abs(omega) * half
@@ -174,9 +176,9 @@ def block_sums(
         t_full = np.zeros((2 * (kmax + 1), n_p))
         b_y = np.zeros((ny2, n_y * (nty + 1)))
         a_part = np.zeros((2 * (kmax + 1), n_p * (nterm + 2)))
-        # the full blocks' weights in closed form when the blocks are contiguous: then the
-        # y-sums alone read every block, and only for the harmonics 0..H
-        closed = contiguous and omega != 0.0
+        # the full blocks' weights in closed form (grid_power_sums): then the y-sums alone
+        # read every block, and only for the harmonics 0..H
+        closed = closed_ok and omega != 0.0
         kmax_rows = nh if closed else kmax
         for r in range(0, j.size, SUM_ROWS):
             d = dvec[r : r + SUM_ROWS]
