@@ -260,8 +260,18 @@ def residual_sums_grid(
             return out, False
         for j in range(nm):
             _grid_model(
-                model[j], slope, cq, sq, consts[j], ca[j], cb[j], drifts[j], theta_s, delta,
-                tau, size,
+                model[j],
+                slope,
+                cq,
+                sq,
+                consts[j],
+                ca[j],
+                cb[j],
+                drifts[j],
+                theta_s,
+                delta,
+                tau,
+                size,
             )
         if s % _PART == 0:
             for j in range(nm):
