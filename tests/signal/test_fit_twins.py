@@ -46,6 +46,55 @@ def test_residual_sums_match_a_direct_evaluation(jit):
     np.testing.assert_allclose(got, want, rtol=1e-9)
 
 
+@pytest.mark.parametrize("jit", [False, True])
+@pytest.mark.parametrize("jitter", [0.0, 1e-3])
+def test_residual_sums_on_and_off_the_grid(jit, jitter, monkeypatch):
+    # on a uniform grid the table path runs, with a jittered clock (δ far above its bound)
+    # the per-sample path: either way the direct evaluation's sums
+    from rotacal.signal import _residual
+
+    rng = np.random.default_rng(11)
+    t = np.arange(70_001) / 2000.0
+    t = t + jitter * rng.uniform(-0.5, 0.5, t.size) / 2000.0
+    f = 3.1
+    a = rng.normal(size=8) * np.logspace(0, -3, 8)
+    b = rng.normal(size=8) * np.logspace(0, -3, 8)
+    t_ref = 0.5 * (t[0] + t[-1])
+    y = _direct_model(t, t_ref, f, 0.1, a, b, -0.02) + 1e-6 * rng.standard_normal(t.size)
+    models = [(0.1, a, b, -0.02), (0.1, a * 1.001, b, 0.0)]
+    calls = []
+    plain = _residual.grid_residual_sums
+    monkeypatch.setattr(
+        _residual, "grid_residual_sums", lambda *args: calls.append(1) or plain(*args)
+    )
+    got = residual_sums(t, y, t_ref, f, models, jit=jit)
+    want = [_direct_rss(t, y, t_ref, f, *m) for m in models]
+    np.testing.assert_allclose(got, want, rtol=1e-9)
+    assert got[0] == pytest.approx(t.size * 1e-12, rel=0.02)  # the added noise
+    if not jit:  # the NumPy path tried the grid and kept its sums only on the grid
+        assert calls == [1]
+        assert (plain(t, y, t_ref, 2 * math.pi * f, (t[-1] - t[0]) / (t.size - 1), 1e-9,
+                      *_arrays(models)) is None) == (jitter > 0)  # fmt: skip
+
+
+def _direct_model(t, t_ref, f, const, a, b, drift):
+    tau = t - t_ref
+    model = const + drift * tau
+    for h in range(1, a.size + 1):
+        model = model + a[h - 1] * np.cos(h * 2 * math.pi * f * tau)
+        model = model + b[h - 1] * np.sin(h * 2 * math.pi * f * tau)
+    return model
+
+
+def _arrays(models):
+    return (
+        np.array([m[0] for m in models]),
+        np.array([m[1] for m in models]),
+        np.array([m[2] for m in models]),
+        np.array([m[3] for m in models]),
+    )
+
+
 def test_the_fit_is_the_same_with_either_twin(monkeypatch):
     # a record so clean that the normal equations cannot resolve the residual: it is summed
     rng = np.random.default_rng(1)
@@ -94,3 +143,20 @@ def test_block_moments_of_a_fast_motion_match_with_either_twin(monkeypatch):
     # truth: the amplitudes put in, the noise as the residual
     np.testing.assert_allclose(fast.amplitudes[:3], amp, rtol=0, atol=3e-7)
     assert fast.residual_rms == pytest.approx(1e-5, rel=0.01)
+
+
+@pytest.mark.parametrize("count", [2, 7, 1000, 25_001])
+def test_grid_power_sums_match_the_sums_over_the_blocks(count):
+    # the closed form (Dirichlet kernel and its derivatives) against the sum it replaces
+    from rotacal.signal._blocks_sums import grid_power_sums
+
+    rng = np.random.default_rng(count)
+    block_s = 0.013
+    omega = rng.uniform(0.5, 3.0) / (20 * block_s)  # harmonic 20 turns < 3 rad per block
+    d_first = -0.5 * count * block_s + rng.uniform(-0.3, 0.3) * block_s
+    d = d_first + np.arange(count) * block_s
+    got = grid_power_sums(omega, d[0], d[-1], block_s, count, 20, 3)
+    for p in range(3):
+        want = np.array([np.sum(d**p * np.exp(1j * k * omega * d)) for k in range(21)])
+        scale = np.max(np.abs(d)) ** p * count
+        np.testing.assert_allclose(got[:, p], want, rtol=0, atol=1e-12 * scale)

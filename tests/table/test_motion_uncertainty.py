@@ -813,3 +813,15 @@ def test_budget_tidying_helpers():
     assert [r.source for r in t.rows] == ["x"] and t.u == large.u
     assert t.notes[-2:] == ("first", "second")
     assert with_notes(small, method="Monte Carlo").method == "Monte Carlo"
+
+
+def test_the_belts_quantile_is_numpys_to_the_bit():
+    # the THD belt's own quantile (one partition) against numpy.quantile's default method
+    from rotacal.table.motion_thd import _quantile
+
+    rng = np.random.default_rng(17)
+    for trial in range(400):
+        n = 10_000 if trial % 4 == 0 else int(rng.integers(1, 40))
+        values = rng.standard_normal(n) * rng.uniform(0.1, 10.0)
+        for q in (0.0, 1.0, 0.025, 0.5, 0.975, float(rng.uniform()), -0.1, 1.2):
+            assert _quantile(values, q) == float(np.quantile(values, min(max(q, 0.0), 1.0)))

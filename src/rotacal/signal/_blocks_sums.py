@@ -71,6 +71,48 @@ def _complex_rows(x: np.ndarray, nh: int, kmax: int) -> np.ndarray:
     return re + 1j * im
 
 
+def grid_power_sums(
+    omega: float, d_first: float, d_last: float, block_s: float, count: int, kmax: int, n_p: int
+) -> np.ndarray:
+    """``Σ_b e^{jkωd_b}·d_b^p`` (k = 0..kmax, p < n_p ≤ 3) over ``count`` blocks at
+    ``d_b = d_first + b·T`` (T = ``block_s``, s; ``d_last`` the last), in closed form.
+
+    About the middle block, d_b = d_c + e·T with e symmetric (half-integers for an even count),
+    ``Σ_e e^{jeθ} = D(θ) = sin(Jθ/2)/sin(θ/2)`` (the Dirichlet kernel, θ = kωT, J = count), and
+    ``Σ_e e·e^{jeθ} = −j·D′(θ)``, ``Σ_e e²·e^{jeθ} = −D″(θ)`` from its derivatives; k = 0 takes
+    the power sums J, 0 and J(J²−1)/12. Each is a few products of sines and cosines instead of
+    a sum over the blocks; θ stays in (0, 2π) (the block plan keeps 2H·ω·T/2 below ~2 rad),
+    where the terms do not cancel beyond a factor ~2/(Jθ).
+    """
+    jj = float(count)
+    d_c = 0.5 * (d_first + d_last)
+    ks = np.arange(kmax + 1, dtype=np.float64)
+    theta = ks * (omega * block_s)
+    half = 0.5 * theta[1:]
+    sig, kap = np.sin(half), np.cos(half)
+    big = jj * half
+    s_a, c_a = np.sin(big), np.cos(big)
+    d0 = np.empty(kmax + 1)
+    d1 = np.empty(kmax + 1)  # D′
+    d2 = np.empty(kmax + 1)  # D″
+    d0[0], d1[0], d2[0] = jj, 0.0, -jj * (jj * jj - 1.0) / 12.0
+    d0[1:] = s_a / sig
+    num = 0.5 * jj * c_a * sig - 0.5 * s_a * kap
+    d1[1:] = num / (sig * sig)
+    d2[1:] = (0.25 * (1.0 - jj * jj) * s_a * sig * sig - 0.5 * jj * kap * c_a * sig
+              + 0.5 * s_a * kap * kap) / sig**3  # fmt: skip
+    rot = np.exp(1j * ks * (omega * d_c))
+    e0 = d0.astype(np.complex128)
+    e1 = -1j * d1
+    e2 = -d2.astype(np.complex128)
+    out = np.empty((kmax + 1, n_p), dtype=np.complex128)
+    out[:, 0] = rot * e0
+    if n_p > 1:
+        out[:, 1] = rot * (d_c * e0 + block_s * e1)
+        out[:, 2] = rot * (d_c * d_c * e0 + 2.0 * d_c * block_s * e1 + block_s * block_s * e2)
+    return out
+
+
 def block_sums(
     merged: tuple[np.ndarray, np.ndarray, np.ndarray],
     p_full: np.ndarray,
@@ -112,6 +154,9 @@ def block_sums(
     d_part = dvec[part]
     p_part = p[part]
     wfull = np.where(full, 1.0, 0.0)
+    # closed form for the full blocks' weights: blocks contiguous and most of them full (the
+    # others are subtracted from the closed form: few, so nothing large cancels)
+    closed_ok = j.size > 1 and int(j[-1]) - int(j[0]) + 1 == j.size and 4 * part.size <= j.size
 
     def sums(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
         x = kmax * abs(omega) * half
@@ -131,16 +176,21 @@ def block_sums(
         t_full = np.zeros((2 * (kmax + 1), n_p))
         b_y = np.zeros((ny2, n_y * (nty + 1)))
         a_part = np.zeros((2 * (kmax + 1), n_p * (nterm + 2)))
+        # the full blocks' weights in closed form (grid_power_sums): then the y-sums alone
+        # read every block, and only for the harmonics 0..H
+        closed = closed_ok and omega != 0.0
+        kmax_rows = nh if closed else kmax
         for r in range(0, j.size, SUM_ROWS):
             d = dvec[r : r + SUM_ROWS]
-            ex = _powers_split(np.exp(1j * omega * d), nh, kmax)
-            w = wfull[r : r + SUM_ROWS]
-            g = np.empty((d.size, n_p))
-            g[:, 0] = w
-            if deriv:
-                np.multiply(w, d, out=g[:, 1])
-                np.multiply(g[:, 1], d, out=g[:, 2])
-            t_full += ex @ g
+            ex = _powers_split(np.exp(1j * omega * d), nh, kmax_rows)
+            if not closed:
+                w = wfull[r : r + SUM_ROWS]
+                g = np.empty((d.size, n_p))
+                g[:, 0] = w
+                if deriv:
+                    np.multiply(w, d, out=g[:, 1])
+                    np.multiply(g[:, 1], d, out=g[:, 2])
+                t_full += ex @ g
             qr = q[r : r + SUM_ROWS, : nty + 1]
             if deriv:
                 qr = np.concatenate((qr, d[:, None] * qr), axis=1)
@@ -151,8 +201,17 @@ def block_sums(
             if deriv:
                 cols += [d_part[:, None] * cols[0], (d_part * d_part)[:, None] * cols[0]]
             a_part += ex @ np.concatenate(cols, axis=1)
+        if closed:
+            t_c = grid_power_sums(omega, dvec[0], dvec[-1], block_s, j.size, kmax, n_p)
+            if part.size:  # less the blocks that are not full (their own P is in a_part)
+                g = np.ones((d_part.size, n_p))
+                if deriv:
+                    g[:, 1] = d_part
+                    g[:, 2] = d_part * d_part
+                t_c -= _complex_rows(ex @ g, nh, kmax)
+        else:
+            t_c = _complex_rows(t_full, nh, kmax)  # (kmax+1, n_p)
         # A_p[k, l] = (full blocks' weight)·P̄_l + the other blocks' own P
-        t_c = _complex_rows(t_full, nh, kmax)  # (kmax+1, n_p)
         a_c = _complex_rows(a_part, nh, kmax).reshape(kmax + 1, n_p, nterm + 2)
         a_c += t_c[:, :, None] * p_full[None, None, : nterm + 2]
         b_c = (b_y[: nh + 1] + 1j * b_y[nh + 1 :]).reshape(nh + 1, n_y, nty + 1)

@@ -132,3 +132,153 @@ def residual_sums_jit(
     if two:
         out[1] = out1 + part1
     return out
+
+
+@njit(cache=True, nogil=True, fastmath={"contract"})
+def _add_harmonic(
+    model: np.ndarray,
+    slope: np.ndarray,
+    crow: np.ndarray,
+    srow: np.ndarray,
+    al: float,
+    be: float,
+    h: float,
+    size: int,
+) -> None:  # pragma: no cover - compiled
+    """``model += α·cos + β·sin`` and ``slope += h·(β·cos − α·sin)`` over one block (a loop
+    without dependences: vectorised, with fused multiply-adds)."""
+    hal = h * al
+    hbe = h * be
+    for q in range(size):
+        c = crow[q]
+        sn = srow[q]
+        model[q] += al * c + be * sn
+        slope[q] += hbe * c - hal * sn
+
+
+@njit(cache=True, nogil=True)
+def _block_rss(y: np.ndarray, model: np.ndarray) -> float:  # pragma: no cover - compiled
+    """``Σ (y − model)²`` over ``y.size`` samples in four interleaved partial sums (a
+    vectorised loop; no less accurate than one running sum)."""
+    acc = np.zeros(4)
+    size = y.size
+    full = size - size % 4
+    for q in range(0, full, 4):
+        for lane in range(4):
+            r = y[q + lane] - model[q + lane]
+            acc[lane] += r * r
+    for q in range(full, size):
+        r = y[q] - model[q]
+        acc[0] += r * r
+    return (acc[0] + acc[1]) + (acc[2] + acc[3])
+
+
+@njit(cache=True, nogil=True)
+def _grid_model(
+    model: np.ndarray,
+    slope: np.ndarray,
+    cq: np.ndarray,
+    sq: np.ndarray,
+    const: float,
+    ca: np.ndarray,
+    cb: np.ndarray,
+    drift: float,
+    theta_s: float,
+    delta: np.ndarray,
+    tau: np.ndarray,
+    size: int,
+) -> None:  # pragma: no cover - compiled
+    """One model over one block of the grid (see :func:`residual_sums_grid`) into ``model``."""
+    for q in range(size):
+        model[q] = const
+        slope[q] = 0.0
+    for h in range(ca.size):
+        ch = math.cos((h + 1) * theta_s)
+        sh = math.sin((h + 1) * theta_s)
+        al = ca[h] * ch + cb[h] * sh
+        be = cb[h] * ch - ca[h] * sh
+        _add_harmonic(model, slope, cq[h], sq[h], al, be, float(h + 1), size)
+    for q in range(size):
+        model[q] += delta[q] * slope[q] + drift * tau[q]
+
+
+@njit(cache=True, nogil=True)
+def residual_sums_grid(
+    t: np.ndarray,
+    y: np.ndarray,
+    t_ref: float,
+    omega: float,
+    dt: float,
+    tol: float,
+    consts: np.ndarray,
+    ca: np.ndarray,
+    cb: np.ndarray,
+    drifts: np.ndarray,
+) -> tuple:  # pragma: no cover - compiled
+    """:func:`residual_sums_jit` for samples on a uniform grid of step ``dt`` (s), without the
+    sample-to-sample dependence of the rotation.
+
+    Within a block of :data:`_BLOCK` samples (:data:`rotacal.signal._residual.GRID_BLOCK`) starting at θ_s = ω·(t_s − t_ref), sample q has
+    θ = θ_s + φ_q + δ with φ_q = q·ω·dt: cos(hφ_q), sin(hφ_q) come from a table made once
+    (exact ``cos``/``sin``), cos(hθ_s), sin(hθ_s) exactly once per block, so the model is
+    ``Σ_h α_h·cos(hφ_q) + β_h·sin(hφ_q)`` (α_h = a_h cos hθ_s + b_h sin hθ_s, β_h = b_h cos hθ_s −
+    a_h sin hθ_s; angle addition) plus the first-order term in δ (θ as the NumPy path forms
+    it, less its table angle: rounding of t, ~1e-12 rad), ``δ·Σ_h h·(β_h cos hφ_q − α_h sin hφ_q)``.
+    The loops over a block's samples are free of dependences (vectorised). Returns the sums
+    and True, or False when some |δ| exceeds ``tol`` (the samples are not on the
+    grid: the caller uses :func:`residual_sums_jit`); ``tol`` is that bound (rad). The NumPy
+    twin is :func:`rotacal.signal._residual.grid_residual_sums`.
+    """
+    n = t.size
+    nh = ca.shape[1]
+    nm = consts.size
+    cq = np.empty((nh, _BLOCK))
+    sq = np.empty((nh, _BLOCK))
+    wdt = omega * dt
+    for h in range(nh):
+        for q in range(_BLOCK):
+            ang = (h + 1) * (q * wdt)
+            cq[h, q] = math.cos(ang)
+            sq[h, q] = math.sin(ang)
+    delta = np.empty(_BLOCK)
+    tau = np.empty(_BLOCK)
+    slope = np.empty(_BLOCK)
+    model = np.empty((nm, _BLOCK))
+    out = np.zeros(nm)
+    part = np.zeros(nm)
+    for s in range(0, n, _BLOCK):
+        size = min(n - s, _BLOCK)
+        theta_s = omega * (t[s] - t_ref)
+        worst = 0.0
+        for q in range(size):
+            tq = t[s + q] - t_ref
+            tau[q] = tq
+            d = (omega * tq - theta_s) - q * wdt
+            delta[q] = d
+            worst = max(worst, abs(d))
+        if worst > tol:
+            return out, False
+        for j in range(nm):
+            _grid_model(
+                model[j],
+                slope,
+                cq,
+                sq,
+                consts[j],
+                ca[j],
+                cb[j],
+                drifts[j],
+                theta_s,
+                delta,
+                tau,
+                size,
+            )
+        if s % _PART == 0:
+            for j in range(nm):
+                out[j] += part[j]
+                part[j] = 0.0
+        for j in range(nm):
+            part[j] += _block_rss(y[s : s + size], model[j])
+    for j in range(nm):
+        out[j] += part[j]
+    return out, True
