@@ -115,3 +115,19 @@ def test_half_products_equal_the_triangle_sums(jit):
     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-11 * float(np.sum(zs * zs)))
     other = _allan_fast._half_products(zs, k, leaf, not jit)
     np.testing.assert_array_equal(got, other)
+
+
+@pytest.mark.parametrize("top", [1, 3])
+def test_half_products_with_the_top_levels_from_block_spectra(monkeypatch, top):
+    """The top levels of the divide and conquer taken from block spectra (the triangular sum
+    over whole blocks) give the triangle sums written out, as the plain recursion does."""
+    monkeypatch.setattr(_allan_fast, "TOP_BLOCK", 16)
+    monkeypatch.setattr(_allan_fast, "TOP_LEVELS", top)
+    k, leaf = _allan_fast._smooth_size(700)
+    assert _allan_fast._top_levels(k, leaf) == top
+    rng = np.random.default_rng(8)
+    zs = np.zeros((2, 2 * k + k // 2 + leaf))
+    zs[:, : 2 * k] = rng.standard_normal((2, 2 * k)) + 3.0  # a mean: products do not cancel
+    got = _allan_fast._half_products(zs, k, leaf)
+    ref = np.array([sum(float(zs[r, :m] @ zs[r, m : 2 * m]) for r in range(2)) for m in range(k)])
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-11 * float(np.sum(zs * zs)))

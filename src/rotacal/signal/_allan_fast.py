@@ -65,7 +65,7 @@ LEAF = 16
 #: A fast value whose estimated relative rounding error exceeds this is recomputed directly.
 FAST_RTOL = 1e-8
 #: Largest number of complex FFT elements held at once (bounds the working memory).
-_FFT_BATCH = 1 << 22
+_FFT_BATCH = 1 << 20
 #: Records of at most this many lag blocks take one whole-record power spectrum instead.
 _WHOLE_BLOCKS = 4
 #: Chunk (samples) of the direct method: keeps its temporaries in cache.
@@ -207,6 +207,60 @@ def _smooth_size(k: int) -> tuple[int, int]:
 
 
 _LEAVES = (16, 18, 20, 24, 25, 27, 30)
+#: Levels of the divide and conquer taken at once by block spectra: at most this many ...
+TOP_LEVELS = 5
+#: ... and only while the blocks keep at least this many samples.
+TOP_BLOCK = 1 << 17
+
+
+def _top_levels(k: int, leaf: int) -> int:
+    """How many top levels of :func:`_half_products` (size ``k``) :func:`_head_block_products`
+    takes: the block ``k >> top`` stays a multiple of the leaf and ≥ :data:`TOP_BLOCK`."""
+    top = 0
+    while top < TOP_LEVELS and (k >> (top + 1)) >= max(TOP_BLOCK, leaf):
+        top += 1
+    return top
+
+
+def _head_block_products(zs: np.ndarray, p: int, nq: int, chunk: int = 2048) -> np.ndarray:
+    """``t[qp + r] = Σ_rows Σ_{j<qp} zs[row, j]·zs[row, j + qp + r]`` for ``q < nq``, ``r < p``:
+    the part of the head products ``H(m) = Σ_{j<m} z_j z_{j+m}`` (``m = qp + r``) whose first
+    index lies in a whole block before ``m``'s own block — what the top ``log2(nq)`` levels of
+    :func:`_half_products` compute, without transforms as long as the record (a real FFT of
+    10⁷ points streams memory in each of its ~24 passes; blocks of ``2p`` points stay cached).
+
+    Uniformly partitioned correlation: with ``V_c`` the spectrum (length 2p) of block ``c`` of
+    ``p`` samples, ``W_c = V_c + (−1)^k·V_{c+1}`` is that of the window ``[cp, cp + 2p)`` (the
+    second block is shifted by half the length), and ``irfft(conj(V_b)·W_{b+q})[r]`` is
+    ``Σ_{i<p} zs[bp + i]·zs[(b + q)p + i + r]`` for ``r < p`` without wrap-around (``i + r <
+    2p``). The block ``q`` of ``t`` is therefore ``irfft(Σ_{b<q} conj(V_b)·W_{b+q})[:p]``: a
+    triangular sum over the blocks, bin by bin, in chunks of ``chunk`` bins (cache-sized);
+    O(nq·N/2) complex products against O(N log N) per level it replaces. ``zs`` has at least
+    ``2·nq·p`` columns (any unit u; result u²).
+    """
+    ns = zs.shape[0]
+    bins = p + 1
+    sign = np.ones(bins)
+    sign[1::2] = -1.0
+    acc = np.zeros((nq, bins), dtype=np.complex128)
+    for r in range(ns):
+        spec = sfft.rfft(zs[r, : 2 * nq * p].reshape(2 * nq, p), n=2 * p, axis=1)
+        for k0 in range(0, bins, chunk):
+            k1 = min(bins, k0 + chunk)
+            v = spec[:, k0:k1]
+            w = v[1:] * sign[k0:k1]
+            w += v[:-1]
+            u = np.conjugate(v[:nq])
+            a = acc[:, k0:k1]
+            for q in range(1, nq):
+                a[q] += np.einsum("bk,bk->k", u[:q], w[q : 2 * q])
+        del spec
+    out = np.empty(nq * p)
+    rows_per = max(1, _FFT_BATCH // p)
+    for q0 in range(0, nq, rows_per):
+        q1 = min(nq, q0 + rows_per)
+        out[q0 * p : q1 * p] = sfft.irfft(acc[q0:q1], n=2 * p, axis=1)[:, :p].ravel()
+    return out
 
 
 def _half_products(zs: np.ndarray, k: int, leaf: int, jit: bool = False) -> np.ndarray:
@@ -222,6 +276,10 @@ def _half_products(zs: np.ndarray, k: int, leaf: int, jit: bool = False) -> np.n
     ns = zs.shape[0]
     h = np.zeros(k)
     s = k
+    top = _top_levels(k, leaf)
+    if top:  # the first top levels at once from block spectra (no record-long transforms)
+        s = k >> top
+        h += _head_block_products(zs, s, 1 << top)
     while s > leaf:
         half = s // 2
         nodes = k // s
