@@ -65,7 +65,7 @@ LEAF = 16
 #: A fast value whose estimated relative rounding error exceeds this is recomputed directly.
 FAST_RTOL = 1e-8
 #: Largest number of complex FFT elements held at once (bounds the working memory).
-_FFT_BATCH = 1 << 20
+_FFT_BATCH = 1 << 18
 #: Records of at most this many lag blocks take one whole-record power spectrum instead.
 _WHOLE_BLOCKS = 4
 #: Chunk (samples) of the direct method: keeps its temporaries in cache.
@@ -146,10 +146,7 @@ def _lagged_products(z: np.ndarray, lag_max: int) -> np.ndarray:
         power += spec.imag * spec.imag
         del spec
         whole: np.ndarray = sfft.irfft(power, n=2 * (power.size - 1))
-        return whole[:lag_max].copy()
-    zp = np.zeros(nb * p)
-    zp[:n] = z
-    blocks = zp.reshape(nb, p)
+        return whole[:lag_max]  # a view: the caller reads a few lags and lets it go
     sign = np.ones(p + 1)
     sign[1::2] = -1.0
     acc = np.zeros(p + 1, dtype=np.complex128)
@@ -157,7 +154,12 @@ def _lagged_products(z: np.ndarray, lag_max: int) -> np.ndarray:
     prev: np.ndarray | None = None  # spectrum of the first block of the current batch
     for s in range(nb - 1, -1, -rows):  # walk backwards so block b + 1 is always known
         lo = max(0, s - rows + 1)
-        spec = sfft.rfft(blocks[lo : s + 1], n=2 * p, axis=1)
+        if (s + 1) * p <= n:  # whole blocks: a view of the record, no padded copy of it
+            batch = z[lo * p : (s + 1) * p].reshape(s + 1 - lo, p)
+        else:
+            batch = np.zeros((s + 1 - lo, p))
+            batch.ravel()[: n - lo * p] = z[lo * p :]
+        spec = sfft.rfft(batch, n=2 * p, axis=1)
         nxt = np.empty_like(spec)
         nxt[:-1] = spec[1:]
         nxt[-1] = prev if prev is not None else 0.0
@@ -316,15 +318,16 @@ def _group_sums(
         vals = x[nodes]
         slopes = np.diff(vals) / np.diff(nodes)
         delta = np.diff(slopes)
-        g = np.interp(np.arange(n, dtype=np.float64), nodes.astype(np.float64), vals)
-        z = x - g
+        z = np.interp(np.arange(n, dtype=np.float64), nodes.astype(np.float64), vals)
+        np.subtract(x, z, out=z)  # x − g, in the interpolant's memory
     else:
         delta = np.zeros(0)
         z = x
     L = n - 2 * ms
     # squares
     c2 = np.zeros(n + 1)
-    np.cumsum(z * z, out=c2[1:])
+    np.square(z, out=c2[1:])
+    np.cumsum(c2[1:], out=c2[1:])
     sq = c2[L] + 4.0 * (c2[ms + L] - c2[ms]) + (c2[n] - c2[2 * ms])
     # full-range lagged products up to lag 2·m_hi
     r = _lagged_products(z, 2 * m_hi)
