@@ -53,10 +53,13 @@ def test_direct_sums_twins_agree():
     np.testing.assert_allclose(a, b, rtol=1e-12, atol=0)
 
 
-@pytest.mark.parametrize("whole", [0, 1_000])
-def test_lagged_products_blocked_and_whole_equal_correlate(monkeypatch, whole):
-    """R(ℓ) = Σ z_i z_{i+ℓ} by blocks (whole = 0) and by one whole-record power spectrum."""
+@pytest.mark.parametrize(("whole", "long_above"), [(0, 1 << 40), (1_000, 1 << 40), (0, 1_000)])
+def test_lagged_products_blocked_and_whole_equal_correlate(monkeypatch, whole, long_above):
+    """R(ℓ) = Σ z_i z_{i+ℓ} by blocks (whole = 0), by one whole-record power spectrum, and by
+    blocks shorter than the lags (the partitioned correlation along the block index)."""
     monkeypatch.setattr(_allan_fast, "_WHOLE_BLOCKS", whole)
+    monkeypatch.setattr(_allan_fast, "_LONG_ABOVE", long_above)
+    monkeypatch.setattr(_allan_fast, "_LONG_BLOCK", 1024)
     rng = np.random.default_rng(3)
     z = rng.standard_normal(20_011)
     lag_max = 5000
