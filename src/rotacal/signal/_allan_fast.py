@@ -191,17 +191,19 @@ def _lagged_products_long(z: np.ndarray, lag_max: int, p: int) -> np.ndarray:
     spectrum (length 2p) of block ``b`` and ``W_c = U_c + (−1)^k·U_{c+1}`` that of the window
     ``[cp, cp + 2p)``, the lag block ``d`` of ``R`` is ``irfft(Σ_b conj(U_b)·W_{b+d})[:p]``
     (no wrap-around: ``i + r < 2p``). Bin by bin, that sum over the blocks is a correlation along
-    the block index, taken by FFTs of length ``Q ≥ n_b + n_d − 1`` along it in chunks of bins
-    (no wrap-around either); each chunk's result overwrites its own bins of the block spectra.
-    Memory: the spectra (16 bytes a sample) and the result, with cache-sized temporaries, where a
-    whole-record transform holds several record-sized buffers (and streams through each of
-    them ~24 times).
+    the block index, taken by FFTs of length ``Q ≥ n_b + n_d`` along it (no wrap-around either:
+    ``b + d + 1 < Q``). As ``W`` is ``U`` plus ``U`` shifted by one block, its transform along
+    the blocks is ``Û(f)·(1 + (−1)^k·e^{2πif/Q})``, so one forward transform serves both:
+    ``C = ifft(|Û|²·(1 + (−1)^k·e^{2πif/Q}))``, in chunks of bins, each chunk's result written
+    over its own bins of the block spectra. Memory: the spectra (16 bytes a sample) and the
+    result, with cache-sized temporaries, where a whole-record transform holds several
+    record-sized buffers (and streams through each of them ~24 times).
     """
     n = z.size
     nb = -(-n // p)
     nd = -(-lag_max // p)
     bins = p + 1
-    spec = np.zeros((nb + 1, bins), dtype=np.complex128)  # the last row: the empty block nb
+    spec = np.empty((nb, bins), dtype=np.complex128)
     step = max(1, _FFT_BATCH // bins)
     full = n // p
     for b0 in range(0, nb, step):
@@ -212,18 +214,18 @@ def _lagged_products_long(z: np.ndarray, lag_max: int, p: int) -> np.ndarray:
             batch = np.zeros((b1 - b0, p))
             batch.ravel()[: n - b0 * p] = z[b0 * p :]
         spec[b0:b1] = sfft.rfft(batch, n=2 * p, axis=1)
-    sign = np.ones(bins)
-    sign[1::2] = -1.0
-    q = sfft.next_fast_len(nb + nd - 1)
-    width = max(1, _FFT_BATCH // q)
+    q = sfft.next_fast_len(nb + nd)
+    width = 2 * max(1, _FFT_BATCH // (2 * q))  # even: each chunk starts on an even bin
+    shift = np.exp(2j * np.pi * np.arange(q) / q)
+    factor = np.empty((q, width), dtype=np.complex128)
+    factor[:, 0::2] = (1.0 + shift)[:, None]  # (−1)^k = +1
+    factor[:, 1::2] = (1.0 - shift)[:, None]  # (−1)^k = −1
     for k0 in range(0, bins, width):
         k1 = min(bins, k0 + width)
-        u = spec[:nb, k0:k1]
-        w = spec[1:, k0:k1] * sign[k0:k1]
-        w += u
-        fu = sfft.fft(u, n=q, axis=0)
-        np.conjugate(fu, out=fu)
-        fu *= sfft.fft(w, n=q, axis=0)
+        fu = sfft.fft(spec[:, k0:k1], n=q, axis=0)
+        power = fu.real * fu.real
+        power += fu.imag * fu.imag
+        np.multiply(power, factor[:, : k1 - k0], out=fu)
         spec[:nd, k0:k1] = sfft.ifft(fu, axis=0, overwrite_x=True)[:nd]
     out = np.empty(nd * p)
     rows = max(1, _FFT_BATCH // bins)
