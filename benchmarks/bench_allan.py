@@ -14,7 +14,9 @@ points (default 10⁷):
    extrapolated both with the exponent those two give (≈ 1.5: overheads still count there) and
    with N², its asymptotic cost (N/2 values of τ at O(N) each).
 
-Best of ``--repeat`` (default 1 for the big runs) with ``time.perf_counter``; no asserts.
+Best of ``--repeat`` (default 1 for the big runs): wall time (``time.perf_counter``) and, in
+the ``cpu`` column, the CPU time of this process (user + system, ``time.process_time``; for the
+command, of the child) — on a shared machine the CPU time is the steadier figure. No asserts.
 
 Run: ``python benchmarks/bench_allan.py [--samples N] [--repeat R] [--quick] [--cli]``
 """
@@ -28,6 +30,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import math  # noqa: E402
+import resource  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
@@ -44,14 +47,26 @@ FS_HZ = 100.0
 RAMP_DEG_S2 = 1e-2
 
 
+#: CPU seconds (user + system) of the last :func:`best_of` (its best run) or :func:`time_cli`.
+LAST_CPU = [0.0]
+
+
 def best_of(fn: Callable[[], Any], repeat: int) -> tuple[float, Any]:
+    """Best wall time of ``repeat`` calls and the last result; the best CPU time in LAST_CPU."""
     best = math.inf
+    cpu = math.inf
     out = None
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         out = fn()
+        cpu = min(cpu, time.process_time() - c0)
         best = min(best, time.perf_counter() - t0)
+    LAST_CPU[0] = cpu
     return best, out
+
+
+def fmt_cpu() -> str:
+    return f"cpu {LAST_CPU[0]:7.3f} s"
 
 
 def gyro_rate(n: int, seed: int = 1) -> np.ndarray:
@@ -91,16 +106,26 @@ def literal_check(y: np.ndarray, res: Any, count: int = 40) -> float:
     return float(np.max(np.abs(res.adev[pick] / adev - 1.0)))
 
 
-def time_cli(y: np.ndarray) -> float:
-    """Seconds of ``rotacal allan FILE --taus all --json OUT`` in a subprocess (NPZ input)."""
+def time_cli(y: np.ndarray) -> tuple[float, float]:
+    """Seconds of ``rotacal allan FILE --taus all --json OUT`` in a subprocess (NPZ input; its
+    CPU time in LAST_CPU), and of ``np.load`` of the same file's rate column in this process."""
     with tempfile.TemporaryDirectory() as folder:
         capture = os.path.join(folder, "gyro.npz")
         np.savez(capture, rate_deg_s=y, time_s=np.arange(y.size) / FS_HZ)
+        t0 = time.perf_counter()
+        with np.load(capture) as data:
+            loaded = data["rate_deg_s"]
+        t_load = time.perf_counter() - t0
+        del loaded
         command = [sys.executable, "-m", "rotacal", "allan", capture, "--taus", "all"]
         command += ["--json", os.path.join(folder, "out.json")]
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
         subprocess.run(command, check=True, capture_output=True)
-        return time.perf_counter() - t0
+        wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        LAST_CPU[0] = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        return wall, t_load
 
 
 def main() -> None:
@@ -126,27 +151,31 @@ def main() -> None:
     print(f"{'case':44s} {'time':>13s}  {'ratio':>8s}  note")
 
     t_rc, res = best_of(lambda: overlapping_adev(y, fs=FS_HZ, taus="octave"), args.repeat)
+    cpu_rc = LAST_CPU[0]
     t_at, ref = best_of(
         lambda: allantools.oadev(y, rate=FS_HZ, data_type="freq", taus="octave"), args.repeat
     )
     diff = float(np.max(np.abs(res.adev / ref[1] - 1.0)))
-    print(f"{'octave τ: rotacal overlapping_adev':44s} {fmt(t_rc)}  {1.0:8.2f}  {res.tau_s.size} τ")
+    print(
+        f"{'octave τ: rotacal overlapping_adev':44s} {fmt(t_rc)}  {1.0:8.2f}  {res.tau_s.size} τ, "
+        f"cpu {cpu_rc:7.3f} s"
+    )
     print(
         f"{'octave τ: allantools.oadev':44s} {fmt(t_at)}  {t_at / t_rc:8.2f}  "
-        f"max |rel diff| {diff:.1e}"
+        f"max |rel diff| {diff:.1e}, {fmt_cpu()} ({LAST_CPU[0] / cpu_rc:.2f}× rotacal's)"
     )
 
     t_all, res_all = best_of(lambda: overlapping_adev(y, fs=FS_HZ, taus="all"), args.repeat)
     print(
         f"{'every τ: rotacal overlapping_adev(taus=all)':44s} {fmt(t_all)}  {t_all / t_rc:8.2f}  "
-        f"{res_all.tau_s.size:,} τ, {res_all._n_direct} computed directly; "
+        f"{res_all.tau_s.size:,} τ, {res_all._n_direct} computed directly, {fmt_cpu()}; "
         f"max |rel diff| from the literal sum {literal_check(y, res_all):.1e}"
     )
     ramp = y + RAMP_DEG_S2 * np.arange(n) / FS_HZ
     t_ramp, res_ramp = best_of(lambda: overlapping_adev(ramp, fs=FS_HZ, taus="all"), args.repeat)
     print(
         f"{'every τ, with a rate ramp':44s} {fmt(t_ramp)}  {t_ramp / t_rc:8.2f}  "
-        f"{res_ramp._n_direct} computed directly; "
+        f"{res_ramp._n_direct} computed directly, {fmt_cpu()}; "
         f"max |rel diff| {literal_check(ramp, res_ramp):.1e}"
     )
     if args.numpy_twin:
@@ -157,10 +186,11 @@ def main() -> None:
             f"{'every τ, ROTACAL_NUMBA=0 (NumPy direct sums)':44s} {fmt(t_np)}  {t_np / t_rc:8.2f}"
         )
     if args.cli:
-        t_cli = time_cli(y)
+        t_cli, t_load = time_cli(y)
         print(
             f"{'rotacal allan --taus all (NPZ → JSON)':44s} {fmt(t_cli)}  {t_cli / t_rc:8.2f}  "
-            f"{t_cli / t_all:.2f}× the in-process every-τ time"
+            f"{fmt_cpu()}; {t_cli / (t_load + t_all):.2f}× np.load ({t_load:.2f} s) + the "
+            "in-process every-τ time"
         )
     sizes = (10_000, 100_000)
     times = []

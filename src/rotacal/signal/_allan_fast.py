@@ -16,11 +16,15 @@ rounding. The derivation (this module is its reference):
               − 4·(2R(m) − H(m) − T(m)) + 2·R(2m),
 
    because ``Σ_{i<L} z_i z_{i+m} = R(m) − T(m)``, ``Σ_{i<L} z_{i+m} z_{i+2m} = R(m) − H(m)`` and
-   ``Σ_{i<L} z_i z_{i+2m} = R(2m)``. Squares come from prefix sums; ``R`` for all lags from one
-   batched FFT correlation over blocks (overlap-add of per-block spectra); ``H`` and ``T`` for all
-   ``m`` from a divide and conquer of FFT correlations (the region ``j < m`` is a triangle in the
-   (j, lag) plane: its lower half is one full block correlation, its two quarter triangles
-   recurse), O(K log² K) for ``m < K``.
+   ``Σ_{i<L} z_i z_{i+2m} = R(2m)``. Squares come from prefix sums (built in blocks, so that
+   they do not drift over the record); ``R`` for all lags from one batched FFT correlation over
+   blocks (overlap-add of per-block spectra; for lags longer than a block, a partitioned
+   correlation along the block index); ``H`` and ``T`` for all ``m`` from a divide and conquer
+   of FFT correlations (the region ``j < m`` is a triangle in the (j, lag) plane: its lower half
+   is one full block correlation, its two quarter triangles recurse), O(K log² K) for ``m < K``;
+   its top levels at once from the spectra of 2·32 blocks (a triangular sum over the blocks,
+   :func:`_head_block_products`). No transform is longer than a few 10⁵ points: longer ones
+   stream the whole record through memory in each pass and run ~5× slower per point.
 
 2. **Conditioning.** The expansion subtracts large sums; its rounding error is about
    ``ε·log N·Σz²`` against a result ``S(m)``. A straight line is annihilated by the second
@@ -65,7 +69,10 @@ LEAF = 16
 #: A fast value whose estimated relative rounding error exceeds this is recomputed directly.
 FAST_RTOL = 1e-8
 #: Largest number of complex FFT elements held at once (bounds the working memory).
-_FFT_BATCH = 1 << 22
+_FFT_BATCH = 1 << 18
+#: More lags than this (samples): :func:`_lagged_products_long`, with blocks of _LONG_BLOCK.
+_LONG_ABOVE = 1 << 17
+_LONG_BLOCK = 1 << 15
 #: Records of at most this many lag blocks take one whole-record power spectrum instead.
 _WHOLE_BLOCKS = 4
 #: Chunk (samples) of the direct method: keeps its temporaries in cache.
@@ -133,23 +140,25 @@ def _lagged_products(z: np.ndarray, lag_max: int) -> np.ndarray:
     Blocks of length ``P ≥ lag_max`` are transformed once (length 2P, zero padded); the spectrum
     of block ``b`` followed by block ``b + 1`` is ``U_b + (−1)^k U_{b+1}``, and the per-block
     correlation spectra are summed before one inverse transform. A record shorter than one
-    block takes its power spectrum instead (one forward, one inverse transform).
+    block takes its power spectrum instead (one forward, one inverse transform); lags longer
+    than ``_LONG_ABOVE`` go by :func:`_lagged_products_long` (blocks shorter than the lags).
     """
     n = z.size
+    if lag_max > _LONG_ABOVE and n > _WHOLE_BLOCKS * _LONG_BLOCK:
+        return _lagged_products_long(z, lag_max, _LONG_BLOCK)
     p = sfft.next_fast_len(max(lag_max, 4096), real=True)
     nb = -(-n // p)
     if nb <= _WHOLE_BLOCKS:
         # few blocks: the power spectrum of the whole record, zero padded past n + lag_max, costs
         # fewer transform points than the 2·nb·p of the blocks (4× fewer at nb = 2)
         spec = sfft.rfft(z, n=sfft.next_fast_len(n + lag_max, real=True))
-        power = spec.real * spec.real
-        power += spec.imag * spec.imag
-        del spec
-        whole: np.ndarray = sfft.irfft(power, n=2 * (power.size - 1))
-        return whole[:lag_max].copy()
-    zp = np.zeros(nb * p)
-    zp[:n] = z
-    blocks = zp.reshape(nb, p)
+        re, im = spec.real, spec.imag  # |U|² in the spectrum's own memory (no temporaries)
+        np.square(re, out=re)
+        np.square(im, out=im)
+        re += im
+        im[:] = 0.0
+        whole: np.ndarray = sfft.irfft(spec, n=2 * (spec.size - 1))
+        return whole[:lag_max]  # a view: the caller reads a few lags and lets it go
     sign = np.ones(p + 1)
     sign[1::2] = -1.0
     acc = np.zeros(p + 1, dtype=np.complex128)
@@ -157,7 +166,12 @@ def _lagged_products(z: np.ndarray, lag_max: int) -> np.ndarray:
     prev: np.ndarray | None = None  # spectrum of the first block of the current batch
     for s in range(nb - 1, -1, -rows):  # walk backwards so block b + 1 is always known
         lo = max(0, s - rows + 1)
-        spec = sfft.rfft(blocks[lo : s + 1], n=2 * p, axis=1)
+        if (s + 1) * p <= n:  # whole blocks: a view of the record, no padded copy of it
+            batch = z[lo * p : (s + 1) * p].reshape(s + 1 - lo, p)
+        else:
+            batch = np.zeros((s + 1 - lo, p))
+            batch.ravel()[: n - lo * p] = z[lo * p :]
+        spec = sfft.rfft(batch, n=2 * p, axis=1)
         nxt = np.empty_like(spec)
         nxt[:-1] = spec[1:]
         nxt[-1] = prev if prev is not None else 0.0
@@ -168,6 +182,57 @@ def _lagged_products(z: np.ndarray, lag_max: int) -> np.ndarray:
         acc += np.einsum("ij,ij->j", spec, nxt)
     r: np.ndarray = sfft.irfft(acc, n=2 * p)[:lag_max]
     return r
+
+
+def _lagged_products_long(z: np.ndarray, lag_max: int, p: int) -> np.ndarray:
+    """``R(ℓ)`` for ``ℓ < lag_max`` of a long record with lags longer than one block of ``p``.
+
+    Uniformly partitioned correlation, transforms of ``2p`` points only: with ``U_b`` the
+    spectrum (length 2p) of block ``b`` and ``W_c = U_c + (−1)^k·U_{c+1}`` that of the window
+    ``[cp, cp + 2p)``, the lag block ``d`` of ``R`` is ``irfft(Σ_b conj(U_b)·W_{b+d})[:p]``
+    (no wrap-around: ``i + r < 2p``). Bin by bin, that sum over the blocks is a correlation along
+    the block index, taken by FFTs of length ``Q ≥ n_b + n_d`` along it (no wrap-around either:
+    ``b + d + 1 < Q``). As ``W`` is ``U`` plus ``U`` shifted by one block, its transform along
+    the blocks is ``Û(f)·(1 + (−1)^k·e^{2πif/Q})``, so one forward transform serves both:
+    ``C = ifft(|Û|²·(1 + (−1)^k·e^{2πif/Q}))``, in chunks of bins, each chunk's result written
+    over its own bins of the block spectra. Memory: the spectra (16 bytes a sample) and the
+    result, with cache-sized temporaries, where a whole-record transform holds several
+    record-sized buffers (and streams through each of them ~24 times).
+    """
+    n = z.size
+    nb = -(-n // p)
+    nd = -(-lag_max // p)
+    bins = p + 1
+    spec = np.empty((nb, bins), dtype=np.complex128)
+    step = max(1, _FFT_BATCH // bins)
+    full = n // p
+    for b0 in range(0, nb, step):
+        b1 = min(nb, b0 + step)
+        if b1 <= full:
+            batch = z[b0 * p : b1 * p].reshape(b1 - b0, p)
+        else:
+            batch = np.zeros((b1 - b0, p))
+            batch.ravel()[: n - b0 * p] = z[b0 * p :]
+        spec[b0:b1] = sfft.rfft(batch, n=2 * p, axis=1)
+    q = sfft.next_fast_len(nb + nd)
+    width = 2 * max(1, _FFT_BATCH // (2 * q))  # even: each chunk starts on an even bin
+    shift = np.exp(2j * np.pi * np.arange(q) / q)
+    factor = np.empty((q, width), dtype=np.complex128)
+    factor[:, 0::2] = (1.0 + shift)[:, None]  # (−1)^k = +1
+    factor[:, 1::2] = (1.0 - shift)[:, None]  # (−1)^k = −1
+    for k0 in range(0, bins, width):
+        k1 = min(bins, k0 + width)
+        fu = sfft.fft(spec[:, k0:k1], n=q, axis=0)
+        power = fu.real * fu.real
+        power += fu.imag * fu.imag
+        np.multiply(power, factor[:, : k1 - k0], out=fu)
+        spec[:nd, k0:k1] = sfft.ifft(fu, axis=0, overwrite_x=True)[:nd]
+    out = np.empty(nd * p)
+    rows = max(1, _FFT_BATCH // bins)
+    for d0 in range(0, nd, rows):
+        d1 = min(nd, d0 + rows)
+        out[d0 * p : d1 * p] = sfft.irfft(spec[d0:d1], n=2 * p, axis=1)[:, :p].ravel()
+    return out[:lag_max]
 
 
 def _correlate_rows(u: np.ndarray, v: np.ndarray, n: int, nout: int) -> np.ndarray:
@@ -207,6 +272,64 @@ def _smooth_size(k: int) -> tuple[int, int]:
 
 
 _LEAVES = (16, 18, 20, 24, 25, 27, 30)
+#: Levels of the divide and conquer taken at once by block spectra: at most this many ...
+TOP_LEVELS = 5
+#: ... and only while the blocks keep at least this many samples.
+TOP_BLOCK = 1 << 17
+
+
+def _top_levels(k: int, leaf: int) -> int:
+    """How many top levels of :func:`_half_products` (size ``k``) :func:`_head_block_products`
+    takes: the block ``k >> top`` stays a multiple of the leaf and ≥ :data:`TOP_BLOCK`."""
+    top = 0
+    while top < TOP_LEVELS and (k >> (top + 1)) >= max(TOP_BLOCK, leaf):
+        top += 1
+    return top
+
+
+def _head_block_products(zs: np.ndarray, p: int, nq: int, chunk: int = 2048) -> np.ndarray:
+    """``t[qp + r] = Σ_rows Σ_{j<qp} zs[row, j]·zs[row, j + qp + r]`` for ``q < nq``, ``r < p``:
+    the part of the head products ``H(m) = Σ_{j<m} z_j z_{j+m}`` (``m = qp + r``) whose first
+    index lies in a whole block before ``m``'s own block — what the top ``log2(nq)`` levels of
+    :func:`_half_products` compute, without transforms as long as the record (a real FFT of
+    10⁷ points streams memory in each of its ~24 passes; blocks of ``2p`` points stay cached).
+
+    Uniformly partitioned correlation: with ``V_c`` the spectrum (length 2p) of block ``c`` of
+    ``p`` samples, ``W_c = V_c + (−1)^k·V_{c+1}`` is that of the window ``[cp, cp + 2p)`` (the
+    second block is shifted by half the length), and ``irfft(conj(V_b)·W_{b+q})[r]`` is
+    ``Σ_{i<p} zs[bp + i]·zs[(b + q)p + i + r]`` for ``r < p`` without wrap-around (``i + r <
+    2p``). The block ``q`` of ``t`` is therefore ``irfft(Σ_{b<q} conj(V_b)·W_{b+q})[:p]``: a
+    triangular sum over the blocks, bin by bin, in chunks of ``chunk`` bins (cache-sized);
+    O(nq·N/2) complex products against O(N log N) per level it replaces. ``zs`` has at least
+    ``2·nq·p`` columns (any unit u; result u²).
+    """
+    ns = zs.shape[0]
+    bins = p + 1
+    sign = np.ones(bins)
+    sign[1::2] = -1.0
+    acc = np.zeros((nq, bins), dtype=np.complex128)
+    spec = np.empty((2 * nq, bins), dtype=np.complex128)  # one buffer for the rows in turn
+    step = max(1, _FFT_BATCH // bins)  # transforms in batches: small temporaries, reused
+    for r in range(ns):
+        blocks = zs[r, : 2 * nq * p].reshape(2 * nq, p)
+        for b0 in range(0, 2 * nq, step):
+            spec[b0 : b0 + step] = sfft.rfft(blocks[b0 : b0 + step], n=2 * p, axis=1)
+        for k0 in range(0, bins, chunk):
+            k1 = min(bins, k0 + chunk)
+            v = spec[:, k0:k1]
+            w = v[1:] * sign[k0:k1]
+            w += v[:-1]
+            u = np.conjugate(v[:nq])
+            a = acc[:, k0:k1]
+            for q in range(1, nq):
+                a[q] += np.einsum("bk,bk->k", u[:q], w[q : 2 * q])
+    del spec
+    out = np.empty(nq * p)
+    rows_per = max(1, _FFT_BATCH // p)
+    for q0 in range(0, nq, rows_per):
+        q1 = min(nq, q0 + rows_per)
+        out[q0 * p : q1 * p] = sfft.irfft(acc[q0:q1], n=2 * p, axis=1)[:, :p].ravel()
+    return out
 
 
 def _half_products(zs: np.ndarray, k: int, leaf: int, jit: bool = False) -> np.ndarray:
@@ -222,6 +345,10 @@ def _half_products(zs: np.ndarray, k: int, leaf: int, jit: bool = False) -> np.n
     ns = zs.shape[0]
     h = np.zeros(k)
     s = k
+    top = _top_levels(k, leaf)
+    if top:  # the first top levels at once from block spectra (no record-long transforms)
+        s = k >> top
+        h += _head_block_products(zs, s, 1 << top)
     while s > leaf:
         half = s // 2
         nodes = k // s
@@ -258,15 +385,14 @@ def _group_sums(
         vals = x[nodes]
         slopes = np.diff(vals) / np.diff(nodes)
         delta = np.diff(slopes)
-        g = np.interp(np.arange(n, dtype=np.float64), nodes.astype(np.float64), vals)
-        z = x - g
+        z = np.interp(np.arange(n, dtype=np.float64), nodes.astype(np.float64), vals)
+        np.subtract(x, z, out=z)  # x − g, in the interpolant's memory
     else:
         delta = np.zeros(0)
         z = x
     L = n - 2 * ms
     # squares
-    c2 = np.zeros(n + 1)
-    np.cumsum(z * z, out=c2[1:])
+    c2, _ = _prefix_sums(z, square=True)
     sq = c2[L] + 4.0 * (c2[ms + L] - c2[ms]) + (c2[n] - c2[2 * ms])
     # full-range lagged products up to lag 2·m_hi
     r = _lagged_products(z, 2 * m_hi)
@@ -301,10 +427,8 @@ def _knot_terms(
     start = int(knots[0]) - c
     zw = z[start : start + knots.size * w].reshape(knots.size, w)
     y = np.einsum("k,kt->t", delta, zw)
-    d0 = np.zeros(w + 1)
-    d1 = np.zeros(w + 1)
-    np.cumsum(y, out=d0[1:])
-    np.cumsum(y * np.arange(w, dtype=np.float64), out=d1[1:])
+    d0, _ = _prefix_sums(y)
+    d1, _ = _prefix_sums(y * np.arange(w, dtype=np.float64))
     mm = ms.astype(np.int64)
     cross = np.zeros(ms.size)
     for mult, sh in ((1.0, 0), (-2.0, 1), (1.0, 2)):
@@ -345,7 +469,9 @@ def second_difference_sums(
     derived in this module's docstring (expansion, divide and conquer, local detrending).
     Measured against the literal sum: ≤ 5e-10 relative for white/flicker/random-walk FM, white
     PM and a dominant rate ramp (tests/signal/test_allan.py); against the literal sum in long
-    double on the same phase ≤ 1e-12 for white FM and ramps, ≤ 3e-11 for random-walk FM.
+    double on the same phase ≤ 1e-12 for white FM and ramps, ≤ 3e-11 for random-walk FM, and
+    ≤ 1e-12 at spot-checked m of the 10⁷-sample gyro record of ``benchmarks/bench_allan.py``
+    (white + random-walk rate noise), with and without its rate ramp.
     """
     n = z.size
     jit = use_numba(n, jit)
@@ -425,6 +551,36 @@ def _without_parabola(z: np.ndarray) -> tuple[np.ndarray, float]:
     return t, 2.0 * a
 
 
+#: Block of :func:`_prefix_sums` (samples).
+_PREFIX_BLOCK = 4096
+
+
+def _prefix_sums(v: np.ndarray, *, square: bool = False) -> tuple[np.ndarray, float]:
+    """Prefix sums ``P[i] = Σ_{j<i} v_j`` (or of ``v_j²``; ``P[0] = 0``, ``N + 1`` values) and
+    the largest block sum of ``|v|`` (of ``v²``), built in blocks of ``b`` samples: a running sum
+    within each block, the blocks' (pairwise) totals added in long double. Each ``P[i]`` is then
+    off by at most ``u·(b·max_block Σ|v| + |P[i]|)`` (u = ε/2), where one running sum over the
+    record drifts by up to ``u·i·max|P|``: for the squares of a 10⁷-sample phase that drift
+    alone cost S(m) ~1e-10 relative (their differences are much smaller than their sums).
+    """
+    n = v.size
+    b = _PREFIX_BLOCK
+    nb = -(-n // b)
+    flat = np.zeros(nb * b + 1)
+    if square:
+        np.square(v, out=flat[1 : n + 1])
+    else:
+        flat[1 : n + 1] = v
+    blocks = flat[1:].reshape(nb, b)
+    totals = blocks.sum(axis=1)
+    block_abs = float(np.max(totals)) if square else float(np.max(np.abs(blocks).sum(axis=1)))
+    offsets = np.zeros(nb, dtype=np.longdouble)
+    np.cumsum(totals[:-1].astype(np.longdouble), out=offsets[1:])
+    np.cumsum(blocks, axis=1, out=blocks)
+    blocks += offsets.astype(np.float64)[:, None]
+    return flat[: n + 1], block_abs
+
+
 class _RampTerms:
     """The exact parabola's share of ``S(m)``: with ``d_i(x) = d_i(w) + 2a·m²``,
 
@@ -434,24 +590,13 @@ class _RampTerms:
     ``Σ w[N−m, N) − Σ w[N−2m, N−m) − Σ w[m, 2m) + Σ w[0, m)``, taken from prefix sums of ``w``
     built in blocks (a running sum within each block, the blocks' totals summed in long double),
     so that each prefix sum is off by at most ``u·(b·max_block Σ|w| + |P|)`` (u = ε/2, b the
-    block): that bound enters each value's error magnitude.
+    block; :func:`_prefix_sums`): that bound enters each value's error magnitude.
     """
-
-    _BLOCK = 4096
 
     def __init__(self, w: np.ndarray, curvature: float, nlog: float) -> None:
         self.curvature = curvature
-        n, b = w.size, self._BLOCK
-        nb = -(-n // b)
-        blocks = np.zeros((nb, b))
-        blocks.ravel()[:n] = w
-        totals = np.zeros(nb, dtype=np.longdouble)
-        np.cumsum(blocks.sum(axis=1, dtype=np.longdouble)[:-1], out=totals[1:])
-        block_abs = float(np.max(np.abs(blocks).sum(axis=1)))
-        np.cumsum(blocks, axis=1, out=blocks)
-        blocks += totals.astype(np.float64)[:, None]
-        self.prefix = np.zeros(n + 1)
-        self.prefix[1:] = blocks.ravel()[:n]
+        b = _PREFIX_BLOCK
+        self.prefix, block_abs = _prefix_sums(w)
         u = 0.5 * _EPS
         # D_w is 8 prefix sums with ± signs; the bound in units of the guard's magnitude
         err_d = 8.0 * u * (b * block_abs + 2.0 * float(np.max(np.abs(self.prefix))))

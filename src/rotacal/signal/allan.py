@@ -533,10 +533,13 @@ def deviation_from_sums(
     n_terms = n_phase - 2 * ms
     tau = ms / fs_hz
     adev = np.sqrt(np.maximum(sums, 0.0) / (2.0 * n_terms)) / tau
-    edf = np.empty(ms.size)
-    for a in np.unique(alphas).tolist():
-        sel = alphas == a
-        edf[sel] = edf_oadev(n_phase, ms[sel], int(a))
+    if alphas.min() == alphas.max():  # one noise type (the usual case): no masks over every τ
+        edf = edf_oadev(n_phase, ms, int(alphas[0]))
+    else:
+        edf = np.empty(ms.size)
+        for a in np.unique(alphas).tolist():
+            sel = alphas == a
+            edf[sel] = edf_oadev(n_phase, ms[sel], int(a))
     lo, hi = adev_confidence_interval(adev, edf, confidence)
     alpha_out: Any = int(alphas[0]) if np.all(alphas == alphas[0]) else alphas
     return AllanDeviation(
