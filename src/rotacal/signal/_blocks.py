@@ -180,12 +180,17 @@ class HarmonicFitAccumulator:
             g0f = (float(t[0]) - self._t0) / self._dt
             g0 = round(g0f)
             on_grid = False
-            if g0 >= 0 and abs(g0f - g0) * self._dt <= self._tol:
+            # the rounding of a time stamp grows with |t|: a later chunk's own tolerance (with
+            # the first chunk's, its stamps 10⁷ samples on were all "off the grid" by 1e-13 s)
+            tol = max(
+                self._tol, min(0.01 * self._dt, grid_tolerance(self._dt, self._t0, float(t[-1])))
+            )
+            if g0 >= 0 and abs(g0f - g0) * self._dt <= tol:
                 if uniform_dt is not None and g0 == 0 and n > 1:
-                    on_grid = abs(uniform_dt - self._dt) * (n - 1) <= self._tol
+                    on_grid = abs(uniform_dt - self._dt) * (n - 1) <= tol
                 if not on_grid:
                     dev = max_grid_deviation(t, self._t0, self._dt, g0)
-                    on_grid = dev <= self._tol
+                    on_grid = dev <= tol
             if on_grid:
                 s2 = self._add_uniform(y, g0)
             else:

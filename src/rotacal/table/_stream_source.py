@@ -150,7 +150,9 @@ def chunks_from_file(
     :func:`rotacal.io.iter_capture_chunks` (CSV, NPZ, HDF5, TDMS; uncompressed NPZ members and
     contiguous HDF5 datasets are memory-mapped; the reader hands each chunk's pages back once
     the next chunk is asked for). ``chunk_rows`` must be a whole number ≥ 1
-    (ConfigError); file errors are raised by the first pass.
+    (ConfigError); file errors are raised by the first pass. Once one pass has read the whole
+    file with the reader's checks (CRC-32 of NPZ members, NaN/inf), later passes skip them
+    (``verified``): the analysis reads the same file up to eight times.
     """
     if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int | np.integer):
         raise ConfigError(f"chunk_rows must be a whole number of rows, not {chunk_rows!r}")
@@ -158,7 +160,13 @@ def chunks_from_file(
         raise ConfigError(f"chunk_rows must be at least 1, not {chunk_rows}")
     rows = int(chunk_rows)
 
+    read_through = False
+
     def chunks() -> Iterator[dict[str, np.ndarray]]:
-        yield from iter_capture_chunks(path, columns, chunk_rows=rows, mapping=mapping, group=group)
+        nonlocal read_through
+        yield from iter_capture_chunks(
+            path, columns, chunk_rows=rows, mapping=mapping, group=group, verified=read_through
+        )
+        read_through = True  # reached only when the pass ran to the end (and its checks held)
 
     return chunks
