@@ -336,7 +336,8 @@ def plan_reversals(
         k_range = (k0, k0)
     if n_trans < 2:
         first_change = run_len = np.empty(0, dtype=np.intp)
-        kinds, level = np.empty(0, dtype=np.int8), np.empty(0)
+        kinds = np.empty(0, dtype=np.int8)
+        level: FloatArray = np.empty(0)
     else:
         first_change, run_len, kinds, level = _candidates(ka, dk)
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import tempfile
 from collections.abc import Iterator
-from typing import IO
+import io
 
 import numpy as np
 
@@ -38,7 +38,7 @@ class MomentStore:
         self.blocks = 0  # rows of all records
         self._held: list[Record] = []
         self._held_bytes = 0
-        self._file: IO[bytes] | None = None
+        self._file: io.FileIO | None = None
         # per spilled record: rows, whether P is stored, byte offset of j in the file
         self._index: list[tuple[int, bool, int]] = []
         self._end = 0
@@ -62,7 +62,9 @@ class MomentStore:
         self._write(j, p, q)
 
     def _spill(self) -> None:
-        self._file = tempfile.TemporaryFile(buffering=0)
+        raw = tempfile.TemporaryFile(buffering=0)  # unbuffered: a FileIO
+        assert isinstance(raw, io.FileIO)
+        self._file = raw
         for record in self._held:
             self._write(*record)
         self._held = []
@@ -73,7 +75,7 @@ class MomentStore:
         self._index.append((j.size, p is not None, self._end))
         for arr in (j.astype(np.int64), p, q):
             if arr is not None:
-                data = memoryview(np.ascontiguousarray(arr, dtype=arr.dtype)).cast("B")
+                data = np.ascontiguousarray(arr).data.cast("B")
                 self._file.seek(self._end)
                 while data:  # a raw file may write less than asked
                     done = self._file.write(data) or 0
