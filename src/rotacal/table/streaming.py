@@ -20,10 +20,11 @@ the capture's length. The capture is read in passes, each a fresh call of ``chun
    position error of eq. (2) (:mod:`rotacal.table._stream_fit`); the FOG's integrated angle, SNR
    and its own eq. (2) on the way.
 
-Passes after the first stop reading after the last sample they need. What grows with the capture
-is only per-event: the encoder's transition list (16 bytes per transition), the reversal windows,
-the block moments of the fit (~1 % of the analysed samples) and the decimated copies (≈ 20 000
-points each).
+Passes after the first stop reading after the last sample they need, and the reader's checks
+(NPZ CRC-32, NaN/inf) run on the first pass only. What grows with the capture is only per-event:
+the encoder's reversal candidates (the transitions are planned chunk by chunk), the reversal
+windows and the decimated copies (≈ 20 000 points each); the block moments of the fit (~0.2 % of
+the analysed samples' bytes) move to a temporary file past 32 MB, so memory is flat.
 
 References
 ----------
