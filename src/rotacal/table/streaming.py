@@ -23,8 +23,8 @@ the capture's length. The capture is read in passes, each a fresh call of ``chun
 Passes after the first stop reading after the last sample they need, and the reader's checks
 (NPZ CRC-32, NaN/inf) run on the first pass only. What grows with the capture is only per-event:
 the encoder's reversal candidates (the transitions are planned chunk by chunk), the reversal
-windows and the decimated copies (≈ 20 000 points each); the block moments of the fit (~0.2 % of
-the analysed samples' bytes) move to a temporary file past 32 MB, so memory is flat.
+windows and the decimated copies (≈ 20 000 points each); the block moments of the fit (42 numbers a
+block of hundreds to thousands of samples) move to a temporary file past 32 MB: memory is flat.
 
 References
 ----------
