@@ -97,3 +97,15 @@ def test_moments_moved_to_a_file_give_the_sums_and_fit_held_in_memory(monkeypatc
     assert a.frequency_hz == pytest.approx(b.frequency_hz, rel=1e-12)
     np.testing.assert_allclose(a.amplitudes, b.amplitudes, rtol=1e-10, atol=1e-13)
     assert spilled.estimate_frequency() == pytest.approx(held.estimate_frequency(), rel=1e-12)
+
+
+def test_chunks_far_from_the_first_stay_on_the_sampling_grid():
+    # stamps 10⁷ samples on are rounded at ~1e-13 s: still the grid (the fast path, no P rows)
+    fs, f = 10_000.0, 0.5
+    acc = HarmonicFitAccumulator(f, harmonics=10)
+    for g0, m in ((0, 1 << 16), (10_000_000, 200_000)):
+        t = np.arange(g0, g0 + m) / fs
+        acc.add(t, np.sin(2 * math.pi * f * t))
+    assert acc.block_samples > 4
+    full_runs = [j.size for j, p, _ in acc._store.records() if p is None]
+    assert sum(full_runs) >= (200_000 // acc.block_samples) - 1
