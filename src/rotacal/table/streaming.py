@@ -70,6 +70,7 @@ from rotacal.table._stream_source import (
     ChunkSource,
     Passes,
     chunks_from_file,
+    one_blas_thread,
 )
 from rotacal.table.motion import (
     MotionResult,
@@ -107,6 +108,7 @@ _GATHER_MAX_SAMPLES = 1_000_000
 _TWO_PI = 2.0 * math.pi
 
 
+@one_blas_thread
 def calibrate_encoder_motion_chunked(
     chunks: ChunkSource,
     *,
@@ -345,6 +347,7 @@ def _fit_and_error(
     return seg, error
 
 
+@one_blas_thread
 def calibrate_lts_motion_chunked(
     chunks: ChunkSource,
     *,
@@ -483,6 +486,7 @@ def calibrate_lts_motion_chunked(
     return with_segment(result, seg, error, clipped)
 
 
+@one_blas_thread
 def calibrate_fog_motion_chunked(
     chunks: ChunkSource,
     *,
