@@ -14,9 +14,9 @@ reads them back in groups of about ``rows`` blocks, one group in memory at a tim
 
 from __future__ import annotations
 
+import io
 import tempfile
 from collections.abc import Iterator
-import io
 
 import numpy as np
 
