@@ -10,7 +10,7 @@ where its terms fall below 1e-17, and the block length is chosen so that the hig
 for the default K = 22; fewer, longer blocks make every frequency's sums cheaper, see
 :mod:`rotacal.signal._blocks_sums`). Moments add, so chunks can be fed one after another and a
 block cut by a chunk boundary is simply summed twice. The moments are kept by
-:class:`~rotacal.signal._blocks_store.MomentStore` (a full block's P row not repeated; past 32 MB
+:class:`~rotacal.signal._blocks_store.MomentStore` (a full block's P row not repeated; past 8 MB
 in a temporary file, so that memory stays flat however long the capture). For uniformly sampled chunks the moments of all
 full blocks are one BLAS product of the (blocks × M) sample matrix with a fixed (M × K+2)
 Vandermonde matrix.

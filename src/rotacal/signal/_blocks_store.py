@@ -6,7 +6,7 @@ moments of each block, with ``P = None`` for a run of full blocks on the samplin
 one P row, so it is not stored). A block cut by a chunk boundary appears in two records; the
 sums of the normal equations are linear in the moments, so the halves need no merging.
 
-Once the records pass ``keep_bytes`` (32 MB by default) they move to an anonymous temporary file
+Once the records pass ``keep_bytes`` (8 MB by default) they move to an anonymous temporary file
 (unlinked at once, gone with the process), and every later record is written there: the memory
 held stays at ``keep_bytes`` plus one group however long the capture. :meth:`MomentStore.groups`
 reads them back in groups of about ``rows`` blocks, one group in memory at a time.
@@ -21,7 +21,7 @@ from collections.abc import Iterator
 import numpy as np
 
 #: Moments held in memory before the store moves them to a temporary file (bytes).
-KEEP_BYTES = 32 << 20
+KEEP_BYTES = 8 << 20
 #: Blocks a group of :meth:`MomentStore.groups` gathers (≈ 5.5 MB of Q with 42 moments).
 GROUP_ROWS = 16_384
 

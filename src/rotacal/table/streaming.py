@@ -24,7 +24,7 @@ Passes after the first stop reading after the last sample they need, and the rea
 (NPZ CRC-32, NaN/inf) run on the first pass only. What grows with the capture is only per-event:
 the encoder's reversal candidates (the transitions are planned chunk by chunk), the reversal
 windows and the decimated copies (≈ 20 000 points each); the block moments of the fit (42 numbers a
-block of hundreds to thousands of samples) move to a temporary file past 32 MB: memory is flat.
+block of hundreds to thousands of samples) move to a temporary file past 8 MB: memory is flat.
 
 References
 ----------
