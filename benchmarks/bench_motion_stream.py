@@ -9,8 +9,9 @@ then, each in a fresh process whose ``RUSAGE_CHILDREN`` peak is its own:
 - ``python -m rotacal motion SCHEME FILE ... --chunked --json OUT`` (the streaming path at every
   N, as the command chooses by itself above 3·10⁷ samples: checks, reversals, fit, budgets, JSON).
 
-Prints seconds, M samples/s, peak RSS and the ratios command/baseline, and the peak's ratio to
-that of the smallest N (flat memory ⇒ ≈ 1). Files go to ``--dir`` (default /tmp/bench-motionstream)
+Prints wall seconds, M samples/s, peak RSS and the ratios command/baseline — of wall time and of
+CPU time (user + system of the child: steadier than wall time on a shared machine) —, and the
+peak's ratio to that of the smallest N (flat memory ⇒ ≈ 1). Files go to ``--dir`` (default /tmp/bench-motionstream)
 and are deleted after each case, also on failure. Check ``df -h /tmp`` first: 10⁹ encoder
 samples are 24 GB.
 
@@ -97,17 +98,16 @@ def write_npz(path: Path, scheme: str, n: int) -> None:
 def baseline(path: str, scheme: str) -> None:
     """Read the capture in chunks and do nothing (the child of the baseline case)."""
     from rotacal.io import iter_capture_chunks
-    from rotacal.table._stream_source import _release_pages
 
     total = 0.0
+    # the reader hands each chunk's pages back itself once the next is asked for
     for chunk in iter_capture_chunks(path, COLUMNS[scheme], chunk_rows=PIECE):
         total += float(chunk[COLUMNS[scheme][1]][-1])  # touch every chunk
-        _release_pages(chunk)
     print(total)
 
 
-def measured(cmd: list[str], env: dict[str, str]) -> tuple[float, float]:
-    """Wall time (s) and peak RSS (MB) of ``cmd`` run in a fresh wrapper process."""
+def measured(cmd: list[str], env: dict[str, str]) -> tuple[float, float, float]:
+    """Wall time (s), CPU time (s) and peak RSS (MB) of ``cmd`` run in a fresh wrapper process."""
     wrapper = [
         sys.executable,
         "-c",
@@ -116,15 +116,15 @@ def measured(cmd: list[str], env: dict[str, str]) -> tuple[float, float]:
         "p = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, "
         "text=True)\n"
         "if p.returncode: sys.exit(p.stderr[-2000:])\n"
-        "print(time.perf_counter() - t0, "
-        "resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)",
+        "ru = resource.getrusage(resource.RUSAGE_CHILDREN)\n"
+        "print(time.perf_counter() - t0, ru.ru_utime + ru.ru_stime, ru.ru_maxrss / 1024)",
         *cmd,
     ]
     out = subprocess.run(wrapper, capture_output=True, text=True, env=env)
     if out.returncode:
         raise RuntimeError(out.stderr)
-    wall, rss = out.stdout.split()
-    return float(wall), float(rss)
+    wall, cpu, rss = out.stdout.split()
+    return float(wall), float(cpu), float(rss)
 
 
 def command(scheme: str, path: Path, out: Path) -> list[str]:
@@ -184,7 +184,8 @@ def main(argv: list[str] | None = None, report: Callable[[str], None] = print) -
     sizes = [int(float(s)) for s in args.sizes.split(",")]
     report(
         f"{'scheme':8s} {'N':>8s} {'base s':>8s} {'cmd s':>8s} {'ratio':>6s} {'Msa/s':>6s} "
-        f"{'base MB':>8s} {'cmd MB':>7s} {'MB/first':>8s} {'periods':>8s} {'THD %':>9s}"
+        f"{'CPU rat':>7s} {'base MB':>8s} {'cmd MB':>7s} {'MB/first':>8s} {'periods':>8s} "
+        f"{'THD %':>9s}"
     )
     try:
         for scheme in args.schemes.split(","):
@@ -198,11 +199,12 @@ def main(argv: list[str] | None = None, report: Callable[[str], None] = print) -
                     )
                     continue
                 r = run_case(scheme, n, work, env)
-                (b_s, b_mb), (c_s, c_mb) = r["base"], r["cmd"]
+                (b_s, b_cpu, b_mb), (c_s, c_cpu, c_mb) = r["base"], r["cmd"]
                 first_rss = first_rss or c_mb
                 report(
                     f"{scheme:8s} {n:8.0e} {b_s:8.2f} {c_s:8.2f} {c_s / b_s:6.2f} {n / c_s / 1e6:6.2f} "
-                    f"{b_mb:8.0f} {c_mb:7.0f} {c_mb / first_rss:8.2f} {r['periods']:8d} {r['thd']:9.5f}"
+                    f"{c_cpu / b_cpu:7.2f} {b_mb:8.0f} {c_mb:7.0f} {c_mb / first_rss:8.2f} "
+                    f"{r['periods']:8d} {r['thd']:9.5f}"
                 )
     finally:
         shutil.rmtree(work, ignore_errors=True)

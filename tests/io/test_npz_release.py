@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from rotacal.errors import CaptureError
 from rotacal.io import iter_capture_chunks
 from rotacal.io.capture import release_pages
+from rotacal.table._stream_source import chunks_from_file
 
 
 def test_released_rows_read_back_the_same(tmp_path):
@@ -21,3 +24,20 @@ def test_released_rows_read_back_the_same(tmp_path):
     before = np.array(mapped[1000:200_000])
     release_pages({"x": mapped[:]})  # the whole array: every page dropped, then faulted back in
     np.testing.assert_array_equal(mapped[1000:200_000], before)
+
+
+def test_a_verified_pass_skips_the_checks_the_first_pass_made(tmp_path):
+    # truth: the unverified reader refuses the NaN; a verified pass (a later pass of a streaming
+    # analysis) hands the same values over unchecked, and the chunk source verifies once
+    data = np.arange(50_000, dtype=np.float64)
+    data[31_234] = np.nan
+    path = tmp_path / "n.npz"
+    np.savez(path, time_s=data, rate_deg_s=data)
+    with pytest.raises(CaptureError, match="not a finite number"):
+        list(iter_capture_chunks(path, ["rate_deg_s"], chunk_rows=4_096))
+    got = iter_capture_chunks(path, ["rate_deg_s"], chunk_rows=4_096, verified=True)
+    np.testing.assert_array_equal(np.concatenate([c["rate_deg_s"] for c in got]), data)
+    source = chunks_from_file(path, ("time_s", "rate_deg_s"), chunk_rows=4_096)
+    for _ in range(2):  # no pass reads through, so none is trusted
+        with pytest.raises(CaptureError, match="not a finite number"):
+            list(source())

@@ -63,3 +63,49 @@ def test_block_fit_equals_the_direct_fit_at_many_periods(periods):
     assert blocks.frequency_hz == pytest.approx(direct.frequency_hz, rel=1e-13)
     np.testing.assert_allclose(blocks.amplitudes, direct.amplitudes, rtol=1e-9, atol=1e-13)
     assert blocks.amplitudes[0] == pytest.approx(2.0, rel=1e-4)
+
+
+def test_moments_moved_to_a_file_give_the_sums_and_fit_held_in_memory(monkeypatch):
+    # truth: the same accumulator with its moments in memory (checked against direct sums above)
+    from rotacal.signal import _blocks_store
+
+    rng = np.random.default_rng(5)
+    n, fs, f, nh = 200_000, 10_000.0, 3.1, 4
+    t = np.arange(n) / fs
+    y = 0.3 + np.sin(2 * math.pi * f * t) + 0.02 * np.sin(4 * math.pi * f * t)
+    y += 1e-3 * rng.standard_normal(n)
+
+    def filled() -> HarmonicFitAccumulator:
+        acc = HarmonicFitAccumulator(f, harmonics=nh)
+        for start in range(0, n, 7_777):  # blocks cut by the chunks: records hold their halves
+            acc.add(t[start : start + 7_777], y[start : start + 7_777])
+        return acc
+
+    held = filled()
+    monkeypatch.setattr(_blocks_store, "KEEP_BYTES", 4096)
+    monkeypatch.setattr(_blocks_store, "GROUP_ROWS", 37)
+    spilled = filled()
+    assert spilled._store.spilled and not held._store.spilled
+    t_ref = 0.5 * (t[0] + t[-1])
+    omega = 2 * math.pi * f * (1 + 1e-4)
+    pairs = zip(
+        spilled._sums_fn(nh, t_ref)(omega, True), held._sums_fn(nh, t_ref)(omega, True), strict=True
+    )
+    for got, want in pairs:
+        assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
+    a, b = spilled.fit(f * (1 + 1e-5)), held.fit(f * (1 + 1e-5))
+    assert a.frequency_hz == pytest.approx(b.frequency_hz, rel=1e-12)
+    np.testing.assert_allclose(a.amplitudes, b.amplitudes, rtol=1e-10, atol=1e-13)
+    assert spilled.estimate_frequency() == pytest.approx(held.estimate_frequency(), rel=1e-12)
+
+
+def test_chunks_far_from_the_first_stay_on_the_sampling_grid():
+    # stamps 10⁷ samples on are rounded at ~1e-13 s: still the grid (the fast path, no P rows)
+    fs, f = 10_000.0, 0.5
+    acc = HarmonicFitAccumulator(f, harmonics=10)
+    for g0, m in ((0, 1 << 16), (10_000_000, 200_000)):
+        t = np.arange(g0, g0 + m) / fs
+        acc.add(t, np.sin(2 * math.pi * f * t))
+    assert acc.block_samples > 4
+    full_runs = [j.size for j, p, _ in acc._store.records() if p is None]
+    assert sum(full_runs) >= (200_000 // acc.block_samples) - 1

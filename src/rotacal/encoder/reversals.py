@@ -325,6 +325,100 @@ def plan_reversals(
     idx = np.asarray(transition_indices, dtype=np.intp)
     ka = np.asarray(k_after, dtype=np.float64)
     k0 = float(k_start)
+    n_trans = int(idx.size)
+    dk = np.diff(ka, prepend=k0) if n_trans else np.empty(0)
+    step = np.abs(dk)
+    skipped = int(np.count_nonzero(step > 1.0))
+    max_step = int(step.max()) if n_trans else 0
+    if n_trans:
+        k_range = (min(k0, float(ka.min())), max(k0, float(ka.max())))
+    else:
+        k_range = (k0, k0)
+    if n_trans < 2:
+        first_change = run_len = np.empty(0, dtype=np.intp)
+        kinds = np.empty(0, dtype=np.int8)
+        level: FloatArray = np.empty(0)
+    else:
+        first_change, run_len, kinds, level = _candidates(ka, dk)
+
+    def window(c: int) -> tuple[int, int]:
+        return _window(idx, ka, int(first_change[c]), int(run_len[c]), float(level[c]))
+
+    return plan_from_candidates(
+        kinds,
+        level,
+        window,
+        transitions=(n_trans, skipped, max_step),
+        k_range=k_range,
+        hysteresis_subintervals=hysteresis_subintervals,
+        stacklevel=stacklevel + 1,
+    )
+
+
+def _window(
+    idx: NDArray[np.intp], ka: FloatArray, j0: int, run: int, level: float
+) -> tuple[int, int]:
+    """[Sub⁻, Sub⁺] of the candidate whose run of trend changes starts at transition j0: the
+    visits of its turning visits at its level (the first and the last)."""
+    levels = ka[j0 - 1 : j0 - 1 + run]
+    at_extreme = np.flatnonzero(levels == level)
+    return int(idx[j0 - 1 + int(at_extreme[0])]), int(idx[j0 + int(at_extreme[-1])]) - 1
+
+
+def transition_candidates(
+    transition_indices: ArrayLike, k_after: ArrayLike, k_before: float
+) -> tuple[NDArray[np.int8], FloatArray, NDArray[np.intp]]:
+    """Reversal candidates of eqs. (5)–(6) in a list of transitions: kind, level and window
+    ``[Sub⁻, Sub⁺]`` of each, as :func:`plan_reversals` finds them.
+
+    For a part of a capture's list (a chunked caller) the candidates are those of the whole list
+    when the part starts at a transition that turns no trend and ends at one, ``k_before`` being
+    the count before its first transition (k of sample 0 for the capture's first).
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.1 eqs. (5)–(6).
+    """
+    idx = np.asarray(transition_indices, dtype=np.intp)
+    ka = np.asarray(k_after, dtype=np.float64)
+    if idx.size < 2:
+        return np.empty(0, dtype=np.int8), np.empty(0), np.empty((0, 2), dtype=np.intp)
+    first_change, run_len, kinds, level = _candidates(ka, np.diff(ka, prepend=float(k_before)))
+    windows = np.array(
+        [
+            _window(idx, ka, j0, run, lv)
+            for j0, run, lv in zip(
+                first_change.tolist(), run_len.tolist(), level.tolist(), strict=True
+            )
+        ],
+        dtype=np.intp,
+    ).reshape(-1, 2)
+    return kinds.astype(np.int8), level, windows
+
+
+def plan_from_candidates(
+    kinds: NDArray[np.int8],
+    level: FloatArray,
+    window: Callable[[int], tuple[int, int]],
+    *,
+    transitions: tuple[int, int, int],
+    k_range: tuple[float, float],
+    hysteresis_subintervals: int | None = None,
+    stacklevel: int = 2,
+) -> ReversalPlan:
+    """Steps 2–3 of :func:`plan_reversals` from the candidates of eqs. (5)–(6) (kind, level,
+    ``window(c)`` = [Sub⁻, Sub⁺] of candidate c): the checks of the steps between samples, the
+    clusters closer than the hysteresis and the windows of each reversal.
+
+    ``transitions`` is ``(transitions, skipped transitions, largest step in subintervals)`` of the
+    capture, ``k_range`` its lowest and highest subinterval count (the default hysteresis is 10 %
+    of it, at least 2).
+
+    References
+    ----------
+    Feng et al. 2023, Sensors 23:4876, §3.1 eqs. (5)–(6).
+    """
+    n_trans, skipped, max_step = transitions
     if hysteresis_subintervals is not None and (
         isinstance(hysteresis_subintervals, bool)
         or int(hysteresis_subintervals) != hysteresis_subintervals
@@ -333,11 +427,6 @@ def plan_reversals(
         raise ConfigError(
             f"hysteresis_subintervals={hysteresis_subintervals!r} must be a whole number ≥ 1."
         )
-    n_trans = int(idx.size)
-    dk = np.diff(ka, prepend=k0) if n_trans else np.empty(0)
-    step = np.abs(dk)
-    skipped = int(np.count_nonzero(step > 1.0))
-    max_step = int(step.max()) if n_trans else 0
     if max_step >= _MAX_SAFE_STEP:
         # A jump of 5 subintervals is 150° of the signal period: one more and the unwrapping
         # cannot tell forward from backward, so the angle would be silently wrong.
@@ -355,21 +444,13 @@ def plan_reversals(
             SubdivisionWarning,
             stacklevel=stacklevel,
         )
-    if n_trans:
-        k_lo = min(k0, float(ka.min()))
-        k_hi = max(k0, float(ka.max()))
-    else:
-        k_lo = k_hi = k0
+    k_lo, k_hi = k_range
     if hysteresis_subintervals is None:
         hyst = max(2, round(0.1 * (k_hi - k_lo)))
     else:
         hyst = int(hysteresis_subintervals)
-
-    if n_trans < 2:
-        return _no_reversals(hyst, n_trans, skipped, max_step)
-    first_change, run_len, kinds, level = _candidates(ka, dk)
-    n_cand = int(first_change.size)
-    if n_cand == 0:
+    n_cand = int(np.asarray(kinds).size)
+    if n_trans < 2 or n_cand == 0:
         return _no_reversals(hyst, n_trans, skipped, max_step)
 
     # rotacal's extension: clusters of candidates closer than the hysteresis.
@@ -377,13 +458,7 @@ def plan_reversals(
     cluster_start = np.flatnonzero(np.concatenate(([True], ~linked)))
     cluster_size = np.diff(np.append(cluster_start, n_cand))
     keep = cluster_size % 2 == 1
-    rev_kinds = kinds[cluster_start[keep]].astype(np.int8)
-
-    def window(c: int) -> tuple[int, int]:
-        j0 = int(first_change[c])
-        levels = ka[j0 - 1 : j0 - 1 + int(run_len[c])]
-        at_extreme = np.flatnonzero(levels == level[c])
-        return int(idx[j0 - 1 + int(at_extreme[0])]), int(idx[j0 + int(at_extreme[-1])]) - 1
+    rev_kinds = np.asarray(kinds)[cluster_start[keep]].astype(np.int8)
 
     windows: list[tuple[int, int]] = []
     pairs = np.empty((int(np.count_nonzero(keep)), 2), dtype=np.intp)

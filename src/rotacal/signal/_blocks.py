@@ -9,7 +9,9 @@ where its terms fall below 1e-17, and the block length is chosen so that the hig
 ``2H·ω·T_b/2`` at 1.25·f is the largest the K stored moments hold (:func:`planned_phase`: 1.5 rad
 for the default K = 22; fewer, longer blocks make every frequency's sums cheaper, see
 :mod:`rotacal.signal._blocks_sums`). Moments add, so chunks can be fed one after another and a
-block cut by a chunk boundary is simply summed twice. For uniformly sampled chunks the moments of all
+block cut by a chunk boundary is simply summed twice. The moments are kept by
+:class:`~rotacal.signal._blocks_store.MomentStore` (a full block's P row not repeated; past 8 MB
+in a temporary file, so that memory stays flat however long the capture). For uniformly sampled chunks the moments of all
 full blocks are one BLAS product of the (blocks × M) sample matrix with a fixed (M × K+2)
 Vandermonde matrix.
 """
@@ -23,7 +25,8 @@ import numpy as np
 
 from rotacal._jit import use_numba
 from rotacal.errors import CaptureError, ConfigError
-from rotacal.signal._blocks_sums import SUM_ROWS, block_sums, taylor_terms
+from rotacal.signal._blocks_store import MomentStore
+from rotacal.signal._blocks_sums import SUM_ROWS, SumsFn, block_sums, taylor_terms
 from rotacal.signal._checks import (
     as_pair,
     check_finite,
@@ -126,8 +129,9 @@ class HarmonicFitAccumulator:
         self._sum_y2 = 0.0
         self._t_first = math.nan
         self._t_last: float | None = None
-        self._records: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-        self._merged: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        # the samples themselves when blocks of one sample (explicit), else the block moments
+        self._records: list[tuple[np.ndarray, np.ndarray]] = []
+        self._store = MomentStore(n_moments + 2)
         # grid (set by _plan)
         self._t0 = 0.0
         self._dt = 0.0
@@ -166,23 +170,27 @@ class HarmonicFitAccumulator:
             check_increasing(t[:1], previous=self._t_last)
         if not self._ready:
             self._plan(t, y, uniform_dt, y_checked)
-        self._merged = None
         if self._explicit:
             check_increasing(t, previous=self._t_last)
             check_finite("y", y)
             yc = y - self._y0
-            self._records.append((t.copy(), yc, np.empty(0)))
+            self._records.append((t.copy(), yc))
             self._sum_y2 += float(yc @ yc)
         else:
             g0f = (float(t[0]) - self._t0) / self._dt
             g0 = round(g0f)
             on_grid = False
-            if g0 >= 0 and abs(g0f - g0) * self._dt <= self._tol:
+            # the rounding of a time stamp grows with |t|: a later chunk's own tolerance (with
+            # the first chunk's, its stamps 10⁷ samples on were all "off the grid" by 1e-13 s)
+            tol = max(
+                self._tol, min(0.01 * self._dt, grid_tolerance(self._dt, self._t0, float(t[-1])))
+            )
+            if g0 >= 0 and abs(g0f - g0) * self._dt <= tol:
                 if uniform_dt is not None and g0 == 0 and n > 1:
-                    on_grid = abs(uniform_dt - self._dt) * (n - 1) <= self._tol
+                    on_grid = abs(uniform_dt - self._dt) * (n - 1) <= tol
                 if not on_grid:
                     dev = max_grid_deviation(t, self._t0, self._dt, g0)
-                    on_grid = dev <= self._tol
+                    on_grid = dev <= tol
             if on_grid:
                 s2 = self._add_uniform(y, g0)
             else:
@@ -249,18 +257,21 @@ class HarmonicFitAccumulator:
     def _add_uniform(self, y: np.ndarray, g0: int) -> float:
         m, v, y0 = self._m, self._v, self._y0
         n = y.size
-        js: list[np.ndarray] = []
-        ps: list[np.ndarray] = []
-        qs: list[np.ndarray] = []
+        # (j, P or None for full blocks, Q) of the chunk's blocks, stored once all are finite
+        parts: list[tuple[np.ndarray, np.ndarray | None, np.ndarray]] = []
         s2 = 0.0
         i = 0
         r0 = g0 % m
         if r0:
             i1 = min(n, m - r0)
             seg = y[:i1] - y0
-            js.append(np.array([g0 // m], dtype=np.int64))
-            ps.append((self._cumv[r0 + i1] - self._cumv[r0])[None, :])
-            qs.append((seg @ v[r0 : r0 + i1])[None, :])
+            parts.append(
+                (
+                    np.array([g0 // m], dtype=np.int64),
+                    (self._cumv[r0 + i1] - self._cumv[r0])[None, :],
+                    (seg @ v[r0 : r0 + i1])[None, :],
+                )
+            )
             s2 += float(seg @ seg)
             i = i1
         nfull = (n - i) // m
@@ -278,22 +289,23 @@ class HarmonicFitAccumulator:
                     q[b:e] = blk @ v
                     flat = blk.reshape(-1)
                     s2 += float(flat @ flat)
-            js.append(np.arange(jstart, jstart + nfull, dtype=np.int64))
-            ps.append(np.broadcast_to(self._cumv[m], (nfull, v.shape[1])))
-            qs.append(q)
+            parts.append((np.arange(jstart, jstart + nfull, dtype=np.int64), None, q))
             i += nfull * m
         if i < n:
             rest = n - i
             seg = y[i:] - y0
-            js.append(np.array([(g0 + i) // m], dtype=np.int64))
-            ps.append(self._cumv[rest][None, :])
-            qs.append((seg @ v[:rest])[None, :])
+            parts.append(
+                (
+                    np.array([(g0 + i) // m], dtype=np.int64),
+                    self._cumv[rest][None, :],
+                    (seg @ v[:rest])[None, :],
+                )
+            )
             s2 += float(seg @ seg)
-        jj = np.concatenate(js)
-        qq = np.concatenate(qs, axis=0)
-        if not np.isfinite(qq).all():
+        if not all(np.isfinite(part[2]).all() for part in parts):
             return math.nan
-        self._records.append((jj, np.concatenate(ps, axis=0), qq))
+        for part in parts:
+            self._store.append(*part)
         return s2
 
     def _add_generic(self, t: np.ndarray, y: np.ndarray) -> float:
@@ -317,46 +329,48 @@ class HarmonicFitAccumulator:
             if not np.isfinite(q).all():
                 return math.nan
             s2 += float(yc @ yc)
-            self._records.append((j[starts].astype(np.int64), p, q))
+            self._store.append(j[starts].astype(np.int64), p, q)
         return s2
 
-    def _merge(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        if self._merged is None:
-            if self._explicit:
-                tt = np.concatenate([r[0] for r in self._records])
-                yy = np.concatenate([r[1] for r in self._records])
-                self._merged = (tt, yy, np.empty(0))
-            elif len(self._records) == 1:  # one chunk: its blocks are distinct already
-                self._merged = self._records[0]
-            else:
-                j = np.concatenate([r[0] for r in self._records])
-                p = np.concatenate([r[1] for r in self._records], axis=0)
-                q = np.concatenate([r[2] for r in self._records], axis=0)
-                starts = np.concatenate([[0], np.flatnonzero(j[1:] != j[:-1]) + 1])
-                if starts.size < j.size:
-                    j = j[starts]
-                    p = np.add.reduceat(p, starts, axis=0)
-                    q = np.add.reduceat(q, starts, axis=0)
-                self._merged = (j, p, q)
-        return self._merged
+    def _block_means(self) -> tuple[np.ndarray, np.ndarray]:
+        """Mean time (s) and mean y of every block, the parts of a cut block merged."""
+        p_full = self._cumv[self._m]
+        j_l, p_l, q_l = [], [], []
+        for j, p, q in self._store.records():
+            j_l.append(j)
+            p_l.append(np.broadcast_to(p_full[:2], (j.size, 2)) if p is None else p[:, :2])
+            q_l.append(q[:, 0])
+        jj = np.concatenate(j_l)
+        pp = np.concatenate(p_l)
+        qq = np.concatenate(q_l)
+        starts = np.concatenate([[0], np.flatnonzero(jj[1:] != jj[:-1]) + 1])
+        if starts.size < jj.size:
+            jj = jj[starts]
+            pp = np.add.reduceat(pp, starts, axis=0)
+            qq = np.add.reduceat(qq, starts)
+        half = 0.5 * self._tb
+        return self._tg + (jj + 0.5) * self._tb + half * pp[:, 1] / pp[:, 0], qq / pp[:, 0]
 
     # ------------------------------------------------------------------ fitting
     def estimate_frequency(self) -> float:
         """Fundamental frequency (Hz) estimated from the block means (FFT + single-sine LS)."""
         if self._n == 0:
             raise CaptureError("no samples were added to the HarmonicFitAccumulator.")
-        a, b, c = self._merge()
         if self._explicit:
-            return estimate_frequency_unchecked(a, b)
-        half = 0.5 * self._tb
-        tm = self._tg + (a + 0.5) * self._tb + half * b[:, 1] / b[:, 0]
-        ym = c[:, 0] / b[:, 0]
-        return estimate_frequency_unchecked(tm, ym)
+            return estimate_frequency_unchecked(*self._samples())
+        return estimate_frequency_unchecked(*self._block_means())
+
+    def _samples(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every sample kept by an explicit accumulator: t and y − y0."""
+        return (
+            np.concatenate([r[0] for r in self._records]),
+            np.concatenate([r[1] for r in self._records]),
+        )
 
     def _sums_fn(self, nh: int, t_ref: float) -> Any:
         kmax_s = 2 * nh
         if self._explicit:
-            tt, yy, _ = self._merge()
+            tt, yy = self._samples()
 
             def sums_explicit(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
                 np_ = 3 if deriv else 1
@@ -376,15 +390,26 @@ class HarmonicFitAccumulator:
                 return s, yv
 
             return sums_explicit
-        return block_sums(
-            self._merge(),
-            self._cumv[self._m],
-            self._tg - t_ref,
-            self._tb,
-            nh,
-            self._k,
-            self._m,
-        )
+        p_full = self._cumv[self._m]
+
+        def group_sums(group: tuple[np.ndarray, np.ndarray, np.ndarray]) -> SumsFn:
+            return block_sums(group, p_full, self._tg - t_ref, self._tb, nh, self._k, self._m)
+
+        # in memory: each group's sums prepared once; spilled: read back at each frequency
+        held = [] if self._store.spilled else [group_sums(g) for g in self._store.groups(p_full)]
+
+        def sums(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
+            # the sums are linear in the moments: the groups' sums add
+            fns = held if not self._store.spilled else map(group_sums, self._store.groups(p_full))
+            s_tot = y_tot = None
+            for fn in fns:
+                s, yv = fn(omega, deriv)
+                s_tot = s if s_tot is None else s_tot + s
+                y_tot = yv if y_tot is None else y_tot + yv
+            assert s_tot is not None and y_tot is not None
+            return s_tot, y_tot
+
+        return sums
 
     def fit(
         self,

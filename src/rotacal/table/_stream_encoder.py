@@ -2,10 +2,12 @@
 
 2. the Heydemann fit on the same even stride as in memory (at most 2·10⁵ points);
 3. signal phase with the cycle count carried from chunk to chunk (:class:`PhaseState`; a
-   per-chunk ``np.unwrap`` would lose whole cycles at the boundaries), the subinterval
-   transitions (global index and count k), the phase state at each chunk's start, and a
-   decimated copy for the figures; then the reversals from the transition list (the same code
-   as in memory, :func:`~rotacal.encoder.plan_reversals`);
+   per-chunk ``np.unwrap`` would lose whole cycles at the boundaries), the reversal candidates
+   of the subinterval transitions found chunk by chunk (:class:`CandidateState`: only the open
+   run of trend changes is carried, so what is kept grows with the reversals, not the samples),
+   the phase state at each chunk's start, and a decimated copy for the figures; then the
+   reversals from the candidates (the same code as in memory,
+   :func:`~rotacal.encoder.reversals.plan_from_candidates`);
 4. the signals in each reversing subinterval (eqs. (7)–(8)) and the time of each reversal;
 5. θ of the analysed samples recomputed chunk by chunk from the saved phase state
    (:func:`segment`), for the fit and the position error (:mod:`rotacal.table._stream_fit`).
@@ -34,11 +36,11 @@ from rotacal.encoder import (
     correct_quadrature,
     fit_quadrature_correction,
     hysteresis_stride,
-    plan_reversals,
     reversal_point_in_window,
     reversal_window,
 )
 from rotacal.encoder._kernel import phase_pass
+from rotacal.encoder.reversals import plan_from_candidates, transition_candidates
 from rotacal.table._stream_fit import Segment
 from rotacal.table._stream_source import Passes
 from rotacal.table.motion import _ELLIPSE_POINTS, _plot_stride
@@ -61,6 +63,70 @@ def correction_pass(passes: Passes, n: int) -> QuadratureCorrection:
     return fit_quadrature_correction(
         a_s, b_s, max_points=max(a_s.size, MIN_SAMPLES), allow_clipped=True
     )
+
+
+class CandidateState:
+    """Reversal candidates of a capture's subinterval transitions, found chunk by chunk.
+
+    :func:`~rotacal.encoder.reversals.transition_candidates` gives the candidates of the whole
+    list when it is given a part that starts at a transition turning no trend and ends at one
+    (a run of trend changes is never cut). Each chunk's transitions are appended to the carried
+    tail; the part up to the last transition before the open run of changes (or up to the last
+    transition) is searched, and the tail from there on is carried. The counts, skipped
+    transitions, largest step and the range of k are carried as numbers (Feng et al. 2023,
+    Sensors 23:4876, §3.1 eqs. (5)–(6)).
+    """
+
+    def __init__(self, k_start: float) -> None:
+        self.k_range = (k_start, k_start)
+        self.n = 0
+        self.skipped = 0
+        self.max_step = 0
+        self._k_before = k_start  # count before the tail's first transition
+        self._k_last = k_start  # count after the last transition seen
+        self._tail = (np.empty(0, dtype=np.intp), np.empty(0))
+        self._found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+
+    def add(self, indices: np.ndarray, k_after: np.ndarray) -> None:
+        """The transitions of the next chunk: sample index and count k after each."""
+        if indices.size == 0:
+            return
+        ka = np.asarray(k_after, dtype=np.float64)
+        step = np.abs(np.diff(ka, prepend=self._k_last))
+        self.n += int(ka.size)
+        self.skipped += int(np.count_nonzero(step > 1.0))
+        self.max_step = max(self.max_step, int(step.max()))
+        lo, hi = self.k_range
+        self.k_range = (min(lo, float(ka.min())), max(hi, float(ka.max())))
+        self._k_last = float(ka[-1])
+        idx = np.concatenate((self._tail[0], np.asarray(indices, dtype=np.intp)))
+        kk = np.concatenate((self._tail[1], ka))
+        direction = np.sign(np.diff(kk, prepend=self._k_before))
+        turns = direction[1:] != direction[:-1]  # turns[j - 1]: transition j changes the trend
+        # the open run of changes at the end starts after the last transition that turns nothing
+        calm = np.flatnonzero(~turns)
+        cut = int(calm[-1]) + 1 if calm.size else 0  # that transition's place
+        if cut > 0:
+            self._found.append(transition_candidates(idx[: cut + 1], kk[: cut + 1], self._k_before))
+            self._k_before = float(kk[cut - 1])
+        self._tail = (idx[cut:], kk[cut:])
+
+    def plan(self, hysteresis_subintervals: int | None, stacklevel: int) -> ReversalPlan:
+        """:func:`~rotacal.encoder.plan_reversals` of every transition added."""
+        tail_idx, tail_k = self._tail
+        parts = [*self._found, transition_candidates(tail_idx, tail_k, self._k_before)]
+        kinds = np.concatenate([p[0] for p in parts])
+        level = np.concatenate([p[1] for p in parts])
+        windows = np.concatenate([p[2] for p in parts])
+        return plan_from_candidates(
+            kinds,
+            level,
+            lambda c: (int(windows[c, 0]), int(windows[c, 1])),
+            transitions=(self.n, self.skipped, self.max_step),
+            k_range=self.k_range,
+            hysteresis_subintervals=hysteresis_subintervals,
+            stacklevel=stacklevel + 1,
+        )
 
 
 @dataclasses.dataclass
@@ -89,9 +155,7 @@ def phase_pass_chunked(
     jit = use_numba(n)  # by the capture's size, not the chunk's
     state: PhaseState | None = None
     k_prev: float | None = None
-    k_start = math.nan
-    trans_idx: list[np.ndarray] = []
-    trans_k: list[np.ndarray] = []
+    found: CandidateState | None = None
     states: list[PhaseState | None] = []
     dec: dict[str, list[np.ndarray]] = {"t": [], "angle": [], "a": [], "b": []}
     rule_step = hysteresis_stride(n)
@@ -105,11 +169,10 @@ def phase_pass_chunked(
             cols["a"], cols["b"], corr, state=state, previous_k=k_prev, offset=off, jit=jit
         )
         phase, state = run.phase_rad, run.state
-        if k_prev is None:
-            k_start = run.k_first
+        if found is None:
+            found = CandidateState(run.k_first)
         k_prev = run.k_last
-        trans_idx.append(run.indices)
-        trans_k.append(run.k_after)
+        found.add(run.indices, run.k_after)
         s0 = (-off) % step
         dec["t"].append(np.array(cols["time_s"][s0::step]))
         dec["angle"].append(phase[s0::step] * scale)
@@ -122,17 +185,13 @@ def phase_pass_chunked(
         lo, hi = min(lo, run.phase_min_rad), max(hi, run.phase_max_rad)
         ends[:] = [ends[0] if ends else float(phase[0]), float(phase[-1])]
         del phase
-    all_idx = np.concatenate(trans_idx)
-    del trans_idx
-    all_k = np.concatenate(trans_k)
-    del trans_k
     if hysteresis_subintervals is None and hysteresis_from is not None:
         hysteresis_subintervals = hysteresis_from(
             np.concatenate(rule_t), np.concatenate(rule_phase)
         )
-    plan = plan_reversals(
-        all_idx, all_k, k_start, hysteresis_subintervals=hysteresis_subintervals, stacklevel=4
-    )
+    if found is None:  # no chunk: plan_reversals' answer for no transitions
+        found = CandidateState(math.nan)
+    plan = found.plan(hysteresis_subintervals, stacklevel=4)
     return Demod(
         plan=plan,
         states=states,

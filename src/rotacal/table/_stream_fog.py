@@ -35,6 +35,9 @@ from rotacal.table.motion import _plot_stride
 from rotacal.table.motion_lts_fog import fog_angle_steps, model_zero_crossings
 
 _SIGNAL = "rate_deg_s"
+#: Samples a model evaluation works on at once: its ten or so work arrays stay in the cache and
+#: do not grow with the chunk (2·10⁶ samples made them 160 MB).
+_SLICE = 1 << 16
 
 
 def rate_segment(passes: Passes, first: int, last: int) -> Segment:
@@ -82,11 +85,14 @@ def zero_crossings(passes: Passes, fit: SineFit, n: int) -> tuple[np.ndarray, np
         # the pair across the boundary: the chunk before's last sample leads this one
         local = t if t_before is None else np.concatenate(([t_before], t))
         start = off if t_before is None else off - 1
-        moments, _ = model_zero_crossings(fit, local)
-        times.append(moments)
-        # the first sample at or after each moment, counted in this chunk (the one after the
-        # chunk's last sample when the moment lies beyond it, by rounding only)
-        indices.append(start + np.searchsorted(local, moments))
+        # slices sharing their last sample with the next: every pair of samples in one slice
+        for s in range(0, max(local.size - 1, 1), _SLICE):
+            part = local[s : s + _SLICE + 1]
+            moments, _ = model_zero_crossings(fit, part)
+            times.append(moments)
+            # the first sample at or after each moment, counted in this chunk (the one after the
+            # chunk's last sample when the moment lies beyond it, by rounding only)
+            indices.append(start + s + np.searchsorted(part, moments))
         t_before = float(t[-1])
     return np.concatenate(times), np.clip(np.concatenate(indices), 0, n - 1)
 
@@ -149,12 +155,14 @@ def integrate(
     def with_snr() -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
         nonlocal total, signal, noise
         for g0, t, w, angle in _integrated(segment, fit):
-            ac = harmonic_series(w_rad * (t - fit.t_ref_s), fit.cos_coefs, fit.sin_coefs, 0.0)
-            r = w - fit.offset - ac
-            if fit.drift is not None:
-                r -= fit.drift * (t - fit.t_ref_s)
-            signal += float(ac @ ac)
-            noise += float(r @ r)
+            for s in range(0, t.size, _SLICE):
+                ts, ws = t[s : s + _SLICE], w[s : s + _SLICE]
+                ac = harmonic_series(w_rad * (ts - fit.t_ref_s), fit.cos_coefs, fit.sin_coefs, 0.0)
+                r = ws - fit.offset - ac
+                if fit.drift is not None:
+                    r -= fit.drift * (ts - fit.t_ref_s)
+                signal += float(ac @ ac)
+                noise += float(r @ r)
             total += float(np.sum(angle))
             dec.append(decimate(g0, first, step, angle))
             yield g0, t, angle

@@ -20,10 +20,11 @@ the capture's length. The capture is read in passes, each a fresh call of ``chun
    position error of eq. (2) (:mod:`rotacal.table._stream_fit`); the FOG's integrated angle, SNR
    and its own eq. (2) on the way.
 
-Passes after the first stop reading after the last sample they need. What grows with the capture
-is only per-event: the encoder's transition list (16 bytes per transition), the reversal windows,
-the block moments of the fit (~1 % of the analysed samples) and the decimated copies (≈ 20 000
-points each).
+Passes after the first stop reading after the last sample they need, and the reader's checks
+(NPZ CRC-32, NaN/inf) run on the first pass only. What grows with the capture is only per-event:
+the encoder's reversal candidates (the transitions are planned chunk by chunk), the reversal
+windows and the decimated copies (≈ 20 000 points each); the block moments of the fit (42 numbers a
+block of hundreds to thousands of samples) move to a temporary file past 8 MB: memory is flat.
 
 References
 ----------
@@ -69,6 +70,7 @@ from rotacal.table._stream_source import (
     ChunkSource,
     Passes,
     chunks_from_file,
+    one_blas_thread,
 )
 from rotacal.table.motion import (
     MotionResult,
@@ -106,6 +108,7 @@ _GATHER_MAX_SAMPLES = 1_000_000
 _TWO_PI = 2.0 * math.pi
 
 
+@one_blas_thread
 def calibrate_encoder_motion_chunked(
     chunks: ChunkSource,
     *,
@@ -344,6 +347,7 @@ def _fit_and_error(
     return seg, error
 
 
+@one_blas_thread
 def calibrate_lts_motion_chunked(
     chunks: ChunkSource,
     *,
@@ -482,6 +486,7 @@ def calibrate_lts_motion_chunked(
     return with_segment(result, seg, error, clipped)
 
 
+@one_blas_thread
 def calibrate_fog_motion_chunked(
     chunks: ChunkSource,
     *,
