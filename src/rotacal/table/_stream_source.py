@@ -9,10 +9,9 @@ chunk handed back once it has been used, so the process's memory stays flat).
 
 from __future__ import annotations
 
-import functools
 import os
 from collections.abc import Callable, Iterator, Mapping
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 
@@ -25,30 +24,6 @@ ChunkSource = Callable[[], Iterator[Mapping[str, np.ndarray]]]
 ENCODER_COLUMNS = ("time_s", "a", "b")
 LTS_COLUMNS = ("time_s", "displacement_mm")
 FOG_COLUMNS = ("time_s", "rate_deg_s")
-
-_F = TypeVar("_F", bound=Callable[..., Any])
-
-
-def one_blas_thread(analysis: _F) -> _F:
-    """Run ``analysis`` with one BLAS thread (threadpoolctl; unchanged where it is missing).
-
-    A streamed analysis's matrix products are small (the fit's block sums, 2048 blocks a
-    product; the parabolas of the reversals): BLAS threads only wait for each other there, and
-    on a busy machine they spin — 35–64 % of the CPU time of the three chunked motion analyses
-    at 10⁷ samples on this project's 2-core machine with other work running.
-    """
-
-    @functools.wraps(analysis)
-    def limited(*args: Any, **kwargs: Any) -> Any:
-        try:
-            from threadpoolctl import threadpool_limits
-        except ImportError:  # pragma: no cover - a dependency; the analysis runs as it is
-            return analysis(*args, **kwargs)
-        with threadpool_limits(limits=1, user_api="blas"):
-            return analysis(*args, **kwargs)
-
-    return limited  # type: ignore[return-value]
-
 
 _INCONSISTENT = (
     "the chunk source gave different chunks on a later pass; chunks() must yield the same "

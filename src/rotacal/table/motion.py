@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from rotacal._threads import one_blas_thread
 from rotacal.encoder import QuadratureCorrection, correct_quadrature, demodulate
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result, with_warnings
@@ -421,6 +422,7 @@ def _cut(
     return int(reversal_idx[0]), int(reversal_idx[2 * n]), n
 
 
+@one_blas_thread
 def calibrate_encoder_motion(
     t: np.ndarray,
     a: np.ndarray,
@@ -541,6 +543,7 @@ def check_lts_settings(harmonics: int, periods: int | None, radius_mm: float) ->
     check_setting("--radius-mm", radius_mm, unit="mm")
 
 
+@one_blas_thread
 def calibrate_lts_motion(
     t: np.ndarray,
     displacement_mm: np.ndarray,
@@ -621,6 +624,7 @@ def calibrate_lts_motion(
     return with_warnings(result, clipped)
 
 
+@one_blas_thread
 def calibrate_fog_motion(
     t: np.ndarray,
     rate_deg_s: np.ndarray,

@@ -41,6 +41,7 @@ from collections.abc import Callable, Iterator, Mapping
 
 import numpy as np
 
+from rotacal._threads import one_blas_thread
 from rotacal.encoder import QuadratureCorrection, correct_quadrature
 from rotacal.errors import ConfigError
 from rotacal.signal import displacement_amplitudes_from_rate
@@ -70,7 +71,6 @@ from rotacal.table._stream_source import (
     ChunkSource,
     Passes,
     chunks_from_file,
-    one_blas_thread,
 )
 from rotacal.table.motion import (
     MotionResult,
