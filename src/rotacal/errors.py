@@ -28,3 +28,16 @@ class StoreError(RotacalError):
 class RecordImmutableError(StoreError):
     """An issued record was to be changed or deleted; issued records never change (a correction is
     a new certificate that supersedes the old one)."""
+
+
+class AlreadyCertifiedError(ConfigError):
+    """This plan and every capture it names were certified already (the same ``plan_sha256`` has
+    an issued record); ``number`` is that certificate's number. A batch counts the plan as
+    skipped; ``rotacal certify`` refuses it."""
+
+    def __init__(self, message: str, number: str) -> None:
+        super().__init__(message)
+        self.number = number
+
+    def __reduce__(self) -> tuple[type, tuple[str, str]]:  # pickled between Dask processes
+        return (type(self), (str(self), self.number))

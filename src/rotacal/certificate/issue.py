@@ -36,7 +36,11 @@ __all__ = [
     "build_content",
     "certify",
     "plan_measurement_count",
+    "measure_into",
+    "new_staging",
     "plan_sha256",
+    "publish",
+    "render_into",
     "results_document",
 ]
 
@@ -338,6 +342,8 @@ def certify(
     overwrite: bool = False,
     advance: Callable[[str], None] | None = None,
     registry: Registry | None = None,
+    into: str | Path | None = None,
+    staging_in: str | Path | None = None,
 ) -> IssuedCertificate:
     """Run a plan's measurements and issue its certificate (INTERFACE.md, ``rotacal certify``).
 
@@ -356,6 +362,12 @@ def certify(
         The records store that draws ``number = "auto"`` and keeps the certificate, in the same
         step that publishes its folder (:func:`rotacal.records.open_store`). Without one the
         certificate is not recorded, and the plan must give its number.
+    into : str or Path, optional
+        Without ``out``: the folder to make the certificate's folder in, named after its number
+        [default: the plan's folder] (``rotacal batch --out``).
+    staging_in : str or Path, optional
+        Where the hidden staging folder is made [default: the certificate folder's parent]; it
+        must be on the same file system as the certificate folder.
 
     Returns
     -------
@@ -367,8 +379,6 @@ def certify(
         One line naming the plan file, the key, the capture or the store at fault; nothing is
         written and nothing recorded.
     """
-    from rotacal import __version__
-
     plan = read_plan(plan_path)
     if registry is not None:
         registry.check_plan(plan)
@@ -377,21 +387,18 @@ def certify(
             f'{plan.path}: certificate.number: "auto" draws the next number from the records '
             "store; give the number, or let the certificate be recorded (without --no-record)"
         )
+    home = Path(into).resolve() if into is not None else plan.path.parent
     target = Path(out).resolve() if out is not None else None
     if target is None and plan.number != "auto":
-        target = plan.path.parent / plan.number
+        target = home / plan.number
     if target is not None:
         _check_free(target, overwrite)
-    parent = target.parent if target is not None else plan.path.parent
+    parent = target.parent if target is not None else home
     if not parent.is_dir():
         raise ConfigError(f"{parent}: no such folder for the certificate")
-    staging = Path(tempfile.mkdtemp(prefix=".rotacal-certify-", dir=parent))
+    staging = new_staging(Path(staging_in) if staging_in is not None else parent)
     try:
-        scratch = staging / ".runs"
-        scratch.mkdir()
-        runs = run_plan(plan, scratch, advance)
-        shutil.rmtree(scratch)
-        content = _draw(build_content(plan, runs, plan.number, __version__), staging)
+        content = measure_into(plan, staging, advance)
         if registry is not None:
             registry.check_unissued(plan, content.plan_sha256)
         number = plan.number
@@ -399,14 +406,10 @@ def certify(
             assert registry is not None
             number = registry.draw_number(plan.issue_date)
         try:
-            folder = target if target is not None else plan.path.parent / number
+            folder = target if target is not None else home / number
             _check_free(folder, overwrite)
-            content = dataclasses.replace(content, number=number)
-            _render(content, staging)
-            if registry is None:
-                _discard(_swap_in(staging, folder, overwrite))
-            else:
-                _keep(registry, content, staging, folder, overwrite)
+            content = render_into(content, number, staging)
+            publish(content, staging, folder, registry, overwrite=overwrite)
         except BaseException as e:
             if plan.number == "auto" and registry is not None:
                 with contextlib.suppress(RotacalError):  # the store may be what failed
@@ -416,6 +419,56 @@ def certify(
         shutil.rmtree(staging, ignore_errors=True)
         raise
     return IssuedCertificate(number, folder, content)
+
+
+# -- the steps of an issue, for certify() and for batches that run them on other machines ---------
+#: The name every staging folder starts with (hidden; a batch removes those its killed workers left).
+STAGING_PREFIX = ".rotacal-certify-"
+
+
+def new_staging(parent: Path) -> Path:
+    """A new, empty, hidden staging folder in ``parent`` (on the certificate folder's file
+    system, so that publishing it is one ``rename``)."""
+    return Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=parent))
+
+
+def measure_into(
+    plan: Plan, staging: Path, advance: Callable[[str], None] | None = None
+) -> CertificateContent:
+    """Run ``plan``'s measurements and draw their figures into ``staging``: the certificate's
+    content under the plan's number (``"auto"`` until one is drawn); ``plan_sha256`` is known."""
+    from rotacal import __version__
+
+    scratch = staging / ".runs"
+    scratch.mkdir()
+    runs = run_plan(plan, scratch, advance)
+    shutil.rmtree(scratch)
+    return _draw(build_content(plan, runs, plan.number, __version__), staging)
+
+
+def render_into(content: CertificateContent, number: str, staging: Path) -> CertificateContent:
+    """Give the measured ``content`` its ``number`` and write results.json, certificate.xml and
+    certificate.pdf into ``staging`` (beside the figures :func:`measure_into` drew)."""
+    content = dataclasses.replace(content, number=number)
+    _render(content, staging)
+    return content
+
+
+def publish(
+    content: CertificateContent,
+    staging: Path,
+    folder: Path,
+    registry: Registry | None,
+    *,
+    overwrite: bool = False,
+) -> None:
+    """Put the rendered ``staging`` folder in place as ``folder`` and, with a ``registry``, keep
+    the certificate in the records in the same step (the folder is taken back if the record's
+    transaction does not commit)."""
+    if registry is None:
+        _discard(_swap_in(staging, folder, overwrite))
+    else:
+        _keep(registry, content, staging, folder, overwrite)
 
 
 def _keep(

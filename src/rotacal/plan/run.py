@@ -23,7 +23,7 @@ from rotacal.errors import ConfigError, RotacalError
 
 from .model import Measurement, Plan
 
-__all__ = ["command_of", "run_measurement", "run_plan"]
+__all__ = ["command_of", "measurement_inputs", "run_measurement", "run_plan"]
 
 
 def command_of(name: str) -> click.Command:
@@ -89,6 +89,30 @@ def _arguments(plan: Plan, m: Measurement, json_path: Path) -> list[str]:
             args += [flag, text]
     args += ["--json", os.fspath(json_path)]
     return args
+
+
+def measurement_inputs(plan: Plan, m: Measurement) -> list[str]:
+    """The files measurement ``m`` reads, as its JSON's ``provenance.inputs`` will list them:
+    in the order its command declares them (the capture first), each once, a file the options
+    name taken relative to the plan's folder. Known before anything runs, so that a batch can
+    tell a plan certified already from its ``plan_sha256`` without measuring it."""
+    from rotacal.cli._common import INPUT_FILE
+    from rotacal.cli._provenance import option_name
+
+    options = dict(m.options)
+    paths: list[str] = []
+    for param in command_of(m.command).params:
+        if type(param.type) is not type(INPUT_FILE):
+            continue
+        if isinstance(param, click.Argument):
+            paths += [os.fspath(c) for c in m.captures]
+            continue
+        value = options.get(option_name(param))
+        if value is None:
+            continue
+        for v in value if isinstance(value, list) else [value]:
+            paths.append(os.fspath(plan.path.parent / str(v)))
+    return list(dict.fromkeys(paths))
 
 
 def _relative_paths(data: Any, plan_dir: Path) -> Any:

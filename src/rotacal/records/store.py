@@ -24,7 +24,7 @@ from sqlalchemy import event
 from sqlalchemy.orm import Session
 
 from rotacal.certificate.content import CertificateContent
-from rotacal.errors import ConfigError, RecordImmutableError, StoreError
+from rotacal.errors import AlreadyCertifiedError, ConfigError, RecordImmutableError, StoreError
 from rotacal.plan.model import Plan
 
 from . import models as m
@@ -274,10 +274,11 @@ class Store:
         """Refuse a plan whose every byte, and every capture's, was certified before."""
         number = self.issued_with(plan_sha256)
         if number is not None:
-            raise ConfigError(
+            raise AlreadyCertifiedError(
                 f"{plan.path}: this plan and its captures were certified already as {number} "
                 f"(same plan_sha256, {self.shown}); a correction is a new plan with "
-                f'supersedes = "{number}"'
+                f'supersedes = "{number}"',
+                number,
             )
 
     @contextlib.contextmanager
