@@ -29,6 +29,7 @@ F = TypeVar("F", bound=Callable[..., Any])
 #: Allan, gyro, pulse, simulation and records commands (and what they import) at start-up.
 COMMAND_MODULES = {
     "allan": "allan",
+    "batch": "batch",
     "certify": "certify",
     "demo": "simulate",
     "gyro": "gyro",

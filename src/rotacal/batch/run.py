@@ -1,0 +1,451 @@
+"""``rotacal batch``: many plans certified as tasks on Dask distributed, resumable, into the records.
+
+The client reads and hashes every plan first: a plan whose ``plan_sha256`` has an issued record is
+``skipped`` without running, so a batch that was stopped — by Ctrl-C, a killed worker or a lost
+node — is finished by running it again, and nothing is issued twice. The rest run one task per
+plan on a local cluster of worker processes (``workers``) or on a running cluster
+(``scheduler``); a plan that fails fails alone, with its one-line reason in ``batch.json``.
+
+How the records are written depends on the store (see :mod:`rotacal.batch.tasks`): SQLite from
+this process only, PostgreSQL by the workers directly.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import datetime as dt
+import fcntl
+import json
+import os
+import shutil
+import time
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rotacal.errors import ConfigError, RotacalError
+
+from .plans import BatchPlan, find_plans, read_batch_plans
+from .tasks import Done, Failed, Measured, certify_task, measure_task, render_task
+
+if TYPE_CHECKING:
+    from distributed import Client, Future
+
+    from rotacal.records import Store
+
+__all__ = ["BatchInterruptedError", "BatchResult", "PlanOutcome", "run_batch"]
+
+#: The file that lists every plan of the batch and what became of it (INTERFACE.md "Batches").
+BATCH_JSON = "batch.json"
+#: Hidden folders in ``--out``: the lock of the batch that writes there, and the staging folders.
+LOCK_NAME, STAGING_NAME = ".rotacal-batch.lock", ".rotacal-batch-staging"
+
+
+class BatchInterruptedError(RotacalError):
+    """The batch was stopped (Ctrl-C) before every plan ended; ``batch.json`` says which did.
+    Running the same batch again finishes the rest."""
+
+
+@dataclasses.dataclass
+class PlanOutcome:
+    """What became of one plan: ``status`` issued | skipped | failed, the certificate ``number``
+    (issued, or the earlier one when skipped), the one-line ``error`` when failed, the task's
+    ``seconds`` on its worker and the measurements' ``warnings``."""
+
+    plan: str
+    status: str = "pending"
+    number: str | None = None
+    error: str | None = None
+    seconds: float | None = None
+    warnings: list[str] = dataclasses.field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "plan": self.plan,
+            "status": self.status,
+            "number": self.number,
+            "error": self.error,
+            "seconds": None if self.seconds is None else round(self.seconds, 3),
+            "warnings": self.warnings,
+        }
+
+
+@dataclasses.dataclass
+class BatchResult:
+    """A batch's outcome: one :class:`PlanOutcome` per plan, in the order they were named."""
+
+    outcomes: list[PlanOutcome]
+    out: Path
+    store: str
+    workers: int
+    wall_seconds: float
+    dashboard: str | None = None
+
+    def count(self, status: str) -> int:
+        return sum(o.status == status for o in self.outcomes)
+
+    @property
+    def failed(self) -> int:
+        return self.count("failed")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "out": str(self.out),
+            "store": self.store,
+            "workers": self.workers,
+            "wall_seconds": round(self.wall_seconds, 3),
+            "counts": {s: self.count(s) for s in ("issued", "skipped", "failed")},
+            "plans": [o.to_dict() for o in self.outcomes],
+        }
+
+
+@contextlib.contextmanager
+def _exclusive(out: Path) -> Iterator[None]:
+    """Hold ``out``'s batch lock: two batches never write into the same folder at once (the
+    second is refused), which makes it safe to remove the staging folders a killed run left."""
+    with open(out / LOCK_NAME, "a+") as fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            raise ConfigError(
+                f"{out}: another batch is writing into this folder; wait for it, or give "
+                "another --out"
+            ) from None
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
+
+
+def _write_json(out: Path, result: BatchResult) -> None:
+    """``batch.json``, whole or not at all (written beside, then renamed over the last one)."""
+    text = json.dumps(result.to_dict(), indent=2, ensure_ascii=False) + "\n"
+    partial = out / f".{BATCH_JSON}.partial"
+    partial.write_text(text, encoding="utf-8")
+    os.replace(partial, out / BATCH_JSON)
+
+
+@contextlib.contextmanager
+def _client(
+    workers: int | None, scheduler: str | None, client: Client | None
+) -> Iterator[Client]:
+    """The Dask client: the one given, one connected to ``scheduler``, or one on a new local
+    cluster of ``workers`` single-threaded processes (closed at the end)."""
+    if client is not None:
+        yield client
+        return
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            remote = Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError) as e:
+            raise ConfigError(f"--scheduler {scheduler}: cannot connect ({e})") from None
+        with remote:
+            yield remote
+        return
+    import importlib.util
+
+    dashboard = ":0" if importlib.util.find_spec("bokeh") is not None else None
+    with (
+        LocalCluster(
+            n_workers=workers or os.cpu_count() or 1,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=dashboard,
+            silence_logs=logging.ERROR,
+        ) as cluster,
+        Client(cluster) as local,
+    ):
+        yield local
+
+
+def _dashboard(client: Client) -> str | None:
+    try:
+        return str(client.dashboard_link) if client.scheduler_info().get("services") else None
+    except (KeyError, AttributeError):
+        return None
+
+
+class _Run:
+    """The client's side of one batch: submits tasks, and as they end draws numbers, keeps
+    records and publishes folders (SQLite), and fills in the outcomes."""
+
+    def __init__(
+        self,
+        client: Client,
+        store: Store,
+        out: Path,
+        staging: Path,
+        advance: Callable[[str], None],
+    ) -> None:
+        self.client, self.store, self.out, self.staging = client, store, out, staging
+        self.advance = advance
+        self.direct = store.engine.dialect.name != "sqlite"  # workers write the records
+        self.drawn: dict[int, str] = {}  # numbers drawn for plans not yet kept (SQLite)
+        self.task_of: dict[Future, tuple[int, str]] = {}
+
+    def submit(self, index: int, entry: BatchPlan) -> Future:
+        path = str(entry.path)
+        if self.direct:
+            future = self.client.submit(
+                certify_task, path, str(self.out), str(self.staging), self.store.url, pure=False
+            )
+            self.task_of[future] = (index, "certify")
+        else:
+            future = self.client.submit(measure_task, path, str(self.staging), pure=False)
+            self.task_of[future] = (index, "measure")
+        return future
+
+    def finished(
+        self, future: Future, entries: Sequence[BatchPlan], outcomes: list[PlanOutcome]
+    ) -> Future | None:
+        """Take a finished task's result; the next task of the same plan, if it has one."""
+        index, step = self.task_of.pop(future)
+        outcome, entry = outcomes[index], entries[index]
+        try:
+            value = future.result()
+        except Exception as e:  # the task died with its workers (KilledWorker) or was cancelled
+            value = Failed(
+                f"its task was lost: {type(e).__name__}: {' '.join(str(e).split())}", 0.0
+            )
+        if isinstance(value, Measured):  # SQLite: number it here, render it there
+            return self._number(index, entry, outcome, value)
+        if isinstance(value, Failed):
+            self._fail(index, outcome, value)
+        elif isinstance(value, Done):
+            if value.measured is not None:  # SQLite: keep and publish it here
+                self._keep(index, outcome, value)
+            else:
+                outcome.status, outcome.number = "issued", value.number
+                outcome.seconds, outcome.warnings = value.seconds, list(value.warnings)
+        if outcome.status != "pending":
+            self.advance(entry.path.name)
+        return None
+
+    def _fail(self, index: int, outcome: PlanOutcome, failure: Failed) -> None:
+        self._void(index, failure.error)
+        outcome.seconds = failure.seconds
+        if failure.certified_as is not None:
+            outcome.status, outcome.number = "skipped", failure.certified_as
+        else:
+            outcome.status, outcome.error = "failed", failure.error
+
+    def _void(self, index: int, reason: str) -> None:
+        number = self.drawn.pop(index, None)
+        if number is not None:
+            with contextlib.suppress(RotacalError):
+                self.store.void_number(number, f"not issued: {reason}")
+
+    def _number(
+        self, index: int, entry: BatchPlan, outcome: PlanOutcome, measured: Measured
+    ) -> Future | None:
+        content = measured.content
+        plan = content.plan
+        try:
+            earlier = self.store.issued_with(content.plan_sha256)
+            if earlier is not None:
+                shutil.rmtree(measured.staging, ignore_errors=True)
+                outcome.status, outcome.number = "skipped", earlier
+                outcome.seconds = measured.seconds
+                self.advance(entry.path.name)
+                return None
+            number = plan.number
+            if number == "auto":
+                number = self.store.draw_number(plan.issue_date)
+                self.drawn[index] = number
+            if (self.out / number).exists():
+                raise ConfigError(
+                    f"{self.out / number} exists: a certificate folder is never replaced; "
+                    "move it away, or give another --out"
+                )
+        except RotacalError as e:
+            shutil.rmtree(measured.staging, ignore_errors=True)
+            self._fail(index, outcome, Failed(f"{plan.path}: {e}", measured.seconds))
+            self.advance(entry.path.name)
+            return None
+        future = self.client.submit(render_task, measured, number, pure=False)
+        self.task_of[future] = (index, "render")
+        return future
+
+    def _keep(self, index: int, outcome: PlanOutcome, done: Done) -> None:
+        from rotacal.certificate.issue import publish
+
+        assert done.measured is not None
+        staging = Path(done.measured.staging)
+        try:
+            publish(done.measured.content, staging, self.out / done.number, self.store)
+        except RotacalError as e:
+            shutil.rmtree(staging, ignore_errors=True)
+            self._fail(index, outcome, Failed(" ".join(str(e).split()), done.seconds))
+            return
+        self.drawn.pop(index, None)
+        outcome.status, outcome.number = "issued", done.number
+        outcome.seconds, outcome.warnings = done.seconds, list(done.warnings)
+
+
+def run_batch(
+    plans: Sequence[str | os.PathLike[str]],
+    *,
+    out: str | os.PathLike[str] | None = None,
+    db: str | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    client: Client | None = None,
+    advance: Callable[[str], None] | None = None,
+    on_start: Callable[[int, str | None], None] | None = None,
+) -> BatchResult:
+    """Certify many plans as tasks on Dask distributed (INTERFACE.md "Batches").
+
+    Parameters
+    ----------
+    plans : sequence of path
+        Plan files, or folders whose ``*.toml`` files are plans.
+    out : path, optional
+        The folder that gets each certificate's folder (``OUT/<number>/``) and ``batch.json``
+        [default: the current folder]; made when missing.
+    db : str, optional
+        The records store's URL [default: ``ROTACAL_DB``, else the user's SQLite file].
+    workers : int, optional
+        Worker processes of the local cluster [default: one per core].
+    scheduler : str, optional
+        The address of a running Dask scheduler (``tcp://host:8786``) instead of a local
+        cluster; its workers must see the plans, captures and ``out`` at the same paths.
+    client : distributed.Client, optional
+        A client to use as it is (tests, notebooks).
+    advance : callable, optional
+        Called with the plan's file name each time a plan ends (a progress bar).
+    on_start : callable, optional
+        Called with the number of plans to run and the dashboard's link (or None) once the
+        cluster is up; not called when every plan was done already.
+
+    Returns
+    -------
+    BatchResult
+        Also written to ``OUT/batch.json``.
+
+    Raises
+    ------
+    ConfigError, StoreError
+        No plans, an unusable ``out``, store or scheduler; nothing has run.
+    BatchInterruptedError
+        Stopped by Ctrl-C; ``batch.json`` says what ended, and a second run finishes the rest.
+    """
+    from rotacal.records import open_store
+
+    start = time.perf_counter()
+    paths = find_plans(plans)
+    target = Path(out if out is not None else os.getcwd()).resolve()
+    if target.exists() and not target.is_dir():
+        raise ConfigError(f"--out {target}: exists and is not a folder")
+    target.mkdir(parents=True, exist_ok=True)
+    advance = advance or (lambda label: None)
+    store = open_store(db)
+    try:
+        with _exclusive(target):
+            staging = target / STAGING_NAME
+            shutil.rmtree(staging, ignore_errors=True)  # what a killed run left
+            staging.mkdir()
+            try:
+                result = _run(
+                    paths, target, staging, store, workers, scheduler, client, advance, on_start
+                )
+            finally:
+                shutil.rmtree(staging, ignore_errors=True)
+            unfinished = [o for o in result.outcomes if o.status == "pending"]
+            for o in unfinished:
+                o.status, o.error = "failed", "interrupted; run the batch again to finish it"
+            result.wall_seconds = time.perf_counter() - start
+            _write_json(target, result)
+    finally:
+        store.close()
+    if unfinished:
+        raise BatchInterruptedError(
+            f"batch stopped: {result.count('issued')} issued, {result.count('skipped')} "
+            f"skipped, {len(unfinished)} not finished ({target / BATCH_JSON}); run the same "
+            "batch again to finish it"
+        )
+    return result
+
+
+def _run(
+    paths: Sequence[Path],
+    out: Path,
+    staging: Path,
+    store: Store,
+    workers: int | None,
+    scheduler: str | None,
+    client: Client | None,
+    advance: Callable[[str], None],
+    on_start: Callable[[int, str | None], None] | None,
+) -> BatchResult:
+    entries = read_batch_plans(paths)
+    outcomes = [PlanOutcome(str(e.path)) for e in entries]
+    first_of: dict[str, int] = {}
+    twin_of: dict[int, int] = {}  # a plan named twice (same plan_sha256): its first
+    todo = []
+    for i, (entry, outcome) in enumerate(zip(entries, outcomes, strict=True)):
+        if entry.error is None:
+            assert entry.plan is not None and entry.sha256 is not None
+            try:
+                earlier = store.issued_with(entry.sha256)
+                if earlier is None:
+                    store.check_plan(entry.plan)
+            except RotacalError as e:
+                entry.error = " ".join(str(e).split())
+            else:
+                if earlier is not None:
+                    outcome.status, outcome.number = "skipped", earlier
+                elif entry.sha256 in first_of:
+                    twin_of[i] = first_of[entry.sha256]
+                    continue
+                else:
+                    first_of[entry.sha256] = i
+                    todo.append(i)
+        if entry.error is not None:
+            outcome.status, outcome.error = "failed", entry.error
+        if outcome.status != "pending":
+            advance(entry.path.name)
+    result = BatchResult(outcomes, out, store.shown, 0, 0.0)
+    if not todo:
+        _settle_twins(outcomes, twin_of, advance)
+        return result
+    from distributed import as_completed
+
+    with _client(workers, scheduler, client) as dask:
+        result.workers = len(dask.scheduler_info().get("workers", {}))
+        result.dashboard = _dashboard(dask)
+        if on_start is not None:
+            on_start(len(todo), result.dashboard)
+        run = _Run(dask, store, out, staging, advance)
+        pending = as_completed([run.submit(i, entries[i]) for i in todo])
+        try:
+            for future in pending:
+                follow = run.finished(future, entries, outcomes)
+                if follow is not None:
+                    pending.add(follow)
+        except KeyboardInterrupt:
+            dask.cancel(list(run.task_of))
+            for index in list(run.drawn):
+                run._void(index, "the batch was stopped (Ctrl-C)")
+    _settle_twins(outcomes, twin_of, advance)
+    return result
+
+
+def _settle_twins(
+    outcomes: list[PlanOutcome], twin_of: dict[int, int], advance: Callable[[str], None]
+) -> None:
+    """A plan named twice ran once: the second is skipped with the first's number, or fails
+    with it."""
+    for i, first in twin_of.items():
+        done, twin = outcomes[first], outcomes[i]
+        if done.status in ("issued", "skipped"):
+            twin.status, twin.number = "skipped", done.number
+        elif done.status == "failed":
+            twin.status, twin.error = "failed", done.error
+        if twin.status != "pending":
+            twin.warnings = list(done.warnings)
+            advance(Path(twin.plan).name)

@@ -1,0 +1,94 @@
+"""Twin plans for the tests and benchmarks of batches: a gyro end-of-line test of many units.
+
+Each unit gets three twin captures of its own (``rotacal simulate``, seeded by the unit, so its
+noise differs) and a plan of three measurements — scale factor and nonlinearity, the triad's scale
+factors and misalignment, and the rotation test — with ``number = "auto"`` and its own serial.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from pathlib import Path
+from typing import Any
+
+import tomli_w
+
+__all__ = ["MEASUREMENTS", "twin_plan", "write_twin_plans"]
+
+#: (command, `rotacal simulate` kind, capture file, options, limits) of each measurement.
+MEASUREMENTS: tuple[tuple[str, str, str, dict[str, Any], dict[str, Any]], ...] = (
+    (
+        "gyro scale-factor",
+        "gyro-rates",
+        "rates.npz",
+        {"full-scale-deg-s": 100, "output-unit": "V"},
+        {"nonlinearity_percent_fs": {"max": 0.5}},
+    ),
+    ("gyro triad", "gyro-triad", "triad.npz", {"output-unit": "deg/s"}, {}),
+    (
+        "gyro rotations",
+        "gyro-rotations",
+        "rotations.npz",
+        {"sections": "rotations.npz.truth.json", "output-unit": "deg/s"},
+        {},
+    ),
+)
+
+
+def twin_plan(unit: int, captures: str) -> dict[str, Any]:
+    """The plan (TOML data) of unit ``unit`` whose captures are in the folder ``captures``
+    (relative to the plan)."""
+    measurements = []
+    for command, _, capture, options, limits in MEASUREMENTS:
+        given = {k: f"{captures}/{v}" if k == "sections" else v for k, v in options.items()}
+        entry: dict[str, Any] = {
+            "name": f"{command} of SN-{unit:04d}",
+            "command": command,
+            "capture": f"{captures}/{capture}",
+            "options": given,
+        }
+        if limits:
+            entry["limits"] = limits
+        measurements.append(entry)
+    return {
+        "certificate": {"number": "auto", "date": "2026-11-25"},
+        "laboratory": {"name": "Rate Lab", "address": "1 Test Road, Testville"},
+        "customer": {"name": "Gyro Maker Ltd", "address": "2 Sensor Street, Sensortown"},
+        "person": [
+            {"name": "A. Operator", "role": "performed"},
+            {"name": "B. Manager", "role": "approved"},
+        ],
+        "item": {
+            "kind": "gyroscope",
+            "manufacturer": "Gyro Maker Ltd",
+            "model": "GM-300",
+            "serial": f"SN-{unit:04d}",
+        },
+        "standard": [
+            {"name": "Rate table", "id": "STD-17", "certificate": "CAL-2026-123", "due": "2027-06-30"}
+        ],
+        "conditions": {"temperature_c": 23.0, "temperature_u_c": 0.5},
+        "measurement": measurements,
+    }
+
+
+def write_twin_plans(folder: Path, count: int, *, first: int = 0) -> list[Path]:
+    """Write the plans of units ``first`` … ``first + count - 1`` into ``folder``
+    (``unit-NNNN.toml``), each with its captures in ``captures-NNNN/``; their paths."""
+    from rotacal.cli import cli
+
+    folder.mkdir(parents=True, exist_ok=True)
+    plans = []
+    for unit in range(first, first + count):
+        captures = f"captures-{unit:04d}"
+        (folder / captures).mkdir(exist_ok=True)
+        for _, kind, capture, _, _ in MEASUREMENTS:
+            args = ["simulate", kind, "--out", str(folder / captures / capture)]
+            args += ["--seed", str(unit), "--overwrite"]
+            with contextlib.redirect_stderr(io.StringIO()):
+                cli.main(args, prog_name="rotacal", standalone_mode=False)
+        path = folder / f"unit-{unit:04d}.toml"
+        path.write_text(tomli_w.dumps(twin_plan(unit, captures)), encoding="utf-8")
+        plans.append(path)
+    return plans
