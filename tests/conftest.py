@@ -147,6 +147,17 @@ def unrendered_figures_in_module() -> Iterator[None]:
 
 
 @pytest.fixture(scope="session")
+def postgres() -> Iterator[Any]:
+    """A PostgreSQL server of this test session, on loopback (the records and batch tests); fails,
+    never skips, without PostgreSQL (.ci/run installs it)."""
+    from rotacal.records.testing import ThrowawayPostgres
+
+    server = ThrowawayPostgres()
+    yield server
+    server.stop()
+
+
+@pytest.fixture(scope="session")
 def demo_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any]:
     """``rotacal demo`` run once per test session (it takes about a minute): its folder and the
     CliRunner result. Tests that use it carry ``@pytest.mark.xdist_group("demo")`` so that, with

@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 import datetime as dt
 import itertools
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import pytest
@@ -19,18 +19,9 @@ from rotacal.certificate.content import (
     ReportedQuantity,
 )
 from rotacal.plan.model import Conditions, Contact, Item, Person, Plan, Standard
-from rotacal.records.testing import ThrowawayPostgres
 
 ENGINES = ("sqlite", "postgresql")
 _PLANS = itertools.count(1)
-
-
-@pytest.fixture(scope="session")
-def postgres() -> Iterator[ThrowawayPostgres]:
-    """A PostgreSQL server of this test session (fails, never skips, without PostgreSQL)."""
-    server = ThrowawayPostgres()
-    yield server
-    server.stop()
 
 
 @pytest.fixture(params=ENGINES)

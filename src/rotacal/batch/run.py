@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import datetime as dt
 import fcntl
 import json
 import os
@@ -127,9 +126,7 @@ def _write_json(out: Path, result: BatchResult) -> None:
 
 
 @contextlib.contextmanager
-def _client(
-    workers: int | None, scheduler: str | None, client: Client | None
-) -> Iterator[Client]:
+def _client(workers: int | None, scheduler: str | None, client: Client | None) -> Iterator[Client]:
     """The Dask client: the one given, one connected to ``scheduler``, or one on a new local
     cluster of ``workers`` single-threaded processes (closed at the end)."""
     if client is not None:
@@ -147,15 +144,12 @@ def _client(
         with remote:
             yield remote
         return
-    import importlib.util
-
-    dashboard = ":0" if importlib.util.find_spec("bokeh") is not None else None
     with (
         LocalCluster(
             n_workers=workers or os.cpu_count() or 1,
             threads_per_worker=1,
             processes=True,
-            dashboard_address=dashboard,
+            dashboard_address=":0",  # a free port: batches side by side never collide
             silence_logs=logging.ERROR,
         ) as cluster,
         Client(cluster) as local,
@@ -163,11 +157,16 @@ def _client(
         yield local
 
 
-def _dashboard(client: Client) -> str | None:
-    try:
-        return str(client.dashboard_link) if client.scheduler_info().get("services") else None
-    except (KeyError, AttributeError):
+def _dashboard(client: Client, local: bool) -> str | None:
+    """The link to the cluster's dashboard, when it has one: Dask serves its pages only with
+    bokeh installed (not a dependency of rotacal; ``pip install bokeh`` for the dashboard)."""
+    import importlib.util
+
+    if local and importlib.util.find_spec("bokeh") is None:
         return None
+    if not client.scheduler_info().get("services", {}).get("dashboard"):
+        return None
+    return str(client.dashboard_link)
 
 
 class _Run:
@@ -186,25 +185,25 @@ class _Run:
         self.advance = advance
         self.direct = store.engine.dialect.name != "sqlite"  # workers write the records
         self.drawn: dict[int, str] = {}  # numbers drawn for plans not yet kept (SQLite)
-        self.task_of: dict[Future, tuple[int, str]] = {}
+        self.task_of: dict[Future, int] = {}  # a running task → its plan's index
 
     def submit(self, index: int, entry: BatchPlan) -> Future:
         path = str(entry.path)
+        future: Future
         if self.direct:
             future = self.client.submit(
                 certify_task, path, str(self.out), str(self.staging), self.store.url, pure=False
             )
-            self.task_of[future] = (index, "certify")
         else:
             future = self.client.submit(measure_task, path, str(self.staging), pure=False)
-            self.task_of[future] = (index, "measure")
+        self.task_of[future] = index
         return future
 
     def finished(
         self, future: Future, entries: Sequence[BatchPlan], outcomes: list[PlanOutcome]
     ) -> Future | None:
         """Take a finished task's result; the next task of the same plan, if it has one."""
-        index, step = self.task_of.pop(future)
+        index = self.task_of.pop(future)
         outcome, entry = outcomes[index], entries[index]
         try:
             value = future.result()
@@ -268,7 +267,7 @@ class _Run:
             self.advance(entry.path.name)
             return None
         future = self.client.submit(render_task, measured, number, pure=False)
-        self.task_of[future] = (index, "render")
+        self.task_of[future] = index
         return future
 
     def _keep(self, index: int, outcome: PlanOutcome, done: Done) -> None:
@@ -417,7 +416,7 @@ def _run(
 
     with _client(workers, scheduler, client) as dask:
         result.workers = len(dask.scheduler_info().get("workers", {}))
-        result.dashboard = _dashboard(dask)
+        result.dashboard = _dashboard(dask, local=scheduler is None and client is None)
         if on_start is not None:
             on_start(len(todo), result.dashboard)
         run = _Run(dask, store, out, staging, advance)

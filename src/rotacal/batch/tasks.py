@@ -22,6 +22,7 @@ import dataclasses
 import io
 import time
 import traceback
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -83,7 +84,7 @@ def _warnings(content: CertificateContent) -> tuple[str, ...]:
 
 
 @contextlib.contextmanager
-def _quiet() -> object:
+def _quiet() -> Iterator[None]:
     """The commands' summaries and warning lines stay out of the worker's log: the warnings are
     in the certificate's content, which the client reports."""
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
@@ -147,9 +148,7 @@ def certify_task(plan_path: str, out: str, staging_root: str, db_url: str) -> Do
     start = time.perf_counter()
     try:
         with _quiet():
-            issued = certify(
-                plan_path, registry=_store(db_url), into=out, staging_in=staging_root
-            )
+            issued = certify(plan_path, registry=_store(db_url), into=out, staging_in=staging_root)
     except Exception as e:
         return _failed(e, start)
     return Done(issued.number, time.perf_counter() - start, _warnings(issued.content))

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -36,11 +37,18 @@ MEASUREMENTS: tuple[tuple[str, str, str, dict[str, Any], dict[str, Any]], ...] =
 )
 
 
-def twin_plan(unit: int, captures: str) -> dict[str, Any]:
+_Measurement = tuple[str, str, str, dict[str, Any], dict[str, Any]]
+
+
+def _chosen(commands: Sequence[str] | None) -> list[_Measurement]:
+    return [m for m in MEASUREMENTS if commands is None or m[0] in commands]
+
+
+def twin_plan(unit: int, captures: str, commands: Sequence[str] | None = None) -> dict[str, Any]:
     """The plan (TOML data) of unit ``unit`` whose captures are in the folder ``captures``
-    (relative to the plan)."""
+    (relative to the plan): the measurements of :data:`MEASUREMENTS` (those of ``commands``)."""
     measurements = []
-    for command, _, capture, options, limits in MEASUREMENTS:
+    for command, _, capture, options, limits in _chosen(commands):
         given = {k: f"{captures}/{v}" if k == "sections" else v for k, v in options.items()}
         entry: dict[str, Any] = {
             "name": f"{command} of SN-{unit:04d}",
@@ -66,16 +74,24 @@ def twin_plan(unit: int, captures: str) -> dict[str, Any]:
             "serial": f"SN-{unit:04d}",
         },
         "standard": [
-            {"name": "Rate table", "id": "STD-17", "certificate": "CAL-2026-123", "due": "2027-06-30"}
+            {
+                "name": "Rate table",
+                "id": "STD-17",
+                "certificate": "CAL-2026-123",
+                "due": "2027-06-30",
+            }
         ],
         "conditions": {"temperature_c": 23.0, "temperature_u_c": 0.5},
         "measurement": measurements,
     }
 
 
-def write_twin_plans(folder: Path, count: int, *, first: int = 0) -> list[Path]:
+def write_twin_plans(
+    folder: Path, count: int, *, first: int = 0, commands: Sequence[str] | None = None
+) -> list[Path]:
     """Write the plans of units ``first`` … ``first + count - 1`` into ``folder``
-    (``unit-NNNN.toml``), each with its captures in ``captures-NNNN/``; their paths."""
+    (``unit-NNNN.toml``), each with its captures in ``captures-NNNN/``; their paths. ``commands``
+    chooses among the measurements (the tests use the rotation test alone: 30 ms)."""
     from rotacal.cli import cli
 
     folder.mkdir(parents=True, exist_ok=True)
@@ -83,12 +99,13 @@ def write_twin_plans(folder: Path, count: int, *, first: int = 0) -> list[Path]:
     for unit in range(first, first + count):
         captures = f"captures-{unit:04d}"
         (folder / captures).mkdir(exist_ok=True)
-        for _, kind, capture, _, _ in MEASUREMENTS:
+        for _, kind, capture, _, _ in _chosen(commands):
             args = ["simulate", kind, "--out", str(folder / captures / capture)]
             args += ["--seed", str(unit), "--overwrite"]
             with contextlib.redirect_stderr(io.StringIO()):
                 cli.main(args, prog_name="rotacal", standalone_mode=False)
         path = folder / f"unit-{unit:04d}.toml"
-        path.write_text(tomli_w.dumps(twin_plan(unit, captures)), encoding="utf-8")
+        plan = twin_plan(unit, captures, commands)
+        path.write_text(tomli_w.dumps(plan), encoding="utf-8")
         plans.append(path)
     return plans

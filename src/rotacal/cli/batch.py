@@ -71,7 +71,12 @@ def batch_command(
 
     with _progress(len(find_plans(plans)), "certifying") as advance:
         result = run_batch(
-            plans, out=out, db=db, workers=workers, scheduler=scheduler, advance=advance,
+            plans,
+            out=out,
+            db=db,
+            workers=workers,
+            scheduler=scheduler,
+            advance=advance,
             on_start=started,
         )
     _wrote(result.out / "batch.json")

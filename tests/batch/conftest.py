@@ -1,0 +1,73 @@
+"""Fixtures of the batch tests: a real ``distributed.LocalCluster`` of two worker processes (one
+per module) and folders of twin plans."""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import shutil
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+from distributed import Client, LocalCluster
+
+from rotacal.batch.testing import write_twin_plans
+
+#: The tests' plans measure the rotation test alone (30 ms), so that a batch costs its overhead.
+COMMANDS = ("gyro rotations",)
+
+
+@contextlib.contextmanager
+def local_client() -> Iterator[Client]:
+    """A client of a new local cluster of two single-threaded worker processes."""
+    with (
+        LocalCluster(
+            n_workers=2,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=":0",
+            silence_logs=logging.ERROR,
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        yield client
+
+
+@pytest.fixture(scope="module")
+def dask_client() -> Iterator[Client]:
+    """A local cluster of two workers shared by a module's tests (each waits for both)."""
+    with local_client() as client:
+        yield client
+
+
+@pytest.fixture
+def own_dask_client() -> Iterator[Client]:
+    """A local cluster of two workers for one test (one that restarts it: after a worker was
+    killed by SIGKILL, distributed 2026.8's restart can wait in vain for its nanny)."""
+    with local_client() as client:
+        yield client
+
+
+@pytest.fixture(scope="module")
+def twin_source(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Eight twin plans (units 0–7), made once per module."""
+    folder = tmp_path_factory.mktemp("twin-plans")
+    write_twin_plans(folder, 8, commands=COMMANDS)
+    return folder
+
+
+@pytest.fixture
+def plans(twin_source: Path, tmp_path: Path) -> Callable[[int], list[Path]]:
+    """``plans(n)``: a fresh copy of the first ``n`` twin plans (with their captures) in this
+    test's folder."""
+
+    def copy(n: int) -> list[Path]:
+        folder = tmp_path / "plans"
+        shutil.copytree(twin_source, folder)
+        every = sorted(folder.glob("unit-*.toml"))
+        for extra in every[n:]:
+            extra.unlink()
+        return every[:n]
+
+    return copy

@@ -1,0 +1,234 @@
+"""``rotacal batch`` on a real ``distributed.LocalCluster``: every plan issued exactly once, through
+killed workers, restarts and resumes; failures isolated; SQLite written by the client, PostgreSQL
+by the workers directly."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+import sqlalchemy as sa
+from click.testing import CliRunner
+from distributed import Client
+
+from rotacal.batch import BatchInterruptedError, BatchResult, expected_plan_sha256, run_batch
+from rotacal.cli import cli
+from rotacal.plan.read import read_plan
+from rotacal.records import models as m
+from rotacal.records import open_store
+
+from .conftest import COMMANDS
+
+CERTIFICATE_FILES = {"certificate.pdf", "certificate.xml", "results.json"}
+
+
+def _records(url: str) -> dict[str, str]:
+    """plan_sha256 → number of every certificate in the store (and that no sha is there twice)."""
+    store = open_store(url)
+    try:
+        with store.begin(read_only=True) as connection:
+            rows = connection.execute(sa.select(m.Certificate.plan_sha256, m.Certificate.number))
+            pairs = [tuple(r) for r in rows]
+    finally:
+        store.close()
+    shas = [sha for sha, _ in pairs]
+    assert len(shas) == len(set(shas)), "a plan was issued twice"
+    return dict(pairs)
+
+
+def _check_issued_once(result: BatchResult, plans: list[Path], url: str) -> None:
+    """Every plan has exactly one certificate, whose folder is whole and whose record holds the
+    plan_sha256 that the plan and its captures give (computed here from the files alone)."""
+    records = _records(url)
+    assert len(records) == len(plans)
+    out = result.out
+    for path in plans:
+        sha = expected_plan_sha256(read_plan(path))
+        number = records[sha]
+        folder = out / number
+        assert CERTIFICATE_FILES <= {p.name for p in folder.iterdir()}
+        assert json.loads((folder / "results.json").read_text())["plan_sha256"] == sha
+    folders = {p.name for p in out.iterdir() if p.is_dir()}
+    assert folders == set(records.values()), "a partial or unrecorded folder was left"
+    listed = json.loads((out / "batch.json").read_text())
+    assert {str(p) for p in plans} <= {p["plan"] for p in listed["plans"]}
+
+
+def _sqlite(tmp_path: Path) -> str:
+    return f"sqlite:///{tmp_path / 'records.sqlite'}"
+
+
+def test_a_batch_issues_every_plan_once_and_a_second_run_skips_them(
+    dask_client: Client, plans: Callable[[int], list[Path]], tmp_path: Path
+) -> None:
+    paths, url, out = plans(5), _sqlite(tmp_path), tmp_path / "certs"
+    dask_client.wait_for_workers(2)
+    first = run_batch([paths[0].parent], out=out, db=url, client=dask_client)
+    assert [o.status for o in first.outcomes] == ["issued"] * 5
+    assert len({o.number for o in first.outcomes}) == 5
+    _check_issued_once(first, paths, url)
+
+    again = run_batch(paths, out=out, db=url, client=dask_client)
+    assert [o.status for o in again.outcomes] == ["skipped"] * 5
+    assert [o.number for o in again.outcomes] == [o.number for o in first.outcomes]
+    assert again.workers == 0  # nothing ran: the skips come from the hashes alone
+    _check_issued_once(again, paths, url)
+
+
+def test_a_failing_plan_fails_alone_with_its_reason(
+    dask_client: Client, plans: Callable[[int], list[Path]], tmp_path: Path
+) -> None:
+    paths, url, out = plans(3), _sqlite(tmp_path), tmp_path / "certs"
+    folder = paths[0].parent
+    (folder / "broken.toml").write_text("[certificate\n", encoding="utf-8")
+    missing = folder / "missing.toml"
+    missing.write_text(paths[0].read_text().replace("captures-0000/rotations.npz", "gone.npz"))
+    corrupt = folder / "corrupt.toml"
+    (folder / "captures-0001" / "bad.npz").write_bytes(b"PK\x03\x04 not a capture")
+    corrupt.write_text(paths[1].read_text().replace('rotations.npz"', 'bad.npz"', 1))
+    dask_client.wait_for_workers(2)
+    result = run_batch([folder], out=out, db=url, client=dask_client)
+    by_name = {Path(o.plan).name: o for o in result.outcomes}
+    assert {n: o.status for n, o in by_name.items()} == {
+        "broken.toml": "failed",
+        "corrupt.toml": "failed",
+        "missing.toml": "failed",
+        "unit-0000.toml": "issued",
+        "unit-0001.toml": "issued",
+        "unit-0002.toml": "issued",
+    }
+    for name in ("broken.toml", "corrupt.toml", "missing.toml"):
+        error = by_name[name].error
+        assert error is not None and "\n" not in error and name in error, error
+    assert "bad.npz" in str(by_name["corrupt.toml"].error)
+    assert "gone.npz" in str(by_name["missing.toml"].error)
+    _check_issued_once(result, paths, url)
+
+
+def _kill_one_worker(client: Client) -> Callable[[str], None]:
+    """An ``advance`` that kills one worker process (SIGKILL) when the first plan has ended."""
+    killed: list[int] = []
+
+    def advance(label: str) -> None:
+        if not killed:
+            pid = next(iter(client.run(os.getpid).values()))
+            os.kill(pid, signal.SIGKILL)
+            killed.append(pid)
+
+    return advance
+
+
+@pytest.mark.parametrize("engine", ["sqlite", "postgresql"])
+def test_a_killed_worker_loses_nothing_and_issues_nothing_twice(
+    dask_client: Client,
+    plans: Callable[[int], list[Path]],
+    tmp_path: Path,
+    request: pytest.FixtureRequest,
+    engine: str,
+) -> None:
+    paths, out = plans(8), tmp_path / "certs"
+    url = (
+        _sqlite(tmp_path)
+        if engine == "sqlite"
+        else request.getfixturevalue("postgres").new_database()
+    )
+    dask_client.wait_for_workers(2)
+    result = run_batch(
+        paths, out=out, db=url, client=dask_client, advance=_kill_one_worker(dask_client)
+    )
+    # Dask runs a lost worker's task again elsewhere: the batch ends whole
+    assert [o.status for o in result.outcomes] == ["issued"] * 8, [o.error for o in result.outcomes]
+    _check_issued_once(result, paths, url)
+    assert not (out / ".rotacal-batch-staging").exists()
+    dask_client.wait_for_workers(2)
+    again = run_batch(paths, out=out, db=url, client=dask_client)
+    assert again.count("skipped") == 8
+    _check_issued_once(again, paths, url)
+
+
+def test_a_restarted_cluster_stops_the_batch_and_a_second_run_finishes_it(
+    own_dask_client: Client, plans: Callable[[int], list[Path]], tmp_path: Path
+) -> None:
+    paths, url, out = plans(8), _sqlite(tmp_path), tmp_path / "certs"
+    restarted: list[bool] = []
+
+    def advance(label: str) -> None:
+        if not restarted:
+            restarted.append(True)
+            own_dask_client.restart()  # every worker process killed and started again
+
+    own_dask_client.wait_for_workers(2)
+    first = run_batch(paths, out=out, db=url, client=own_dask_client, advance=advance)
+    lost = [o for o in first.outcomes if o.status == "failed"]
+    assert lost, "the restart came too late to stop any plan"
+    assert all("lost" in str(o.error) for o in lost)
+    issued = {o.number for o in first.outcomes if o.status == "issued"}
+    own_dask_client.wait_for_workers(2)
+    second = run_batch(paths, out=out, db=url, client=own_dask_client)
+    assert second.count("failed") == 0
+    assert {o.number for o in second.outcomes if o.status == "skipped"} == issued
+    _check_issued_once(second, paths, url)
+
+
+def test_postgresql_is_written_by_the_workers_directly(
+    dask_client: Client, plans: Callable[[int], list[Path]], tmp_path: Path, postgres: object
+) -> None:
+    paths, out = plans(4), tmp_path / "certs"
+    url = postgres.new_database()  # type: ignore[attr-defined]
+    dask_client.wait_for_workers(2)
+    result = run_batch(paths, out=out, db=url, client=dask_client)
+    assert result.count("issued") == 4
+    _check_issued_once(result, paths, url)
+
+    def stores_open() -> list[str]:
+        from rotacal.batch import tasks
+
+        return list(tasks._STORES)
+
+    opened = [u for urls in dask_client.run(stores_open).values() for u in urls]
+    assert url in opened  # the workers opened the store themselves
+
+
+def test_interrupting_the_client_voids_its_drawn_numbers(
+    dask_client: Client, plans: Callable[[int], list[Path]], tmp_path: Path
+) -> None:
+    paths, url, out = plans(6), _sqlite(tmp_path), tmp_path / "certs"
+
+    def advance(label: str) -> None:
+        raise KeyboardInterrupt
+
+    dask_client.wait_for_workers(2)
+    with pytest.raises(BatchInterruptedError, match="run the same batch again"):
+        run_batch(paths, out=out, db=url, client=dask_client, advance=advance)
+    listed = json.loads((out / "batch.json").read_text())
+    assert any(p["status"] == "failed" and "interrupted" in p["error"] for p in listed["plans"])
+    dask_client.wait_for_workers(2)
+    finished = run_batch(paths, out=out, db=url, client=dask_client)
+    assert finished.count("failed") == 0
+    _check_issued_once(finished, paths, url)
+
+
+def test_the_command_reports_a_table_and_exits_2_when_a_plan_failed(
+    plans: Callable[[int], list[Path]], tmp_path: Path
+) -> None:
+    paths, url, out = plans(2), _sqlite(tmp_path), tmp_path / "certs"
+    (paths[0].parent / "broken.toml").write_text("not = [toml\n", encoding="utf-8")
+    result = CliRunner().invoke(
+        cli, ["batch", str(paths[0].parent), "--out", str(out), "--db", url, "--workers", "1"]
+    )
+    assert result.exit_code == 2, result.output
+    assert "issued         2" in result.stdout and "failed         1" in result.stdout
+    assert "failed: " in result.stderr and "broken.toml" in result.stderr
+    assert "Traceback" not in result.output
+    assert len(_records(url)) == 2 and COMMANDS
+
+
+def test_the_command_refuses_workers_with_a_scheduler(tmp_path: Path) -> None:
+    result = CliRunner().invoke(
+        cli, ["batch", str(tmp_path), "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"]
+    )
+    assert result.exit_code == 2 and "not both" in result.output
