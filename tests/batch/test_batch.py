@@ -232,3 +232,34 @@ def test_the_command_refuses_workers_with_a_scheduler(tmp_path: Path) -> None:
         cli, ["batch", str(tmp_path), "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"]
     )
     assert result.exit_code == 2 and "not both" in result.output
+
+
+def test_a_running_scheduler_takes_the_batch_and_a_plan_named_twice_runs_once(
+    dask_client: Client, plans: Callable[[int], list[Path]], tmp_path: Path
+) -> None:
+    paths, url, out = plans(2), _sqlite(tmp_path), tmp_path / "certs"
+    twin = paths[0].parent / "the-same.toml"
+    twin.write_bytes(paths[0].read_bytes())  # the same plan and captures under another name
+    address = dask_client.scheduler_info()["address"]
+    dask_client.wait_for_workers(2)
+    result = CliRunner().invoke(
+        cli,
+        [
+            "batch",
+            *map(str, paths),
+            str(twin),
+            "--out",
+            str(out),
+            "--db",
+            url,
+            "--scheduler",
+            address,
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    listed = {
+        Path(p["plan"]).name: p for p in json.loads((out / "batch.json").read_text())["plans"]
+    }
+    assert listed["the-same.toml"]["status"] == "skipped"
+    assert listed["the-same.toml"]["number"] == listed["unit-0000.toml"]["number"]
+    assert len(_records(url)) == 2

@@ -179,16 +179,18 @@ class _Run:
         store: Store,
         out: Path,
         staging: Path,
+        entries: Sequence[BatchPlan],
+        outcomes: list[PlanOutcome],
         advance: Callable[[str], None],
     ) -> None:
         self.client, self.store, self.out, self.staging = client, store, out, staging
-        self.advance = advance
+        self.entries, self.outcomes, self.advance = entries, outcomes, advance
         self.direct = store.engine.dialect.name != "sqlite"  # workers write the records
         self.drawn: dict[int, str] = {}  # numbers drawn for plans not yet kept (SQLite)
         self.task_of: dict[Future, int] = {}  # a running task → its plan's index
 
-    def submit(self, index: int, entry: BatchPlan) -> Future:
-        path = str(entry.path)
+    def submit(self, index: int) -> Future:
+        path = str(self.entries[index].path)
         future: Future
         if self.direct:
             future = self.client.submit(
@@ -199,12 +201,9 @@ class _Run:
         self.task_of[future] = index
         return future
 
-    def finished(
-        self, future: Future, entries: Sequence[BatchPlan], outcomes: list[PlanOutcome]
-    ) -> Future | None:
-        """Take a finished task's result; the next task of the same plan, if it has one."""
+    def finished(self, future: Future) -> Future | None:
+        """Take a finished task's result; the plan's next task, if it has one."""
         index = self.task_of.pop(future)
-        outcome, entry = outcomes[index], entries[index]
         try:
             value = future.result()
         except Exception as e:  # the task died with its workers (KilledWorker) or was cancelled
@@ -212,26 +211,40 @@ class _Run:
                 f"its task was lost: {type(e).__name__}: {' '.join(str(e).split())}", 0.0
             )
         if isinstance(value, Measured):  # SQLite: number it here, render it there
-            return self._number(index, entry, outcome, value)
+            return self._number(index, value)
         if isinstance(value, Failed):
-            self._fail(index, outcome, value)
-        elif isinstance(value, Done):
-            if value.measured is not None:  # SQLite: keep and publish it here
-                self._keep(index, outcome, value)
-            else:
-                outcome.status, outcome.number = "issued", value.number
-                outcome.seconds, outcome.warnings = value.seconds, list(value.warnings)
-        if outcome.status != "pending":
-            self.advance(entry.path.name)
+            self._fail(index, value)
+        elif value.measured is not None:  # SQLite: rendered there, kept and published here
+            self._keep(index, value)
+        else:
+            self._end(index, "issued", value.number, value.seconds, value.warnings)
         return None
 
-    def _fail(self, index: int, outcome: PlanOutcome, failure: Failed) -> None:
+    def _end(
+        self,
+        index: int,
+        status: str,
+        number: str | None,
+        seconds: float,
+        warnings: tuple[str, ...] = (),
+        error: str | None = None,
+    ) -> None:
+        outcome = self.outcomes[index]
+        outcome.status, outcome.number, outcome.error = status, number, error
+        outcome.seconds, outcome.warnings = seconds, list(warnings)
+        self.advance(self.entries[index].path.name)
+
+    def _fail(self, index: int, failure: Failed) -> None:
         self._void(index, failure.error)
-        outcome.seconds = failure.seconds
-        if failure.certified_as is not None:
-            outcome.status, outcome.number = "skipped", failure.certified_as
+        earlier = failure.certified_as
+        sha = self.entries[index].sha256
+        if earlier is None and sha is not None:  # issued meanwhile by another writer?
+            with contextlib.suppress(RotacalError):
+                earlier = self.store.issued_with(sha)
+        if earlier is not None:
+            self._end(index, "skipped", earlier, failure.seconds)
         else:
-            outcome.status, outcome.error = "failed", failure.error
+            self._end(index, "failed", None, failure.seconds, error=failure.error)
 
     def _void(self, index: int, reason: str) -> None:
         number = self.drawn.pop(index, None)
@@ -239,18 +252,13 @@ class _Run:
             with contextlib.suppress(RotacalError):
                 self.store.void_number(number, f"not issued: {reason}")
 
-    def _number(
-        self, index: int, entry: BatchPlan, outcome: PlanOutcome, measured: Measured
-    ) -> Future | None:
-        content = measured.content
-        plan = content.plan
+    def _number(self, index: int, measured: Measured) -> Future | None:
+        plan = measured.content.plan
         try:
-            earlier = self.store.issued_with(content.plan_sha256)
+            earlier = self.store.issued_with(measured.content.plan_sha256)
             if earlier is not None:
                 shutil.rmtree(measured.staging, ignore_errors=True)
-                outcome.status, outcome.number = "skipped", earlier
-                outcome.seconds = measured.seconds
-                self.advance(entry.path.name)
+                self._end(index, "skipped", earlier, measured.seconds)
                 return None
             number = plan.number
             if number == "auto":
@@ -263,14 +271,13 @@ class _Run:
                 )
         except RotacalError as e:
             shutil.rmtree(measured.staging, ignore_errors=True)
-            self._fail(index, outcome, Failed(f"{plan.path}: {e}", measured.seconds))
-            self.advance(entry.path.name)
+            self._fail(index, Failed(f"{plan.path}: {e}", measured.seconds))
             return None
         future = self.client.submit(render_task, measured, number, pure=False)
         self.task_of[future] = index
         return future
 
-    def _keep(self, index: int, outcome: PlanOutcome, done: Done) -> None:
+    def _keep(self, index: int, done: Done) -> None:
         from rotacal.certificate.issue import publish
 
         assert done.measured is not None
@@ -279,11 +286,10 @@ class _Run:
             publish(done.measured.content, staging, self.out / done.number, self.store)
         except RotacalError as e:
             shutil.rmtree(staging, ignore_errors=True)
-            self._fail(index, outcome, Failed(" ".join(str(e).split()), done.seconds))
+            self._fail(index, Failed(" ".join(str(e).split()), done.seconds))
             return
         self.drawn.pop(index, None)
-        outcome.status, outcome.number = "issued", done.number
-        outcome.seconds, outcome.warnings = done.seconds, list(done.warnings)
+        self._end(index, "issued", done.number, done.seconds, done.warnings)
 
 
 def run_batch(
@@ -419,11 +425,11 @@ def _run(
         result.dashboard = _dashboard(dask, local=scheduler is None and client is None)
         if on_start is not None:
             on_start(len(todo), result.dashboard)
-        run = _Run(dask, store, out, staging, advance)
-        pending = as_completed([run.submit(i, entries[i]) for i in todo])
+        run = _Run(dask, store, out, staging, entries, outcomes, advance)
+        pending = as_completed([run.submit(i) for i in todo])
         try:
             for future in pending:
-                follow = run.finished(future, entries, outcomes)
+                follow = run.finished(future)
                 if follow is not None:
                     pending.add(follow)
         except KeyboardInterrupt:
