@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from rotacal.errors import ConfigError, RotacalError
 
+from .cluster import dashboard_link, dask_client
 from .plans import BatchPlan, find_plans, read_batch_plans
 from .tasks import Done, Failed, Measured, certify_task, measure_task, render_task
 
@@ -123,50 +124,6 @@ def _write_json(out: Path, result: BatchResult) -> None:
     partial = out / f".{BATCH_JSON}.partial"
     partial.write_text(text, encoding="utf-8")
     os.replace(partial, out / BATCH_JSON)
-
-
-@contextlib.contextmanager
-def _client(workers: int | None, scheduler: str | None, client: Client | None) -> Iterator[Client]:
-    """The Dask client: the one given, one connected to ``scheduler``, or one on a new local
-    cluster of ``workers`` single-threaded processes (closed at the end)."""
-    if client is not None:
-        yield client
-        return
-    import logging
-
-    from distributed import Client, LocalCluster
-
-    if scheduler is not None:
-        try:
-            remote = Client(scheduler, timeout="20s")
-        except (OSError, TimeoutError) as e:
-            raise ConfigError(f"--scheduler {scheduler}: cannot connect ({e})") from None
-        with remote:
-            yield remote
-        return
-    with (
-        LocalCluster(
-            n_workers=workers or os.cpu_count() or 1,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=":0",  # a free port: batches side by side never collide
-            silence_logs=logging.ERROR,
-        ) as cluster,
-        Client(cluster) as local,
-    ):
-        yield local
-
-
-def _dashboard(client: Client, local: bool) -> str | None:
-    """The link to the cluster's dashboard, when it has one: Dask serves its pages only with
-    bokeh installed (not a dependency of rotacal; ``pip install bokeh`` for the dashboard)."""
-    import importlib.util
-
-    if local and importlib.util.find_spec("bokeh") is None:
-        return None
-    if not client.scheduler_info().get("services", {}).get("dashboard"):
-        return None
-    return str(client.dashboard_link)
 
 
 class _Run:
@@ -420,9 +377,9 @@ def _run(
         return result
     from distributed import as_completed
 
-    with _client(workers, scheduler, client) as dask:
+    with dask_client(workers, scheduler, client) as dask:
         result.workers = len(dask.scheduler_info().get("workers", {}))
-        result.dashboard = _dashboard(dask, local=scheduler is None and client is None)
+        result.dashboard = dashboard_link(dask, local=scheduler is None and client is None)
         if on_start is not None:
             on_start(len(todo), result.dashboard)
         run = _Run(dask, store, out, staging, entries, outcomes, advance)

@@ -64,6 +64,20 @@ from ._reading import current_read_options
     f"[default: chunked above {_IN_MEMORY_MAX_SAMPLES:.0e} samples].",
 )
 @click.option(
+    "--workers",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Split the capture over a local Dask cluster of N worker processes (NPZ without "
+    "compression, HDF5 or TDMS; τ at octaves or decades).",
+)
+@click.option(
+    "--scheduler",
+    metavar="ADDRESS",
+    default=None,
+    help="Split the capture over the workers of the running Dask scheduler at ADDRESS "
+    "(tcp://host:8786); they must see the capture at the same path.",
+)
+@click.option(
     "--angle",
     "is_angle",
     is_flag=True,
@@ -79,6 +93,8 @@ def allan_cmd(
     unit: str,
     taus: str | None,
     chunked: bool | None,
+    workers: int | None,
+    scheduler: str | None,
     is_angle: bool,
     columns: Sequence[str],
     group: str | None,
@@ -114,6 +130,26 @@ def allan_cmd(
     # only the columns the analysis uses: other arrays of the file may have other lengths
     wanted = [rate_column, *(["time_s"] if "time_s" in available else [])]
     n = None
+    if workers is not None or scheduler is not None:
+        if workers is not None and scheduler is not None:
+            raise click.UsageError("give --workers (a local cluster) or --scheduler, not both")
+        if chunked is False:
+            raise click.UsageError("--in-memory reads the capture in this process; drop it")
+        result = _dask_noise(
+            capture,
+            rate_column,
+            fs_hz,
+            unit,
+            taus,
+            is_angle,
+            mapping,
+            group,
+            kw,
+            workers,
+            scheduler,
+        )
+        _finish(result, capture, json_path, report_path)
+        return
     if chunked is None:
         n = capture_length(
             capture, rate_column, mapping=mapping, group=group, read_options=read_options
@@ -173,16 +209,7 @@ def _chunked_noise(
     from rotacal.gyro.noise_stream import gyro_noise_chunks
     from rotacal.io import capture_length, iter_capture_chunks
 
-    if taus in ("all", "log"):
-        raise ConfigError(
-            f"--taus {taus} needs the whole record in memory; this capture is read in chunks: "
-            "give --taus octave or decade, or --in-memory (if the record fits in memory)"
-        )
-    if is_angle:
-        raise ConfigError(
-            "--angle is analysed in memory only; give --in-memory (if the record fits in "
-            "memory), or difference the angle to a rate column first"
-        )
+    _check_streamable(taus, is_angle, "read in chunks")
     read_options = current_read_options()
     if n is None:
         n = capture_length(
@@ -208,10 +235,78 @@ def _chunked_noise(
             history=_CHUNK_HISTORY,
             progress=progress,
         )
+    return _octave_note(result, taus, f"read in chunks ({n} samples)")
+
+
+def _check_streamable(taus: str | None, is_angle: bool, how: str) -> None:
+    if taus in ("all", "log"):
+        raise ConfigError(
+            f"--taus {taus} needs the whole record in memory; this capture is {how}: give "
+            "--taus octave or decade, or --in-memory (if the record fits in memory)"
+        )
+    if is_angle:
+        raise ConfigError(
+            "--angle is analysed in memory only; give --in-memory (if the record fits in "
+            "memory), or difference the angle to a rate column first"
+        )
+
+
+def _octave_note(result: Any, taus: str | None, how: str) -> Any:
     if taus is None:  # the log grid, the default in memory, needs the record's length up front
-        note = f"read in chunks ({n} samples): τ at octaves (--taus octave)"
+        note = f"{how}: τ at octaves (--taus octave)"
         result = dataclasses.replace(result, notes=[note, *result.notes])
     return result
+
+
+def _dask_noise(
+    capture: str,
+    rate_column: str,
+    fs_hz: float | None,
+    unit: str,
+    taus: str | None,
+    is_angle: bool,
+    mapping: Any,
+    group: str | None,
+    kw: dict[str, Any],
+    workers: int | None,
+    scheduler: str | None,
+) -> Any:
+    """The noise of a capture split over a Dask cluster's workers
+    (:func:`rotacal.batch.capture_noise.gyro_noise_on_dask`)."""
+    from rotacal.batch.capture_noise import CHUNK_ROWS, gyro_noise_on_dask
+    from rotacal.batch.cluster import dask_client
+    from rotacal.io import capture_length, read_capture_rows
+
+    _check_streamable(taus, is_angle, "split over workers")
+    read_options = current_read_options()
+    n = capture_length(
+        capture, rate_column, mapping=mapping, group=group, read_options=read_options
+    )
+    # a format without row offsets is refused before a cluster is started
+    options = {"mapping": mapping, "group": group, "read_options": read_options}
+    read_capture_rows(capture, [rate_column], 0, min(n, 1), **options)
+    tasks = 2 * (-(-n // CHUNK_ROWS)) + 1  # at most: two rounds of blocks and the checks
+    with (
+        dask_client(workers, scheduler, None) as client,
+        _sample_progress(tasks, "Allan deviation (tasks on Dask)") as progress,
+    ):
+        result = gyro_noise_on_dask(
+            capture,
+            client=client,
+            column=rate_column,
+            fs_hz=fs_hz,
+            unit=unit,
+            taus=taus or "octave",
+            specs=kw.pop("specs"),
+            allow_clipped=kw.pop("allow_clipped"),
+            mapping=mapping,
+            group=group,
+            read_options=read_options,
+            history=_CHUNK_HISTORY,
+            progress=progress,
+        )
+        workers_used = len(client.scheduler_info().get("workers", {}))
+    return _octave_note(result, taus, f"split over {workers_used} Dask workers ({n} samples)")
 
 
 def _finish(result: Any, capture: str, json_path: str | None, report_path: str | None) -> None:

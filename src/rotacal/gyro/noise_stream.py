@@ -29,7 +29,7 @@ from rotacal.signal.allan_stream import DEFAULT_HISTORY, ChunkedAdev
 from rotacal.signal.clipping import RailDetector, check_clipping
 from rotacal.uncertainty.specs import InstrumentSpecs
 
-__all__ = ["gyro_noise_chunks"]
+__all__ = ["NoiseChecks", "gyro_noise_chunks"]
 
 
 class _TimeSteps:
@@ -83,6 +83,46 @@ class _TimeSteps:
         return _constant_rate(self.first, self.last, n, self.min_step, self.max_step, fs_hz)
 
 
+class NoiseChecks:
+    """What :func:`gyro_noise_chunks` checks of the chunks besides the deviation itself: the time
+    column (order, gaps, constant rate; the sampling rate), and the rails of clipping, with
+    carried state. ``add(chunk)`` in row order, then ``finish(n)`` with the rate samples seen.
+    """
+
+    def __init__(self, column: str, fs_hz: float | None) -> None:
+        _check_fs_hz(fs_hz)
+        self.column, self.fs_hz = column, fs_hz
+        self.times: _TimeSteps | None = None
+        self.rails = RailDetector(column)
+
+    def add(self, chunk: Mapping[str, Any]) -> np.ndarray:
+        """Check the next rows (``column`` and ``time_s`` when given); the rate as float64."""
+        rate = np.asarray(chunk[self.column], dtype=np.float64)
+        t = chunk.get("time_s")
+        if self.times is None and t is not None:
+            self.times = _TimeSteps()
+        if self.times is not None:
+            if t is None or np.shape(t) != rate.shape:
+                raise CaptureError(
+                    f"time_s and {self.column} must come in chunks of equal lengths; got "
+                    f"{None if t is None else np.shape(t)} and {rate.shape}."
+                )
+            self.times.add(np.asarray(t, dtype=np.float64))
+        self.rails.add(rate)
+        return rate
+
+    def finish(self, n: int, allow_clipped: bool) -> tuple[float, tuple[str, ...]]:
+        """The sampling rate (Hz) and the clipping warnings, once ``n`` rate samples were fed."""
+        if self.times is not None:
+            fs = self.times.rate(n, self.fs_hz)
+        elif self.fs_hz is None:
+            raise CaptureError("give the sampling rate (fs_hz, --fs-hz) or a time_s column.")
+        else:
+            fs = float(self.fs_hz)
+        clipped = check_clipping({self.column: self.rails.result()}, allow_clipped=allow_clipped)
+        return fs, tuple(clipped)
+
+
 def gyro_noise_chunks(
     chunks: Iterable[Mapping[str, Any]],
     *,
@@ -130,31 +170,10 @@ def gyro_noise_chunks(
     ----------
     IEEE Std 952-1997, Annex C; NIST SP 1065 (Riley 2008), eq. (11) and §5.3.
     """
-    _check_fs_hz(fs_hz)
-    times: _TimeSteps | None = None
-    rails = RailDetector(column)
+    checks = NoiseChecks(column, fs_hz)
     with ChunkedAdev(taus=taus, history=history, column=column, progress=progress) as acc:
         for chunk in chunks:
-            rate = np.asarray(chunk[column], dtype=np.float64)
-            t = chunk.get("time_s")
-            if times is None and t is not None:
-                times = _TimeSteps()
-            if times is not None:
-                if t is None or np.shape(t) != rate.shape:
-                    raise CaptureError(
-                        f"time_s and {column} must come in chunks of equal lengths; got "
-                        f"{None if t is None else np.shape(t)} and {rate.shape}."
-                    )
-                times.add(np.asarray(t, dtype=np.float64))
-            acc.add(rate)
-            rails.add(rate)
-        n = acc.n_samples
-        if times is not None:
-            fs = times.rate(n, fs_hz)
-        elif fs_hz is None:
-            raise CaptureError("give the sampling rate (fs_hz, --fs-hz) or a time_s column.")
-        else:
-            fs = float(fs_hz)
+            acc.add(checks.add(chunk))
+        fs, clipped = checks.finish(acc.n_samples, allow_clipped)
         adev = acc.result(fs=fs)
-    clipped = check_clipping({column: rails.result()}, allow_clipped=allow_clipped)
     return noise_of_deviation(adev, unit=unit, column=column, specs=specs, warnings=clipped)

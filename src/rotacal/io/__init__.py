@@ -16,6 +16,7 @@ if TYPE_CHECKING:
         iter_capture_chunks,
         parse_column_mapping,
         read_capture,
+        read_capture_rows,
     )
     from .read_options import ReadOptions
     from .write import write_capture
@@ -30,6 +31,7 @@ __all__ = [
     "iter_capture_chunks",
     "parse_column_mapping",
     "read_capture",
+    "read_capture_rows",
     "write_capture",
 ]
 

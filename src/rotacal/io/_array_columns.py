@@ -179,6 +179,11 @@ class ArrayColumns:
         for raw in self.inner.chunks(arrays + plain, chunk_rows):
             yield self._columns(raw, names)
 
+    def rows(self, names: list[str], start: int, stop: int) -> dict[str, np.ndarray] | None:
+        arrays, plain = self._split(names)
+        raw = self.inner.rows(arrays + plain, start, stop)
+        return None if raw is None else self._columns(raw, names)
+
     def integrity(self, name: str) -> Integrity | None:
         if name not in self._parts:
             return self.inner.integrity(name)

@@ -293,6 +293,10 @@ class CsvReader:
         d = self.layout.delimiter
         return len(line.split()) if d == " " else line.count(d) + 1
 
+    def rows(self, names: list[str], start: int, stop: int) -> None:
+        """None: text has no row offsets (a row range would read the file from its start)."""
+        return None
+
     def chunks(self, names: list[str], chunk_rows: int) -> Iterator[dict[str, np.ndarray]]:
         idx = [self.layout.names.index(n) for n in names]
         lines = self._lines(self.header_lines)

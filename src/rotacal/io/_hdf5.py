@@ -196,6 +196,15 @@ class Hdf5Reader:
             hi = min(n, lo + chunk_rows)
             yield {name: np.asarray(src[lo:hi]) for name, src in sources.items()}
 
+    def rows(self, names: list[str], start: int, stop: int) -> dict[str, np.ndarray]:
+        """Rows ``start`` … ``stop - 1`` of each dataset (HDF5 reads any slice)."""
+        out: dict[str, np.ndarray] = {}
+        for name in names:
+            d = self._dataset(name)
+            mm = self._memmap(d)
+            out[name] = np.asarray((mm if mm is not None else d)[start:stop])
+        return out
+
     def integrity(self, name: str) -> None:
         return None  # HDF5 checks its own checksums (metadata, fletcher32 chunks) on reading
 

@@ -326,6 +326,17 @@ class NpzReader:
                         self.integrity(name).checked = True
                 yield out  # iter_capture_chunks hands the mapped pages back
 
+    def rows(self, names: list[str], start: int, stop: int) -> dict[str, np.ndarray] | None:
+        """Rows ``start`` … ``stop - 1`` of each member, mapped from the file; None unless every
+        member is stored uncompressed in row order (a compressed member has no row offsets)."""
+        out: dict[str, np.ndarray] = {}
+        for name in names:
+            mapped = self._mapped(name)
+            if mapped is None or (self._member(name).fortran and mapped.ndim > 1):
+                return None
+            out[name] = mapped[start:stop]
+        return out
+
     def locate(self, index: int) -> str:
         return f"row {index} (0-based)"
 

@@ -452,6 +452,66 @@ def iter_capture_chunks(
         _close(reader)
 
 
+def read_capture_rows(
+    path: PathLike,
+    columns: Iterable[str],
+    start: int,
+    stop: int,
+    *,
+    mapping: MappingArg = None,
+    group: str | None = None,
+    read_options: ReadOptions | None = None,
+) -> dict[str, np.ndarray]:
+    """Rows ``start`` … ``stop - 1`` of a capture's ``columns`` (canonical names), read without
+    the rows before them: for analyses that split one capture over many processes.
+
+    Each column is validated as :func:`iter_capture_chunks` validates a chunk (row numbers in
+    messages count from the start of the file). A stored checksum covers the whole column and
+    is not checked here: a pass over the whole file (:func:`iter_capture_chunks`) checks it.
+
+    Raises
+    ------
+    ConfigError
+        The format has no row offsets (CSV and other text, a compressed NPZ member): convert the
+        capture to NPZ saved without compression, HDF5 or TDMS.
+    CaptureError
+        Unequal column lengths, a range outside the capture, NaN/inf or absurd values.
+    """
+    mapped = _normalise_mapping(mapping)
+    reader = _open_reader(path, group, read_options)
+    fname = reader.fname
+    try:
+        _available, wanted = _resolve(reader, mapped, columns)
+        lengths = _declared(reader, wanted)
+        known = {k: n for k, n in lengths.items() if n is not None}
+        equal_lengths(fname, known)
+        n = next(iter(known.values()), None)
+        if n is not None and not 0 <= start < stop <= n:
+            raise CaptureError(f"{fname}: rows {start}…{stop - 1} are outside its {n} rows")
+        with reading(reader):
+            raw = reader.rows(list(wanted.values()), start, stop)
+        if raw is None:
+            raise ConfigError(
+                f"{fname}: its {reader.label} data cannot be read from a given row on (text, or "
+                "a compressed NPZ member); for parallel analysis save it as NPZ without "
+                "compression (numpy.savez), HDF5 or TDMS"
+            )
+        return {
+            canon: to_float_column(
+                raw[fcol],
+                fname=fname,
+                what=label(canon, fcol, reader.noun),
+                locate=reader.locate,
+                integrity=None,
+                offset=start,
+                allow_nonfinite=False,
+            )
+            for canon, fcol in wanted.items()
+        }
+    finally:
+        _close(reader)
+
+
 def release_pages(arrays: Mapping[str, np.ndarray]) -> None:
     """Drop the pages of memory-mapped chunks from this process once they have been used.
 

@@ -47,7 +47,14 @@ from rotacal.signal.allan import (
     deviation_from_sums,
 )
 
-__all__ = ["DEFAULT_HISTORY", "STREAMED_TAUS", "ChunkedAdev", "octave_adev_chunks"]
+__all__ = [
+    "DEFAULT_HISTORY",
+    "STREAMED_TAUS",
+    "ChunkedAdev",
+    "check_streamed_record",
+    "deviation_of_streamed_sums",
+    "octave_adev_chunks",
+]
 
 #: Phase values carried between chunks: cluster sizes up to half of it are summed in the pass.
 DEFAULT_HISTORY = 1 << 22
@@ -221,18 +228,7 @@ class ChunkedAdev:
         conf = _check_confidence(confidence)
         carry = self._carry
         n_phase = carry.count
-        n_samples = n_phase - 1
-        if n_phase < MIN_SAMPLES:
-            raise CaptureError(
-                f"the record holds {n_samples} rate samples; the Allan deviation needs at least "
-                f"{MIN_SAMPLES - 1}: supply a longer record."
-            )
-        if carry.low == carry.high:
-            raise CaptureError(
-                f"the rate record is constant ({carry.high!r} in all {n_samples} samples): the "
-                "sensor is stuck or saturated, or the column is a set value; supply the sensor "
-                "output."
-            )
+        check_streamed_record(n_phase, carry.low, carry.high)
         ms, notes = _cluster_sizes(self.taus, n_phase, fs_hz)
         sums = np.empty(ms.size)
         self._file.flush()
@@ -241,22 +237,60 @@ class ChunkedAdev:
         sums[short] = carry.sums[[index[m] for m in ms[short].tolist()]]
         if not short.all():
             done = self.progress
+            n_samples = n_phase - 1
             report = None if done is None else (lambda i: done(n_samples + i))
             sums[~short] = _long_sums(self._file, n_phase, ms[~short].tolist(), report)
-        sums /= fs_hz * fs_hz  # the phase was summed in rate × sample interval
-        return deviation_from_sums(
-            sums,
-            ms,
-            n_phase=n_phase,
-            n_samples=n_samples,
-            fs_hz=fs_hz,
-            data_type="rate",
-            confidence=conf,
-            alphas=_check_alpha(noise_alpha, ms.size),
-            notes=tuple(notes),
-            warnings=(),
-            n_direct=int(ms.size),
+        return deviation_of_streamed_sums(
+            sums, ms, notes, n_phase=n_phase, fs_hz=fs_hz, confidence=conf, noise_alpha=noise_alpha
         )
+
+
+def check_streamed_record(n_phase: int, low: float, high: float) -> None:
+    """Refuse a record streamed in pieces that is too short or constant (``low``/``high``: its
+    smallest and largest rate sample).
+
+    Raises
+    ------
+    CaptureError — fewer than 10 phase points, a constant record.
+    """
+    n_samples = n_phase - 1
+    if n_phase < MIN_SAMPLES:
+        raise CaptureError(
+            f"the record holds {n_samples} rate samples; the Allan deviation needs at least "
+            f"{MIN_SAMPLES - 1}: supply a longer record."
+        )
+    if low == high:
+        raise CaptureError(
+            f"the rate record is constant ({high!r} in all {n_samples} samples): the sensor is "
+            "stuck or saturated, or the column is a set value; supply the sensor output."
+        )
+
+
+def deviation_of_streamed_sums(
+    sums: np.ndarray,
+    ms: np.ndarray,
+    notes: list[str],
+    *,
+    n_phase: int,
+    fs_hz: float,
+    confidence: float,
+    noise_alpha: Any,
+) -> AllanDeviation:
+    """The deviation from the sums S(m) of a rate record's second differences, summed in units
+    of rate × sample interval (phase x_i = Σ_{k<i} rate_k): divided by fs² here."""
+    return deviation_from_sums(
+        sums / (fs_hz * fs_hz),
+        ms,
+        n_phase=n_phase,
+        n_samples=n_phase - 1,
+        fs_hz=fs_hz,
+        data_type="rate",
+        confidence=confidence,
+        alphas=_check_alpha(noise_alpha, ms.size),
+        notes=tuple(notes),
+        warnings=(),
+        n_direct=int(ms.size),
+    )
 
 
 def octave_adev_chunks(

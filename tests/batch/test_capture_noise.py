@@ -1,0 +1,131 @@
+"""One capture's Allan deviation split over the workers of a real ``distributed.LocalCluster``:
+the same numbers as the single-process streamed path and as the whole record in memory, the
+same refusals with the same messages."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from distributed import Client
+
+from rotacal.batch.capture_noise import gyro_noise_on_dask
+from rotacal.cli import cli
+from rotacal.errors import CaptureError, ConfigError
+from rotacal.gyro.noise import gyro_noise
+from rotacal.gyro.noise_stream import gyro_noise_chunks
+from rotacal.io import iter_capture_chunks
+
+N, FS = 300_000, 100.0
+#: small blocks and history: ~40 blocks, and both the short and the long cluster sizes
+SPLIT = {"chunk_rows": 7777, "history": 1024}
+
+
+def _record(seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    rate = 3.0 + 0.01 * rng.standard_normal(N) + np.cumsum(1e-5 * rng.standard_normal(N))
+    return np.arange(N) / FS, rate
+
+
+def _worst(a: Any, b: Any, where: str = "") -> float:
+    """The largest relative difference between the numbers of two JSON documents (and that
+    everything else is equal)."""
+    if isinstance(a, dict):
+        assert a.keys() == b.keys(), where
+        return max((_worst(a[k], b[k], f"{where}/{k}") for k in a if k != "provenance"), default=0)
+    if isinstance(a, list):
+        assert len(a) == len(b), where
+        return max((_worst(u, v, where) for u, v in zip(a, b, strict=True)), default=0.0)
+    if isinstance(a, float) and isinstance(b, float) and math.isfinite(a):
+        return 0.0 if a == b else abs(a - b) / max(abs(a), abs(b))
+    assert a == b, where
+    return 0.0
+
+
+@pytest.fixture(scope="module")
+def npz(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("noise") / "noise.npz"
+    t, rate = _record()
+    np.savez(path, time_s=t, rate_deg_s=rate)
+    return path
+
+
+def _chunks(path: Path, taus: str) -> dict[str, Any]:
+    chunks = iter_capture_chunks(path, ["rate_deg_s", "time_s"], chunk_rows=5000)
+    return gyro_noise_chunks(chunks, taus=taus, history=SPLIT["history"]).to_dict()
+
+
+@pytest.mark.parametrize("taus", ["octave", "decade"])
+def test_split_over_workers_equals_one_process_and_memory(
+    dask_client: Client, npz: Path, taus: str
+) -> None:
+    got = gyro_noise_on_dask(str(npz), client=dask_client, taus=taus, **SPLIT).to_dict()
+    assert _worst(got, _chunks(npz, taus)) < 1e-9
+    t, rate = _record()
+    assert _worst(got, gyro_noise(rate, time_s=t, taus=taus).to_dict()) < 1e-9
+
+
+def test_an_hdf5_capture_splits_too(dask_client: Client, npz: Path, tmp_path: Path) -> None:
+    path = tmp_path / "noise.h5"
+    t, rate = _record()
+    with h5py.File(path, "w") as f:
+        f["time_s"], f["rate_deg_s"] = t, rate
+    got = gyro_noise_on_dask(str(path), client=dask_client, **SPLIT).to_dict()
+    assert _worst(got, _chunks(npz, "octave")) < 1e-9
+
+
+def _message(error: pytest.ExceptionInfo[Exception]) -> str:
+    return str(error.value)
+
+
+@pytest.mark.parametrize(
+    "damage",
+    [
+        lambda t, r: r.__setitem__(123_456, np.nan),  # a NaN
+        lambda t, r: t.__setitem__(slice(200_000, None), t[200_000:] + 5.0),  # a gap in time
+    ],
+    ids=["nan", "gap"],
+)
+def test_a_bad_capture_is_refused_with_the_message_of_one_process(
+    dask_client: Client, tmp_path: Path, damage: Any
+) -> None:
+    t, rate = _record()
+    damage(t, rate)
+    path = tmp_path / "bad.npz"
+    np.savez(path, time_s=t, rate_deg_s=rate)
+    with pytest.raises(CaptureError) as one:
+        _chunks(path, "octave")
+    with pytest.raises(CaptureError) as split:
+        gyro_noise_on_dask(str(path), client=dask_client, **SPLIT)
+    assert _message(split) == _message(one)
+
+
+def test_text_is_refused_before_any_work(dask_client: Client, tmp_path: Path) -> None:
+    path = tmp_path / "noise.csv"
+    t, rate = _record()
+    np.savetxt(
+        path, np.c_[t[:2000], rate[:2000]], delimiter=",", header="time_s,rate_deg_s", comments=""
+    )
+    with pytest.raises(ConfigError, match="save it as NPZ without compression"):
+        gyro_noise_on_dask(str(path), client=dask_client)
+
+
+def test_the_command_splits_over_a_running_scheduler(
+    dask_client: Client, npz: Path, tmp_path: Path
+) -> None:
+    address = dask_client.scheduler_info()["address"]
+    outputs = {}
+    for name, extra in (("split", ["--scheduler", address]), ("chunked", ["--chunked"])):
+        out = tmp_path / f"{name}.json"
+        result = CliRunner().invoke(
+            cli, ["allan", str(npz), "--taus", "octave", *extra, "--json", str(out)]
+        )
+        assert result.exit_code == 0, result.output
+        outputs[name] = json.loads(out.read_text())
+    assert _worst(outputs["split"], outputs["chunked"]) < 1e-9
