@@ -1,0 +1,104 @@
+"""One huge capture's Allan deviation split over Dask workers, against one process.
+
+Writes a rate record of ``--samples`` rows (time_s and rate_deg_s, NPZ without compression) and
+times, on the same file:
+
+- **one process**: ``rotacal allan --chunked --taus octave`` in a fresh process (the baseline);
+- **N workers**: ``rotacal allan --workers N --taus octave`` for each N of ``--workers``
+  (a fresh process that starts its local cluster: the start is included);
+
+and checks that every number of the JSON agrees with the baseline's. Prints seconds, the ratio
+to the baseline and the peak RSS of the largest process (the command's, or a Dask worker's: the
+kernel counts waited-for descendants too). No asserts.
+
+Run: ``python benchmarks/bench_capture_dask.py [--samples 1e8] [--workers 1,2]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def write_record(path: Path, n: int) -> None:
+    """White rate noise plus a random walk, at 100 Hz, written in 10⁷-row pieces."""
+    rng = np.random.default_rng(7)
+    rate = np.lib.format.open_memmap(path.with_suffix(".rate.npy"), "w+", np.float64, (n,))
+    time_s = np.lib.format.open_memmap(path.with_suffix(".time.npy"), "w+", np.float64, (n,))
+    walk = 0.0
+    for lo in range(0, n, 10_000_000):
+        hi = min(n, lo + 10_000_000)
+        steps = np.cumsum(1e-5 * rng.standard_normal(hi - lo)) + walk
+        rate[lo:hi] = 3.0 + 0.01 * rng.standard_normal(hi - lo) + steps
+        walk = float(steps[-1])
+        time_s[lo:hi] = np.arange(lo, hi) / 100.0
+    rate.flush()
+    time_s.flush()
+    np.savez(path, time_s=time_s, rate_deg_s=rate)
+    del rate, time_s
+    path.with_suffix(".rate.npy").unlink()
+    path.with_suffix(".time.npy").unlink()
+
+
+def run(args: list[str]) -> tuple[float, float]:
+    """``rotacal ARGS`` in a fresh process: its wall seconds and peak RSS (MB)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "rotacal", *args], check=True, capture_output=True)
+    seconds = time.perf_counter() - start
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    return seconds, max(peak, before) / 1024
+
+
+def worst(a: Any, b: Any) -> float:
+    if isinstance(a, dict):
+        return max((worst(a[k], b[k]) for k in a if k not in ("provenance", "notes")), default=0)
+    if isinstance(a, list):
+        return max((worst(u, v) for u, v in zip(a, b, strict=True)), default=0.0)
+    if isinstance(a, float) and isinstance(b, float) and math.isfinite(a) and a != b:
+        return abs(a - b) / max(abs(a), abs(b))
+    return 0.0
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--samples", type=float, default=1e8)
+    parser.add_argument("--workers", default="1,2")
+    args = parser.parse_args()
+    n = int(args.samples)
+    with tempfile.TemporaryDirectory(prefix="rotacal-bench-dask-") as tmp:
+        path = Path(tmp) / "rate.npz"
+        t = time.perf_counter()
+        write_record(path, n)
+        print(
+            f"{n:.3g} samples, {os.path.getsize(path) / 1e6:.0f} MB, written in "
+            f"{time.perf_counter() - t:.1f} s"
+        )
+        common = [str(path), "--taus", "octave", "--overwrite"]
+        base_json = Path(tmp) / "one.json"
+        base, rss = run(["allan", *common, "--chunked", "--json", str(base_json)])
+        print(f"{'one process (--chunked)':<28}{base:8.2f} s   1.00x   peak RSS {rss:.0f} MB")
+        reference = json.loads(base_json.read_text())
+        for w in [int(x) for x in args.workers.split(",")]:
+            out = Path(tmp) / f"w{w}.json"
+            seconds, rss = run(["allan", *common, "--workers", str(w), "--json", str(out)])
+            diff = worst(json.loads(out.read_text()), reference)
+            print(
+                f"{f'{w} Dask worker(s)':<28}{seconds:8.2f} s   {base / seconds:.2f}x   "
+                f"peak RSS {rss:.0f} MB; largest difference {diff:.1e} relative"
+            )
+
+
+if __name__ == "__main__":
+    main()
