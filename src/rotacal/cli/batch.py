@@ -19,8 +19,8 @@ if TYPE_CHECKING:
 @cli.command(
     "batch",
     epilog=example(
-        "rotacal batch plans/ --out certificates           # every plans/*.toml, 1 worker a core",
-        "rotacal batch plans/*.toml --out certs --workers 4",
+        "rotacal batch plans/ --out certificates   # every .toml file of plans/; a worker a core",
+        "rotacal batch unit-1.toml unit-2.toml --out certs --workers 2",
         "rotacal batch plans/ --out certs --scheduler tcp://head:8786 --db postgresql+psycopg://lab@db/records",
     ),
 )
@@ -55,7 +55,7 @@ def batch_command(
 ) -> None:
     """Certify many plans as tasks on Dask distributed.
 
-    PLAN... are plan files or folders of them (their *.toml). A plan whose plan and captures were
+    PLAN... are plan files or folders of them (their .toml files). A plan whose plan and captures were
     certified already is skipped, so a stopped batch is finished by running it again; a plan that
     fails fails alone, with its reason in DIR/batch.json. Exit code 2 when any plan failed.
     """
