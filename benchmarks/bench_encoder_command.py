@@ -1,6 +1,6 @@
 """The whole `rotacal motion encoder` command against reading the file and a bare unwrap, one run.
 
-    python benchmarks/bench_encoder_command.py [--samples 2e7] [--periods 10,1000] [--quick]
+    python benchmarks/bench_encoder_command.py [--samples 2e7] [--periods 10,1000] [--quick] [--cpu]
 
 For each number of motion periods a twin capture is written as NPZ (``rotacal simulate
 encoder``), then timed as separate processes, best of ``--repeat``, from start to exit:
@@ -11,7 +11,9 @@ encoder``), then timed as separate processes, best of ``--repeat``, from start t
   budgets, JSON), with Numba chosen by size and with ``ROTACAL_NUMBA=0``.
 
 Prints seconds, the ratio to the baseline and the peak RSS of each process (from
-``resource.getrusage`` of the children). Machines here are shared: the ratios are the figures.
+``resource.getrusage`` of the children). Machines here are shared: the ratios are the figures;
+``--cpu`` times CPU seconds (user + system of the process) instead of wall time, which other
+processes on the machine disturb less.
 """
 
 from __future__ import annotations
@@ -26,17 +28,22 @@ from pathlib import Path
 FS = 200_000.0
 
 
-def best(cmd: list[str], env: dict[str, str], repeats: int) -> tuple[float, float]:
-    """Wall time (s) and peak RSS (MB) of the command, best of ``repeats``; each run inside a
-    fresh wrapper process, whose RUSAGE_CHILDREN peak is that command's alone."""
+def best(
+    cmd: list[str], env: dict[str, str], repeats: int, cpu: bool = False
+) -> tuple[float, float]:
+    """Wall time (s), or CPU time (user + system, s) with ``cpu``, and peak RSS (MB) of the
+    command, best of ``repeats``; each run inside a fresh wrapper process, whose RUSAGE_CHILDREN
+    figures are that command's alone."""
     wrapper = [
         sys.executable,
         "-c",
         "import resource, subprocess, sys, time\n"
-        "t0 = time.perf_counter(); subprocess.run(sys.argv[1:], check=True, "
+        "t0 = time.perf_counter(); subprocess.run(sys.argv[2:], check=True, "
         "stdout=subprocess.DEVNULL)\n"
-        "print(time.perf_counter() - t0, "
-        "resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)",
+        "wall = time.perf_counter() - t0\n"
+        "ru = resource.getrusage(resource.RUSAGE_CHILDREN)\n"
+        "print(ru.ru_utime + ru.ru_stime if sys.argv[1] == 'cpu' else wall, ru.ru_maxrss / 1024)",
+        "cpu" if cpu else "wall",
         *cmd,
     ]
     out = []
@@ -53,14 +60,16 @@ def main() -> None:
     ap.add_argument("--periods", default="10,1000")
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--quick", action="store_true", help="10⁶ samples, 1 repeat")
+    ap.add_argument("--cpu", action="store_true", help="CPU seconds instead of wall seconds")
     args = ap.parse_args()
     n = int(1e6 if args.quick else args.samples)
     repeats = 1 if args.quick else args.repeat
     env = dict(os.environ)
     env.setdefault("OPENBLAS_NUM_THREADS", "1")
     duration = n / FS
+    clock = "CPU s" if args.cpu else "s"
     print(f"samples {n:,}; best of {repeats}; separate processes, start to exit")
-    print(f"{'periods':>7s}  {'what':<40s} {'s':>7s} {'ratio':>6s} {'peak MB':>8s}")
+    print(f"{'periods':>7s}  {'what':<40s} {clock:>7s} {'ratio':>6s} {'peak MB':>8s}")
     with tempfile.TemporaryDirectory() as tmp:
         for periods in (float(p) for p in args.periods.split(",")):
             f = periods / duration
@@ -82,10 +91,10 @@ def main() -> None:
             ]
             cli = ["rotacal", "motion", "encoder", str(path), "--lines", "36000", "--overwrite"]
             cli += ["--json", str(Path(tmp) / "out.json")]
-            rows = [("np.load + np.unwrap(np.arctan2)  [baseline]", best(base_cmd, env, repeats))]
-            rows.append(("rotacal motion encoder (Numba by size)", best(cli, env, repeats)))
+            rows = [("np.load + np.unwrap(np.arctan2)  [baseline]", best(base_cmd, env, repeats, args.cpu))]
+            rows.append(("rotacal motion encoder (Numba by size)", best(cli, env, repeats, args.cpu)))
             rows.append(
-                ("rotacal motion encoder (ROTACAL_NUMBA=0)", best(cli, env | {"ROTACAL_NUMBA": "0"}, repeats))
+                ("rotacal motion encoder (ROTACAL_NUMBA=0)", best(cli, env | {"ROTACAL_NUMBA": "0"}, repeats, args.cpu))
             )  # fmt: skip
             t_base = rows[0][1][0]
             for name, (sec, mb) in rows:

@@ -231,8 +231,11 @@ def motion_encoder(
         with _sample_progress(6 * n, "calibrating (chunked)") as progress:
             result = calibrate_encoder_motion_chunked(source, lines=lines, progress=progress, **kw)
     else:
+        from rotacal._jit import ENCODER_CALL_SAMPLES, single_call
+
         cap = _read(capture, list(MOTION_ENCODER.required), columns, group)
-        with _status("demodulating and fitting"):
+        # one calibration, then the process ends: Numba only where this call repays its load
+        with _status("demodulating and fitting"), single_call(ENCODER_CALL_SAMPLES):
             result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
     if correction_from is not None:  # a clipped reference analysed with --allow-clipped
         result = with_warnings(
