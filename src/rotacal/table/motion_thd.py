@@ -187,10 +187,12 @@ def _bracketed_root(
 
     Each step takes the secant through the two ends that bracket the root; when the same end is
     kept twice its function value is scaled by ``1 − f_new/f_old`` (by ½ when that is not
-    positive), which restores superlinear convergence where plain false position stalls, and a
-    bisection is taken whenever the bracket did not at least halve over two steps, so it
-    shrinks below ``tol`` in a bounded number of steps for any continuous ``f``. Returns the end
-    of the final bracket with the smaller |f|.
+    positive), which restores superlinear convergence where plain false position stalls; a
+    step that would move less than ``tol/2`` moves ``tol/2`` towards the other end (as in
+    Brent's method), so the bracket closes once the newest point has converged; and a bisection
+    is taken whenever the bracket did not at least halve over two steps, so it shrinks below
+    ``tol`` in a bounded number of steps for any continuous ``f``. Returns the end of the final
+    bracket with the smaller |f|.
 
     References
     ----------
@@ -205,6 +207,9 @@ def _bracketed_root(
     while f1 != 0.0 and abs(x1 - x0) > tol:
         width = abs(x1 - x0)
         x = x1 - f1 * (x1 - x0) / (f1 - f0)
+        if abs(x - x1) < 0.5 * tol:
+            # converged from one side: step just past it, so the bracket closes on the root
+            x = x1 + math.copysign(0.5 * tol, x0 - x1)
         if not min(x0, x1) < x < max(x0, x1) or width > 0.5 * before_last:
             x = 0.5 * (x0 + x1)  # the secant did not shrink the bracket enough: bisect
         before_last, last = last, width
