@@ -25,8 +25,8 @@ MIN_SAMPLES = 4_000_000
 #: runs faster on the NumPy path in a process that has not loaded Numba: loading it (import,
 #: its CPU target, the cached kernels) costs 0.6–0.8 s of CPU and the compiled chain saves
 #: 15–19 ns a sample (measured at 2·10⁷ samples, 10 and 1000 periods: 0.36–0.53 s compiled
-#: against 0.66–0.88 s NumPy once loaded), even at 3–5·10⁷ samples; to be measured again when
-#: the kernels change. ``benchmarks/bench_encoder_command.py`` shows the whole command.
+#: against 0.66–0.88 s NumPy once loaded): one call repays the load from 3–5·10⁷ samples on.
+#: To be measured again when the kernels change. ``benchmarks/bench_encoder_command.py`` shows the whole command.
 ENCODER_CALL_SAMPLES = 40_000_000
 
 _available: bool | None = None
