@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import zipfile
+
 import h5py
 import numpy as np
 import pytest
@@ -307,3 +309,19 @@ def test_capture_object():
     assert cap.names == ["t", "u"]
     assert len(cap) == 5
     assert "t" in cap and "a" not in cap
+
+
+@pytest.mark.parametrize("n", [1, 7, 1001])
+def test_npz_columns_are_written_aligned_and_read_by_numpy(tmp_path, n):
+    """rotacal's NPZ pads each member's local header so the data start on 64 bytes: the
+    mapped columns are aligned arrays (NumPy's fast paths); the archive stays what np.savez
+    writes, for np.load and zipfile."""
+    cols = {name: np.arange(float(n)) * (i + 1) for i, name in enumerate(["time_s", "a", "b_é"])}
+    path = write_capture(tmp_path / "c.npz", cols, metadata={"unit": "V"})
+    cap = read_capture(path)
+    with np.load(path) as raw, zipfile.ZipFile(path) as zf:
+        assert zf.testzip() is None
+        for name, values in cols.items():
+            assert cap[name].ctypes.data % 64 == 0 and cap[name].flags.aligned
+            np.testing.assert_array_equal(cap[name], values)
+            np.testing.assert_array_equal(raw[name], values)

@@ -198,11 +198,6 @@ def motion_encoder(
     the angle comes from their subintervals and the reversing moments (Feng et al. 2023, eqs. 3–8).
     """
     from rotacal.io import capture_length, parse_column_mapping
-    from rotacal.table import (
-        calibrate_encoder_motion,
-        calibrate_encoder_motion_chunked,
-        encoder_chunks_from_file,
-    )
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
@@ -225,14 +220,20 @@ def motion_encoder(
     )
     if chunked is None:
         chunked = n > _IN_MEMORY_MAX_SAMPLES
-    if chunked:
+    if chunked:  # the streaming modules are imported only here (start-up of the in-memory path)
+        from rotacal.table import calibrate_encoder_motion_chunked, encoder_chunks_from_file
+
         source = encoder_chunks_from_file(capture, mapping=mapping, group=group)
         # the chunked calibration reads the capture in up to six passes
         with _sample_progress(6 * n, "calibrating (chunked)") as progress:
             result = calibrate_encoder_motion_chunked(source, lines=lines, progress=progress, **kw)
     else:
+        from rotacal._jit import ENCODER_CALL_SAMPLES, single_call
+        from rotacal.table import calibrate_encoder_motion
+
         cap = _read(capture, list(MOTION_ENCODER.required), columns, group)
-        with _status("demodulating and fitting"):
+        # one calibration, then the process ends: Numba only where this call repays its load
+        with _status("demodulating and fitting"), single_call(ENCODER_CALL_SAMPLES):
             result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
     if correction_from is not None:  # a clipped reference analysed with --allow-clipped
         result = with_warnings(

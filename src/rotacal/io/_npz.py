@@ -13,6 +13,7 @@ from __future__ import annotations
 import io
 import json
 import struct
+import time
 import warnings
 import zipfile
 import zlib
@@ -346,9 +347,36 @@ class NpzReader:
         self._zip.close()
 
 
+#: Extra-field id of the padding record that aligns a member's data (the id Android's zipalign
+#: uses; zip readers skip records they do not know).
+_ALIGN_EXTRA_ID = 0xD935
+#: Alignment (bytes) of each member's data in the file: NumPy pads a .npy header to 64 bytes, so
+#: the member's local zip header is padded to end on a multiple of 64 too.
+_ALIGN = 64
+#: Bytes zipfile appends to a local header written with ``force_zip64`` (the Zip64 extra field).
+_ZIP64_LOCAL_EXTRA = 20
+
+
 def write_npz(fh: IO[bytes], columns: Mapping[str, np.ndarray], metadata: Any) -> None:
-    """Write the columns uncompressed (so they can be memory-mapped on reading)."""
+    """Write the columns uncompressed (so they can be memory-mapped on reading), each member's
+    data 64-byte aligned in the file.
+
+    The archive is what ``np.savez`` writes (stored ``NAME.npy`` members, Zip64 local headers,
+    read by ``np.load`` alike) plus a padding record in each local header's extra field, so
+    that a mapped column is an aligned array: NumPy's reductions and BLAS then take their fast
+    paths (an unaligned column makes ``np.dot`` ~10x slower) and nothing needs copying.
+    """
     arrays: dict[str, Any] = dict(columns)
     if metadata:
         arrays[NPZ_METADATA_KEY] = np.array(json.dumps(metadata, default=str))
-    np.savez(fh, **arrays)
+    stamp = time.localtime(time.time())[:6]
+    with zipfile.ZipFile(fh, mode="w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
+        for name, value in arrays.items():
+            info = zipfile.ZipInfo(name + ".npy", date_time=stamp)
+            info.compress_type = zipfile.ZIP_STORED
+            # local header: 30 fixed bytes, the name, the extra field (ours + Zip64's)
+            fixed = _LOCAL_HEADER.size + len(info.filename.encode("utf-8")) + _ZIP64_LOCAL_EXTRA
+            pad = -(zf.fp.tell() + fixed + 4) % _ALIGN  # type: ignore[union-attr]
+            info.extra = struct.pack("<HH", _ALIGN_EXTRA_ID, pad) + bytes(pad)
+            with zf.open(info, "w", force_zip64=True) as out:
+                npformat.write_array(out, np.asanyarray(value), allow_pickle=False)

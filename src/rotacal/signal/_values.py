@@ -51,7 +51,9 @@ def in_working_range(x: np.ndarray) -> bool:
     :func:`check_magnitudes` then looks at the samples.
     """
     with np.errstate(over="ignore", invalid="ignore", under="ignore"):
-        power = float(np.dot(x, x))
+        # vdot, not dot: a column memory-mapped from an NPZ member is rarely 8-byte aligned,
+        # and dot then leaves BLAS for a loop ~10x slower; vdot stays fast (same sum, no copy)
+        power = float(np.vdot(x, x))
     return SMALLEST * SMALLEST <= power <= LARGEST * LARGEST
 
 

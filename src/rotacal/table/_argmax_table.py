@@ -42,7 +42,51 @@ _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(24)
 # |s′| = max(|sin φ₀|, |cos φ₀|) for φ₀ uniform: the law of cos φ, φ uniform on [0, π/4]
 _S_PRIME = np.cos(0.125 * math.pi * (_NODES + 1.0))
 _MIX_WEIGHTS = 0.5 * _WEIGHTS
-_interp: Any = None  # scipy.interpolate.PchipInterpolator, built (and imported) on first use
+_interp: Any = None  # the table's PCHIP slopes, computed on first use
+
+
+def pchip_slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Slopes at the nodes of the shape-preserving piecewise cubic Hermite interpolant (PCHIP).
+
+    Interior nodes: 0 where the neighbouring secants δ differ in sign or one is 0, else their
+    weighted harmonic mean with weights 2h_k + h_{k−1} and h_k + 2h_{k−1} (Fritsch & Butland
+    1984, SIAM J. Sci. Stat. Comput. 5:300–304); the ends: the three-point formula, set to 0
+    when its sign is not that of the first secant and to 3δ when the secants change sign and it
+    exceeds 3|δ| (the end conditions of Moler, "Numerical Computing with MATLAB", §3.4). ``x``
+    strictly increasing, at least 3 nodes; units of y per unit of x.
+    """
+    h = np.diff(x)
+    delta = np.diff(y) / h
+    d = np.zeros(x.size)
+    w1 = 2.0 * h[1:] + h[:-1]
+    w2 = h[1:] + 2.0 * h[:-1]
+    same = delta[:-1] * delta[1:] > 0.0
+    with np.errstate(divide="ignore"):
+        harmonic = (w1 + w2) / (w1 / delta[:-1] + w2 / delta[1:])
+    d[1:-1] = np.where(same, harmonic, 0.0)
+    for end, (h0, h1, s0, s1) in (
+        (0, (h[0], h[1], delta[0], delta[1])),
+        (-1, (h[-1], h[-2], delta[-1], delta[-2])),
+    ):
+        slope = ((2.0 * h0 + h1) * s0 - h0 * s1) / (h0 + h1)
+        if np.sign(slope) != np.sign(s0):
+            slope = 0.0
+        elif np.sign(s0) != np.sign(s1) and abs(slope) > abs(3.0 * s0):
+            slope = 3.0 * s0
+        d[end] = slope
+    return d
+
+
+def pchip_eval(x: np.ndarray, y: np.ndarray, d: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """The cubic Hermite interpolant through (x, y) with slopes ``d`` at the points ``at``;
+    beyond the ends, the end interval's cubic continued."""
+    k = np.clip(np.searchsorted(x, at, side="right") - 1, 0, x.size - 2)
+    h = x[k + 1] - x[k]
+    s = (y[k + 1] - y[k]) / h
+    t = at - x[k]
+    c2 = (3.0 * s - 2.0 * d[k] - d[k + 1]) / h
+    c3 = (d[k] + d[k + 1] - 2.0 * s) / (h * h)
+    return y[k] + t * (d[k] + t * (c2 + t * c3))
 
 
 def in_range(g_max: float) -> bool:
@@ -55,14 +99,12 @@ def u_over_dt(g: float) -> float:
     reversal (the mixture over |s′|), from the table; ``g`` within :func:`in_range`."""
     global _interp
     if _interp is None:
-        from scipy.interpolate import PchipInterpolator
-
-        _interp = PchipInterpolator(LOG_G, LOG_F)
+        _interp = pchip_slopes(LOG_G, LOG_F)
     g_eff = g / _S_PRIME
     log_g = np.log10(np.maximum(g_eff, 1e-300))
     inside = log_g >= LOG_G[0]
     f = np.full(g_eff.shape, 1.0 / math.sqrt(12.0))
-    f[inside] = 10.0 ** _interp(log_g[inside])
+    f[inside] = 10.0 ** pchip_eval(LOG_G, LOG_F, _interp, log_g[inside])
     return math.sqrt(float(_MIX_WEIGHTS @ (f * f)))
 
 

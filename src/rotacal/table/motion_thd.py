@@ -179,6 +179,50 @@ def _quantile(values: np.ndarray, q: float) -> float:
     return hi - diff * (1.0 - gamma) if gamma >= 0.5 else lo + diff * gamma
 
 
+def _bracketed_root(
+    f: Callable[[float], float], x0: float, f0: float, x1: float, *, tol: float
+) -> float:
+    """A root of ``f`` in [x0, x1], where ``f(x0) = f0`` and f(x1) have opposite signs (or
+    one is 0), to within ``tol`` (unit of x): the Anderson–Björck variant of false position.
+
+    Each step takes the secant through the two ends that bracket the root; when the same end is
+    kept twice its function value is scaled by ``1 − f_new/f_old`` (by ½ when that is not
+    positive), which restores superlinear convergence where plain false position stalls; a
+    step that would move less than ``tol/2`` moves ``tol/2`` towards the other end (as in
+    Brent's method), so the bracket closes once the newest point has converged; and a bisection
+    is taken whenever the bracket did not at least halve over two steps, so it shrinks below
+    ``tol`` in a bounded number of steps for any continuous ``f``. Returns the end of the final
+    bracket with the smaller |f|.
+
+    References
+    ----------
+    N. Anderson and Å. Björck 1973, BIT 13:253–264 ("A new high order method of regula falsi
+    type for computing a root of an equation"); J. A. Ford 1995, "Improved algorithms of
+    Illinois-type for the numerical solution of nonlinear equations" (University of Essex).
+    """
+    f1 = f(x1)
+    if f0 == 0.0:
+        return x0
+    before_last = last = math.inf  # the bracket's width two steps and one step ago
+    while f1 != 0.0 and abs(x1 - x0) > tol:
+        width = abs(x1 - x0)
+        x = x1 - f1 * (x1 - x0) / (f1 - f0)
+        if abs(x - x1) < 0.5 * tol:
+            # converged from one side: step just past it, so the bracket closes on the root
+            x = x1 + math.copysign(0.5 * tol, x0 - x1)
+        if not min(x0, x1) < x < max(x0, x1) or width > 0.5 * before_last:
+            x = 0.5 * (x0 + x1)  # the secant did not shrink the bracket enough: bisect
+        before_last, last = last, width
+        fx = f(x)
+        if (fx < 0.0) != (f1 < 0.0):
+            x0, f0 = x1, f1  # the root lies between the newest two points
+        else:
+            m = 1.0 - fx / f1
+            f0 *= m if m > 0.0 else 0.5  # x0 kept again: the Anderson–Björck scaling
+        x1, f1 = x, fx
+    return x1 if abs(f1) <= abs(f0) else x0
+
+
 def _thd_interval(
     draws: _ThdDraws, observed: float, p: float, p_star: float, scale: float
 ) -> tuple[float, float, float]:
@@ -212,12 +256,11 @@ def _thd_interval(
         raise ConfigError("the THD's confidence belt could not be bracketed; check A_h and u_h.")
 
     def root(edge: Callable[[float], float]) -> float:
-        if edge(0.0) >= observed:
+        f0 = edge(0.0) - observed
+        if f0 >= 0.0:
             return 0.0
         b = bracket(edge)
-        from scipy.optimize import brentq  # SciPy's modules are imported where used (start-up)
-
-        return float(brentq(lambda th: edge(th) - observed, 0.0, b, xtol=1e-9 * b, rtol=1e-10))
+        return _bracketed_root(lambda th: edge(th) - observed, 0.0, f0, b, tol=1e-9 * b)
 
     lo = root(upper_edge)
     hi = root(lower_edge)
