@@ -82,6 +82,9 @@ class _RatePoints:
     def push(
         self, t: FloatArray, ang: FloatArray, nom: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        carried = self._t.size
+        if self.jit and carried <= self.a < t.size:
+            return self._push_compiled(t, ang, nom)
         tt = np.concatenate((self._t, t))
         aa = np.concatenate((self._ang, ang))
         nn = np.concatenate((self._nom, nom)) if self.dev is not None else aa
@@ -105,6 +108,28 @@ class _RatePoints:
         self._t, self._ang = tt[used:].copy(), aa[used:].copy()
         self._nom = nn[used:].copy() if self.dev is not None else self._nom
         return t_avg, rate, rate_nom
+
+    def _push_compiled(
+        self, t: FloatArray, ang: FloatArray, nom: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """:meth:`push` without a copy of the chunk: the block that spans the carried pulses
+        from them and the chunk's first pulses, the others on the chunk itself."""
+        from rotacal.table._rate_stream_jit import block_rates
+
+        both = self.dev is not None
+        lead = self.a + 1 - self._t.size  # the chunk's pulses in the first block
+        head_t = np.concatenate((self._t, t[:lead]))
+        head_a = np.concatenate((self._ang, ang[:lead]))
+        head_n = np.concatenate((self._nom, nom[:lead])) if both else head_a
+        first = block_rates(head_t, head_a, head_n, self.a, 1, both)
+        start = lead - 1  # the chunk's pulse where the second block starts
+        blocks = (t.size - 1 - start) // self.a
+        used = start + blocks * self.a
+        rest = block_rates(t[start:], ang[start:], nom[start:], self.a, blocks, both)
+        self._t, self._ang = t[used:].copy(), ang[used:].copy()
+        self._nom = nom[used:].copy() if both else self._nom
+        t_avg, rate = np.concatenate((first[0], rest[0])), np.concatenate((first[1], rest[1]))
+        return t_avg, rate, np.concatenate((first[2], rest[2])) if both else rate
 
 
 @dataclasses.dataclass
