@@ -213,9 +213,11 @@ def test_peak_collector_equals_the_array_filter_across_windows(monkeypatch):
     assert got.plain == float(np.max(np.abs(d)))
 
 
+@pytest.mark.parametrize("chunk", [997, 4321])
 @pytest.mark.parametrize("same_line", [True, False])
-def test_compiled_per_pulse_loops_equal_the_numpy_ones(capture, same_line):
-    """The Numba twins of the jitter sums and the rate points: ≤ 1e-12 relative, any chunking."""
+def test_compiled_per_pulse_loops_equal_the_numpy_ones(capture, same_line, chunk):
+    """The Numba twins of the jitter sums and the rate points: ≤ 1e-12 relative, any chunking
+    (chunks shorter and longer than the jitter's 2m + 3 pulses carried)."""
     pytest.importorskip("numba")
     from rotacal.table.rate_jitter import JitterSums
     from rotacal.table.rate_stream import _RatePoints
@@ -227,11 +229,11 @@ def test_compiled_per_pulse_loops_equal_the_numpy_ones(capture, same_line):
         sums = JitterSums(t.size, M, jit=jit)
         points = _RatePoints(M, 10, dev, 17, jit)
         parts = []
-        for start in range(0, t.size, 997):
-            chunk = t[start : start + 997]
-            sums.update(chunk)
-            nom, ang = points.angles(chunk)
-            parts.append(points.push(chunk, ang, nom))
+        for start in range(0, t.size, chunk):
+            part = t[start : start + chunk]
+            sums.update(part)
+            nom, ang = points.angles(part)
+            parts.append(points.push(part, ang, nom))
         out[jit] = (sums.result(), [np.concatenate([p[i] for p in parts]) for i in range(3)])
     assert out[True][0] == pytest.approx(out[False][0], rel=1e-12)
     for compiled, plain in zip(out[True][1], out[False][1], strict=True):

@@ -155,32 +155,69 @@ class AllanSums:
         self.counts = np.zeros(len(self.ks), dtype=np.int64)
         self._seen = 0  # pulses fed so far
         groups: dict[int, list[int]] = {}
-        for idx, d in enumerate(self.strides):
+        for idx, d in sorted(enumerate(self.strides), key=lambda x: x[1]):
             groups.setdefault(d, []).append(idx)
         self._groups = groups
+        # each stride's pulses are taken from those of its largest divisor among the strides
+        # (a record a fraction of the chunk's, in cache: not every stride across the whole chunk)
+        self._parent = {
+            d: max(p for p in (1, *groups) if p < d and d % p == 0) for d in groups if d > 1
+        }
         # per stride: decimated tail (t, a), its first decimated index, next term per k
         self._tails = {d: (np.zeros(0), np.zeros(0), 0) for d in groups}
         self._next = [0] * len(self.ks)
 
     def update(self, t: FloatArray, a: FloatArray) -> None:
-        """Add the next chunk of pulse times (s) and angles (deg)."""
+        """Add the next chunk of pulse times (s) and angles (deg).
+
+        The record is the carried tail followed by the chunk's decimated pulses; terms that start
+        in the tail are summed on the tail and the chunk's first 2·max(k/d) pulses, the others on
+        the chunk itself (every pulse: a view, not a copy of the chunk).
+        """
+        decimated = {1: (0, t, a)}  # stride: its first pulse in the chunk, times, angles
+        children = dict.fromkeys((1, *self._groups), 0)
+        for p in self._parent.values():
+            children[p] += 1
         for d, members in self._groups.items():
             first = (-self._seen) % d  # the chunk's first pulse whose index is a multiple of d
+            ct, ca = t, a
+            if d > 1:  # from the parent's pulses, with unit stride for the kernels
+                p = self._parent[d]
+                p_first, p_t, p_a = decimated[p]
+                i0, step = (first - p_first) // p, d // p
+                ct, ca = p_t[i0::step].copy(), p_a[i0::step].copy()
+                children[p] -= 1
+                if children[p] == 0:
+                    del decimated[p]
+                if children[d]:
+                    decimated[d] = (first, ct, ca)
             tt, aa, base = self._tails[d]
-            bt = np.concatenate((tt, t[first::d]))
-            ba = np.concatenate((aa, a[first::d]))
-            end = base + bt.size  # one past the last decimated index
+            held = tt.size  # decimated index base + held is the chunk's first
             kds = [self.ks[idx] // d for idx in members]
             starts = [self._next[idx] - base for idx in members]
-            stops = [end - base - 2 * kd for kd in kds]
-            sums = allan_sums(bt, ba, kds, starts, stops, jit=self.jit)
-            for idx, start, stop, total in zip(members, starts, stops, sums, strict=True):
-                if stop > start:
-                    self.parts[idx].append(total)
-                    self.counts[idx] += stop - start
-                    self._next[idx] = base + stop
+            stops = [held + ct.size - 2 * kd for kd in kds]
+            reach = 2 * max(kds)
+            head_t = np.concatenate((tt, ct[:reach]))
+            head_a = np.concatenate((aa, ca[:reach]))
+            in_head = allan_sums(
+                head_t, head_a, kds, starts, [min(s, held) for s in stops], jit=self.jit
+            )
+            body = [max(s, held) - held for s in starts]
+            in_body = allan_sums(ct, ca, kds, body, [s - held for s in stops], jit=self.jit)
+            for i, idx in enumerate(members):
+                if stops[i] > starts[i]:
+                    self.parts[idx] += [in_head[i], in_body[i]]
+                    self.counts[idx] += stops[i] - starts[i]
+                    self._next[idx] = base + stops[i]
             keep = max(0, min(self._next[idx] for idx in members) - base)
-            self._tails[d] = (bt[keep:].copy(), ba[keep:].copy(), base + keep)
+            if keep >= held:
+                self._tails[d] = (ct[keep - held :].copy(), ca[keep - held :].copy(), base + keep)
+            else:
+                self._tails[d] = (
+                    np.concatenate((tt[keep:], ct)),
+                    np.concatenate((aa[keep:], ca)),
+                    base + keep,
+                )
         self._seen += t.size
 
     def mean_squares(self) -> FloatArray:

@@ -116,12 +116,19 @@ class JitterSums:
         if self.jit:
             from rotacal.table._rate_stream_jit import jitter_square_sum
 
-            x = np.concatenate((self._tail, t))
-            total, count = jitter_square_sum(x, self.m, self.span > _PULSE_FILTER.size - 1)
-            if count > 0:
-                self._parts.append(total)
-                self.count += count
-            self._tail = x[max(x.size - self.span, 0) :].copy()
+            same = self.span > _PULSE_FILTER.size - 1
+            # values that start in the carried tail on it and the chunk's first `span` pulses,
+            # the rest on the chunk itself (no copy of the chunk)
+            for x in (np.concatenate((self._tail, t[: self.span])), t):
+                total, count = jitter_square_sum(x, self.m, same)
+                if count > 0:
+                    self._parts.append(total)
+                    self.count += count
+            if t.size >= self.span:
+                self._tail = t[t.size - self.span :].copy()
+            else:
+                x = np.concatenate((self._tail, t))
+                self._tail = x[max(x.size - self.span, 0) :]
             return
         for start in range(0, t.size, _JITTER_BLOCK):
             self._update(t[start : start + _JITTER_BLOCK])

@@ -59,52 +59,85 @@ class _RatePoints:
     carried): the same arithmetic per block as :func:`rotacal.encoder.pulses.pulse_rate`."""
 
     def __init__(
-        self, m: int, average: int, deviation: FloatArray | None, shift: int, jit: bool = False
+        self,
+        m: int,
+        average: int,
+        deviation: FloatArray | None,
+        shift: int,
+        jit: bool = False,
+        nominal: bool = True,
     ) -> None:
         self.m, self.a, self.dev, self.shift = m, int(average), deviation, int(shift)
         self.jit = jit
+        # the uncompensated rates too (compensated ones given): pass 2 needs only the rates
+        self.both = deviation is not None and nominal
         self.seen = 0
         self._t = np.zeros(0)
         self._ang = np.zeros(0)
         self._nom = np.zeros(0)
 
     def angles(self, t: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The nominal and the compensated angles (deg) of the chunk's pulses (the same array
+        when nothing is compensated, or the nominal ones are not wanted)."""
         count = np.arange(self.seen, self.seen + t.size)
-        nom = pulse_angle_deg(count, self.m)
-        ang = (
-            nom
-            if self.dev is None
-            else pulse_angle_deg(count, self.m, self.dev, line_offset=self.shift)
-        )
         self.seen += t.size
-        return nom, ang
+        if self.dev is None:
+            nom = pulse_angle_deg(count, self.m)
+            return nom, nom
+        ang = pulse_angle_deg(count, self.m, self.dev, line_offset=self.shift)
+        return (pulse_angle_deg(count, self.m) if self.both else ang), ang
 
     def push(
         self, t: FloatArray, ang: FloatArray, nom: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        carried = self._t.size
+        if self.jit and carried <= self.a < t.size:
+            return self._push_compiled(t, ang, nom)
         tt = np.concatenate((self._t, t))
         aa = np.concatenate((self._ang, ang))
-        nn = np.concatenate((self._nom, nom)) if self.dev is not None else aa
+        nn = np.concatenate((self._nom, nom)) if self.both else aa
         blocks = max(tt.size - 1, 0) // self.a
         used = blocks * self.a
         if blocks and self.jit:
             from rotacal.table._rate_stream_jit import block_rates
 
-            t_avg, rate, rate_nom = block_rates(tt, aa, nn, self.a, blocks, self.dev is not None)
+            t_avg, rate, rate_nom = block_rates(tt, aa, nn, self.a, blocks, self.both)
         elif blocks:
             dt = np.diff(tt[: used + 1])
             t_avg = (tt[:used] + 0.5 * dt).reshape(blocks, self.a).mean(axis=1)
             rate = (np.diff(aa[: used + 1]) / dt).reshape(blocks, self.a).mean(axis=1)
             rate_nom = (
                 rate
-                if self.dev is None
+                if not self.both
                 else (np.diff(nn[: used + 1]) / dt).reshape(blocks, self.a).mean(axis=1)
             )
         else:
             t_avg = rate = rate_nom = np.zeros(0)
         self._t, self._ang = tt[used:].copy(), aa[used:].copy()
-        self._nom = nn[used:].copy() if self.dev is not None else self._nom
+        self._nom = nn[used:].copy() if self.both else self._nom
         return t_avg, rate, rate_nom
+
+    def _push_compiled(
+        self, t: FloatArray, ang: FloatArray, nom: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """:meth:`push` without a copy of the chunk: the block that spans the carried pulses
+        from them and the chunk's first pulses, the others on the chunk itself."""
+        from rotacal.table._rate_stream_jit import block_rates
+
+        both = self.both
+        lead = self.a + 1 - self._t.size  # the chunk's pulses in the first block
+        head_t = np.concatenate((self._t, t[:lead]))
+        head_a = np.concatenate((self._ang, ang[:lead]))
+        head_n = np.concatenate((self._nom, nom[:lead])) if both else head_a
+        first = block_rates(head_t, head_a, head_n, self.a, 1, both)
+        start = lead - 1  # the chunk's pulse where the second block starts
+        blocks = (t.size - 1 - start) // self.a
+        used = start + blocks * self.a
+        rest = block_rates(t[start:], ang[start:], nom[start:], self.a, blocks, both)
+        self._t, self._ang = t[used:].copy(), ang[used:].copy()
+        self._nom = nom[used:].copy() if both else self._nom
+        t_avg, rate = np.concatenate((first[0], rest[0])), np.concatenate((first[1], rest[1]))
+        return t_avg, rate, np.concatenate((first[2], rest[2])) if both else rate
 
 
 @dataclasses.dataclass
@@ -285,7 +318,7 @@ def rate_passes(
         gains = [welch_gain(power, noise_periodogram(g, points)) for g in (present, noise_only)]
         plain = max(abs(a * hi0 + b), abs(a * lo0 + b))
         collector = PeakCollector(points, _candidate_floor(plain, points, sources), gains)
-        rp2 = _RatePoints(m, average, deviation, shift, compiled)
+        rp2 = _RatePoints(m, average, deviation, shift, compiled, nominal=False)
         for t in chunks():  # pass 2: the deviation about the mean rate, exactly
             t = np.asarray(t, dtype=np.float64)
             _, ang = rp2.angles(t)
