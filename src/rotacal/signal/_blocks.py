@@ -392,7 +392,7 @@ class HarmonicFitAccumulator:
             return sums_explicit
         p_full = self._cumv[self._m]
 
-        def group_sums(group: tuple[np.ndarray, np.ndarray, np.ndarray]) -> SumsFn:
+        def group_sums(group: tuple[np.ndarray, np.ndarray | None, np.ndarray]) -> SumsFn:
             return block_sums(group, p_full, self._tg - t_ref, self._tb, nh, self._k, self._m)
 
         # in memory: each group's sums prepared once; spilled: read back at each frequency

@@ -282,6 +282,9 @@ def _fit(
             ta, ya, f0, nh, refine, int(max_iter), float(rtol), bool(drift), bool(drift_check)
         )
     acc = HarmonicFitAccumulator(f0, harmonics=nh)
+    # the caller holds every sample: moments up to their size stay in memory (a temporary file
+    # would be written once and read back at every trial frequency)
+    acc._store.keep_bytes = max(acc._store.keep_bytes, ta.nbytes + ya.nbytes)
     acc._add(ta, ya, uniform_dt=dt_u, y_checked=True)
     return acc.fit(
         f0,
