@@ -93,16 +93,16 @@ def estimate_frequency_unchecked(t: np.ndarray, y: np.ndarray) -> float:
     seg = min(n, _FFT_POINTS)
     f_seg = _fft_peak(y[:seg], dt)
     if seg == n:
-        td, yd, f_c = t, y, f_seg
-    elif f_seg * dt * seg >= 8.0:  # many periods in the first segment: a fast signal
-        d = max(1, int(1.0 / (16.0 * f_seg * dt)))
-        td, yd = _block_mean(t, d), _block_mean(y, d)
+        d, yd, f_c = 1, y, f_seg
+    else:
+        if f_seg * dt * seg >= 8.0:  # many periods in the first segment: a fast signal
+            d = max(1, int(1.0 / (16.0 * f_seg * dt)))
+        else:  # a slow signal: decimate the whole record by block means
+            d = -(-n // _FFT_POINTS)
+        yd = _block_mean(y, d)
         f_c = _fft_peak(yd, d * dt)
-    else:  # a slow signal: decimate the whole record by block means
-        d = -(-n // _FFT_POINTS)
-        td, yd = _block_mean(t, d), _block_mean(y, d)
-        f_c = _fft_peak(yd, d * dt)
-    if f_c * span < _LS_MAX_PERIODS:
+    if f_c * span < _LS_MAX_PERIODS:  # the block-mean times only here (a pass over t)
+        td = _block_mean(t, d)
         per_period = td.size / max(f_c * span, 1e-300)
         d2 = max(1, min(-(-td.size // _LS_POINTS), int(per_period / 16.0)))
         f_c = _ls_refine(_block_mean(td, d2), _block_mean(yd, d2), f_c, span)
