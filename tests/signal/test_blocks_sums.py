@@ -109,3 +109,26 @@ def test_chunks_far_from_the_first_stay_on_the_sampling_grid():
     assert acc.block_samples > 4
     full_runs = [j.size for j, p, _ in acc._store.records() if p is None]
     assert sum(full_runs) >= (200_000 // acc.block_samples) - 1
+
+
+def test_a_fast_signal_fits_with_longer_blocks_equal_to_the_direct_fit():
+    # truth: the explicit design matrix solved by QR, same samples; 520 samples a period make
+    # 20-sample blocks with 22 moments, so the one-shot fit plans 28 (blocks 1.8x longer)
+    from rotacal.signal._blocks import moments_for
+    from rotacal.signal._blocks_sums import taylor_terms
+
+    # the sums refuse a block phase that needs more than 28 terms: θ = 2x stays below 1.8π
+    assert taylor_terms(0.9 * math.pi, 28) > 28
+    rng = np.random.default_rng(11)
+    n, fs = 60_000, 50_000.0
+    f = fs / 520.0
+    t = np.arange(n) / fs
+    y = 0.5 + 2.0 * np.sin(2 * math.pi * f * t + 0.4) + 0.02 * np.sin(6 * math.pi * f * t - 1.0)
+    y += 1e-3 * rng.standard_normal(n)
+    assert moments_for(f, 5, 1.0 / fs) == 28
+    assert moments_for(f / 20.0, 5, 1.0 / fs) == 22  # slow: long blocks with 22 already
+    blocks = fit_harmonics(t, y, f * (1 + 1e-6), harmonics=5, method="blocks")
+    direct = fit_harmonics(t, y, f * (1 + 1e-6), harmonics=5, method="direct")
+    assert blocks.frequency_hz == pytest.approx(direct.frequency_hz, rel=1e-13)
+    np.testing.assert_allclose(blocks.amplitudes, direct.amplitudes, rtol=1e-9, atol=1e-13)
+    np.testing.assert_allclose(blocks.amplitudes_u, direct.amplitudes_u, rtol=1e-6)
