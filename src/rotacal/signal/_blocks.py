@@ -26,7 +26,8 @@ import numpy as np
 from rotacal._jit import use_numba
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.signal._blocks_store import MomentStore
-from rotacal.signal._blocks_sums import SUM_ROWS, SumsFn, block_sums, taylor_terms
+from rotacal.signal._blocks_grid import SQUARES_OVERFLOW, centred_square_sum, grid_sums
+from rotacal.signal._blocks_sums import SUM_ROWS, SumsFn, block_sums, taylor_terms, unit_powers
 from rotacal.signal._checks import (
     as_pair,
     check_finite,
@@ -52,21 +53,14 @@ _LONG_MOMENTS = 28
 # periods of 10⁷ samples (19-sample blocks) the fit took 210 ms with 22 moments, 131 ms with 28;
 # at 1,000 periods (190-sample blocks) 42 and 38 ms; at 100 periods (1,909) 20 and 32 ms
 _SHORT_BLOCK = 128
+# below this block length the samples themselves (10⁷ samples, 10 harmonics: ~100 ms CPU at any
+# number of periods; with moments 78 ms at 5,000 periods (38-sample blocks), 142 ms at 10,000
+# (19), 650 ms at 30,000 (6), 2.4 s at 100,000 (samples kept one by one))
+_GRID_BLOCK = 24
 _SUB_SAMPLES = 1 << 16
 # The residual from the normal equations, yᵀy − bᵀp, loses its digits when it is this small a
 # part of yᵀy; below it a fit that still has the samples sums the residual itself.
 _RSS_ROUNDING = 1e-9
-
-
-def _unit_powers(e1: np.ndarray, kmax: int) -> np.ndarray:
-    """``e1**k`` for k = 0..kmax as columns, by repeated multiplication (error ~k·eps)."""
-    out = np.empty((e1.size, kmax + 1), dtype=np.complex128)
-    out[:, 0] = 1.0
-    if kmax >= 1:
-        out[:, 1] = e1
-    for k in range(2, kmax + 1):
-        np.multiply(out[:, k - 1], e1, out=out[:, k])
-    return out
 
 
 def planned_phase(n_moments: int) -> float:
@@ -101,6 +95,15 @@ def moments_for(f_hz: float, harmonics: int, dt_s: float) -> int:
     their denominators sin(θ/2) stay ≥ 0.33. Longer blocks would bring θ to 2π."""
     m = block_length(f_hz, harmonics, dt_s, _DEFAULT_MOMENTS)
     return _LONG_MOMENTS if _MIN_BLOCK <= m < _SHORT_BLOCK else _DEFAULT_MOMENTS
+
+
+def sums_from_samples(f_hz: float, harmonics: int, dt_s: float) -> bool:
+    """Whether a one-shot fit of a uniformly sampled record (arguments as :func:`block_length`)
+    should sum its samples at each trial frequency (:meth:`HarmonicFitAccumulator._hold_grid`)
+    rather than compress them into moments: when the default plan's blocks would hold fewer
+    than ``_GRID_BLOCK`` samples. The samples cost O(N·H) per frequency whatever the number of
+    periods; the moments' sums grow with the number of blocks."""
+    return block_length(f_hz, harmonics, dt_s, _DEFAULT_MOMENTS) < _GRID_BLOCK
 
 
 class HarmonicFitAccumulator:
@@ -161,6 +164,8 @@ class HarmonicFitAccumulator:
         self._t_last: float | None = None
         # the samples themselves when blocks of one sample (explicit), else the block moments
         self._records: list[tuple[np.ndarray, np.ndarray]] = []
+        # a uniformly sampled record held as it is (t, y), summed at each frequency (_hold_grid)
+        self._grid: tuple[np.ndarray, np.ndarray] | None = None
         self._store = MomentStore(n_moments + 2)
         # grid (set by _plan)
         self._t0 = 0.0
@@ -196,6 +201,8 @@ class HarmonicFitAccumulator:
         n = t.size
         if n == 0:
             return
+        if self._grid is not None:
+            raise ConfigError("an accumulator holding a whole record takes no more chunks.")
         if self._t_last is not None and not t[0] > self._t_last:
             check_increasing(t[:1], previous=self._t_last)
         if not self._ready:
@@ -228,14 +235,28 @@ class HarmonicFitAccumulator:
                 s2 = self._add_generic(t, y)
             if not math.isfinite(s2):
                 check_finite("y", y)
-                raise CaptureError(
-                    "y holds values too large to square in float64; rescale the signal."
-                )
+                raise CaptureError(SQUARES_OVERFLOW)
             self._sum_y2 += s2
         if self._n == 0:
             self._t_first = float(t[0])
         self._n += n
         self._t_last = float(t[-1])
+
+    def _hold_grid(self, t: np.ndarray, y: np.ndarray, dt: float) -> None:
+        """Take a whole record on the uniform grid ``t[0] + i·dt`` (``y`` finite) by reference, no
+        moments: the sums at each trial frequency come from the samples
+        (:func:`~rotacal.signal._blocks_grid.grid_sums`). For a one-shot fit of a fast signal,
+        whose blocks would hold fewer samples than moments; nothing can be added after it."""
+        if self._n or t.size < 2:
+            raise ConfigError("_hold_grid takes one whole record of ≥ 2 samples, nothing else.")
+        self._ready = True
+        self._grid = (t, y)
+        self._t0 = self._t_first = float(t[0])
+        self._t_last = float(t[-1])
+        self._dt = dt
+        self._y0 = float(np.mean(y[: min(y.size, 1 << 16)]))
+        self._sum_y2 = centred_square_sum(y, self._y0)
+        self._n = t.size
 
     def _plan(
         self, t: np.ndarray, y: np.ndarray, uniform_dt: float | None, y_checked: bool
@@ -383,6 +404,8 @@ class HarmonicFitAccumulator:
         """Fundamental frequency (Hz) estimated from the block means (FFT + single-sine LS)."""
         if self._n == 0:
             raise CaptureError("no samples were added to the HarmonicFitAccumulator.")
+        if self._grid is not None:
+            return estimate_frequency_unchecked(*self._grid)
         if self._explicit:
             return estimate_frequency_unchecked(*self._samples())
         return estimate_frequency_unchecked(*self._block_means())
@@ -396,6 +419,8 @@ class HarmonicFitAccumulator:
 
     def _sums_fn(self, nh: int, t_ref: float) -> Any:
         kmax_s = 2 * nh
+        if self._grid is not None:
+            return grid_sums(self._grid[1], self._y0, self._t0 - t_ref, self._dt, nh)
         if self._explicit:
             tt, yy = self._samples()
 
@@ -406,7 +431,7 @@ class HarmonicFitAccumulator:
                 for r in range(0, tt.size, SUM_ROWS):
                     d = tt[r : r + SUM_ROWS] - t_ref
                     ycs = yy[r : r + SUM_ROWS]
-                    e = _unit_powers(np.exp(1j * omega * d), kmax_s)
+                    e = unit_powers(np.exp(1j * omega * d), kmax_s)
                     s[0] += e.sum(axis=0)
                     yv[0] += ycs @ e[:, : nh + 1]
                     if deriv:

@@ -45,6 +45,17 @@ def taylor_terms(x: float, limit: int) -> int:
     return limit + 1
 
 
+def unit_powers(e1: np.ndarray, kmax: int) -> np.ndarray:
+    """``e1**k`` for k = 0..kmax as columns, by repeated multiplication (error ~k·eps)."""
+    out = np.empty((e1.size, kmax + 1), dtype=np.complex128)
+    out[:, 0] = 1.0
+    if kmax >= 1:
+        out[:, 1] = e1
+    for k in range(2, kmax + 1):
+        np.multiply(out[:, k - 1], e1, out=out[:, k])
+    return out
+
+
 def _powers_split(
     e1: np.ndarray, nh: int, kmax: int, work: np.ndarray | None = None, out: np.ndarray | None = None
 ) -> np.ndarray:

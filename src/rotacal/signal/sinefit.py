@@ -24,7 +24,7 @@ from typing import Any, Literal
 import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
-from rotacal.signal._blocks import HarmonicFitAccumulator, moments_for
+from rotacal.signal._blocks import HarmonicFitAccumulator, moments_for, sums_from_samples
 from rotacal.signal._checks import (
     as_pair,
     check_finite,
@@ -282,10 +282,13 @@ def _fit(
             ta, ya, f0, nh, refine, int(max_iter), float(rtol), bool(drift), bool(drift_check)
         )
     acc = HarmonicFitAccumulator(f0, harmonics=nh, n_moments=moments_for(f0, nh, span / (n - 1)))
-    # the caller holds every sample: moments up to their size stay in memory (a temporary file
-    # would be written once and read back at every trial frequency)
-    acc._store.keep_bytes = max(acc._store.keep_bytes, ta.nbytes + ya.nbytes)
-    acc._add(ta, ya, uniform_dt=dt_u, y_checked=True)
+    if dt_u is not None and sums_from_samples(f0, nh, dt_u):
+        acc._hold_grid(ta, ya, dt_u)
+    else:
+        # the caller holds every sample: moments up to their size stay in memory (a temporary
+        # file would be written once and read back at every trial frequency)
+        acc._store.keep_bytes = max(acc._store.keep_bytes, ta.nbytes + ya.nbytes)
+        acc._add(ta, ya, uniform_dt=dt_u, y_checked=True)
     return acc.fit(
         f0,
         nh,
