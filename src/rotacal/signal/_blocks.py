@@ -25,8 +25,8 @@ import numpy as np
 
 from rotacal._jit import use_numba
 from rotacal.errors import CaptureError, ConfigError
-from rotacal.signal._blocks_store import MomentStore
 from rotacal.signal._blocks_grid import SQUARES_OVERFLOW, centred_square_sum, grid_sums
+from rotacal.signal._blocks_store import MomentStore
 from rotacal.signal._blocks_sums import SUM_ROWS, SumsFn, block_sums, taylor_terms, unit_powers
 from rotacal.signal._checks import (
     as_pair,

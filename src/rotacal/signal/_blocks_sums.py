@@ -57,7 +57,11 @@ def unit_powers(e1: np.ndarray, kmax: int) -> np.ndarray:
 
 
 def _powers_split(
-    e1: np.ndarray, nh: int, kmax: int, work: np.ndarray | None = None, out: np.ndarray | None = None
+    e1: np.ndarray,
+    nh: int,
+    kmax: int,
+    work: np.ndarray | None = None,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Rows ``Re e1^k`` and ``Im e1^k``, ordered [Re 0..nh, Im 0..nh, Re nh+1..kmax, Im nh+1..kmax]
     (the rows the y-sums need come first); powers by repeated multiplication (error ~k·eps).
