@@ -47,6 +47,15 @@ def test_block_sums_equal_the_sums_over_every_sample(chunks):
         # without the derivative: the same p = 0 sums (BLAS may add in another order)
         np.testing.assert_allclose(s0[0], s[0], rtol=0, atol=1e-13 * np.abs(s).max())
         np.testing.assert_allclose(y0_only[0], yv[0], rtol=0, atol=1e-13 * np.abs(yv).max())
+        _check_without_y_derivative(sums, omega, s, yv)
+
+
+def _check_without_y_derivative(sums, omega, s, yv):
+    """A last step's sums (S with τ, y-sums without): the same S and p = 0 y-sums."""
+    s_l, yv_l = sums(omega, True, False)
+    assert s_l.shape == s.shape and yv_l.shape == (1, yv.shape[1])
+    np.testing.assert_allclose(s_l, s, rtol=0, atol=1e-13 * np.abs(s).max())
+    np.testing.assert_allclose(yv_l[0], yv[0], rtol=0, atol=1e-13 * np.abs(yv).max())
 
 
 @pytest.mark.parametrize("periods", [30, 3000])
@@ -154,6 +163,7 @@ def test_sums_from_the_samples_equal_the_sums_over_every_sample(n):
         s0, y0_only = sums(omega, False)
         np.testing.assert_allclose(s0[0], s[0], rtol=0, atol=1e-13 * np.abs(s).max())
         np.testing.assert_allclose(y0_only[0], yv[0], rtol=0, atol=1e-13 * np.abs(yv).max())
+        _check_without_y_derivative(sums, omega, s, yv)
 
 
 @pytest.mark.parametrize("drift", [False, True])

@@ -27,7 +27,7 @@ from rotacal._jit import use_numba
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.signal._blocks_grid import SQUARES_OVERFLOW, centred_square_sum, grid_sums
 from rotacal.signal._blocks_store import MomentStore
-from rotacal.signal._blocks_sums import SUM_ROWS, SumsFn, block_sums, taylor_terms, unit_powers
+from rotacal.signal._blocks_sums import SUM_ROWS, block_sums, taylor_terms, unit_powers
 from rotacal.signal._checks import (
     as_pair,
     check_finite,
@@ -39,7 +39,7 @@ from rotacal.signal._checks import (
     max_grid_deviation,
 )
 from rotacal.signal._freq import estimate_frequency_unchecked
-from rotacal.signal._normal import solve_normal
+from rotacal.signal._normal import SumsFn, solve_normal
 from rotacal.signal._residual import residual_sums
 from rotacal.signal._result import SineFit, build_drift_check, build_sine_fit
 
@@ -424,10 +424,12 @@ class HarmonicFitAccumulator:
         if self._explicit:
             tt, yy = self._samples()
 
-            def sums_explicit(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
+            def sums_explicit(
+                omega: float, deriv: bool, y_deriv: bool = True
+            ) -> tuple[np.ndarray, np.ndarray]:
                 np_ = 3 if deriv else 1
                 s = np.zeros((np_, kmax_s + 1), dtype=np.complex128)
-                yv = np.zeros((2 if deriv else 1, nh + 1), dtype=np.complex128)
+                yv = np.zeros((2 if deriv and y_deriv else 1, nh + 1), dtype=np.complex128)
                 for r in range(0, tt.size, SUM_ROWS):
                     d = tt[r : r + SUM_ROWS] - t_ref
                     ycs = yy[r : r + SUM_ROWS]
@@ -438,7 +440,8 @@ class HarmonicFitAccumulator:
                         de = d @ e
                         s[1] += de
                         s[2] += (d * d) @ e
-                        yv[1] += (ycs * d) @ e[:, : nh + 1]
+                        if yv.shape[0] == 2:
+                            yv[1] += (ycs * d) @ e[:, : nh + 1]
                 return s, yv
 
             return sums_explicit
@@ -450,12 +453,12 @@ class HarmonicFitAccumulator:
         # in memory: each group's sums prepared once; spilled: read back at each frequency
         held = [] if self._store.spilled else [group_sums(g) for g in self._store.groups(p_full)]
 
-        def sums(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
+        def sums(omega: float, deriv: bool, y_deriv: bool = True) -> tuple[np.ndarray, np.ndarray]:
             # the sums are linear in the moments: the groups' sums add
             fns = held if not self._store.spilled else map(group_sums, self._store.groups(p_full))
             s_tot = y_tot = None
             for fn in fns:
-                s, yv = fn(omega, deriv)
+                s, yv = fn(omega, deriv, y_deriv)
                 s_tot = s if s_tot is None else s_tot + s
                 y_tot = yv if y_tot is None else y_tot + yv
             assert s_tot is not None and y_tot is not None

@@ -25,7 +25,8 @@ import math
 import numpy as np
 
 from rotacal.errors import CaptureError
-from rotacal.signal._blocks_sums import SumsFn, unit_powers
+from rotacal.signal._blocks_sums import unit_powers
+from rotacal.signal._normal import SumsFn
 
 SQUARES_OVERFLOW = "y holds values too large to square in float64; rescale the signal."
 
@@ -50,7 +51,7 @@ def centred_square_sum(y: np.ndarray, y0: float) -> float:
 
 
 def grid_sums(y: np.ndarray, y0: float, tau0_s: float, dt_s: float, nh: int) -> SumsFn:
-    """A sums provider ``(ω, with_derivative) → (S, Y)`` for
+    """A sums provider (:class:`~rotacal.signal._normal.SumsFn`) for
     :func:`~rotacal.signal._normal.solve_normal` over the samples ``y`` at ``τ_i = tau0_s + i·dt_s``.
 
     Parameters
@@ -82,13 +83,13 @@ def grid_sums(y: np.ndarray, y0: float, tau0_s: float, dt_s: float, nh: int) -> 
     tail_tau = tau0_s + np.arange(nseg * m, n) * dt_s
     tail_y = y[nseg * m :] - y0
 
-    def sums(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
+    def sums(omega: float, deriv: bool, y_deriv: bool = True) -> tuple[np.ndarray, np.ndarray]:
         n_p = 3 if deriv else 1
-        n_y = 2 if deriv else 1
+        n_y = 2 if deriv and y_deriv else 1
         w = np.exp(1j * omega * np.outer(o, ks))  # (M, 2H+1)
         w_p = [w.sum(axis=0)] + [(o**p) @ w for p in range(1, n_p)]
         cols = [w[:, :ny].real, w[:, :ny].imag]
-        if deriv:
+        if n_y == 2:
             ow = o[:, None] * w[:, :ny]
             cols += [ow.real, ow.imag]
         wcat = np.ascontiguousarray(np.hstack(cols))  # (M, 2·n_y·(H+1)) real
@@ -107,9 +108,10 @@ def grid_sums(y: np.ndarray, y0: float, tau0_s: float, dt_s: float, nh: int) -> 
             exy = ex[:, :ny]
             yv[0] += np.sum(exy * z0, axis=0)
             t_seg[0] += ex.sum(axis=0)
-            if deriv:
+            if n_y == 2:
                 z1 = zc[:, 2 * ny : 3 * ny] + 1j * zc[:, 3 * ny :]
                 yv[1] += np.sum(exy * (d[:, None] * z0 + z1), axis=0)
+            if deriv:
                 t_seg[1] += d @ ex
                 t_seg[2] += (d * d) @ ex
         s = np.empty((n_p, kmax + 1), dtype=np.complex128)

@@ -21,18 +21,16 @@ boundary or off the grid. The cost is O(blocks·H·terms) per frequency, the sam
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import numpy as np
 
 from rotacal.errors import CaptureError
+from rotacal.signal._normal import SumsFn
 
 #: Blocks per BLAS product (their exponentials, 2·(2H+1) rows of doubles, stay in the L2 cache).
 SUM_ROWS = 2048
 #: The exponential series is cut where its terms fall below this.
 TRUNC = 1e-17
-
-SumsFn = Callable[[float, bool], tuple[np.ndarray, np.ndarray]]
 
 
 def taylor_terms(x: float, limit: int) -> int:
@@ -147,7 +145,8 @@ def block_sums(
     n_moments: int,
     block_samples: int,
 ) -> SumsFn:
-    """A sums provider ``(ω, with_derivative) → (S, Y)`` for :func:`~rotacal.signal._normal.solve_normal`.
+    """A sums provider ``(ω, with_derivative[, y_derivative]) → (S, Y)`` for
+    :func:`~rotacal.signal._normal.solve_normal` (:class:`~rotacal.signal._normal.SumsFn`).
 
     Parameters
     ----------
@@ -188,7 +187,7 @@ def block_sums(
     # others are subtracted from the closed form: few, so nothing large cancels)
     closed_ok = j.size > 1 and int(j[-1]) - int(j[0]) + 1 == j.size and 4 * part.size <= j.size
 
-    def sums(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
+    def sums(omega: float, deriv: bool, y_deriv: bool = True) -> tuple[np.ndarray, np.ndarray]:
         x = kmax * abs(omega) * half
         nterm = taylor_terms(x, n_moments)
         if nterm > n_moments:
@@ -200,7 +199,7 @@ def block_sums(
             )
         nty = min(nterm, taylor_terms(nh * abs(omega) * half, n_moments))
         n_p = 3 if deriv else 1
-        n_y = 2 if deriv else 1
+        n_y = 2 if deriv and y_deriv else 1
         ny2 = 2 * (nh + 1)
         # weights of the full blocks' common P row (d^p) and the y-moments (Q, d·Q)
         t_full = np.zeros((2 * (kmax + 1), n_p))
@@ -234,7 +233,7 @@ def block_sums(
                     np.multiply(g[:, 1], d, out=g[:, 2])
                 t_full += ex @ g
             qs = q[r : r + SUM_ROWS, :nq]
-            if deriv:
+            if n_y == 2:
                 qr = qr_buf[:c]
                 qr[:, :nq] = qs
                 np.multiply(d[:, None], qs, out=qr[:, nq:])
@@ -284,6 +283,7 @@ def block_sums(
                 ),
                 axis=1,
             )
+        if n_y == 2:
             b0 = b_c[:, 0]
             b1 = b_c[:, 1]
             yv[1] = np.sum(cy * (b1[:, :nty] + half * b0[:, 1 : nty + 1]), axis=1)
