@@ -11,6 +11,7 @@ from rotacal.signal._checks import MIN_PERIODS
 
 _FFT_POINTS = 1 << 16
 _PAD_POINTS = 1 << 18
+_DEC_POINTS = 1 << 20
 _LS_POINTS = 4096
 _LS_MAX_PERIODS = 64.0
 
@@ -101,9 +102,13 @@ def estimate_frequency_unchecked(t: np.ndarray, y: np.ndarray) -> float:
     else:
         if f_seg * dt * seg >= 8.0:  # many periods in the first segment: a fast signal
             d = max(1, int(1.0 / (16.0 * f_seg * dt)))
+            # at most _DEC_POINTS block means (~65,000 periods, from the start): their transform
+            # costs as much as the fit beyond it, and a start within ~1e-3 bin of the record
+            # needs no more (the fit's steps are the same)
+            yd = _block_mean(y[: _DEC_POINTS * d], d)
         else:  # a slow signal: decimate the whole record by block means
             d = -(-n // _FFT_POINTS)
-        yd = _block_mean(y, d)
+            yd = _block_mean(y, d)
         f_c = _fft_peak(yd, d * dt)
     if f_c * span < _LS_MAX_PERIODS:  # the block-mean times only here (a pass over t)
         td = _block_mean(t, d)
