@@ -14,6 +14,12 @@ block cut by a chunk boundary is simply summed twice. The moments are kept by
 in a temporary file, so that memory stays flat however long the capture). For uniformly sampled chunks the moments of all
 full blocks are one BLAS product of the (blocks × M) sample matrix with a fixed (M × K+2)
 Vandermonde matrix.
+
+A fit of a whole record at once (:func:`~rotacal.signal.sinefit.fit_harmonics`) plans by the
+signal's speed: 22 moments for blocks of ≥ 128 samples, 28 (blocks 1.8× longer:
+:func:`moments_for`) down to 24-sample blocks, and below that, on a uniform grid, no moments at
+all (:func:`sums_from_samples`; :mod:`rotacal.signal._blocks_grid`); its moments stay in memory
+up to the size of its samples.
 """
 
 from __future__ import annotations
