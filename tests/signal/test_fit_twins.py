@@ -146,13 +146,15 @@ def test_block_moments_of_a_fast_motion_match_with_either_twin(monkeypatch):
 
 
 @pytest.mark.parametrize("count", [2, 7, 1000, 25_001])
-def test_grid_power_sums_match_the_sums_over_the_blocks(count):
-    # the closed form (Dirichlet kernel and its derivatives) against the sum it replaces
+@pytest.mark.parametrize("turn", [(0.5, 3.0), (3.0, 5.6)])
+def test_grid_power_sums_match_the_sums_over_the_blocks(count, turn):
+    # the closed form (Dirichlet kernel and its derivatives) against the sum it replaces; up
+    # to 5.6 rad per block of harmonic 20: what 28 moments allow (a one-shot fit's long blocks)
     from rotacal.signal._blocks_sums import grid_power_sums
 
     rng = np.random.default_rng(count)
     block_s = 0.013
-    omega = rng.uniform(0.5, 3.0) / (20 * block_s)  # harmonic 20 turns < 3 rad per block
+    omega = rng.uniform(*turn) / (20 * block_s)
     d_first = -0.5 * count * block_s + rng.uniform(-0.3, 0.3) * block_s
     d = d_first + np.arange(count) * block_s
     got = grid_power_sums(omega, d[0], d[-1], block_s, count, 20, 3)

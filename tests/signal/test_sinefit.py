@@ -309,6 +309,20 @@ def test_estimate_frequency_fast_signal_long_record():
     np.testing.assert_allclose(fit.amplitudes, [1.0, 0.1], rtol=1e-9)
 
 
+def test_estimate_frequency_of_more_periods_than_its_transform_takes():
+    # 1.1·10⁶ samples, 20 a period: the start value comes from the first 2^20 (52,000 periods);
+    # truth: the frequency put in, to within 0.01 bin of the whole record
+    rng = np.random.default_rng(3)
+    n, fs = 1_100_000, 50_000.0
+    f = fs / 20.0 * (1 + 0.3 / 55_000)
+    t = np.arange(n) / fs
+    y = np.cos(TWO_PI * f * t) + 0.1 * np.cos(TWO_PI * 3 * f * t) + 0.01 * rng.standard_normal(n)
+    assert abs(estimate_frequency(t, y) - f) * (n / fs) < 0.01
+    fit = fit_harmonics(t, y, harmonics=3)
+    assert abs(fit.frequency_hz - f) < 5 * fit.frequency_u_hz
+    np.testing.assert_allclose(fit.amplitudes, [1.0, 0.0, 0.1], atol=1e-4)
+
+
 # ------------------------------------------------------------------------- chunked accumulation
 def test_accumulator_chunks_equal_one_shot():
     rng = np.random.default_rng(9)

@@ -14,6 +14,12 @@ block cut by a chunk boundary is simply summed twice. The moments are kept by
 in a temporary file, so that memory stays flat however long the capture). For uniformly sampled chunks the moments of all
 full blocks are one BLAS product of the (blocks × M) sample matrix with a fixed (M × K+2)
 Vandermonde matrix.
+
+A fit of a whole record at once (:func:`~rotacal.signal.sinefit.fit_harmonics`) plans by the
+signal's speed: 22 moments for blocks of ≥ 128 samples, 28 (blocks 1.8× longer:
+:func:`moments_for`) down to 24-sample blocks, and below that, on a uniform grid, no moments at
+all (:func:`sums_from_samples`; :mod:`rotacal.signal._blocks_grid`); its moments stay in memory
+up to the size of its samples.
 """
 
 from __future__ import annotations
@@ -25,8 +31,9 @@ import numpy as np
 
 from rotacal._jit import use_numba
 from rotacal.errors import CaptureError, ConfigError
+from rotacal.signal._blocks_grid import SQUARES_OVERFLOW, centred_square_sum, grid_sums
 from rotacal.signal._blocks_store import MomentStore
-from rotacal.signal._blocks_sums import SUM_ROWS, SumsFn, block_sums, taylor_terms
+from rotacal.signal._blocks_sums import SUM_ROWS, block_sums, taylor_terms, unit_powers
 from rotacal.signal._checks import (
     as_pair,
     check_finite,
@@ -38,7 +45,7 @@ from rotacal.signal._checks import (
     max_grid_deviation,
 )
 from rotacal.signal._freq import estimate_frequency_unchecked
-from rotacal.signal._normal import solve_normal
+from rotacal.signal._normal import SumsFn, solve_normal
 from rotacal.signal._residual import residual_sums
 from rotacal.signal._result import SineFit, build_drift_check, build_sine_fit
 
@@ -46,21 +53,20 @@ _F_MARGIN = 1.25
 _MAX_BLOCK = 4096
 _MIN_BLOCK = 4
 _SUB_BLOCKS = 256
+_DEFAULT_MOMENTS = 22
+_LONG_MOMENTS = 28
+# below this block length (of the default plan) a one-shot fit takes _LONG_MOMENTS: at 10,000
+# periods of 10⁷ samples (19-sample blocks) the fit took 210 ms with 22 moments, 131 ms with 28;
+# at 1,000 periods (190-sample blocks) 42 and 38 ms; at 100 periods (1,909) 20 and 32 ms
+_SHORT_BLOCK = 128
+# below this block length the samples themselves (10⁷ samples, 10 harmonics: ~100 ms CPU at any
+# number of periods; with moments 78 ms at 5,000 periods (38-sample blocks), 142 ms at 10,000
+# (19), 650 ms at 30,000 (6), 2.4 s at 100,000 (samples kept one by one))
+_GRID_BLOCK = 24
 _SUB_SAMPLES = 1 << 16
 # The residual from the normal equations, yᵀy − bᵀp, loses its digits when it is this small a
 # part of yᵀy; below it a fit that still has the samples sums the residual itself.
 _RSS_ROUNDING = 1e-9
-
-
-def _unit_powers(e1: np.ndarray, kmax: int) -> np.ndarray:
-    """``e1**k`` for k = 0..kmax as columns, by repeated multiplication (error ~k·eps)."""
-    out = np.empty((e1.size, kmax + 1), dtype=np.complex128)
-    out[:, 0] = 1.0
-    if kmax >= 1:
-        out[:, 1] = e1
-    for k in range(2, kmax + 1):
-        np.multiply(out[:, k - 1], e1, out=out[:, k])
-    return out
 
 
 def planned_phase(n_moments: int) -> float:
@@ -71,6 +77,39 @@ def planned_phase(n_moments: int) -> float:
     while taylor_terms(x + 0.05, n_moments) <= n_moments:
         x += 0.05
     return x
+
+
+def block_length(f_hz: float, harmonics: int, dt_s: float, n_moments: int) -> int:
+    """Samples per block (1: samples kept as they are) that the plan gives a fundamental of
+    ``f_hz`` (Hz) with ``harmonics`` harmonics, sampled every ``dt_s`` (s), ``n_moments`` moments:
+    harmonic 2H at 1.25·f turns by :func:`planned_phase` over half a block, at most 4096 samples,
+    and blocks of fewer than 4 samples are not worth their moments."""
+    w = 2.0 * math.pi * f_hz * _F_MARGIN
+    m = int(min(_MAX_BLOCK, 2.0 * planned_phase(n_moments) / (2 * harmonics * w * dt_s)))
+    return 1 if m < _MIN_BLOCK else m
+
+
+def moments_for(f_hz: float, harmonics: int, dt_s: float) -> int:
+    """Moments per block for a record fitted in one go (all samples at hand; arguments as
+    :func:`block_length`): the default 22, or 28 when 22 give blocks shorter than
+    ``_SHORT_BLOCK`` samples (a fast signal: hundreds of thousands of blocks).
+
+    With 28 the blocks are 1.8× longer (2.75 rad planned instead of 1.5), so the sums at each
+    trial frequency read ~45 % fewer blocks (each with 6 more terms); the closed-form weights
+    of :func:`~rotacal.signal._blocks_sums.grid_power_sums` still see a block phase
+    θ = 2H·ω·T ≤ 2·2.8 rad < 2π (the sums refuse a frequency that needs more moments), where
+    their denominators sin(θ/2) stay ≥ 0.33. Longer blocks would bring θ to 2π."""
+    m = block_length(f_hz, harmonics, dt_s, _DEFAULT_MOMENTS)
+    return _LONG_MOMENTS if _MIN_BLOCK <= m < _SHORT_BLOCK else _DEFAULT_MOMENTS
+
+
+def sums_from_samples(f_hz: float, harmonics: int, dt_s: float) -> bool:
+    """Whether a one-shot fit of a uniformly sampled record (arguments as :func:`block_length`)
+    should sum its samples at each trial frequency (:meth:`HarmonicFitAccumulator._hold_grid`)
+    rather than compress them into moments: when the default plan's blocks would hold fewer
+    than ``_GRID_BLOCK`` samples. The samples cost O(N·H) per frequency whatever the number of
+    periods; the moments' sums grow with the number of blocks."""
+    return block_length(f_hz, harmonics, dt_s, _DEFAULT_MOMENTS) < _GRID_BLOCK
 
 
 class HarmonicFitAccumulator:
@@ -107,7 +146,7 @@ class HarmonicFitAccumulator:
         *,
         harmonics: int = 10,
         block_samples: int | None = None,
-        n_moments: int = 22,
+        n_moments: int = _DEFAULT_MOMENTS,
     ) -> None:
         self._f_hint = None if frequency_hz is None else check_frequency(frequency_hz)
         self._h_plan = check_harmonics(harmonics)
@@ -131,6 +170,8 @@ class HarmonicFitAccumulator:
         self._t_last: float | None = None
         # the samples themselves when blocks of one sample (explicit), else the block moments
         self._records: list[tuple[np.ndarray, np.ndarray]] = []
+        # a uniformly sampled record held as it is (t, y), summed at each frequency (_hold_grid)
+        self._grid: tuple[np.ndarray, np.ndarray] | None = None
         self._store = MomentStore(n_moments + 2)
         # grid (set by _plan)
         self._t0 = 0.0
@@ -166,6 +207,8 @@ class HarmonicFitAccumulator:
         n = t.size
         if n == 0:
             return
+        if self._grid is not None:
+            raise ConfigError("an accumulator holding a whole record takes no more chunks.")
         if self._t_last is not None and not t[0] > self._t_last:
             check_increasing(t[:1], previous=self._t_last)
         if not self._ready:
@@ -198,14 +241,28 @@ class HarmonicFitAccumulator:
                 s2 = self._add_generic(t, y)
             if not math.isfinite(s2):
                 check_finite("y", y)
-                raise CaptureError(
-                    "y holds values too large to square in float64; rescale the signal."
-                )
+                raise CaptureError(SQUARES_OVERFLOW)
             self._sum_y2 += s2
         if self._n == 0:
             self._t_first = float(t[0])
         self._n += n
         self._t_last = float(t[-1])
+
+    def _hold_grid(self, t: np.ndarray, y: np.ndarray, dt: float) -> None:
+        """Take a whole record on the uniform grid ``t[0] + i·dt`` (``y`` finite) by reference, no
+        moments: the sums at each trial frequency come from the samples
+        (:func:`~rotacal.signal._blocks_grid.grid_sums`). For a one-shot fit of a fast signal,
+        whose blocks would hold fewer samples than moments; nothing can be added after it."""
+        if self._n or t.size < 2:
+            raise ConfigError("_hold_grid takes one whole record of ≥ 2 samples, nothing else.")
+        self._ready = True
+        self._grid = (t, y)
+        self._t0 = self._t_first = float(t[0])
+        self._t_last = float(t[-1])
+        self._dt = dt
+        self._y0 = float(np.mean(y[: min(y.size, 1 << 16)]))
+        self._sum_y2 = centred_square_sum(y, self._y0)
+        self._n = t.size
 
     def _plan(
         self, t: np.ndarray, y: np.ndarray, uniform_dt: float | None, y_checked: bool
@@ -236,10 +293,7 @@ class HarmonicFitAccumulator:
                         f"could not estimate the frequency from the first chunk ({reason}); "
                         "pass frequency_hz= to HarmonicFitAccumulator."
                     ) from None
-            w = 2.0 * math.pi * f * _F_MARGIN
-            m = int(min(_MAX_BLOCK, 2.0 * planned_phase(self._k) / (2 * self._h_plan * w * dt)))
-            if m < _MIN_BLOCK:
-                m = 1
+            m = block_length(f, self._h_plan, dt, self._k)
         self._ready = True
         self._t0 = float(t[0])
         self._dt = dt
@@ -356,6 +410,8 @@ class HarmonicFitAccumulator:
         """Fundamental frequency (Hz) estimated from the block means (FFT + single-sine LS)."""
         if self._n == 0:
             raise CaptureError("no samples were added to the HarmonicFitAccumulator.")
+        if self._grid is not None:
+            return estimate_frequency_unchecked(*self._grid)
         if self._explicit:
             return estimate_frequency_unchecked(*self._samples())
         return estimate_frequency_unchecked(*self._block_means())
@@ -369,41 +425,46 @@ class HarmonicFitAccumulator:
 
     def _sums_fn(self, nh: int, t_ref: float) -> Any:
         kmax_s = 2 * nh
+        if self._grid is not None:
+            return grid_sums(self._grid[1], self._y0, self._t0 - t_ref, self._dt, nh)
         if self._explicit:
             tt, yy = self._samples()
 
-            def sums_explicit(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
+            def sums_explicit(
+                omega: float, deriv: bool, y_deriv: bool = True
+            ) -> tuple[np.ndarray, np.ndarray]:
                 np_ = 3 if deriv else 1
                 s = np.zeros((np_, kmax_s + 1), dtype=np.complex128)
-                yv = np.zeros((2 if deriv else 1, nh + 1), dtype=np.complex128)
+                yv = np.zeros((2 if deriv and y_deriv else 1, nh + 1), dtype=np.complex128)
                 for r in range(0, tt.size, SUM_ROWS):
                     d = tt[r : r + SUM_ROWS] - t_ref
                     ycs = yy[r : r + SUM_ROWS]
-                    e = _unit_powers(np.exp(1j * omega * d), kmax_s)
+                    e = unit_powers(np.exp(1j * omega * d), kmax_s)
                     s[0] += e.sum(axis=0)
                     yv[0] += ycs @ e[:, : nh + 1]
                     if deriv:
                         de = d @ e
                         s[1] += de
                         s[2] += (d * d) @ e
-                        yv[1] += (ycs * d) @ e[:, : nh + 1]
+                        if yv.shape[0] == 2:
+                            yv[1] += (ycs * d) @ e[:, : nh + 1]
                 return s, yv
 
             return sums_explicit
         p_full = self._cumv[self._m]
 
-        def group_sums(group: tuple[np.ndarray, np.ndarray, np.ndarray]) -> SumsFn:
+        def group_sums(group: tuple[np.ndarray, np.ndarray | None, np.ndarray]) -> SumsFn:
             return block_sums(group, p_full, self._tg - t_ref, self._tb, nh, self._k, self._m)
 
         # in memory: each group's sums prepared once; spilled: read back at each frequency
         held = [] if self._store.spilled else [group_sums(g) for g in self._store.groups(p_full)]
 
-        def sums(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
+        def sums(omega: float, deriv: bool, y_deriv: bool = True) -> tuple[np.ndarray, np.ndarray]:
             # the sums are linear in the moments: the groups' sums add
             fns = held if not self._store.spilled else map(group_sums, self._store.groups(p_full))
             s_tot = y_tot = None
             for fn in fns:
-                s, yv = fn(omega, deriv)
+                s, yv = fn(omega, deriv, y_deriv)
                 s_tot = s if s_tot is None else s_tot + s
                 y_tot = yv if y_tot is None else y_tot + yv
             assert s_tot is not None and y_tot is not None

@@ -114,17 +114,17 @@ class MomentStore:
 
     def groups(
         self, p_full: np.ndarray, rows: int | None = None
-    ) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    ) -> Iterator[tuple[np.ndarray, np.ndarray | None, np.ndarray]]:
         """``(j, P, Q)`` of consecutive records gathered to about ``rows`` blocks each (default
-        GROUP_ROWS; a full block's P row filled in), a record longer than that alone."""
+        GROUP_ROWS; a full block's P row filled in where records are mixed), a record longer
+        than that alone (P None when it is a run of full blocks)."""
         rows = GROUP_ROWS if rows is None else rows
         pending: list[Record] = []
         size = 0
 
-        def gathered() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        def gathered() -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
             if len(pending) == 1:
-                j, p, q = pending[0]
-                return j, np.broadcast_to(p_full, q.shape) if p is None else p, q
+                return pending[0]
             j = np.concatenate([r[0] for r in pending])
             p = np.concatenate(
                 [np.broadcast_to(p_full, r[2].shape) if r[1] is None else r[1] for r in pending]

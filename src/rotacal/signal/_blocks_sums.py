@@ -21,18 +21,16 @@ boundary or off the grid. The cost is O(blocks·H·terms) per frequency, the sam
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import numpy as np
 
 from rotacal.errors import CaptureError
+from rotacal.signal._normal import SumsFn
 
 #: Blocks per BLAS product (their exponentials, 2·(2H+1) rows of doubles, stay in the L2 cache).
 SUM_ROWS = 2048
 #: The exponential series is cut where its terms fall below this.
 TRUNC = 1e-17
-
-SumsFn = Callable[[float, bool], tuple[np.ndarray, np.ndarray]]
 
 
 def taylor_terms(x: float, limit: int) -> int:
@@ -45,16 +43,41 @@ def taylor_terms(x: float, limit: int) -> int:
     return limit + 1
 
 
-def _powers_split(e1: np.ndarray, nh: int, kmax: int) -> np.ndarray:
+def unit_powers(e1: np.ndarray, kmax: int) -> np.ndarray:
+    """``e1**k`` for k = 0..kmax as columns, by repeated multiplication (error ~k·eps)."""
+    out = np.empty((e1.size, kmax + 1), dtype=np.complex128)
+    out[:, 0] = 1.0
+    if kmax >= 1:
+        out[:, 1] = e1
+    for k in range(2, kmax + 1):
+        np.multiply(out[:, k - 1], e1, out=out[:, k])
+    return out
+
+
+def _powers_split(
+    e1: np.ndarray,
+    nh: int,
+    kmax: int,
+    work: np.ndarray | None = None,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
     """Rows ``Re e1^k`` and ``Im e1^k``, ordered [Re 0..nh, Im 0..nh, Re nh+1..kmax, Im nh+1..kmax]
-    (the rows the y-sums need come first); powers by repeated multiplication (error ~k·eps)."""
-    pw = np.empty((kmax + 1, e1.size), dtype=np.complex128)
+    (the rows the y-sums need come first); powers by repeated multiplication (error ~k·eps).
+    ``work`` (complex, ≥ (kmax+1) × size) and ``out`` (real, ≥ 2(kmax+1) × size) are reused
+    buffers when given (a chunk's arrays of a few hundred kB each, allocated once per sum)."""
+    size = e1.size
+    pw = np.empty((kmax + 1, size), dtype=np.complex128) if work is None else work[: kmax + 1]
+    if pw.shape[1] != size:
+        pw = pw[:, :size]
     pw[0] = 1.0
     if kmax >= 1:
         pw[1] = e1
     for k in range(2, kmax + 1):
         np.multiply(pw[k - 1], e1, out=pw[k])
-    out = np.empty((2 * (kmax + 1), e1.size))
+    if out is None:
+        out = np.empty((2 * (kmax + 1), size))
+    else:
+        out = out[: 2 * (kmax + 1), :size]
     ny = nh + 1
     out[:ny] = pw[:ny].real
     out[ny : 2 * ny] = pw[:ny].imag
@@ -114,7 +137,7 @@ def grid_power_sums(
 
 
 def block_sums(
-    merged: tuple[np.ndarray, np.ndarray, np.ndarray],
+    merged: tuple[np.ndarray, np.ndarray | None, np.ndarray],
     p_full: np.ndarray,
     grid_offset_s: float,
     block_s: float,
@@ -122,12 +145,14 @@ def block_sums(
     n_moments: int,
     block_samples: int,
 ) -> SumsFn:
-    """A sums provider ``(ω, with_derivative) → (S, Y)`` for :func:`~rotacal.signal._normal.solve_normal`.
+    """A sums provider ``(ω, with_derivative[, y_derivative]) → (S, Y)`` for
+    :func:`~rotacal.signal._normal.solve_normal` (:class:`~rotacal.signal._normal.SumsFn`).
 
     Parameters
     ----------
     merged : (j, P, Q)
-        Block index, P and Q moments (k = 0..n_moments+1) of every block, j increasing.
+        Block index, P and Q moments (k = 0..n_moments+1) of every block, j increasing; P None
+        for a run of full blocks on the grid (each block's P row is ``p_full``).
     p_full : ndarray
         The P row of a full block on the grid.
     grid_offset_s : float
@@ -149,7 +174,11 @@ def block_sums(
     dvec = grid_offset_s + (j + 0.5) * block_s
     kmax = 2 * nh
     # blocks whose P row is that of a full block (bit for bit) share it: only their weights count
-    full = np.all(p == p_full, axis=1)
+    if p is None:  # a run of full blocks on the grid (no P rows stored)
+        p = np.broadcast_to(p_full, q.shape)
+        full = np.ones(j.size, dtype=bool)
+    else:
+        full = np.all(p == p_full, axis=1)
     part = np.flatnonzero(~full)
     d_part = dvec[part]
     p_part = p[part]
@@ -158,7 +187,7 @@ def block_sums(
     # others are subtracted from the closed form: few, so nothing large cancels)
     closed_ok = j.size > 1 and int(j[-1]) - int(j[0]) + 1 == j.size and 4 * part.size <= j.size
 
-    def sums(omega: float, deriv: bool) -> tuple[np.ndarray, np.ndarray]:
+    def sums(omega: float, deriv: bool, y_deriv: bool = True) -> tuple[np.ndarray, np.ndarray]:
         x = kmax * abs(omega) * half
         nterm = taylor_terms(x, n_moments)
         if nterm > n_moments:
@@ -170,7 +199,7 @@ def block_sums(
             )
         nty = min(nterm, taylor_terms(nh * abs(omega) * half, n_moments))
         n_p = 3 if deriv else 1
-        n_y = 2 if deriv else 1
+        n_y = 2 if deriv and y_deriv else 1
         ny2 = 2 * (nh + 1)
         # weights of the full blocks' common P row (d^p) and the y-moments (Q, d·Q)
         t_full = np.zeros((2 * (kmax + 1), n_p))
@@ -180,21 +209,37 @@ def block_sums(
         # read every block, and only for the harmonics 0..H
         closed = closed_ok and omega != 0.0
         kmax_rows = nh if closed else kmax
+        # a chunk's work arrays, allocated once (fresh ones at every chunk cost more than the
+        # arithmetic: their pages are faulted in again and again)
+        rows = min(SUM_ROWS, j.size)
+        nq = nty + 1
+        jw = 1j * omega
+        arg = np.empty(rows, dtype=np.complex128)
+        work = np.empty((kmax_rows + 1, rows), dtype=np.complex128)
+        ex_buf = np.empty((2 * (kmax_rows + 1), rows))
+        qr_buf = np.empty((rows, n_y * nq))
+        prod = np.empty((ny2, n_y * nq))
         for r in range(0, j.size, SUM_ROWS):
             d = dvec[r : r + SUM_ROWS]
-            ex = _powers_split(np.exp(1j * omega * d), nh, kmax_rows)
+            c = d.size
+            e1 = np.exp(np.multiply(jw, d, out=arg[:c]), out=arg[:c])
+            ex = _powers_split(e1, nh, kmax_rows, work, ex_buf)
             if not closed:
                 w = wfull[r : r + SUM_ROWS]
-                g = np.empty((d.size, n_p))
+                g = np.empty((c, n_p))
                 g[:, 0] = w
                 if deriv:
                     np.multiply(w, d, out=g[:, 1])
                     np.multiply(g[:, 1], d, out=g[:, 2])
                 t_full += ex @ g
-            qr = q[r : r + SUM_ROWS, : nty + 1]
-            if deriv:
-                qr = np.concatenate((qr, d[:, None] * qr), axis=1)
-            b_y += ex[:ny2] @ qr
+            qs = q[r : r + SUM_ROWS, :nq]
+            if n_y == 2:
+                qr = qr_buf[:c]
+                qr[:, :nq] = qs
+                np.multiply(d[:, None], qs, out=qr[:, nq:])
+            else:
+                qr = qs
+            b_y += np.matmul(ex[:ny2], qr, out=prod)
         if part.size:
             ex = _powers_split(np.exp(1j * omega * d_part), nh, kmax)
             cols = [p_part[:, : nterm + 2]]
@@ -238,6 +283,7 @@ def block_sums(
                 ),
                 axis=1,
             )
+        if n_y == 2:
             b0 = b_c[:, 0]
             b1 = b_c[:, 1]
             yv[1] = np.sum(cy * (b1[:, :nty] + half * b0[:, 1 : nty + 1]), axis=1)

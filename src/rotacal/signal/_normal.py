@@ -21,15 +21,23 @@ least-squares minimiser of IEEE Std 1057-2017 §4.1.3 (four-parameter / multi-ha
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from rotacal.errors import CaptureError
 
-# sums(omega, with_derivative) -> (S: (1 or 3, 2H+1) complex, Y: (1 or 2, H+1) complex)
-SumsFn = Callable[[float, bool], tuple[np.ndarray, np.ndarray]]
+
+class SumsFn(Protocol):
+    """``sums(ω, with_derivative, y_derivative=True) → (S, Y)``: S of (3 with the derivative,
+    else 1) × (2H+1) complex sums, Y of (2 with both, else 1) × (H+1): the y-sums with τ only
+    for a next step's right-hand side, which a step that ends the refinement does not take."""
+
+    def __call__(
+        self, omega: float, deriv: bool, y_deriv: bool = True, /
+    ) -> tuple[np.ndarray, np.ndarray]: ...
+
 
 MAX_COND = 1e12
 _EPS = float(np.finfo(np.float64).eps)
@@ -183,8 +191,10 @@ def solve_normal(
         out[m, m] = float(np.real(s[2][0]))
         return out, np.append(rhs, float(np.real(y[1][0])))
 
-    def linear(f: float) -> _Linear:
-        s, y = sums(2.0 * math.pi * f, refine or drift)
+    def linear(f: float, last: bool = False) -> _Linear:
+        # the y-sums with τ serve the drift column and a next step; a last step needs neither
+        y_deriv = drift or drift_check or not last
+        s, y = sums(2.0 * math.pi * f, refine or drift, y_deriv)
         hank, toep = _hankel_toeplitz(s[0], nh)
         gram = _inner(cmat, cmat, hank, toep)
         rhs = np.real(cmat @ y[0])
@@ -200,7 +210,8 @@ def solve_normal(
         rss = yy - float(rhs @ p)
         return _Linear(f, p, rss, gram, s, y)
 
-    def full_system(lin: _Linear) -> tuple[np.ndarray, np.ndarray]:
+    def full_system(lin: _Linear) -> tuple[np.ndarray, np.ndarray | None]:
+        """JᵀJ and Jᵀr (None without the y-sums with τ: JᵀJ alone, for the covariance)."""
         a = lin.p[1 : nh + 1]
         b = lin.p[nh + 1 : 2 * nh + 1]
         cd = np.zeros(nh + 1, dtype=np.complex128)
@@ -210,7 +221,6 @@ def solve_normal(
         hank2, toep2 = _hankel_toeplitz(lin.s[2], nh)
         g_pd = _inner(cmat, cd[None, :], hank1, toep1)[:, 0]
         g_dd = float(_inner(cd[None, :], cd[None, :], hank2, toep2)[0, 0])
-        dty = float(np.real(cd @ lin.y[1]))
         phi_y = np.real(cmat @ lin.y[0])
         if drift:  # the drift column τ (p = 1) against ∂model/∂f (p = 1): sums with p = 2
             g_pd = np.append(g_pd, float(_inner(e0, cd[None, :], hank2, toep2)[0, 0]))
@@ -221,6 +231,9 @@ def solve_normal(
         jtj[:-1, -1] = g_pd
         jtj[-1, :-1] = g_pd
         jtj[-1, -1] = g_dd
+        if lin.y.shape[0] < 2:
+            return jtj, None
+        dty = float(np.real(cd @ lin.y[1]))
         phi_r = phi_y - lin.gram @ lin.p
         jtr = np.append(phi_r, dty - float(g_pd @ lin.p))
         return jtj, jtr
@@ -234,6 +247,7 @@ def solve_normal(
         for _ in range(max_iter):
             iterations += 1
             jtj, jtr = full_system(lin)
+            assert jtr is not None  # lin came from a step that did not end the refinement
             step, inv, cond = solve_spd(jtj, jtr)
             df = float(step[-1])
             tol = max(rtol * abs(lin.f), STEP_OF_U * _frequency_u(inv, lin.rss, n))
@@ -247,7 +261,8 @@ def solve_normal(
             for _half in range(40):
                 f_try = lin.f + lam * df
                 if f_try > 0:
-                    cand = linear(f_try)
+                    # a step this small ends the refinement once taken
+                    cand = linear(f_try, last=abs(lam * df) <= tol)
                     if cand.rss <= lin.rss + rss_tol:
                         new = cand
                         break
