@@ -93,7 +93,7 @@ def run(args: argparse.Namespace, periods: float) -> None:
 
     t_fit, fit = best_of(lambda: fit_harmonics(t, y, harmonics=H, refine_frequency=True))
     print(
-        f"fit_harmonics (blocks, refine f): {t_fit * 1e3:8.1f} ms  {n / t_fit / 1e6:8.1f} M samples/s"
+        f"fit_harmonics (refine f):        {t_fit * 1e3:8.1f} ms  {n / t_fit / 1e6:8.1f} M samples/s"
         f"  ({fit.iterations} iterations)"
     )
     print(
