@@ -292,9 +292,7 @@ def demodulate(
         run.indices, run.k_after, run.k_first, hysteresis_subintervals=hysteresis_subintervals
     )
     corr = correction
-    reversals = _pinned(
-        plan, tt, lambda lo, hi: correct_quadrature(aa[lo : hi + 1], bb[lo : hi + 1], corr)
-    )
+    reversals = _pinned(plan, tt, lambda rows: correct_quadrature(aa[rows], bb[rows], corr))
     scale = 360.0 / (_TWO_PI * float(lines))
     theta = phase
     theta *= scale

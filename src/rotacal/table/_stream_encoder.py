@@ -121,7 +121,7 @@ class CandidateState:
         return plan_from_candidates(
             kinds,
             level,
-            lambda c: (int(windows[c, 0]), int(windows[c, 1])),
+            windows,
             transitions=(self.n, self.skipped, self.max_step),
             k_range=self.k_range,
             hysteresis_subintervals=hysteresis_subintervals,
