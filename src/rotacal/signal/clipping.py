@@ -98,6 +98,7 @@ __all__ = [
     "RailDetector",
     "check_clipping",
     "find_clipping",
+    "find_quadrature_clipping",
 ]
 
 #: How many times more samples (or a longer stay) a rail holds than the honest reference.
@@ -354,6 +355,12 @@ class RailDetector:
         run continues the one left open by the previous piece, its last one stays open.
         """
         same = np.flatnonzero(x[1:] == x[:-1])  # x[i + 1] == x[i]
+        if same.size == 0 and not (self._open_len and x[0] == self._open_value):
+            # no run of two or more in the piece nor across its start (a float column's usual
+            # case): only the open run closes, and the last sample opens the next one
+            self._close_open_run()
+            self._open_value, self._open_len = float(x[-1]), 1
+            return
         breaks = np.flatnonzero(np.diff(same) != 1)
         starts = same[np.concatenate(([0], breaks + 1))] if same.size else same
         ends = same[np.concatenate((breaks, [same.size - 1]))] + 1 if same.size else same
@@ -375,7 +382,8 @@ class RailDetector:
         self._classify(vals, lens)
 
     def _close_open_run(self) -> None:
-        if self._open_len:
+        # a run of one sample changes no verdict: every use of a run length takes max(run, 1)
+        if self._open_len > 1:
             self._classify(np.array([self._open_value]), np.array([self._open_len]))
         self._open_value, self._open_len = math.nan, 0
 
@@ -533,6 +541,29 @@ def find_clipping(
         if ok:
             rails.append(rail)
     return Clipping(column, det._finite, tuple(rails)) if rails else None
+
+
+def find_quadrature_clipping(
+    a: Any, b: Any, names: tuple[str, str] = ("a", "b")
+) -> tuple[Clipping | None, Clipping | None]:
+    """:func:`find_clipping` of each channel of a quadrature pair with the other as its
+    companion, ``(of a, of b)``: the two detectors are fed piece by piece in turn, so each piece
+    of both channels is read from memory once for both (the same findings as two calls).
+
+    Parameters
+    ----------
+    a, b : array_like — the two channels, same rows (any unit).
+    names : (str, str) — their column names, for the messages.
+    """
+    x = np.asarray(a, dtype=np.float64).reshape(-1)
+    y = np.asarray(b, dtype=np.float64).reshape(-1)
+    det_a, det_b = RailDetector(names[0]), RailDetector(names[1])
+    if x.size != y.size:
+        det_a.add(x, y)  # its one-line refusal
+    for s in range(0, x.size, _PIECE):
+        det_a.add(x[s : s + _PIECE], y[s : s + _PIECE])
+        det_b.add(y[s : s + _PIECE], x[s : s + _PIECE])
+    return det_a.result(), det_b.result()
 
 
 def check_clipping(
