@@ -216,8 +216,9 @@ def _apply(
 
 def _fit(aa: FloatArray, bb: FloatArray, max_points: int) -> QuadratureCorrection:
     stride = _stride_for(aa.size, max_points)
-    a_s = aa[::stride]
-    b_s = bb[::stride]
+    # contiguous copies: the strided samples are read several times below (bit for bit the same)
+    a_s = np.ascontiguousarray(aa[::stride])
+    b_s = np.ascontiguousarray(bb[::stride])
     _check_varies(a_s, b_s)
     ma, mb = float(a_s.mean()), float(b_s.mean())
     sa, sb = float(a_s.std()), float(b_s.std())
