@@ -78,6 +78,9 @@ def test_the_same_finding_in_any_chunking():
     assert whole is not None and len(whole.rails) == 2
     ref = RailDetector("x")
     ref.add(x)
+    hinted = RailDetector("x", rows=x.size)  # the subsample at its final stride from the start
+    hinted.add(x)
+    assert hinted._stride == ref._stride == 2 and hinted._ratios() == ref._ratios()
     for _ in range(4):
         det = RailDetector("x")
         pos = 0
