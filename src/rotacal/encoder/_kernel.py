@@ -148,25 +148,32 @@ def _phase_jit(
         carry[:3] = (state.last_wrapped_rad, float(state.cycles), previous_k)
     n = a.size
     phase = np.empty(n, dtype=np.float64)
-    buf_i = np.empty(min(n, BLOCK), dtype=np.int64)
-    buf_k = np.empty(min(n, BLOCK), dtype=np.float64)
-    idx: list[np.ndarray] = []
-    k_after: list[np.ndarray] = []
+    # Room for a transition at every sample: the kernel writes each block's transitions straight
+    # after the previous ones (no copy per block, no concatenation); np.empty commits no memory,
+    # so only the pages the transitions fill are ever touched.
+    out_i = np.empty(n, dtype=np.int64)
+    out_k = np.empty(n, dtype=np.float64)
+    total = 0
     for s in range(0, n, BLOCK):
         e = min(n, s + BLOCK)
         u, v = correct_quadrature(a[s:e], b[s:e], c)
         wrapped = np.arctan2(v, u, out=u)
-        count = phase_block(
-            wrapped, consts, carry, has_prev or s > 0, offset + s, phase[s:e], buf_i, buf_k
+        total += phase_block(
+            wrapped,
+            consts,
+            carry,
+            has_prev or s > 0,
+            offset + s,
+            phase[s:e],
+            out_i[total:],
+            out_k[total:],
         )
-        idx.append(buf_i[:count].copy())
-        k_after.append(buf_k[:count].copy())
     k_first = float(np.floor(phase[0] * _INV_SUB))
     return ChunkPhase(
         phase,
         PhaseState(float(carry[0]), int(carry[1])),
-        np.concatenate(idx),
-        np.concatenate(k_after),
+        out_i[:total],
+        out_k[:total],
         k_first,
         float(carry[2]),
         float(carry[3]),
