@@ -360,7 +360,10 @@ def plan_reversals(
     ka = np.asarray(k_after, dtype=np.float64)
     k0 = float(k_start)
     n_trans = int(idx.size)
-    dk = np.diff(ka, prepend=k0) if n_trans else np.empty(0)
+    dk = np.empty(n_trans)  # np.diff(ka, prepend=k0) without its concatenated copy
+    if n_trans:
+        dk[0] = ka[0] - k0
+        np.subtract(ka[1:], ka[:-1], out=dk[1:])
     step = np.abs(dk)
     skipped = int(np.count_nonzero(step > 1.0))
     max_step = int(step.max()) if n_trans else 0
