@@ -148,14 +148,18 @@ def _phase_jit(
         carry[:3] = (state.last_wrapped_rad, float(state.cycles), previous_k)
     n = a.size
     phase = np.empty(n, dtype=np.float64)
-    # Room for a transition at every sample: the kernel writes each block's transitions straight
-    # after the previous ones (no copy per block, no concatenation); np.empty commits no memory,
-    # so only the pages the transitions fill are ever touched.
-    out_i = np.empty(n, dtype=np.int64)
-    out_k = np.empty(n, dtype=np.float64)
+    # The kernel writes each block's transitions straight after the previous ones (no copy per
+    # block, no concatenation), into arrays with room for a transition at every sample of the
+    # block: a quarter of the samples to start with (a fast motion has fewer), doubled as needed.
+    out_i = np.empty(min(n, n // 4 + BLOCK), dtype=np.int64)
+    out_k = np.empty(out_i.size, dtype=np.float64)
     total = 0
     for s in range(0, n, BLOCK):
         e = min(n, s + BLOCK)
+        if total + (e - s) > out_i.size:
+            size = min(n, 2 * out_i.size)
+            out_i = np.concatenate((out_i[:total], np.empty(size - total, dtype=np.int64)))
+            out_k = np.concatenate((out_k[:total], np.empty(size - total)))
         u, v = correct_quadrature(a[s:e], b[s:e], c)
         wrapped = np.arctan2(v, u, out=u)
         total += phase_block(
