@@ -67,6 +67,22 @@ def test_phase_pass_equals_the_separate_steps(twin, jit):
 
 
 @pytest.mark.parametrize("jit", [False, True])
+def test_a_scale_in_the_pass_equals_scaling_afterwards(twin, jit):
+    _, _, a, b = twin
+    corr = fit_quadrature_correction(a, b)
+    scale = 360.0 / (2 * math.pi * LINES)
+    plain = phase_pass(a, b, corr, jit=jit)
+    scaled = phase_pass(a, b, corr, jit=jit, scale=scale)
+    np.testing.assert_array_equal(scaled.phase_rad, plain.phase_rad * scale)
+    assert (scaled.k_first, scaled.k_last) == (plain.k_first, plain.k_last)
+    assert (scaled.phase_min_rad, scaled.phase_max_rad) == (
+        plain.phase_min_rad,
+        plain.phase_max_rad,
+    )
+    np.testing.assert_array_equal(scaled.indices, plain.indices)
+
+
+@pytest.mark.parametrize("jit", [False, True])
 def test_phase_pass_carries_its_state_across_chunks(twin, jit):
     _, _, a, b = twin
     corr = fit_quadrature_correction(a, b)
