@@ -114,7 +114,8 @@ def _candidates(
     the direction before the run was increasing) and its level (the extreme k of its turning
     visits: the highest for a maximum, the lowest for a minimum).
     """
-    direction = np.sign(dk).astype(np.int8)
+    # sign(dk) as int8 from two comparisons (no float temporary; 0 where dk is 0)
+    direction = (dk > 0).view(np.int8) - (dk < 0).view(np.int8)
     first_change, run_len = _odd_runs(direction)
     if first_change.size == 0:
         return first_change, run_len, np.empty(0, dtype=np.int8), np.empty(0)
@@ -364,9 +365,9 @@ def plan_reversals(
     if n_trans:
         dk[0] = ka[0] - k0
         np.subtract(ka[1:], ka[:-1], out=dk[1:])
-    step = np.abs(dk)
-    skipped = int(np.count_nonzero(step > 1.0))
-    max_step = int(step.max()) if n_trans else 0
+    # |dk| without a temporary of its own: counts from comparisons, the extreme from both ends
+    skipped = int(np.count_nonzero(dk > 1.0)) + int(np.count_nonzero(dk < -1.0))
+    max_step = int(max(dk.max(), -dk.min())) if n_trans else 0
     if n_trans:
         k_range = (min(k0, float(ka.min())), max(k0, float(ka.max())))
     else:
