@@ -36,7 +36,12 @@ def test_windows_and_pairs_equal_a_loop_over_the_candidates(noise):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         plan = plan_reversals(idx, ka, k0)
-    first, run, _, level = _candidates(ka, np.diff(ka, prepend=k0))
+    dk = np.diff(ka, prepend=k0)
+    assert plan.skipped_transitions == sum(abs(d) > 1 for d in dk)
+    assert plan.skipped_transitions > 0 or noise < 0.1  # the noisy count skips subintervals
+    assert plan.max_step_subintervals == int(max(abs(d) for d in dk))
+    first, run, kinds, level = _candidates(ka, dk)
+    assert list(kinds) == [int(np.sign(dk[j - 1])) for j in first]  # the trend before the run
     cand = []
     for j0, n, lv in zip(first, run, level, strict=True):
         at = [r for r in range(n) if ka[j0 - 1 + r] == lv]
