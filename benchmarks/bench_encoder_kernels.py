@@ -1,6 +1,7 @@
 """Throughput of the encoder chain against bare ``np.unwrap(np.arctan2(b, a))``, one run.
 
     python benchmarks/bench_encoder_kernels.py [--samples 1e7] [--periods 10,100,1000] [--quick] [--cpu]
+        [--stages]
 
 For each number of motion periods in the capture (same sample count), every row is timed best
 of ``--repeat`` after a warm-up (Numba's first call compiles or loads its cache there) and printed
@@ -18,11 +19,16 @@ needs); ``demodulate`` (checks, Heydemann fit, fused pass, reversals) and the wh
 budgets alone (``motion_budgets`` inside the calibration) on their first call, with the cached
 Monte Carlo draws and tables cleared: the fixed cost a command pays (the issue: ≤ 10 ms). One core:
 BLAS is held to one thread. Machines here are shared and noisy: the ratios are the figures.
+
+``--stages`` adds, per number of periods, where ``calibrate_encoder_motion`` (Numba by size)
+spends its time: each stage timed inside the call (its function wrapped for the run), best of
+``--repeat`` calls, and what is left (checks of the settings, plot copies, result assembly).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import time
 
@@ -120,7 +126,66 @@ def budgets_cold(t: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return spent[0]
 
 
-def run_periods(n: int, periods: float, repeats: int) -> None:
+#: (label, module, attribute) of each stage of calibrate_encoder_motion, in the order it runs.
+STAGES = (
+    ("checks: signals a, b", "rotacal.encoder.quadrature", "_check_pair"),
+    ("checks: time stamps", "rotacal.encoder.quadrature", "_check_time"),
+    ("checks: rails (clipping)", "rotacal.encoder.quadrature", "_clipping"),
+    ("Heydemann ellipse fit", "rotacal.encoder.quadrature", "_fit"),
+    ("fused pass", "rotacal.encoder._kernel", "phase_pass"),
+    ("reversals: plan", "rotacal.encoder.quadrature", "plan_reversals"),
+    ("reversals: Chp, eqs. (7)-(8)", "rotacal.encoder.quadrature", "_pinned"),
+    ("harmonic fit", "rotacal.table.motion", "fit_motion"),
+    ("  of which residual sums", "rotacal.signal._blocks", "residual_sums"),
+    ("budgets (THD, Monte Carlo)", "rotacal.table.motion", "motion_budgets"),
+)
+
+
+def stage_times(
+    t: np.ndarray, a: np.ndarray, b: np.ndarray, repeats: int
+) -> list[tuple[str, float]]:
+    """Seconds of each stage of one ``calibrate_encoder_motion`` call (best of ``repeats``),
+    the whole call, and the rest."""
+    import importlib
+
+    spent: dict[str, float] = {}
+    best: dict[str, float] = {}
+    plain: list[tuple[Any, str, Any]] = []
+
+    def timed(label: str, fn: Callable[..., Any]) -> Callable[..., Any]:
+        def call(*args: Any, **kwargs: Any) -> Any:
+            t0 = CLOCK()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                spent[label] = spent.get(label, 0.0) + CLOCK() - t0
+
+        return call
+
+    for label, module, name in STAGES:
+        mod = importlib.import_module(module)
+        plain.append((mod, name, getattr(mod, name)))
+        setattr(mod, name, timed(label, getattr(mod, name)))
+    try:
+        for i in range(repeats + 1):  # the first call warms up
+            spent.clear()
+            t0 = CLOCK()
+            calibrate_encoder_motion(t, a, b, lines=LINES)
+            spent["whole call"] = CLOCK() - t0
+            if i:
+                for key, sec in spent.items():
+                    best[key] = min(best.get(key, math.inf), sec)
+    finally:
+        for mod, name, fn in plain:
+            setattr(mod, name, fn)
+    rows = [(label, best.get(label, 0.0)) for label, _, _ in STAGES]
+    top = sum(sec for label, sec in rows if not label.startswith(" "))
+    rows.append(("rest (settings, plot copies, result)", max(0.0, best["whole call"] - top)))
+    rows.append(("whole call", best["whole call"]))
+    return rows
+
+
+def run_periods(n: int, periods: float, repeats: int, stages: bool = False) -> None:
     """Time every row on one capture of ``periods`` motion periods and print them."""
     motion, t, a, b = capture(n, periods)
     corr = fit_quadrature_correction(a, b)
@@ -174,6 +239,11 @@ def run_periods(n: int, periods: float, repeats: int) -> None:
             f"{periods:7.0f}  {name:<44s} {sec * 1e3:8.1f} {n / sec / 1e6:6.1f} "
             f"{sec / t_unwrap:8.2f} {sec / t_limit:7.2f}"
         )
+    if stages:
+        for name, sec in stage_times(t, a, b, repeats):
+            print(
+                f"{periods:7.0f}  stage: {name:<37s} {sec * 1e3:8.1f} {'':6s} {sec / t_unwrap:8.2f}"
+            )
     r = calibrate_encoder_motion(t, a, b, lines=LINES)
     truth = motion.truth(r.analysis_start_s, r.analysis_stop_s)
     print(
@@ -189,6 +259,9 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="10⁶ samples, 2 repeats")
     ap.add_argument("--cpu", action="store_true", help="time by CPU time, not wall time")
+    ap.add_argument(
+        "--stages", action="store_true", help="also time each stage of calibrate_encoder_motion"
+    )
     args = ap.parse_args()
     global CLOCK
     if args.cpu:
@@ -199,7 +272,7 @@ def main() -> None:
     print(f"samples {n:,}; numba available: {_jit.numba_available()}; best of {repeats} ({clock})")
     print(f"{'periods':>7s}  {'row':<44s} {'ms':>8s} {'M/s':>6s} {'/unwrap':>8s} {'/limit':>7s}")
     for periods in (float(p) for p in args.periods.split(",")):
-        run_periods(n, periods, repeats)
+        run_periods(n, periods, repeats, args.stages)
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ import pytest
 
 from rotacal import _jit, sim
 from rotacal.encoder import (
+    QuadratureCorrection,
     correct_quadrature,
     demodulate,
     fit_quadrature_correction,
@@ -66,6 +67,22 @@ def test_phase_pass_equals_the_separate_steps(twin, jit):
 
 
 @pytest.mark.parametrize("jit", [False, True])
+def test_a_scale_in_the_pass_equals_scaling_afterwards(twin, jit):
+    _, _, a, b = twin
+    corr = fit_quadrature_correction(a, b)
+    scale = 360.0 / (2 * math.pi * LINES)
+    plain = phase_pass(a, b, corr, jit=jit)
+    scaled = phase_pass(a, b, corr, jit=jit, scale=scale)
+    np.testing.assert_array_equal(scaled.phase_rad, plain.phase_rad * scale)
+    assert (scaled.k_first, scaled.k_last) == (plain.k_first, plain.k_last)
+    assert (scaled.phase_min_rad, scaled.phase_max_rad) == (
+        plain.phase_min_rad,
+        plain.phase_max_rad,
+    )
+    np.testing.assert_array_equal(scaled.indices, plain.indices)
+
+
+@pytest.mark.parametrize("jit", [False, True])
 def test_phase_pass_carries_its_state_across_chunks(twin, jit):
     _, _, a, b = twin
     corr = fit_quadrature_correction(a, b)
@@ -80,6 +97,22 @@ def test_phase_pass_carries_its_state_across_chunks(twin, jit):
         idx.append(run.indices)
     np.testing.assert_array_equal(np.concatenate(pieces), whole.phase_rad)
     np.testing.assert_array_equal(np.concatenate(idx), whole.indices)
+
+
+@pytest.mark.parametrize("jit", [False, True])
+def test_a_transition_at_almost_every_sample(jit):
+    """A fast motion (0.6 rad a sample, reversing): more transitions than the Numba twin first
+    makes room for (it grows its output); both equal the separate steps."""
+    n = 5 * BLOCK + 123
+    phi = np.cumsum(np.where(np.arange(n) % 70_000 < 35_000, 0.6, -0.6))
+    a, b = np.cos(phi), np.sin(phi)
+    corr = QuadratureCorrection(0.0, 0.0, 1.0, 1.0, 0.0, "given", 2 * math.pi, n)
+    phase, _, idx, k_after, _, _ = _steps(a, b, corr)
+    run = phase_pass(a, b, corr, jit=jit)
+    assert idx.size > n // 2
+    np.testing.assert_array_equal(run.phase_rad, phase)
+    np.testing.assert_array_equal(run.indices, idx)
+    np.testing.assert_array_equal(run.k_after, k_after)
 
 
 def test_demodulate_numba_and_numpy_agree_and_match_the_truth(twin, monkeypatch):

@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 
 from rotacal.errors import CaptureError
-from rotacal.signal import ClippedSignalError, RailDetector, check_clipping, find_clipping
+from rotacal.signal import (
+    ClippedSignalError,
+    RailDetector,
+    check_clipping,
+    find_clipping,
+    find_quadrature_clipping,
+)
 from rotacal.signal.clipping import RAIL_RATIO
 
 
@@ -72,6 +78,9 @@ def test_the_same_finding_in_any_chunking():
     assert whole is not None and len(whole.rails) == 2
     ref = RailDetector("x")
     ref.add(x)
+    hinted = RailDetector("x", rows=x.size)  # the subsample at its final stride from the start
+    hinted.add(x)
+    assert hinted._stride == ref._stride == 2 and hinted._ratios() == ref._ratios()
     for _ in range(4):
         det = RailDetector("x")
         pos = 0
@@ -116,6 +125,19 @@ def test_a_quadrature_channel_at_rest_where_it_peaks_is_not_clipped():
     assert find_clipping(a, "a", companion=b) is None  # …its companion can
     clipped = np.clip(_quantise(1.3 * np.cos(phi), 16), -1.0, 1.0)  # …and a real rail stays
     assert find_clipping(clipped, "a", companion=b) is not None
+
+
+def test_a_quadrature_pair_gives_the_findings_of_two_calls():
+    """Both channels fed in turn, piece by piece (more rows than one piece), as two calls."""
+    n = 300_000
+    phi = 30 * np.pi * np.sin(2 * np.pi * 4 * np.arange(n) / n)
+    for gain in (1.0, 1.3):  # not clipped, then a clipped at ±1 while b sweeps
+        a = np.clip(_quantise(gain * np.cos(phi), 12), -1.0, 1.0)
+        b = _quantise(np.sin(phi), 12)
+        b[77_777] = np.nan
+        want = (find_clipping(a, "a", companion=b), find_clipping(b, "b", companion=a))
+        assert find_quadrature_clipping(a, b) == want
+        assert (want[0] is not None) == (gain > 1.0) and want[1] is None
 
 
 def test_the_level_at_rest_is_not_a_rail():

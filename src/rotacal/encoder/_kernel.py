@@ -34,7 +34,8 @@ class ChunkPhase:
     Attributes
     ----------
     phase_rad : ndarray
-        Unwrapped phase φ of every sample (rad).
+        Unwrapped phase φ of every sample (rad), times ``scale`` when :func:`phase_pass` was
+        given one.
     state : PhaseState
         To pass with the next chunk.
     indices : ndarray of int64
@@ -66,6 +67,7 @@ def phase_pass(
     previous_k: float | None = None,
     offset: int = 0,
     jit: bool | None = None,
+    scale: float | None = None,
 ) -> ChunkPhase:
     """Correct, unwrap and subdivide one chunk of raw signals, chunk-exact.
 
@@ -84,6 +86,10 @@ def phase_pass(
         Global sample index of the chunk's first sample.
     jit : bool, optional
         Force the Numba twin (True) or the NumPy path (False); default by size.
+    scale : float, optional
+        Store φ·scale instead of φ (e.g. 360/(2π·lines): θ in deg), each block scaled while it
+        is in the cache instead of in a pass of its own afterwards (the same numbers bit for
+        bit). The extremes, the counts and the state stay those of φ (rad).
 
     Returns
     -------
@@ -107,7 +113,7 @@ def phase_pass(
             math.floor((state.cycles * (2.0 * math.pi) + state.last_wrapped_rad) * _INV_SUB)
         )
     if use_numba(n, jit):
-        return _phase_jit(a, b, correction, state, previous_k, offset)
+        return _phase_jit(a, b, correction, state, previous_k, offset, scale)
     phase = np.empty(n, dtype=np.float64)
     idx: list[np.ndarray] = []
     k_after: list[np.ndarray] = []
@@ -124,7 +130,10 @@ def phase_pass(
         k_after.append(k)
         lo = min(lo, float(ph.min()))
         hi = max(hi, float(ph.max()))
-        phase[s : s + ph.size] = ph
+        if scale is None:
+            phase[s : s + ph.size] = ph
+        else:
+            np.multiply(ph, scale, out=phase[s : s + ph.size])
     assert state is not None and k_prev is not None
     return ChunkPhase(
         phase, state, np.concatenate(idx), np.concatenate(k_after), k_first, k_prev, lo, hi
@@ -138,6 +147,7 @@ def _phase_jit(
     state: PhaseState | None,
     previous_k: float | None,
     offset: int,
+    scale: float | None,
 ) -> ChunkPhase:
     from rotacal.encoder._kernel_jit import phase_block
 
@@ -148,25 +158,40 @@ def _phase_jit(
         carry[:3] = (state.last_wrapped_rad, float(state.cycles), previous_k)
     n = a.size
     phase = np.empty(n, dtype=np.float64)
-    buf_i = np.empty(min(n, BLOCK), dtype=np.int64)
-    buf_k = np.empty(min(n, BLOCK), dtype=np.float64)
-    idx: list[np.ndarray] = []
-    k_after: list[np.ndarray] = []
+    # The kernel writes each block's transitions straight after the previous ones (no copy per
+    # block, no concatenation), into arrays with room for a transition at every sample of the
+    # block: a quarter of the samples to start with (a fast motion has fewer), doubled as needed.
+    out_i = np.empty(min(n, n // 4 + BLOCK), dtype=np.int64)
+    out_k = np.empty(out_i.size, dtype=np.float64)
+    total = 0
+    k_first = math.nan
     for s in range(0, n, BLOCK):
         e = min(n, s + BLOCK)
+        if total + (e - s) > out_i.size:
+            size = min(n, 2 * out_i.size)
+            out_i = np.concatenate((out_i[:total], np.empty(size - total, dtype=np.int64)))
+            out_k = np.concatenate((out_k[:total], np.empty(size - total)))
         u, v = correct_quadrature(a[s:e], b[s:e], c)
         wrapped = np.arctan2(v, u, out=u)
-        count = phase_block(
-            wrapped, consts, carry, has_prev or s > 0, offset + s, phase[s:e], buf_i, buf_k
+        total += phase_block(
+            wrapped,
+            consts,
+            carry,
+            has_prev or s > 0,
+            offset + s,
+            phase[s:e],
+            out_i[total:],
+            out_k[total:],
         )
-        idx.append(buf_i[:count].copy())
-        k_after.append(buf_k[:count].copy())
-    k_first = float(np.floor(phase[0] * _INV_SUB))
+        if s == 0:
+            k_first = float(np.floor(phase[0] * _INV_SUB))
+        if scale is not None:
+            phase[s:e] *= scale
     return ChunkPhase(
         phase,
         PhaseState(float(carry[0]), int(carry[1])),
-        np.concatenate(idx),
-        np.concatenate(k_after),
+        out_i[:total],
+        out_k[:total],
         k_first,
         float(carry[2]),
         float(carry[3]),

@@ -22,7 +22,7 @@ from rotacal.signal._values import (
     check_not_copies,
     in_working_range,
 )
-from rotacal.signal.clipping import check_clipping, find_clipping
+from rotacal.signal.clipping import check_clipping, find_quadrature_clipping
 
 FloatArray = NDArray[np.floating[Any]]
 _TWO_PI = 2.0 * math.pi
@@ -142,13 +142,8 @@ def _clipping(aa: FloatArray, bb: FloatArray, allow_clipped: bool) -> tuple[str,
     """Refuse a channel at the rails (or return the warnings when allowed): the one detector,
     each channel judged with the other as its companion (a table at rest where a channel peaks
     is not a rail)."""
-    return check_clipping(
-        {
-            "a": find_clipping(aa, "a", companion=bb),
-            "b": find_clipping(bb, "b", companion=aa),
-        },
-        allow_clipped=allow_clipped,
-    )
+    found_a, found_b = find_quadrature_clipping(aa, bb)
+    return check_clipping({"a": found_a, "b": found_b}, allow_clipped=allow_clipped)
 
 
 def _stride_for(n: int, max_points: int) -> int:
@@ -221,8 +216,9 @@ def _apply(
 
 def _fit(aa: FloatArray, bb: FloatArray, max_points: int) -> QuadratureCorrection:
     stride = _stride_for(aa.size, max_points)
-    a_s = aa[::stride]
-    b_s = bb[::stride]
+    # contiguous copies: the strided samples are read several times below (bit for bit the same)
+    a_s = np.ascontiguousarray(aa[::stride])
+    b_s = np.ascontiguousarray(bb[::stride])
     _check_varies(a_s, b_s)
     ma, mb = float(a_s.mean()), float(b_s.mean())
     sa, sb = float(a_s.std()), float(b_s.std())

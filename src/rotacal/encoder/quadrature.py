@@ -283,21 +283,21 @@ def demodulate(
     # eqs. (7)–(8) correct the few samples of each reversal window again)
     from rotacal.encoder._kernel import phase_pass
 
-    run = phase_pass(aa, bb, correction)
-    phase = run.phase_rad
-    if hysteresis_subintervals is None and hysteresis_from is not None:
-        step = hysteresis_stride(phase.size)
-        hysteresis_subintervals = hysteresis_from(tt[::step], phase[::step])
+    scale = 360.0 / (_TWO_PI * float(lines))
+    # θ = φ·scale block by block in the pass, unless the hysteresis rule still needs φ
+    rule = hysteresis_subintervals is None and hysteresis_from is not None
+    run = phase_pass(aa, bb, correction, scale=None if rule else scale)
+    theta = run.phase_rad
+    if rule:
+        assert hysteresis_from is not None
+        step = hysteresis_stride(theta.size)
+        hysteresis_subintervals = hysteresis_from(tt[::step], theta[::step])
+        theta *= scale
     plan = plan_reversals(
         run.indices, run.k_after, run.k_first, hysteresis_subintervals=hysteresis_subintervals
     )
     corr = correction
-    reversals = _pinned(
-        plan, tt, lambda lo, hi: correct_quadrature(aa[lo : hi + 1], bb[lo : hi + 1], corr)
-    )
-    scale = 360.0 / (_TWO_PI * float(lines))
-    theta = phase
-    theta *= scale
+    reversals = _pinned(plan, tt, lambda rows: correct_quadrature(aa[rows], bb[rows], corr))
     span = float(tt[-1] - tt[0])
     return Demodulation(
         correction=correction,

@@ -114,7 +114,8 @@ def _candidates(
     the direction before the run was increasing) and its level (the extreme k of its turning
     visits: the highest for a maximum, the lowest for a minimum).
     """
-    direction = np.sign(dk).astype(np.int8)
+    # sign(dk) as int8 from two comparisons (no float temporary; 0 where dk is 0)
+    direction = (dk > 0).view(np.int8) - (dk < 0).view(np.int8)
     first_change, run_len = _odd_runs(direction)
     if first_change.size == 0:
         return first_change, run_len, np.empty(0, dtype=np.int8), np.empty(0)
@@ -161,21 +162,26 @@ def reversing_subintervals(
     return idx[middle - 1], idx[middle] - 1, kinds
 
 
-#: ``(lo, hi) → (u, v)`` of samples lo..hi (inclusive): the corrected signals of a window.
-WindowSignals = Callable[[int, int], tuple[FloatArray, FloatArray]]
-
-
-def _reversal_point(signals: WindowSignals, n: int, first: int, last: int) -> int:
-    """Chp of eqs. (7)–(8): the extreme sample of the faster-changing signal in [Sub⁻, Sub⁺]."""
-    if last <= first:
-        return first
-    lo, hi = reversal_window(first, last, n)
-    return lo + reversal_point_in_window(*signals(lo, hi))
+#: ``rows → (u, v)``: the corrected signals at the sample indices ``rows`` (int array).
+WindowSignals = Callable[[NDArray[np.intp]], tuple[FloatArray, FloatArray]]
 
 
 def _pinned(plan: ReversalPlan, t: FloatArray, signals: WindowSignals) -> Reversals:
-    """The reversals of a plan, each pinned to its Chp (eqs. (7)–(8)) with its time (s)."""
-    chp = [_reversal_point(signals, t.size, int(f), int(last)) for f, last in plan.windows.tolist()]
+    """The reversals of a plan, each pinned to its Chp (eqs. (7)–(8)) with its time (s).
+
+    The samples of every window are gathered and corrected in one call and eqs. (7)–(8) are
+    evaluated for all windows at once (:func:`_points_in_windows`): no Python loop per window.
+    """
+    first = plan.windows[:, 0]
+    last = plan.windows[:, 1]
+    chp = first.copy()  # a one-sample visit is its own Chp
+    wide = np.flatnonzero(last > first)
+    if wide.size:
+        lo = np.maximum(first[wide] - 1, 0)
+        hi = np.minimum(last[wide] + 1, t.size - 1)
+        starts, rows = _window_rows(lo, hi - lo + 1)
+        u, v = signals(rows)
+        chp[wide] = lo + _points_in_windows(u, v, starts)
     indices = plan.indices(chp)
     return Reversals(
         indices=indices,
@@ -187,6 +193,42 @@ def _pinned(plan: ReversalPlan, t: FloatArray, signals: WindowSignals) -> Revers
         skipped_transitions=plan.skipped_transitions,
         max_step_subintervals=plan.max_step_subintervals,
     )
+
+
+def _window_rows(
+    lo: NDArray[np.intp], sizes: NDArray[np.intp]
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Start of each window in the concatenation of windows ``lo .. lo + size − 1``, and the
+    sample index of every row of that concatenation."""
+    starts = np.cumsum(sizes) - sizes
+    rows = np.arange(int(sizes.sum()), dtype=np.intp)
+    rows += np.repeat(lo - starts, sizes)
+    return starts, rows
+
+
+def _points_in_windows(u: FloatArray, v: FloatArray, starts: NDArray[np.intp]) -> NDArray[np.intp]:
+    """:func:`reversal_point_in_window` of each window of the concatenated ``u``, ``v`` (windows
+    start at ``starts``, each of ≥ 2 samples; the last ends at the arrays' end), as offsets.
+
+    The sums Σu, Σv are ``np.add.reduceat``'s, also for a single window, so that a window gives
+    the same Chp whether it is evaluated alone (a chunked caller) or among all the others.
+    """
+    ends = np.append(starts[1:], u.size) - 1
+    sizes = ends - starts + 1
+    qu = np.add.reduceat(u, starts) - sizes * 0.5 * (u[starts] + u[ends])
+    qv = np.add.reduceat(v, starts) - sizes * 0.5 * (v[starts] + v[ends])
+    take_u = np.abs(qu) >= np.abs(qv)
+    q = np.where(take_u, qu, qv)
+    # the extreme eq. (8) asks for: the maximum of the chosen signal if q > 0, else its minimum,
+    # i.e. the first maximum of the signal times sign(q) (a negation is exact)
+    per_row = np.repeat(np.arange(starts.size), sizes)
+    seg = np.where(take_u[per_row], u, v)
+    seg *= np.where(q < 0, -1.0, 1.0)[per_row]
+    top = np.maximum.reduceat(seg, starts)
+    offset = np.arange(u.size, dtype=np.intp) - starts[per_row]
+    at_top = np.where(seg == top[per_row], offset, u.size)
+    out = np.minimum.reduceat(at_top, starts)
+    return np.where((q > 0) | (q < 0), out, (sizes - 1) // 2)  # q = 0 (or NaN): the middle
 
 
 def reversal_window(first: int, last: int, n_samples: int) -> tuple[int, int]:
@@ -238,18 +280,11 @@ def reversal_point_in_window(u_window: ArrayLike, v_window: ArrayLike) -> int:
     ----------
     Feng et al. 2023, Sensors 23:4876, §3.2, eqs. (7)–(8).
     """
-    us = np.asarray(u_window, dtype=np.float64)
-    vs = np.asarray(v_window, dtype=np.float64)
+    us = np.asarray(u_window, dtype=np.float64).reshape(-1)
+    vs = np.asarray(v_window, dtype=np.float64).reshape(-1)
     if us.size < 2:
         return 0
-    qu = float(np.sum(us)) - us.size * 0.5 * (us[0] + us[-1])
-    qv = float(np.sum(vs)) - vs.size * 0.5 * (vs[0] + vs[-1])
-    seg, q = (us, qu) if abs(qu) >= abs(qv) else (vs, qv)
-    if q > 0:
-        return int(np.argmax(seg))
-    if q < 0:
-        return int(np.argmin(seg))
-    return (us.size - 1) // 2
+    return int(_points_in_windows(us, vs, np.zeros(1, dtype=np.intp))[0])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -326,10 +361,13 @@ def plan_reversals(
     ka = np.asarray(k_after, dtype=np.float64)
     k0 = float(k_start)
     n_trans = int(idx.size)
-    dk = np.diff(ka, prepend=k0) if n_trans else np.empty(0)
-    step = np.abs(dk)
-    skipped = int(np.count_nonzero(step > 1.0))
-    max_step = int(step.max()) if n_trans else 0
+    dk = np.empty(n_trans)  # np.diff(ka, prepend=k0) without its concatenated copy
+    if n_trans:
+        dk[0] = ka[0] - k0
+        np.subtract(ka[1:], ka[:-1], out=dk[1:])
+    # |dk| without a temporary of its own: counts from comparisons, the extreme from both ends
+    skipped = int(np.count_nonzero(dk > 1.0)) + int(np.count_nonzero(dk < -1.0))
+    max_step = int(max(dk.max(), -dk.min())) if n_trans else 0
     if n_trans:
         k_range = (min(k0, float(ka.min())), max(k0, float(ka.max())))
     else:
@@ -340,14 +378,10 @@ def plan_reversals(
         level: FloatArray = np.empty(0)
     else:
         first_change, run_len, kinds, level = _candidates(ka, dk)
-
-    def window(c: int) -> tuple[int, int]:
-        return _window(idx, ka, int(first_change[c]), int(run_len[c]), float(level[c]))
-
     return plan_from_candidates(
         kinds,
         level,
-        window,
+        _windows(idx, ka, first_change, run_len, level),
         transitions=(n_trans, skipped, max_step),
         k_range=k_range,
         hysteresis_subintervals=hysteresis_subintervals,
@@ -355,14 +389,29 @@ def plan_reversals(
     )
 
 
-def _window(
-    idx: NDArray[np.intp], ka: FloatArray, j0: int, run: int, level: float
-) -> tuple[int, int]:
-    """[Sub⁻, Sub⁺] of the candidate whose run of trend changes starts at transition j0: the
-    visits of its turning visits at its level (the first and the last)."""
-    levels = ka[j0 - 1 : j0 - 1 + run]
-    at_extreme = np.flatnonzero(levels == level)
-    return int(idx[j0 - 1 + int(at_extreme[0])]), int(idx[j0 + int(at_extreme[-1])]) - 1
+def _windows(
+    idx: NDArray[np.intp],
+    ka: FloatArray,
+    first_change: NDArray[np.intp],
+    run_len: NDArray[np.intp],
+    level: FloatArray,
+) -> NDArray[np.intp]:
+    """[Sub⁻, Sub⁺] of each candidate (rows of shape (m, 2)): the candidate whose run of trend
+    changes starts at transition j0 spans from the first to the last of its turning visits at
+    its level (transitions j0 − 1 .. j0 + L − 2 lead into them), all candidates at once."""
+    m = int(first_change.size)
+    if m == 0:
+        return np.empty((0, 2), dtype=np.intp)
+    starts, rows = _window_rows(first_change - 1, run_len)
+    per_row = np.repeat(np.arange(m), run_len)
+    place = np.arange(rows.size, dtype=np.intp) - starts[per_row]  # turning visit r of its run
+    at_level = ka[rows] == level[per_row]  # the run's extreme level is reached in every run
+    first_r = np.minimum.reduceat(np.where(at_level, place, rows.size), starts)
+    last_r = np.maximum.reduceat(np.where(at_level, place, -1), starts)
+    out = np.empty((m, 2), dtype=np.intp)
+    out[:, 0] = idx[first_change - 1 + first_r]
+    out[:, 1] = idx[first_change + last_r] - 1
+    return out
 
 
 def transition_candidates(
@@ -384,22 +433,13 @@ def transition_candidates(
     if idx.size < 2:
         return np.empty(0, dtype=np.int8), np.empty(0), np.empty((0, 2), dtype=np.intp)
     first_change, run_len, kinds, level = _candidates(ka, np.diff(ka, prepend=float(k_before)))
-    windows = np.array(
-        [
-            _window(idx, ka, j0, run, lv)
-            for j0, run, lv in zip(
-                first_change.tolist(), run_len.tolist(), level.tolist(), strict=True
-            )
-        ],
-        dtype=np.intp,
-    ).reshape(-1, 2)
-    return kinds.astype(np.int8), level, windows
+    return kinds.astype(np.int8), level, _windows(idx, ka, first_change, run_len, level)
 
 
 def plan_from_candidates(
     kinds: NDArray[np.int8],
     level: FloatArray,
-    window: Callable[[int], tuple[int, int]],
+    windows: NDArray[np.intp],
     *,
     transitions: tuple[int, int, int],
     k_range: tuple[float, float],
@@ -407,7 +447,7 @@ def plan_from_candidates(
     stacklevel: int = 2,
 ) -> ReversalPlan:
     """Steps 2–3 of :func:`plan_reversals` from the candidates of eqs. (5)–(6) (kind, level,
-    ``window(c)`` = [Sub⁻, Sub⁺] of candidate c): the checks of the steps between samples, the
+    ``windows[c]`` = [Sub⁻, Sub⁺] of candidate c, shape (m, 2)): the checks of the steps between samples, the
     clusters closer than the hysteresis and the windows of each reversal.
 
     ``transitions`` is ``(transitions, skipped transitions, largest step in subintervals)`` of the
@@ -460,21 +500,18 @@ def plan_from_candidates(
     keep = cluster_size % 2 == 1
     rev_kinds = np.asarray(kinds)[cluster_start[keep]].astype(np.int8)
 
-    windows: list[tuple[int, int]] = []
-    pairs = np.empty((int(np.count_nonzero(keep)), 2), dtype=np.intp)
-    for i, (start, size) in enumerate(
-        zip(cluster_start[keep].tolist(), cluster_size[keep].tolist(), strict=True)
-    ):
-        windows.append(window(start))
-        if size == 1:
-            pairs[i] = len(windows) - 1
-        else:
-            # A cluster straddles the reversal symmetrically: take the middle of its
-            # outermost extremes (both of the cluster's kind).
-            windows.append(window(start + size - 1))
-            pairs[i] = (len(windows) - 2, len(windows) - 1)
+    # Each kept cluster gives the window of its first candidate and, when it has more than one
+    # candidate, that of its last (a cluster straddles the reversal symmetrically: the reversal
+    # lies midway between the Chp of its outermost extremes, both of the cluster's kind).
+    first = cluster_start[keep]
+    two = cluster_size[keep] > 1
+    place = np.cumsum(1 + two) - (1 + two)  # row of each cluster's first window
+    rows = np.empty(int(first.size + np.count_nonzero(two)), dtype=np.intp)
+    rows[place] = first
+    rows[place[two] + 1] = first[two] + cluster_size[keep][two] - 1
+    pairs = np.column_stack((place, place + two)).astype(np.intp)
     return ReversalPlan(
-        windows=np.asarray(windows, dtype=np.intp).reshape(-1, 2),
+        windows=np.asarray(windows, dtype=np.intp).reshape(-1, 2)[rows],
         pairs=pairs,
         kinds=rev_kinds,
         candidates=n_cand,
@@ -581,7 +618,7 @@ def find_reversals(
     plan = plan_reversals(
         idx, k_after, k0, hysteresis_subintervals=hysteresis_subintervals, stacklevel=3
     )
-    return _pinned(plan, tt, lambda lo, hi: (uu[lo : hi + 1], vv[lo : hi + 1]))
+    return _pinned(plan, tt, lambda rows: (uu[rows], vv[rows]))
 
 
 def intercept_periods(reversals: Reversals, n_periods: int | None = None) -> tuple[int, int, int]:

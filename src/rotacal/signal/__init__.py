@@ -22,6 +22,7 @@ if TYPE_CHECKING:
         RailDetector,
         check_clipping,
         find_clipping,
+        find_quadrature_clipping,
     )
     from rotacal.signal.sinefit import (
         DriftCheck,
@@ -54,6 +55,7 @@ __all__ = [
     "edf_overlapping_adev",
     "estimate_frequency",
     "find_clipping",
+    "find_quadrature_clipping",
     "fit_harmonics",
     "fit_sine_3p",
     "fit_sine_4p",

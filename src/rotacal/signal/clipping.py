@@ -98,6 +98,7 @@ __all__ = [
     "RailDetector",
     "check_clipping",
     "find_clipping",
+    "find_quadrature_clipping",
 ]
 
 #: How many times more samples (or a longer stay) a rail holds than the honest reference.
@@ -251,13 +252,29 @@ class _Side:
 
 def _range(x: np.ndarray) -> tuple[float, float]:
     """(min, max) of the finite values of ``x``; (inf, −inf) when there are none."""
+    lo, hi, _ = _finite_range(x)
+    return lo, hi
+
+
+def _finite_range(x: np.ndarray) -> tuple[float, float, bool]:
+    """:func:`_range` of ``x`` and whether all its values are finite."""
     if x.size == 0:
-        return math.inf, -math.inf
+        return math.inf, -math.inf, True
     lo, hi = float(x.min()), float(x.max())
     if math.isfinite(lo) and math.isfinite(hi):
-        return lo, hi
+        return lo, hi, True
     xf = x[np.isfinite(x)]
-    return (float(xf.min()), float(xf.max())) if xf.size else (math.inf, -math.inf)
+    return (float(xf.min()), float(xf.max()), False) if xf.size else (math.inf, -math.inf, False)
+
+
+def _final_stride(rows: int) -> int:
+    """The stride of the subsample once ``rows`` rows are fed: the smallest power of two that
+    leaves at most ``_SUBSAMPLE`` of them (what :meth:`RailDetector._subsample`'s halving ends
+    at, whatever the chunking)."""
+    stride = 1
+    while -(-rows // stride) > _SUBSAMPLE:
+        stride *= 2
+    return stride
 
 
 class RailDetector:
@@ -269,9 +286,11 @@ class RailDetector:
     Parameters
     ----------
     column : str — the column's name, for the messages.
+    rows : int, optional — the column's length, when known before it is fed: the subsample then
+        starts at its final stride (the same samples kept, without thinning them again and again).
     """
 
-    def __init__(self, column: str) -> None:
+    def __init__(self, column: str, rows: int | None = None) -> None:
         self.column = column
         self._n = 0  # samples fed (finite or not): row numbers
         self._finite = 0
@@ -280,7 +299,7 @@ class RailDetector:
         self._elsewhere_run = 0  # longest run at a value that is neither extreme
         self._open_value = math.nan  # the run still open at the end of the last piece
         self._open_len = 0
-        self._stride = 1
+        self._stride = 1 if rows is None else _final_stride(rows)
         self._kept: list[np.ndarray] = []
         self._kept_n = 0
         self._comp_lo = math.inf  # the companion's range over the whole column
@@ -304,23 +323,29 @@ class RailDetector:
         for s in range(0, x.size, _PIECE):
             self._add_piece(x[s : s + _PIECE], None if c is None else c[s : s + _PIECE])
 
-    def _add_piece(self, x: np.ndarray, comp: np.ndarray | None) -> None:
+    def _add_piece(
+        self,
+        x: np.ndarray,
+        comp: np.ndarray | None,
+        ranges: tuple[tuple[float, float, bool], tuple[float, float]] | None = None,
+    ) -> None:
+        """One piece; ``ranges`` = (:func:`_finite_range` of x, :func:`_range` of comp) when
+        the caller has them already (a quadrature pair: each channel's is the other's)."""
         g0 = self._n
         self._n += x.size
         if x.size == 0:
             return
-        lo, hi = float(x.min()), float(x.max())
+        lo, hi, clean = _finite_range(x) if ranges is None else ranges[0]
         xf = x
-        if not (math.isfinite(lo) and math.isfinite(hi)):  # NaN or inf: judge the finite ones
+        if not clean:  # NaN or inf: judge the finite ones
             xf = x[np.isfinite(x)]
             if xf.size == 0:
                 self._close_open_run()
                 return
-            lo, hi = float(xf.min()), float(xf.max())
         self._finite += xf.size
         self._subsample(x, g0)
         if comp is not None:
-            c_lo, c_hi = _range(comp)
+            c_lo, c_hi = _range(comp) if ranges is None else ranges[1]
             self._comp_lo, self._comp_hi = min(self._comp_lo, c_lo), max(self._comp_hi, c_hi)
         for side, top in ((self._hi, hi), (self._lo, lo)):
             if side.sign * top < side.next_value:
@@ -354,6 +379,12 @@ class RailDetector:
         run continues the one left open by the previous piece, its last one stays open.
         """
         same = np.flatnonzero(x[1:] == x[:-1])  # x[i + 1] == x[i]
+        if same.size == 0 and not (self._open_len and x[0] == self._open_value):
+            # no run of two or more in the piece nor across its start (a float column's usual
+            # case): only the open run closes, and the last sample opens the next one
+            self._close_open_run()
+            self._open_value, self._open_len = float(x[-1]), 1
+            return
         breaks = np.flatnonzero(np.diff(same) != 1)
         starts = same[np.concatenate(([0], breaks + 1))] if same.size else same
         ends = same[np.concatenate((breaks, [same.size - 1]))] + 1 if same.size else same
@@ -375,7 +406,8 @@ class RailDetector:
         self._classify(vals, lens)
 
     def _close_open_run(self) -> None:
-        if self._open_len:
+        # a run of one sample changes no verdict: every use of a run length takes max(run, 1)
+        if self._open_len > 1:
             self._classify(np.array([self._open_value]), np.array([self._open_len]))
         self._open_value, self._open_len = math.nan, 0
 
@@ -513,7 +545,7 @@ def find_clipping(
     -------
     Clipping or None
     """
-    det = RailDetector(column)
+    det = RailDetector(column, int(np.size(values)))
     det.add(values, companion)
     judged = det.extremes()
     if not judged:
@@ -533,6 +565,32 @@ def find_clipping(
         if ok:
             rails.append(rail)
     return Clipping(column, det._finite, tuple(rails)) if rails else None
+
+
+def find_quadrature_clipping(
+    a: Any, b: Any, names: tuple[str, str] = ("a", "b")
+) -> tuple[Clipping | None, Clipping | None]:
+    """:func:`find_clipping` of each channel of a quadrature pair with the other as its
+    companion, ``(of a, of b)``: the two detectors are fed piece by piece in turn, so each piece
+    of both channels is read from memory once for both (the same findings as two calls).
+
+    Parameters
+    ----------
+    a, b : array_like — the two channels, same rows (any unit).
+    names : (str, str) — their column names, for the messages.
+    """
+    x = np.asarray(a, dtype=np.float64).reshape(-1)
+    y = np.asarray(b, dtype=np.float64).reshape(-1)
+    det_a, det_b = RailDetector(names[0], x.size), RailDetector(names[1], y.size)
+    if x.size != y.size:
+        det_a.add(x, y)  # its one-line refusal
+    det_a._with_companion = det_b._with_companion = True
+    for s in range(0, x.size, _PIECE):
+        xp, yp = x[s : s + _PIECE], y[s : s + _PIECE]
+        rx, ry = _finite_range(xp), _finite_range(yp)
+        det_a._add_piece(xp, yp, (rx, ry[:2]))
+        det_b._add_piece(yp, xp, (ry, rx[:2]))
+    return det_a.result(), det_b.result()
 
 
 def check_clipping(

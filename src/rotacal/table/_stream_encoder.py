@@ -121,7 +121,7 @@ class CandidateState:
         return plan_from_candidates(
             kinds,
             level,
-            lambda c: (int(windows[c, 0]), int(windows[c, 1])),
+            windows,
             transitions=(self.n, self.skipped, self.max_step),
             k_range=self.k_range,
             hysteresis_subintervals=hysteresis_subintervals,
@@ -283,11 +283,16 @@ def segment(
 
     def pieces() -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
         for number, off, cols in passes.run(first, last + 1):
-            phase = phase_pass(
-                cols["a"], cols["b"], corr, state=states[number], jit=use_numba(last + 1 - first)
+            theta = phase_pass(
+                cols["a"],
+                cols["b"],
+                corr,
+                state=states[number],
+                jit=use_numba(last + 1 - first),
+                scale=scale,  # θ (deg) block by block in the pass: no temporary of its own
             ).phase_rad
             s = max(first - off, 0)
-            e = min(last + 1 - off, phase.size)
-            yield off + s, cols["time_s"][s:e], phase[s:e] * scale
+            e = min(last + 1 - off, theta.size)
+            yield off + s, cols["time_s"][s:e], theta[s:e]
 
     return pieces
