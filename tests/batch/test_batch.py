@@ -17,6 +17,7 @@ from distributed import Client
 
 from rotacal.batch import BatchInterruptedError, BatchResult, expected_plan_sha256, run_batch
 from rotacal.cli import cli
+from rotacal.errors import ConfigError
 from rotacal.plan.read import read_plan
 from rotacal.records import models as m
 from rotacal.records import open_store
@@ -263,3 +264,15 @@ def test_a_running_scheduler_takes_the_batch_and_a_plan_named_twice_runs_once(
     assert listed["the-same.toml"]["status"] == "skipped"
     assert listed["the-same.toml"]["number"] == listed["unit-0000.toml"]["number"]
     assert len(_records(url)) == 2
+
+
+def test_a_batch_json_that_is_not_a_batchs_is_never_replaced(
+    plans: Callable[[int], list[Path]], tmp_path: Path
+) -> None:
+    paths, url, out = plans(1), _sqlite(tmp_path), tmp_path / "certs"
+    out.mkdir()
+    (out / "batch.json").write_text('{"mine": true}', encoding="utf-8")
+    with pytest.raises(ConfigError, match="is never replaced"):
+        run_batch(paths, out=out, db=url, workers=1)
+    assert (out / "batch.json").read_text(encoding="utf-8") == '{"mine": true}'
+    assert not _records(url)

@@ -122,10 +122,12 @@ WRITER_ARGS = {
 def test_every_command_has_a_recipe():
     # certify's convention (wrote lines, --overwrite, identical JSON) is checked in
     # tests/certificate/test_certify.py, on a plan of its own; the records commands' in
-    # tests/records/test_cli.py, on a store of their own
+    # tests/records/test_cli.py, on a store of their own; batch's (its folder and batch.json,
+    # which each run of the same batch rewrites, a foreign batch.json refused) in tests/batch
     records = {("records", c) for c in ("list", "show", "history", "export", "import")}
     records |= {("records", "upgrade"), ("records", "settings")}
-    assert set(_commands(cli)) == {*ANALYSES, *WRITERS, ("demo",), ("certify",), *records}
+    special = {("demo",), ("certify",), ("batch",), *records}
+    assert set(_commands(cli)) == {*ANALYSES, *WRITERS, *special}
 
 
 def _analysis_argv(path: tuple[str, ...], captures: dict[str, Path]) -> list[str]:

@@ -118,6 +118,24 @@ def _exclusive(out: Path) -> Iterator[None]:
             fcntl.flock(fh, fcntl.LOCK_UN)
 
 
+def _check_batch_json(out: Path) -> None:
+    """A ``batch.json`` already in ``out`` must be a batch's (each run of the same batch
+    rewrites it); anything else there is the user's and is never replaced."""
+    path = out / BATCH_JSON
+    if not path.exists():
+        return
+    try:
+        listed = json.loads(path.read_text(encoding="utf-8"))
+        ours = isinstance(listed, dict) and {"counts", "plans"} <= listed.keys()
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        ours = False
+    if not ours:
+        raise ConfigError(
+            f"{path} exists and is not a batch's list of plans; it is never replaced: move it "
+            "away, or give another --out"
+        )
+
+
 def _write_json(out: Path, result: BatchResult) -> None:
     """``batch.json``, whole or not at all (written beside, then renamed over the last one)."""
     text = json.dumps(result.to_dict(), indent=2, ensure_ascii=False) + "\n"
@@ -308,6 +326,7 @@ def run_batch(
     store = open_store(db)
     try:
         with _exclusive(target):
+            _check_batch_json(target)
             staging = target / STAGING_NAME
             shutil.rmtree(staging, ignore_errors=True)  # what a killed run left
             staging.mkdir()

@@ -19,9 +19,9 @@ if TYPE_CHECKING:
 @cli.command(
     "batch",
     epilog=example(
-        "rotacal batch plans/ --out certificates   # every .toml file of plans/; a worker a core",
+        "rotacal batch plans/ --out certs     # every .toml file of plans/",
         "rotacal batch unit-1.toml unit-2.toml --out certs --workers 2",
-        "rotacal batch plans/ --out certs --scheduler tcp://head:8786 --db postgresql+psycopg://lab@db/records",
+        "rotacal batch plans/ --out /shared/certs --scheduler tcp://head:8786",
     ),
 )
 @click.argument("plans", nargs=-1, required=True, metavar="PLAN...")
