@@ -16,7 +16,9 @@ __all__ = ["dashboard_link", "dask_client"]
 
 
 @contextlib.contextmanager
-def dask_client(workers: int | None, scheduler: str | None, client: Client | None) -> Iterator[Client]:
+def dask_client(
+    workers: int | None, scheduler: str | None, client: Client | None
+) -> Iterator[Client]:
     """The Dask client: the one given, one connected to ``scheduler``, or one on a new local
     cluster of ``workers`` single-threaded processes (closed at the end)."""
     if client is not None:
