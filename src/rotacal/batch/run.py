@@ -176,15 +176,14 @@ class _Run:
         self.task_of[future] = index
         return future
 
-    def finished(self, future: Future) -> Future | None:
-        """Take a finished task's result; the plan's next task, if it has one."""
+    def finished(self, future: Future, value: object) -> Future | None:
+        """Take a finished task's result (``value``, fetched with it by ``as_completed``); the
+        plan's next task, if it has one."""
         index = self.task_of.pop(future)
-        try:
-            value = future.result()
-        except Exception as e:  # the task died with its workers (KilledWorker) or was cancelled
-            value = Failed(
-                f"its task was lost: {type(e).__name__}: {' '.join(str(e).split())}", 0.0
-            )
+        if isinstance(value, BaseException):  # the task died with its workers, or was cancelled
+            reason = " ".join(str(value).split())
+            value = Failed(f"its task was lost: {type(value).__name__}: {reason}", 0.0)
+        assert isinstance(value, (Measured, Failed, Done))
         if isinstance(value, Measured):  # SQLite: number it here, render it there
             return self._number(index, value)
         if isinstance(value, Failed):
@@ -230,11 +229,8 @@ class _Run:
     def _number(self, index: int, measured: Measured) -> Future | None:
         plan = measured.content.plan
         try:
-            earlier = self.store.issued_with(measured.content.plan_sha256)
-            if earlier is not None:
-                shutil.rmtree(measured.staging, ignore_errors=True)
-                self._end(index, "skipped", earlier, measured.seconds)
-                return None
+            # issued meanwhile by another writer? the record's unique plan_sha256 refuses it at
+            # keep, and _fail then counts the plan as skipped: no query here for each plan
             number = plan.number
             if number == "auto":
                 number = self.store.draw_number(plan.issue_date)
@@ -402,10 +398,14 @@ def _run(
         if on_start is not None:
             on_start(len(todo), result.dashboard)
         run = _Run(dask, store, out, staging, entries, outcomes, advance)
-        pending = as_completed([run.submit(i) for i in todo])
+        # results come with their futures (fetched in the background, not one round trip each);
+        # a lost or cancelled task comes with its exception
+        pending = as_completed(
+            [run.submit(i) for i in todo], with_results=True, raise_errors=False
+        )
         try:
-            for future in pending:
-                follow = run.finished(future)
+            for future, value in pending:
+                follow = run.finished(future, value)
                 if follow is not None:
                     pending.add(follow)
         except KeyboardInterrupt:
