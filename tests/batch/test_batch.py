@@ -59,6 +59,17 @@ def _check_issued_once(result: BatchResult, plans: list[Path], url: str) -> None
     assert {str(p) for p in plans} <= {p["plan"] for p in listed["plans"]}
 
 
+def _open_stores() -> list[str]:
+    from rotacal.batch import tasks
+
+    return list(tasks._STORES)
+
+
+def _stores_opened_by_workers(client: Client) -> list[str]:
+    """The URLs of the records stores the workers opened themselves."""
+    return [u for urls in client.run(_open_stores).values() for u in urls]
+
+
 def _sqlite(tmp_path: Path) -> str:
     return f"sqlite:///{tmp_path / 'records.sqlite'}"
 
@@ -70,6 +81,7 @@ def test_a_batch_issues_every_plan_once_and_a_second_run_skips_them(
     dask_client.wait_for_workers(2)
     first = run_batch([paths[0].parent], out=out, db=url, client=dask_client)
     assert [o.status for o in first.outcomes] == ["issued"] * 5
+    assert url in _stores_opened_by_workers(dask_client)  # workers on this machine write SQLite
     assert len({o.number for o in first.outcomes}) == 5
     _check_issued_once(first, paths, url)
 
@@ -123,13 +135,18 @@ def _kill_one_worker(client: Client) -> Callable[[str], None]:
     return advance
 
 
-@pytest.mark.parametrize("engine", ["sqlite", "postgresql"])
+@pytest.mark.parametrize(
+    ("engine", "from_workers"),
+    [("sqlite", True), ("sqlite", False), ("postgresql", None)],
+    ids=["sqlite-workers", "sqlite-client", "postgresql"],
+)
 def test_a_killed_worker_loses_nothing_and_issues_nothing_twice(
     dask_client: Client,
     plans: Callable[[int], list[Path]],
     tmp_path: Path,
     request: pytest.FixtureRequest,
     engine: str,
+    from_workers: bool | None,
 ) -> None:
     paths, out = plans(8), tmp_path / "certs"
     url = (
@@ -138,8 +155,14 @@ def test_a_killed_worker_loses_nothing_and_issues_nothing_twice(
         else request.getfixturevalue("postgres").new_database()
     )
     dask_client.wait_for_workers(2)
+    killer = _kill_one_worker(dask_client)
     result = run_batch(
-        paths, out=out, db=url, client=dask_client, advance=_kill_one_worker(dask_client)
+        paths,
+        out=out,
+        db=url,
+        client=dask_client,
+        advance=killer,
+        records_from_workers=from_workers,
     )
     # Dask runs a lost worker's task again elsewhere: the batch ends whole
     assert [o.status for o in result.outcomes] == ["issued"] * 8, [o.error for o in result.outcomes]
@@ -163,7 +186,14 @@ def test_a_restarted_cluster_stops_the_batch_and_a_second_run_finishes_it(
             own_dask_client.restart()  # every worker process killed and started again
 
     own_dask_client.wait_for_workers(2)
-    first = run_batch(paths, out=out, db=url, client=own_dask_client, advance=advance)
+    first = run_batch(
+        paths,
+        out=out,
+        db=url,
+        client=own_dask_client,
+        advance=advance,
+        records_from_workers=False,
+    )
     lost = [o for o in first.outcomes if o.status == "failed"]
     assert lost, "the restart came too late to stop any plan"
     assert all("lost" in str(o.error) for o in lost)
@@ -185,13 +215,7 @@ def test_postgresql_is_written_by_the_workers_directly(
     assert result.count("issued") == 4
     _check_issued_once(result, paths, url)
 
-    def stores_open() -> list[str]:
-        from rotacal.batch import tasks
-
-        return list(tasks._STORES)
-
-    opened = [u for urls in dask_client.run(stores_open).values() for u in urls]
-    assert url in opened  # the workers opened the store themselves
+    assert url in _stores_opened_by_workers(dask_client)
 
 
 def test_interrupting_the_client_voids_its_drawn_numbers(
@@ -204,7 +228,14 @@ def test_interrupting_the_client_voids_its_drawn_numbers(
 
     dask_client.wait_for_workers(2)
     with pytest.raises(BatchInterruptedError, match="run the same batch again"):
-        run_batch(paths, out=out, db=url, client=dask_client, advance=advance)
+        run_batch(
+            paths,
+            out=out,
+            db=url,
+            client=dask_client,
+            advance=advance,
+            records_from_workers=False,
+        )
     listed = json.loads((out / "batch.json").read_text())
     assert any(p["status"] == "failed" and "interrupted" in p["error"] for p in listed["plans"])
     dask_client.wait_for_workers(2)

@@ -6,8 +6,9 @@ node — is finished by running it again, and nothing is issued twice. The rest 
 plan on a local cluster of worker processes (``workers``) or on a running cluster
 (``scheduler``); a plan that fails fails alone, with its one-line reason in ``batch.json``.
 
-How the records are written depends on the store (see :mod:`rotacal.batch.tasks`): SQLite from
-this process only, PostgreSQL by the workers directly.
+The records are written by the workers directly — PostgreSQL always, SQLite when the workers
+run on this machine (its lock serialises them) — or, for an SQLite file and workers on other
+machines, by this process only (see :mod:`rotacal.batch.tasks`).
 """
 
 from __future__ import annotations
@@ -157,10 +158,11 @@ class _Run:
         entries: Sequence[BatchPlan],
         outcomes: list[PlanOutcome],
         advance: Callable[[str], None],
+        direct: bool,
     ) -> None:
         self.client, self.store, self.out, self.staging = client, store, out, staging
         self.entries, self.outcomes, self.advance = entries, outcomes, advance
-        self.direct = store.engine.dialect.name != "sqlite"  # workers write the records
+        self.direct = direct  # the workers write the records (else this process does)
         self.drawn: dict[int, str] = {}  # numbers drawn for plans not yet kept (SQLite)
         self.task_of: dict[Future, int] = {}  # a running task → its plan's index
 
@@ -273,6 +275,7 @@ def run_batch(
     client: Client | None = None,
     advance: Callable[[str], None] | None = None,
     on_start: Callable[[int, str | None], None] | None = None,
+    records_from_workers: bool | None = None,
 ) -> BatchResult:
     """Certify many plans as tasks on Dask distributed (INTERFACE.md "Batches").
 
@@ -297,6 +300,11 @@ def run_batch(
     on_start : callable, optional
         Called with the number of plans to run and the dashboard's link (or None) once the
         cluster is up; not called when every plan was done already.
+    records_from_workers : bool, optional
+        Whether the workers write the records store themselves [default: always for
+        PostgreSQL; for SQLite when every worker runs on this machine, where SQLite's lock
+        serialises them — an SQLite file is not safe to share between machines, so with
+        workers elsewhere this process writes it].
 
     Returns
     -------
@@ -327,9 +335,8 @@ def run_batch(
             shutil.rmtree(staging, ignore_errors=True)  # what a killed run left
             staging.mkdir()
             try:
-                result = _run(
-                    paths, target, staging, store, workers, scheduler, client, advance, on_start
-                )
+                cluster = _Cluster(workers, scheduler, client, records_from_workers)
+                result = _run(paths, target, staging, store, cluster, advance, on_start)
             finally:
                 shutil.rmtree(staging, ignore_errors=True)
             unfinished = [o for o in result.outcomes if o.status == "pending"]
@@ -348,14 +355,44 @@ def run_batch(
     return result
 
 
+@dataclasses.dataclass(frozen=True)
+class _Cluster:
+    """Where the tasks run (run_batch's arguments) and who writes the records."""
+
+    workers: int | None
+    scheduler: str | None
+    client: Client | None
+    records_from_workers: bool | None
+
+    def direct(self, dask: Client, store: Store) -> bool:
+        """Whether the workers write the records: see :func:`run_batch`."""
+        if self.records_from_workers is not None:
+            return self.records_from_workers
+        if store.engine.dialect.name != "sqlite":
+            return True
+        return all(_on_this_machine(a) for a in dask.scheduler_info().get("workers", {}))
+
+
+def _on_this_machine(address: str) -> bool:
+    """Whether a worker's address (``tcp://host:port``) is on this machine."""
+    import socket
+    from urllib.parse import urlsplit
+
+    host = urlsplit(address).hostname or ""
+    if host in ("localhost", "::1") or host.startswith("127."):
+        return True
+    try:
+        return host in socket.gethostbyname_ex(socket.gethostname())[2]
+    except OSError:
+        return False
+
+
 def _run(
     paths: Sequence[Path],
     out: Path,
     staging: Path,
     store: Store,
-    workers: int | None,
-    scheduler: str | None,
-    client: Client | None,
+    cluster: _Cluster,
     advance: Callable[[str], None],
     on_start: Callable[[int, str | None], None] | None,
 ) -> BatchResult:
@@ -392,17 +429,17 @@ def _run(
         return result
     from distributed import as_completed
 
-    with dask_client(workers, scheduler, client) as dask:
+    with dask_client(cluster.workers, cluster.scheduler, cluster.client) as dask:
         result.workers = len(dask.scheduler_info().get("workers", {}))
-        result.dashboard = dashboard_link(dask, local=scheduler is None and client is None)
+        local = cluster.scheduler is None and cluster.client is None
+        result.dashboard = dashboard_link(dask, local=local)
         if on_start is not None:
             on_start(len(todo), result.dashboard)
-        run = _Run(dask, store, out, staging, entries, outcomes, advance)
+        direct = cluster.direct(dask, store)
+        run = _Run(dask, store, out, staging, entries, outcomes, advance, direct)
         # results come with their futures (fetched in the background, not one round trip each);
         # a lost or cancelled task comes with its exception
-        pending = as_completed(
-            [run.submit(i) for i in todo], with_results=True, raise_errors=False
-        )
+        pending = as_completed([run.submit(i) for i in todo], with_results=True, raise_errors=False)
         try:
             for future, value in pending:
                 follow = run.finished(future, value)

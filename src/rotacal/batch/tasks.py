@@ -5,14 +5,16 @@ can name the plan and the reason in one line and go on with the others. A task t
 worker leaves at most a hidden staging folder, which the batch removes; it never leaves a
 certificate folder without its record.
 
-Two ways to keep the records (``rotacal batch`` chooses by the store's kind):
+Two ways to keep the records (``rotacal batch`` chooses by the store and where the workers are):
 
-- **SQLite** is written by the client process only: the worker measures the plan and draws its
-  figures (:func:`measure_task`), the client draws the number, the worker renders the certificate
-  with it (:func:`render_task`), and the client keeps it and publishes its folder in one step.
-- **PostgreSQL** is written by the workers directly: :func:`certify_task` runs
-  :func:`rotacal.certificate.issue.certify` against the server, which keeps numbers unique between
-  any number of writers.
+- **The workers** write the store themselves: :func:`certify_task` runs
+  :func:`rotacal.certificate.issue.certify` against it. PostgreSQL keeps numbers unique between
+  any number of writers; an SQLite file does so for the workers of one machine (its lock
+  serialises their transactions).
+- **The client** writes it, for an SQLite file and workers on other machines (a file shared
+  between machines is not safe): the worker measures the plan and draws its figures
+  (:func:`measure_task`), the client draws the number, the worker renders the certificate with
+  it (:func:`render_task`), and the client keeps it and publishes its folder in one step.
 """
 
 from __future__ import annotations
@@ -142,7 +144,7 @@ def _store(url: str) -> Store:
 
 def certify_task(plan_path: str, out: str, staging_root: str, db_url: str) -> Done | Failed:
     """Issue a plan's certificate on the worker, keeping it in the records store at ``db_url``
-    (PostgreSQL batches): its folder is ``out``/NUMBER, staged in ``staging_root``."""
+    (workers that write the records): its folder is ``out``/NUMBER, staged in ``staging_root``."""
     from rotacal.certificate.issue import certify
 
     start = time.perf_counter()
