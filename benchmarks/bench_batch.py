@@ -21,7 +21,6 @@ Run: ``python benchmarks/bench_batch.py [--plans 200] [--postgres]``
 from __future__ import annotations
 
 import argparse
-import logging
 import resource
 import tempfile
 import time
@@ -29,9 +28,10 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from distributed import Client, LocalCluster
+from distributed import Client
 
 from rotacal.batch import run_batch
+from rotacal.batch.cluster import dask_client
 from rotacal.batch.testing import write_twin_plans
 
 
@@ -45,18 +45,10 @@ def _warm() -> None:
 
 @contextmanager
 def cluster(workers: int) -> Iterator[tuple[Client, float]]:
-    """A client of a warmed local cluster, and the seconds its start and warm-up took."""
+    """A client of a warmed local cluster as ``rotacal batch --workers`` makes it, and the
+    seconds its start and warm-up took."""
     start = time.perf_counter()
-    with (
-        LocalCluster(
-            n_workers=workers,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=":0",
-            silence_logs=logging.ERROR,
-        ) as local,
-        Client(local) as client,
-    ):
+    with dask_client(workers, None, None) as client:
         client.run(_warm)
         yield client, time.perf_counter() - start
 

@@ -4,14 +4,14 @@ per module) and folders of twin plans."""
 from __future__ import annotations
 
 import contextlib
-import logging
 import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from distributed import Client, LocalCluster
+from distributed import Client
 
+from rotacal.batch.cluster import dask_client
 from rotacal.batch.testing import write_twin_plans
 
 #: The tests' plans measure the rotation test alone (30 ms), so that a batch costs its overhead.
@@ -20,17 +20,9 @@ COMMANDS = ("gyro rotations",)
 
 @contextlib.contextmanager
 def local_client() -> Iterator[Client]:
-    """A client of a new local cluster of two single-threaded worker processes."""
-    with (
-        LocalCluster(
-            n_workers=2,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=":0",
-            silence_logs=logging.ERROR,
-        ) as cluster,
-        Client(cluster) as client,
-    ):
+    """A client of a new local cluster of two worker processes, as ``rotacal batch --workers 2``
+    makes it."""
+    with dask_client(2, None, None) as client:
         yield client
 
 
