@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from distributed import Client
 
-from rotacal.batch.cluster import dask_client
+from rotacal.batch import cluster
 from rotacal.batch.testing import write_twin_plans
 
 #: The tests' plans measure the rotation test alone (30 ms), so that a batch costs its overhead.
@@ -22,7 +22,7 @@ COMMANDS = ("gyro rotations",)
 def local_client() -> Iterator[Client]:
     """A client of a new local cluster of two worker processes, as ``rotacal batch --workers 2``
     makes it."""
-    with dask_client(2, None, None) as client:
+    with cluster.dask_client(2, None, None) as client:
         yield client
 
 
