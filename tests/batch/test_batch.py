@@ -16,6 +16,7 @@ from click.testing import CliRunner
 from distributed import Client
 
 from rotacal.batch import BatchInterruptedError, BatchResult, expected_plan_sha256, run_batch
+from rotacal.batch.tasks import open_store_urls
 from rotacal.cli import cli
 from rotacal.errors import ConfigError
 from rotacal.plan.read import read_plan
@@ -59,15 +60,10 @@ def _check_issued_once(result: BatchResult, plans: list[Path], url: str) -> None
     assert {str(p) for p in plans} <= {p["plan"] for p in listed["plans"]}
 
 
-def _open_stores() -> list[str]:
-    from rotacal.batch import tasks
-
-    return list(tasks._STORES)
-
-
 def _stores_opened_by_workers(client: Client) -> list[str]:
     """The URLs of the records stores the workers opened themselves."""
-    return [u for urls in client.run(_open_stores).values() for u in urls]
+    # a function of rotacal's: the workers cannot import the tests' modules
+    return [u for urls in client.run(open_store_urls).values() for u in urls]
 
 
 def _sqlite(tmp_path: Path) -> str:

@@ -34,7 +34,15 @@ if TYPE_CHECKING:
     from rotacal.certificate.content import CertificateContent
     from rotacal.records import Store
 
-__all__ = ["Done", "Failed", "Measured", "certify_task", "measure_task", "render_task"]
+__all__ = [
+    "Done",
+    "Failed",
+    "Measured",
+    "certify_task",
+    "measure_task",
+    "open_store_urls",
+    "render_task",
+]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -132,6 +140,12 @@ def render_task(measured: Measured, number: str) -> Done | Failed:
 
 #: The records stores a worker has open, by URL: one connection pool per worker process.
 _STORES: dict[str, Store] = {}
+
+
+def open_store_urls() -> list[str]:
+    """The URLs of the records stores this process has opened for its tasks (run it on the
+    workers, ``client.run(open_store_urls)``, to see which of them write the records)."""
+    return list(_STORES)
 
 
 def _store(url: str) -> Store:
