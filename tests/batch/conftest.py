@@ -33,14 +33,6 @@ def dask_client() -> Iterator[Client]:
         yield client
 
 
-@pytest.fixture
-def own_dask_client() -> Iterator[Client]:
-    """A local cluster of two workers for one test (one that restarts it: after a worker was
-    killed by SIGKILL, distributed 2026.8's restart can wait in vain for its nanny)."""
-    with local_client() as client:
-        yield client
-
-
 @pytest.fixture(scope="module")
 def twin_source(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Eight twin plans (units 0–7), made once per module."""
