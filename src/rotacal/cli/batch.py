@@ -55,9 +55,10 @@ def batch_command(
 ) -> None:
     """Certify many plans as tasks on Dask distributed.
 
-    PLAN... are plan files or folders of them (their .toml files). A plan whose plan and captures were
-    certified already is skipped, so a stopped batch is finished by running it again; a plan that
-    fails fails alone, with its reason in DIR/batch.json. Exit code 2 when any plan failed.
+    PLAN... are plan files or folders of them (their .toml files). A plan whose plan and
+    captures were certified already is skipped, so a stopped batch is finished by running it
+    again; a plan that fails fails alone, with its reason in DIR/batch.json. Exit code 2 when
+    any plan failed.
     """
     from rotacal.batch import run_batch
     from rotacal.batch.plans import find_plans
