@@ -22,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import io
+import shutil
 import time
 import traceback
 from collections.abc import Iterator
@@ -117,8 +118,6 @@ def measure_task(plan_path: str, staging_root: str) -> Measured | Failed:
         return Measured(content, str(staging), time.perf_counter() - start)
     except Exception as e:
         if staging is not None:
-            import shutil
-
             shutil.rmtree(staging, ignore_errors=True)
         return _failed(e, start)
 
