@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 from collections.abc import Callable
 from pathlib import Path
@@ -54,7 +55,7 @@ def _check_issued_once(result: BatchResult, plans: list[Path], url: str) -> None
         folder = out / number
         assert CERTIFICATE_FILES <= {p.name for p in folder.iterdir()}
         assert json.loads((folder / "results.json").read_text())["plan_sha256"] == sha
-    folders = {p.name for p in out.iterdir() if p.is_dir()}
+    folders = {p.name for p in out.iterdir() if p.is_dir() and not p.name.startswith(".")}
     assert folders == set(records.values()), "a partial or unrecorded folder was left"
     listed = json.loads((out / "batch.json").read_text())
     assert {str(p) for p in plans} <= {p["plan"] for p in listed["plans"]}
@@ -299,3 +300,32 @@ def test_a_batch_json_that_is_not_a_batchs_is_never_replaced(
         run_batch(paths, out=out, db=url, workers=1)
     assert (out / "batch.json").read_text(encoding="utf-8") == '{"mine": true}'
     assert not _records(url)
+
+
+def test_a_certificate_folder_without_its_record_is_moved_aside_and_its_number_voided(
+    dask_client: Client, plans: Callable[[int], list[Path]], tmp_path: Path
+) -> None:
+    # what a worker killed between publishing a folder and committing its record leaves behind
+    paths, url, out = plans(2), _sqlite(tmp_path), tmp_path / "certs"
+    dask_client.wait_for_workers(2)
+    first = run_batch(paths, out=out, db=url, client=dask_client)
+    issued = first.outcomes[0].number
+    assert issued is not None
+    orphan = out / "RC-2026-0042"
+    shutil.copytree(out / issued, orphan)
+    results = json.loads((orphan / "results.json").read_text())
+    results["certificate_number"] = orphan.name
+    (orphan / "results.json").write_text(json.dumps(results))
+    (out / "notes").mkdir()  # the user's own folder: never touched
+    again = run_batch(paths, out=out, db=url, client=dask_client)
+    assert again.set_aside == ["RC-2026-0042"]
+    assert not orphan.exists() and (out / "notes").is_dir()
+    assert [p.name.split("-20")[0] for p in (out / ".rotacal-unrecorded").iterdir()] == ["RC"]
+    assert json.loads((out / "batch.json").read_text())["set_aside"] == ["RC-2026-0042"]
+    store = open_store(url)
+    try:
+        with store.begin(read_only=True) as connection:
+            voided = connection.execute(sa.select(m.VoidedNumber.number)).scalars().all()
+    finally:
+        store.close()
+    assert "RC-2026-0042" in voided

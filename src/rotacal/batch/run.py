@@ -41,6 +41,8 @@ __all__ = ["BatchInterruptedError", "BatchResult", "PlanOutcome", "run_batch"]
 BATCH_JSON = "batch.json"
 #: Hidden folders in ``--out``: the lock of the batch that writes there, and the staging folders.
 LOCK_NAME, STAGING_NAME = ".rotacal-batch.lock", ".rotacal-batch-staging"
+#: Where certificate folders found without their record are moved (never deleted).
+UNRECORDED_NAME = ".rotacal-unrecorded"
 
 
 class BatchInterruptedError(RotacalError):
@@ -82,6 +84,8 @@ class BatchResult:
     workers: int
     wall_seconds: float
     dashboard: str | None = None
+    #: certificate folders of this batch's plans found without their record, moved aside
+    set_aside: list[str] = dataclasses.field(default_factory=list)
 
     def count(self, status: str) -> int:
         return sum(o.status == status for o in self.outcomes)
@@ -98,6 +102,7 @@ class BatchResult:
             "wall_seconds": round(self.wall_seconds, 3),
             "counts": {s: self.count(s) for s in ("issued", "skipped", "failed")},
             "plans": [o.to_dict() for o in self.outcomes],
+            "set_aside": self.set_aside,
         }
 
 
@@ -426,6 +431,7 @@ def _run(
     result = BatchResult(outcomes, out, store.shown, 0, 0.0)
     if not todo:
         _settle_twins(outcomes, twin_of, advance)
+        result.set_aside = _set_aside_unrecorded(out, store, entries, outcomes)
         return result
     from distributed import as_completed
 
@@ -450,7 +456,46 @@ def _run(
             for index in list(run.drawn):
                 run._void(index, "the batch was stopped (Ctrl-C)")
     _settle_twins(outcomes, twin_of, advance)
+    result.set_aside = _set_aside_unrecorded(out, store, entries, outcomes)
     return result
+
+
+def _set_aside_unrecorded(
+    out: Path, store: Store, entries: Sequence[BatchPlan], outcomes: Sequence[PlanOutcome]
+) -> list[str]:
+    """Move aside the certificate folders of this batch's plans that have no record.
+
+    A worker that writes the records publishes a folder inside the record's transaction; killed
+    between the two (the commit's fsync takes milliseconds), it leaves a folder whose record was
+    rolled back, while Dask runs the plan again under another number. Such a folder is moved to
+    ``out/.rotacal-unrecorded/`` (not deleted) and its number voided with the reason. Only folders
+    named by their own ``results.json`` number, of a plan of this batch, whose plan has another
+    or no record, are touched; the folders of the plans' known numbers are not even read.
+    """
+    known = {o.number for o in outcomes if o.number}
+    shas = {e.sha256 for e in entries if e.sha256}
+    moved = []
+    for folder in sorted(out.iterdir()):
+        if folder.name.startswith(".") or folder.name in known or not folder.is_dir():
+            continue
+        try:
+            results = json.loads((folder / "results.json").read_text(encoding="utf-8"))
+            sha, number = results["plan_sha256"], results["certificate_number"]
+        except (OSError, ValueError, KeyError, TypeError):
+            continue  # not a certificate folder
+        if number != folder.name or sha not in shas:
+            continue
+        try:
+            if store.issued_with(sha) == number:
+                continue
+            store.void_number(number, "its worker was lost while the record was being kept")
+        except RotacalError:
+            continue
+        aside = out / UNRECORDED_NAME
+        aside.mkdir(exist_ok=True)
+        os.rename(folder, aside / f"{number}-{time.strftime('%Y%m%dT%H%M%S')}")
+        moved.append(number)
+    return moved
 
 
 def _settle_twins(

@@ -98,6 +98,12 @@ def _summary(result: BatchResult) -> None:
         f"{len(result.outcomes)} plans in {result.wall_seconds:.1f} s {where}; "
         f"records: {result.store}"
     )
+    if result.set_aside:
+        click.echo(
+            f"moved aside {len(result.set_aside)} certificate folder(s) without a record (a "
+            f"worker lost before its record was kept): {result.out / '.rotacal-unrecorded'}",
+            err=True,
+        )
     for o in result.outcomes:
         if o.status == "failed":
             click.echo(f"failed: {o.error}", err=True)
