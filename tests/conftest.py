@@ -35,19 +35,24 @@ SHARED_DATA = Path(
 
 @pytest.fixture(scope="session")
 def shared_data() -> Callable[..., Path]:
-    """``shared_data("imucal", "example_data")``: the path, or a skip naming what is absent.
+    """``shared_data("imucal", "example_data")``: the path; a skip only when the whole shared
+    folder is absent from this machine, a failure when the folder is there but not the file.
 
-    The only skip the test suite allows: real data that this machine does not have.
+    The only skip the test suite allows: real data that this machine does not have. A recording
+    missing from a folder that is present (renamed, moved) fails the test, which could otherwise
+    never fail where the data are.
     """
 
     def need(*parts: str) -> Path:
         path = SHARED_DATA.joinpath(*parts)
-        if not path.exists():
-            pytest.skip(
-                f"real data {path} is absent (the shared recordings are not on this machine; "
-                "set ROTACAL_SHARED_DATA to their folder)"
-            )
-        return path
+        if path.exists():
+            return path
+        if SHARED_DATA.is_dir():
+            pytest.fail(f"real data {path} is missing from {SHARED_DATA}, which is present")
+        pytest.skip(
+            f"real data {SHARED_DATA} is absent (the shared recordings are not on this "
+            "machine; set ROTACAL_SHARED_DATA to their folder)"
+        )
 
     return need
 
