@@ -278,6 +278,16 @@ def _declared(reader: Reader, wanted: dict[str, str]) -> dict[str, int | None]:
     return lengths
 
 
+def _wanted_lengths(
+    reader: Reader, mapped: dict[str, str], columns: Iterable[str]
+) -> tuple[dict[str, str], dict[str, int]]:
+    """The wanted columns (canonical name → the file's) and the lengths the file declares of
+    them (CSV declares none)."""
+    _available, wanted = _resolve(reader, mapped, columns)
+    lengths = _declared(reader, wanted)
+    return wanted, {k: n for k, n in lengths.items() if n is not None}
+
+
 def capture_columns(
     path: PathLike,
     *,
@@ -409,10 +419,8 @@ def iter_capture_chunks(
     reader = _open_reader(path, group, read_options)
     fname = reader.fname
     try:
-        _available, wanted = _resolve(reader, mapped, columns)
-        lengths = _declared(reader, wanted)
-        known = {k: n for k, n in lengths.items() if n is not None}
-        if len(known) == len(lengths):  # CSV: unequal lengths show up as empty cells
+        wanted, known = _wanted_lengths(reader, mapped, columns)
+        if len(known) == len(wanted):  # CSV: unequal lengths show up as empty cells
             equal_lengths(fname, known)
         whats = {canon: label(canon, fcol, reader.noun) for canon, fcol in wanted.items()}
         with reading(reader):
@@ -481,9 +489,7 @@ def read_capture_rows(
     reader = _open_reader(path, group, read_options)
     fname = reader.fname
     try:
-        _available, wanted = _resolve(reader, mapped, columns)
-        lengths = _declared(reader, wanted)
-        known = {k: n for k, n in lengths.items() if n is not None}
+        wanted, known = _wanted_lengths(reader, mapped, columns)
         equal_lengths(fname, known)
         n = next(iter(known.values()), None)
         if n is not None and not 0 <= start < stop <= n:
