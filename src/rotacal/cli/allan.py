@@ -129,25 +129,17 @@ def allan_cmd(
         )
     # only the columns the analysis uses: other arrays of the file may have other lengths
     wanted = [rate_column, *(["time_s"] if "time_s" in available else [])]
+    options = {"fs_hz": fs_hz, "unit": unit, "taus": taus}
+    options |= {"specs": kw["specs"], "allow_clipped": kw["allow_clipped"]}
+    reading = {"mapping": mapping, "group": group, "read_options": read_options}
+    stream = _Stream(capture, rate_column, reading, options, is_angle)
     n = None
     if workers is not None or scheduler is not None:
         if workers is not None and scheduler is not None:
             raise click.UsageError("give --workers (a local cluster) or --scheduler, not both")
         if chunked is False:
             raise click.UsageError("--in-memory reads the capture in this process; drop it")
-        result = _dask_noise(
-            capture,
-            rate_column,
-            fs_hz,
-            unit,
-            taus,
-            is_angle,
-            mapping,
-            group,
-            kw,
-            workers,
-            scheduler,
-        )
+        result = _dask_noise(stream, workers, scheduler)
         _finish(result, capture, json_path, report_path)
         return
     if chunked is None:
@@ -156,9 +148,7 @@ def allan_cmd(
         )
         chunked = n > _IN_MEMORY_MAX_SAMPLES
     if chunked:
-        result = _chunked_noise(
-            capture, n, wanted, rate_column, fs_hz, unit, taus, is_angle, mapping, group, kw
-        )
+        result = _chunked_noise(stream, n, wanted)
         _finish(result, capture, json_path, report_path)
         return
     with _status(f"reading {capture}"):
@@ -180,8 +170,8 @@ def allan_cmd(
             unit=unit,
             taus=taus or "log",
             column=rate_column,
-            specs=kw.pop("specs"),
-            allow_clipped=kw.pop("allow_clipped"),
+            specs=kw["specs"],
+            allow_clipped=kw["allow_clipped"],
         )
     _finish(result, capture, json_path, report_path)
 
@@ -192,121 +182,88 @@ _CHUNK_ROWS = 1 << 22
 _CHUNK_HISTORY = 1 << 22
 
 
-def _chunked_noise(
-    capture: str,
-    n: int | None,
-    wanted: list[str],
-    rate_column: str,
-    fs_hz: float | None,
-    unit: str,
-    taus: str | None,
-    is_angle: bool,
-    mapping: Any,
-    group: str | None,
-    kw: dict[str, Any],
-) -> Any:
+@dataclasses.dataclass(frozen=True)
+class _Stream:
+    """What the command's two streamed paths share: the capture, how it is read, and the
+    analysis's options."""
+
+    capture: str
+    column: str
+    reading: dict[str, Any]  # mapping, group and read_options of rotacal.io's readers
+    options: dict[str, Any]  # fs_hz, unit, taus, specs, allow_clipped
+    is_angle: bool
+
+    @property
+    def taus(self) -> str | None:
+        return self.options["taus"]
+
+    def check(self, how: str) -> None:
+        """Refuse what needs the whole record in memory."""
+        if self.taus in ("all", "log"):
+            raise ConfigError(
+                f"--taus {self.taus} needs the whole record in memory; this capture is {how}: "
+                "give --taus octave or decade, or --in-memory (if the record fits in memory)"
+            )
+        if self.is_angle:
+            raise ConfigError(
+                "--angle is analysed in memory only; give --in-memory (if the record fits in "
+                "memory), or difference the angle to a rate column first"
+            )
+
+    def analysis(self) -> dict[str, Any]:
+        """The keyword arguments of the streamed analyses (τ at octaves by default)."""
+        return {**self.options, "column": self.column, "taus": self.taus or "octave"}
+
+    def noted(self, result: Any, how: str) -> Any:
+        """``result`` with a note of the octave grid when the user asked for none."""
+        if self.taus is None:  # the log grid, the default in memory, needs the length first
+            note = f"{how}: τ at octaves (--taus octave)"
+            result = dataclasses.replace(result, notes=[note, *result.notes])
+        return result
+
+
+def _chunked_noise(stream: _Stream, n: int | None, wanted: list[str]) -> Any:
     """The noise of a capture read in chunks (:func:`rotacal.gyro.noise_stream.gyro_noise_chunks`)."""
     from rotacal.gyro.noise_stream import gyro_noise_chunks
     from rotacal.io import capture_length, iter_capture_chunks
 
-    _check_streamable(taus, is_angle, "read in chunks")
-    read_options = current_read_options()
+    stream.check("read in chunks")
     if n is None:
-        n = capture_length(
-            capture, rate_column, mapping=mapping, group=group, read_options=read_options
-        )
-    chunks = iter_capture_chunks(
-        capture,
-        wanted,
-        chunk_rows=_CHUNK_ROWS,
-        mapping=mapping,
-        group=group,
-        read_options=read_options,
-    )
+        n = capture_length(stream.capture, stream.column, **stream.reading)
+    chunks = iter_capture_chunks(stream.capture, wanted, chunk_rows=_CHUNK_ROWS, **stream.reading)
     with _sample_progress(2 * n, "Allan deviation (chunked)") as progress:
         result = gyro_noise_chunks(
-            chunks,
-            column=rate_column,
-            fs_hz=fs_hz,
-            unit=unit,
-            taus=taus or "octave",
-            specs=kw.pop("specs"),
-            allow_clipped=kw.pop("allow_clipped"),
-            history=_CHUNK_HISTORY,
-            progress=progress,
+            chunks, **stream.analysis(), history=_CHUNK_HISTORY, progress=progress
         )
-    return _octave_note(result, taus, f"read in chunks ({n} samples)")
+    return stream.noted(result, f"read in chunks ({n} samples)")
 
 
-def _check_streamable(taus: str | None, is_angle: bool, how: str) -> None:
-    if taus in ("all", "log"):
-        raise ConfigError(
-            f"--taus {taus} needs the whole record in memory; this capture is {how}: give "
-            "--taus octave or decade, or --in-memory (if the record fits in memory)"
-        )
-    if is_angle:
-        raise ConfigError(
-            "--angle is analysed in memory only; give --in-memory (if the record fits in "
-            "memory), or difference the angle to a rate column first"
-        )
-
-
-def _octave_note(result: Any, taus: str | None, how: str) -> Any:
-    if taus is None:  # the log grid, the default in memory, needs the record's length up front
-        note = f"{how}: τ at octaves (--taus octave)"
-        result = dataclasses.replace(result, notes=[note, *result.notes])
-    return result
-
-
-def _dask_noise(
-    capture: str,
-    rate_column: str,
-    fs_hz: float | None,
-    unit: str,
-    taus: str | None,
-    is_angle: bool,
-    mapping: Any,
-    group: str | None,
-    kw: dict[str, Any],
-    workers: int | None,
-    scheduler: str | None,
-) -> Any:
+def _dask_noise(stream: _Stream, workers: int | None, scheduler: str | None) -> Any:
     """The noise of a capture split over a Dask cluster's workers
     (:func:`rotacal.batch.capture_noise.gyro_noise_on_dask`)."""
     from rotacal.batch.capture_noise import CHUNK_ROWS, gyro_noise_on_dask
     from rotacal.batch.cluster import dask_client
     from rotacal.io import capture_length, read_capture_rows
 
-    _check_streamable(taus, is_angle, "split over workers")
-    read_options = current_read_options()
-    n = capture_length(
-        capture, rate_column, mapping=mapping, group=group, read_options=read_options
-    )
+    stream.check("split over workers")
+    n = capture_length(stream.capture, stream.column, **stream.reading)
     # a format without row offsets is refused before a cluster is started
-    options = {"mapping": mapping, "group": group, "read_options": read_options}
-    read_capture_rows(capture, [rate_column], 0, min(n, 1), **options)
+    read_capture_rows(stream.capture, [stream.column], 0, min(n, 1), **stream.reading)
     tasks = 2 * (-(-n // CHUNK_ROWS)) + 1  # at most: two rounds of blocks and the checks
     with (
         dask_client(workers, scheduler, None) as client,
         _sample_progress(tasks, "Allan deviation (tasks on Dask)") as progress,
     ):
         result = gyro_noise_on_dask(
-            capture,
+            stream.capture,
             client=client,
-            column=rate_column,
-            fs_hz=fs_hz,
-            unit=unit,
-            taus=taus or "octave",
-            specs=kw.pop("specs"),
-            allow_clipped=kw.pop("allow_clipped"),
-            mapping=mapping,
-            group=group,
-            read_options=read_options,
+            **stream.analysis(),
+            **stream.reading,
             history=_CHUNK_HISTORY,
             progress=progress,
         )
         workers_used = len(client.scheduler_info().get("workers", {}))
-    return _octave_note(result, taus, f"split over {workers_used} Dask workers ({n} samples)")
+    return stream.noted(result, f"split over {workers_used} Dask workers ({n} samples)")
 
 
 def _finish(result: Any, capture: str, json_path: str | None, report_path: str | None) -> None:
