@@ -23,13 +23,13 @@ its confidence interval and the noise terms then come from them as on one machin
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rotacal.batch._blocks import CaptureRows, block_starts, task_round
 from rotacal.errors import CaptureError, ConfigError
 
 if TYPE_CHECKING:
@@ -47,35 +47,13 @@ CHUNK_ROWS = 1 << 22
 _OFFSET_ROWS = 1 << 16
 
 
-@dataclasses.dataclass(frozen=True)
-class _Source:
-    """Where a task reads its rows: the capture and how to read it (pickled to the workers)."""
-
-    path: str
-    column: str
-    mapping: dict[str, str] | None
-    group: str | None
-    read_options: ReadOptions | None
-
-    def rate(self, start: int, stop: int) -> np.ndarray:
-        """Rows ``start`` … ``stop - 1`` of the rate column (validated)."""
-        from rotacal.io import read_capture_rows
-
-        if stop <= start:
-            return np.empty(0)
-        return read_capture_rows(
-            self.path,
-            [self.column],
-            start,
-            stop,
-            mapping=self.mapping,
-            group=self.group,
-            read_options=self.read_options,
-        )[self.column]
+def _rate(source: CaptureRows, start: int, stop: int) -> np.ndarray:
+    """Rows ``start`` … ``stop - 1`` of the rate column (validated)."""
+    return source.column(source.columns[0], start, stop)
 
 
 def _check_task(
-    source: _Source, with_time: bool, fs_hz: float | None, allow_clipped: bool, rows: int
+    source: CaptureRows, with_time: bool, fs_hz: float | None, allow_clipped: bool, rows: int
 ) -> tuple[int, float, tuple[str, ...], float, float]:
     """Read the capture through once with every check of the single-process path: the number
     of samples, the sampling rate (Hz), the clipping warnings and the rate's extremes."""
@@ -83,9 +61,10 @@ def _check_task(
     from rotacal.io import iter_capture_chunks
     from rotacal.signal._values import check_magnitudes
 
-    checks = NoiseChecks(source.column, fs_hz)
+    name = source.columns[0]
+    checks = NoiseChecks(name, fs_hz)
     n, low, high = 0, math.inf, -math.inf
-    columns = [source.column, *(["time_s"] if with_time else [])]
+    columns = [name, *(["time_s"] if with_time else [])]
     for chunk in iter_capture_chunks(
         source.path,
         columns,
@@ -95,7 +74,7 @@ def _check_task(
         read_options=source.read_options,
     ):
         rate = checks.add(chunk)
-        check_magnitudes(source.column, rate, what="rate data", offset=n)
+        check_magnitudes(name, rate, what="rate data", offset=n)
         low, high = min(low, float(rate.min())), max(high, float(rate.max()))
         n += rate.size
     fs, clipped = checks.finish(n, allow_clipped)
@@ -103,13 +82,13 @@ def _check_task(
 
 
 def _short_task(
-    source: _Source, a: int, b: int, n: int, c: float, ms: np.ndarray, history: int
+    source: CaptureRows, a: int, b: int, n: int, c: float, ms: np.ndarray, history: int
 ) -> tuple[float, np.ndarray]:
     """Σ(rate − c) over rows [a, b), and S(m) over the second differences at i in [a, b) of
     each short cluster size ``ms`` (2m ≤ history), in (rate × sample interval)²."""
     from rotacal.signal._allan_fast import direct_sums
 
-    r = source.rate(a, min(n, b + history)) - c
+    r = _rate(source, a, min(n, b + history)) - c
     block = float(np.sum(r[: b - a]))
     x = np.zeros(r.size + 1)
     np.cumsum(r, out=x[1:])  # x[t] = phase at a + t, less the phase at a
@@ -121,15 +100,15 @@ def _short_task(
     return block, sums
 
 
-def _phase_at(source: _Source, p: int, boundary: np.ndarray, rows: int, c: float) -> float:
+def _phase_at(source: CaptureRows, p: int, boundary: np.ndarray, rows: int, c: float) -> float:
     """x_p (phase at sample p, offset c removed) from the block boundaries' phases and the rows
     between p's block boundary and p."""
     k = p // rows
-    return float(boundary[k]) + float(np.sum(source.rate(k * rows, p) - c))
+    return float(boundary[k]) + float(np.sum(_rate(source, k * rows, p) - c))
 
 
 def _long_task(
-    source: _Source,
+    source: CaptureRows,
     a: int,
     b: int,
     n: int,
@@ -142,7 +121,7 @@ def _long_task(
 
     def integral(start: int, count: int) -> np.ndarray:
         x = np.zeros(count)
-        np.cumsum(source.rate(start, start + count - 1) - c, out=x[1:])
+        np.cumsum(_rate(source, start, start + count - 1) - c, out=x[1:])
         return x
 
     sums = np.zeros(ms.size)
@@ -161,7 +140,7 @@ def _long_task(
 
 def _sums(
     client: Client,
-    source: _Source,
+    source: CaptureRows,
     starts: list[int],
     n: int,
     c: float,
@@ -173,29 +152,23 @@ def _sums(
 ) -> dict[int, float]:
     """S(m) of every cluster size: the short ones and the blocks' sums in one round of tasks,
     then the long ones (which need the phase at every block boundary) in a second."""
-    from distributed import as_completed
-
-    first = [
-        client.submit(_short_task, source, a, min(n, a + rows), n, c, short, history, pure=False)
-        for a in starts
-    ]
-    for _ in as_completed(first):
-        tick()
-    blocks = [f.result() for f in first]
+    blocks = task_round(
+        client,
+        _short_task,
+        [(source, a, min(n, a + rows), n, c, short, history) for a in starts],
+        tick,
+    )
     sums = {int(m): math.fsum(s[k] for _, s in blocks) for k, m in enumerate(short.tolist())}
     if not long.size:
         return sums
     # the phase at each block boundary, a correctly rounded sum of the blocks' sums
     boundary = np.array([math.fsum(b for b, _ in blocks[:k]) for k in range(len(blocks) + 1)])
-    second = [
-        client.submit(
-            _long_task, source, a, min(n, a + rows), n, c, long, boundary, rows, pure=False
-        )
-        for a in starts
-    ]
-    for _ in as_completed(second):
-        tick()
-    parts = [f.result() for f in second]
+    parts = task_round(
+        client,
+        _long_task,
+        [(source, a, min(n, a + rows), n, c, long, boundary, rows) for a in starts],
+        tick,
+    )
     for k, m in enumerate(long.tolist()):
         sums[int(m)] = math.fsum(p[k] for p in parts)
     return sums
@@ -272,18 +245,18 @@ def gyro_noise_on_dask(
     history = DEFAULT_HISTORY if history is None else int(history)
     if chunk_rows < 1 or history < 4:
         raise ConfigError(f"chunk_rows ({chunk_rows}) and history ({history}) must be positive")
-    source = _Source(str(path), column, mapping, group, read_options)
+    source = CaptureRows(str(path), (column,), mapping, group, read_options)
     n = capture_length(path, column, mapping=mapping, group=group, read_options=read_options)
     names = capture_columns(path, mapping=mapping, group=group, read_options=read_options)
     with_time = "time_s" in names
     n_phase = n + 1
     if n_phase < MIN_SAMPLES:
         check_streamed_record(n_phase, 0.0, 1.0)  # the single-process path's message
-    c = float(np.mean(source.rate(0, min(n, _OFFSET_ROWS))))
+    c = float(np.mean(_rate(source, 0, min(n, _OFFSET_ROWS))))
     ms, notes = _cluster_sizes(taus, n_phase, 1.0)  # octave/decade sizes do not depend on fs
     short = ms[2 * ms <= history]
     long = ms[2 * ms > history]
-    starts = list(range(0, n, chunk_rows))
+    starts = block_starts(n, chunk_rows)
     done = 0
 
     def tick() -> None:

@@ -1,0 +1,75 @@
+"""What every analysis of one huge capture on Dask shares: the rows a task reads, the blocks a
+record is split into, and a round of tasks whose results come back in block order."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any, TypeVar
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+    from rotacal.io.read_options import ReadOptions
+
+__all__ = ["CaptureRows", "block_starts", "task_round"]
+
+T = TypeVar("T")
+
+
+@dataclasses.dataclass(frozen=True)
+class CaptureRows:
+    """Where a task reads its rows: the capture, its columns and how to read it (pickled to the
+    workers, which must see ``path``: a shared file system)."""
+
+    path: str
+    columns: tuple[str, ...]
+    mapping: dict[str, str] | None = None
+    group: str | None = None
+    read_options: ReadOptions | None = None
+
+    def read(self, start: int, stop: int) -> dict[str, np.ndarray]:
+        """Rows ``start`` … ``stop - 1`` of every column, validated as the reader validates a
+        whole capture (empty arrays when ``stop <= start``)."""
+        from rotacal.io import read_capture_rows
+
+        if stop <= start:
+            return {name: np.empty(0) for name in self.columns}
+        return read_capture_rows(
+            self.path,
+            list(self.columns),
+            start,
+            stop,
+            mapping=self.mapping,
+            group=self.group,
+            read_options=self.read_options,
+        )
+
+    def column(self, name: str, start: int, stop: int) -> np.ndarray:
+        """Rows ``start`` … ``stop - 1`` of one column."""
+        return dataclasses.replace(self, columns=(name,)).read(start, stop)[name]
+
+
+def block_starts(n: int, rows: int) -> list[int]:
+    """The first row of each block of ``rows`` rows that tile rows 0 … n − 1."""
+    return list(range(0, n, rows))
+
+
+def task_round(
+    client: Client,
+    fn: Callable[..., T],
+    arguments: Sequence[tuple[Any, ...]],
+    tick: Callable[[], None] | None = None,
+) -> list[T]:
+    """``fn(*args)`` for each of ``arguments`` as tasks of the cluster, the results in the order
+    of ``arguments``; ``tick()`` after each task that ends. The first task's error is raised
+    (in the order of ``arguments``), so the message is the one a single process gives first."""
+    from distributed import as_completed
+
+    futures = [client.submit(fn, *args, pure=False) for args in arguments]
+    for _ in as_completed(futures):
+        if tick is not None:
+            tick()
+    return [f.result() for f in futures]
