@@ -31,6 +31,7 @@ from rotacal.table.rate_alignment import (
     own_revolutions,
     same_capture,
 )
+from rotacal.table.rate_stream import RatePasses, rate_passes
 from rotacal.uncertainty import InstrumentSpecs
 
 __all__ = ["calibrate_rate_file", "file_heads"]
@@ -179,6 +180,45 @@ def calibrate_rate_file(
     ----------
     Kokuyama et al. (2015) §5; see :func:`~rotacal.table.rate.calibrate_rate`.
     """
+    return calibrate_rate_source(
+        path,
+        pulses_per_rev=pulses_per_rev,
+        selfcal=selfcal,
+        head=head,
+        average=average,
+        set_rate_deg_s=set_rate_deg_s,
+        allan_angles_deg=allan_angles_deg,
+        compensate=compensate,
+        specs=specs,
+        mapping=mapping,
+        group=group,
+        read_options=read_options,
+        chunk_rows=chunk_rows,
+        progress=progress,
+    )
+
+
+def calibrate_rate_source(
+    path: str | PathLike[str],
+    *,
+    pulses_per_rev: int,
+    selfcal: SelfCalibration | Mapping[str, Any] | ArrayLike | None,
+    head: int | str,
+    average: int,
+    set_rate_deg_s: float | None,
+    allan_angles_deg: ArrayLike | None,
+    compensate: bool,
+    specs: InstrumentSpecs | None,
+    mapping: Any,
+    group: str | None,
+    read_options: Any,
+    chunk_rows: int,
+    progress: Callable[[int], None] | None = None,
+    passes_for: Callable[[str], Callable[..., RatePasses]] | None = None,
+) -> RateResult:
+    """:func:`calibrate_rate_file` with the rate's two passes over the head's column made by
+    ``passes_for(column)`` (default :func:`~rotacal.table.rate_stream.rate_passes` over its
+    chunks; :mod:`rotacal.batch.capture_rate` splits them over Dask workers)."""
     from rotacal.io import capture_length
 
     m = check_pulses_per_rev(pulses_per_rev)
@@ -270,4 +310,5 @@ def calibrate_rate_file(
         notes=notes,
         keep_series=False,
         progress=progress,
+        run_passes=rate_passes if passes_for is None else passes_for(column),
     )

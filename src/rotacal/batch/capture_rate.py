@@ -1,0 +1,326 @@
+"""The pulse-timing rate of one huge capture (``rotacal rate``), as tasks on Dask distributed.
+
+:func:`calibrate_rate_on_dask` gives what :func:`rotacal.table.rate_file.calibrate_rate_file`
+gives for the same head (≤ 1e-9 relative, tested), with both passes of
+:mod:`rotacal.table.rate_stream` split into blocks of ``chunk_rows`` pulses, each read by a
+worker on its own (a shared file system; NPZ without compression, HDF5 or TDMS):
+
+* **First round** — a task per block [a, b) checks its pulse times with the pulse before them
+  (the checks and the messages of the single-process path, which checks the same chunks: with
+  the same ``chunk_rows`` the same first fault in file order), and sums what starts in it: the
+  timing jitter's filtered values (the 2m + 3 pulses after b read too), the terms of s(φ) that
+  lie wholly inside it (their heads and tails kept), its rate points with the three before them
+  (the rms statistics' lagged sums), the Welch windows that start in it (the points after it
+  read too), the trend's centred sums, the times of whole revolutions and the first pulses.
+  The provisional reference (the first rate point) is computed by the client up front.
+* **The client** merges the blocks in order (:meth:`~rotacal.table.rate_stream.PassOne.merge`):
+  the terms of s(φ) across each boundary from the carried tails and the next block's first
+  decimated pulses (fewer than 2·k/d each, at every stride d), sums added exactly or in
+  Chan's pairwise update; then the mean rate, the budgets' inputs and the Wiener gains.
+* **Second round** — a task per block finds the peak's candidates among its rate points about
+  the mean rate and filters the window that holds each (the window's points read around it).
+
+A deviation from another capture is aligned (one pass of folded sums) and a capture's own
+self-calibration made by the client as on one machine; only the rate's passes are split.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Iterator, Mapping
+from os import PathLike
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rotacal.batch._blocks import CaptureRows, block_starts, task_round
+from rotacal.errors import ConfigError
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+    from rotacal.encoder.selfcal import SelfCalibration
+    from rotacal.table.rate import RateResult
+    from rotacal.table.rate_stream import PassOne, RatePasses, RatePlan
+    from rotacal.uncertainty import InstrumentSpecs
+    from rotacal.uncertainty.summaries import ErrorProcess, PeakInputs
+
+__all__ = ["calibrate_rate_on_dask"]
+
+FloatArray = NDArray[np.float64]
+
+
+def _points(
+    source: CaptureRows, plan: RatePlan, p0: int, p1: int, mean_rate: float | None = None
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Rate points p0 … p1 − 1 (each from pulses p·A … (p + 1)·A) as the single-process path
+    computes them: times (s), compensated and nominal rates (deg/s), and the pulse times read."""
+    a = plan.average
+    t = source.column(source.columns[0], p0 * a, p1 * a + 1)
+    rp = plan.rate_points(nominal=mean_rate is None)
+    rp.seen = p0 * a
+    nom, ang = rp.angles(t)
+    t_avg, rate, rate_nom = rp.push(t, ang, nom)
+    return t_avg, rate, rate_nom, t
+
+
+def _first_task(
+    source: CaptureRows, plan: RatePlan, ref: float, a: int, b: int
+) -> tuple[PassOne, tuple[dict[int, Any], dict[int, Any] | None]]:
+    """What the first pass gathers over pulses [a, b), as :meth:`PassOne.merge` takes it."""
+    from rotacal.encoder.pulses import check_pulse_times
+    from rotacal.table.rate_allan_sums import AllanSums
+    from rotacal.table.rate_stream import PassOne
+    from rotacal.uncertainty.summaries_peak import WelchSums, window_length, window_starts
+    from rotacal.uncertainty.summaries_rms import MAX_LAG
+
+    n, m, avg, name = plan.n, plan.m, plan.average, source.columns[0]
+    one = PassOne.empty(plan)
+    lead = max(a - 1, 0)  # the pulse before the block: the intervals across its start
+    span = one.jitter.span
+    t = source.column(name, lead, min(n, b + span))
+    if b - lead >= 3:
+        check_pulse_times(t[: b - lead], name, first_index=lead)
+    own = t[a - lead : b - lead]
+    rp = plan.rate_points()
+    rp.seen = a
+    nom, ang = rp.angles(own)
+    if a == 0:
+        one.first_t = float(own[0])
+    if b == n:
+        one.last_t = float(own[-1])
+    if a < plan.prefix_pulses:
+        one.prefix_t.append(own[: plan.prefix_pulses - a].copy())
+        one.prefix_a.append(nom[: plan.prefix_pulses - a].copy())
+    if plan.revs >= 1:
+        first = (-a) % m
+        keep = np.arange(a + first, b, m) <= plan.revs * m
+        one.rev_times.append(own[first::m][keep].copy())
+        if a <= plan.revs * m < b:
+            one.end_t = float(own[plan.revs * m - a])
+    else:
+        one.short_t.append(own.copy())
+        one.short_a.append(ang.copy())
+    one.jitter.update(t[a - lead :])  # the terms that start in [a, b)
+    ks, strides = plan.ks.tolist(), plan.strides
+    one.allan = AllanSums.starting_at(ks, strides, a, jit=plan.compiled)
+    heads = one.allan.heads(own, ang)
+    one.allan.update(own, ang)
+    heads_nom = None
+    if one.allan_nom is not None:
+        one.allan_nom = AllanSums.starting_at(ks, strides, a, jit=plan.compiled)
+        heads_nom = one.allan_nom.heads(own, nom)
+        one.allan_nom.update(own, nom)
+    # the rate points p·A in [a, b), the MAX_LAG − 1 before them, and the Welch windows that
+    # start among them (with the points up to their ends)
+    p0, p1 = -(-a // avg), min(plan.points, -(-b // avg))
+    if p1 > p0:
+        starts, size = window_starts(plan.points), window_length(plan.points)
+        windows = np.flatnonzero((starts >= p0) & (starts < p1))
+        q0 = max(0, p0 - (MAX_LAG - 1))
+        q1 = max(p1, int(starts[windows[-1]]) + size) if windows.size else p1
+        t_avg, rate, rate_nom, _ = _points(source, plan, q0, q1)
+        d = 100.0 * (rate - ref) / ref
+        d0 = d[p0 - q0 : p1 - q0]
+        stats = one.stats
+        stats.n, stats.tail = p0, d[: p0 - q0]
+        stats.update(d0)
+        if windows.size:
+            s = int(starts[windows[0]])
+            one.welch = WelchSums(plan.points, _buffer_start=s, _next=int(windows[0]))
+            one.welch.update(d[s - q0 :])
+        one.trend.update(t_avg[p0 - q0 : p1 - q0], d0)
+        dn = d0
+        if plan.deviation is not None:
+            dn = 100.0 * (rate_nom[p0 - q0 : p1 - q0] - ref) / ref
+        one.add_extremes(d0, dn)
+    return one, (heads, heads_nom)
+
+
+def _second_task(
+    source: CaptureRows,
+    plan: RatePlan,
+    mean_rate: float,
+    floor: float,
+    gains: list[FloatArray],
+    a: int,
+    b: int,
+) -> tuple[float, NDArray[np.int64], FloatArray, list[FloatArray]]:
+    """The second pass over the rate points p·A in [a, b): their largest |d| about the mean rate
+    (%), the candidates |d| ≥ ``floor``, their values and their values filtered by each gain
+    in the window whose middle holds them (:class:`~rotacal.uncertainty.summaries_peak.
+    PeakCollector`'s arithmetic)."""
+    from rotacal.uncertainty.summaries_peak import (
+        denoised_at,
+        window_length,
+        window_of,
+        window_starts,
+    )
+
+    avg, points = plan.average, plan.points
+    p0, p1 = -(-a // avg), min(points, -(-b // avg))
+    none = np.zeros(0, dtype=np.int64)
+    if p1 <= p0:
+        return 0.0, none, np.zeros(0), [np.zeros(0) for _ in gains]
+    size = window_length(points)
+    q0, q1 = max(0, p0 - size), min(points, p1 + size)  # every window that holds a point
+    _, rate, _, _ = _points(source, plan, q0, q1, mean_rate)
+    d = 100.0 * (rate - mean_rate) / mean_rate
+    mine = np.abs(d[p0 - q0 : p1 - q0])
+    pos = np.flatnonzero(mine >= floor).astype(np.int64) + p0
+    base = d[pos - q0]
+    den = [np.empty(pos.size) for _ in gains]
+    which = window_of(pos, points)
+    starts = window_starts(points)
+    for j in np.unique(which).tolist():
+        sel = np.flatnonzero(which == j)
+        s = int(starts[j])
+        values = d[s - q0 : s - q0 + size]
+        for out, filtered in zip(den, denoised_at(values, pos[sel] - s, gains), strict=True):
+            out[sel] = filtered
+    return float(mine.max()), pos, base, den
+
+
+def _dask_passes(
+    chunks: Callable[[], Iterator[FloatArray]],
+    pulses: int,
+    *,
+    client: Client,
+    source: CaptureRows,
+    chunk_rows: int,
+    tick: Callable[[], None],
+    sources_for: Callable[[float, tuple[float, float, bool]], list[ErrorProcess]],
+    keep_series: bool = False,
+    progress: Callable[[int], None] | None = None,
+    **settings: Any,
+) -> RatePasses:
+    """:func:`rotacal.table.rate_stream.rate_passes` with both passes as rounds of tasks
+    (``chunks`` is not read: each task reads its own block)."""
+    from rotacal.table.rate_stream import PassOne, finish_passes, rate_plan
+    from rotacal.uncertainty.summaries import PeakInputs
+
+    if keep_series:
+        raise ConfigError("the rate points of a capture split over workers are not kept")
+    plan = rate_plan(pulses, **settings)
+    _, first, _, _ = _points(source, plan, 0, 1)
+    ref = float(first[0])  # the provisional reference: the first rate point
+    starts = block_starts(plan.n, chunk_rows)
+    blocks = [(a, min(plan.n, a + chunk_rows)) for a in starts]
+    one = PassOne.empty(plan)
+    one.ref = ref
+    for block, heads in task_round(
+        client, _first_task, [(source, plan, ref, a, b) for a, b in blocks], tick
+    ):
+        one.merge(block, heads)
+
+    def second(mean_rate: float, floor: float, gains: list[FloatArray]) -> PeakInputs:
+        parts = task_round(
+            client,
+            _second_task,
+            [(source, plan, mean_rate, floor, gains, a, b) for a, b in blocks],
+            tick,
+        )
+        return PeakInputs(
+            plan.points,
+            max(p[0] for p in parts),
+            np.concatenate([p[1] for p in parts]),
+            np.concatenate([p[2] for p in parts]),
+            [np.concatenate([p[3][i] for p in parts]) for i in range(len(gains))],
+        )
+
+    return finish_passes(plan, one, sources_for, second)
+
+
+def calibrate_rate_on_dask(
+    path: str | PathLike[str],
+    *,
+    client: Client,
+    pulses_per_rev: int,
+    selfcal: SelfCalibration | Mapping[str, Any] | ArrayLike | None = None,
+    head: int | str = 0,
+    average: int = 10,
+    set_rate_deg_s: float | None = None,
+    allan_angles_deg: ArrayLike | None = None,
+    compensate: bool = True,
+    specs: InstrumentSpecs | None = None,
+    mapping: Any = None,
+    group: str | None = None,
+    read_options: Any = None,
+    chunk_rows: int | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> RateResult:
+    """:func:`rotacal.table.rate_file.calibrate_rate_file` of one head of a capture, its two
+    passes split over the workers of a Dask cluster (see the module for how).
+
+    Parameters
+    ----------
+    path : str
+        The capture (NPZ saved without compression, HDF5 or TDMS), at a path every worker sees.
+    client : distributed.Client
+        The cluster's client.
+    pulses_per_rev, selfcal, head, average, set_rate_deg_s, allan_angles_deg, compensate, specs
+        As :func:`~rotacal.table.rate_file.calibrate_rate_file` (m pulses per revolution,
+        ``average`` intervals per rate point, the set rate in deg/s, s(φ) angles in deg).
+    mapping, group, read_options
+        How to read the capture, as :func:`rotacal.io.read_capture`.
+    chunk_rows : int, optional
+        Pulses of a task's block [default: the single-process path's chunk,
+        :data:`rotacal.table.rate_file.CHUNK_PULSES`, which checks the same chunks].
+    progress : callable, optional
+        Called with the number of tasks done so far (the passes the client makes itself, the
+        alignment and the self-calibration, are not counted).
+
+    Returns
+    -------
+    RateResult
+        As ``calibrate_rate_file`` over the same file to ≤ 1e-9 relative.
+
+    Raises
+    ------
+    CaptureError, ConfigError
+        As the single-process path, with the same messages; ConfigError also for a capture that
+        cannot be read from a given row on (CSV, a compressed NPZ member).
+
+    References
+    ----------
+    Kokuyama et al. (2015) §5; see :func:`rotacal.table.rate.calibrate_rate`.
+    """
+    from rotacal.table.rate_file import CHUNK_PULSES, calibrate_rate_source
+
+    rows = CHUNK_PULSES if chunk_rows is None else int(chunk_rows)
+    if rows < 1:
+        raise ConfigError(f"chunk_rows must be positive, got {chunk_rows}")
+    done = 0
+
+    def tick() -> None:
+        nonlocal done
+        done += 1
+        if progress is not None:
+            progress(done)
+
+    source_for = functools.partial(
+        CaptureRows, str(path), mapping=mapping, group=group, read_options=read_options
+    )
+    return calibrate_rate_source(
+        path,
+        pulses_per_rev=pulses_per_rev,
+        selfcal=selfcal,
+        head=head,
+        average=average,
+        set_rate_deg_s=set_rate_deg_s,
+        allan_angles_deg=allan_angles_deg,
+        compensate=compensate,
+        specs=specs,
+        mapping=mapping,
+        group=group,
+        read_options=read_options,
+        chunk_rows=rows,
+        passes_for=lambda column: functools.partial(
+            _dask_passes,
+            client=client,
+            source=source_for((column,)),
+            chunk_rows=rows,
+            tick=tick,
+        ),
+    )
