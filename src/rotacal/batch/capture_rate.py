@@ -52,17 +52,14 @@ FloatArray = NDArray[np.float64]
 
 
 def _points(
-    source: CaptureRows, plan: RatePlan, p0: int, p1: int, mean_rate: float | None = None
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Rate points p0 … p1 − 1 (each from pulses p·A … (p + 1)·A) as the single-process path
-    computes them: times (s), compensated and nominal rates (deg/s), and the pulse times read."""
-    a = plan.average
-    t = source.column(source.columns[0], p0 * a, p1 * a + 1)
+    t: FloatArray, plan: RatePlan, p0: int, p1: int, mean_rate: float | None = None
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Rate points p0 … p1 − 1 (each from pulses p·A … (p + 1)·A, ``t`` their times in s) as
+    the single-process path computes them: times (s), compensated and nominal rates (deg/s)."""
     rp = plan.rate_points(nominal=mean_rate is None)
-    rp.seen = p0 * a
+    rp.seen = p0 * plan.average
     nom, ang = rp.angles(t)
-    t_avg, rate, rate_nom = rp.push(t, ang, nom)
-    return t_avg, rate, rate_nom, t
+    return rp.push(t, ang, nom)
 
 
 def _first_task(
@@ -77,12 +74,19 @@ def _first_task(
 
     n, m, avg, name = plan.n, plan.m, plan.average, source.columns[0]
     one = PassOne.empty(plan)
+    # the rate points p·A in [a, b), the MAX_LAG − 1 before them, and the Welch windows that
+    # start among them (with the points up to their ends)
+    p0, p1 = -(-a // avg), min(plan.points, -(-b // avg))
+    starts, size = window_starts(plan.points), window_length(plan.points)
+    windows = np.flatnonzero((starts >= p0) & (starts < p1))
+    q0 = max(0, p0 - (MAX_LAG - 1))
+    q1 = max(p1, int(starts[windows[-1]]) + size) if windows.size else p1
     lead = max(a - 1, 0)  # the pulse before the block: the intervals across its start
-    span = one.jitter.span
-    t = source.column(name, lead, min(n, b + span))
+    r0 = min(lead, q0 * avg)
+    t = source.column(name, r0, max(min(n, b + one.jitter.span), q1 * avg + 1))
     if b - lead >= 3:
-        check_pulse_times(t[: b - lead], name, first_index=lead)
-    own = t[a - lead : b - lead]
+        check_pulse_times(t[lead - r0 : b - r0], name, first_index=lead)
+    own = t[a - r0 : b - r0]
     rp = plan.rate_points()
     rp.seen = a
     nom, ang = rp.angles(own)
@@ -102,7 +106,7 @@ def _first_task(
     else:
         one.short_t.append(own.copy())
         one.short_a.append(ang.copy())
-    one.jitter.update(t[a - lead :])  # the terms that start in [a, b)
+    one.jitter.update(t[a - r0 : min(n, b + one.jitter.span) - r0])  # terms starting in [a, b)
     ks, strides = plan.ks.tolist(), plan.strides
     one.allan = AllanSums.starting_at(ks, strides, a, jit=plan.compiled)
     heads = one.allan.heads(own, ang)
@@ -112,15 +116,8 @@ def _first_task(
         one.allan_nom = AllanSums.starting_at(ks, strides, a, jit=plan.compiled)
         heads_nom = one.allan_nom.heads(own, nom)
         one.allan_nom.update(own, nom)
-    # the rate points p·A in [a, b), the MAX_LAG − 1 before them, and the Welch windows that
-    # start among them (with the points up to their ends)
-    p0, p1 = -(-a // avg), min(plan.points, -(-b // avg))
     if p1 > p0:
-        starts, size = window_starts(plan.points), window_length(plan.points)
-        windows = np.flatnonzero((starts >= p0) & (starts < p1))
-        q0 = max(0, p0 - (MAX_LAG - 1))
-        q1 = max(p1, int(starts[windows[-1]]) + size) if windows.size else p1
-        t_avg, rate, rate_nom, _ = _points(source, plan, q0, q1)
+        t_avg, rate, rate_nom = _points(t[q0 * avg - r0 : q1 * avg + 1 - r0], plan, q0, q1)
         d = 100.0 * (rate - ref) / ref
         d0 = d[p0 - q0 : p1 - q0]
         stats = one.stats
@@ -165,7 +162,8 @@ def _second_task(
         return 0.0, none, np.zeros(0), [np.zeros(0) for _ in gains]
     size = window_length(points)
     q0, q1 = max(0, p0 - size), min(points, p1 + size)  # every window that holds a point
-    _, rate, _, _ = _points(source, plan, q0, q1, mean_rate)
+    t = source.column(source.columns[0], q0 * avg, q1 * avg + 1)
+    _, rate, _ = _points(t, plan, q0, q1, mean_rate)
     d = 100.0 * (rate - mean_rate) / mean_rate
     mine = np.abs(d[p0 - q0 : p1 - q0])
     pos = np.flatnonzero(mine >= floor).astype(np.int64) + p0
@@ -203,7 +201,8 @@ def _dask_passes(
     if keep_series:
         raise ConfigError("the rate points of a capture split over workers are not kept")
     plan = rate_plan(pulses, **settings)
-    _, first, _, _ = _points(source, plan, 0, 1)
+    head = source.column(source.columns[0], 0, plan.average + 1)
+    _, first, _ = _points(head, plan, 0, 1)
     ref = float(first[0])  # the provisional reference: the first rate point
     starts = block_starts(plan.n, chunk_rows)
     blocks = [(a, min(plan.n, a + chunk_rows)) for a in starts]
