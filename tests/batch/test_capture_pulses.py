@@ -5,8 +5,7 @@ refusals with the same messages."""
 from __future__ import annotations
 
 import json
-import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -30,21 +29,6 @@ CHUNK = 997
 #: Welch windows of this many rate points (here and on the workers): the windows and the peak's
 #: filter cross many block boundaries
 WINDOW = 512
-
-
-def _worst(a: Any, b: Any, where: str = "") -> float:
-    """The largest relative difference between the numbers of two JSON documents (and that
-    everything else is equal)."""
-    if isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        return max((_worst(a[k], b[k], f"{where}/{k}") for k in a if k != "provenance"), default=0)
-    if isinstance(a, list):
-        assert len(a) == len(b), where
-        return max((_worst(u, v, where) for u, v in zip(a, b, strict=True)), default=0.0)
-    if isinstance(a, float) and isinstance(b, float) and math.isfinite(a):
-        return 0.0 if a == b else abs(a - b) / max(abs(a), abs(b))
-    assert a == b, where
-    return 0.0
 
 
 def _set_window(size: int) -> None:
@@ -80,7 +64,11 @@ def twin(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, np.ndarr
 
 @pytest.mark.parametrize("given", [False, True], ids=["nominal", "aligned-deviation"])
 def test_split_over_workers_equals_one_process_and_memory(
-    dask_client: Client, windows: None, twin: tuple[Path, Path, np.ndarray], given: bool
+    worst: Callable[[Any, Any], float],
+    dask_client: Client,
+    windows: None,
+    twin: tuple[Path, Path, np.ndarray],
+    given: bool,
 ) -> None:
     one, _, deviation = twin
     kw: dict[str, Any] = {"pulses_per_rev": M, "set_rate_deg_s": 120.0}
@@ -89,20 +77,23 @@ def test_split_over_workers_equals_one_process_and_memory(
     assert got.compensated is given
     assert (np.load(one)["head_0"].size - 1) // 10 > 5 * WINDOW  # rate points: many windows
     streamed = calibrate_rate_file(one, chunk_rows=CHUNK, **kw)
-    assert _worst(got.to_dict(), streamed.to_dict()) < 1e-9
+    assert worst(got.to_dict(), streamed.to_dict()) < 1e-9
     memory = calibrate_rate([np.load(one)["head_0"]], **kw)
-    assert _worst(got.to_dict(), memory.to_dict()) < 1e-9
+    assert worst(got.to_dict(), memory.to_dict()) < 1e-9
 
 
 def test_a_capture_self_calibrated_first(
-    dask_client: Client, windows: None, twin: tuple[Path, Path, np.ndarray]
+    worst: Callable[[Any, Any], float],
+    dask_client: Client,
+    windows: None,
+    twin: tuple[Path, Path, np.ndarray],
 ) -> None:
     """Two heads, nothing given: the client self-calibrates them, the rate's passes split."""
     _, two, _ = twin
     got = calibrate_rate_on_dask(two, client=dask_client, pulses_per_rev=M, chunk_rows=7777)
     assert got.compensated
     streamed = calibrate_rate_file(two, pulses_per_rev=M, chunk_rows=7777)
-    assert _worst(got.to_dict(), streamed.to_dict()) < 1e-9
+    assert worst(got.to_dict(), streamed.to_dict()) < 1e-9
 
 
 def test_the_first_fault_in_the_file_is_the_one_reported(
@@ -131,7 +122,10 @@ def test_text_is_refused(dask_client: Client, tmp_path: Path) -> None:
 
 
 def test_the_command_splits_over_a_running_scheduler(
-    dask_client: Client, twin: tuple[Path, Path, np.ndarray], tmp_path: Path
+    worst: Callable[[Any, Any], float],
+    dask_client: Client,
+    twin: tuple[Path, Path, np.ndarray],
+    tmp_path: Path,
 ) -> None:
     address = dask_client.scheduler_info()["address"]
     outputs = {}
@@ -149,7 +143,7 @@ def test_the_command_splits_over_a_running_scheduler(
         == f"split over 2 Dask workers ({np.load(twin[0])['head_0'].size} pulses)."
     )
     split["notes"] = split["notes"][:-1]
-    assert _worst(split, outputs["chunked"]) < 1e-9
+    assert worst(split, outputs["chunked"]) < 1e-9
     both = CliRunner().invoke(
         cli,
         [

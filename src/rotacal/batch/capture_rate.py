@@ -285,7 +285,7 @@ def calibrate_rate_on_dask(
     ----------
     Kokuyama et al. (2015) §5; see :func:`rotacal.table.rate.calibrate_rate`.
     """
-    from rotacal.table.rate_file import CHUNK_PULSES, calibrate_rate_source
+    from rotacal.table.rate_file import CHUNK_PULSES, calibrate_rate_file
 
     rows = CHUNK_PULSES if chunk_rows is None else int(chunk_rows)
     if rows < 1:
@@ -301,7 +301,7 @@ def calibrate_rate_on_dask(
     source_for = functools.partial(
         CaptureRows, str(path), mapping=mapping, group=group, read_options=read_options
     )
-    return calibrate_rate_source(
+    return calibrate_rate_file(
         path,
         pulses_per_rev=pulses_per_rev,
         selfcal=selfcal,

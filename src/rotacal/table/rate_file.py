@@ -161,13 +161,17 @@ def calibrate_rate_file(
     read_options: Any = None,
     chunk_rows: int = CHUNK_PULSES,
     progress: Callable[[int], None] | None = None,
+    passes_for: Callable[[str], Callable[..., RatePasses]] | None = None,
 ) -> RateResult:
     """:func:`rotacal.table.rate.calibrate_rate` of one head of a capture file, streamed.
 
     Parameters as for :func:`~rotacal.table.rate.calibrate_rate` (``head`` a number: the
     head-averaged times need every head at once), plus where the file is (``mapping``, ``group``
     and ``read_options`` as for :func:`rotacal.io.read_capture`), ``chunk_rows`` (pulses per
-    chunk) and ``progress`` (called with the pulses of each chunk read, every pass).
+    chunk), ``progress`` (called with the pulses of each chunk read, every pass) and
+    ``passes_for``: given the head's column, what makes the rate's two passes over it, with the
+    arguments of :func:`~rotacal.table.rate_stream.rate_passes` (default: that function over
+    the column's chunks; :mod:`rotacal.batch.capture_rate` splits them over Dask workers).
 
     Raises
     ------
@@ -180,45 +184,6 @@ def calibrate_rate_file(
     ----------
     Kokuyama et al. (2015) §5; see :func:`~rotacal.table.rate.calibrate_rate`.
     """
-    return calibrate_rate_source(
-        path,
-        pulses_per_rev=pulses_per_rev,
-        selfcal=selfcal,
-        head=head,
-        average=average,
-        set_rate_deg_s=set_rate_deg_s,
-        allan_angles_deg=allan_angles_deg,
-        compensate=compensate,
-        specs=specs,
-        mapping=mapping,
-        group=group,
-        read_options=read_options,
-        chunk_rows=chunk_rows,
-        progress=progress,
-    )
-
-
-def calibrate_rate_source(
-    path: str | PathLike[str],
-    *,
-    pulses_per_rev: int,
-    selfcal: SelfCalibration | Mapping[str, Any] | ArrayLike | None,
-    head: int | str,
-    average: int,
-    set_rate_deg_s: float | None,
-    allan_angles_deg: ArrayLike | None,
-    compensate: bool,
-    specs: InstrumentSpecs | None,
-    mapping: Any,
-    group: str | None,
-    read_options: Any,
-    chunk_rows: int,
-    progress: Callable[[int], None] | None = None,
-    passes_for: Callable[[str], Callable[..., RatePasses]] | None = None,
-) -> RateResult:
-    """:func:`calibrate_rate_file` with the rate's two passes over the head's column made by
-    ``passes_for(column)`` (default :func:`~rotacal.table.rate_stream.rate_passes` over its
-    chunks; :mod:`rotacal.batch.capture_rate` splits them over Dask workers)."""
     from rotacal.io import capture_length
 
     m = check_pulses_per_rev(pulses_per_rev)
