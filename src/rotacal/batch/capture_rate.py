@@ -18,7 +18,8 @@ worker on its own (a shared file system; NPZ without compression, HDF5 or TDMS):
   decimated pulses (fewer than 2·k/d each, at every stride d), sums added exactly or in
   Chan's pairwise update; then the mean rate, the budgets' inputs and the Wiener gains.
 * **Second round** — a task per block finds the peak's candidates among its rate points about
-  the mean rate and filters the window that holds each (the window's points read around it).
+  the mean rate and filters the window that holds each (the windows' points around the block
+  read when there are candidates).
 
 A deviation from another capture is aligned (one pass of folded sums) and a capture's own
 self-calibration made by the client as on one machine; only the rate's passes are split.
@@ -52,11 +53,12 @@ FloatArray = NDArray[np.float64]
 
 
 def _points(
-    t: FloatArray, plan: RatePlan, p0: int, p1: int, mean_rate: float | None = None
+    t: FloatArray, plan: RatePlan, p0: int, *, nominal: bool = True
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Rate points p0 … p1 − 1 (each from pulses p·A … (p + 1)·A, ``t`` their times in s) as
-    the single-process path computes them: times (s), compensated and nominal rates (deg/s)."""
-    rp = plan.rate_points(nominal=mean_rate is None)
+    """The rate points from p0 on (each from pulses p·A … (p + 1)·A, ``t`` their times in s,
+    from pulse p0·A on) as the single-process path computes them: times (s), compensated and
+    (``nominal``) uncompensated rates (deg/s)."""
+    rp = plan.rate_points(nominal=nominal)
     rp.seen = p0 * plan.average
     nom, ang = rp.angles(t)
     return rp.push(t, ang, nom)
@@ -86,10 +88,10 @@ def _first_task(
     t = source.column(name, r0, max(min(n, b + one.jitter.span), q1 * avg + 1))
     if b - lead >= 3:
         check_pulse_times(t[lead - r0 : b - r0], name, first_index=lead)
-    own = t[a - r0 : b - r0]
     rp = plan.rate_points()
-    rp.seen = a
-    nom, ang = rp.angles(own)
+    rp.seen = r0
+    nom_all, ang_all = rp.angles(t)  # once for the block and the rate points around it
+    own, nom, ang = (x[a - r0 : b - r0] for x in (t, nom_all, ang_all))
     if a == 0:
         one.first_t = float(own[0])
     if b == n:
@@ -117,7 +119,8 @@ def _first_task(
         heads_nom = one.allan_nom.heads(own, nom)
         one.allan_nom.update(own, nom)
     if p1 > p0:
-        t_avg, rate, rate_nom = _points(t[q0 * avg - r0 : q1 * avg + 1 - r0], plan, q0, q1)
+        span = slice(q0 * avg - r0, q1 * avg + 1 - r0)
+        t_avg, rate, rate_nom = plan.rate_points().push(t[span], ang_all[span], nom_all[span])
         d = 100.0 * (rate - ref) / ref
         d0 = d[p0 - q0 : p1 - q0]
         stats = one.stats
@@ -157,20 +160,25 @@ def _second_task(
 
     avg, points = plan.average, plan.points
     p0, p1 = -(-a // avg), min(points, -(-b // avg))
-    none = np.zeros(0, dtype=np.int64)
     if p1 <= p0:
-        return 0.0, none, np.zeros(0), [np.zeros(0) for _ in gains]
-    size = window_length(points)
-    q0, q1 = max(0, p0 - size), min(points, p1 + size)  # every window that holds a point
-    t = source.column(source.columns[0], q0 * avg, q1 * avg + 1)
-    _, rate, _ = _points(t, plan, q0, q1, mean_rate)
-    d = 100.0 * (rate - mean_rate) / mean_rate
-    mine = np.abs(d[p0 - q0 : p1 - q0])
+        return 0.0, np.zeros(0, dtype=np.int64), np.zeros(0), [np.zeros(0) for _ in gains]
+
+    def deviation(q0: int, q1: int) -> FloatArray:
+        t = source.column(source.columns[0], q0 * avg, q1 * avg + 1)
+        _, rate, _ = _points(t, plan, q0, nominal=False)
+        return np.asarray(100.0 * (rate - mean_rate) / mean_rate, dtype=np.float64)
+
+    d, q0 = deviation(p0, p1), p0
+    mine = np.abs(d)
     pos = np.flatnonzero(mine >= floor).astype(np.int64) + p0
     base = d[pos - q0]
     den = [np.empty(pos.size) for _ in gains]
     which = window_of(pos, points)
-    starts = window_starts(points)
+    starts, size = window_starts(points), window_length(points)
+    if pos.size:  # the candidates are few: their windows' points around the block only then
+        lo, hi = int(starts[which[0]]), int(starts[which[-1]]) + size
+        if lo < p0 or hi > p1:
+            d, q0 = deviation(lo, hi), lo
     for j in np.unique(which).tolist():
         sel = np.flatnonzero(which == j)
         s = int(starts[j])
@@ -202,7 +210,7 @@ def _dask_passes(
         raise ConfigError("the rate points of a capture split over workers are not kept")
     plan = rate_plan(pulses, **settings)
     head = source.column(source.columns[0], 0, plan.average + 1)
-    _, first, _ = _points(head, plan, 0, 1)
+    _, first, _ = _points(head, plan, 0)
     ref = float(first[0])  # the provisional reference: the first rate point
     starts = block_starts(plan.n, chunk_rows)
     blocks = [(a, min(plan.n, a + chunk_rows)) for a in starts]
