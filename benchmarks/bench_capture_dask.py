@@ -10,7 +10,8 @@ rate_deg_s, NPZ without compression); ``--analysis rate`` one head of ``--sample
   (a fresh process that starts its local cluster: the start is included);
 
 and checks that every number of the JSON agrees with the baseline's. Prints seconds, the ratio
-to the baseline and the peak RSS of the largest process (the command's, or a Dask worker's: the
+to the baseline, the CPU seconds of the command and the workers it waited for (on a shared
+machine the steadier figure) and the peak RSS of the largest process (the command's, or a Dask worker's: the
 kernel counts waited-for descendants too). No asserts.
 
 Run: ``python benchmarks/bench_capture_dask.py [--analysis rate] [--samples 1e8] [--workers 1,2]``
@@ -52,9 +53,10 @@ def write_record(path: Path, n: int) -> None:
     path.with_suffix(".time.npy").unlink()
 
 
-def run(args: list[str]) -> tuple[float, float]:
-    """``rotacal ARGS`` in a fresh process: its wall seconds and peak RSS (MB) — of the process
-    and of the descendants it waited for (the Dask workers), from its own wait4 record."""
+def run(args: list[str]) -> tuple[float, float, float]:
+    """``rotacal ARGS`` in a fresh process: its wall seconds, peak RSS (MB) and CPU seconds — of
+    the process and of the descendants it waited for (the Dask workers), from its wait4 record
+    (on a shared machine the CPU seconds are the steadier figure)."""
     start = time.perf_counter()
     child = subprocess.Popen(
         [sys.executable, "-m", "rotacal", *args],
@@ -66,7 +68,7 @@ def run(args: list[str]) -> tuple[float, float]:
     seconds = time.perf_counter() - start
     if child.returncode:
         raise SystemExit(f"rotacal {' '.join(args)} failed ({child.returncode})")
-    return seconds, usage.ru_maxrss / 1024
+    return seconds, usage.ru_maxrss / 1024, usage.ru_utime + usage.ru_stime
 
 
 def worst(a: Any, b: Any) -> float:
@@ -109,16 +111,20 @@ def main() -> None:
         if pulses:
             common = ["rate", str(path), "--pulses-per-rev", "18000", "--overwrite"]
         base_json = Path(tmp) / "one.json"
-        base, rss = run([*common, "--chunked", "--json", str(base_json)])
-        print(f"{'one process (--chunked)':<28}{base:8.2f} s   1.00x   peak RSS {rss:.0f} MB")
+        base, rss, cpu = run([*common, "--chunked", "--json", str(base_json)])
+        print(
+            f"{'one process (--chunked)':<28}{base:8.2f} s   1.00x   CPU {cpu:6.2f} s   "
+            f"peak RSS {rss:.0f} MB"
+        )
         reference = json.loads(base_json.read_text())
         for w in [int(x) for x in args.workers.split(",")]:
             out = Path(tmp) / f"w{w}.json"
-            seconds, rss = run([*common, "--workers", str(w), "--json", str(out)])
+            seconds, rss, cpu = run([*common, "--workers", str(w), "--json", str(out)])
             diff = worst(json.loads(out.read_text()), reference)
             print(
                 f"{f'{w} Dask worker(s)':<28}{seconds:8.2f} s   {base / seconds:.2f}x   "
-                f"peak RSS {rss:.0f} MB; largest difference {diff:.1e} relative"
+                f"CPU {cpu:6.2f} s   peak RSS {rss:.0f} MB; largest difference {diff:.1e} "
+                "relative"
             )
 
 
