@@ -58,16 +58,19 @@ def run(args: list[str]) -> tuple[float, float, float]:
     the process and of the descendants it waited for (the Dask workers), from its wait4 record
     (on a shared machine the CPU seconds are the steadier figure)."""
     start = time.perf_counter()
-    child = subprocess.Popen(
-        [sys.executable, "-m", "rotacal", *args],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    _, status, usage = os.wait4(child.pid, 0)
-    child.returncode = os.waitstatus_to_exitcode(status)
-    seconds = time.perf_counter() - start
-    if child.returncode:
-        raise SystemExit(f"rotacal {' '.join(args)} failed ({child.returncode})")
+    with tempfile.TemporaryFile() as errors:
+        child = subprocess.Popen(
+            [sys.executable, "-m", "rotacal", *args], stdout=subprocess.DEVNULL, stderr=errors
+        )
+        _, status, usage = os.wait4(child.pid, 0)
+        child.returncode = os.waitstatus_to_exitcode(status)
+        seconds = time.perf_counter() - start
+        if child.returncode:
+            errors.seek(0)
+            tail = errors.read().decode(errors="replace").strip().splitlines()[-5:]
+            raise SystemExit(
+                f"rotacal {' '.join(args)} failed ({child.returncode}):\n" + "\n".join(tail)
+            )
     return seconds, usage.ru_maxrss / 1024, usage.ru_utime + usage.ru_stime
 
 

@@ -21,8 +21,10 @@ worker on its own (a shared file system; NPZ without compression, HDF5 or TDMS):
   the mean rate and filters the window that holds each (the windows' points around the block
   read when there are candidates).
 
-A deviation from another capture is aligned (one pass of folded sums) and a capture's own
-self-calibration made by the client as on one machine; only the rate's passes are split.
+The pass that places a deviation from another capture (folded sums per line and a line's
+centred sums, :class:`~rotacal.table.rate_alignment.FoldSums`) is a round of its own, each
+block checked as above; a capture's own self-calibration (several heads, none given) is made by
+the client as on one machine.
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ if TYPE_CHECKING:
 
     from rotacal.encoder.selfcal import SelfCalibration
     from rotacal.table.rate import RateResult
+    from rotacal.table.rate_alignment import FoldSums
     from rotacal.table.rate_stream import PassOne, RatePasses, RatePlan
     from rotacal.uncertainty import InstrumentSpecs
     from rotacal.uncertainty.summaries import ErrorProcess, PeakInputs
@@ -64,11 +67,62 @@ def _points(
     return rp.push(t, ang, nom)
 
 
+def _check_block(t: FloatArray, first: int, a: int, b: int, name: str) -> None:
+    """Check pulses [a, b) with the pulse before them (``t``: the pulses from ``first`` on), as
+    the single-process path checks a chunk: the same pulses, the same messages."""
+    from rotacal.encoder.pulses import check_pulse_times
+
+    lead = max(a - 1, 0)
+    if b - lead >= 3:
+        check_pulse_times(t[lead - first : b - first], name, first_index=lead)
+
+
+def _fold_task(
+    source: CaptureRows, n: int, m: int, t01: tuple[float, float], a: int, b: int
+) -> FoldSums:
+    """The alignment's folded sums over pulses [a, b) (``t01``: the train's first two pulse
+    times, s), the pulses checked first."""
+    from rotacal.table.rate_alignment import FoldSums
+
+    lead = max(a - 1, 0)
+    t = source.column(source.columns[0], lead, b)
+    _check_block(t, lead, a, b, source.columns[0])
+    fold = FoldSums.starting_at(n, m, a, *t01)
+    fold.update(t[a - lead :])
+    return fold
+
+
+def _dask_fold(
+    pulses: int,
+    m: int,
+    *,
+    client: Client,
+    source: CaptureRows,
+    chunk_rows: int,
+    tick: Callable[[], None],
+) -> FoldSums:
+    """The alignment's pass (:class:`~rotacal.table.rate_alignment.FoldSums`) as a round of
+    tasks, merged in block order."""
+    from rotacal.table.rate_alignment import FoldSums
+
+    fold = FoldSums(pulses, m)
+    head = source.column(source.columns[0], 0, min(pulses, 2))
+    if head.size < 2:  # nothing to split; the rate's checks refuse the train
+        fold.update(head)
+        return fold
+    t01 = (float(head[0]), float(head[1]))
+    blocks = [(a, min(pulses, a + chunk_rows)) for a in block_starts(pulses, chunk_rows)]
+    for part in task_round(
+        client, _fold_task, [(source, pulses, m, t01, a, b) for a, b in blocks], tick
+    ):
+        fold.merge(part)
+    return fold
+
+
 def _first_task(
     source: CaptureRows, plan: RatePlan, ref: float, a: int, b: int
 ) -> tuple[PassOne, tuple[dict[int, Any], dict[int, Any] | None]]:
     """What the first pass gathers over pulses [a, b), as :meth:`PassOne.merge` takes it."""
-    from rotacal.encoder.pulses import check_pulse_times
     from rotacal.table.rate_allan_sums import AllanSums
     from rotacal.table.rate_stream import PassOne
     from rotacal.uncertainty.summaries_peak import WelchSums, window_length, window_starts
@@ -83,11 +137,9 @@ def _first_task(
     windows = np.flatnonzero((starts >= p0) & (starts < p1))
     q0 = max(0, p0 - (MAX_LAG - 1))
     q1 = max(p1, int(starts[windows[-1]]) + size) if windows.size else p1
-    lead = max(a - 1, 0)  # the pulse before the block: the intervals across its start
-    r0 = min(lead, q0 * avg)
+    r0 = min(max(a - 1, 0), q0 * avg)
     t = source.column(name, r0, max(min(n, b + one.jitter.span), q1 * avg + 1))
-    if b - lead >= 3:
-        check_pulse_times(t[lead - r0 : b - r0], name, first_index=lead)
+    _check_block(t, r0, a, b, name)
     rp = plan.rate_points()
     rp.seen = r0
     nom_all, ang_all = rp.angles(t)  # once for the block and the rate points around it
@@ -293,7 +345,7 @@ def calibrate_rate_on_dask(
     ----------
     Kokuyama et al. (2015) §5; see :func:`rotacal.table.rate.calibrate_rate`.
     """
-    from rotacal.table.rate_file import CHUNK_PULSES, calibrate_rate_file
+    from rotacal.table.rate_file import CHUNK_PULSES, HeadPasses, calibrate_rate_file
 
     rows = CHUNK_PULSES if chunk_rows is None else int(chunk_rows)
     if rows < 1:
@@ -306,9 +358,11 @@ def calibrate_rate_on_dask(
         if progress is not None:
             progress(done)
 
-    source_for = functools.partial(
-        CaptureRows, str(path), mapping=mapping, group=group, read_options=read_options
-    )
+    def split(column: str) -> dict[str, Any]:
+        """How a pass over the column is split: the client, the rows, the blocks' size."""
+        rows_of = CaptureRows(str(path), (column,), mapping, group, read_options)
+        return {"client": client, "source": rows_of, "chunk_rows": rows, "tick": tick}
+
     return calibrate_rate_file(
         path,
         pulses_per_rev=pulses_per_rev,
@@ -323,11 +377,8 @@ def calibrate_rate_on_dask(
         group=group,
         read_options=read_options,
         chunk_rows=rows,
-        passes_for=lambda column: functools.partial(
-            _dask_passes,
-            client=client,
-            source=source_for((column,)),
-            chunk_rows=rows,
-            tick=tick,
+        passes_for=lambda column: HeadPasses(
+            fold=functools.partial(_dask_fold, **split(column)),
+            rate=functools.partial(_dask_passes, **split(column)),
         ),
     )

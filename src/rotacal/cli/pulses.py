@@ -403,7 +403,7 @@ def _dask_rate(
     from rotacal.io import read_capture_rows
     from rotacal.table.rate_file import CHUNK_PULSES
 
-    mapping, read_options, _, n = _head_file(capture, columns, group, str(kw["head"]))
+    mapping, read_options, heads, n = _head_file(capture, columns, group, str(kw["head"]))
     if n:  # a format without row offsets is refused before a cluster is started
         head = str(kw["head"])
         column = head if head.startswith("head_") else f"head_{head}"
@@ -411,7 +411,8 @@ def _dask_rate(
             read_capture_rows(
                 capture, [column], 0, 1, mapping=mapping, group=group, read_options=read_options
             )
-    tasks = 2 * (-(-n // CHUNK_PULSES))  # the two rounds of blocks
+    aligning = kw["compensate"] and (kw["selfcal"] is not None or heads >= 2)
+    tasks = (3 if aligning else 2) * (-(-n // CHUNK_PULSES))  # the rounds of blocks
     with (
         _naming_file(capture),
         dask_client(workers, scheduler, None) as client,
