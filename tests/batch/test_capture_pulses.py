@@ -99,10 +99,12 @@ def test_a_capture_self_calibrated_first(
 def test_the_first_fault_in_the_file_is_the_one_reported(
     dask_client: Client, twin: tuple[Path, Path, np.ndarray], tmp_path: Path
 ) -> None:
-    """A pulse missing in a late block and a pair out of order in an earlier one: both paths
-    name the pair, with the same message."""
+    """A pulse missing in a late block, a NaN in the block after the next one (within the
+    rows the block before reads past its end) and a pair out of order: both paths name the
+    pair, with the same message."""
     t = np.load(twin[0])["head_0"].copy()
     t = np.delete(t, 40_000)
+    t[21_500] = np.nan
     t[20_001], t[20_002] = t[20_002], t[20_001]
     path = tmp_path / "bad.npz"
     np.savez(path, head_0=t)

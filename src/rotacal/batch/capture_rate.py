@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rotacal.batch._blocks import CaptureRows, block_starts, task_round
-from rotacal.errors import ConfigError
+from rotacal.errors import CaptureError, ConfigError
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -121,8 +121,9 @@ def _dask_fold(
 
 def _first_task(
     source: CaptureRows, plan: RatePlan, ref: float, a: int, b: int
-) -> tuple[PassOne, tuple[dict[int, Any], dict[int, Any] | None]]:
-    """What the first pass gathers over pulses [a, b), as :meth:`PassOne.merge` takes it."""
+) -> tuple[PassOne, tuple[dict[int, Any], dict[int, Any] | None]] | None:
+    """What the first pass gathers over pulses [a, b), as :meth:`PassOne.merge` takes it
+    (None when the rows it reads past the block cannot be read)."""
     from rotacal.table.rate_allan_sums import AllanSums
     from rotacal.table.rate_stream import PassOne
     from rotacal.uncertainty.summaries_peak import WelchSums, window_length, window_starts
@@ -137,9 +138,14 @@ def _first_task(
     windows = np.flatnonzero((starts >= p0) & (starts < p1))
     q0 = max(0, p0 - (MAX_LAG - 1))
     q1 = max(p1, int(starts[windows[-1]]) + size) if windows.size else p1
-    r0 = min(max(a - 1, 0), q0 * avg)
-    t = source.column(name, r0, max(min(n, b + one.jitter.span), q1 * avg + 1))
-    _check_block(t, r0, a, b, name)
+    lead = max(a - 1, 0)
+    r0, r1 = min(lead, q0 * avg), max(min(n, b + one.jitter.span), q1 * avg + 1)
+    mine = source.column(name, lead, b)
+    _check_block(mine, lead, a, b, name)
+    try:  # the rows around the block are checked by the blocks they belong to
+        t = np.concatenate((source.column(name, r0, lead), mine, source.column(name, b, r1)))
+    except (CaptureError, ConfigError):
+        return None  # a fault in another block's rows: that block reports it, in file order
     rp = plan.rate_points()
     rp.seen = r0
     nom_all, ang_all = rp.angles(t)  # once for the block and the rate points around it
@@ -268,10 +274,12 @@ def _dask_passes(
     blocks = [(a, min(plan.n, a + chunk_rows)) for a in starts]
     one = PassOne.empty(plan)
     one.ref = ref
-    for block, heads in task_round(
+    for part in task_round(
         client, _first_task, [(source, plan, ref, a, b) for a, b in blocks], tick
     ):
-        one.merge(block, heads)
+        if part is None:  # the block whose rows those are raised first: never reached
+            raise CaptureError(f"{source.path}: rows of the capture could not be read again")
+        one.merge(*part)
 
     def second(mean_rate: float, floor: float, gains: list[FloatArray]) -> PeakInputs:
         parts = task_round(
