@@ -351,6 +351,61 @@ class PassOne:
 PeakPass = Callable[[float, float, list[FloatArray]], PeakInputs]
 
 
+def _first_pass(
+    chunks: Chunks,
+    plan: RatePlan,
+    one: PassOne,
+    keep_series: bool,
+    progress: Callable[[int], None] | None,
+) -> int:
+    """The first pass over ``chunks()`` into ``one``; the pulses seen (a function of its own:
+    its last chunk is not held through the second pass)."""
+    m, revs, prefix_pulses, deviation = plan.m, plan.revs, plan.prefix_pulses, plan.deviation
+    rp = plan.rate_points()
+    for t in chunks():
+        t = np.asarray(t, dtype=np.float64)
+        if t.size == 0:
+            continue
+        i0 = rp.seen
+        if i0 == 0:
+            one.first_t = float(t[0])
+        one.last_t = float(t[-1])
+        nom, ang = rp.angles(t)
+        if i0 < prefix_pulses:
+            one.prefix_t.append(t[: prefix_pulses - i0].copy())
+            one.prefix_a.append(nom[: prefix_pulses - i0].copy())
+        if revs >= 1:
+            first = (-i0) % m
+            idx = np.arange(i0 + first, i0 + t.size, m)
+            keep = idx <= revs * m
+            one.rev_times.append(t[first::m][keep].copy())
+            if i0 <= revs * m < i0 + t.size:
+                one.end_t = float(t[revs * m - i0])
+        else:
+            one.short_t.append(t.copy())
+            one.short_a.append(ang.copy())
+        one.jitter.update(t)
+        one.allan.update(t, ang)
+        if one.allan_nom is not None:
+            one.allan_nom.update(t, nom)
+        t_avg, rate, rate_nom = rp.push(t, ang, nom)
+        if rate.size:
+            if math.isnan(one.ref):
+                one.ref = float(rate[0])  # the provisional reference (the same for any chunking)
+            d0 = 100.0 * (rate - one.ref) / one.ref
+            one.stats.update(d0)
+            one.welch.update(d0)
+            one.trend.update(t_avg, d0)
+            one.add_extremes(
+                d0, d0 if deviation is None else 100.0 * (rate_nom - one.ref) / one.ref
+            )
+            if keep_series:
+                one.series.append((t_avg, rate, rate_nom))
+        if progress is not None:
+            progress(t.size)
+    return rp.seen
+
+
 def rate_passes(
     chunks: Chunks,
     pulses: int,
@@ -397,52 +452,10 @@ def rate_passes(
         allan_angles_deg=allan_angles_deg,
         prefix_pulses=prefix_pulses,
     )
-    m, n, revs = plan.m, plan.n, plan.revs
     one = PassOne.empty(plan)
-    rp = plan.rate_points()
-    for t in chunks():
-        t = np.asarray(t, dtype=np.float64)
-        if t.size == 0:
-            continue
-        i0 = rp.seen
-        if i0 == 0:
-            one.first_t = float(t[0])
-        one.last_t = float(t[-1])
-        nom, ang = rp.angles(t)
-        if i0 < prefix_pulses:
-            one.prefix_t.append(t[: prefix_pulses - i0].copy())
-            one.prefix_a.append(nom[: prefix_pulses - i0].copy())
-        if revs >= 1:
-            first = (-i0) % m
-            idx = np.arange(i0 + first, i0 + t.size, m)
-            keep = idx <= revs * m
-            one.rev_times.append(t[first::m][keep].copy())
-            if i0 <= revs * m < i0 + t.size:
-                one.end_t = float(t[revs * m - i0])
-        else:
-            one.short_t.append(t.copy())
-            one.short_a.append(ang.copy())
-        one.jitter.update(t)
-        one.allan.update(t, ang)
-        if one.allan_nom is not None:
-            one.allan_nom.update(t, nom)
-        t_avg, rate, rate_nom = rp.push(t, ang, nom)
-        if rate.size:
-            if math.isnan(one.ref):
-                one.ref = float(rate[0])  # the provisional reference (the same for any chunking)
-            d0 = 100.0 * (rate - one.ref) / one.ref
-            one.stats.update(d0)
-            one.welch.update(d0)
-            one.trend.update(t_avg, d0)
-            one.add_extremes(
-                d0, d0 if deviation is None else 100.0 * (rate_nom - one.ref) / one.ref
-            )
-            if keep_series:
-                one.series.append((t_avg, rate, rate_nom))
-        if progress is not None:
-            progress(t.size)
-    if rp.seen != n:
-        raise CaptureError(f"the train held {rp.seen} pulses, not the {n} expected.")
+    seen = _first_pass(chunks, plan, one, keep_series, progress)
+    if seen != plan.n:
+        raise CaptureError(f"the train held {seen} pulses, not the {plan.n} expected.")
 
     def second(mean_rate: float, floor: float, gains: list[FloatArray]) -> PeakInputs:
         collector = PeakCollector(plan.points, floor, gains)
