@@ -116,6 +116,26 @@ def test_the_first_fault_in_the_file_is_the_one_reported(
     assert "pulse 20002" in str(one.value)
 
 
+def test_a_damaged_npz_is_refused_as_in_one_process(
+    dask_client: Client, twin: tuple[Path, Path, np.ndarray], tmp_path: Path
+) -> None:
+    """A pulse time changed in its last bit after the file was written: still a valid train,
+    only the archive's CRC-32 tells; both paths refuse it with the same message."""
+    t = np.load(twin[0])["head_0"]
+    data = bytearray(twin[0].read_bytes())
+    at = bytes(data).find(t[30_000].tobytes())
+    assert at > 0
+    data[at] ^= 1
+    path = tmp_path / "damaged.npz"
+    path.write_bytes(bytes(data))
+    with pytest.raises(CaptureError) as one:
+        calibrate_rate_file(path, pulses_per_rev=M, chunk_rows=CHUNK)
+    with pytest.raises(CaptureError) as split:
+        calibrate_rate_on_dask(path, client=dask_client, pulses_per_rev=M, chunk_rows=CHUNK)
+    assert str(split.value) == str(one.value)
+    assert "CRC-32" in str(one.value)
+
+
 def test_text_is_refused(dask_client: Client, tmp_path: Path) -> None:
     path = tmp_path / "pulses.csv"
     np.savetxt(path, np.arange(5000) / 1e3, header="head_0", comments="")

@@ -7,7 +7,8 @@ worker on its own (a shared file system; NPZ without compression, HDF5 or TDMS):
 
 * **First round** — a task per block [a, b) checks its pulse times with the pulse before them
   (the checks and the messages of the single-process path, which checks the same chunks: with
-  the same ``chunk_rows`` the same first fault in file order), and sums what starts in it: the
+  the same ``chunk_rows`` the same first fault in file order; one more task reads the column
+  through in order for its stored checksum), and sums what starts in it: the
   timing jitter's filtered values (the 2m + 3 pulses after b read too), the terms of s(φ) that
   lie wholly inside it (their heads and tails kept), its rate points with the three before them
   (the rms statistics' lagged sums), the Welch windows that start in it (the points after it
@@ -92,6 +93,54 @@ def _fold_task(
     return fold
 
 
+def _read_through(source: CaptureRows, rows: int) -> int:
+    """Read the column through once, in order, as the single-process path reads it: a stored
+    checksum (an NPZ member's CRC-32) covers the whole column and is checked at its end. The
+    rows read."""
+    from rotacal.io import iter_capture_chunks
+
+    name, n = source.columns[0], 0
+    for part in iter_capture_chunks(
+        source.path,
+        [name],
+        chunk_rows=rows,
+        mapping=source.mapping,
+        group=source.group,
+        read_options=source.read_options,
+    ):
+        n += part[name].size
+    return n
+
+
+class _Integrity:
+    """The whole column read through once by one task beside the first round over it (the
+    single-process path checks the stored checksum at the end of its first pass)."""
+
+    def __init__(
+        self, client: Client, source: CaptureRows, rows: int, tick: Callable[[], None]
+    ) -> None:
+        self.client, self.source, self.rows, self.tick = client, source, rows, tick
+        self.future: Any = None
+        self.settled = False
+
+    def start(self) -> None:
+        """Submit the task (once)."""
+        if self.future is None:
+            self.future = self.client.submit(_read_through, self.source, self.rows, pure=False)
+
+    def settle(self, pulses: int) -> None:
+        """After a round without a fault: the task's error, if any (a damaged file)."""
+        if self.settled or self.future is None:
+            return
+        read = self.future.result()
+        self.tick()
+        self.settled = True
+        if read != pulses:
+            raise CaptureError(
+                f"{self.source.path}: {read} pulses were read, {pulses} declared; the file changed"
+            )
+
+
 def _dask_fold(
     pulses: int,
     m: int,
@@ -100,6 +149,7 @@ def _dask_fold(
     source: CaptureRows,
     chunk_rows: int,
     tick: Callable[[], None],
+    integrity: _Integrity,
 ) -> FoldSums:
     """The alignment's pass (:class:`~rotacal.table.rate_alignment.FoldSums`) as a round of
     tasks, merged in block order."""
@@ -112,10 +162,12 @@ def _dask_fold(
         return fold
     t01 = (float(head[0]), float(head[1]))
     blocks = [(a, min(pulses, a + chunk_rows)) for a in block_starts(pulses, chunk_rows)]
+    integrity.start()
     for part in task_round(
         client, _fold_task, [(source, pulses, m, t01, a, b) for a, b in blocks], tick
     ):
         fold.merge(part)
+    integrity.settle(pulses)
     return fold
 
 
@@ -254,6 +306,7 @@ def _dask_passes(
     source: CaptureRows,
     chunk_rows: int,
     tick: Callable[[], None],
+    integrity: _Integrity,
     sources_for: Callable[[float, tuple[float, float, bool]], list[ErrorProcess]],
     keep_series: bool = False,
     progress: Callable[[int], None] | None = None,
@@ -274,12 +327,14 @@ def _dask_passes(
     blocks = [(a, min(plan.n, a + chunk_rows)) for a in starts]
     one = PassOne.empty(plan)
     one.ref = ref
+    integrity.start()
     for part in task_round(
         client, _first_task, [(source, plan, ref, a, b) for a, b in blocks], tick
     ):
         if part is None:  # the block whose rows those are raised first: never reached
             raise CaptureError(f"{source.path}: rows of the capture could not be read again")
         one.merge(*part)
+    integrity.settle(plan.n)
 
     def second(mean_rate: float, floor: float, gains: list[FloatArray]) -> PeakInputs:
         parts = task_round(
@@ -367,10 +422,20 @@ def calibrate_rate_on_dask(
             progress(done)
 
     def split(column: str) -> dict[str, Any]:
-        """How a pass over the column is split: the client, the rows, the blocks' size."""
+        """How a pass over the column is split: the client, the rows, the blocks' size, the
+        read-through of the column (shared by the passes: the first one waits for it)."""
         rows_of = CaptureRows(str(path), (column,), mapping, group, read_options)
-        return {"client": client, "source": rows_of, "chunk_rows": rows, "tick": tick}
+        if column not in checks:
+            checks[column] = _Integrity(client, rows_of, rows, tick)
+        return {
+            "client": client,
+            "source": rows_of,
+            "chunk_rows": rows,
+            "tick": tick,
+            "integrity": checks[column],
+        }
 
+    checks: dict[str, _Integrity] = {}
     return calibrate_rate_file(
         path,
         pulses_per_rev=pulses_per_rev,

@@ -412,7 +412,7 @@ def _dask_rate(
                 capture, [column], 0, 1, mapping=mapping, group=group, read_options=read_options
             )
     aligning = kw["compensate"] and (kw["selfcal"] is not None or heads >= 2)
-    tasks = (3 if aligning else 2) * (-(-n // CHUNK_PULSES))  # the rounds of blocks
+    tasks = (3 if aligning else 2) * (-(-n // CHUNK_PULSES)) + 1  # rounds of blocks, checksum
     with (
         _naming_file(capture),
         dask_client(workers, scheduler, None) as client,
