@@ -1,17 +1,20 @@
-"""One huge capture's Allan deviation split over Dask workers, against one process.
+"""One huge capture's analysis split over Dask workers, against one process.
 
-Writes a rate record of ``--samples`` rows (time_s and rate_deg_s, NPZ without compression) and
-times, on the same file:
+``--analysis allan`` (the default) writes a rate record of ``--samples`` rows (time_s and
+rate_deg_s, NPZ without compression); ``--analysis rate`` one head of ``--samples`` pulse times
+(HDF5: bench_rate.py's twin, 18,000 pulses per revolution at 300 °/s). It times, on the file:
 
-- **one process**: ``rotacal allan --chunked --taus octave`` in a fresh process (the baseline);
-- **N workers**: ``rotacal allan --workers N --taus octave`` for each N of ``--workers``
+- **one process**: ``rotacal allan --chunked --taus octave`` (``rotacal rate --chunked``) in a
+  fresh process (the baseline);
+- **N workers**: the same command with ``--workers N`` for each N of ``--workers``
   (a fresh process that starts its local cluster: the start is included);
 
 and checks that every number of the JSON agrees with the baseline's. Prints seconds, the ratio
-to the baseline and the peak RSS of the largest process (the command's, or a Dask worker's: the
+to the baseline, the CPU seconds of the command and the workers it waited for (on a shared
+machine the steadier figure) and the peak RSS of the largest process (the command's, or a Dask worker's: the
 kernel counts waited-for descendants too). No asserts.
 
-Run: ``python benchmarks/bench_capture_dask.py [--samples 1e8] [--workers 1,2]``
+Run: ``python benchmarks/bench_capture_dask.py [--analysis rate] [--samples 1e8] [--workers 1,2]``
 """
 
 from __future__ import annotations
@@ -50,21 +53,25 @@ def write_record(path: Path, n: int) -> None:
     path.with_suffix(".time.npy").unlink()
 
 
-def run(args: list[str]) -> tuple[float, float]:
-    """``rotacal ARGS`` in a fresh process: its wall seconds and peak RSS (MB) — of the process
-    and of the descendants it waited for (the Dask workers), from its own wait4 record."""
+def run(args: list[str]) -> tuple[float, float, float]:
+    """``rotacal ARGS`` in a fresh process: its wall seconds, peak RSS (MB) and CPU seconds — of
+    the process and of the descendants it waited for (the Dask workers), from its wait4 record
+    (on a shared machine the CPU seconds are the steadier figure)."""
     start = time.perf_counter()
-    child = subprocess.Popen(
-        [sys.executable, "-m", "rotacal", *args],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    _, status, usage = os.wait4(child.pid, 0)
-    child.returncode = os.waitstatus_to_exitcode(status)
-    seconds = time.perf_counter() - start
-    if child.returncode:
-        raise SystemExit(f"rotacal {' '.join(args)} failed ({child.returncode})")
-    return seconds, usage.ru_maxrss / 1024
+    with tempfile.TemporaryFile() as errors:
+        child = subprocess.Popen(
+            [sys.executable, "-m", "rotacal", *args], stdout=subprocess.DEVNULL, stderr=errors
+        )
+        _, status, usage = os.wait4(child.pid, 0)
+        child.returncode = os.waitstatus_to_exitcode(status)
+        seconds = time.perf_counter() - start
+        if child.returncode:
+            errors.seek(0)
+            tail = errors.read().decode(errors="replace").strip().splitlines()[-5:]
+            raise SystemExit(
+                f"rotacal {' '.join(args)} failed ({child.returncode}):\n" + "\n".join(tail)
+            )
+    return seconds, usage.ru_maxrss / 1024, usage.ru_utime + usage.ru_stime
 
 
 def worst(a: Any, b: Any) -> float:
@@ -81,34 +88,46 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=float, default=1e8)
     parser.add_argument("--workers", default="1,2")
+    parser.add_argument("--analysis", choices=["allan", "rate"], default="allan")
     parser.add_argument("--write", metavar="PATH", help=argparse.SUPPRESS)
     args = parser.parse_args()
     n = int(args.samples)
+    pulses = args.analysis == "rate"
     if args.write:  # in a child: the pages it touches must not count in the measured children
-        write_record(Path(args.write), n)
+        if pulses:
+            from bench_rate import write_h5
+
+            write_h5(args.write, n)
+        else:
+            write_record(Path(args.write), n)
         return
     with tempfile.TemporaryDirectory(prefix="rotacal-bench-dask-") as tmp:
-        path = Path(tmp) / "rate.npz"
+        path = Path(tmp) / ("pulses.h5" if pulses else "rate.npz")
         t = time.perf_counter()
-        subprocess.run(
-            [sys.executable, __file__, "--samples", str(n), "--write", str(path)], check=True
-        )
+        writer = [sys.executable, __file__, "--samples", str(n), "--analysis", args.analysis]
+        subprocess.run([*writer, "--write", str(path)], check=True)
         print(
             f"{n:.3g} samples, {os.path.getsize(path) / 1e6:.0f} MB, written in "
             f"{time.perf_counter() - t:.1f} s"
         )
-        common = [str(path), "--taus", "octave", "--overwrite"]
+        common = ["allan", str(path), "--taus", "octave", "--overwrite"]
+        if pulses:
+            common = ["rate", str(path), "--pulses-per-rev", "18000", "--overwrite"]
         base_json = Path(tmp) / "one.json"
-        base, rss = run(["allan", *common, "--chunked", "--json", str(base_json)])
-        print(f"{'one process (--chunked)':<28}{base:8.2f} s   1.00x   peak RSS {rss:.0f} MB")
+        base, rss, cpu = run([*common, "--chunked", "--json", str(base_json)])
+        print(
+            f"{'one process (--chunked)':<28}{base:8.2f} s   1.00x   CPU {cpu:6.2f} s   "
+            f"peak RSS {rss:.0f} MB"
+        )
         reference = json.loads(base_json.read_text())
         for w in [int(x) for x in args.workers.split(",")]:
             out = Path(tmp) / f"w{w}.json"
-            seconds, rss = run(["allan", *common, "--workers", str(w), "--json", str(out)])
+            seconds, rss, cpu = run([*common, "--workers", str(w), "--json", str(out)])
             diff = worst(json.loads(out.read_text()), reference)
             print(
                 f"{f'{w} Dask worker(s)':<28}{seconds:8.2f} s   {base / seconds:.2f}x   "
-                f"peak RSS {rss:.0f} MB; largest difference {diff:.1e} relative"
+                f"CPU {cpu:6.2f} s   peak RSS {rss:.0f} MB; largest difference {diff:.1e} "
+                "relative"
             )
 
 

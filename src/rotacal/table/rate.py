@@ -69,7 +69,7 @@ from rotacal.table.rate_budgets import (
 )
 from rotacal.table.rate_jitter import timing_jitter
 from rotacal.table.rate_plausibility import rate_warnings
-from rotacal.table.rate_stream import rate_passes
+from rotacal.table.rate_stream import RatePasses, rate_passes
 from rotacal.uncertainty import (
     InstrumentSpecs,
     UncertaintyBudget,
@@ -463,9 +463,11 @@ def _rate_result(
     notes: list[str],
     keep_series: bool,
     progress: Callable[[int], None] | None = None,
+    run_passes: Callable[..., RatePasses] = rate_passes,
 ) -> RateResult:
     """The analysis of one train of ``pulses`` times given chunk by chunk (both passes of
-    :func:`rotacal.table.rate_stream.rate_passes`), its budgets and the result."""
+    :func:`rotacal.table.rate_stream.rate_passes`, or ``run_passes`` with its arguments), its
+    budgets and the result."""
     n = heads
 
     def sources_for(omega: float, jitter: tuple[float, float, bool]) -> list[ErrorProcess]:
@@ -485,7 +487,7 @@ def _rate_result(
         return found
 
     source_notes: list[str] = []
-    passes = rate_passes(
+    passes = run_passes(
         chunks,
         pulses,
         pulses_per_rev=m,

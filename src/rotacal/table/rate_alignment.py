@@ -130,6 +130,24 @@ class FoldSums:
             self._fold(self._y_sums, y)
         self.seen += t.size
 
+    @classmethod
+    def starting_at(cls, n: int, pulses_per_rev: int, first: int, t0: float, t1: float) -> FoldSums:
+        """The sums of a block of the train that starts at pulse ``first``, fed its pulses
+        (``t0``, ``t1``: the train's first two pulse times, s); :meth:`merge` adds it."""
+        out = cls(n, pulses_per_rev)
+        out.seen, out.t0 = int(first), float(t0)
+        out._rate0 = (360.0 / out.m) / (float(t1) - out.t0)
+        return out
+
+    def merge(self, block: FoldSums) -> None:
+        """Add the sums of the block of pulses that follows those seen."""
+        if self.seen == 0:
+            self.t0, self._rate0 = block.t0, block._rate0
+        self._x_sums += block._x_sums
+        self._y_sums += block._y_sums
+        self._fit.merge(block._fit)
+        self.last, self.seen = block.last, block.seen
+
     def folded(self) -> FloatArray:
         """−(mean over the revolutions of count·Δθ − line(t)), arcsec, line by line."""
         fit = self._fit

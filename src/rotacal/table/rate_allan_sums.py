@@ -220,6 +220,70 @@ class AllanSums:
                 )
         self._seen += t.size
 
+    @classmethod
+    def starting_at(
+        cls, ks: Sequence[int], strides: Sequence[int], first: int, jit: bool | None = None
+    ) -> AllanSums:
+        """Sums of a block of a record that starts at pulse ``first``: fed the block's pulses,
+        they hold the terms that lie wholly inside it (:meth:`merge` adds the block, and the
+        terms across its start, to the sums of the record before it)."""
+        out = cls(ks, strides, jit)
+        out._seen = int(first)
+        for d in out._groups:
+            start = -(-out._seen // d)  # the block's first decimated index
+            out._tails[d] = (np.zeros(0), np.zeros(0), start)
+            for idx in out._groups[d]:
+                out._next[idx] = start
+        return out
+
+    def heads(self, t: FloatArray, a: FloatArray) -> dict[int, tuple[FloatArray, FloatArray]]:
+        """Per stride, the first decimated pulses (times, angles) of the chunk that follows the
+        pulses seen, as many as a term reaches past its start: what :meth:`merge` needs of it."""
+        out = {}
+        for d, members in self._groups.items():
+            first = (-self._seen) % d
+            reach = 2 * max(self.ks[idx] // d for idx in members)
+            out[d] = (t[first::d][:reach].copy(), a[first::d][:reach].copy())
+        return out
+
+    def merge(self, block: AllanSums, heads: dict[int, tuple[FloatArray, FloatArray]]) -> None:
+        """Add the sums of the block that follows the pulses seen (:meth:`starting_at` of
+        them, fed the block; ``heads``: its :meth:`heads`): the terms that start in the carried
+        tails are summed on them and the block's first pulses, as :meth:`update` would."""
+        if block.ks != self.ks or block.strides != self.strides:
+            raise ValueError("the block's cluster sizes are not these")
+        for d, members in self._groups.items():
+            tt, aa, base = self._tails[d]
+            held = tt.size
+            ht, ha = heads[d]
+            count = -(-block._seen // d) - -(-self._seen // d)  # the block's decimated pulses
+            kds = [self.ks[idx] // d for idx in members]
+            starts = [self._next[idx] - base for idx in members]
+            stops = [min(held + count - 2 * kd, held) for kd in kds]
+            sums = allan_sums(
+                np.concatenate((tt, ht)), np.concatenate((aa, ha)), kds, starts, stops, jit=self.jit
+            )
+            for i, idx in enumerate(members):
+                if stops[i] > starts[i]:
+                    self.parts[idx].append(sums[i])
+                    self.counts[idx] += stops[i] - starts[i]
+                done = max(starts[i], stops[i])
+                # a term left in the tail needs pulses after the block: the block has none
+                self._next[idx] = base + done if done < held else block._next[idx]
+            keep = min(self._next[idx] for idx in members) - base
+            if keep >= held:
+                self._tails[d] = block._tails[d]
+            else:  # the block is shorter than a term: all of it is in its head
+                self._tails[d] = (
+                    np.concatenate((tt[keep:], ht)),
+                    np.concatenate((aa[keep:], ha)),
+                    base + keep,
+                )
+        for idx, part in enumerate(block.parts):
+            self.parts[idx] += part
+        self.counts += block.counts
+        self._seen = block._seen
+
     def mean_squares(self) -> FloatArray:
         """⟨(ω_{j+k} − ω_j)²⟩ per cluster size, (deg/s)² (NaN where no term was complete)."""
         sums = np.array([math.fsum(p) for p in self.parts])

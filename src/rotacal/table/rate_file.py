@@ -12,6 +12,7 @@ several heads and nothing given — the capture's own self-calibration, streamed
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Iterator, Mapping
 from os import PathLike
 from typing import Any
@@ -31,9 +32,10 @@ from rotacal.table.rate_alignment import (
     own_revolutions,
     same_capture,
 )
+from rotacal.table.rate_stream import RatePasses, rate_passes
 from rotacal.uncertainty import InstrumentSpecs
 
-__all__ = ["calibrate_rate_file", "file_heads"]
+__all__ = ["HeadPasses", "calibrate_rate_file", "file_heads"]
 
 FloatArray = NDArray[np.float64]
 
@@ -52,6 +54,16 @@ def file_heads(path: str | PathLike[str], *, mapping: Any = None, group: str | N
     if n == 0:
         raise CaptureError(f"{path}: no column head_0; give the pulse times of head 0 (--column).")
     return n
+
+
+@dataclasses.dataclass(frozen=True)
+class HeadPasses:
+    """What runs the passes over a head's column instead of this process: the alignment's
+    (pulses N, m → its :class:`~rotacal.table.rate_alignment.FoldSums`) and the rate's two
+    (the arguments of :func:`~rotacal.table.rate_stream.rate_passes`)."""
+
+    fold: Callable[[int, int], FoldSums]
+    rate: Callable[..., RatePasses]
 
 
 def _checked(
@@ -160,13 +172,17 @@ def calibrate_rate_file(
     read_options: Any = None,
     chunk_rows: int = CHUNK_PULSES,
     progress: Callable[[int], None] | None = None,
+    passes_for: Callable[[str], HeadPasses] | None = None,
 ) -> RateResult:
     """:func:`rotacal.table.rate.calibrate_rate` of one head of a capture file, streamed.
 
     Parameters as for :func:`~rotacal.table.rate.calibrate_rate` (``head`` a number: the
     head-averaged times need every head at once), plus where the file is (``mapping``, ``group``
     and ``read_options`` as for :func:`rotacal.io.read_capture`), ``chunk_rows`` (pulses per
-    chunk) and ``progress`` (called with the pulses of each chunk read, every pass).
+    chunk), ``progress`` (called with the pulses of each chunk read, every pass) and
+    ``passes_for``: given the head's column, what runs the passes over it (default: this
+    process over the column's chunks; :mod:`rotacal.batch.capture_rate` splits them over Dask
+    workers).
 
     Raises
     ------
@@ -197,6 +213,7 @@ def calibrate_rate_file(
         )
     column = f"head_{k}"
     pulses = capture_length(path, column, mapping=mapping, group=group, read_options=read_options)
+    runner = None if passes_for is None else passes_for(column)
     chunks = _checked(
         path, column, mapping=mapping, group=group, read_options=read_options, chunk_rows=chunk_rows
     )
@@ -224,11 +241,14 @@ def calibrate_rate_file(
     if compensate and selfcal is not None:
         dev = _as_deviation(selfcal, m)
         deviation = dev.values
-        fold = FoldSums(pulses, m)
-        for t in chunks():  # the alignment's pass: the head's folded angle error
-            fold.update(t)
-            if progress is not None:
-                progress(t.size)
+        if runner is not None:
+            fold = runner.fold(pulses, m)
+        else:
+            fold = FoldSums(pulses, m)
+            for t in chunks():  # the alignment's pass: the head's folded angle error
+                fold.update(t)
+                if progress is not None:
+                    progress(t.size)
         same = same_capture(dev, (fold.t0, fold.last, pulses))
         shift = 0
         revs = own_revolutions(selfcal) if same else None
@@ -270,4 +290,5 @@ def calibrate_rate_file(
         notes=notes,
         keep_series=False,
         progress=progress,
+        run_passes=rate_passes if runner is None else runner.rate,
     )

@@ -146,6 +146,11 @@ class JitterSums:
             self.count += e.size
         self._tail = x[max(x.size - self.span, 0) :].copy()
 
+    def merge(self, other: JitterSums) -> None:
+        """Add the terms another block of the same train summed (each term in one block)."""
+        self._parts.append(math.fsum(other._parts))
+        self.count += other.count
+
     def result(self) -> tuple[float, float, bool]:
         """(σ_t, its degrees of freedom, graduation-free) as :func:`timing_jitter` returns."""
         return _jitter_of(self.count, math.fsum(self._parts) / self.count, self.m, self.span > 3)

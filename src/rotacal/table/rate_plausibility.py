@@ -42,20 +42,36 @@ class TrendSums:
         """Add rate points: times (s), deviations (%)."""
         ok = np.isfinite(t) & np.isfinite(d)
         t, d = t[ok], d[ok]
-        k = t.size
+        if t.size == 0:
+            return
+        mt, md = float(np.mean(t)), float(np.mean(d))
+        tc, dc = t - mt, d - md
+        part = TrendSums(
+            t.size,
+            mt,
+            md,
+            float(np.dot(tc, tc)),
+            float(np.dot(tc, dc)),
+            float(np.dot(dc, dc)),
+            float(t[0]),
+            float(t[-1]),
+        )
+        self.merge(part)
+
+    def merge(self, other: TrendSums) -> None:
+        """Add the sums of the rate points that follow these (Chan et al.'s pairwise update)."""
+        k = other.n
         if k == 0:
             return
         if self.n == 0:
-            self.first_t = float(t[0])
-        self.last_t = float(t[-1])
-        mt, md = float(np.mean(t)), float(np.mean(d))
-        tc, dc = t - mt, d - md
+            self.first_t = other.first_t
+        self.last_t = other.last_t
         n = self.n + k
-        dt, dd = mt - self.mean_t, md - self.mean_d
+        dt, dd = other.mean_t - self.mean_t, other.mean_d - self.mean_d
         w = self.n * k / n
-        self.ctt += float(np.dot(tc, tc)) + w * dt * dt
-        self.ctd += float(np.dot(tc, dc)) + w * dt * dd
-        self.cdd += float(np.dot(dc, dc)) + w * dd * dd
+        self.ctt += other.ctt + w * dt * dt
+        self.ctd += other.ctd + w * dt * dd
+        self.cdd += other.cdd + w * dd * dd
         self.mean_t += dt * k / n
         self.mean_d += dd * k / n
         self.n = n
