@@ -242,6 +242,38 @@ def accumulate(
         add(np.concatenate(carry_t), np.concatenate(carry_y))
 
 
+def add_ranges(first: int, sizes: list[int], block: int | None) -> list[tuple[int, int]]:
+    """The samples ``[start, stop)`` (global indices) of each add :func:`accumulate` makes when
+    fed pieces of ``sizes`` samples from sample ``first`` on: the same adds (same blocks, same
+    sums in the same order) can then be made elsewhere and merged (:func:`merge_part`). It
+    follows :func:`accumulate` step by step (tested: the split calibration equals it)."""
+    m = block or 1
+    head = first_add_samples(block)
+    out: list[tuple[int, int]] = []
+    pos = carry_start = first
+    n_carry = 0
+    started = False
+    for size in sizes:
+        want = head if not started else m
+        if n_carry + size < want:
+            n_carry += size
+            pos += size
+            continue
+        i = 0
+        if n_carry or not started:
+            i = want - n_carry
+            out.append((carry_start, pos + i))
+            started = True
+        cut = i + (size - i) // m * m
+        if cut > i:
+            out.append((pos + i, pos + cut))
+        carry_start, n_carry = pos + cut, size - cut
+        pos += size
+    if n_carry:
+        out.append((carry_start, carry_start + n_carry))
+    return out
+
+
 def detrended(segment: Segment, fit: SineFit) -> Segment:
     """The segment with y less the fitted drift (:func:`~rotacal.table.motion_drift.detrended_angle`)."""
 
@@ -280,7 +312,7 @@ def position_error_pass(
     if acc3 is None:
         acc3 = accumulator(set_frequency_hz, 1, dt)
         accumulate([(acc3, to_true)], segment(), block_length(set_frequency_hz, 1, dt))
-    fit3 = acc3.fit(set_frequency_hz, 1, False, max_iter=1, rtol=1e-12)
+    fit3 = ideal_fit(acc3, set_frequency_hz)
     step = _plot_stride(last + 1 - first)
     parts = [
         piece_error(
@@ -289,6 +321,11 @@ def position_error_pass(
         for g0, t_piece, y_piece in segment()
     ]
     return position_error_of(parts, first, last)
+
+
+def ideal_fit(acc3: HarmonicFitAccumulator, set_frequency_hz: float) -> SineFit:
+    """The three-parameter fit at the set frequency (Hz) whose sinusoid eq. (2) compares with."""
+    return acc3.fit(set_frequency_hz, 1, False, max_iter=1, rtol=1e-12)
 
 
 def piece_error(
