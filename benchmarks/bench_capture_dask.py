@@ -1,17 +1,20 @@
-"""One huge capture's Allan deviation split over Dask workers, against one process.
+"""One huge capture's analysis split over Dask workers, against one process.
 
-Writes a rate record of ``--samples`` rows (time_s and rate_deg_s, NPZ without compression) and
-times, on the same file:
+Writes a record of ``--samples`` rows (NPZ without compression) and times, on the same file:
 
-- **one process**: ``rotacal allan --chunked --taus octave`` in a fresh process (the baseline);
-- **N workers**: ``rotacal allan --workers N --taus octave`` for each N of ``--workers``
-  (a fresh process that starts its local cluster: the start is included);
+- **one process**: the command with ``--chunked`` in a fresh process (the baseline);
+- **N workers**: the command with ``--workers N`` for each N of ``--workers`` (a fresh process
+  that starts its local cluster: the start is included);
 
-and checks that every number of the JSON agrees with the baseline's. Prints seconds, the ratio
-to the baseline and the peak RSS of the largest process (the command's, or a Dask worker's: the
-kernel counts waited-for descendants too). No asserts.
+and checks that every number of the JSON agrees with the baseline's. ``--analysis allan``:
+``rotacal allan --taus octave`` of a rate record (time_s, rate_deg_s: white noise and a random
+walk at 100 Hz); ``--analysis encoder``: ``rotacal motion encoder --lines 36000`` of the twin
+encoder capture of ``bench_motion_stream.py`` (time_s, a, b at 1 MHz, a 2 Hz motion). Prints
+seconds, the ratio to the baseline and the peak RSS of the largest process (the command's, or a
+Dask worker's: the kernel counts waited-for descendants too). No asserts.
 
-Run: ``python benchmarks/bench_capture_dask.py [--samples 1e8] [--workers 1,2]``
+Run: ``python benchmarks/bench_capture_dask.py [--analysis allan|encoder] [--samples 1e8]
+[--workers 1,2]``
 """
 
 from __future__ import annotations
@@ -50,6 +53,20 @@ def write_record(path: Path, n: int) -> None:
     path.with_suffix(".time.npy").unlink()
 
 
+def write_encoder(path: Path, n: int) -> None:
+    """The twin encoder capture of ``bench_motion_stream.py`` (1 MHz, a 2 Hz motion)."""
+    from bench_motion_stream import write_npz
+
+    write_npz(path, "encoder", n)
+
+
+#: analysis → (writer of its record, the command before the capture's path and its options)
+ANALYSES = {
+    "allan": (write_record, ["allan", "--taus", "octave"]),
+    "encoder": (write_encoder, ["motion", "encoder", "--lines", "36000"]),
+}
+
+
 def run(args: list[str]) -> tuple[float, float]:
     """``rotacal ARGS`` in a fresh process: its wall seconds and peak RSS (MB) — of the process
     and of the descendants it waited for (the Dask workers), from its own wait4 record."""
@@ -79,32 +96,33 @@ def worst(a: Any, b: Any) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--analysis", choices=sorted(ANALYSES), default="allan")
     parser.add_argument("--samples", type=float, default=1e8)
     parser.add_argument("--workers", default="1,2")
     parser.add_argument("--write", metavar="PATH", help=argparse.SUPPRESS)
     args = parser.parse_args()
     n = int(args.samples)
+    write, command = ANALYSES[args.analysis]
     if args.write:  # in a child: the pages it touches must not count in the measured children
-        write_record(Path(args.write), n)
+        write(Path(args.write), n)
         return
     with tempfile.TemporaryDirectory(prefix="rotacal-bench-dask-") as tmp:
-        path = Path(tmp) / "rate.npz"
+        path = Path(tmp) / "capture.npz"
         t = time.perf_counter()
-        subprocess.run(
-            [sys.executable, __file__, "--samples", str(n), "--write", str(path)], check=True
-        )
+        writer = [sys.executable, __file__, "--analysis", args.analysis, "--samples", str(n)]
+        subprocess.run([*writer, "--write", str(path)], check=True)
         print(
             f"{n:.3g} samples, {os.path.getsize(path) / 1e6:.0f} MB, written in "
             f"{time.perf_counter() - t:.1f} s"
         )
-        common = [str(path), "--taus", "octave", "--overwrite"]
+        common = [*command, str(path), "--overwrite"]
         base_json = Path(tmp) / "one.json"
-        base, rss = run(["allan", *common, "--chunked", "--json", str(base_json)])
+        base, rss = run([*common, "--chunked", "--json", str(base_json)])
         print(f"{'one process (--chunked)':<28}{base:8.2f} s   1.00x   peak RSS {rss:.0f} MB")
         reference = json.loads(base_json.read_text())
         for w in [int(x) for x in args.workers.split(",")]:
             out = Path(tmp) / f"w{w}.json"
-            seconds, rss = run(["allan", *common, "--workers", str(w), "--json", str(out)])
+            seconds, rss = run([*common, "--workers", str(w), "--json", str(out)])
             diff = worst(json.loads(out.read_text()), reference)
             print(
                 f"{f'{w} Dask worker(s)':<28}{seconds:8.2f} s   {base / seconds:.2f}x   "

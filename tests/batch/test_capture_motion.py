@@ -69,8 +69,8 @@ def _one_process(path: Path, **kw: Any) -> Any:
 
 @pytest.mark.parametrize(
     ("gather", "kw"),
-    [(None, SET), (1000, SET), (1000, {**SET, "drift": True}), (1000, {})],
-    ids=["gathered", "accumulated", "accumulated-drift", "no-set-values"],
+    [(None, SET), (1000, SET), (1000, {**SET, "drift": True})],
+    ids=["gathered", "accumulated", "accumulated-drift"],
 )
 def test_split_over_workers_equals_one_process_and_memory(
     dask_client: Client,

@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rotacal._threads import one_blas_thread
 from rotacal.batch._blocks import CaptureRows, block_starts, task_round
 from rotacal.errors import CaptureError
 
@@ -341,6 +342,7 @@ def _use_numba(n: int) -> bool:
     return use_numba(n)
 
 
+@one_blas_thread  # as one process: the client's fit sums in the same order
 def calibrate_encoder_motion_on_dask(
     path: str,
     *,
