@@ -56,7 +56,7 @@ if TYPE_CHECKING:
     from rotacal.signal import SineFit
     from rotacal.table._stream_checks import Checked
     from rotacal.table._stream_encoder import PhaseBlock
-    from rotacal.table._stream_fit import Fed
+    from rotacal.table._stream_fit import Fed, PartMoments
     from rotacal.table.motion import MotionResult
     from rotacal.uncertainty import InstrumentSpecs
 
@@ -200,11 +200,11 @@ def _fit_task(
     ranges: list[tuple[int, int]],
     first: int,
     step: int,
-) -> tuple[list[list[Any]], np.ndarray, np.ndarray, float]:
+) -> tuple[list[list[PartMoments]], np.ndarray, np.ndarray, float]:
     """Each add of ``ranges`` (they tile the rows) made to a planned part of each template
-    (:func:`~rotacal.table._stream_fit.planned_part`, t through its map): the parts of each
-    add, the decimated t and θ of the rows and their last t (s)."""
-    from rotacal.table._stream_fit import decimate, planned_part
+    (:func:`~rotacal.table._stream_fit.planned_part`, t through its map): the moments of
+    each add's parts, the decimated t and θ of the rows and their last t (s)."""
+    from rotacal.table._stream_fit import decimate, moments_of, planned_part
 
     t, y = _theta_rows(source, corr, scale, state, jit, rows, detrend)
     lo = rows[1]
@@ -215,7 +215,7 @@ def _fit_task(
         for template, to_t in templates:
             part = planned_part(template)
             part.add(t_add if to_t is None else to_t(t_add), y_add)
-            parts.append(part)
+            parts.append(moments_of(part))
         adds.append(parts)
     return adds, decimate(lo, first, step, t), decimate(lo, first, step, y), float(t[-1])
 
@@ -595,8 +595,7 @@ def _fit(
     acc = accumulator(f0, harmonics, dt)
     fed: list[Fed] = [(acc, None)]
     acc3 = None
-    with_set = set_amplitude_deg is not None and set_frequency_hz is not None
-    if with_set and not drift:
+    if set_amplitude_deg is not None and set_frequency_hz is not None and not drift:
         acc3 = accumulator(set_frequency_hz, 1, dt)
         fed.append((acc3, to_true))
     dec, ends = _accumulate(split, fed, block_length(f0, harmonics, dt), first, last, None)

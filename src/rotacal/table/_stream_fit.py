@@ -186,18 +186,38 @@ def planned_part(acc: HarmonicFitAccumulator) -> HarmonicFitAccumulator:
     return part
 
 
-def merge_part(acc: HarmonicFitAccumulator, part: HarmonicFitAccumulator) -> None:
-    """Add the moments of ``part`` (:func:`planned_part`, fed the samples that follow those
-    of ``acc``) to ``acc``: moments add (the same blocks as one accumulator fed both)."""
-    if part._n == 0:
+@dataclasses.dataclass
+class PartMoments:
+    """What a planned part (:func:`planned_part`) holds once fed: its block moments' records
+    (the samples less the working offset, for an accumulator of one-sample blocks), its Σ(y −
+    y0)², its number of samples and last t (s) — without the plan's matrices (MB)."""
+
+    records: list[Any]
+    sum_y2: float
+    n: int
+    t_last: float | None
+
+
+def moments_of(part: HarmonicFitAccumulator) -> PartMoments:
+    """The moments of a fed planned part, to send back to the accumulator it was planned on."""
+    records = list(part._records) if part._explicit else list(part._store.records())
+    return PartMoments(records, part._sum_y2, part._n, part._t_last)
+
+
+def merge_part(acc: HarmonicFitAccumulator, part: PartMoments) -> None:
+    """Add the moments of a part (:func:`planned_part` fed the samples that follow those of
+    ``acc``, :func:`moments_of`) to ``acc``: moments add (the same blocks, and with the same
+    adds the same sums in the same order, as one accumulator fed both)."""
+    if part.n == 0:
         return
     if acc._explicit:
-        acc._records.extend(part._records)
-    for record in part._store.records():
-        acc._store.append(*record)
-    acc._sum_y2 += part._sum_y2
-    acc._n += part._n
-    acc._t_last = part._t_last
+        acc._records.extend(part.records)
+    else:
+        for record in part.records:
+            acc._store.append(*record)
+    acc._sum_y2 += part.sum_y2
+    acc._n += part.n
+    acc._t_last = part.t_last
 
 
 def accumulate(
