@@ -5,7 +5,6 @@ of the whole capture in memory, the same refusals with the same messages."""
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Any
 
@@ -13,6 +12,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from distributed import Client
+from tests.batch.test_capture_noise import _worst
 
 import rotacal.table.streaming as streaming
 from rotacal import sim
@@ -33,21 +33,6 @@ MOTION = sim.SineMotion(
 #: blocks of 9973 rows: ~20 blocks, reversing windows and accumulator blocks cut by them
 ROWS = 9973
 SET = {"set_amplitude_deg": 0.5, "set_frequency_hz": 2.0}
-
-
-def _worst(a: Any, b: Any, where: str = "") -> float:
-    """The largest relative difference between the numbers of two JSON documents (and that
-    everything else is equal)."""
-    if isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        return max((_worst(a[k], b[k], f"{where}/{k}") for k in a if k != "provenance"), default=0)
-    if isinstance(a, list):
-        assert len(a) == len(b), where
-        return max((_worst(u, v, where) for u, v in zip(a, b, strict=True)), default=0.0)
-    if isinstance(a, float) and isinstance(b, float) and math.isfinite(a):
-        return 0.0 if a == b else abs(a - b) / max(abs(a), abs(b))
-    assert a == b, where
-    return 0.0
 
 
 @pytest.fixture(scope="module")

@@ -167,47 +167,51 @@ def _times_task(source: CaptureRows, indices: list[int]) -> np.ndarray:
     return t[np.asarray(indices) - indices[0]]
 
 
-def _theta_rows(
-    source: CaptureRows,
-    corr: QuadratureCorrection,
-    scale: float,
-    state: PhaseState | None,
-    jit: bool,
-    rows: tuple[int, int, int],
-    detrend: SineFit | None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """t (s) and θ (deg) of the rows lo … hi − 1 of ``rows`` = (a, lo, hi), unwrapped from the
-    block start a ≤ lo with the block's entry ``state``; less ``detrend``'s drift if given."""
-    from rotacal.table._stream_encoder import chunk_theta
-    from rotacal.table.motion_drift import detrended_angle
+@dataclasses.dataclass(frozen=True)
+class _Span:
+    """Rows ``lo`` … ``hi − 1`` of the capture whose θ a task computes, unwrapped from the
+    start ``a`` ≤ lo of their block with the block's entry ``state`` (the same θ as the
+    single-process pass, which runs from the chunk's start)."""
 
-    a, lo, hi = rows
-    cols = source.read(a, hi)
-    theta = chunk_theta(cols, corr, state, scale, jit)[lo - a :]
-    t = np.array(cols["time_s"][lo - a :])
-    return t, theta if detrend is None else detrended_angle(detrend, t, theta)
+    source: CaptureRows
+    corr: QuadratureCorrection
+    scale: float  # deg of θ per rad of signal phase
+    state: PhaseState | None
+    jit: bool
+    a: int
+    lo: int
+    hi: int
+
+    def theta(self, detrend: SineFit | None) -> tuple[np.ndarray, np.ndarray]:
+        """t (s) and θ (deg) of the rows, less ``detrend``'s drift if given."""
+        from rotacal.table._stream_encoder import chunk_theta
+        from rotacal.table.motion_drift import detrended_angle
+
+        cols = self.source.read(self.a, self.hi)
+        theta = chunk_theta(cols, self.corr, self.state, self.scale, self.jit)[self.lo - self.a :]
+        t = np.array(cols["time_s"][self.lo - self.a :])
+        return t, theta if detrend is None else detrended_angle(detrend, t, theta)
+
+
+def _theta_task(span: _Span, detrend: SineFit | None) -> tuple[np.ndarray, np.ndarray]:
+    return span.theta(detrend)
 
 
 def _fit_task(
-    source: CaptureRows,
-    corr: QuadratureCorrection,
-    scale: float,
-    state: PhaseState | None,
-    jit: bool,
-    rows: tuple[int, int, int],
+    span: _Span,
     detrend: SineFit | None,
     templates: list[Fed],
     ranges: list[tuple[int, int]],
     first: int,
     step: int,
 ) -> tuple[list[list[PartMoments]], np.ndarray, np.ndarray, float]:
-    """Each add of ``ranges`` (they tile the rows) made to a planned part of each template
+    """Each add of ``ranges`` (they tile the span) made to a planned part of each template
     (:func:`~rotacal.table._stream_fit.planned_part`, t through its map): the moments of
-    each add's parts, the decimated t and θ of the rows and their last t (s)."""
+    each add's parts, the decimated t and θ of the span and its last t (s)."""
     from rotacal.table._stream_fit import decimate, moments_of, planned_part
 
-    t, y = _theta_rows(source, corr, scale, state, jit, rows, detrend)
-    lo = rows[1]
+    t, y = span.theta(detrend)
+    lo = span.lo
     adds = []
     for start, stop in ranges:
         t_add, y_add = t[start - lo : stop - lo], y[start - lo : stop - lo]
@@ -221,20 +225,13 @@ def _fit_task(
 
 
 def _error_task(
-    source: CaptureRows,
-    corr: QuadratureCorrection,
-    scale: float,
-    state: PhaseState | None,
-    jit: bool,
-    rows: tuple[int, int, int],
-    detrend: SineFit | None,
-    error: tuple[Any, ...],
+    span: _Span, detrend: SineFit | None, error: tuple[Any, ...]
 ) -> tuple[float, float, np.ndarray]:
-    """Eq. (2) over the rows (:func:`~rotacal.table._stream_fit.piece_error`)."""
+    """Eq. (2) over the span (:func:`~rotacal.table._stream_fit.piece_error`)."""
     from rotacal.table._stream_fit import piece_error
 
-    t, y = _theta_rows(source, corr, scale, state, jit, rows, detrend)
-    return piece_error(rows[1], t, y, *error)
+    t, y = span.theta(detrend)
+    return piece_error(span.lo, t, y, *error)
 
 
 @dataclasses.dataclass
@@ -258,15 +255,20 @@ class _Split:
     def round(self, fn: Callable[..., Any], args: list[tuple[Any, ...]]) -> list[Any]:
         return task_round(self.client, fn, args, self.tick)
 
-    def spans(self, cuts: Callable[[int], int], jit: bool) -> list[tuple[Any, ...]]:
-        """The leading arguments of θ tasks over rows [cuts(a_j), cuts(a_{j+1})) of each block
-        j (non-empty ones), each read from its block's start with its entry state."""
+    def span(self, j: int, lo: int, hi: int, jit: bool) -> _Span:
+        """Rows lo … hi − 1, read from the start of block j (≤ lo)."""
+        assert self.corr is not None
+        a = j * self.rows
+        return _Span(self.source, self.corr, self.scale, self.states[j], jit, a, lo, hi)
+
+    def spans(self, cuts: Callable[[int], int], jit: bool) -> list[_Span]:
+        """Rows [cuts(a_j), cuts(a_{j+1})) of each block j (the non-empty ones)."""
         ends = [*self.starts, self.n]
         out = []
         for j, a in enumerate(ends[:-1]):
             lo, hi = cuts(a), cuts(ends[j + 1])
             if lo < hi:
-                out.append((self.source, self.corr, self.scale, self.states[j], jit, (a, lo, hi)))
+                out.append(self.span(j, lo, hi, jit))
         return out
 
 
@@ -298,9 +300,9 @@ def _accumulate(
     sizes = [cuts(b) - cuts(a) for a, b in itertools.pairwise(bounds)]
     ranges = add_ranges(first, [size for size in sizes if size], block)
     (start, stop), rest = ranges[0], ranges[1:]
-    j = start // split.rows
-    lead = (split.source, split.corr, split.scale, split.states[j], jit)
-    t, y = split.round(_theta_rows, [(*lead, (j * split.rows, start, stop), detrend)])[0]
+    t, y = split.round(_theta_task, [(split.span(start // split.rows, start, stop, jit), detrend)])[
+        0
+    ]
     for acc, to_t in fed:
         acc.add(t if to_t is None else to_t(t), y)
     dec: tuple[list[np.ndarray], list[np.ndarray]] = ([t[::step]], [y[::step]])
@@ -313,17 +315,7 @@ def _accumulate(
         [[(planned_part(acc), to_t) for acc, to_t in fed]], broadcast=True
     )[0]
     args = [
-        (
-            *lead[:3],
-            split.states[k],
-            jit,
-            (k * split.rows, rs[0][0], rs[-1][1]),
-            detrend,
-            templates,
-            rs,
-            first,
-            step,
-        )
+        (split.span(k, rs[0][0], rs[-1][1], jit), detrend, templates, rs, first, step)
         for k, rs in by_block.items()
     ]
     for adds, dec_t, dec_y, t_end in split.round(_fit_task, args):
@@ -582,7 +574,7 @@ def _fit(
     to_true = true_time(specs, t0)
     if n_seg <= _GATHER_MAX_SAMPLES:  # gathered and fitted as in memory
         pieces = split.round(
-            _theta_rows, [(*lead, None) for lead in split.spans(_clip(first, last), jit)]
+            _theta_task, [(span, None) for span in split.spans(_clip(first, last), jit)]
         )
 
         def segment() -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
@@ -615,5 +607,5 @@ def _fit(
         first,
         _plot_stride(n_seg),
     )
-    args = [(*lead, seg.fit, error) for lead in split.spans(_clip(first, last), jit)]
+    args = [(span, seg.fit, error) for span in split.spans(_clip(first, last), jit)]
     return seg, position_error_of(split.round(_error_task, args), first, last)
