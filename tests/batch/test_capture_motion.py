@@ -75,12 +75,12 @@ def test_split_over_workers_equals_one_process_and_memory(
     assert np.array_equal(got.reversal_times_s, one.reversal_times_s)
     assert _worst(got.to_dict(), one.to_dict()) < 1e-9
     assert seen == list(range(1, len(seen) + 1)) and len(seen) > 3 * (capture["a"].size // ROWS)
-    memory = calibrate_encoder_motion(
-        capture["time_s"], capture["a"], capture["b"], lines=LINES, **kw
-    )
-    assert np.array_equal(got.reversal_times_s, memory.reversal_times_s)
-    assert got.amplitude_deg == pytest.approx(memory.amplitude_deg, rel=1e-9)
-    assert got.thd_percent == pytest.approx(memory.thd_percent, rel=1e-9)
+    if gather is None:  # and, gathered, the fit of the whole span in memory
+        memory = calibrate_encoder_motion(
+            capture["time_s"], capture["a"], capture["b"], lines=LINES, **kw
+        )
+        assert np.array_equal(got.reversal_times_s, memory.reversal_times_s)
+        assert _worst(got.to_dict(), memory.to_dict()) < 1e-9
 
 
 def _nan(cols: dict[str, np.ndarray]) -> None:
