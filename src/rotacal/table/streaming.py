@@ -20,6 +20,10 @@ the capture's length. The capture is read in passes, each a fresh call of ``chun
    position error of eq. (2) (:mod:`rotacal.table._stream_fit`); the FOG's integrated angle, SNR
    and its own eq. (2) on the way.
 
+The OSE passes' per-chunk work are functions of :mod:`rotacal.table._stream_encoder` and
+:mod:`rotacal.table._stream_fit` that a Dask task calls as well
+(:mod:`rotacal.batch.capture_motion`: the same calibration split over a cluster's workers).
+
 Passes after the first stop reading after the last sample they need, and the reader's checks
 (NPZ CRC-32, NaN/inf) run on the first pass only. What grows with the capture is only per-event:
 the encoder's reversal candidates (the transitions are planned chunk by chunk), the reversal
