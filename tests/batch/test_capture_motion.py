@@ -83,24 +83,39 @@ def test_split_over_workers_equals_one_process_and_memory(
         assert _worst(got.to_dict(), memory.to_dict()) < 1e-9
 
 
-def _nan(cols: dict[str, np.ndarray]) -> None:
+def _nan(cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     cols["b"][5 * ROWS + 17] = np.nan
+    return cols
 
 
-def _clip(cols: dict[str, np.ndarray]) -> None:
+def _clip(cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     cols["a"][:] = np.clip(cols["a"], -0.8, 0.8)
+    return cols
 
 
-def _backwards(cols: dict[str, np.ndarray]) -> None:
+def _backwards(cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     cols["time_s"][3 * ROWS] = cols["time_s"][3 * ROWS - 1] - 1e-6  # across a block boundary
+    return cols
 
 
-@pytest.mark.parametrize("damage", [_nan, _clip, _backwards], ids=["nan", "clipped", "time"])
+def _short(cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    return {k: v[: 2 * ROWS] for k, v in cols.items()}  # 2 reversals: too few
+
+
+@pytest.mark.parametrize(
+    ("damage", "word"),
+    [
+        (_nan, f"nan at row {5 * ROWS + 17} "),
+        (_clip, "clipped"),
+        (_backwards, f"not strictly increasing at sample {3 * ROWS} "),
+        (_short, "2 reversing moment(s)"),
+    ],
+    ids=["nan", "clipped", "time", "short"],
+)
 def test_a_bad_capture_is_refused_with_the_message_of_one_process(
-    dask_client: Client, capture: dict[str, np.ndarray], tmp_path: Path, damage: Any
+    dask_client: Client, capture: dict[str, np.ndarray], tmp_path: Path, damage: Any, word: str
 ) -> None:
-    bad = {k: v.copy() for k, v in capture.items()}
-    damage(bad)
+    bad = damage({k: v.copy() for k, v in capture.items()})
     path = write_capture(tmp_path / "bad.npz", bad)
     with pytest.raises(CaptureError) as one:
         _one_process(path)
@@ -109,6 +124,7 @@ def test_a_bad_capture_is_refused_with_the_message_of_one_process(
             str(path), client=dask_client, lines=LINES, chunk_rows=ROWS
         )
     assert str(split.value) == str(one.value)
+    assert word in str(split.value)
 
 
 def test_text_is_refused_before_any_work(
