@@ -4,6 +4,7 @@ of the whole capture in memory, the same refusals with the same messages."""
 
 from __future__ import annotations
 
+import itertools
 import json
 from pathlib import Path
 from typing import Any
@@ -16,8 +17,10 @@ from tests.batch.test_capture_noise import _worst
 
 import rotacal.table.streaming as streaming
 from rotacal import sim
-from rotacal.batch.capture_motion import calibrate_encoder_motion_on_dask
+from rotacal.batch.capture_motion import _entry_states, calibrate_encoder_motion_on_dask
 from rotacal.cli import cli
+from rotacal.encoder import correct_quadrature, fit_quadrature_correction
+from rotacal.encoder._kernel import phase_pass
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.io import write_capture
 from rotacal.table import (
@@ -45,6 +48,27 @@ def capture() -> dict[str, np.ndarray]:
 @pytest.fixture(scope="module")
 def npz(capture: dict[str, np.ndarray], tmp_path_factory: pytest.TempPathFactory) -> Path:
     return write_capture(tmp_path_factory.mktemp("motion") / "enc.npz", capture)
+
+
+def test_entry_states_carry_the_cycles_over_a_wrap_at_a_block_start(
+    capture: dict[str, np.ndarray],
+) -> None:
+    """Blocks that start just after the wrapped phase jumps (both ways): the states chained
+    from each block unwrapped alone are those of one pass over the blocks in order."""
+    a, b = capture["a"], capture["b"]
+    corr = fit_quadrature_correction(a, b)
+    u, v = correct_quadrature(a, b, corr)
+    d = np.diff(np.arctan2(v, u))
+    up, down = np.flatnonzero(d > np.pi) + 1, np.flatnonzero(d < -np.pi) + 1
+    cuts = [0, *sorted({int(up[5]), int(down[5]), int(up[60]), int(down[60])}), a.size]
+    ends = []
+    for lo, hi in itertools.pairwise(cuts):
+        run = phase_pass(a[lo:hi], b[lo:hi], corr, jit=False)
+        ends.append((float(run.phase_rad[0]), run.state))
+    state = None
+    for (lo, hi), entry in zip(itertools.pairwise(cuts), _entry_states(ends), strict=True):
+        assert entry == state
+        state = phase_pass(a[lo:hi], b[lo:hi], corr, state=state, jit=False).state
 
 
 def _one_process(path: Path, **kw: Any) -> Any:
