@@ -371,7 +371,10 @@ def calibrate_encoder_motion_on_dask(
     mapping, group, read_options
         How to read the capture, as :func:`rotacal.io.read_capture`.
     chunk_rows : int
-        Rows of a task's block.
+        Rows of a task's block. The result equals that of the single-process path read in
+        chunks of as many rows (its default, 2·10⁶, is this one's): the fit's adds, and so its
+        sums, follow the chunks (another chunking changes the residual's rounding, ~1e-7 of
+        the uncertainties).
     progress : callable, optional
         Called with the number of tasks done so far.
 
