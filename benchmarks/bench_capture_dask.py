@@ -1,20 +1,27 @@
 """One huge capture's analysis split over Dask workers, against one process.
 
-``--analysis allan`` (the default) writes a rate record of ``--samples`` rows (time_s and
-rate_deg_s, NPZ without compression); ``--analysis rate`` one head of ``--samples`` pulse times
-(HDF5: bench_rate.py's twin, 18,000 pulses per revolution at 300 °/s). It times, on the file:
+``--analysis`` chooses the record, written once (NPZ without compression unless said):
 
-- **one process**: ``rotacal allan --chunked --taus octave`` (``rotacal rate --chunked``) in a
-  fresh process (the baseline);
-- **N workers**: the same command with ``--workers N`` for each N of ``--workers``
-  (a fresh process that starts its local cluster: the start is included);
+- ``allan`` (the default): ``rotacal allan --taus octave`` of a rate record (time_s, rate_deg_s:
+  white noise and a random walk at 100 Hz);
+- ``rate``: ``rotacal rate --pulses-per-rev 18000`` of one head of pulse times (HDF5:
+  bench_rate.py's twin, 18,000 pulses per revolution at 300 °/s);
+- ``encoder``: ``rotacal motion encoder --lines 36000`` of the twin encoder capture of
+  ``bench_motion_stream.py`` (time_s, a, b at 1 MHz, a 2 Hz motion).
+
+On the file it times:
+
+- **one process**: the command with ``--chunked`` in a fresh process (the baseline);
+- **N workers**: the command with ``--workers N`` for each N of ``--workers`` (a fresh process
+  that starts its local cluster: the start is included);
 
 and checks that every number of the JSON agrees with the baseline's. Prints seconds, the ratio
 to the baseline, the CPU seconds of the command and the workers it waited for (on a shared
-machine the steadier figure) and the peak RSS of the largest process (the command's, or a Dask worker's: the
-kernel counts waited-for descendants too). No asserts.
+machine the steadier figure) and the peak RSS of the largest process (the command's, or a Dask
+worker's: the kernel counts waited-for descendants too). No asserts.
 
-Run: ``python benchmarks/bench_capture_dask.py [--analysis rate] [--samples 1e8] [--workers 1,2]``
+Run: ``python benchmarks/bench_capture_dask.py [--analysis allan|rate|encoder] [--samples 1e8]
+[--workers 1,2]``
 """
 
 from __future__ import annotations
@@ -53,6 +60,28 @@ def write_record(path: Path, n: int) -> None:
     path.with_suffix(".time.npy").unlink()
 
 
+def write_encoder(path: Path, n: int) -> None:
+    """The twin encoder capture of ``bench_motion_stream.py`` (1 MHz, a 2 Hz motion)."""
+    from bench_motion_stream import write_npz
+
+    write_npz(path, "encoder", n)
+
+
+def write_pulses(path: Path, n: int) -> None:
+    """One head of ``n`` pulse times: ``bench_rate.py``'s twin (HDF5)."""
+    from bench_rate import write_h5
+
+    write_h5(str(path), n)
+
+
+#: analysis → (writer of its record, the record's file name, the command and its options)
+ANALYSES = {
+    "allan": (write_record, "rate.npz", ["allan", "--taus", "octave"]),
+    "rate": (write_pulses, "pulses.h5", ["rate", "--pulses-per-rev", "18000"]),
+    "encoder": (write_encoder, "capture.npz", ["motion", "encoder", "--lines", "36000"]),
+}
+
+
 def run(args: list[str]) -> tuple[float, float, float]:
     """``rotacal ARGS`` in a fresh process: its wall seconds, peak RSS (MB) and CPU seconds — of
     the process and of the descendants it waited for (the Dask workers), from its wait4 record
@@ -86,33 +115,26 @@ def worst(a: Any, b: Any) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--analysis", choices=sorted(ANALYSES), default="allan")
     parser.add_argument("--samples", type=float, default=1e8)
     parser.add_argument("--workers", default="1,2")
-    parser.add_argument("--analysis", choices=["allan", "rate"], default="allan")
     parser.add_argument("--write", metavar="PATH", help=argparse.SUPPRESS)
     args = parser.parse_args()
     n = int(args.samples)
-    pulses = args.analysis == "rate"
+    write, name, command = ANALYSES[args.analysis]
     if args.write:  # in a child: the pages it touches must not count in the measured children
-        if pulses:
-            from bench_rate import write_h5
-
-            write_h5(args.write, n)
-        else:
-            write_record(Path(args.write), n)
+        write(Path(args.write), n)
         return
     with tempfile.TemporaryDirectory(prefix="rotacal-bench-dask-") as tmp:
-        path = Path(tmp) / ("pulses.h5" if pulses else "rate.npz")
+        path = Path(tmp) / name
         t = time.perf_counter()
-        writer = [sys.executable, __file__, "--samples", str(n), "--analysis", args.analysis]
+        writer = [sys.executable, __file__, "--analysis", args.analysis, "--samples", str(n)]
         subprocess.run([*writer, "--write", str(path)], check=True)
         print(
             f"{n:.3g} samples, {os.path.getsize(path) / 1e6:.0f} MB, written in "
             f"{time.perf_counter() - t:.1f} s"
         )
-        common = ["allan", str(path), "--taus", "octave", "--overwrite"]
-        if pulses:
-            common = ["rate", str(path), "--pulses-per-rev", "18000", "--overwrite"]
+        common = [*command, str(path), "--overwrite"]
         base_json = Path(tmp) / "one.json"
         base, rss, cpu = run([*common, "--chunked", "--json", str(base_json)])
         print(

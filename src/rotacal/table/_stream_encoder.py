@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 import numpy as np
@@ -50,15 +50,28 @@ MIN_SAMPLES = 16
 
 def correction_pass(passes: Passes, n: int) -> QuadratureCorrection:
     """Pass 2: Heydemann fit on the in-memory stride ⌈N/2·10⁵⌉ (same points, same result)."""
-    stride = max(1, -(-n // _ELLIPSE_POINTS))
-    parts_a: list[np.ndarray] = []
-    parts_b: list[np.ndarray] = []
-    for _, off, cols in passes.run():
-        s0 = (-off) % stride
-        parts_a.append(np.array(cols["a"][s0::stride]))
-        parts_b.append(np.array(cols["b"][s0::stride]))
-    a_s = np.concatenate(parts_a)
-    b_s = np.concatenate(parts_b)
+    stride = correction_stride(n)
+    parts = [strided_points(off, cols["a"], cols["b"], stride) for _, off, cols in passes.run()]
+    return correction_of_points(parts)
+
+
+def correction_stride(n: int) -> int:
+    """The in-memory stride of the Heydemann fit's points for ``n`` samples."""
+    return max(1, -(-n // _ELLIPSE_POINTS))
+
+
+def strided_points(
+    off: int, a: np.ndarray, b: np.ndarray, stride: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The samples of a chunk (first global index ``off``) whose index is a multiple of stride."""
+    s0 = (-off) % stride
+    return np.array(a[s0::stride]), np.array(b[s0::stride])
+
+
+def correction_of_points(parts: list[tuple[np.ndarray, np.ndarray]]) -> QuadratureCorrection:
+    """The Heydemann fit of the chunks' strided points, in capture order."""
+    a_s = np.concatenate([p[0] for p in parts])
+    b_s = np.concatenate([p[1] for p in parts])
     # clipping was judged on every sample in pass 1
     return fit_quadrature_correction(
         a_s, b_s, max_points=max(a_s.size, MIN_SAMPLES), allow_clipped=True
@@ -141,6 +154,123 @@ class Demod:
     net_deg: float  # last θ − first θ
 
 
+@dataclasses.dataclass
+class PhaseBlock:
+    """What the phase pass keeps of one chunk (:func:`phase_block`): its transitions, the
+    state after it, its extremes and end phases (rad) and its decimated copies."""
+
+    indices: np.ndarray
+    k_after: np.ndarray
+    k_first: float
+    k_last: float
+    state: PhaseState
+    lo: float
+    hi: float
+    first_phase: float
+    last_phase: float
+    dec: dict[str, np.ndarray]  # every plot-stride-th t, θ (deg), a, b
+    rule: tuple[np.ndarray, np.ndarray] | None  # t and φ a hysteresis rule sees
+
+
+def phase_block(
+    cols: Mapping[str, np.ndarray],
+    off: int,
+    corr: QuadratureCorrection,
+    scale: float,
+    state: PhaseState | None,
+    k_prev: float | None,
+    jit: bool,
+    n: int,
+    with_rule: bool,
+) -> PhaseBlock:
+    """The phase pass over one chunk (first global index ``off``) of a capture of ``n``
+    samples, entering with the phase ``state`` and the k of the sample before it."""
+    run = phase_pass(
+        cols["a"], cols["b"], corr, state=state, previous_k=k_prev, offset=off, jit=jit
+    )
+    phase = run.phase_rad
+    s0 = (-off) % _plot_stride(n)
+    step = _plot_stride(n)
+    dec = {
+        "t": np.array(cols["time_s"][s0::step]),
+        "angle": phase[s0::step] * scale,
+        "a": np.array(cols["a"][s0::step]),
+        "b": np.array(cols["b"][s0::step]),
+    }
+    rule = None
+    if with_rule:
+        rule_step = hysteresis_stride(n)
+        r0 = (-off) % rule_step
+        rule = (np.array(cols["time_s"][r0::rule_step]), phase[r0::rule_step])
+    return PhaseBlock(
+        run.indices,
+        run.k_after,
+        run.k_first,
+        run.k_last,
+        run.state,
+        run.phase_min_rad,
+        run.phase_max_rad,
+        float(phase[0]),
+        float(phase[-1]),
+        dec,
+        rule,
+    )
+
+
+class PhaseFold:
+    """The phase pass's chunks (:class:`PhaseBlock`) gathered in capture order into the
+    reversal plan and the figures' copies (:meth:`finish`); only the reversal candidates' open
+    run is carried (:class:`CandidateState`)."""
+
+    def __init__(self) -> None:
+        self._found: CandidateState | None = None
+        self._dec: dict[str, list[np.ndarray]] = {"t": [], "angle": [], "a": [], "b": []}
+        self._rule: list[tuple[np.ndarray, np.ndarray]] = []
+        self._lo, self._hi = math.inf, -math.inf
+        self._ends: list[float] = []
+
+    def add(self, block: PhaseBlock) -> None:
+        if self._found is None:
+            self._found = CandidateState(block.k_first)
+        self._found.add(block.indices, block.k_after)
+        for key, part in block.dec.items():
+            self._dec[key].append(part)
+        if block.rule is not None:
+            self._rule.append(block.rule)
+        self._lo, self._hi = min(self._lo, block.lo), max(self._hi, block.hi)
+        self._ends[:] = [self._ends[0] if self._ends else block.first_phase, block.last_phase]
+
+    def finish(
+        self,
+        states: list[PhaseState | None],
+        scale: float,
+        hysteresis_subintervals: int | None,
+        hysteresis_from: HysteresisRule | None,
+        stacklevel: int,
+    ) -> Demod:
+        """The reversal plan and copies of every chunk added; ``states``: the phase state at
+        each chunk's start."""
+        if hysteresis_subintervals is None and hysteresis_from is not None:
+            hysteresis_subintervals = hysteresis_from(
+                np.concatenate([r[0] for r in self._rule]),
+                np.concatenate([r[1] for r in self._rule]),
+            )
+        found = self._found
+        if found is None:  # no chunk: plan_reversals' answer for no transitions
+            found = CandidateState(math.nan)
+        plan = found.plan(hysteresis_subintervals, stacklevel=stacklevel + 1)
+        return Demod(
+            plan=plan,
+            states=states,
+            plot_t=np.concatenate(self._dec["t"]),
+            plot_angle=np.concatenate(self._dec["angle"]),
+            plot_a=np.concatenate(self._dec["a"]),
+            plot_b=np.concatenate(self._dec["b"]),
+            span_deg=(self._hi - self._lo) * scale,
+            net_deg=(self._ends[-1] - self._ends[0]) * scale,
+        )
+
+
 def phase_pass_chunked(
     passes: Passes,
     n: int,
@@ -151,57 +281,39 @@ def phase_pass_chunked(
 ) -> Demod:
     """Pass 3: phase with the cycle count carried, transitions, chunk-start states, plot copy
     (and the samples a hysteresis rule sees, as in memory)."""
-    step = _plot_stride(n)
     jit = use_numba(n)  # by the capture's size, not the chunk's
     state: PhaseState | None = None
     k_prev: float | None = None
-    found: CandidateState | None = None
     states: list[PhaseState | None] = []
-    dec: dict[str, list[np.ndarray]] = {"t": [], "angle": [], "a": [], "b": []}
-    rule_step = hysteresis_stride(n)
-    rule_t: list[np.ndarray] = []
-    rule_phase: list[np.ndarray] = []
-    lo, hi = math.inf, -math.inf
-    ends: list[float] = []
+    fold = PhaseFold()
     for _, off, cols in passes.run():
         states.append(state)
-        run = phase_pass(
-            cols["a"], cols["b"], corr, state=state, previous_k=k_prev, offset=off, jit=jit
+        block = phase_block(
+            cols, off, corr, scale, state, k_prev, jit, n, hysteresis_from is not None
         )
-        phase, state = run.phase_rad, run.state
-        if found is None:
-            found = CandidateState(run.k_first)
-        k_prev = run.k_last
-        found.add(run.indices, run.k_after)
-        s0 = (-off) % step
-        dec["t"].append(np.array(cols["time_s"][s0::step]))
-        dec["angle"].append(phase[s0::step] * scale)
-        dec["a"].append(np.array(cols["a"][s0::step]))
-        dec["b"].append(np.array(cols["b"][s0::step]))
-        if hysteresis_from is not None:
-            r0 = (-off) % rule_step
-            rule_t.append(np.array(cols["time_s"][r0::rule_step]))
-            rule_phase.append(phase[r0::rule_step])
-        lo, hi = min(lo, run.phase_min_rad), max(hi, run.phase_max_rad)
-        ends[:] = [ends[0] if ends else float(phase[0]), float(phase[-1])]
-        del phase
-    if hysteresis_subintervals is None and hysteresis_from is not None:
-        hysteresis_subintervals = hysteresis_from(
-            np.concatenate(rule_t), np.concatenate(rule_phase)
-        )
-    if found is None:  # no chunk: plan_reversals' answer for no transitions
-        found = CandidateState(math.nan)
-    plan = found.plan(hysteresis_subintervals, stacklevel=4)
-    return Demod(
-        plan=plan,
-        states=states,
-        plot_t=np.concatenate(dec["t"]),
-        plot_angle=np.concatenate(dec["angle"]),
-        plot_a=np.concatenate(dec["a"]),
-        plot_b=np.concatenate(dec["b"]),
-        span_deg=(hi - lo) * scale,
-        net_deg=(ends[-1] - ends[0]) * scale,
-    )
+        state, k_prev = block.state, block.k_last
+        fold.add(block)
+    return fold.finish(states, scale, hysteresis_subintervals, hysteresis_from, stacklevel=4)
+
+
+def window_bounds(plan: ReversalPlan, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """First and last sample (inclusive) that eqs. (7)–(8) read for each reversing window of
+    the plan, and each window's Chp where it is already known (a one-sample visit: its sample;
+    the others are overwritten once their samples are read)."""
+    m = plan.windows.shape[0]
+    chp = np.empty(m, dtype=np.intp)
+    lo = np.empty(m, dtype=np.int64)
+    hi = np.empty(m, dtype=np.int64)
+    for w, (first, last) in enumerate(plan.windows.tolist()):
+        lo[w], hi[w] = reversal_window(first, last, n)
+        chp[w] = first
+    return lo, hi, chp
+
+
+def reversal_index(plan: ReversalPlan, chp: np.ndarray, r: int) -> int:
+    """The sample of reversal ``r``: midway between the Chp of its two windows (eq. (8))."""
+    w0, w1 = (int(x) for x in plan.pairs[r])
+    return (int(chp[w0]) + int(chp[w1])) // 2
 
 
 def reversals_pass(
@@ -212,15 +324,9 @@ def reversals_pass(
     Each window's samples are gathered only while the pass is inside it and are dropped as soon
     as its Chp is known, so only the windows open in the current chunk are held.
     """
-    windows = plan.windows
-    m = windows.shape[0]
+    lo, hi, chp = window_bounds(plan, n)
+    m = lo.size
     n_rev = plan.pairs.shape[0]
-    chp = np.empty(m, dtype=np.intp)
-    lo = np.empty(m, dtype=np.int64)
-    hi = np.empty(m, dtype=np.int64)
-    for w, (first, last) in enumerate(windows.tolist()):
-        lo[w], hi[w] = reversal_window(first, last, n)
-        chp[w] = first  # final for a one-sample visit, overwritten otherwise
     # Ranges to read: the signals of every window wider than one sample ("uv"), the time stamps
     # of the span from a reversal's first window to its last ("t"): its index lies in there.
     ranges: list[tuple[int, int, str, int]] = [
@@ -263,8 +369,7 @@ def reversals_pass(
                 vs = np.concatenate([p[1] for p in pieces])
                 chp[key] = r_lo + reversal_point_in_window(us, vs)
             else:
-                w0, w1 = (int(x) for x in plan.pairs[key])
-                index = (int(chp[w0]) + int(chp[w1])) // 2
+                index = reversal_index(plan, chp, key)
                 indices[key] = index
                 times[key] = np.concatenate(pieces)[index - r_lo]
     return indices, times
@@ -283,16 +388,27 @@ def segment(
 
     def pieces() -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
         for number, off, cols in passes.run(first, last + 1):
-            theta = phase_pass(
-                cols["a"],
-                cols["b"],
-                corr,
-                state=states[number],
-                jit=use_numba(last + 1 - first),
-                scale=scale,  # θ (deg) block by block in the pass: no temporary of its own
-            ).phase_rad
+            theta = chunk_theta(cols, corr, states[number], scale, use_numba(last + 1 - first))
             s = max(first - off, 0)
             e = min(last + 1 - off, theta.size)
             yield off + s, cols["time_s"][s:e], theta[s:e]
 
     return pieces
+
+
+def chunk_theta(
+    cols: Mapping[str, np.ndarray],
+    corr: QuadratureCorrection,
+    state: PhaseState | None,
+    scale: float,
+    jit: bool,
+) -> np.ndarray:
+    """θ (deg) of every sample of a chunk, entering with the phase ``state``."""
+    return phase_pass(
+        cols["a"],
+        cols["b"],
+        corr,
+        state=state,
+        jit=jit,
+        scale=scale,  # θ (deg) block by block in the pass: no temporary of its own
+    ).phase_rad

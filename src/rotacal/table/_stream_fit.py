@@ -20,6 +20,7 @@ Feng et al. (2023), Sensors 23:4876, eqs. (1), (2), (9); IEEE Std 1057-2017, §4
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 from collections.abc import Callable, Iterator
@@ -29,6 +30,7 @@ import numpy as np
 
 from rotacal.results import with_warnings
 from rotacal.signal import HarmonicFitAccumulator, SineFit
+from rotacal.signal._blocks_store import MomentStore
 from rotacal.table.motion import MotionResult, _plot_stride
 from rotacal.table.motion_drift import detrended_angle, explained_fit, fit_motion
 from rotacal.uncertainty import InstrumentSpecs
@@ -135,6 +137,21 @@ def fit_segment(
             yield g0, t_piece, y_piece
 
     accumulate([(acc, None), *(beside or [])], tap(), block_length(f0, harmonics, dt))
+    return accumulated_fit(acc, f0, harmonics, drift, rate, (dec_t, dec_y), ends, n_seg)
+
+
+def accumulated_fit(
+    acc: HarmonicFitAccumulator,
+    f0: float,
+    harmonics: int,
+    drift: bool,
+    rate: bool,
+    dec: tuple[list[np.ndarray], list[np.ndarray]],
+    ends: list[float],
+    n_seg: int,
+) -> SegmentFit:
+    """The fit of :func:`fit_segment` from its accumulator fed the whole segment, the segment's
+    decimated copies (t, y) and its first and last t (s)."""
     fit = explained_fit(
         lambda with_term: acc.fit(
             f0, harmonics, True, max_iter=50, rtol=1e-12, drift=with_term, drift_check=not with_term
@@ -142,10 +159,65 @@ def fit_segment(
         drift,
         rate,
     )
-    t_plot = np.concatenate(dec_t)
+    t_plot = np.concatenate(dec[0])
     return SegmentFit(
-        fit, np.array(ends), None, t_plot, np.concatenate(dec_y) - fit.evaluate(t_plot), n_seg
+        fit, np.array(ends), None, t_plot, np.concatenate(dec[1]) - fit.evaluate(t_plot), n_seg
     )
+
+
+def first_add_samples(block: int | None) -> int:
+    """Samples of :func:`accumulate`'s first add: at least 2¹⁶, whole blocks of ``block``."""
+    m = block or 1
+    return -(-_FIRST_ADD_SAMPLES // m) * m
+
+
+def planned_part(acc: HarmonicFitAccumulator) -> HarmonicFitAccumulator:
+    """An empty accumulator on the time grid, block plan and working offset of ``acc`` (which
+    has had its first add): a part of the record is added to it elsewhere (a Dask task) and
+    merged back with :func:`merge_part`. Reads the accumulator's private state: the two
+    functions are its merge."""
+    part = copy.copy(acc)
+    part._store = MomentStore(acc._k + 2)
+    part._records = []
+    part._n = 0
+    part._sum_y2 = 0.0
+    part._t_first = math.nan
+    part._t_last = None
+    return part
+
+
+@dataclasses.dataclass
+class PartMoments:
+    """What a planned part (:func:`planned_part`) holds once fed: its block moments' records
+    (the samples less the working offset, for an accumulator of one-sample blocks), its Σ(y −
+    y0)², its number of samples and last t (s) — without the plan's matrices (MB)."""
+
+    records: list[Any]
+    sum_y2: float
+    n: int
+    t_last: float | None
+
+
+def moments_of(part: HarmonicFitAccumulator) -> PartMoments:
+    """The moments of a fed planned part, to send back to the accumulator it was planned on."""
+    records = list(part._records) if part._explicit else list(part._store.records())
+    return PartMoments(records, part._sum_y2, part._n, part._t_last)
+
+
+def merge_part(acc: HarmonicFitAccumulator, part: PartMoments) -> None:
+    """Add the moments of a part (:func:`planned_part` fed the samples that follow those of
+    ``acc``, :func:`moments_of`) to ``acc``: moments add (the same blocks, and with the same
+    adds the same sums in the same order, as one accumulator fed both)."""
+    if part.n == 0:
+        return
+    if acc._explicit:
+        acc._records.extend(part.records)
+    else:
+        for record in part.records:
+            acc._store.append(*record)
+    acc._sum_y2 += part.sum_y2
+    acc._n += part.n
+    acc._t_last = part.t_last
 
 
 def accumulate(
@@ -164,7 +236,7 @@ def accumulate(
             acc.add(t_piece if to_t is None else to_t(t_piece), y_piece)
 
     m = block or 1
-    first = -(-_FIRST_ADD_SAMPLES // m) * m  # ≥ 2¹⁶ samples, whole blocks
+    first = first_add_samples(block)
     carry_t: list[np.ndarray] = []
     carry_y: list[np.ndarray] = []
     n_carry = 0
@@ -188,6 +260,38 @@ def accumulate(
         n_carry = t_piece.size - cut
     if n_carry:
         add(np.concatenate(carry_t), np.concatenate(carry_y))
+
+
+def add_ranges(first: int, sizes: list[int], block: int | None) -> list[tuple[int, int]]:
+    """The samples ``[start, stop)`` (global indices) of each add :func:`accumulate` makes when
+    fed pieces of ``sizes`` samples from sample ``first`` on: the same adds (same blocks, same
+    sums in the same order) can then be made elsewhere and merged (:func:`merge_part`). It
+    follows :func:`accumulate` step by step (tested: the split calibration equals it)."""
+    m = block or 1
+    head = first_add_samples(block)
+    out: list[tuple[int, int]] = []
+    pos = carry_start = first
+    n_carry = 0
+    started = False
+    for size in sizes:
+        want = head if not started else m
+        if n_carry + size < want:
+            n_carry += size
+            pos += size
+            continue
+        i = 0
+        if n_carry or not started:
+            i = want - n_carry
+            out.append((carry_start, pos + i))
+            started = True
+        cut = i + (size - i) // m * m
+        if cut > i:
+            out.append((pos + i, pos + cut))
+        carry_start, n_carry = pos + cut, size - cut
+        pos += size
+    if n_carry:
+        out.append((carry_start, carry_start + n_carry))
+    return out
 
 
 def detrended(segment: Segment, fit: SineFit) -> Segment:
@@ -228,22 +332,52 @@ def position_error_pass(
     if acc3 is None:
         acc3 = accumulator(set_frequency_hz, 1, dt)
         accumulate([(acc3, to_true)], segment(), block_length(set_frequency_hz, 1, dt))
-    fit3 = acc3.fit(set_frequency_hz, 1, False, max_iter=1, rtol=1e-12)
-    phase0 = float(fit3.phases_rad[0])
+    fit3 = ideal_fit(acc3, set_frequency_hz)
     step = _plot_stride(last + 1 - first)
-    worst = 0.0
-    total = 0.0
-    dec: list[np.ndarray] = []
-    for g0, t_piece, y_piece in segment():
-        t_true = t_piece if to_true is None else to_true(t_piece)
-        ideal = fit3.offset + set_amplitude_deg * np.sin(
-            2 * np.pi * set_frequency_hz * (t_true - fit3.t_ref_s) + phase0
+    parts = [
+        piece_error(
+            g0, t_piece, y_piece, fit3, set_amplitude_deg, set_frequency_hz, to_true, first, step
         )
-        err = y_piece - ideal
-        worst = max(worst, float(np.max(np.abs(err))))
-        total += float(err @ err)
-        dec.append(decimate(g0, first, step, err))
-    return worst, math.sqrt(total / (last + 1 - first)), np.concatenate(dec)
+        for g0, t_piece, y_piece in segment()
+    ]
+    return position_error_of(parts, first, last)
+
+
+def ideal_fit(acc3: HarmonicFitAccumulator, set_frequency_hz: float) -> SineFit:
+    """The three-parameter fit at the set frequency (Hz) whose sinusoid eq. (2) compares with."""
+    return acc3.fit(set_frequency_hz, 1, False, max_iter=1, rtol=1e-12)
+
+
+def piece_error(
+    g0: int,
+    t_piece: np.ndarray,
+    y_piece: np.ndarray,
+    fit3: SineFit,
+    set_amplitude_deg: float,
+    set_frequency_hz: float,
+    to_true: Callable[[np.ndarray], np.ndarray] | None,
+    first: int,
+    step: int,
+) -> tuple[float, float, np.ndarray]:
+    """Eq. (2) on one piece of the segment (first global index ``g0``; t in s, θ in deg)
+    against the ideal sinusoid of the three-parameter fit ``fit3``: the largest |error|, the
+    sum of its squares (deg²) and its decimated copy."""
+    t_true = t_piece if to_true is None else to_true(t_piece)
+    ideal = fit3.offset + set_amplitude_deg * np.sin(
+        2 * np.pi * set_frequency_hz * (t_true - fit3.t_ref_s) + float(fit3.phases_rad[0])
+    )
+    err = y_piece - ideal
+    return float(np.max(np.abs(err))), float(err @ err), decimate(g0, first, step, err)
+
+
+def position_error_of(
+    parts: list[tuple[float, float, np.ndarray]], first: int, last: int
+) -> tuple[float, float, np.ndarray]:
+    """The maximum and rms (deg) of eq. (2) and its decimated copy, from the pieces'
+    :func:`piece_error` in segment order."""
+    worst = max((p[0] for p in parts), default=0.0)
+    total = sum(p[1] for p in parts)  # in order, as one process adds them
+    return worst, math.sqrt(total / (last + 1 - first)), np.concatenate([p[2] for p in parts])
 
 
 def with_segment(

@@ -20,6 +20,10 @@ the capture's length. The capture is read in passes, each a fresh call of ``chun
    position error of eq. (2) (:mod:`rotacal.table._stream_fit`); the FOG's integrated angle, SNR
    and its own eq. (2) on the way.
 
+The OSE passes' per-chunk work are functions of :mod:`rotacal.table._stream_encoder` and
+:mod:`rotacal.table._stream_fit` that a Dask task calls as well
+(:mod:`rotacal.batch.capture_motion`: the same calibration split over a cluster's workers).
+
 Passes after the first stop reading after the last sample they need, and the reader's checks
 (NPZ CRC-32, NaN/inf) run on the first pass only. What grows with the capture is only per-event:
 the encoder's reversal candidates (the transitions are planned chunk by chunk), the reversal
@@ -186,10 +190,7 @@ def calibrate_encoder_motion_chunked(
     Heydemann 1981, Appl. Opt. 20:3382 (signal correction); JCGM 100:2008, JCGM 101:2008
     (budgets, :mod:`rotacal.table.motion_uncertainty`).
     """
-    _check_settings(harmonics, periods)
-    if int(lines) != lines or lines < 1:
-        raise ConfigError(f"--lines must be a positive whole number, got {lines}")
-    _check_set_values(set_amplitude_deg, set_frequency_hz)
+    check_encoder_settings(lines, harmonics, periods, set_amplitude_deg, set_frequency_hz)
     passes = Passes(chunks, progress)
     scale = 360.0 / (_TWO_PI * float(lines))
 
@@ -225,6 +226,48 @@ def calibrate_encoder_motion_chunked(
         true_time(specs, t0),
         found.typical,
     )
+    return encoder_result(
+        demod,
+        corr,
+        seg,
+        error,
+        (first, last, rev_times, n_periods, t0),
+        set_amplitude_deg,
+        set_frequency_hz,
+        specs,
+        clipped,
+    )
+
+
+def check_encoder_settings(
+    lines: int,
+    harmonics: int,
+    periods: int | None,
+    set_amplitude_deg: float | None,
+    set_frequency_hz: float | None,
+) -> None:
+    """The OSE calibration's refusals of its settings (ConfigError), as in memory."""
+    _check_settings(harmonics, periods)
+    if int(lines) != lines or lines < 1:
+        raise ConfigError(f"--lines must be a positive whole number, got {lines}")
+    _check_set_values(set_amplitude_deg, set_frequency_hz)
+
+
+def encoder_result(
+    demod: enc.Demod,
+    corr: QuadratureCorrection,
+    seg: SegmentFit,
+    error: tuple[float, float, np.ndarray] | None,
+    cut: tuple[int, int, np.ndarray, int, float],
+    set_amplitude_deg: float | None,
+    set_frequency_hz: float | None,
+    specs: InstrumentSpecs | None,
+    clipped: tuple[str, ...],
+) -> MotionResult:
+    """The OSE result from the passes' findings: the phase pass's ``demod``, the correction,
+    the fit and position error of the analysed samples, and ``cut`` = (first, last, reversal
+    times (s), whole periods, capture start (s))."""
+    first, last, rev_times, n_periods, t0 = cut
     plot = {
         "t": demod.plot_t,
         "angle_deg": demod.plot_angle,
