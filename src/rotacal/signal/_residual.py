@@ -14,6 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from rotacal._jit import use_numba
+from rotacal._threads import blas_one_thread
 from rotacal.signal._result import harmonic_series_many
 
 #: Samples per chunk of the NumPy path: the cosines, sines and model of a chunk stay in cache.
@@ -131,33 +132,37 @@ def grid_residual_sums(
     table = np.vstack([np.cos(ang), np.sin(ang)])  # (2H, GRID_BLOCK)
     sums = np.zeros(nm)
     step = GRID_BLOCK * _GRID_GROUP
-    for s in range(0, n, step):
-        e = min(n, s + step)
-        full = (e - s) // GRID_BLOCK
-        parts = [(s, full, GRID_BLOCK)] if full else []
-        if s + full * GRID_BLOCK < e:
-            parts.append((s + full * GRID_BLOCK, 1, e - s - full * GRID_BLOCK))
-        for start, nb, size in parts:
-            tau = t[start : start + nb * size].reshape(nb, size) - t_ref
-            theta = omega * tau
-            theta_s = theta[:, :1]
-            delta = (theta - theta_s) - phi[None, :size]
-            if not np.abs(delta).max() <= tol:
-                return None
-            h_theta = theta_s * harm[None, :]
-            c_h, s_h = np.cos(h_theta), np.sin(h_theta)
-            ys = y[start : start + nb * size].reshape(nb, size)
-            for j in range(nm):
-                al = ca[j] * c_h + cb[j] * s_h
-                be = cb[j] * c_h - ca[j] * s_h
-                coef = np.vstack([np.hstack([al, be]), np.hstack([harm * be, -harm * al])])
-                # not a BLAS product: a multithreaded BLAS spends 10x more on these small
-                # products on a busy machine than einsum's single-threaded loop does
-                prod = np.einsum("ij,jk->ik", coef, table[:, :size], optimize=False)
-                model = prod[:nb] + delta * prod[nb:]
-                model += consts[j]
-                if drifts[j]:
-                    model += drifts[j] * tau
-                r = ys - model
-                sums[j] += float(np.einsum("ij,ij->", r, r))
+    with blas_one_thread():
+        for s in range(0, n, step):
+            e = min(n, s + step)
+            full = (e - s) // GRID_BLOCK
+            parts = [(s, full, GRID_BLOCK)] if full else []
+            if s + full * GRID_BLOCK < e:
+                parts.append((s + full * GRID_BLOCK, 1, e - s - full * GRID_BLOCK))
+            for start, nb, size in parts:
+                tau = t[start : start + nb * size].reshape(nb, size) - t_ref
+                theta = omega * tau
+                theta_s = theta[:, :1]
+                delta = (theta - theta_s) - phi[None, :size]
+                if not np.abs(delta).max() <= tol:
+                    return None
+                h_theta = theta_s * harm[None, :]
+                c_h, s_h = np.cos(h_theta), np.sin(h_theta)
+                ys = y[start : start + nb * size].reshape(nb, size)
+                # every model's values and first-order terms in one product with the table
+                # (one BLAS thread: on these small products more threads only spin)
+                al = ca[:, None, :] * c_h + cb[:, None, :] * s_h  # (models, blocks, H)
+                be = cb[:, None, :] * c_h - ca[:, None, :] * s_h
+                coef = np.concatenate(
+                    [np.concatenate([al, be], axis=2), np.concatenate([harm * be, -harm * al], 2)]
+                ).reshape(2 * nm * nb, 2 * nh)
+                prod = coef @ table[:, :size]
+                for j in range(nm):
+                    model = prod[j * nb : (j + 1) * nb]
+                    model += delta * prod[(nm + j) * nb : (nm + j + 1) * nb]
+                    model += consts[j]
+                    if drifts[j]:
+                        model += drifts[j] * tau
+                    r = np.subtract(ys, model, out=model).reshape(-1)
+                    sums[j] += float(r @ r)
     return [float(x) for x in sums]
