@@ -66,6 +66,38 @@ def residual_sums(
     IEEE Std 1057-2017, §4.1.3 (the residual of the sine fits, from which s² = RSS/(N − p));
     Feng et al. 2023, Sensors 23:4876, eq. (9) (the multi-harmonic model).
     """
+    return _sums(t, y, t_ref, frequency_hz, models, jit)[0]
+
+
+def residual_tau_sums(
+    t: np.ndarray,
+    y: np.ndarray,
+    t_ref: float,
+    frequency_hz: float,
+    model: tuple[float, np.ndarray, np.ndarray, float],
+    *,
+    jit: bool | None = None,
+) -> tuple[float, float]:
+    """``Σ r²`` and ``Σ r·τ`` of one model's residual ``r = y − model`` (τ = t − t_ref, s).
+
+    The second sum is the residual's product with a drift column τ: with it a fit's residual
+    gives that of the same fit with the column added, without a second pass over the samples
+    (:meth:`~rotacal.signal._blocks.HarmonicFitAccumulator.fit`). Arguments as
+    :func:`residual_sums`; returns (unit of y squared, unit of y times s).
+    """
+    rss, rtau = _sums(t, y, t_ref, frequency_hz, [model], jit)
+    return rss[0], rtau[0]
+
+
+def _sums(
+    t: np.ndarray,
+    y: np.ndarray,
+    t_ref: float,
+    frequency_hz: float,
+    models: Sequence[tuple[float, np.ndarray, np.ndarray, float]],
+    jit: bool | None,
+) -> tuple[list[float], list[float]]:
+    """``Σ r²`` and ``Σ r·τ`` of each model (:func:`residual_sums`, :func:`residual_tau_sums`)."""
     omega = 2.0 * math.pi * frequency_hz
     consts = np.array([float(m[0]) for m in models])
     ca = np.array([np.asarray(m[1], dtype=np.float64) for m in models])
@@ -81,14 +113,15 @@ def residual_sums(
                 t, y, float(t_ref), omega, dt, tol, consts, ca, cb, drifts
             )
             if on_grid:
-                return [float(x) for x in out]
+                return [float(x) for x in out[0]], [float(x) for x in out[1]]
         out = residual_sums_jit(t, y, float(t_ref), omega, consts, ca, cb, drifts)
-        return [float(x) for x in out]
+        return [float(x) for x in out[0]], [float(x) for x in out[1]]
     if dt > 0:
         grid = grid_residual_sums(t, y, float(t_ref), omega, dt, tol, consts, ca, cb, drifts)
         if grid is not None:
             return grid
     sums = [0.0] * len(models)
+    tau_sums = [0.0] * len(models)
     series = [(np.asarray(ca_i), np.asarray(cb_i), const) for const, ca_i, cb_i, _ in models]
     for s in range(0, t.size, _CHUNK):
         tau = t[s : s + _CHUNK] - t_ref
@@ -99,7 +132,8 @@ def residual_sums(
                 model += drift * tau
             r = ys - model
             sums[i] += float(r @ r)
-    return sums
+            tau_sums[i] += float(r @ tau)
+    return sums, tau_sums
 
 
 def grid_residual_sums(
@@ -113,8 +147,8 @@ def grid_residual_sums(
     ca: np.ndarray,
     cb: np.ndarray,
     drifts: np.ndarray,
-) -> list[float] | None:
-    """The residual sums of samples on a uniform grid of step ``dt`` (s) by matrix products.
+) -> tuple[list[float], list[float]] | None:
+    """The residual sums (``Σ r²`` and ``Σ r·τ`` of each model) of samples on a uniform grid of step ``dt`` (s) by matrix products.
 
     The NumPy twin of :func:`rotacal.signal._residual_jit.residual_sums_grid` (same angles,
     same tables): in a block of :data:`GRID_BLOCK` samples from θ_s, sample q lies at
@@ -131,6 +165,7 @@ def grid_residual_sums(
     ang = np.outer(harm, phi)
     table = np.vstack([np.cos(ang), np.sin(ang)])  # (2H, GRID_BLOCK)
     sums = np.zeros(nm)
+    tau_sums = np.zeros(nm)
     step = GRID_BLOCK * _GRID_GROUP
     with blas_one_thread():
         for s in range(0, n, step):
@@ -165,4 +200,5 @@ def grid_residual_sums(
                         model += drifts[j] * tau
                     r = np.subtract(ys, model, out=model).reshape(-1)
                     sums[j] += float(r @ r)
-    return [float(x) for x in sums]
+                    tau_sums[j] += float(r @ tau.reshape(-1))
+    return [float(x) for x in sums], [float(x) for x in tau_sums]
