@@ -39,7 +39,7 @@ def prefetch_quantiles() -> None:
     def work() -> None:
         try:
             import scipy.special  # noqa: F401
-        except BaseException:  # noqa: BLE001 - coverage_factor's own import reports it
+        except BaseException:  # coverage_factor's own import reports it
             return
 
     threading.Thread(target=work, name="rotacal-import-quantiles", daemon=True).start()
