@@ -53,13 +53,8 @@ def test_residual_sums_on_and_off_the_grid(jit, jitter, monkeypatch):
     # the per-sample path: either way the direct evaluation's sums
     from rotacal.signal import _residual
 
-    rng = np.random.default_rng(11)
-    t = np.arange(70_001) / 2000.0
-    t = t + jitter * rng.uniform(-0.5, 0.5, t.size) / 2000.0
     f = 3.1
-    a = rng.normal(size=8) * np.logspace(0, -3, 8)
-    b = rng.normal(size=8) * np.logspace(0, -3, 8)
-    t_ref = 0.5 * (t[0] + t[-1])
+    rng, t, t_ref, a, b = _clocked_series(11, jitter, 8)
     y = _direct_model(t, t_ref, f, 0.1, a, b, -0.02) + 1e-6 * rng.standard_normal(t.size)
     models = [(0.1, a, b, -0.02), (0.1, a * 1.001, b, 0.0)]
     calls = []
@@ -75,6 +70,17 @@ def test_residual_sums_on_and_off_the_grid(jit, jitter, monkeypatch):
         assert calls == [1]
         assert (plain(t, y, t_ref, 2 * math.pi * f, (t[-1] - t[0]) / (t.size - 1), 1e-9,
                       *_arrays(models)) is None) == (jitter > 0)  # fmt: skip
+
+
+def _clocked_series(seed, jitter, nh):
+    """rng, 70,001 times at 2 kHz (jittered by ``jitter`` of a step), their middle, and the
+    cos/sin coefficients of ``nh`` harmonics falling from 1 to 1e-3."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(70_001) / 2000.0
+    t = t + jitter * rng.uniform(-0.5, 0.5, t.size) / 2000.0
+    a = rng.normal(size=nh) * np.logspace(0, -3, nh)
+    b = rng.normal(size=nh) * np.logspace(0, -3, nh)
+    return rng, t, 0.5 * (t[0] + t[-1]), a, b
 
 
 def _direct_model(t, t_ref, f, const, a, b, drift):
@@ -170,13 +176,8 @@ def test_residual_tau_sums_match_a_direct_evaluation(jit, jitter):
     # Σ r² and Σ r·τ of one model, on the grid (table path) and off it (per-sample path)
     from rotacal.signal._residual import residual_tau_sums
 
-    rng = np.random.default_rng(5)
-    t = np.arange(70_001) / 2000.0
-    t = t + jitter * rng.uniform(-0.5, 0.5, t.size) / 2000.0
     f = 2.3
-    a = rng.normal(size=6) * np.logspace(0, -3, 6)
-    b = rng.normal(size=6) * np.logspace(0, -3, 6)
-    t_ref = 0.5 * (t[0] + t[-1])
+    rng, t, t_ref, a, b = _clocked_series(5, jitter, 6)
     y = _direct_model(t, t_ref, f, 0.1, a, b, 0.0) + 1e-6 * rng.standard_normal(t.size)
     y += 1e-7 * (t - t_ref)  # a drift the model lacks: Σ r·τ far from 0
     model = (0.1, a, b, 0.0)
