@@ -136,6 +136,7 @@ STAGES = (
     ("reversals: plan", "rotacal.encoder.quadrature", "plan_reversals"),
     ("reversals: Chp, eqs. (7)-(8)", "rotacal.encoder.quadrature", "_pinned"),
     ("harmonic fit", "rotacal.table.motion", "fit_motion"),
+    ("  of which residual sums", "rotacal.signal._blocks", "residual_tau_sums"),
     ("  of which residual sums", "rotacal.signal._blocks", "residual_sums"),
     ("budgets (THD, Monte Carlo)", "rotacal.table.motion", "motion_budgets"),
 )
@@ -178,7 +179,8 @@ def stage_times(
     finally:
         for mod, name, fn in plain:
             setattr(mod, name, fn)
-    rows = [(label, best.get(label, 0.0)) for label, _, _ in STAGES]
+    # a label named twice (two functions of one stage) is one row: its times add
+    rows = [(label, best.get(label, 0.0)) for label in dict.fromkeys(s[0] for s in STAGES)]
     top = sum(sec for label, sec in rows if not label.startswith(" "))
     rows.append(("rest (settings, plot copies, result)", max(0.0, best["whole call"] - top)))
     rows.append(("whole call", best["whole call"]))

@@ -24,10 +24,11 @@ MIN_SAMPLES = 4_000_000
 #: Below this many samples one in-memory encoder calibration (demodulation, fit, residual sums)
 #: runs faster on the NumPy path in a process that has not loaded Numba: loading it (import,
 #: its CPU target, the cached kernels) costs 0.6–0.8 s of CPU and the compiled chain saves
-#: 15–19 ns a sample (measured at 2·10⁷ samples, 10 and 1000 periods: 0.36–0.53 s compiled
-#: against 0.66–0.88 s NumPy once loaded): one call repays the load from 3–5·10⁷ samples on.
+#: ~2.5 ns a sample (measured at 2·10⁷ samples, 10 and 1000 periods: 0.31–0.36 s compiled
+#: against 0.36–0.41 s NumPy once loaded, since the NumPy fit sums one residual by BLAS): one
+#: call repays the load from ~2.5·10⁸ samples on, past the size the CLI reads whole.
 #: To be measured again when the kernels change. ``benchmarks/bench_encoder_command.py`` shows the whole command.
-ENCODER_CALL_SAMPLES = 40_000_000
+ENCODER_CALL_SAMPLES = 250_000_000
 
 _available: bool | None = None
 _single_call_samples: int | None = None

@@ -53,13 +53,8 @@ def test_residual_sums_on_and_off_the_grid(jit, jitter, monkeypatch):
     # the per-sample path: either way the direct evaluation's sums
     from rotacal.signal import _residual
 
-    rng = np.random.default_rng(11)
-    t = np.arange(70_001) / 2000.0
-    t = t + jitter * rng.uniform(-0.5, 0.5, t.size) / 2000.0
     f = 3.1
-    a = rng.normal(size=8) * np.logspace(0, -3, 8)
-    b = rng.normal(size=8) * np.logspace(0, -3, 8)
-    t_ref = 0.5 * (t[0] + t[-1])
+    rng, t, t_ref, a, b = _clocked_series(11, jitter, 8)
     y = _direct_model(t, t_ref, f, 0.1, a, b, -0.02) + 1e-6 * rng.standard_normal(t.size)
     models = [(0.1, a, b, -0.02), (0.1, a * 1.001, b, 0.0)]
     calls = []
@@ -75,6 +70,17 @@ def test_residual_sums_on_and_off_the_grid(jit, jitter, monkeypatch):
         assert calls == [1]
         assert (plain(t, y, t_ref, 2 * math.pi * f, (t[-1] - t[0]) / (t.size - 1), 1e-9,
                       *_arrays(models)) is None) == (jitter > 0)  # fmt: skip
+
+
+def _clocked_series(seed, jitter, nh):
+    """rng, 70,001 times at 2 kHz (jittered by ``jitter`` of a step), their middle, and the
+    cos/sin coefficients of ``nh`` harmonics falling from 1 to 1e-3."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(70_001) / 2000.0
+    t = t + jitter * rng.uniform(-0.5, 0.5, t.size) / 2000.0
+    a = rng.normal(size=nh) * np.logspace(0, -3, nh)
+    b = rng.normal(size=nh) * np.logspace(0, -3, nh)
+    return rng, t, 0.5 * (t[0] + t[-1]), a, b
 
 
 def _direct_model(t, t_ref, f, const, a, b, drift):
@@ -162,3 +168,46 @@ def test_grid_power_sums_match_the_sums_over_the_blocks(count, turn):
         want = np.array([np.sum(d**p * np.exp(1j * k * omega * d)) for k in range(21)])
         scale = np.max(np.abs(d)) ** p * count
         np.testing.assert_allclose(got[:, p], want, rtol=0, atol=1e-12 * scale)
+
+
+@pytest.mark.parametrize("jit", [False, True])
+@pytest.mark.parametrize("jitter", [0.0, 1e-3])
+def test_residual_tau_sums_match_a_direct_evaluation(jit, jitter):
+    # Σ r² and Σ r·τ of one model, on the grid (table path) and off it (per-sample path)
+    from rotacal.signal._residual import residual_tau_sums
+
+    f = 2.3
+    rng, t, t_ref, a, b = _clocked_series(5, jitter, 6)
+    y = _direct_model(t, t_ref, f, 0.1, a, b, 0.0) + 1e-6 * rng.standard_normal(t.size)
+    y += 1e-7 * (t - t_ref)  # a drift the model lacks: Σ r·τ far from 0
+    model = (0.1, a, b, 0.0)
+    r = y - _direct_model(t, t_ref, f, *model)
+    rss, r_tau = residual_tau_sums(t, y, t_ref, f, model, jit=jit)
+    assert rss == pytest.approx(float(r @ r), rel=1e-9)
+    assert r_tau == pytest.approx(float(r @ (t - t_ref)), rel=1e-9)
+
+
+@pytest.mark.parametrize("jit", [False, True])
+@pytest.mark.parametrize("drift", [0.0, 3e-8, 2e-7, 1e-5])
+def test_the_drift_checks_residual_is_its_own_residual(jit, drift, monkeypatch):
+    # where the fit's residual is summed from the samples, the drift check's follows from the
+    # fit's Σ r·τ (no drift; a drift that removes part of the residual) or is summed itself (a
+    # drift that removes most of it; one the normal equations resolve): either way it is
+    # Σ (y − check model)² summed directly
+    rng = np.random.default_rng(3)
+    t = np.arange(400_000) / 20_000.0
+    y = 0.5 * np.sin(2 * math.pi * 0.7 * t) + 0.005 * np.sin(2 * math.pi * 1.4 * t + 0.3)
+    y += 2e-7 * rng.standard_normal(t.size) + drift * (t - t.mean())
+    if jit:
+        monkeypatch.setattr(_jit, "MIN_SAMPLES", 0)
+    else:
+        monkeypatch.setenv("ROTACAL_NUMBA", "0")
+    fit = fit_harmonics(t, y, 0.7, harmonics=10, drift_check=True)
+    check = fit.drift_check
+    assert check is not None
+    want = _direct_rss(
+        t, y, fit.t_ref_s, fit.frequency_hz, check.offset, check.cos_coefs, check.sin_coefs,
+        check.drift,
+    )  # fmt: skip
+    assert check.residual_rms**2 * t.size == pytest.approx(want, rel=1e-9)
+    assert check.residual_rms == pytest.approx(2e-7, rel=0.02)  # the added noise

@@ -444,6 +444,23 @@ def test_coverage_factor_equals_scipy_stats_bit_for_bit():
         assert coverage_factor(7.3, p, truncate=False) == float(stats.t.isf(tail, 7.3))
 
 
+def test_prefetched_quantiles_are_the_same_quantiles():
+    # the CLI starts importing scipy.special in a thread beside the analysis: the import
+    # completes and coverage_factor's numbers are scipy's, as without it
+    import sys
+    import threading
+
+    from rotacal.uncertainty.coverage import prefetch_quantiles
+
+    prefetch_quantiles()
+    for thread in threading.enumerate():
+        if thread.name == "rotacal-import-quantiles":
+            thread.join(timeout=60)
+    assert "scipy.special" in sys.modules
+    stats = pytest.importorskip("scipy.stats")
+    assert coverage_factor(18_000_391.0) == float(stats.t.isf(0.5 * (1 - 0.95), 18_000_391.0))
+
+
 def test_coverage_factor_truncates_fractional_dof():
     assert coverage_factor(16.7521, 0.99) == coverage_factor(16, 0.99)
     assert coverage_factor(16.7521, 0.99, truncate=False) < coverage_factor(16, 0.99)

@@ -45,8 +45,8 @@ from rotacal.signal._checks import (
     max_grid_deviation,
 )
 from rotacal.signal._freq import estimate_frequency_unchecked
-from rotacal.signal._normal import SumsFn, solve_normal
-from rotacal.signal._residual import residual_sums
+from rotacal.signal._normal import NormalFit, SumsFn, solve_normal
+from rotacal.signal._residual import residual_sums, residual_tau_sums
 from rotacal.signal._result import SineFit, build_drift_check, build_sine_fit
 
 _F_MARGIN = 1.25
@@ -550,20 +550,7 @@ class HarmonicFitAccumulator:
         rss = sol.rss
         rss_d = sol.check[1] if sol.check is not None else 0.0
         if _samples is not None:
-            # the residuals the normal equations cannot resolve, summed from the samples in one
-            # pass (the fit and its drift check share the frequency, hence the cos and sin)
-            unresolved = _RSS_ROUNDING * self._sum_y2
-            models = {}
-            if rss <= unresolved:
-                models["fit"] = self._model(sol.params, nh, drift)
-            if sol.check is not None and rss_d <= unresolved:
-                models["check"] = self._model(sol.check[0], nh, True)
-            if models:
-                t_s, y_s = _samples
-                sums = residual_sums(t_s, y_s, t_ref, sol.frequency_hz, list(models.values()))
-                summed = dict(zip(models, sums, strict=True))
-                rss = summed.get("fit", rss)
-                rss_d = summed.get("check", rss_d)
+            rss, rss_d = self._summed_rss(sol, nh, drift, t_ref, _samples)
         check = None
         if sol.check is not None:
             p_d, _, inv_d = sol.check
@@ -588,6 +575,42 @@ class HarmonicFitAccumulator:
             drift=float(sol.params[-1]) if drift else None,
             drift_check=check,
         )
+
+    def _summed_rss(
+        self,
+        sol: NormalFit,
+        nh: int,
+        drift: bool,
+        t_ref: float,
+        samples: tuple[np.ndarray, np.ndarray],
+    ) -> tuple[float, float]:
+        """The RSS of the fit and of its drift check, each summed from the samples where the
+        normal equations cannot resolve it (``yᵀy − bᵀp`` is rounding), else as they give it.
+
+        Where both must be summed, one pass gives the fit's ``Σ r²`` and ``Σ r·τ``, and the
+        check's RSS follows without a second pass: adding the column τ to a least-squares fit
+        lowers its RSS by ``(τᵀr)²·[(ΦᵀΦ)⁻¹]_DD`` (Φ the check's columns, D the last; the
+        partitioned inverse, e.g. Seber & Lee 2003, *Linear Regression Analysis*, §3.7) — unless
+        that removes more than half of the RSS, where the check's own residual is summed.
+        """
+        rss = sol.rss
+        rss_d = sol.check[1] if sol.check is not None else 0.0
+        unresolved = _RSS_ROUNDING * self._sum_y2
+        check_summed = sol.check is not None and rss_d <= unresolved
+        t_s, y_s = samples
+        if rss <= unresolved:
+            fit_model = self._model(sol.params, nh, drift)
+            rss, r_tau = residual_tau_sums(t_s, y_s, t_ref, sol.frequency_hz, fit_model)
+            if check_summed:
+                assert sol.check is not None
+                lowered = r_tau * r_tau * float(sol.check[2][-1, -1])
+                if 0.0 <= lowered <= 0.5 * rss:
+                    return rss, rss - lowered
+        if check_summed:
+            assert sol.check is not None
+            check_model = self._model(sol.check[0], nh, True)
+            rss_d = residual_sums(t_s, y_s, t_ref, sol.frequency_hz, [check_model])[0]
+        return rss, rss_d
 
     def _model(
         self, params: np.ndarray, nh: int, drift: bool

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from rotacal._jit import use_numba
+from rotacal._threads import blas_one_thread
 from rotacal.signal._result import harmonic_series_many
 
 #: Samples per chunk of the NumPy path: the cosines, sines and model of a chunk stay in cache.
@@ -65,6 +66,38 @@ def residual_sums(
     IEEE Std 1057-2017, §4.1.3 (the residual of the sine fits, from which s² = RSS/(N − p));
     Feng et al. 2023, Sensors 23:4876, eq. (9) (the multi-harmonic model).
     """
+    return _sums(t, y, t_ref, frequency_hz, models, jit)[0]
+
+
+def residual_tau_sums(
+    t: np.ndarray,
+    y: np.ndarray,
+    t_ref: float,
+    frequency_hz: float,
+    model: tuple[float, np.ndarray, np.ndarray, float],
+    *,
+    jit: bool | None = None,
+) -> tuple[float, float]:
+    """``Σ r²`` and ``Σ r·τ`` of one model's residual ``r = y − model`` (τ = t − t_ref, s).
+
+    The second sum is the residual's product with a drift column τ: with it a fit's residual
+    gives that of the same fit with the column added, without a second pass over the samples
+    (:meth:`~rotacal.signal._blocks.HarmonicFitAccumulator.fit`). Arguments as
+    :func:`residual_sums`; returns (unit of y squared, unit of y times s).
+    """
+    rss, rtau = _sums(t, y, t_ref, frequency_hz, [model], jit)
+    return rss[0], rtau[0]
+
+
+def _sums(
+    t: np.ndarray,
+    y: np.ndarray,
+    t_ref: float,
+    frequency_hz: float,
+    models: Sequence[tuple[float, np.ndarray, np.ndarray, float]],
+    jit: bool | None,
+) -> tuple[list[float], list[float]]:
+    """``Σ r²`` and ``Σ r·τ`` of each model (:func:`residual_sums`, :func:`residual_tau_sums`)."""
     omega = 2.0 * math.pi * frequency_hz
     consts = np.array([float(m[0]) for m in models])
     ca = np.array([np.asarray(m[1], dtype=np.float64) for m in models])
@@ -80,14 +113,15 @@ def residual_sums(
                 t, y, float(t_ref), omega, dt, tol, consts, ca, cb, drifts
             )
             if on_grid:
-                return [float(x) for x in out]
+                return [float(x) for x in out[0]], [float(x) for x in out[1]]
         out = residual_sums_jit(t, y, float(t_ref), omega, consts, ca, cb, drifts)
-        return [float(x) for x in out]
+        return [float(x) for x in out[0]], [float(x) for x in out[1]]
     if dt > 0:
         grid = grid_residual_sums(t, y, float(t_ref), omega, dt, tol, consts, ca, cb, drifts)
         if grid is not None:
             return grid
     sums = [0.0] * len(models)
+    tau_sums = [0.0] * len(models)
     series = [(np.asarray(ca_i), np.asarray(cb_i), const) for const, ca_i, cb_i, _ in models]
     for s in range(0, t.size, _CHUNK):
         tau = t[s : s + _CHUNK] - t_ref
@@ -98,7 +132,8 @@ def residual_sums(
                 model += drift * tau
             r = ys - model
             sums[i] += float(r @ r)
-    return sums
+            tau_sums[i] += float(r @ tau)
+    return sums, tau_sums
 
 
 def grid_residual_sums(
@@ -112,8 +147,8 @@ def grid_residual_sums(
     ca: np.ndarray,
     cb: np.ndarray,
     drifts: np.ndarray,
-) -> list[float] | None:
-    """The residual sums of samples on a uniform grid of step ``dt`` (s) by matrix products.
+) -> tuple[list[float], list[float]] | None:
+    """The residual sums (``Σ r²`` and ``Σ r·τ`` of each model) of samples on a uniform grid of step ``dt`` (s) by matrix products.
 
     The NumPy twin of :func:`rotacal.signal._residual_jit.residual_sums_grid` (same angles,
     same tables): in a block of :data:`GRID_BLOCK` samples from θ_s, sample q lies at
@@ -130,34 +165,40 @@ def grid_residual_sums(
     ang = np.outer(harm, phi)
     table = np.vstack([np.cos(ang), np.sin(ang)])  # (2H, GRID_BLOCK)
     sums = np.zeros(nm)
+    tau_sums = np.zeros(nm)
     step = GRID_BLOCK * _GRID_GROUP
-    for s in range(0, n, step):
-        e = min(n, s + step)
-        full = (e - s) // GRID_BLOCK
-        parts = [(s, full, GRID_BLOCK)] if full else []
-        if s + full * GRID_BLOCK < e:
-            parts.append((s + full * GRID_BLOCK, 1, e - s - full * GRID_BLOCK))
-        for start, nb, size in parts:
-            tau = t[start : start + nb * size].reshape(nb, size) - t_ref
-            theta = omega * tau
-            theta_s = theta[:, :1]
-            delta = (theta - theta_s) - phi[None, :size]
-            if not np.abs(delta).max() <= tol:
-                return None
-            h_theta = theta_s * harm[None, :]
-            c_h, s_h = np.cos(h_theta), np.sin(h_theta)
-            ys = y[start : start + nb * size].reshape(nb, size)
-            for j in range(nm):
-                al = ca[j] * c_h + cb[j] * s_h
-                be = cb[j] * c_h - ca[j] * s_h
-                coef = np.vstack([np.hstack([al, be]), np.hstack([harm * be, -harm * al])])
-                # not a BLAS product: a multithreaded BLAS spends 10x more on these small
-                # products on a busy machine than einsum's single-threaded loop does
-                prod = np.einsum("ij,jk->ik", coef, table[:, :size], optimize=False)
-                model = prod[:nb] + delta * prod[nb:]
-                model += consts[j]
-                if drifts[j]:
-                    model += drifts[j] * tau
-                r = ys - model
-                sums[j] += float(np.einsum("ij,ij->", r, r))
-    return [float(x) for x in sums]
+    with blas_one_thread():
+        for s in range(0, n, step):
+            e = min(n, s + step)
+            full = (e - s) // GRID_BLOCK
+            parts = [(s, full, GRID_BLOCK)] if full else []
+            if s + full * GRID_BLOCK < e:
+                parts.append((s + full * GRID_BLOCK, 1, e - s - full * GRID_BLOCK))
+            for start, nb, size in parts:
+                tau = t[start : start + nb * size].reshape(nb, size) - t_ref
+                theta = omega * tau
+                theta_s = theta[:, :1]
+                delta = (theta - theta_s) - phi[None, :size]
+                if not np.abs(delta).max() <= tol:
+                    return None
+                h_theta = theta_s * harm[None, :]
+                c_h, s_h = np.cos(h_theta), np.sin(h_theta)
+                ys = y[start : start + nb * size].reshape(nb, size)
+                # every model's values and first-order terms in one product with the table
+                # (one BLAS thread: on these small products more threads only spin)
+                al = ca[:, None, :] * c_h + cb[:, None, :] * s_h  # (models, blocks, H)
+                be = cb[:, None, :] * c_h - ca[:, None, :] * s_h
+                coef = np.concatenate(
+                    [np.concatenate([al, be], axis=2), np.concatenate([harm * be, -harm * al], 2)]
+                ).reshape(2 * nm * nb, 2 * nh)
+                prod = coef @ table[:, :size]
+                for j in range(nm):
+                    model = prod[j * nb : (j + 1) * nb]
+                    model += delta * prod[(nm + j) * nb : (nm + j + 1) * nb]
+                    model += consts[j]
+                    if drifts[j]:
+                        model += drifts[j] * tau
+                    r = np.subtract(ys, model, out=model).reshape(-1)
+                    sums[j] += float(r @ r)
+                    tau_sums[j] += float(r @ tau.reshape(-1))
+    return [float(x) for x in sums], [float(x) for x in tau_sums]

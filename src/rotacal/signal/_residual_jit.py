@@ -50,7 +50,8 @@ def residual_sums_jit(
     cb: np.ndarray,
     drifts: np.ndarray,
 ) -> np.ndarray:  # pragma: no cover - compiled
-    """Residual sums of squares of one or two models (rows of ``ca``/``cb``) over the samples.
+    """Residual sums of squares of one or two models (rows of ``ca``/``cb``) over the samples
+    (row 0 of the result) and the residuals' sums with τ = t − t_ref (row 1).
 
     With one model the second row repeats the first (its sum is dropped). Blocks of
     :data:`_BLOCK` samples: cos θ, sin θ sample by sample, then each harmonic for the whole
@@ -75,6 +76,8 @@ def residual_sums_jit(
     out1 = 0.0
     part0 = 0.0
     part1 = 0.0
+    tau0 = 0.0
+    tau1 = 0.0
     c_prev = 1.0
     s_prev = 0.0
     theta_prev = 0.0
@@ -127,10 +130,14 @@ def residual_sums_jit(
             r1 = y[i] - v1
             part0 += r0 * r0
             part1 += r1 * r1
-    out = np.empty(consts.size)
-    out[0] = out0 + part0
+            tau0 += r0 * tau[q]
+            tau1 += r1 * tau[q]
+    out = np.empty((2, consts.size))
+    out[0, 0] = out0 + part0
+    out[1, 0] = tau0
     if two:
-        out[1] = out1 + part1
+        out[0, 1] = out1 + part1
+        out[1, 1] = tau1
     return out
 
 
@@ -157,20 +164,25 @@ def _add_harmonic(
 
 
 @njit(cache=True, nogil=True)
-def _block_rss(y: np.ndarray, model: np.ndarray) -> float:  # pragma: no cover - compiled
-    """``Σ (y − model)²`` over ``y.size`` samples in four interleaved partial sums (a
-    vectorised loop; no less accurate than one running sum)."""
+def _block_rss(
+    y: np.ndarray, model: np.ndarray, tau: np.ndarray
+) -> tuple:  # pragma: no cover - compiled
+    """``Σ (y − model)²`` and ``Σ (y − model)·τ`` over ``y.size`` samples, each in four
+    interleaved partial sums (a vectorised loop; no less accurate than one running sum)."""
     acc = np.zeros(4)
+    acc_t = np.zeros(4)
     size = y.size
     full = size - size % 4
     for q in range(0, full, 4):
         for lane in range(4):
             r = y[q + lane] - model[q + lane]
             acc[lane] += r * r
+            acc_t[lane] += r * tau[q + lane]
     for q in range(full, size):
         r = y[q] - model[q]
         acc[0] += r * r
-    return (acc[0] + acc[1]) + (acc[2] + acc[3])
+        acc_t[0] += r * tau[q]
+    return (acc[0] + acc[1]) + (acc[2] + acc[3]), (acc_t[0] + acc_t[1]) + (acc_t[2] + acc_t[3])
 
 
 @njit(cache=True, nogil=True)
@@ -225,7 +237,7 @@ def residual_sums_grid(
     a_h sin hθ_s; angle addition) plus the first-order term in δ (θ as the NumPy path forms
     it, less its table angle: rounding of t, ~1e-12 rad), ``δ·Σ_h h·(β_h cos hφ_q − α_h sin hφ_q)``.
     The loops over a block's samples are free of dependences (vectorised). Returns the sums
-    and True, or False when some |δ| exceeds ``tol`` (the samples are not on the
+    (row 0: ``Σ r²``, row 1: ``Σ r·τ`` of each model) and True, or False when some |δ| exceeds ``tol`` (the samples are not on the
     grid: the caller uses :func:`residual_sums_jit`); ``tol`` is that bound (rad). The NumPy
     twin is :func:`rotacal.signal._residual.grid_residual_sums`.
     """
@@ -244,7 +256,7 @@ def residual_sums_grid(
     tau = np.empty(_BLOCK)
     slope = np.empty(_BLOCK)
     model = np.empty((nm, _BLOCK))
-    out = np.zeros(nm)
+    out = np.zeros((2, nm))
     part = np.zeros(nm)
     for s in range(0, n, _BLOCK):
         size = min(n - s, _BLOCK)
@@ -275,10 +287,12 @@ def residual_sums_grid(
             )
         if s % _PART == 0:
             for j in range(nm):
-                out[j] += part[j]
+                out[0, j] += part[j]
                 part[j] = 0.0
         for j in range(nm):
-            part[j] += _block_rss(y[s : s + size], model[j])
+            rss, rtau = _block_rss(y[s : s + size], model[j], tau)
+            part[j] += rss
+            out[1, j] += rtau
     for j in range(nm):
-        out[j] += part[j]
+        out[0, j] += part[j]
     return out, True

@@ -19,7 +19,11 @@ if TYPE_CHECKING:
         uncertainty_keys,
     )
     from rotacal.uncertainty.correlation import correlation_matrix
-    from rotacal.uncertainty.coverage import coverage_factor, welch_satterthwaite
+    from rotacal.uncertainty.coverage import (
+        coverage_factor,
+        prefetch_quantiles,
+        welch_satterthwaite,
+    )
     from rotacal.uncertainty.distributions import (
         Arcsine,
         Constant,
@@ -71,6 +75,7 @@ __all__ = [
     "load_specs",
     "monte_carlo",
     "numerical_tolerance",
+    "prefetch_quantiles",
     "propagate",
     "result_keys",
     "round_ilac",
