@@ -116,8 +116,8 @@ def _block_task(
 
 
 def _crc_task(source: CaptureRows, columns: list[str], rows: int) -> None:
-    """Recompute the CRC-32s an NPZ stores for its columns (a pass over the file in order; the
-    blocks' reads check everything else)."""
+    """Recompute the CRC-32s an NPZ stores for its columns: a pass over the file in order (the
+    blocks' reads check everything else), fed while each chunk is scanned, its pages released."""
     from rotacal.io import iter_capture_chunks
 
     for _ in iter_capture_chunks(
@@ -127,7 +127,6 @@ def _crc_task(source: CaptureRows, columns: list[str], rows: int) -> None:
         mapping=source.mapping,
         group=source.group,
         read_options=source.read_options,
-        allow_nonfinite=True,
     ):
         pass
 
@@ -143,29 +142,39 @@ def _phase_at(source: CaptureRows, p: int, boundary: np.ndarray, rows: int, c: f
 _PIECE = 1 << 16
 
 
-def _squares_of_second_differences(
-    d0: float, c: float, r0: np.ndarray, r1: np.ndarray, r2: np.ndarray
-) -> float:
-    """Σ d_i² for i = 0 … len(r0), with d_0 = d0 and d_{i+1} = d_i + (r2_i − c) − 2(r1_i − c)
-    + (r0_i − c): the second differences of the phase from their increments (the rates at i,
-    i + m and i + 2m), in pieces, each piece's sum of squares added exactly (math.fsum)."""
-    parts, carry = [d0 * d0], d0
+def _piece_squares(d0: float, r0: np.ndarray, r1: np.ndarray, r2: np.ndarray) -> np.ndarray:
+    """Σ d_i² over each piece of ``_PIECE`` terms i = 1 … len(r0), with d_0 = d0 and d_{i+1} =
+    d_i + (r2_i − r1_i) − (r1_i − r0_i): the second differences of the phase from their
+    increments, the rates at i, i + m and i + 2m (differences of neighbouring rates first: the
+    rate's offset cancels before it can round the increments)."""
+    parts, carry = np.empty(-(-r0.size // _PIECE)), d0
     size = min(r0.size, _PIECE)
     v, w = np.empty(size), np.empty(size)
-    for lo in range(0, r0.size, _PIECE):
+    for k, lo in enumerate(range(0, r0.size, _PIECE)):
         hi = min(r0.size, lo + _PIECE)
         vv, ww = v[: hi - lo], w[: hi - lo]
-        np.subtract(r1[lo:hi], c, out=vv)
-        vv *= -2.0
-        np.subtract(r2[lo:hi], c, out=ww)
-        vv += ww
-        np.subtract(r0[lo:hi], c, out=ww)
-        vv += ww
+        np.subtract(r2[lo:hi], r1[lo:hi], out=vv)
+        np.subtract(r1[lo:hi], r0[lo:hi], out=ww)
+        vv -= ww
         np.cumsum(vv, out=vv)
         vv += carry
         carry = float(vv[-1])
-        parts.append(float(np.dot(vv, vv)))
-    return math.fsum(parts)
+        parts[k] = np.dot(vv, vv)
+    return parts
+
+
+def _squares_of_second_differences(
+    d0: float, r0: np.ndarray, r1: np.ndarray, r2: np.ndarray, jit: bool
+) -> float:
+    """Σ d_i² for i = 0 … len(r0) (see :func:`_piece_squares`; its Numba twin when ``jit``),
+    the pieces' sums added exactly (math.fsum)."""
+    if jit:
+        from rotacal.batch._capture_noise_jit import piece_squares_jit
+
+        parts = piece_squares_jit(d0, r0, r1, r2, _PIECE)
+    else:
+        parts = _piece_squares(d0, r0, r1, r2)
+    return math.fsum([d0 * d0, *parts.tolist()])
 
 
 def _long_task(
@@ -188,6 +197,9 @@ def _long_task(
             have = windows[offset] = _rate(source, a + offset, a + offset + count)
         return have[:count]
 
+    from rotacal._jit import use_numba
+
+    jit = use_numba(sum(max(0, min(b, n - 2 * m + 1) - a) for m in ms.tolist()))
     sums = np.zeros(ms.size)
     for k, m in enumerate(ms.tolist()):
         for offset in [o for o in windows if 0 < o < m]:
@@ -197,7 +209,7 @@ def _long_task(
             continue
         at = [_phase_at(source, p, boundary, rows, c) for p in (a, a + m, a + 2 * m)]
         r0, r1, r2 = (window(o, count - 1) for o in (0, m, 2 * m))
-        sums[k] = _squares_of_second_differences(at[2] - 2.0 * at[1] + at[0], c, r0, r1, r2)
+        sums[k] = _squares_of_second_differences(at[2] - 2.0 * at[1] + at[0], r0, r1, r2, jit)
     return sums
 
 
