@@ -35,6 +35,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from rotacal.gyro.scale_factor_points import _SHOW_ROWS
 from rotacal.gyro.scale_factor_stream import (
     _LEVELS_CAP,
     _Blocks,
@@ -47,7 +48,6 @@ from rotacal.gyro.scale_factor_stream import (
     _RatePoints,
     _Top2,
 )
-from rotacal.gyro.scale_factor_points import _SHOW_ROWS
 
 __all__ = ["merge_point_sums", "merge_rate_points", "points_seen"]
 
