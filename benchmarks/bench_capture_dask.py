@@ -1,17 +1,24 @@
-"""One huge capture's Allan deviation split over Dask workers, against one process.
+"""One huge capture's analysis split over Dask workers, against one process.
 
-Writes a rate record of ``--samples`` rows (time_s and rate_deg_s, NPZ without compression) and
-times, on the same file:
+Writes a capture of ``--samples`` rows (NPZ without compression) for the ``--analysis``:
 
-- **one process**: ``rotacal allan --chunked --taus octave`` in a fresh process (the baseline);
-- **N workers**: ``rotacal allan --workers N --taus octave`` for each N of ``--workers``
-  (a fresh process that starts its local cluster: the start is included);
+- ``allan``: time_s and rate_deg_s, analysed by ``rotacal allan --taus octave``;
+- ``scale-factor``: a rate-table log (rate_deg_s, output) stepping through 11 set rates up and
+  down, analysed by ``rotacal gyro scale-factor``;
 
-and checks that every number of the JSON agrees with the baseline's. Prints seconds, the ratio
-to the baseline and the peak RSS of the largest process (the command's, or a Dask worker's: the
-kernel counts waited-for descendants too). No asserts.
+and times, on the same file:
 
-Run: ``python benchmarks/bench_capture_dask.py [--samples 1e8] [--workers 1,2]``
+- **one process**: the command with ``--chunked`` in a fresh process (the baseline);
+- **N workers**: the command with ``--workers N`` for each N of ``--workers`` (a fresh process
+  that starts its local cluster: the start is included);
+
+and checks that every number of the JSON agrees with the baseline's. Prints the best wall
+seconds of ``--repeat`` runs, the ratio to the baseline, the CPU seconds of the command and the
+processes it waited for (its Dask workers), and the peak RSS of the largest of them (the kernel
+counts waited-for descendants too). No asserts.
+
+Run: ``python benchmarks/bench_capture_dask.py [--analysis allan] [--samples 1e8]
+[--workers 1,2] [--repeat 1]``
 """
 
 from __future__ import annotations
@@ -28,6 +35,29 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+#: The set rates of the scale-factor log (°/s), visited up then down.
+RATES = np.array([-300.0, -100.0, -30.0, -10.0, -1.0, 0.0, 1.0, 10.0, 30.0, 100.0, 300.0])
+
+
+def write_log(path: Path, n: int) -> None:
+    """A rate-table log of ``n`` rows: plateaus of equal length through RATES up and down, the
+    output 0.01 V/(°/s) with a bias, a slight nonlinearity and white noise; 10⁷-row pieces."""
+    rng = np.random.default_rng(7)
+    plan = np.r_[RATES, RATES[::-1]]
+    rate = np.lib.format.open_memmap(path.with_suffix(".rate.npy"), "w+", np.float64, (n,))
+    out = np.lib.format.open_memmap(path.with_suffix(".out.npy"), "w+", np.float64, (n,))
+    for lo in range(0, n, 10_000_000):
+        hi = min(n, lo + 10_000_000)
+        r = plan[np.arange(lo, hi) * plan.size // n]
+        rate[lo:hi] = r
+        out[lo:hi] = 0.01 * r + 0.02 + 2e-8 * r**2 + 1e-3 * rng.standard_normal(hi - lo)
+    rate.flush()
+    out.flush()
+    np.savez(path, rate_deg_s=rate, output=out)
+    del rate, out
+    path.with_suffix(".rate.npy").unlink()
+    path.with_suffix(".out.npy").unlink()
 
 
 def write_record(path: Path, n: int) -> None:
@@ -50,9 +80,10 @@ def write_record(path: Path, n: int) -> None:
     path.with_suffix(".time.npy").unlink()
 
 
-def run(args: list[str]) -> tuple[float, float]:
-    """``rotacal ARGS`` in a fresh process: its wall seconds and peak RSS (MB) — of the process
-    and of the descendants it waited for (the Dask workers), from its own wait4 record."""
+def run(args: list[str]) -> tuple[float, float, float]:
+    """``rotacal ARGS`` in a fresh process: its wall seconds, CPU seconds and peak RSS (MB) —
+    of the process and of the descendants it waited for (the Dask workers), from its own wait4
+    record."""
     start = time.perf_counter()
     child = subprocess.Popen(
         [sys.executable, "-m", "rotacal", *args],
@@ -64,7 +95,12 @@ def run(args: list[str]) -> tuple[float, float]:
     seconds = time.perf_counter() - start
     if child.returncode:
         raise SystemExit(f"rotacal {' '.join(args)} failed ({child.returncode})")
-    return seconds, usage.ru_maxrss / 1024
+    return seconds, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024
+
+
+def best(args: list[str], repeat: int) -> tuple[float, float, float]:
+    """The run of least wall time of ``repeat`` (the machine is shared: noise only adds)."""
+    return min(run(args) for _ in range(max(1, repeat)))
 
 
 def worst(a: Any, b: Any) -> float:
@@ -77,38 +113,52 @@ def worst(a: Any, b: Any) -> float:
     return 0.0
 
 
+COMMANDS = {
+    "allan": (["allan"], ["--taus", "octave"], write_record),
+    "scale-factor": (["gyro", "scale-factor"], [], write_log),
+}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--analysis", choices=sorted(COMMANDS), default="allan")
     parser.add_argument("--samples", type=float, default=1e8)
     parser.add_argument("--workers", default="1,2")
+    parser.add_argument("--repeat", type=int, default=1)
     parser.add_argument("--write", metavar="PATH", help=argparse.SUPPRESS)
     args = parser.parse_args()
     n = int(args.samples)
+    command, extra, write = COMMANDS[args.analysis]
     if args.write:  # in a child: the pages it touches must not count in the measured children
-        write_record(Path(args.write), n)
+        write(Path(args.write), n)
         return
     with tempfile.TemporaryDirectory(prefix="rotacal-bench-dask-") as tmp:
-        path = Path(tmp) / "rate.npz"
+        path = Path(tmp) / "capture.npz"
         t = time.perf_counter()
-        subprocess.run(
-            [sys.executable, __file__, "--samples", str(n), "--write", str(path)], check=True
-        )
+        writer = [sys.executable, __file__, "--analysis", args.analysis, "--samples", str(n)]
+        subprocess.run([*writer, "--write", str(path)], check=True)
         print(
-            f"{n:.3g} samples, {os.path.getsize(path) / 1e6:.0f} MB, written in "
-            f"{time.perf_counter() - t:.1f} s"
+            f"{args.analysis}: {n:.3g} samples, {os.path.getsize(path) / 1e6:.0f} MB, written in "
+            f"{time.perf_counter() - t:.1f} s; best of {max(1, args.repeat)}"
         )
-        common = [str(path), "--taus", "octave", "--overwrite"]
+        common = [*command, str(path), *extra, "--overwrite"]
         base_json = Path(tmp) / "one.json"
-        base, rss = run(["allan", *common, "--chunked", "--json", str(base_json)])
-        print(f"{'one process (--chunked)':<28}{base:8.2f} s   1.00x   peak RSS {rss:.0f} MB")
+        base, cpu, rss = best([*common, "--chunked", "--json", str(base_json)], args.repeat)
+        print(
+            f"{'one process (--chunked)':<28}{base:8.2f} s   1.00x   CPU {cpu:6.2f} s   "
+            f"peak RSS {rss:.0f} MB"
+        )
         reference = json.loads(base_json.read_text())
         for w in [int(x) for x in args.workers.split(",")]:
             out = Path(tmp) / f"w{w}.json"
-            seconds, rss = run(["allan", *common, "--workers", str(w), "--json", str(out)])
+            seconds, cpu, rss = best(
+                [*common, "--workers", str(w), "--json", str(out)], args.repeat
+            )
             diff = worst(json.loads(out.read_text()), reference)
             print(
                 f"{f'{w} Dask worker(s)':<28}{seconds:8.2f} s   {base / seconds:.2f}x   "
-                f"peak RSS {rss:.0f} MB; largest difference {diff:.1e} relative"
+                f"CPU {cpu:6.2f} s   peak RSS {rss:.0f} MB; largest difference {diff:.1e} "
+                "relative"
             )
 
 
