@@ -24,6 +24,7 @@ Run: ``python benchmarks/bench_capture_dask.py [--analysis allan] [--samples 1e8
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import math
 import os
@@ -40,44 +41,50 @@ import numpy as np
 RATES = np.array([-300.0, -100.0, -30.0, -10.0, -1.0, 0.0, 1.0, 10.0, 30.0, 100.0, 300.0])
 
 
+def _write_columns(path: Path, n: int, fill: Any) -> None:
+    """An NPZ (without compression) of float64 columns of ``n`` rows, named by the parameters of
+    ``fill(lo, hi, *columns)`` after lo and hi, which fills rows lo … hi − 1 of each column, a
+    10⁷-row piece at a time (memory maps: the file may exceed memory)."""
+    names = list(inspect.signature(fill).parameters)[2:]
+    parts = {c: path.with_suffix(f".{c}.npy") for c in names}
+    maps = {c: np.lib.format.open_memmap(p, "w+", np.float64, (n,)) for c, p in parts.items()}
+    for lo in range(0, n, 10_000_000):
+        fill(lo, min(n, lo + 10_000_000), *maps.values())
+    for m in maps.values():
+        m.flush()
+    np.savez(path, **maps)
+    del maps
+    for p in parts.values():
+        p.unlink()
+
+
 def write_log(path: Path, n: int) -> None:
     """A rate-table log of ``n`` rows: plateaus of equal length through RATES up and down, the
-    output 0.01 V/(°/s) with a bias, a slight nonlinearity and white noise; 10⁷-row pieces."""
+    output 0.01 V/(°/s) with a bias, a slight nonlinearity and white noise."""
     rng = np.random.default_rng(7)
     plan = np.r_[RATES, RATES[::-1]]
-    rate = np.lib.format.open_memmap(path.with_suffix(".rate.npy"), "w+", np.float64, (n,))
-    out = np.lib.format.open_memmap(path.with_suffix(".out.npy"), "w+", np.float64, (n,))
-    for lo in range(0, n, 10_000_000):
-        hi = min(n, lo + 10_000_000)
+
+    def fill(lo: int, hi: int, rate_deg_s: np.ndarray, output: np.ndarray) -> None:
         r = plan[np.arange(lo, hi) * plan.size // n]
-        rate[lo:hi] = r
-        out[lo:hi] = 0.01 * r + 0.02 + 2e-8 * r**2 + 1e-3 * rng.standard_normal(hi - lo)
-    rate.flush()
-    out.flush()
-    np.savez(path, rate_deg_s=rate, output=out)
-    del rate, out
-    path.with_suffix(".rate.npy").unlink()
-    path.with_suffix(".out.npy").unlink()
+        rate_deg_s[lo:hi] = r
+        output[lo:hi] = 0.01 * r + 0.02 + 2e-8 * r**2 + 1e-3 * rng.standard_normal(hi - lo)
+
+    _write_columns(path, n, fill)
 
 
 def write_record(path: Path, n: int) -> None:
-    """White rate noise plus a random walk, at 100 Hz, written in 10⁷-row pieces."""
+    """White rate noise plus a random walk, at 100 Hz."""
     rng = np.random.default_rng(7)
-    rate = np.lib.format.open_memmap(path.with_suffix(".rate.npy"), "w+", np.float64, (n,))
-    time_s = np.lib.format.open_memmap(path.with_suffix(".time.npy"), "w+", np.float64, (n,))
     walk = 0.0
-    for lo in range(0, n, 10_000_000):
-        hi = min(n, lo + 10_000_000)
+
+    def fill(lo: int, hi: int, time_s: np.ndarray, rate_deg_s: np.ndarray) -> None:
+        nonlocal walk
         steps = np.cumsum(1e-5 * rng.standard_normal(hi - lo)) + walk
-        rate[lo:hi] = 3.0 + 0.01 * rng.standard_normal(hi - lo) + steps
+        rate_deg_s[lo:hi] = 3.0 + 0.01 * rng.standard_normal(hi - lo) + steps
         walk = float(steps[-1])
         time_s[lo:hi] = np.arange(lo, hi) / 100.0
-    rate.flush()
-    time_s.flush()
-    np.savez(path, time_s=time_s, rate_deg_s=rate)
-    del rate, time_s
-    path.with_suffix(".rate.npy").unlink()
-    path.with_suffix(".time.npy").unlink()
+
+    _write_columns(path, n, fill)
 
 
 def run(args: list[str]) -> tuple[float, float, float]:

@@ -5,7 +5,6 @@ same refusals with the same messages."""
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +15,7 @@ from click.testing import CliRunner
 from distributed import Client
 
 from rotacal.batch.capture_noise import gyro_noise_on_dask
+from rotacal.batch.testing import largest_difference
 from rotacal.cli import cli
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.noise import gyro_noise
@@ -31,21 +31,6 @@ def _record(seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng(seed)
     rate = 3.0 + 0.01 * rng.standard_normal(N) + np.cumsum(1e-5 * rng.standard_normal(N))
     return np.arange(N) / FS, rate
-
-
-def _worst(a: Any, b: Any, where: str = "") -> float:
-    """The largest relative difference between the numbers of two JSON documents (and that
-    everything else is equal)."""
-    if isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        return max((_worst(a[k], b[k], f"{where}/{k}") for k in a if k != "provenance"), default=0)
-    if isinstance(a, list):
-        assert len(a) == len(b), where
-        return max((_worst(u, v, where) for u, v in zip(a, b, strict=True)), default=0.0)
-    if isinstance(a, float) and isinstance(b, float) and math.isfinite(a):
-        return 0.0 if a == b else abs(a - b) / max(abs(a), abs(b))
-    assert a == b, where
-    return 0.0
 
 
 @pytest.fixture(scope="module")
@@ -66,9 +51,9 @@ def test_split_over_workers_equals_one_process_and_memory(
     dask_client: Client, npz: Path, taus: str
 ) -> None:
     got = gyro_noise_on_dask(str(npz), client=dask_client, taus=taus, **SPLIT).to_dict()
-    assert _worst(got, _chunks(npz, taus)) < 1e-9
+    assert largest_difference(got, _chunks(npz, taus)) < 1e-9
     t, rate = _record()
-    assert _worst(got, gyro_noise(rate, time_s=t, taus=taus).to_dict()) < 1e-9
+    assert largest_difference(got, gyro_noise(rate, time_s=t, taus=taus).to_dict()) < 1e-9
 
 
 def test_an_hdf5_capture_splits_too(dask_client: Client, npz: Path, tmp_path: Path) -> None:
@@ -77,7 +62,7 @@ def test_an_hdf5_capture_splits_too(dask_client: Client, npz: Path, tmp_path: Pa
     with h5py.File(path, "w") as f:
         f["time_s"], f["rate_deg_s"] = t, rate
     got = gyro_noise_on_dask(str(path), client=dask_client, **SPLIT).to_dict()
-    assert _worst(got, _chunks(npz, "octave")) < 1e-9
+    assert largest_difference(got, _chunks(npz, "octave")) < 1e-9
 
 
 def _message(error: pytest.ExceptionInfo[Exception]) -> str:
@@ -128,4 +113,4 @@ def test_the_command_splits_over_a_running_scheduler(
         )
         assert result.exit_code == 0, result.output
         outputs[name] = json.loads(out.read_text())
-    assert _worst(outputs["split"], outputs["chunked"]) < 1e-9
+    assert largest_difference(outputs["split"], outputs["chunked"]) < 1e-9

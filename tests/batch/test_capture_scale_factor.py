@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import itertools
 import json
-import math
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +16,7 @@ from click.testing import CliRunner
 from distributed import Client
 
 from rotacal.batch.capture_scale_factor import calibrate_scale_factor_on_dask
+from rotacal.batch.testing import largest_difference
 from rotacal.cli import cli
 from rotacal.errors import CaptureError
 from rotacal.gyro.scale_factor import _check_options
@@ -51,21 +51,6 @@ def _log(seed: int = 2, clip: float | None = None) -> tuple[np.ndarray, np.ndarr
     return rates, output
 
 
-def _worst(a: Any, b: Any, where: str = "") -> float:
-    """The largest relative difference between the numbers of two JSON documents (and that
-    everything else is equal)."""
-    if isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        return max((_worst(a[k], b[k], f"{where}/{k}") for k in a if k != "provenance"), default=0)
-    if isinstance(a, list):
-        assert len(a) == len(b), where
-        return max((_worst(u, v, where) for u, v in zip(a, b, strict=True)), default=0.0)
-    if isinstance(a, float) and isinstance(b, float) and math.isfinite(a):
-        return 0.0 if a == b else abs(a - b) / max(abs(a), abs(b))
-    assert a == b, where
-    return 0.0
-
-
 def _one_pass(path: Path, **options: Any) -> dict[str, Any]:
     def chunks(names: Any) -> Any:
         return iter_capture_chunks(path, list(names), chunk_rows=5000)
@@ -88,7 +73,7 @@ def test_split_over_workers_equals_one_process(dask_client: Client, npz: Path) -
     ).to_dict()
     one = _one_pass(npz, **OPTIONS)
     assert any("clipped" in w for w in one["warnings"])  # the rails' merge is exercised
-    assert _worst(got, one) < 1e-9
+    assert largest_difference(got, one) < 1e-9
     assert ticks[-1] == 2 * -(-np.load(npz)["output"].size // CHUNK)
 
 
@@ -118,7 +103,7 @@ def test_the_command_splits_over_a_running_scheduler(
         )
         assert result.exit_code == 0, result.output
         outputs[name] = json.loads(out.read_text())
-    assert _worst(outputs["split"], outputs["chunked"]) < 1e-9
+    assert largest_difference(outputs["split"], outputs["chunked"]) < 1e-9
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -150,7 +135,7 @@ def test_blocks_merged_in_order_equal_one_pass(seed: int) -> None:
             sums.add(rates[s : min(b, s + 1234)], output[s : min(b, s + 1234)])
         second.append(sums)
     got = result_of_sums(points, merge_point_sums(second), opts, None).to_dict()  # type: ignore[arg-type]
-    assert _worst(got, one) < 1e-9
+    assert largest_difference(got, one) < 1e-9
 
 
 def _state(det: RailDetector) -> tuple[Any, ...]:

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rotacal.batch._blocks import CaptureRows, block_starts, task_round
+from rotacal.batch._blocks import CaptureRows, Ticks, block_starts, task_round
 from rotacal.errors import CaptureError, ConfigError
 
 if TYPE_CHECKING:
@@ -360,13 +360,7 @@ def gyro_noise_on_dask(
     ms, notes = _cluster_sizes(taus, n_phase, 1.0)  # octave/decade sizes do not depend on fs
     short = ms[2 * ms <= history]
     long = ms[2 * ms > history]
-    done = 0
-
-    def tick() -> None:
-        nonlocal done
-        done += 1
-        if progress is not None:
-            progress(done)
+    tick = Ticks(progress)
 
     checking = _Checking(
         fs_hz=fs_hz,

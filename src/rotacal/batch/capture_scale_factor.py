@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rotacal.batch._blocks import CaptureRows, block_starts, task_round
+from rotacal.batch._blocks import CaptureRows, Ticks, block_starts, task_round
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -123,13 +123,7 @@ def calibrate_scale_factor_on_dask(
     n = capture_length(path, _RATE, **reading)
     source.read(0, min(n, 1))  # a format without row offsets is refused before any task
     starts = block_starts(n, chunk_rows)
-    done = 0
-
-    def tick() -> None:
-        nonlocal done
-        done += 1
-        if progress is not None:
-            progress(done)
+    tick = Ticks(progress)
 
     def chunks(names: Sequence[str]) -> Iterator[Mapping[str, np.ndarray]]:
         return iter_capture_chunks(path, list(names), chunk_rows=chunk_rows, **reading)

@@ -215,7 +215,7 @@ def _dask_scale_factor(
         raise ConfigError(
             "--rest-from runs are analysed in this process; drop --workers/--scheduler"
         )
-    reading = {
+    reading: dict[str, Any] = {
         "mapping": parse_column_mapping(columns),
         "group": group,
         "read_options": current_read_options(),
