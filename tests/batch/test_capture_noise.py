@@ -4,19 +4,16 @@ same refusals with the same messages."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import h5py
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from distributed import Client
 
 from rotacal.batch.capture_noise import gyro_noise_on_dask
-from rotacal.batch.testing import largest_difference
-from rotacal.cli import cli
+from rotacal.batch.testing import largest_difference, split_and_one_process
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.noise import gyro_noise
 from rotacal.gyro.noise_stream import gyro_noise_chunks
@@ -105,12 +102,5 @@ def test_the_command_splits_over_a_running_scheduler(
     dask_client: Client, npz: Path, tmp_path: Path
 ) -> None:
     address = dask_client.scheduler_info()["address"]
-    outputs = {}
-    for name, extra in (("split", ["--scheduler", address]), ("chunked", ["--chunked"])):
-        out = tmp_path / f"{name}.json"
-        result = CliRunner().invoke(
-            cli, ["allan", str(npz), "--taus", "octave", *extra, "--json", str(out)]
-        )
-        assert result.exit_code == 0, result.output
-        outputs[name] = json.loads(out.read_text())
-    assert largest_difference(outputs["split"], outputs["chunked"]) < 1e-9
+    split, one = split_and_one_process(["allan", str(npz), "--taus", "octave"], address, tmp_path)
+    assert largest_difference(split, one) < 1e-9

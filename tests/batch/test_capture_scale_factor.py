@@ -6,18 +6,15 @@ cluster."""
 from __future__ import annotations
 
 import itertools
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from distributed import Client
 
 from rotacal.batch.capture_scale_factor import calibrate_scale_factor_on_dask
-from rotacal.batch.testing import largest_difference
-from rotacal.cli import cli
+from rotacal.batch.testing import largest_difference, split_and_one_process
 from rotacal.errors import CaptureError
 from rotacal.gyro.scale_factor import _check_options
 from rotacal.gyro.scale_factor_merge import merge_point_sums, merge_rate_points, points_seen
@@ -94,16 +91,10 @@ def test_the_command_splits_over_a_running_scheduler(
     dask_client: Client, npz: Path, tmp_path: Path
 ) -> None:
     address = dask_client.scheduler_info()["address"]
-    outputs = {}
-    for name, extra in (("split", ["--scheduler", address]), ("chunked", ["--chunked"])):
-        out = tmp_path / f"{name}.json"
-        result = CliRunner().invoke(
-            cli,
-            ["gyro", "scale-factor", str(npz), "--allow-clipped", *extra, "--json", str(out)],
-        )
-        assert result.exit_code == 0, result.output
-        outputs[name] = json.loads(out.read_text())
-    assert largest_difference(outputs["split"], outputs["chunked"]) < 1e-9
+    split, one = split_and_one_process(
+        ["gyro", "scale-factor", str(npz), "--allow-clipped"], address, tmp_path
+    )
+    assert largest_difference(split, one) < 1e-9
 
 
 @pytest.mark.parametrize("seed", range(3))

@@ -17,7 +17,13 @@ from typing import Any
 
 import tomli_w
 
-__all__ = ["MEASUREMENTS", "largest_difference", "twin_plan", "write_twin_plans"]
+__all__ = [
+    "MEASUREMENTS",
+    "largest_difference",
+    "split_and_one_process",
+    "twin_plan",
+    "write_twin_plans",
+]
 
 #: (command, `rotacal simulate` kind, capture file, options, limits) of each measurement.
 MEASUREMENTS: tuple[tuple[str, str, str, dict[str, Any], dict[str, Any]], ...] = (
@@ -131,3 +137,24 @@ def largest_difference(
         return 0.0 if a == b else abs(a - b) / max(abs(a), abs(b))
     assert a == b, where
     return 0.0
+
+
+def split_and_one_process(
+    args: Sequence[str], scheduler: str, folder: Path
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The JSON of ``rotacal ARGS`` split over the workers of ``scheduler`` and of the same
+    command streamed in one process (``--chunked``), written in ``folder``; AssertionError with
+    the output when either fails."""
+    import json
+
+    from click.testing import CliRunner
+
+    from rotacal.cli import cli
+
+    outputs = []
+    for name, extra in (("split", ["--scheduler", scheduler]), ("chunked", ["--chunked"])):
+        out = folder / f"{name}.json"
+        result = CliRunner().invoke(cli, [*args, *extra, "--json", str(out)])
+        assert result.exit_code == 0, result.output
+        outputs.append(json.loads(out.read_text()))
+    return outputs[0], outputs[1]
