@@ -71,8 +71,10 @@ def _message(error: pytest.ExceptionInfo[Exception]) -> str:
     [
         lambda t, r: r.__setitem__(123_456, np.nan),  # a NaN
         lambda t, r: t.__setitem__(slice(200_000, None), t[200_000:] + 5.0),  # a gap in time
+        lambda t, r: t.__setitem__(10, t[9]),  # a repeated time stamp in the first block
+        lambda t, r: np.minimum(r, np.quantile(r, 0.9), out=r),  # a rail
     ],
-    ids=["nan", "gap"],
+    ids=["nan", "gap", "order", "clipped"],
 )
 def test_a_bad_capture_is_refused_with_the_message_of_one_process(
     dask_client: Client, tmp_path: Path, damage: Any
