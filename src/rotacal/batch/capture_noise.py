@@ -247,12 +247,17 @@ def _sums(
     if format_of(Path(source.path)) == "npz":
         columns = [*source.columns, *(["time_s"] if checking.with_time else [])]
         crc = client.submit(_crc_task, source, columns, rows, pure=False)
-    blocks = task_round(
-        client,
-        _block_task,
-        [(source, a, min(n, a + rows), c, short, history, checking) for a in starts],
-        tick,
-    )
+    try:
+        blocks = task_round(
+            client,
+            _block_task,
+            [(source, a, min(n, a + rows), c, short, history, checking) for a in starts],
+            tick,
+        )
+    except BaseException:
+        if crc is not None:
+            crc.cancel()  # the file is refused already: do not read it through
+        raise
     if crc is not None:
         crc.result()  # a damaged file: raised after the blocks' faults, as one pass does
         tick()
