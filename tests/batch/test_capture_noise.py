@@ -4,6 +4,7 @@ same refusals with the same messages."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -106,3 +107,25 @@ def test_the_command_splits_over_a_running_scheduler(
     address = dask_client.scheduler_info()["address"]
     split, one = split_and_one_process(["allan", str(npz), "--taus", "octave"], address, tmp_path)
     assert largest_difference(split, one) < 1e-9
+
+
+@pytest.mark.parametrize("jit", [False, True])
+def test_long_sums_from_increments_equal_the_literal_sum(jit: bool) -> None:
+    """Σ d_i² of the second differences from the rates' increments (in pieces; Numba or NumPy)
+    against the literal sum over the phase, and the two paths against each other."""
+    from rotacal.batch.capture_noise import _PIECE, _squares_of_second_differences
+
+    if jit:
+        pytest.importorskip("numba")
+    rng = np.random.default_rng(5)
+    m, count = 700, 2 * _PIECE + 123
+    rate = 3.0 + 0.01 * rng.standard_normal(count + 2 * m)
+    x = np.r_[0.0, np.cumsum(rate - 3.0)]  # the offset taken out: x keeps its digits
+    d = x[2 * m : 2 * m + count] - 2.0 * x[m : m + count] + x[:count]
+    literal = math.fsum((d * d).tolist())
+    r0, r1, r2 = (rate[o : o + count - 1] for o in (0, m, 2 * m))
+    got = _squares_of_second_differences(float(d[0]), r0, r1, r2, jit)
+    assert abs(got - literal) <= 1e-10 * literal
+    assert abs(got - _squares_of_second_differences(float(d[0]), r0, r1, r2, not jit)) <= (
+        1e-12 * literal
+    )
