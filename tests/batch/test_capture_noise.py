@@ -4,7 +4,6 @@ same refusals with the same messages."""
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any
@@ -12,11 +11,10 @@ from typing import Any
 import h5py
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from distributed import Client
 
 from rotacal.batch.capture_noise import gyro_noise_on_dask
-from rotacal.cli import cli
+from rotacal.batch.testing import largest_difference, split_and_one_process
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.noise import gyro_noise
 from rotacal.gyro.noise_stream import gyro_noise_chunks
@@ -31,21 +29,6 @@ def _record(seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng(seed)
     rate = 3.0 + 0.01 * rng.standard_normal(N) + np.cumsum(1e-5 * rng.standard_normal(N))
     return np.arange(N) / FS, rate
-
-
-def _worst(a: Any, b: Any, where: str = "") -> float:
-    """The largest relative difference between the numbers of two JSON documents (and that
-    everything else is equal)."""
-    if isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        return max((_worst(a[k], b[k], f"{where}/{k}") for k in a if k != "provenance"), default=0)
-    if isinstance(a, list):
-        assert len(a) == len(b), where
-        return max((_worst(u, v, where) for u, v in zip(a, b, strict=True)), default=0.0)
-    if isinstance(a, float) and isinstance(b, float) and math.isfinite(a):
-        return 0.0 if a == b else abs(a - b) / max(abs(a), abs(b))
-    assert a == b, where
-    return 0.0
 
 
 @pytest.fixture(scope="module")
@@ -66,9 +49,9 @@ def test_split_over_workers_equals_one_process_and_memory(
     dask_client: Client, npz: Path, taus: str
 ) -> None:
     got = gyro_noise_on_dask(str(npz), client=dask_client, taus=taus, **SPLIT).to_dict()
-    assert _worst(got, _chunks(npz, taus)) < 1e-9
+    assert largest_difference(got, _chunks(npz, taus)) < 1e-9
     t, rate = _record()
-    assert _worst(got, gyro_noise(rate, time_s=t, taus=taus).to_dict()) < 1e-9
+    assert largest_difference(got, gyro_noise(rate, time_s=t, taus=taus).to_dict()) < 1e-9
 
 
 def test_an_hdf5_capture_splits_too(dask_client: Client, npz: Path, tmp_path: Path) -> None:
@@ -77,7 +60,7 @@ def test_an_hdf5_capture_splits_too(dask_client: Client, npz: Path, tmp_path: Pa
     with h5py.File(path, "w") as f:
         f["time_s"], f["rate_deg_s"] = t, rate
     got = gyro_noise_on_dask(str(path), client=dask_client, **SPLIT).to_dict()
-    assert _worst(got, _chunks(npz, "octave")) < 1e-9
+    assert largest_difference(got, _chunks(npz, "octave")) < 1e-9
 
 
 def _message(error: pytest.ExceptionInfo[Exception]) -> str:
@@ -89,8 +72,10 @@ def _message(error: pytest.ExceptionInfo[Exception]) -> str:
     [
         lambda t, r: r.__setitem__(123_456, np.nan),  # a NaN
         lambda t, r: t.__setitem__(slice(200_000, None), t[200_000:] + 5.0),  # a gap in time
+        lambda t, r: t.__setitem__(10, t[9]),  # a repeated time stamp in the first block
+        lambda t, r: np.minimum(r, np.quantile(r, 0.9), out=r),  # a rail
     ],
-    ids=["nan", "gap"],
+    ids=["nan", "gap", "order", "clipped"],
 )
 def test_a_bad_capture_is_refused_with_the_message_of_one_process(
     dask_client: Client, tmp_path: Path, damage: Any
@@ -120,12 +105,27 @@ def test_the_command_splits_over_a_running_scheduler(
     dask_client: Client, npz: Path, tmp_path: Path
 ) -> None:
     address = dask_client.scheduler_info()["address"]
-    outputs = {}
-    for name, extra in (("split", ["--scheduler", address]), ("chunked", ["--chunked"])):
-        out = tmp_path / f"{name}.json"
-        result = CliRunner().invoke(
-            cli, ["allan", str(npz), "--taus", "octave", *extra, "--json", str(out)]
-        )
-        assert result.exit_code == 0, result.output
-        outputs[name] = json.loads(out.read_text())
-    assert _worst(outputs["split"], outputs["chunked"]) < 1e-9
+    split, one = split_and_one_process(["allan", str(npz), "--taus", "octave"], address, tmp_path)
+    assert largest_difference(split, one) < 1e-9
+
+
+@pytest.mark.parametrize("jit", [False, True])
+def test_long_sums_from_increments_equal_the_literal_sum(jit: bool) -> None:
+    """Σ d_i² of the second differences from the rates' increments (in pieces; Numba or NumPy)
+    against the literal sum over the phase, and the two paths against each other."""
+    from rotacal.batch.capture_noise import _PIECE, _squares_of_second_differences
+
+    if jit:
+        pytest.importorskip("numba")
+    rng = np.random.default_rng(5)
+    m, count = 700, 2 * _PIECE + 123
+    rate = 3.0 + 0.01 * rng.standard_normal(count + 2 * m)
+    x = np.r_[0.0, np.cumsum(rate - 3.0)]  # the offset taken out: x keeps its digits
+    d = x[2 * m : 2 * m + count] - 2.0 * x[m : m + count] + x[:count]
+    literal = math.fsum((d * d).tolist())
+    r0, r1, r2 = (rate[o : o + count - 1] for o in (0, m, 2 * m))
+    got = _squares_of_second_differences(float(d[0]), r0, r1, r2, jit)
+    assert abs(got - literal) <= 1e-10 * literal
+    assert abs(got - _squares_of_second_differences(float(d[0]), r0, r1, r2, not jit)) <= (
+        1e-12 * literal
+    )

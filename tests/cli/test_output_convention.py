@@ -334,6 +334,8 @@ def test_provenance_of_an_analysis(captures, tmp_path):
         "sample-rate-hz": None,
         "bandwidth-hz": None,
         "chunked": None,  # streamed or in memory: chosen by the log's length
+        "workers": None,
+        "scheduler": None,
         "allow-clipped": False,
         "column": ["output=output"],
         "group": None,

@@ -14,7 +14,7 @@ if TYPE_CHECKING:
 
     from rotacal.io.read_options import ReadOptions
 
-__all__ = ["CaptureRows", "block_starts", "task_round"]
+__all__ = ["CaptureRows", "Ticks", "block_starts", "task_round"]
 
 T = TypeVar("T")
 
@@ -50,6 +50,18 @@ class CaptureRows:
     def column(self, name: str, start: int, stop: int) -> np.ndarray:
         """Rows ``start`` … ``stop - 1`` of one column."""
         return dataclasses.replace(self, columns=(name,)).read(start, stop)[name]
+
+
+class Ticks:
+    """Counts the tasks that ended, telling ``progress`` (when given) the count after each."""
+
+    def __init__(self, progress: Callable[[int], None] | None) -> None:
+        self.done, self.progress = 0, progress
+
+    def __call__(self) -> None:
+        self.done += 1
+        if self.progress is not None:
+            self.progress(self.done)
 
 
 def block_starts(n: int, rows: int) -> list[int]:

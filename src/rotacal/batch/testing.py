@@ -1,4 +1,5 @@
-"""Twin plans for the tests and benchmarks of batches: a gyro end-of-line test of many units.
+"""Twin plans for the tests and benchmarks of batches: a gyro end-of-line test of many units;
+and the comparison of two results' JSON (a split capture's against one process's).
 
 Each unit gets three twin captures of its own (``rotacal simulate``, seeded by the unit, so its
 noise differs) and a plan of three measurements — scale factor and nonlinearity, the triad's scale
@@ -9,13 +10,20 @@ from __future__ import annotations
 
 import contextlib
 import io
+import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import tomli_w
 
-__all__ = ["MEASUREMENTS", "twin_plan", "write_twin_plans"]
+__all__ = [
+    "MEASUREMENTS",
+    "largest_difference",
+    "split_and_one_process",
+    "twin_plan",
+    "write_twin_plans",
+]
 
 #: (command, `rotacal simulate` kind, capture file, options, limits) of each measurement.
 MEASUREMENTS: tuple[tuple[str, str, str, dict[str, Any], dict[str, Any]], ...] = (
@@ -109,3 +117,44 @@ def write_twin_plans(
         path.write_text(tomli_w.dumps(plan), encoding="utf-8")
         plans.append(path)
     return plans
+
+
+def largest_difference(
+    a: Any, b: Any, skip: Sequence[str] = ("provenance",), where: str = ""
+) -> float:
+    """The largest relative difference between the finite numbers of two JSON documents,
+    checking that everything else is equal (AssertionError naming the first place that is not);
+    keys in ``skip`` are left out."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict) and a.keys() == b.keys(), where
+        parts = (largest_difference(a[k], b[k], skip, f"{where}/{k}") for k in a if k not in skip)
+        return max(parts, default=0.0)
+    if isinstance(a, list):
+        assert isinstance(b, list) and len(a) == len(b), where
+        parts = (largest_difference(u, v, skip, where) for u, v in zip(a, b, strict=True))
+        return max(parts, default=0.0)
+    if isinstance(a, float) and isinstance(b, float) and math.isfinite(a):
+        return 0.0 if a == b else abs(a - b) / max(abs(a), abs(b))
+    assert a == b, where
+    return 0.0
+
+
+def split_and_one_process(
+    args: Sequence[str], scheduler: str, folder: Path
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The JSON of ``rotacal ARGS`` split over the workers of ``scheduler`` and of the same
+    command streamed in one process (``--chunked``), written in ``folder``; AssertionError with
+    the output when either fails."""
+    import json
+
+    from click.testing import CliRunner
+
+    from rotacal.cli import cli
+
+    outputs = []
+    for name, extra in (("split", ["--scheduler", scheduler]), ("chunked", ["--chunked"])):
+        out = folder / f"{name}.json"
+        result = CliRunner().invoke(cli, [*args, *extra, "--json", str(out)])
+        assert result.exit_code == 0, result.output
+        outputs.append(json.loads(out.read_text()))
+    return outputs[0], outputs[1]

@@ -27,6 +27,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
+from ._dask import dask_options, split_wanted
 from ._help import example
 from ._reading import current_read_options
 
@@ -63,20 +64,7 @@ from ._reading import current_read_options
     help="Read the capture in chunks (flat memory; τ at octaves or decades) or load it whole "
     f"[default: chunked above {_IN_MEMORY_MAX_SAMPLES:.0e} samples].",
 )
-@click.option(
-    "--workers",
-    type=click.IntRange(min=1),
-    default=None,
-    help="Split the capture over a local Dask cluster of N worker processes (NPZ without "
-    "compression, HDF5 or TDMS; τ at octaves or decades).",
-)
-@click.option(
-    "--scheduler",
-    metavar="ADDRESS",
-    default=None,
-    help="Split the capture over the workers of the running Dask scheduler at ADDRESS "
-    "(tcp://host:8786); they must see the capture at the same path.",
-)
+@dask_options("NPZ without compression, HDF5 or TDMS; τ at octaves or decades")
 @click.option(
     "--angle",
     "is_angle",
@@ -134,11 +122,7 @@ def allan_cmd(
     reading = {"mapping": mapping, "group": group, "read_options": read_options}
     stream = _Stream(capture, rate_column, reading, options, is_angle)
     n = None
-    if workers is not None or scheduler is not None:
-        if workers is not None and scheduler is not None:
-            raise click.UsageError("give --workers (a local cluster) or --scheduler, not both")
-        if chunked is False:
-            raise click.UsageError("--in-memory reads the capture in this process; drop it")
+    if split_wanted(workers, scheduler, chunked):
         result = _dask_noise(stream, workers, scheduler)
         _finish(result, capture, json_path, report_path)
         return

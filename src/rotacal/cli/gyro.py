@@ -29,6 +29,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
+from ._dask import dask_options, split_wanted
 from ._help import example
 from ._rate_files import rate_file_options, rate_row_chunks, rate_row_count, read_rate_rows
 from ._reading import current_read_options
@@ -102,6 +103,7 @@ _SCALE_FACTOR_IN_MEMORY_MAX_ROWS = 1_000_000
     help="Stream the captures in chunks (flat memory; two passes over them) or load them whole "
     f"[default: chunked above {_SCALE_FACTOR_IN_MEMORY_MAX_ROWS:.0e} rows].",
 )
+@dask_options("one capture: NPZ without compression, HDF5 or TDMS")
 @_clipping_option
 @_analysis_options
 @_names_capture
@@ -115,6 +117,8 @@ def gyro_scale_factor(
     sample_rate_hz: float | None,
     bandwidth_hz: float | None,
     chunked: bool | None,
+    workers: int | None,
+    scheduler: str | None,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -127,8 +131,6 @@ def gyro_scale_factor(
     one file per set rate takes the rate of each file from its name (--rate-from-name) or from a
     table (--rates).
     """
-    from rotacal.gyro import calibrate_scale_factor, calibrate_scale_factor_chunked
-
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     captures = [capture, *more_captures]
@@ -141,19 +143,12 @@ def gyro_scale_factor(
         "bandwidth_hz": bandwidth_hz,
         "allow_clipped": kw.pop("allow_clipped"),
     }
-    n = None if chunked is False else rate_row_count(captures, columns, group, rate_files)
-    if chunked is None:
-        chunked = n is not None and n > _SCALE_FACTOR_IN_MEMORY_MAX_ROWS
-    if chunked:
-        assert n is not None
-        source = rate_row_chunks(captures, columns, group, rate_files)
-        # two passes: the set rates alone, then both columns
-        with _sample_progress(2 * n, "calibrating (chunked)") as progress:
-            result = calibrate_scale_factor_chunked(source, progress=progress, **options)
+    if split_wanted(workers, scheduler, chunked):
+        result = _dask_scale_factor(
+            captures, rate_files, columns, group, options, (workers, scheduler)
+        )
     else:
-        rate, output = read_rate_rows(captures, columns, group, rate_files)
-        with _status("fitting"):
-            result = calibrate_scale_factor(rate, output, **options)
+        result = _scale_factor_here(captures, rate_files, columns, group, options, chunked)
     _emit_warnings(result)
     data = result.to_dict()
     _write_json(data, json_path)
@@ -170,6 +165,72 @@ def gyro_scale_factor(
         )
     if _summary_wanted():
         _print_scale_factor(result, data)
+
+
+def _scale_factor_here(
+    captures: list[str],
+    rate_files: dict[str, Any],
+    columns: Sequence[str],
+    group: str | None,
+    options: dict[str, Any],
+    chunked: bool | None,
+) -> Any:
+    """The calibration in this process: streamed in chunks, or in memory."""
+    from rotacal.gyro import calibrate_scale_factor, calibrate_scale_factor_chunked
+
+    n = None if chunked is False else rate_row_count(captures, columns, group, rate_files)
+    if chunked is None:
+        chunked = n is not None and n > _SCALE_FACTOR_IN_MEMORY_MAX_ROWS
+    if chunked:
+        assert n is not None
+        source = rate_row_chunks(captures, columns, group, rate_files)
+        # two passes: the set rates alone, then both columns
+        with _sample_progress(2 * n, "calibrating (chunked)") as progress:
+            return calibrate_scale_factor_chunked(source, progress=progress, **options)
+    rate, output = read_rate_rows(captures, columns, group, rate_files)
+    with _status("fitting"):
+        return calibrate_scale_factor(rate, output, **options)
+
+
+def _dask_scale_factor(
+    captures: list[str],
+    rate_files: dict[str, Any],
+    columns: Sequence[str],
+    group: str | None,
+    options: dict[str, Any],
+    where: tuple[int | None, str | None],
+) -> Any:
+    """The calibration of one log split over a Dask cluster's workers
+    (:func:`rotacal.batch.capture_scale_factor.calibrate_scale_factor_on_dask`)."""
+    from rotacal.batch.capture_scale_factor import CHUNK_ROWS, calibrate_scale_factor_on_dask
+    from rotacal.batch.cluster import dask_client
+    from rotacal.io import capture_length, parse_column_mapping, read_capture_rows
+
+    if len(captures) > 1 or rate_files["rate_from_name"] or rate_files["rates_path"] is not None:
+        raise ConfigError(
+            "--workers and --scheduler split one capture holding rate_deg_s and output; analyse "
+            "several captures, or one capture per set rate, in this process (drop them)"
+        )
+    if rate_files["rest_from"]:
+        raise ConfigError(
+            "--rest-from runs are analysed in this process; drop --workers/--scheduler"
+        )
+    reading: dict[str, Any] = {
+        "mapping": parse_column_mapping(columns),
+        "group": group,
+        "read_options": current_read_options(),
+    }
+    n = capture_length(captures[0], "rate_deg_s", **reading)
+    # a format without row offsets is refused before a cluster is started
+    read_capture_rows(captures[0], ["rate_deg_s", "output"], 0, min(n, 1), **reading)
+    tasks = 2 * (-(-n // CHUNK_ROWS))  # two rounds of blocks
+    with (
+        dask_client(*where, None) as client,
+        _sample_progress(tasks, "calibrating (tasks on Dask)") as progress,
+    ):
+        return calibrate_scale_factor_on_dask(
+            captures[0], client=client, **reading, progress=progress, **options
+        )
 
 
 def _print_scale_factor(result: Any, data: dict[str, Any]) -> None:

@@ -2,46 +2,51 @@
 3-axis calibration (robot-manipulator study 2023) and calibration from rotations through a known angle (Ferraris),
 multiposition drift coefficients (GyroWheel study), noise terms (IEEE Std 952)."""
 
-from rotacal.gyro.multiposition import (
-    EARTH_RATE_DEG_H,
-    MultipositionPlan,
-    MultipositionResult,
-    calibrate_multiposition,
-    check_multiposition_plan,
-    coefficient_names,
-    drift_design_matrix,
-    earth_rate_and_gravity,
-    multiposition_plan,
-)
-from rotacal.gyro.noise import GyroNoise, gyro_noise, gyro_noise_from_angle
-from rotacal.gyro.rotations import (
-    RotationCalibration,
-    calibrate_triad_rotations,
-    ferraris_sections,
-)
-from rotacal.gyro.scale_factor import (
-    REQUIREMENTS,
-    ScaleFactorResult,
-    calibrate_scale_factor,
-    evaluate_requirement,
-    resolve_requirement,
-)
-from rotacal.gyro.scale_factor_stream import (
-    calibrate_scale_factor_chunked,
-    scale_factor_chunks,
-)
-from rotacal.gyro.triad import (
-    RATE_COLUMNS,
-    TRIAD_OUTPUT_COLUMNS,
-    TriadPlanCheck,
-    TriadResult,
-    apply_triad_calibration,
-    calibrate_triad,
-    calibrate_triad_columns,
-    decompose_scale_misalignment,
-    triad_plan,
-    triad_plan_check,
-)
+from typing import TYPE_CHECKING
+
+from rotacal._lazy import attach
+
+if TYPE_CHECKING:
+    from rotacal.gyro.multiposition import (
+        EARTH_RATE_DEG_H,
+        MultipositionPlan,
+        MultipositionResult,
+        calibrate_multiposition,
+        check_multiposition_plan,
+        coefficient_names,
+        drift_design_matrix,
+        earth_rate_and_gravity,
+        multiposition_plan,
+    )
+    from rotacal.gyro.noise import GyroNoise, gyro_noise, gyro_noise_from_angle
+    from rotacal.gyro.rotations import (
+        RotationCalibration,
+        calibrate_triad_rotations,
+        ferraris_sections,
+    )
+    from rotacal.gyro.scale_factor import (
+        REQUIREMENTS,
+        ScaleFactorResult,
+        calibrate_scale_factor,
+        evaluate_requirement,
+        resolve_requirement,
+    )
+    from rotacal.gyro.scale_factor_stream import (
+        calibrate_scale_factor_chunked,
+        scale_factor_chunks,
+    )
+    from rotacal.gyro.triad import (
+        RATE_COLUMNS,
+        TRIAD_OUTPUT_COLUMNS,
+        TriadPlanCheck,
+        TriadResult,
+        apply_triad_calibration,
+        calibrate_triad,
+        calibrate_triad_columns,
+        decompose_scale_misalignment,
+        triad_plan,
+        triad_plan_check,
+    )
 
 __all__ = [
     "EARTH_RATE_DEG_H",
@@ -77,3 +82,5 @@ __all__ = [
     "triad_plan",
     "triad_plan_check",
 ]
+
+__getattr__, __dir__ = attach(__name__, __file__, __all__)

@@ -70,6 +70,21 @@ class _TimeSteps:
         self.last = float(t[-1])
         self.count += t.size
 
+    def resume(self, start: int, previous: float, typical: float) -> None:
+        """Start at row ``start`` (> 0) after the time stamp ``previous`` (s), with the typical
+        step the rows before set: the state a single pass has there, but for the extreme steps
+        (those of this block and of the step into it) and the first time stamp."""
+        self.count, self.last, self.typical = start, previous, typical
+
+    def merge(self, later: _TimeSteps) -> None:
+        """Fold in the checks of the rows that follow (made with :meth:`resume` at this one's
+        end): the state of one pass over both."""
+        if self.count == 0:
+            self.first, self.typical = later.first, later.typical
+        self.count, self.last = later.count, later.last
+        self.min_step = min(self.min_step, later.min_step)
+        self.max_step = max(self.max_step, later.max_step)
+
     def rate(self, n: int, fs_hz: float | None) -> float:
         """The sampling rate (Hz), as the in-memory path computes it."""
         if self.count != n:
@@ -94,6 +109,34 @@ class NoiseChecks:
         self.column, self.fs_hz = column, fs_hz
         self.times: _TimeSteps | None = None
         self.rails = RailDetector(column)
+
+    @classmethod
+    def block(
+        cls,
+        column: str,
+        fs_hz: float | None,
+        *,
+        rows: int,
+        start: int,
+        previous: float | None = None,
+        typical: float | None = None,
+    ) -> NoiseChecks:
+        """The checks of one block of a record split over several processes: rows ``start`` on
+        of a column of ``rows`` rows; with a time column, ``previous`` is the time stamp before
+        the block (s; none for the first) and ``typical`` the typical step (s) the first block
+        sets. Blocks merge in row order (:meth:`merge`) into the checks of one pass."""
+        checks = cls(column, fs_hz)
+        checks.rails = RailDetector(column, rows, start=start)
+        if previous is not None and typical is not None:
+            checks.times = _TimeSteps()
+            checks.times.resume(start, previous, typical)
+        return checks
+
+    def merge(self, later: NoiseChecks) -> None:
+        """Fold in the checks of the block that follows (see :meth:`block`)."""
+        if self.times is not None and later.times is not None:
+            self.times.merge(later.times)
+        self.rails.merge(later.rails)
 
     def add(self, chunk: Mapping[str, Any]) -> np.ndarray:
         """Check the next rows (``column`` and ``time_s`` when given); the rate as float64."""

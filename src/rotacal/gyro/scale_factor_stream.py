@@ -162,12 +162,12 @@ def _merge_spans(
 class _RatePoints:
     """Pass 1: the rate points of ``rate_deg_s`` fed in chunks."""
 
-    def __init__(self, tol: float) -> None:
+    def __init__(self, tol: float, start: int = 0) -> None:
         self.tol = tol
         self.lo = np.empty(0)
         self.hi = np.empty(0)
         self.rows = np.empty(0, dtype=np.int64)
-        self.n = 0
+        self.n = start  # rows fed, counted from the log's first (``start``: a block's first row)
         self.bad = _FirstRows()
         self.magnitudes = _Magnitudes(_RATE, "a set rate")
 
@@ -200,6 +200,10 @@ class _RatePoints:
             np.r_[self.rows, ends - starts],
             self.tol,
         )
+        self.check_count()
+
+    def check_count(self) -> None:
+        """Refuse a column of more rate points than a rate-table test holds."""
         if self.lo.size > MAX_RATE_POINTS:
             raise CaptureError(
                 f"column rate_deg_s holds more than {MAX_RATE_POINTS} rate points (set rates more "
@@ -267,7 +271,12 @@ class _Top2:
         self.k_second = np.zeros(ng, dtype=np.int64)
 
     def add(self, g: np.ndarray, ys: np.ndarray, starts: np.ndarray) -> None:
-        t_b, k_b, s_b, ks_b = _segments_top2(self.sign * ys, starts)
+        self.fold(g, *_segments_top2(self.sign * ys, starts))
+
+    def fold(
+        self, g: np.ndarray, t_b: np.ndarray, k_b: np.ndarray, s_b: np.ndarray, ks_b: np.ndarray
+    ) -> None:
+        """Fold other samples' two largest values (as sign·output) and counts into points g."""
         t_a, k_a, s_a, ks_a = self.top[g], self.k_top[g], self.second[g], self.k_second[g]
         top = np.maximum(t_a, t_b)
         k_top = np.where(t_a == top, k_a, 0) + np.where(t_b == top, k_b, 0)
@@ -323,13 +332,20 @@ class _Blocks:
     """Per rate point: the means of consecutive blocks of ``block`` finite samples (less the
     point's first sample), their count, mean and M2; the open block is carried."""
 
-    def __init__(self, ng: int, block: int) -> None:
+    def __init__(self, ng: int, block: int, seen: np.ndarray | None = None) -> None:
         self.block = block
         self.carry_sum = np.zeros(ng)
         self.carry_n = np.zeros(ng, dtype=np.int64)
         self.n = np.zeros(ng)
         self.mean = np.zeros(ng)
         self.m2 = np.zeros(ng)
+        # one block of the log (``seen``: each point's samples before it): the block open at its
+        # start holds seen % block samples whose sum it cannot know; the samples that complete
+        # it are summed apart (``head_sum``) for the rows before to finish (``pending`` until then)
+        self.entry_n = np.zeros(ng, dtype=np.int64) if seen is None else seen % block
+        self.carry_n += self.entry_n
+        self.pending = self.entry_n > 0
+        self.head_sum = np.zeros(ng)
 
     def add(self, gs: np.ndarray, v: np.ndarray, within: np.ndarray) -> None:
         """``v``: finite samples less their point's shift, sorted by point (stable); ``within``:
@@ -349,6 +365,11 @@ class _Blocks:
         part = ~full  # at most one per point: its last block, carried on
         self.carry_sum[bg[part]] = sums[part]
         self.carry_n[bg[part]] = sizes[part]
+        head = full & cont & self.pending[bg]  # completes the block open at the start
+        if head.any():
+            self.head_sum[bg[head]] = sums[head]
+            self.pending[bg[head]] = False
+            full &= ~head
         if not full.any():
             return
         means, fg = sums[full] / self.block, bg[full]
@@ -371,11 +392,21 @@ class _Blocks:
 class _PointSums:
     """Pass 2: everything the analysis needs of the samples, per rate point (module docstring)."""
 
-    def __init__(self, points: _RatePoints, opts: _Options) -> None:
+    def __init__(
+        self,
+        points: _RatePoints,
+        opts: _Options,
+        *,
+        start: int | None = None,
+        seen: np.ndarray | None = None,
+    ) -> None:
+        """``start`` and ``seen``: the sums of one block of the log, from row ``start`` on,
+        each point having ``seen`` samples before it (see :mod:`rotacal.gyro.scale_factor_merge`;
+        a log read through the reader, whose samples are all finite)."""
         ng = points.lo.size
         self.lo, self.rows = points.lo, points.rows
         self.stride = np.maximum(-(-self.rows // _QUANTUM_SAMPLES), 1)
-        self.n_rows = 0
+        self.n_rows = 0 if start is None else start
         self.rate_excess = np.zeros(ng)
         self.n = np.zeros(ng, dtype=np.int64)
         self.mean = np.zeros(ng)  # of the samples less ``shift``
@@ -385,10 +416,15 @@ class _PointSums:
         self.magnitudes = _Magnitudes(_OUTPUT, "a gyro output")
         self.abs_max = 0.0
         self.copy = self.negative = True
-        self.rails = RailDetector(_OUTPUT)
+        self.rails = RailDetector(
+            _OUTPUT, None if start is None else int(self.rows.sum()), start=start
+        )
         self.highs, self.lows = _Top2(ng, 1.0), _Top2(ng, -1.0)
         self.levels = _Levels(ng)
-        self.blocks = _Blocks(ng, opts.noise.block)
+        self.blocks = _Blocks(ng, opts.noise.block, seen)
+        # finite samples of each point before the chunk: the statistics' counts, or for a block
+        # of the log those before the block plus its own (its statistics start from zero)
+        self.seen = self.n if seen is None else seen.astype(np.int64)
         self.kept: list[tuple[np.ndarray, ...]] = []
 
     def group_of(self, rate: np.ndarray) -> np.ndarray:
@@ -411,16 +447,19 @@ class _PointSums:
         if y.size == 0 or self.magnitudes.largest > LARGEST:
             return  # nothing, or refused at the end of the pass: no overflowing arithmetic
         self.abs_max = max(self.abs_max, float(np.max(np.abs(y))))
-        gs, ys, starts, sizes, within = _by_point(gid, y, self.n)
+        gs, ys, starts, sizes, within = _by_point(gid, y, self.seen)
         seg_g = gs[starts]
-        fresh = within[starts] == 0
-        self.shift[seg_g[fresh]] = ys[starts[fresh]]  # each point's first finite sample
+        fresh = self.n[seg_g] == 0
+        # each point's first finite sample (of the block: the merge moves it to the log's)
+        self.shift[seg_g[fresh]] = ys[starts[fresh]]
         d = ys - np.repeat(self.shift[seg_g], sizes)  # as in memory: the digits of the noise
         # point statistics: this chunk's two-pass mean and M2, merged
         seg_mean = np.add.reduceat(d, starts) / sizes
         dev = d - np.repeat(seg_mean, sizes)
         seg_m2 = np.add.reduceat(dev * dev, starts)
         _chan_merge(self.n, self.mean, self.m2, seg_g, sizes, seg_mean, seg_m2)
+        if self.seen is not self.n:
+            self.seen[seg_g] += sizes
         self.highs.add(seg_g, ys, starts)
         self.lows.add(seg_g, ys, starts)
         self.levels.add(gs, ys, starts)
@@ -586,12 +625,26 @@ def calibrate_scale_factor_chunked(
     points = _RatePoints(opts.tol)
     for _, (rate,) in reader.run((_RATE,)):
         points.add(rate)
-    points.finish()
-    _refuse_one_rate(points.lo)
-    check_blocks_fit(opts.noise, points.rows)  # refused before reading the outputs
+    check_points(points, opts)
     sums = _PointSums(points, opts)
     for _, (rate, y) in reader.run((_RATE, _OUTPUT)):
         sums.add(rate, y)
+    return result_of_sums(points, sums, opts, reader)
+
+
+def check_points(points: _RatePoints, opts: _Options) -> None:
+    """The refusals once the rate points are known (pass 1 ended): no rows, non-finite or
+    absurd set rates, a single rate, blocks of the bandwidth longer than every point."""
+    points.finish()
+    _refuse_one_rate(points.lo)
+    check_blocks_fit(opts.noise, points.rows)  # refused before reading the outputs
+
+
+def result_of_sums(
+    points: _RatePoints, sums: _PointSums, opts: _Options, reader: _Reader
+) -> ScaleFactorResult:
+    """The result from pass 2's sums, with its refusals in the order of the in-memory path
+    (``reader`` for the passes a refusal or left-out outputs need)."""
     rates = points.lo + sums.rate_excess / points.rows
     if sums.magnitudes.largest > LARGEST:  # the statistics were not accumulated
         sums.magnitudes.finish()

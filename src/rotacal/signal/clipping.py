@@ -288,11 +288,22 @@ class RailDetector:
     column : str — the column's name, for the messages.
     rows : int, optional — the column's length, when known before it is fed: the subsample then
         starts at its final stride (the same samples kept, without thinning them again and again).
+    start : int, optional — the row of the first sample fed, when this detector sees one block
+        of a column split over several processes: :meth:`merge` then folds it into the
+        detector of the rows before it (``rows`` is required: every block keeps the same rows).
     """
 
-    def __init__(self, column: str, rows: int | None = None) -> None:
+    def __init__(self, column: str, rows: int | None = None, *, start: int | None = None) -> None:
         self.column = column
-        self._n = 0  # samples fed (finite or not): row numbers
+        self._n = 0 if start is None else int(start)  # samples fed (finite or not): row numbers
+        self._start = self._n
+        # a block's first run (value, length, whether it spans every sample fed so far): the
+        # run continues the one the rows before left open, which the block cannot see
+        self._lead: tuple[float, int, bool] | None = None
+        if start is not None:
+            if rows is None:
+                raise ValueError("a block's RailDetector needs the column's length (rows)")
+            self._lead = (math.nan, 0, True)
         self._finite = 0
         self._hi = _Side(1.0)
         self._lo = _Side(-1.0)
@@ -320,8 +331,74 @@ class RailDetector:
                     f"{c.size} samples); they must be sampled together."
                 )
             self._with_companion = True
+        if self._lead is not None and self._lead[2] and x.size:
+            self._extend_lead(x)
         for s in range(0, x.size, _PIECE):
             self._add_piece(x[s : s + _PIECE], None if c is None else c[s : s + _PIECE])
+
+    def _extend_lead(self, x: np.ndarray) -> None:
+        """Grow the block's first run by the samples of ``x`` equal to it (block mode only)."""
+        value, length, _ = self._lead  # type: ignore[misc]
+        if length == 0:
+            value = float(x[0])
+        differ = x != value  # NaN differs from everything: it never extends a run
+        i = int(np.argmax(differ))
+        self._lead = (value, length + i, False) if differ[i] else (value, length + x.size, True)
+
+    def merge(self, later: RailDetector) -> None:
+        """Fold in ``later``, a detector of the rows that follow this one's (made with
+        ``start`` = this one's rows fed, and the same ``rows``): the state becomes the one a
+        single detector fed both in order reaches, for finite samples (NaN or inf never form a
+        run, and a column holding them is refused by the analyses before rails are judged).
+
+        Why this is exact: the extremes and the next values inward are the two largest distinct
+        values with their counts, which merge as in :meth:`_Side.merge`; a run counts at an
+        extreme when its value is the final extreme and elsewhere otherwise (a run listed at an
+        extreme that is later passed is demoted), so ``later``'s runs move with their values;
+        the run open at the end of this one joins ``later``'s first run when they share a value;
+        the subsample keeps the rows that are multiples of the one final stride.
+        """
+        if later._lead is None or later._start != self._n or later._stride != self._stride:
+            raise ValueError("merge needs the detector of the rows that follow, made with start")
+        for mine, theirs in ((self._hi, later._hi), (self._lo, later._lo)):
+            demoted = mine.merge(
+                theirs.value,
+                theirs.count,
+                theirs.first,
+                theirs.next_value,
+                theirs.next_count,
+                (theirs.comp_lo, theirs.comp_hi),
+            )
+            if theirs.value == mine.value:
+                mine.run = max(mine.run, theirs.run)
+            else:
+                demoted = max(demoted, theirs.run)
+            self._elsewhere_run = max(self._elsewhere_run, demoted, later._elsewhere_run)
+        value, length, whole = later._lead
+        joins = self._open_len > 0 and length > 0 and value == self._open_value
+        if self._lead is not None and self._lead[2]:  # this one is a single run so far
+            first, count, _ = self._lead
+            self._lead = (
+                later._lead
+                if count == 0
+                else (first, count + length, whole)
+                if joins
+                else (first, count, False)
+            )
+        if joins and whole:  # later is one run, continuing the open one: it stays open
+            self._open_len += length
+        else:
+            if joins:
+                self._classify(np.array([value]), np.array([self._open_len + length]))
+                self._open_len = 0
+            self._close_open_run()
+            self._open_value, self._open_len = later._open_value, later._open_len
+        self._n, self._finite = later._n, self._finite + later._finite
+        self._kept += later._kept
+        self._kept_n += later._kept_n
+        self._comp_lo = min(self._comp_lo, later._comp_lo)
+        self._comp_hi = max(self._comp_hi, later._comp_hi)
+        self._with_companion = self._with_companion or later._with_companion
 
     def _add_piece(
         self,
