@@ -4,11 +4,9 @@ per module) and folders of twin plans."""
 from __future__ import annotations
 
 import contextlib
-import math
 import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
 
 import pytest
 from distributed import Client
@@ -57,23 +55,3 @@ def plans(twin_source: Path, tmp_path: Path) -> Callable[[int], list[Path]]:
         return every[:n]
 
     return copy
-
-
-def _worst(a: Any, b: Any, where: str = "") -> float:
-    if isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        return max((_worst(a[k], b[k], f"{where}/{k}") for k in a if k != "provenance"), default=0)
-    if isinstance(a, list):
-        assert len(a) == len(b), where
-        return max((_worst(u, v, where) for u, v in zip(a, b, strict=True)), default=0.0)
-    if isinstance(a, float) and isinstance(b, float) and math.isfinite(a):
-        return 0.0 if a == b else abs(a - b) / max(abs(a), abs(b))
-    assert a == b, where
-    return 0.0
-
-
-@pytest.fixture
-def worst() -> Callable[[Any, Any], float]:
-    """``worst(a, b)``: the largest relative difference between the numbers of two JSON
-    documents (provenance aside), having asserted that everything else is equal."""
-    return _worst

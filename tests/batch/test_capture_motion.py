@@ -5,20 +5,17 @@ of the whole capture in memory, the same refusals with the same messages."""
 from __future__ import annotations
 
 import itertools
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from distributed import Client
-from tests.batch.test_capture_noise import _worst
 
 import rotacal.table.streaming as streaming
 from rotacal import sim
 from rotacal.batch.capture_motion import _entry_states, calibrate_encoder_motion_on_dask
-from rotacal.cli import cli
+from rotacal.batch.testing import largest_difference, split_and_one_process
 from rotacal.encoder import correct_quadrature, fit_quadrature_correction
 from rotacal.encoder._kernel import phase_pass
 from rotacal.errors import CaptureError, ConfigError
@@ -97,14 +94,14 @@ def test_split_over_workers_equals_one_process_and_memory(
     )
     one = _one_process(npz, **kw)
     assert np.array_equal(got.reversal_times_s, one.reversal_times_s)
-    assert _worst(got.to_dict(), one.to_dict()) < 1e-9
+    assert largest_difference(got.to_dict(), one.to_dict()) < 1e-9
     assert seen == list(range(1, len(seen) + 1)) and len(seen) > 3 * (capture["a"].size // ROWS)
     if gather is None:  # and, gathered, the fit of the whole span in memory
         memory = calibrate_encoder_motion(
             capture["time_s"], capture["a"], capture["b"], lines=LINES, **kw
         )
         assert np.array_equal(got.reversal_times_s, memory.reversal_times_s)
-        assert _worst(got.to_dict(), memory.to_dict()) < 1e-9
+        assert largest_difference(got.to_dict(), memory.to_dict()) < 1e-9
 
 
 def _nan(cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -163,16 +160,7 @@ def test_the_command_splits_over_a_running_scheduler(
     dask_client: Client, npz: Path, tmp_path: Path
 ) -> None:
     address = dask_client.scheduler_info()["address"]
-    outputs = {}
-    for name, extra in (("split", ["--scheduler", address]), ("chunked", ["--chunked"])):
-        out = tmp_path / f"{name}.json"
-        result = CliRunner().invoke(
-            cli,
-            ["motion", "encoder", str(npz), "--lines", str(LINES), *extra, "--json", str(out)],
-        )
-        assert result.exit_code == 0, result.output
-        outputs[name] = json.loads(out.read_text())
-    notes = outputs["split"].pop("notes")
-    assert any("split over 2 Dask workers" in note for note in notes)
-    assert notes[1:] == outputs["chunked"].pop("notes")
-    assert _worst(outputs["split"], outputs["chunked"]) < 1e-9
+    split, one = split_and_one_process(
+        ["motion", "encoder", str(npz), "--lines", str(LINES)], address, tmp_path
+    )
+    assert largest_difference(split, one) < 1e-9

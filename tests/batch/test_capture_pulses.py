@@ -4,8 +4,7 @@ refusals with the same messages."""
 
 from __future__ import annotations
 
-import json
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +15,7 @@ from distributed import Client
 
 import rotacal.uncertainty.summaries_peak as summaries_peak
 from rotacal.batch.capture_rate import calibrate_rate_on_dask
+from rotacal.batch.testing import largest_difference, split_and_one_process
 from rotacal.cli import cli
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.sim.pulses import simulate_pulses
@@ -64,7 +64,6 @@ def twin(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, np.ndarr
 
 @pytest.mark.parametrize("given", [False, True], ids=["nominal", "aligned-deviation"])
 def test_split_over_workers_equals_one_process_and_memory(
-    worst: Callable[[Any, Any], float],
     dask_client: Client,
     windows: None,
     twin: tuple[Path, Path, np.ndarray],
@@ -77,13 +76,12 @@ def test_split_over_workers_equals_one_process_and_memory(
     assert got.compensated is given
     assert (np.load(one)["head_0"].size - 1) // 10 > 5 * WINDOW  # rate points: many windows
     streamed = calibrate_rate_file(one, chunk_rows=CHUNK, **kw)
-    assert worst(got.to_dict(), streamed.to_dict()) < 1e-9
+    assert largest_difference(got.to_dict(), streamed.to_dict()) < 1e-9
     memory = calibrate_rate([np.load(one)["head_0"]], **kw)
-    assert worst(got.to_dict(), memory.to_dict()) < 1e-9
+    assert largest_difference(got.to_dict(), memory.to_dict()) < 1e-9
 
 
 def test_a_capture_self_calibrated_first(
-    worst: Callable[[Any, Any], float],
     dask_client: Client,
     windows: None,
     twin: tuple[Path, Path, np.ndarray],
@@ -93,7 +91,7 @@ def test_a_capture_self_calibrated_first(
     got = calibrate_rate_on_dask(two, client=dask_client, pulses_per_rev=M, chunk_rows=7777)
     assert got.compensated
     streamed = calibrate_rate_file(two, pulses_per_rev=M, chunk_rows=7777)
-    assert worst(got.to_dict(), streamed.to_dict()) < 1e-9
+    assert largest_difference(got.to_dict(), streamed.to_dict()) < 1e-9
 
 
 def test_the_first_fault_in_the_file_is_the_one_reported(
@@ -144,28 +142,15 @@ def test_text_is_refused(dask_client: Client, tmp_path: Path) -> None:
 
 
 def test_the_command_splits_over_a_running_scheduler(
-    worst: Callable[[Any, Any], float],
     dask_client: Client,
     twin: tuple[Path, Path, np.ndarray],
     tmp_path: Path,
 ) -> None:
     address = dask_client.scheduler_info()["address"]
-    outputs = {}
-    for name, extra in (("split", ["--scheduler", address]), ("chunked", ["--chunked"])):
-        out = tmp_path / f"{name}.json"
-        result = CliRunner().invoke(
-            cli,
-            ["rate", str(twin[0]), "--pulses-per-rev", str(M), *extra, "--json", str(out)],
-        )
-        assert result.exit_code == 0, result.output
-        outputs[name] = json.loads(out.read_text())
-    split = outputs["split"]
-    assert (
-        split["notes"][-1]
-        == f"split over 2 Dask workers ({np.load(twin[0])['head_0'].size} pulses)."
+    split, one = split_and_one_process(
+        ["rate", str(twin[0]), "--pulses-per-rev", str(M)], address, tmp_path
     )
-    split["notes"] = split["notes"][:-1]
-    assert worst(split, outputs["chunked"]) < 1e-9
+    assert largest_difference(split, one) < 1e-9
     both = CliRunner().invoke(
         cli,
         [

@@ -3,11 +3,19 @@
 
 from __future__ import annotations
 
-from typing import Any, TypeVar
+import dataclasses
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
+from ._common import _sample_progress
+
+if TYPE_CHECKING:
+    from distributed import Client
+
 F = TypeVar("F", bound=Any)
+R = TypeVar("R")
 
 
 def dask_options(what: str) -> Any:
@@ -41,3 +49,36 @@ def split_wanted(workers: int | None, scheduler: str | None, chunked: bool | Non
     if chunked is False:
         raise click.UsageError("--in-memory reads the capture in this process; drop it")
     return True
+
+
+def run_on_dask(
+    where: tuple[int | None, str | None],
+    tasks: int,
+    label: str,
+    analysis: Callable[[Client, Callable[[int], None]], R],
+    *,
+    capture: str,
+    columns: list[str],
+    rows: int,
+    reading: dict[str, Any],
+    unit: str = "samples",
+) -> R:
+    """``analysis(client, progress)`` on the cluster ``where`` (``--workers``, ``--scheduler``)
+    with a bar over at most ``tasks`` tasks; its result with a last note "split over N Dask
+    workers (``rows`` ``unit``)". The first row of the capture's ``columns`` (of ``rows``; ``reading``: mapping, group
+    and read options) is read first, so that a format without row offsets (CSV, a compressed NPZ
+    member) is refused before a cluster starts."""
+    from rotacal.batch.cluster import dask_client
+    from rotacal.io import read_capture_rows
+
+    if rows:  # an empty capture is refused by the analysis itself, with its message
+        read_capture_rows(capture, columns, 0, 1, **reading)
+    with (
+        dask_client(*where, None) as client,
+        _sample_progress(tasks, f"{label} (tasks on Dask)") as progress,
+    ):
+        result = analysis(client, progress)
+        used = len(client.scheduler_info().get("workers", {}))
+    notes = result.notes  # type: ignore[attr-defined]
+    note = f"split over {used} Dask workers ({rows} {unit})"
+    return dataclasses.replace(result, notes=type(notes)((*notes, note)))  # type: ignore[type-var]

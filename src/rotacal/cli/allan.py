@@ -27,7 +27,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
-from ._dask import dask_options, split_wanted
+from ._dask import dask_options, run_on_dask, split_wanted
 from ._help import example
 from ._reading import current_read_options
 
@@ -226,28 +226,28 @@ def _dask_noise(stream: _Stream, workers: int | None, scheduler: str | None) -> 
     """The noise of a capture split over a Dask cluster's workers
     (:func:`rotacal.batch.capture_noise.gyro_noise_on_dask`)."""
     from rotacal.batch.capture_noise import CHUNK_ROWS, gyro_noise_on_dask
-    from rotacal.batch.cluster import dask_client
-    from rotacal.io import capture_length, read_capture_rows
+    from rotacal.io import capture_length
 
     stream.check("split over workers")
     n = capture_length(stream.capture, stream.column, **stream.reading)
-    # a format without row offsets is refused before a cluster is started
-    read_capture_rows(stream.capture, [stream.column], 0, min(n, 1), **stream.reading)
-    tasks = 2 * (-(-n // CHUNK_ROWS)) + 1  # at most: two rounds of blocks and the checks
-    with (
-        dask_client(workers, scheduler, None) as client,
-        _sample_progress(tasks, "Allan deviation (tasks on Dask)") as progress,
-    ):
-        result = gyro_noise_on_dask(
+    result = run_on_dask(
+        (workers, scheduler),
+        2 * (-(-n // CHUNK_ROWS)) + 1,  # at most: two rounds of blocks and the checksums
+        "Allan deviation",
+        lambda client, progress: gyro_noise_on_dask(
             stream.capture,
             client=client,
             **stream.analysis(),
             **stream.reading,
             history=_CHUNK_HISTORY,
             progress=progress,
-        )
-        workers_used = len(client.scheduler_info().get("workers", {}))
-    return stream.noted(result, f"split over {workers_used} Dask workers ({n} samples)")
+        ),
+        capture=stream.capture,
+        columns=[stream.column],
+        rows=n,
+        reading=stream.reading,
+    )
+    return stream.noted(result, "split over workers")
 
 
 def _finish(result: Any, capture: str, json_path: str | None, report_path: str | None) -> None:

@@ -29,7 +29,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
-from ._dask import dask_options, split_wanted
+from ._dask import dask_options, run_on_dask, split_wanted
 from ._help import example
 from ._rate_files import rate_file_options, rate_row_chunks, rate_row_count, read_rate_rows
 from ._reading import current_read_options
@@ -203,8 +203,7 @@ def _dask_scale_factor(
     """The calibration of one log split over a Dask cluster's workers
     (:func:`rotacal.batch.capture_scale_factor.calibrate_scale_factor_on_dask`)."""
     from rotacal.batch.capture_scale_factor import CHUNK_ROWS, calibrate_scale_factor_on_dask
-    from rotacal.batch.cluster import dask_client
-    from rotacal.io import capture_length, parse_column_mapping, read_capture_rows
+    from rotacal.io import capture_length, parse_column_mapping
 
     if len(captures) > 1 or rate_files["rate_from_name"] or rate_files["rates_path"] is not None:
         raise ConfigError(
@@ -221,16 +220,18 @@ def _dask_scale_factor(
         "read_options": current_read_options(),
     }
     n = capture_length(captures[0], "rate_deg_s", **reading)
-    # a format without row offsets is refused before a cluster is started
-    read_capture_rows(captures[0], ["rate_deg_s", "output"], 0, min(n, 1), **reading)
-    tasks = 2 * (-(-n // CHUNK_ROWS))  # two rounds of blocks
-    with (
-        dask_client(*where, None) as client,
-        _sample_progress(tasks, "calibrating (tasks on Dask)") as progress,
-    ):
-        return calibrate_scale_factor_on_dask(
+    return run_on_dask(
+        where,
+        2 * (-(-n // CHUNK_ROWS)),  # two rounds of blocks
+        "calibrating",
+        lambda client, progress: calibrate_scale_factor_on_dask(
             captures[0], client=client, **reading, progress=progress, **options
-        )
+        ),
+        capture=captures[0],
+        columns=["rate_deg_s", "output"],
+        rows=n,
+        reading=reading,
+    )
 
 
 def _print_scale_factor(result: Any, data: dict[str, Any]) -> None:

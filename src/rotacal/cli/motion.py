@@ -30,6 +30,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
+from ._dask import dask_options, run_on_dask, split_wanted
 from ._help import example
 from ._reading import current_read_options
 
@@ -181,20 +182,7 @@ def _print_motion(r: Any, data: dict[str, Any]) -> None:
     help="Stream the capture in chunks (flat memory) or load it whole "
     f"[default: chunked above {_IN_MEMORY_MAX_SAMPLES:.0e} samples].",
 )
-@click.option(
-    "--workers",
-    type=click.IntRange(min=1),
-    default=None,
-    help="Split the capture's passes over a local Dask cluster of N worker processes (NPZ "
-    "without compression, HDF5 or TDMS): for a capture larger than one process's time.",
-)
-@click.option(
-    "--scheduler",
-    metavar="ADDRESS",
-    default=None,
-    help="Split the capture's passes over the workers of the running Dask scheduler at ADDRESS "
-    "(tcp://host:8786); they must see the capture at the same path.",
-)
+@dask_options("NPZ without compression, HDF5 or TDMS: for a capture larger than one process's time")
 @_motion_common
 @_names_capture
 def motion_encoder(
@@ -235,13 +223,8 @@ def motion_encoder(
     n = capture_length(
         capture, "a", mapping=mapping, group=group, read_options=current_read_options()
     )
-    split = workers is not None or scheduler is not None
-    if split:
-        if workers is not None and scheduler is not None:
-            raise click.UsageError("give --workers (a local cluster) or --scheduler, not both")
-        if chunked is False:
-            raise click.UsageError("--in-memory reads the capture in this process; drop it")
-    elif chunked is None:
+    split = split_wanted(workers, scheduler, chunked)
+    if not split and chunked is None:
         chunked = n > _IN_MEMORY_MAX_SAMPLES
     if split:
         result = _dask_encoder(capture, n, (mapping, group), (workers, scheduler), lines, kw)
@@ -279,24 +262,15 @@ def _dask_encoder(
 ) -> Any:
     """The encoder calibration split over a Dask cluster's workers
     (:func:`rotacal.batch.capture_motion.calibrate_encoder_motion_on_dask`), noted as such."""
-    import dataclasses
-
     from rotacal.batch.capture_motion import CHUNK_ROWS, calibrate_encoder_motion_on_dask
-    from rotacal.batch.cluster import dask_client
-    from rotacal.io import read_capture_rows
 
     mapping, group = reading
     options = current_read_options()
-    # a format without row offsets is refused before a cluster is started
-    read_capture_rows(
-        capture, ["a"], 0, min(n, 1), mapping=mapping, group=group, read_options=options
-    )
-    tasks = 8 * (-(-n // CHUNK_ROWS)) + 3  # at most: the rounds over the blocks and the checks
-    with (
-        dask_client(*cluster, None) as client,
-        _sample_progress(tasks, "calibrating (tasks on Dask)") as progress,
-    ):
-        result = calibrate_encoder_motion_on_dask(
+    return run_on_dask(
+        cluster,
+        8 * (-(-n // CHUNK_ROWS)) + 3,  # at most: the rounds over the blocks and the checks
+        "calibrating",
+        lambda client, progress: calibrate_encoder_motion_on_dask(
             capture,
             client=client,
             lines=lines,
@@ -305,10 +279,12 @@ def _dask_encoder(
             read_options=options,
             progress=progress,
             **kw,
-        )
-        workers_used = len(client.scheduler_info().get("workers", {}))
-    note = f"split over {workers_used} Dask workers ({n} samples)"
-    return dataclasses.replace(result, notes=(note, *result.notes))
+        ),
+        capture=capture,
+        columns=["a"],
+        rows=n,
+        reading={"mapping": mapping, "group": group, "read_options": options},
+    )
 
 
 def _chunked_option(func: F) -> F:

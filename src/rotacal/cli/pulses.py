@@ -29,6 +29,7 @@ from ._common import (
     _write_json,
     _write_report,
 )
+from ._dask import dask_options, run_on_dask, split_wanted
 from ._help import example
 from ._reading import current_read_options
 
@@ -242,20 +243,7 @@ def _selfcal_chunked(
     f"[default: chunked above {_IN_MEMORY_MAX_PULSES:.0e} pulses of the head, or "
     f"{_SELFCAL_IN_MEMORY_MAX:.0e} in all to self-calibrate, except CSV].",
 )
-@click.option(
-    "--workers",
-    type=click.IntRange(min=1),
-    default=None,
-    help="Split the rate's passes over a local Dask cluster of N worker processes (one head "
-    "as the streamed path takes it; NPZ without compression, HDF5 or TDMS).",
-)
-@click.option(
-    "--scheduler",
-    metavar="ADDRESS",
-    default=None,
-    help="Split the rate's passes over the workers of the running Dask scheduler at ADDRESS "
-    "(tcp://host:8786); they must see the capture at the same path.",
-)
+@dask_options("one head as the streamed path takes it; NPZ without compression, HDF5 or TDMS")
 @_analysis_options
 @_names_capture
 def rate_cmd(
@@ -294,11 +282,7 @@ def rate_cmd(
             ) from None
         if not isinstance(selfcal, dict):
             raise ConfigError(f"--selfcal {selfcal_path} is not a `rotacal selfcal --json` result")
-    split = workers is not None or scheduler is not None
-    if split and workers is not None and scheduler is not None:
-        raise click.UsageError("give --workers (a local cluster) or --scheduler, not both")
-    if split and chunked is False:
-        raise click.UsageError("--in-memory reads the capture in this process; drop it")
+    split = split_wanted(workers, scheduler, chunked)
     if chunked is None and not split:
         chunked = _stream_by_default(capture, columns, group, head, selfcal, no_compensation)
     settings: dict[str, Any] = {
@@ -396,40 +380,28 @@ def _dask_rate(
 ) -> Any:
     """The rate of a capture whose passes are split over a Dask cluster's workers
     (:func:`rotacal.batch.capture_rate.calibrate_rate_on_dask`), with a bar over the tasks."""
-    import dataclasses
 
     from rotacal.batch.capture_rate import calibrate_rate_on_dask
-    from rotacal.batch.cluster import dask_client
-    from rotacal.io import read_capture_rows
     from rotacal.table.rate_file import CHUNK_PULSES
 
     mapping, read_options, heads, n = _head_file(capture, columns, group, str(kw["head"]))
-    if n:  # a format without row offsets is refused before a cluster is started
-        head = str(kw["head"])
-        column = head if head.startswith("head_") else f"head_{head}"
-        with _naming_file(capture):
-            read_capture_rows(
-                capture, [column], 0, 1, mapping=mapping, group=group, read_options=read_options
-            )
+    head = str(kw["head"])
+    reading = {"mapping": mapping, "group": group, "read_options": read_options}
     aligning = kw["compensate"] and (kw["selfcal"] is not None or heads >= 2)
-    tasks = (3 if aligning else 2) * (-(-n // CHUNK_PULSES)) + 1  # rounds of blocks, checksum
-    with (
-        _naming_file(capture),
-        dask_client(workers, scheduler, None) as client,
-        _sample_progress(tasks, "rate (tasks on Dask)") as progress,
-    ):
-        result = calibrate_rate_on_dask(
-            capture,
-            client=client,
-            mapping=mapping,
-            group=group,
-            read_options=read_options,
-            progress=progress,
-            **kw,
+    with _naming_file(capture):
+        return run_on_dask(
+            (workers, scheduler),
+            (3 if aligning else 2) * (-(-n // CHUNK_PULSES)) + 1,  # rounds of blocks, checksum
+            "rate",
+            lambda client, progress: calibrate_rate_on_dask(
+                capture, client=client, **reading, progress=progress, **kw
+            ),
+            capture=capture,
+            columns=[head if head.startswith("head_") else f"head_{head}"],
+            rows=n,
+            reading=reading,
+            unit="pulses",
         )
-        used = len(client.scheduler_info().get("workers", {}))
-    note = f"split over {used} Dask workers ({n} pulses)."
-    return dataclasses.replace(result, notes=[*result.notes, note])
 
 
 def _finish_rate(result: Any, capture: str, json_path: Any, report_path: Any) -> None:
