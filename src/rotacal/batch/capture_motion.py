@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rotacal._threads import one_blas_thread
-from rotacal.batch._blocks import CaptureRows, block_starts, task_round
+from rotacal.batch._blocks import CaptureRows, Ticks, block_starts, task_round
 from rotacal.errors import CaptureError
 
 if TYPE_CHECKING:
@@ -407,13 +407,7 @@ def calibrate_encoder_motion_on_dask(
     source = CaptureRows(str(path), ENCODER_COLUMNS, mapping, group, read_options)
     n = capture_length(path, "a", mapping=mapping, group=group, read_options=read_options)
     source.read(0, min(n, 1))  # a format without row offsets is refused before any work
-    done = 0
-
-    def tick() -> None:
-        nonlocal done
-        done += 1
-        if progress is not None:
-            progress(done)
+    tick = Ticks(progress)
 
     split = _Split(client, source, n, chunk_rows, tick)
     checked = client.submit(_check_task, source, chunk_rows, pure=False)

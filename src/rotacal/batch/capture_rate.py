@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rotacal.batch._blocks import CaptureRows, block_starts, task_round
+from rotacal.batch._blocks import CaptureRows, Ticks, block_starts, task_round
 from rotacal.errors import CaptureError, ConfigError
 
 if TYPE_CHECKING:
@@ -413,13 +413,7 @@ def calibrate_rate_on_dask(
     rows = CHUNK_PULSES if chunk_rows is None else int(chunk_rows)
     if rows < 1:
         raise ConfigError(f"chunk_rows must be positive, got {chunk_rows}")
-    done = 0
-
-    def tick() -> None:
-        nonlocal done
-        done += 1
-        if progress is not None:
-            progress(done)
+    tick = Ticks(progress)
 
     def split(column: str) -> dict[str, Any]:
         """How a pass over the column is split: the client, the rows, the blocks' size, the
