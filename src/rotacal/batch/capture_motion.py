@@ -364,10 +364,12 @@ def calibrate_encoder_motion_on_dask(
         The capture (NPZ saved without compression, HDF5 or TDMS), at a path every worker sees.
     client : distributed.Client
         The cluster's client.
-    lines, harmonics, periods, set_amplitude_deg, set_frequency_hz, correction, specs,
-    allow_clipped, drift, hysteresis_subintervals
+    lines, harmonics, periods, set_amplitude_deg, set_frequency_hz
         As :func:`rotacal.table.calibrate_encoder_motion_chunked` (lines per revolution; set
-        values in deg and Hz; hysteresis in 30° subintervals).
+        values in deg and Hz).
+    correction, specs, allow_clipped, drift, hysteresis_subintervals
+        As :func:`rotacal.table.calibrate_encoder_motion_chunked` (hysteresis in 30°
+        subintervals).
     mapping, group, read_options
         How to read the capture, as :func:`rotacal.io.read_capture`.
     chunk_rows : int
