@@ -369,6 +369,17 @@ def test_many_intervals_equal_exact_chi2_quantiles():
     np.testing.assert_allclose(hi, np.sqrt(nu / stats.chi2.ppf(0.025, nu)), rtol=1e-6)
 
 
+def test_few_intervals_equal_scipy_chi2_quantiles_to_the_bit():
+    """Up to the interpolation's threshold the quantiles are exact: scipy.stats.chi2's own."""
+    from scipy import stats
+
+    nu = np.concatenate([np.geomspace(0.05, 1e9, 1500), [1.0, 2.0, 3.5]])
+    tail = 0.5 * (1.0 - 0.95)  # as the interval takes it (0.025 and a little)
+    lo, hi = adev_confidence_interval(np.ones(nu.size), nu, 0.95)
+    assert np.array_equal(lo, np.sqrt(nu / stats.chi2.ppf(1.0 - tail, nu)))
+    assert np.array_equal(hi, np.sqrt(nu / stats.chi2.ppf(tail, nu)))
+
+
 def test_edf_white_pm_closed_form_by_monte_carlo():
     """edf = 2·E[S]²/Var[S]: checked on simulated white PM (independent of Greenhall's sums)."""
     rng = np.random.default_rng(21)
