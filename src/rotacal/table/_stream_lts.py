@@ -23,8 +23,8 @@ from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
 
-from rotacal.table._stream_checks import Checked, start_frequency
 from rotacal.signal import HarmonicFitAccumulator
+from rotacal.table._stream_checks import Checked, start_frequency
 from rotacal.table._stream_fit import Segment, accumulate, accumulator, block_length
 from rotacal.table._stream_source import Passes
 from rotacal.table.motion import _plot_stride
