@@ -360,7 +360,9 @@ def _calibrate(
     rev_times, rev_idx = _refine(split, trig, ext, float(found.last_t) - t0, bounds)
     first, last, n_periods = lts_cut(found, split.radius_mm, drift, rev_idx, periods)
     f0 = n_periods / (rev_times[2 * n_periods] - rev_times[0])
-    seg, error = _fit(split, first, last, f0, harmonics, drift, set_values, specs, t0, found.typical)
+    seg, error = _fit(
+        split, first, last, f0, harmonics, drift, set_values, specs, t0, found.typical
+    )
     return lts_result(
         ext,
         seg,

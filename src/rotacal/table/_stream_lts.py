@@ -394,9 +394,7 @@ class SwingFold:
         """The kept extremes (the first and last swings by the in-memory zigzag rule)."""
         plot_t, plot_x = np.concatenate(self.dec_t), np.concatenate(self.dec_x)
         if self.sign_first == 0:
-            return Extremes(
-                np.empty(0, np.intp), np.empty(0), np.empty(0, np.int8), plot_t, plot_x
-            )
+            return Extremes(np.empty(0, np.intp), np.empty(0), np.empty(0, np.int8), plot_t, plot_x)
         self._close(self.state)
         swings = self.swings
         sign = np.array([s[0] for s in swings], dtype=np.int8)
