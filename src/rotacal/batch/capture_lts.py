@@ -140,15 +140,40 @@ def _window_task(
     a: int,
     b: int,
     trig: _Trigger,
-    lo: np.ndarray,
-    hi: np.ndarray,
-    which: list[int],
-) -> list[tuple[int, int, np.ndarray, np.ndarray]]:
-    """The block's samples in each reversal window of ``which``."""
-    from rotacal.table._stream_lts import window_pieces
+    windows: _Windows,
+    edges: tuple[bool, bool],
+) -> tuple[list[tuple[int, float, int]], list[tuple[int, int, np.ndarray, np.ndarray]]]:
+    """The reversing moment (s) and sample index of each window of ``windows`` the block holds
+    whole; the block's samples of the others (cut by its start or end, unless ``edges`` says
+    that is the capture's first or last row)."""
+    from rotacal.table._stream_lts import window_moment, window_pieces
 
     t, x, _ = trig.block(source, a, b)
-    return window_pieces(a, t, x, lo, hi, which)
+    done, cut = [], []
+    for piece in window_pieces(a, t, x, windows.lo, windows.hi, windows.which):
+        j, g0, t_w, _ = piece
+        i = windows.which.index(j)
+        whole = (g0 > a or edges[0]) and (g0 + t_w.size < b or edges[1])
+        if whole:
+            done.append(
+                (j, *window_moment([piece[1:]], windows.t_ext[i], windows.sign[i], windows.half))
+            )
+        else:
+            cut.append(piece)
+    return done, cut
+
+
+@dataclasses.dataclass(frozen=True)
+class _Windows:
+    """Reversal windows ``which``: their first and last times (s), their extreme's time (s) and
+    sign, and the half window (s)."""
+
+    which: list[int]
+    lo: np.ndarray
+    hi: np.ndarray
+    t_ext: list[float]
+    sign: list[int]
+    half: float
 
 
 def _line_task(
@@ -348,7 +373,8 @@ def _calibrate(
         return lts.search_ranks(count, ranks, lo_x, hi_x)
 
     q_lo, q_hi = TRIGGER_PERCENTILES
-    mid, h = trigger_levels(lts.percentile(n, q_lo, order), lts.percentile(n, q_hi, order), None)
+    p_lo, p_hi = lts.percentiles(n, [q_lo, q_hi], order)
+    mid, h = trigger_levels(p_lo, p_hi, None)
     found, clipped = checks()
     fold = lts.SwingFold(n, h)
     bounds = []
@@ -408,14 +434,25 @@ def _refine(
         return times, indices
     lo, hi, half = reversal_windows(ext, span_s)
     args = []
-    for (a, b), (t_a, t_b) in zip(split.blocks(), bounds, strict=True):
+    blocks = split.blocks()
+    for k, ((a, b), (t_a, t_b)) in enumerate(zip(blocks, bounds, strict=True)):
         which = np.flatnonzero((lo <= t_b) & (hi >= t_a)).tolist()
         if which:
-            args.append((split.source, a, b, trig, lo[which], hi[which], which))
-    parts: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {j: [] for j in range(m)}
-    for pieces in split.round(_window_task, args):
-        for j, g0, t_w, x_w in pieces:
-            parts[j].append((g0, t_w, x_w))
-    for j in range(m):
-        finish_window(j, parts[j], ext, half, times, indices)
+            windows = _Windows(
+                which,
+                lo[which],
+                hi[which],
+                ext.time[which].tolist(),
+                ext.sign[which].tolist(),
+                half,
+            )
+            args.append((split.source, a, b, trig, windows, (k == 0, k == len(blocks) - 1)))
+    parts: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
+    for done, cut in split.round(_window_task, args):
+        for j, moment, index in done:
+            times[j], indices[j] = moment, index
+        for j, g0, t_w, x_w in cut:
+            parts.setdefault(j, []).append((g0, t_w, x_w))
+    for j, pieces in parts.items():  # the windows cut by a block boundary
+        finish_window(j, pieces, ext, half, times, indices)
     return times, np.clip(indices, 0, split.n - 1)

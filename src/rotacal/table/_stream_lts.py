@@ -255,13 +255,25 @@ def _gathering(r: _Rank) -> bool:
 
 def percentile(n: int, q: float, order: Callable[[list[int]], list[float]]) -> float:
     """``np.percentile(x, q)`` (linear method) of n values from their order statistics."""
-    virtual = (n - 1) * (q / 100.0)
-    below = math.floor(virtual)
-    above = min(below + 1, n - 1)
-    a, b = order([below, above]) if above != below else order([below]) * 2
-    gamma = virtual - below
-    diff = b - a
-    return b - diff * (1 - gamma) if gamma >= 0.5 else a + diff * gamma
+    return percentiles(n, [q], order)[0]
+
+
+def percentiles(n: int, qs: list[float], order: Callable[[list[int]], list[float]]) -> list[float]:
+    """``np.percentile(x, q)`` (linear method) of n values for each q of ``qs``, the order
+    statistics they need asked of ``order`` at once (one search: its passes serve them all)."""
+    plans = []
+    for q in qs:
+        virtual = (n - 1) * (q / 100.0)
+        below = math.floor(virtual)
+        plans.append((below, min(below + 1, n - 1), virtual - below))
+    wanted = sorted({k for below, above, _ in plans for k in (below, above)})
+    value = dict(zip(wanted, order(wanted), strict=True))
+    out = []
+    for below, above, gamma in plans:
+        a, b = value[below], value[above]
+        diff = b - a
+        out.append(b - diff * (1 - gamma) if gamma >= 0.5 else a + diff * gamma)
+    return out
 
 
 @dataclasses.dataclass
@@ -493,8 +505,16 @@ def finish_window(
     indices: np.ndarray,
 ) -> None:
     """The reversing moment (s) and sample index of window ``j`` from its pieces, in order."""
+    times[j], indices[j] = window_moment(parts, float(ext.time[j]), int(ext.sign[j]), half)
+
+
+def window_moment(
+    parts: list[tuple[int, np.ndarray, np.ndarray]], t_ext: float, sign: int, half: float
+) -> tuple[float, int]:
+    """The reversing moment (s) of the extreme at ``t_ext`` (s; ``sign`` +1 a maximum) from its
+    window's pieces ``(global index, t, θ)`` in order (:func:`~rotacal.table.refine_extreme`,
+    half window ``half`` s), and its sample index."""
     t_w = np.concatenate([p[1] for p in parts])
     x_w = np.concatenate([p[2] for p in parts])
-    moment = refine_extreme(t_w, x_w, float(ext.time[j]), int(ext.sign[j]), half)
-    times[j] = moment
-    indices[j] = parts[0][0] + int(np.searchsorted(t_w, moment))
+    moment = refine_extreme(t_w, x_w, t_ext, sign, half)
+    return moment, parts[0][0] + int(np.searchsorted(t_w, moment))

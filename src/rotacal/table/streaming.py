@@ -470,7 +470,8 @@ def calibrate_lts_motion_chunked(
         return lts.order_statistics(trigger_seen, ranks, lo_x, hi_x)
 
     q_lo, q_hi = TRIGGER_PERCENTILES
-    mid, h = trigger_levels(lts.percentile(n, q_lo, order), lts.percentile(n, q_hi, order), None)
+    p_lo, p_hi = lts.percentiles(n, [q_lo, q_hi], order)
+    mid, h = trigger_levels(p_lo, p_hi, None)
     ext = lts.swing_extremes(pieces, n, mid, h)
     rev_times, rev_idx = lts.refined_reversals(pieces, ext, float(found.last_t) - t0, n)
     first, last, n_periods = lts_cut(found, radius_mm, drift, rev_idx, periods)
