@@ -175,12 +175,9 @@ def test_the_command_splits_over_a_running_scheduler(
     dask_client: Client, npz: Path, tmp_path: Path
 ) -> None:
     address = dask_client.scheduler_info()["address"]
-    split, one = split_and_one_process(
-        ["motion", "lts", str(npz), "--radius-mm", str(R), "--set-amplitude-deg", "0.5"]
-        + ["--set-frequency-hz", "2"],
-        address,
-        tmp_path,
-    )
+    args = ["motion", "lts", str(npz), "--radius-mm", str(R)]
+    sets = ["--set-amplitude-deg", "0.5", "--set-frequency-hz", "2"]
+    split, one = split_and_one_process([*args, *sets], address, tmp_path)
     assert largest_difference(split, one) < 1e-9
 
 

@@ -427,10 +427,8 @@ def _refine(
     window from the blocks whose time span meets it, in block order, then each parabola."""
     from rotacal.table._stream_lts import finish_window, reversal_windows
 
-    m = ext.index.size
-    times = np.empty(m)
-    indices = np.empty(m, dtype=np.intp)
-    if m == 0:
+    times, indices = np.empty(ext.index.size), np.empty(ext.index.size, dtype=np.intp)
+    if ext.index.size == 0:
         return times, indices
     lo, hi, half = reversal_windows(ext, span_s)
     args = []

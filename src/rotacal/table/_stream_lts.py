@@ -474,8 +474,7 @@ def refined_reversals(
     """Reversing moments (s) and their sample index (``np.searchsorted(t, moment)``, clipped
     to the capture) from the extremes, each parabola on its window's samples (one pass)."""
     m = ext.index.size
-    times = np.empty(m)
-    indices = np.empty(m, dtype=np.intp)
+    times, indices = np.empty(m), np.empty(m, dtype=np.intp)
     if m == 0:
         return times, indices
     lo, hi, half = reversal_windows(ext, span_s)
