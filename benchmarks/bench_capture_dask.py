@@ -8,6 +8,8 @@
   bench_rate.py's twin, 18,000 pulses per revolution at 300 °/s);
 - ``encoder``: ``rotacal motion encoder --lines 36000`` of the twin encoder capture of
   ``bench_motion_stream.py`` (time_s, a, b at 1 MHz, a 2 Hz motion);
+- ``lts``: ``rotacal motion lts --radius-mm 100`` of the twin LTS capture of
+  ``bench_motion_stream.py`` (time_s, displacement_mm at 10 kHz, a 0.5 Hz motion);
 - ``scale-factor``: ``rotacal gyro scale-factor`` of a rate-table log (rate_deg_s, output)
   stepping through 11 set rates up and down.
 
@@ -22,7 +24,7 @@ seconds of ``--repeat`` runs, the ratio to the baseline, the CPU seconds of the 
 machine the steadier figure) and the peak RSS of the largest process (the command's, or a Dask
 worker's: the kernel counts waited-for descendants too). No asserts.
 
-Run: ``python benchmarks/bench_capture_dask.py [--analysis allan|rate|encoder|scale-factor]
+Run: ``python benchmarks/bench_capture_dask.py [--analysis allan|rate|encoder|lts|scale-factor]
 [--samples 1e8] [--workers 1,2] [--repeat 1]``
 """
 
@@ -99,6 +101,13 @@ def write_encoder(path: Path, n: int) -> None:
     write_npz(path, "encoder", n)
 
 
+def write_lts(path: Path, n: int) -> None:
+    """The twin LTS capture of ``bench_motion_stream.py`` (10 kHz, a 0.5 Hz motion)."""
+    from bench_motion_stream import write_npz
+
+    write_npz(path, "lts", n)
+
+
 def write_pulses(path: Path, n: int) -> None:
     """One head of ``n`` pulse times: ``bench_rate.py``'s twin (HDF5)."""
     from bench_rate import write_h5
@@ -111,6 +120,7 @@ ANALYSES = {
     "allan": (write_record, "rate.npz", ["allan", "--taus", "octave"]),
     "rate": (write_pulses, "pulses.h5", ["rate", "--pulses-per-rev", "18000"]),
     "encoder": (write_encoder, "capture.npz", ["motion", "encoder", "--lines", "36000"]),
+    "lts": (write_lts, "lts.npz", ["motion", "lts", "--radius-mm", "100"]),
     "scale-factor": (write_log, "log.npz", ["gyro", "scale-factor"]),
 }
 

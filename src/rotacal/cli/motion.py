@@ -346,12 +346,15 @@ def _stream_calibration(
 @click.argument("capture", type=INPUT_FILE)
 @click.option("--radius-mm", type=float, required=True, help="R: laser spot to table axis (mm).")
 @_chunked_option
+@dask_options("NPZ without compression, HDF5 or TDMS: for a capture larger than one process's time")
 @_motion_common
 @_names_capture
 def motion_lts(
     capture: str,
     radius_mm: float,
     chunked: bool | None,
+    workers: int | None,
+    scheduler: str | None,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -365,7 +368,9 @@ def motion_lts(
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    if _streams(capture, "displacement_mm", chunked, columns, group):
+    if split_wanted(workers, scheduler, chunked):
+        result = _dask_lts(capture, columns, group, (workers, scheduler), radius_mm, kw)
+    elif _streams(capture, "displacement_mm", chunked, columns, group):
         from rotacal.table import calibrate_lts_motion_chunked, lts_chunks_from_file
 
         # checks, levels (2 with a drift: its fit), swings, parabolas, fit, position error
@@ -388,6 +393,38 @@ def motion_lts(
                 cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw
             )
     _finish_motion(result, capture, json_path, report_path)
+
+
+def _dask_lts(
+    capture: str,
+    columns: Sequence[str],
+    group: str | None,
+    cluster: tuple[int | None, str | None],
+    radius_mm: float,
+    kw: dict[str, Any],
+) -> Any:
+    """The LTS calibration split over a Dask cluster's workers
+    (:func:`rotacal.batch.capture_lts.calibrate_lts_motion_on_dask`), noted as such."""
+    from rotacal.batch.capture_lts import CHUNK_ROWS, calibrate_lts_motion_on_dask
+    from rotacal.io import capture_length, parse_column_mapping
+
+    mapping = parse_column_mapping(columns)
+    options = current_read_options()
+    reading: dict[str, Any] = {"mapping": mapping, "group": group, "read_options": options}
+    n = capture_length(capture, "displacement_mm", **reading)
+    return run_on_dask(
+        cluster,
+        # at most: range, ~4 rank passes, swings, windows, fit and error (drift: 3 more), checks
+        12 * (-(-n // CHUNK_ROWS)) + 4,
+        "calibrating",
+        lambda client, progress: calibrate_lts_motion_on_dask(
+            capture, client=client, radius_mm=radius_mm, progress=progress, **reading, **kw
+        ),
+        capture=capture,
+        columns=["displacement_mm"],
+        rows=n,
+        reading=reading,
+    )
 
 
 @motion.command(

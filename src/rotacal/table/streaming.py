@@ -53,6 +53,7 @@ from rotacal.table import _stream_encoder as enc
 from rotacal.table import _stream_fog as fog
 from rotacal.table import _stream_lts as lts
 from rotacal.table._stream_checks import (
+    Checked,
     check_pass,
     raise_encoder_faults,
     raise_signal_faults,
@@ -447,26 +448,13 @@ def calibrate_lts_motion_chunked(
     Feng et al. (2023), Sensors 23:4876, §5, eqs. (1), (2), (15); IEEE Std 1057-2017, §4.1.3;
     JCGM 100:2008 and JCGM 101:2008 (budgets).
     """
-    check_lts_settings(harmonics, periods, radius_mm)
-    _check_set_values(set_amplitude_deg, set_frequency_hz)
+    check_lts_run(harmonics, periods, radius_mm, set_amplitude_deg, set_frequency_hz)
     passes = Passes(chunks, progress, LTS_COLUMNS, "lts_chunks_from_file(path)")
-    name = LTS_COLUMNS[1]
-    found = check_pass(passes, {name: None}, keep=name if drift else None)
-    raise_signal_faults(found, name)
-    clipped = found.clipping(allow_clipped)
-    check_reach(max(abs(found.low[name]), abs(found.high[name])), radius_mm)
+    found = check_pass(passes, {LTS_COLUMNS[1]: None}, keep=LTS_COLUMNS[1] if drift else None)
+    clipped = lts_faults(found, radius_mm, allow_clipped)
     n = found.n
     t0 = float(found.first_t)
-
-    def angle_of(value: float) -> float:
-        return float(lts_angle(np.array([value]), radius_mm)[0])
-
-    span = angle_of(found.high[name]) - angle_of(found.low[name])
-    net = None if drift else angle_of(found.last_value[name]) - angle_of(found.first_value[name])
-    if drift:
-        trend = lts.prefit_drift_chunked(passes, found, radius_mm, harmonics)
-    else:
-        trend = 0.0
+    trend = lts.prefit_drift_chunked(passes, found, radius_mm, harmonics) if drift else 0.0
     pieces = lts.trigger_values(passes, radius_mm, trend, t0)
 
     def trigger_seen() -> Iterator[np.ndarray]:
@@ -474,7 +462,7 @@ def calibrate_lts_motion_chunked(
             yield xt
 
     if trend == 0.0:  # θ itself: its range from D's, arctan being increasing
-        lo_x, hi_x = angle_of(found.low[name]), angle_of(found.high[name])
+        lo_x, hi_x = lts_span(found, radius_mm)[:2]
     else:
         lo_x, hi_x = lts.value_range(trigger_seen)
 
@@ -482,10 +470,11 @@ def calibrate_lts_motion_chunked(
         return lts.order_statistics(trigger_seen, ranks, lo_x, hi_x)
 
     q_lo, q_hi = TRIGGER_PERCENTILES
-    mid, h = trigger_levels(lts.percentile(n, q_lo, order), lts.percentile(n, q_hi, order), None)
+    p_lo, p_hi = lts.percentiles(n, [q_lo, q_hi], order)
+    mid, h = trigger_levels(p_lo, p_hi, None)
     ext = lts.swing_extremes(pieces, n, mid, h)
     rev_times, rev_idx = lts.refined_reversals(pieces, ext, float(found.last_t) - t0, n)
-    first, last, n_periods = _cut(rev_idx, periods, "LTS capture", span, net)
+    first, last, n_periods = lts_cut(found, radius_mm, drift, rev_idx, periods)
     f0 = n_periods / (rev_times[2 * n_periods] - rev_times[0])
     seg, error = _fit_and_error(
         lts.angle_segment(passes, radius_mm, first, last),
@@ -499,6 +488,75 @@ def calibrate_lts_motion_chunked(
         true_time(specs, t0),
         found.typical,
     )
+    return lts_result(
+        ext,
+        seg,
+        error,
+        (first, last, rev_times, n_periods, t0),
+        radius_mm,
+        set_amplitude_deg,
+        set_frequency_hz,
+        specs,
+        clipped,
+    )
+
+
+def check_lts_run(
+    harmonics: int,
+    periods: int | None,
+    radius_mm: float,
+    set_amplitude_deg: float | None,
+    set_frequency_hz: float | None,
+) -> None:
+    """The settings checks of the LTS calibration (ConfigError)."""
+    check_lts_settings(harmonics, periods, radius_mm)
+    _check_set_values(set_amplitude_deg, set_frequency_hz)
+
+
+def lts_faults(found: Checked, radius_mm: float, allow_clipped: bool) -> tuple[str, ...]:
+    """The first pass's faults of an LTS capture raised in the in-memory order (the signal's,
+    clipping, |D| > R); the clipping warnings."""
+    name = LTS_COLUMNS[1]
+    raise_signal_faults(found, name)
+    clipped = found.clipping(allow_clipped)
+    check_reach(max(abs(found.low[name]), abs(found.high[name])), radius_mm)
+    return clipped
+
+
+def lts_span(found: Checked, radius_mm: float) -> tuple[float, float, float]:
+    """The smallest and largest θ (deg), arctan being increasing, and θ's net change from the
+    first to the last sample (deg)."""
+    name = LTS_COLUMNS[1]
+
+    def angle_of(value: float) -> float:
+        return float(lts_angle(np.array([value]), radius_mm)[0])
+
+    net = angle_of(found.last_value[name]) - angle_of(found.first_value[name])
+    return angle_of(found.low[name]), angle_of(found.high[name]), net
+
+
+def lts_cut(
+    found: Checked, radius_mm: float, drift: bool, rev_idx: np.ndarray, periods: int | None
+) -> tuple[int, int, int]:
+    """The analysed span's first and last sample and its number of periods (``_cut``)."""
+    low, high, net = lts_span(found, radius_mm)
+    return _cut(rev_idx, periods, "LTS capture", high - low, None if drift else net)
+
+
+def lts_result(
+    ext: lts.Extremes,
+    seg: SegmentFit,
+    error: tuple[float, float, np.ndarray] | None,
+    cut: tuple[int, int, np.ndarray, int, float],
+    radius_mm: float,
+    set_amplitude_deg: float | None,
+    set_frequency_hz: float | None,
+    specs: InstrumentSpecs | None,
+    clipped: tuple[str, ...],
+) -> MotionResult:
+    """The LTS calibration's result from its passes: ``cut`` is (first, last, reversal times
+    (s), periods, the capture's first time (s))."""
+    first, last, rev_times, n_periods, t0 = cut
     plot = {
         "t": ext.plot_t,
         "angle_deg": ext.plot_angle,
