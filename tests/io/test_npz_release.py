@@ -41,3 +41,25 @@ def test_a_verified_pass_skips_the_checks_the_first_pass_made(tmp_path):
     for _ in range(2):  # no pass reads through, so none is trusted
         with pytest.raises(CaptureError, match="not a finite number"):
             list(source())
+
+
+def test_reading_an_npz_capture_does_not_import_the_text_reader(tmp_path):
+    """A binary capture's command pays no import of the CSV reader (~8 ms); the same process
+    then reads a CSV file, which imports it: the module name checked is the one in use."""
+    import subprocess
+    import sys
+
+    np.savez(tmp_path / "c.npz", time_s=np.arange(5.0), a=np.ones(5))
+    (tmp_path / "c.csv").write_text("time_s,a\n0,1\n1,1\n")
+    code = (
+        "import sys\nfrom rotacal.io import read_capture\n"
+        "read_capture(sys.argv[1]); print('rotacal.io._csv' in sys.modules)\n"
+        "read_capture(sys.argv[2]); print('rotacal.io._csv' in sys.modules)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code, str(tmp_path / "c.npz"), str(tmp_path / "c.csv")],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.split()
+    assert out == ["False", "True"]

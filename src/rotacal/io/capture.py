@@ -29,7 +29,6 @@ from ._common import (
     name_list,
     open_checked,
 )
-from ._csv import CsvReader
 from ._npz import NpzReader
 from ._validate import (
     Reader,
@@ -176,7 +175,11 @@ def _reader_class(fmt: str) -> Any:
         from ._tdms import TdmsReader
 
         return TdmsReader
-    return {"csv": CsvReader, "npz": NpzReader}[fmt]
+    if fmt == "csv":
+        from ._csv import CsvReader
+
+        return CsvReader
+    return NpzReader
 
 
 def _open_reader(
@@ -199,7 +202,7 @@ def _open_reader(
         check_group_unused(p, group)
     with library_errors(p.name, fmt.upper()):
         if fmt == "csv":
-            reader: Reader = CsvReader(p, read_options)
+            reader: Reader = cls(p, read_options)
         else:
             reader = cls(p) if fmt == "npz" else cls(p, group)
     try:
