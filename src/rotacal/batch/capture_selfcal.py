@@ -23,7 +23,7 @@ relative, tested), its two passes run by a cluster's workers, each reading the r
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -50,7 +50,7 @@ def _pair_task(source: CaptureRows, chunk_rows: int) -> StreamedPairing:
     from rotacal.encoder.pulse_stream import pair_heads_streamed
     from rotacal.io import iter_capture_chunks
 
-    def head(name: str) -> object:
+    def head(name: str) -> Iterator[np.ndarray]:
         chunks = iter_capture_chunks(
             source.path,
             [name],
@@ -61,7 +61,7 @@ def _pair_task(source: CaptureRows, chunk_rows: int) -> StreamedPairing:
         )
         return (chunk[name] for chunk in chunks)
 
-    return pair_heads_streamed([head(n) for n in source.columns], source.columns)  # type: ignore[misc]
+    return pair_heads_streamed([head(n) for n in source.columns], source.columns)
 
 
 def _fit_task(

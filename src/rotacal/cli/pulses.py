@@ -237,7 +237,7 @@ def _selfcal_dask(
     from rotacal.io import parse_column_mapping
 
     lengths = _head_lengths(capture, columns, group)
-    reading = {
+    reading: dict[str, Any] = {
         "mapping": parse_column_mapping(columns),
         "group": group,
         "read_options": current_read_options(),
