@@ -84,7 +84,7 @@ def test_split_over_workers_equals_one_process(
     assert largest_difference(got.to_dict(), one.to_dict()) < 1e-9
     np.testing.assert_array_equal(got.per_revolution_arcsec, one.per_revolution_arcsec)
     paired = 3456 - 40 - 100  # head 0's pulses that every head covers
-    assert ticks[-1] == 1 + -(-paired // (2 * M))  # the first pass, a task per block
+    assert ticks[-1] == 4 + -(-paired // (2 * M))  # a task per head i ≥ 1, then per block
 
 
 def _refusals(client: Client, path: Path, n: int) -> tuple[str, str]:
@@ -106,6 +106,16 @@ def test_the_first_fault_in_time_across_heads_is_the_one_reported(
     split, one = _refusals(dask_client, _save(tmp_path / "gaps.npz", heads), 5)
     assert split == one
     assert "head_3" in one
+
+
+def test_a_copied_head_is_refused_once_all_are_read_as_in_one_process(
+    dask_client: Client, tmp_path: Path
+) -> None:
+    heads = _heads()
+    heads[2] = heads[0] + 1e-4
+    split, one = _refusals(dask_client, _save(tmp_path / "copy.npz", heads), 5)
+    assert split == one
+    assert "'head_2' is a copy of head_0" in one
 
 
 def test_a_drifting_head_is_refused_in_its_block_as_in_one_process(

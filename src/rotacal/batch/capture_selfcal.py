@@ -6,10 +6,13 @@ distributed.
 relative, tested), its two passes run by a cluster's workers, each reading the rows it needs
 (a shared file system; NPZ without compression, HDF5 or TDMS):
 
-* **First pass** — one task checks every head's pulse train and pairs each head with head 0 in
-  time (:func:`~rotacal.encoder.pulse_stream.pair_heads_streamed`, reading the heads in chunks
-  of ``chunk_rows`` as the single-process command does): the same checks in the same order, so
-  the same first fault across heads in time order.
+* **First pass** — a task per head i ≥ 1 checks its pulse train and pairs it with head 0 in
+  time (:func:`~rotacal.encoder.pulse_stream.pair_with_head0`: head 0 read in the chunks of
+  ``chunk_rows`` the single-process command reads, so the same counts of index differences;
+  head 0's train checked by the task of head 1); the client composes the pairing
+  (:func:`~rotacal.encoder.pulse_stream.finish_pairing`, with the refusals of the whole pass).
+  When a task refuses its head, one task runs the whole pass in order, so that the message is
+  the single-process one: the first fault across heads in time order.
 * **Second pass** — a task per block of whole revolutions of paired head-0 pulses
   (:func:`~rotacal.encoder.selfcal_stream.fit_block`) reads each head's matching rows (the
   pairing's index offsets place them; ±RATE_WINDOW pulses of context) and returns the block's
@@ -24,7 +27,7 @@ relative, tested), its two passes run by a cluster's workers, each reading the r
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -45,23 +48,67 @@ __all__ = ["self_calibrate_on_dask"]
 CHUNK_ROWS = 1 << 19
 
 
-def _pair_task(source: CaptureRows, chunk_rows: int) -> StreamedPairing:
-    """The first pass: every head checked and paired with head 0, read in chunks in order."""
-    from rotacal.encoder.pulse_stream import pair_heads_streamed
+def _head_chunks(source: CaptureRows, name: str, chunk_rows: int) -> Iterator[np.ndarray]:
+    """One head's pulse times in chunks of ``chunk_rows``, as the single-process command reads
+    them."""
     from rotacal.io import iter_capture_chunks
 
-    def head(name: str) -> Iterator[np.ndarray]:
-        chunks = iter_capture_chunks(
-            source.path,
-            [name],
-            chunk_rows=chunk_rows,
-            mapping=source.mapping,
-            group=source.group,
-            read_options=source.read_options,
-        )
-        return (chunk[name] for chunk in chunks)
+    chunks = iter_capture_chunks(
+        source.path,
+        [name],
+        chunk_rows=chunk_rows,
+        mapping=source.mapping,
+        group=source.group,
+        read_options=source.read_options,
+    )
+    return (chunk[name] for chunk in chunks)
 
-    return pair_heads_streamed([head(n) for n in source.columns], source.columns)
+
+def _pair_task(source: CaptureRows, chunk_rows: int) -> StreamedPairing:
+    """The first pass in one task, every head read in order: the single-process path's first
+    refusal across heads, in time order."""
+    from rotacal.encoder.pulse_stream import pair_heads_streamed
+
+    heads = [_head_chunks(source, n, chunk_rows) for n in source.columns]
+    return pair_heads_streamed(heads, source.columns)
+
+
+def _head_task(source: CaptureRows, chunk_rows: int, i: int) -> tuple[Any, ...]:
+    """Head i's share of the first pass: checked, paired with head 0 (checked too when i = 1)."""
+    from rotacal.encoder.pulse_stream import pair_with_head0
+
+    return pair_with_head0(
+        _head_chunks(source, source.columns[0], chunk_rows),
+        _head_chunks(source, source.columns[i], chunk_rows),
+        source.columns[i],
+        check_head0=i == 1,
+    )
+
+
+def _first_pass(
+    client: Client, source: CaptureRows, chunk_rows: int, tick: Callable[[], None]
+) -> StreamedPairing:
+    """A task per head i ≥ 1 (its train checked and paired with head 0's, read in the same
+    chunks as in one process: the same counts), composed by the client. A refusal is made again
+    by the whole pass in one task, for the single-process message (the first fault in time
+    order across heads)."""
+    from rotacal.encoder.pulse_stream import finish_pairing
+    from rotacal.errors import RotacalError
+
+    n = len(source.columns)
+    try:
+        parts = task_round(client, _head_task, [(source, chunk_rows, i) for i in range(1, n)], tick)
+    except RotacalError:
+        task_round(client, _pair_task, [(source, chunk_rows)])  # raises one process's message
+        raise  # one head's share refused what the whole pass accepts: never seen
+    counts: list[dict[int, int]] = [{}]
+    checks, prefixes = [parts[0][3]], [parts[0][4]]  # head 0's, from the task of head 1
+    for c, check, prefix, _, _ in parts:
+        counts.append(c)
+        checks.append(check)
+        prefixes.append(prefix)
+    # the refusals the pass makes once every train is read (copies, overlap): as in one process
+    return finish_pairing(source.columns, checks, prefixes, counts)
 
 
 def _fit_task(
@@ -157,7 +204,7 @@ def self_calibrate_on_dask(
     names = tuple(f"head_{i}" for i in range(heads))
     source = CaptureRows(str(path), names, mapping, group, read_options)
     tick = Ticks(progress)
-    (pairing,) = task_round(client, _pair_task, [(source, chunk_rows)], tick)
+    pairing = _first_pass(client, source, chunk_rows, tick)
     blocks = fit_blocks(pairing, m, BLOCK_PULSES if block_pulses is None else block_pulses)
 
     def run_pass(candidates: list[str], shifts: Shifts | None) -> PassSums:

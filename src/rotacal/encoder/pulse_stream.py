@@ -305,12 +305,24 @@ def pair_heads_streamed(
         s.drain()
     if progress is not None:
         progress(sum(s.read for s in streams))
-    check_heads_not_copies([s.prefix for s in streams], names)
-    c0 = s0.check
-    offsets = np.zeros(len(streams), dtype=np.int64)
+    return finish_pairing(names, [s.check for s in streams], [s.prefix for s in streams], counts)
+
+
+def finish_pairing(
+    names: Sequence[str],
+    checks: Sequence[TrainCheck],
+    prefixes: Sequence[FloatArray],
+    counts: Sequence[dict[int, int]],
+) -> StreamedPairing:
+    """The pairing from what one pass over the heads gathered: each head's checked train, its
+    first COPY_CHECK_PULSES and, for head i ≥ 1, the counts of its index differences to head 0
+    (:func:`pair_heads_streamed`'s last step; the refusals of :func:`pair_heads`)."""
+    check_heads_not_copies(list(prefixes), names)
+    c0 = checks[0]
+    offsets = np.zeros(len(checks), dtype=np.int64)
     lo, hi = 0, c0.pulses
-    for i in range(1, len(streams)):
-        ci = streams[i].check
+    for i in range(1, len(checks)):
+        ci = checks[i]
         if ci.last < c0.first or ci.first > c0.last or not counts[i]:
             raise CaptureError(
                 f"column '{names[i]}' ({ci.first:.6g}–{ci.last:.6g} s) does not overlap head_0 "
@@ -323,16 +335,33 @@ def pair_heads_streamed(
         raise CaptureError(
             "the heads overlap for fewer than 2 pulses of head_0; record all heads together."
         )
-    spans = [(s.check.first, s.check.last, s.check.pulses) for s in streams]
+    spans = [(c.first, c.last, c.pulses) for c in checks]
     return StreamedPairing(
         index_offsets=offsets,
         first=lo,
         stop=hi,
-        sizes=[s.check.pulses for s in streams],
-        first_times_s=[s.check.first for s in streams],
-        last_times_s=[s.check.last for s in streams],
+        sizes=[c.pulses for c in checks],
+        first_times_s=[c.first for c in checks],
+        last_times_s=[c.last for c in checks],
         notes=tuple(pairing_notes(names, spans, offsets, lo, hi)),
     )
+
+
+def pair_with_head0(
+    head0: Iterable[ArrayLike], head: Iterable[ArrayLike], name: str, *, check_head0: bool
+) -> tuple[dict[int, int], TrainCheck, FloatArray, TrainCheck, FloatArray]:
+    """One head's share of :func:`pair_heads_streamed`, alone: its train checked and the counts
+    of its index differences to head 0, head 0 read in the same chunks as there (so the same
+    counts); head 0's train checked too when ``check_head0``. Returns the counts, the head's
+    check and first pulses, head 0's check and first pulses (unchecked: empty)."""
+    s0 = HeadStream(head0, "head_0", check=check_head0)
+    si = HeadStream(head, name)
+    counts: dict[int, int] = {}
+    while s0.pull():
+        _nearest_offsets(si, s0.buf, s0.start, counts)
+        s0.drop_before(s0.read)
+    si.drain()
+    return counts, si.check, si.prefix, s0.check, s0.prefix
 
 
 def _nearest_offsets(si: HeadStream, t0: FloatArray, j0: int, counts: dict[int, int]) -> None:
