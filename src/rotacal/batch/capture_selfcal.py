@@ -6,10 +6,10 @@ distributed.
 relative, tested), its two passes run by a cluster's workers, each reading the rows it needs
 (a shared file system; NPZ without compression, HDF5 or TDMS):
 
-* **First pass** — a task per head i ≥ 1 checks its pulse train and pairs it with head 0 in
-  time (:func:`~rotacal.encoder.pulse_stream.pair_with_head0`: head 0 read in the chunks of
-  ``chunk_rows`` the single-process command reads, so the same counts of index differences;
-  head 0's train checked by the task of head 1); the client composes the pairing
+* **First pass** — a task per group of heads (as many groups as workers) checks their pulse
+  trains and pairs each with head 0 in time (:func:`~rotacal.encoder.pulse_stream.pair_with_head0`:
+  head 0 read in the chunks of ``chunk_rows`` the single-process command reads, so the same
+  counts of index differences; head 0's train checked by the first group's task); the client composes the pairing
   (:func:`~rotacal.encoder.pulse_stream.finish_pairing`, with the refusals of the whole pass).
   When a task refuses its head, one task runs the whole pass in order, so that the message is
   the single-process one: the first fault across heads in time order.
@@ -26,6 +26,7 @@ relative, tested), its two passes run by a cluster's workers, each reading the r
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -46,6 +47,9 @@ __all__ = ["self_calibrate_on_dask"]
 
 #: Pulse times read at a time from each head by the first pass (the single-process command's).
 CHUNK_ROWS = 1 << 19
+#: Blocks of the fit submitted at a time: each returns its revolutions' fitted orders (~4 MB
+#: for 14 revolutions of 18,000 pulses and both senses), merged before the next wave is asked.
+WAVE = 16
 
 
 def _head_chunks(source: CaptureRows, name: str, chunk_rows: int) -> Iterator[np.ndarray]:
@@ -73,14 +77,16 @@ def _pair_task(source: CaptureRows, chunk_rows: int) -> StreamedPairing:
     return pair_heads_streamed(heads, source.columns)
 
 
-def _head_task(source: CaptureRows, chunk_rows: int, i: int) -> tuple[Any, ...]:
-    """Head i's share of the first pass: checked, paired with head 0 (checked too when i = 1)."""
+def _heads_task(source: CaptureRows, chunk_rows: int, i: int, j: int) -> tuple[Any, ...]:
+    """Heads i … j − 1's share of the first pass: checked and paired with head 0 (checked too
+    when i = 1)."""
     from rotacal.encoder.pulse_stream import pair_with_head0
 
+    names = [source.columns[0], *source.columns[i:j]]
     return pair_with_head0(
-        _head_chunks(source, source.columns[0], chunk_rows),
-        _head_chunks(source, source.columns[i], chunk_rows),
-        source.columns[i],
+        _head_chunks(source, names[0], chunk_rows),
+        [_head_chunks(source, name, chunk_rows) for name in names[1:]],
+        names,
         check_head0=i == 1,
     )
 
@@ -88,25 +94,32 @@ def _head_task(source: CaptureRows, chunk_rows: int, i: int) -> tuple[Any, ...]:
 def _first_pass(
     client: Client, source: CaptureRows, chunk_rows: int, tick: Callable[[], None]
 ) -> StreamedPairing:
-    """A task per head i ≥ 1 (its train checked and paired with head 0's, read in the same
-    chunks as in one process: the same counts), composed by the client. A refusal is made again
-    by the whole pass in one task, for the single-process message (the first fault in time
-    order across heads)."""
+    """A task per group of heads (as many as the cluster has workers): their trains checked and
+    paired with head 0's, read in the same chunks as in one process (the same counts), composed
+    by the client. A refusal is made again by the whole pass in one task, for the
+    single-process message (the first fault in time order across heads)."""
     from rotacal.encoder.pulse_stream import finish_pairing
     from rotacal.errors import RotacalError
 
     n = len(source.columns)
+    groups = max(1, min(n - 1, len(client.scheduler_info().get("workers", {}))))
+    edges = [1 + (n - 1) * g // groups for g in range(groups + 1)]
     try:
-        parts = task_round(client, _head_task, [(source, chunk_rows, i) for i in range(1, n)], tick)
+        parts = task_round(
+            client,
+            _heads_task,
+            [(source, chunk_rows, i, j) for i, j in itertools.pairwise(edges)],
+            tick,
+        )
     except RotacalError:
         task_round(client, _pair_task, [(source, chunk_rows)])  # raises one process's message
-        raise  # one head's share refused what the whole pass accepts: never seen
+        raise  # a group's share refused what the whole pass accepts: never seen
     counts: list[dict[int, int]] = [{}]
-    checks, prefixes = [parts[0][3]], [parts[0][4]]  # head 0's, from the task of head 1
-    for c, check, prefix, _, _ in parts:
-        counts.append(c)
-        checks.append(check)
-        prefixes.append(prefix)
+    checks, prefixes = [parts[0][1][0]], [parts[0][2][0]]  # head 0's, from the first group
+    for c, check, prefix in parts:
+        counts += c[1:]
+        checks += check[1:]
+        prefixes += prefix[1:]
     # the refusals the pass makes once every train is read (copies, overlap): as in one process
     return finish_pairing(source.columns, checks, prefixes, counts)
 
@@ -208,17 +221,20 @@ def self_calibrate_on_dask(
     blocks = fit_blocks(pairing, m, BLOCK_PULSES if block_pulses is None else block_pulses)
 
     def run_pass(candidates: list[str], shifts: Shifts | None) -> PassSums:
-        def round_(todo: list[tuple[int, int]], given: Shifts | None) -> list[BlockFit]:
-            args = [(source, pairing, m, candidates, given, p0, p1) for p0, p1 in todo]
-            return task_round(client, _fit_task, args, tick)
-
         sums = PassSums(pairing, m, spill_dir)
-        first = blocks if shifts is not None else blocks[:1]
-        for block in round_(first, shifts):
-            sums.add(block)
+
+        def round_(todo: list[tuple[int, int]], given: Shifts | None) -> None:
+            # in waves, merged as they come: the client holds WAVE blocks' fits, not the record's
+            for w in range(0, len(todo), WAVE):
+                args = [
+                    (source, pairing, m, candidates, given, a, b) for a, b in todo[w : w + WAVE]
+                ]
+                for block in task_round(client, _fit_task, args, tick):
+                    sums.add(block)
+
+        round_(blocks if shifts is not None else blocks[:1], shifts)
         if shifts is None:  # the line shifts come from the first block's revolutions
-            for block in round_(blocks[1:], sums.shifts):
-                sums.add(block)
+            round_(blocks[1:], sums.shifts)
         return sums
 
     return finish_chunked(pairing, m, rotation, specs, run_pass)

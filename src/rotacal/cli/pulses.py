@@ -247,7 +247,7 @@ def _selfcal_dask(
     with _naming_file(capture), _nan_padding_hint():
         return run_on_dask(
             where,
-            len(lengths) - 1 + blocks,  # a task per head i ≥ 1, then per block of revolutions
+            len(lengths) - 1 + blocks,  # ≤ a task per head i ≥ 1, then one per block of revolutions
             "self-calibration",
             lambda client, progress: self_calibrate_on_dask(
                 capture,

@@ -290,22 +290,8 @@ def pair_heads_streamed(
     CaptureError
         As :func:`check_pulse_times`, :func:`check_heads_not_copies` and :func:`pair_heads`.
     """
-    streams = [HeadStream(h, name) for h, name in zip(heads, names, strict=True)]
-    s0 = streams[0]
-    counts: list[dict[int, int]] = [{} for _ in streams]
-    while s0.pull():
-        t0 = s0.buf
-        j0 = s0.start
-        for i in range(1, len(streams)):
-            _nearest_offsets(streams[i], t0, j0, counts[i])
-        s0.drop_before(s0.read)
-        if progress is not None:
-            progress(sum(s.read for s in streams))
-    for s in streams[1:]:
-        s.drain()
-    if progress is not None:
-        progress(sum(s.read for s in streams))
-    return finish_pairing(names, [s.check for s in streams], [s.prefix for s in streams], counts)
+    counts, checks, prefixes = pair_with_head0(heads[0], heads[1:], names, progress=progress)
+    return finish_pairing(names, checks, prefixes, counts)
 
 
 def finish_pairing(
@@ -348,20 +334,34 @@ def finish_pairing(
 
 
 def pair_with_head0(
-    head0: Iterable[ArrayLike], head: Iterable[ArrayLike], name: str, *, check_head0: bool
-) -> tuple[dict[int, int], TrainCheck, FloatArray, TrainCheck, FloatArray]:
-    """One head's share of :func:`pair_heads_streamed`, alone: its train checked and the counts
-    of its index differences to head 0, head 0 read in the same chunks as there (so the same
-    counts); head 0's train checked too when ``check_head0``. Returns the counts, the head's
-    check and first pulses, head 0's check and first pulses (unchecked: empty)."""
-    s0 = HeadStream(head0, "head_0", check=check_head0)
-    si = HeadStream(head, name)
-    counts: dict[int, int] = {}
+    head0: Iterable[ArrayLike],
+    heads: Sequence[Iterable[ArrayLike]],
+    names: Sequence[str],
+    *,
+    check_head0: bool = True,
+    progress: Callable[[int], None] | None = None,
+) -> tuple[list[dict[int, int]], list[TrainCheck], list[FloatArray]]:
+    """The pass of :func:`pair_heads_streamed` over head 0 and ``heads`` (all the others, or
+    some of them: each head's counts depend on head 0's chunks and its own alone): every train
+    checked (head 0's when ``check_head0``) and, per head i, the counts of its index
+    differences to head 0. ``names``: head 0's then the heads'. Returns the counts (head 0's
+    empty), the checks and the first COPY_CHECK_PULSES of each head, head 0 first (unchecked:
+    an empty prefix)."""
+    s0 = HeadStream(head0, names[0], check=check_head0)
+    streams = [HeadStream(h, name) for h, name in zip(heads, names[1:], strict=True)]
+    counts: list[dict[int, int]] = [{} for _ in streams]
     while s0.pull():
-        _nearest_offsets(si, s0.buf, s0.start, counts)
+        for si, ci in zip(streams, counts, strict=True):
+            _nearest_offsets(si, s0.buf, s0.start, ci)
         s0.drop_before(s0.read)
-    si.drain()
-    return counts, si.check, si.prefix, s0.check, s0.prefix
+        if progress is not None:
+            progress(s0.read + sum(s.read for s in streams))
+    for s in streams:
+        s.drain()
+    if progress is not None:
+        progress(s0.read + sum(s.read for s in streams))
+    every = [s0, *streams]
+    return [{}, *counts], [s.check for s in every], [s.prefix for s in every]
 
 
 def _nearest_offsets(si: HeadStream, t0: FloatArray, j0: int, counts: dict[int, int]) -> None:
