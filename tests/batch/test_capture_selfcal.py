@@ -89,48 +89,45 @@ def test_split_over_workers_equals_one_process(
     assert ticks[-1] == 2 + -(-paired // (2 * M))  # a group of heads per worker, a task per block
 
 
-def _refusals(client: Client, path: Path, n: int) -> tuple[str, str]:
-    with pytest.raises(CaptureError) as one:
-        _one_process(path, n)
-    with pytest.raises(CaptureError) as split:
-        _split(client, path, n)
-    return str(split.value), str(one.value)
-
-
-def test_the_first_fault_in_time_across_heads_is_the_one_reported(
-    dask_client: Client, tmp_path: Path
-) -> None:
-    """Head 3 loses a pulse early, head 1 later (head 1 is read before head 3 in each chunk):
-    both paths name head 3's, with the same message."""
-    heads = _heads()
+def _gaps(heads: list[np.ndarray]) -> None:
+    """Head 3 loses a pulse early, head 1 later (head 1 is read before head 3 in each chunk,
+    and the two are in different tasks of the first pass): head 3's is the first in time."""
     heads[1] = np.delete(heads[1], 2500)
     heads[3] = np.delete(heads[3], 1200)
-    split, one = _refusals(dask_client, _save(tmp_path / "gaps.npz", heads), 5)
-    assert split == one
-    assert "head_3" in one
 
 
-def test_a_copied_head_is_refused_once_all_are_read_as_in_one_process(
-    dask_client: Client, tmp_path: Path
-) -> None:
-    heads = _heads()
+def _copy(heads: list[np.ndarray]) -> None:
+    """Refused once every train is read, by the client."""
     heads[2] = heads[0] + 1e-4
-    split, one = _refusals(dask_client, _save(tmp_path / "copy.npz", heads), 5)
-    assert split == one
-    assert "'head_2' is a copy of head_0" in one
 
 
-def test_a_drifting_head_is_refused_in_its_block_as_in_one_process(
-    dask_client: Client, tmp_path: Path
-) -> None:
-    """A head that runs away from head 0 late in the record (a check of the second pass, in the
-    block that holds it)."""
-    heads = _heads()
+def _drift(heads: list[np.ndarray]) -> None:
+    """Head 4 runs away from head 0 late in the record: a check of the fit's block that holds
+    it."""
     t = heads[4]
     t[3000:] += np.linspace(0.0, 2.0, t.size - 3000) * float(np.median(np.diff(t)))
-    split, one = _refusals(dask_client, _save(tmp_path / "drift.npz", heads), 5)
-    assert split == one
-    assert "'head_4' drifts against head_0" in one
+
+
+@pytest.mark.parametrize(
+    ("spoil", "match"),
+    [
+        (_gaps, "column 'head_3'"),
+        (_copy, "'head_2' is a copy of head_0"),
+        (_drift, "'head_4' drifts against head_0"),
+    ],
+)
+def test_a_bad_capture_is_refused_with_the_message_of_one_process(
+    dask_client: Client, tmp_path: Path, spoil: Any, match: str
+) -> None:
+    heads = _heads()
+    spoil(heads)
+    path = _save(tmp_path / "bad.npz", heads)
+    with pytest.raises(CaptureError) as one:
+        _one_process(path, 5)
+    with pytest.raises(CaptureError) as split:
+        _split(dask_client, path, 5)
+    assert str(split.value) == str(one.value)
+    assert match in str(one.value)
 
 
 def test_the_command_splits_over_a_running_scheduler(
