@@ -11,7 +11,9 @@
 - ``lts``: ``rotacal motion lts --radius-mm 100`` of the twin LTS capture of
   ``bench_motion_stream.py`` (time_s, displacement_mm at 10 kHz, a 0.5 Hz motion);
 - ``scale-factor``: ``rotacal gyro scale-factor`` of a rate-table log (rate_deg_s, output)
-  stepping through 11 set rates up and down.
+  stepping through 11 set rates up and down;
+- ``selfcal``: ``rotacal selfcal --pulses-per-rev 18000`` of ``bench_selfcal_stream.py``'s twin
+  (12 ragged heads; ``--samples`` pulse times in all, rounded to whole revolutions).
 
 On the file it times:
 
@@ -24,8 +26,8 @@ seconds of ``--repeat`` runs, the ratio to the baseline, the CPU seconds of the 
 machine the steadier figure) and the peak RSS of the largest process (the command's, or a Dask
 worker's: the kernel counts waited-for descendants too). No asserts.
 
-Run: ``python benchmarks/bench_capture_dask.py [--analysis allan|rate|encoder|lts|scale-factor]
-[--samples 1e8] [--workers 1,2] [--repeat 1]``
+Run: ``python benchmarks/bench_capture_dask.py [--analysis NAME] [--samples 1e8] [--workers 1,2]
+[--repeat 1]`` (NAME: allan, rate, encoder, lts, scale-factor, selfcal)
 """
 
 from __future__ import annotations
@@ -115,6 +117,13 @@ def write_pulses(path: Path, n: int) -> None:
     write_h5(str(path), n)
 
 
+def write_heads(path: Path, n: int) -> None:
+    """12 heads of about ``n`` pulse times in all: ``bench_selfcal_stream.py``'s twin."""
+    from bench_selfcal_stream import HEADS, M, write_capture
+
+    write_capture(path, max(2, n // (HEADS * M)))
+
+
 #: analysis → (writer of its record, the record's file name, the command and its options)
 ANALYSES = {
     "allan": (write_record, "rate.npz", ["allan", "--taus", "octave"]),
@@ -122,6 +131,7 @@ ANALYSES = {
     "encoder": (write_encoder, "capture.npz", ["motion", "encoder", "--lines", "36000"]),
     "lts": (write_lts, "lts.npz", ["motion", "lts", "--radius-mm", "100"]),
     "scale-factor": (write_log, "log.npz", ["gyro", "scale-factor"]),
+    "selfcal": (write_heads, "heads.npz", ["selfcal", "--pulses-per-rev", "18000"]),
 }
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 from collections.abc import Iterator, Sequence
@@ -70,6 +71,7 @@ _SELFCAL_CHUNK_ROWS = 1 << 19
     "(heads padded with empty cells or trailing NaNs need it) "
     f"[default: chunked above {_SELFCAL_IN_MEMORY_MAX:.0e} pulse times in all, except CSV].",
 )
+@dask_options("the fit by blocks of revolutions; NPZ without compression, HDF5 or TDMS")
 @_analysis_options
 @_names_capture
 def selfcal_cmd(
@@ -77,6 +79,8 @@ def selfcal_cmd(
     pulses_per_rev: int,
     rotation: str,
     chunked: bool | None,
+    workers: int | None,
+    scheduler: str | None,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -92,12 +96,17 @@ def selfcal_cmd(
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     lengths = None
-    if chunked is None and Path(capture).suffix.lower() in (".csv", ".txt"):
+    split = split_wanted(workers, scheduler, chunked)
+    if chunked is None and not split and Path(capture).suffix.lower() in (".csv", ".txt"):
         chunked = False  # CSV pulse files pad short heads with empty cells: read in memory
-    if chunked is None:
+    if chunked is None and not split:
         lengths = _head_lengths(capture, columns, group)
         chunked = sum(lengths.values()) > _SELFCAL_IN_MEMORY_MAX
-    if chunked:
+    if split:
+        result = _selfcal_dask(
+            capture, columns, group, (workers, scheduler), pulses_per_rev, rotation, kw.pop("specs")
+        )
+    elif chunked:
         result = _selfcal_chunked(
             capture, columns, group, lengths, pulses_per_rev, rotation, kw.pop("specs")
         )
@@ -188,19 +197,75 @@ def _selfcal_chunked(
         # padded with trailing NaNs is read with --in-memory, which drops the padding)
         return (chunk[name] for chunk in chunks)
 
-    with _sample_progress(2 * sum(lengths.values()), "self-calibration (chunked)") as progress:
-        try:
-            return self_calibrate_chunked(
-                lambda: [one_head(name) for name in lengths],
+    with (
+        _sample_progress(2 * sum(lengths.values()), "self-calibration (chunked)") as progress,
+        _nan_padding_hint(),
+    ):
+        return self_calibrate_chunked(
+            lambda: [one_head(name) for name in lengths],
+            pulses_per_rev=pulses_per_rev,
+            rotation=rotation,  # type: ignore[arg-type]
+            specs=specs,
+            progress=progress,
+        )
+
+
+@contextlib.contextmanager
+def _nan_padding_hint() -> Iterator[None]:
+    """A NaN met by a chunked reading may pad a shorter head: say how to read it."""
+    try:
+        yield
+    except CaptureError as e:
+        if "not a finite number" not in str(e):
+            raise
+        raise CaptureError(f"{e} (if NaNs pad a shorter head: give --in-memory)") from None
+
+
+def _selfcal_dask(
+    capture: str,
+    columns: Sequence[str],
+    group: str | None,
+    where: tuple[int | None, str | None],
+    pulses_per_rev: int,
+    rotation: str,
+    specs: Any,
+) -> Any:
+    """The self-calibration split over a Dask cluster's workers
+    (:func:`rotacal.batch.capture_selfcal.self_calibrate_on_dask`), with a bar over the tasks."""
+    from rotacal.batch.capture_selfcal import self_calibrate_on_dask
+    from rotacal.encoder.selfcal_stream import BLOCK_PULSES
+    from rotacal.io import parse_column_mapping
+
+    lengths = _head_lengths(capture, columns, group)
+    reading: dict[str, Any] = {
+        "mapping": parse_column_mapping(columns),
+        "group": group,
+        "read_options": current_read_options(),
+    }
+    n0 = next(iter(lengths.values()), 0)
+    blocks = -(-n0 // max(1, BLOCK_PULSES // max(pulses_per_rev, 1) * pulses_per_rev))
+    with _naming_file(capture), _nan_padding_hint():
+        return run_on_dask(
+            where,
+            len(lengths) - 1 + blocks,  # ≤ a task per head i ≥ 1, then one per block of revolutions
+            "self-calibration",
+            lambda client, progress: self_calibrate_on_dask(
+                capture,
+                client=client,
+                heads=len(lengths),
                 pulses_per_rev=pulses_per_rev,
                 rotation=rotation,  # type: ignore[arg-type]
                 specs=specs,
+                **reading,
+                chunk_rows=_SELFCAL_CHUNK_ROWS,
                 progress=progress,
-            )
-        except CaptureError as e:
-            if "not a finite number" not in str(e):
-                raise
-            raise CaptureError(f"{e} (if NaNs pad a shorter head: give --in-memory)") from None
+            ),
+            capture=capture,
+            columns=list(lengths)[:1],
+            rows=sum(lengths.values()),
+            reading=reading,
+            unit="pulse times",
+        )
 
 
 @cli.command(

@@ -290,27 +290,25 @@ def pair_heads_streamed(
     CaptureError
         As :func:`check_pulse_times`, :func:`check_heads_not_copies` and :func:`pair_heads`.
     """
-    streams = [HeadStream(h, name) for h, name in zip(heads, names, strict=True)]
-    s0 = streams[0]
-    counts: list[dict[int, int]] = [{} for _ in streams]
-    while s0.pull():
-        t0 = s0.buf
-        j0 = s0.start
-        for i in range(1, len(streams)):
-            _nearest_offsets(streams[i], t0, j0, counts[i])
-        s0.drop_before(s0.read)
-        if progress is not None:
-            progress(sum(s.read for s in streams))
-    for s in streams[1:]:
-        s.drain()
-    if progress is not None:
-        progress(sum(s.read for s in streams))
-    check_heads_not_copies([s.prefix for s in streams], names)
-    c0 = s0.check
-    offsets = np.zeros(len(streams), dtype=np.int64)
+    counts, checks, prefixes = pair_with_head0(heads[0], heads[1:], names, progress=progress)
+    return finish_pairing(names, checks, prefixes, counts)
+
+
+def finish_pairing(
+    names: Sequence[str],
+    checks: Sequence[TrainCheck],
+    prefixes: Sequence[FloatArray],
+    counts: Sequence[dict[int, int]],
+) -> StreamedPairing:
+    """The pairing from what one pass over the heads gathered: each head's checked train, its
+    first COPY_CHECK_PULSES and, for head i ≥ 1, the counts of its index differences to head 0
+    (:func:`pair_heads_streamed`'s last step; the refusals of :func:`pair_heads`)."""
+    check_heads_not_copies(list(prefixes), names)
+    c0 = checks[0]
+    offsets = np.zeros(len(checks), dtype=np.int64)
     lo, hi = 0, c0.pulses
-    for i in range(1, len(streams)):
-        ci = streams[i].check
+    for i in range(1, len(checks)):
+        ci = checks[i]
         if ci.last < c0.first or ci.first > c0.last or not counts[i]:
             raise CaptureError(
                 f"column '{names[i]}' ({ci.first:.6g}–{ci.last:.6g} s) does not overlap head_0 "
@@ -323,16 +321,47 @@ def pair_heads_streamed(
         raise CaptureError(
             "the heads overlap for fewer than 2 pulses of head_0; record all heads together."
         )
-    spans = [(s.check.first, s.check.last, s.check.pulses) for s in streams]
+    spans = [(c.first, c.last, c.pulses) for c in checks]
     return StreamedPairing(
         index_offsets=offsets,
         first=lo,
         stop=hi,
-        sizes=[s.check.pulses for s in streams],
-        first_times_s=[s.check.first for s in streams],
-        last_times_s=[s.check.last for s in streams],
+        sizes=[c.pulses for c in checks],
+        first_times_s=[c.first for c in checks],
+        last_times_s=[c.last for c in checks],
         notes=tuple(pairing_notes(names, spans, offsets, lo, hi)),
     )
+
+
+def pair_with_head0(
+    head0: Iterable[ArrayLike],
+    heads: Sequence[Iterable[ArrayLike]],
+    names: Sequence[str],
+    *,
+    check_head0: bool = True,
+    progress: Callable[[int], None] | None = None,
+) -> tuple[list[dict[int, int]], list[TrainCheck], list[FloatArray]]:
+    """The pass of :func:`pair_heads_streamed` over head 0 and ``heads`` (all the others, or
+    some of them: each head's counts depend on head 0's chunks and its own alone): every train
+    checked (head 0's when ``check_head0``) and, per head i, the counts of its index
+    differences to head 0. ``names``: head 0's then the heads'. Returns the counts (head 0's
+    empty), the checks and the first COPY_CHECK_PULSES of each head, head 0 first (unchecked:
+    an empty prefix)."""
+    s0 = HeadStream(head0, names[0], check=check_head0)
+    streams = [HeadStream(h, name) for h, name in zip(heads, names[1:], strict=True)]
+    counts: list[dict[int, int]] = [{} for _ in streams]
+    while s0.pull():
+        for si, ci in zip(streams, counts, strict=True):
+            _nearest_offsets(si, s0.buf, s0.start, ci)
+        s0.drop_before(s0.read)
+        if progress is not None:
+            progress(s0.read + sum(s.read for s in streams))
+    for s in streams:
+        s.drain()
+    if progress is not None:
+        progress(s0.read + sum(s.read for s in streams))
+    every = [s0, *streams]
+    return [{}, *counts], [s.check for s in every], [s.prefix for s in every]
 
 
 def _nearest_offsets(si: HeadStream, t0: FloatArray, j0: int, counts: dict[int, int]) -> None:

@@ -157,28 +157,186 @@ def self_calibrate_chunked(
     _check_heads(n, m)
     names = [f"head_{i}" for i in range(n)]
     pairing = pair_heads_streamed(heads, names, progress)
-    _check_head0_length(pairing.sizes[0], m)
-    revs = _whole_revolutions(pairing.pulses, m, pairing.notes)
     done = pairing.timestamps
-    candidates: list[str] = ["forward", "reverse"] if rotation == "auto" else [rotation]
-    shifts: dict[str, NDArray[np.int64]] | None = None
-    while True:
-        senses, rev_offsets, prefix = _fit_pass(
+    return finish_chunked(
+        pairing,
+        m,
+        rotation,
+        specs,
+        lambda candidates, shifts: _fit_pass(
             head_chunks(),
             pairing,
             m,
-            revs,
             candidates,
             shifts,
             block_pulses,
             spill_dir,
             None if progress is None else (lambda k: progress(done + k)),
+        ),
+    )
+
+
+Shifts = dict[str, NDArray[np.int64]]
+
+
+@dataclasses.dataclass
+class BlockFit:
+    """One block's share of the second pass: each revolution's mean head difference
+    (``offsets``, (k, n − 1)), the fit of each sense (orders (k, m//2 + 1), sum of squares),
+    the heads' line shifts used and the head differences of the first pulses it holds."""
+
+    shifts: Shifts
+    offsets: FloatArray
+    fits: dict[str, tuple[NDArray[np.complex128], float]]
+    mean: FloatArray | None
+    diff: FloatArray | None
+
+
+def fit_blocks(pairing: StreamedPairing, m: int, block_pulses: int) -> list[tuple[int, int]]:
+    """The blocks [p0, p1) of paired head-0 pulses of the second pass (whole revolutions of
+    ``block_pulses`` rounded down, at least one)."""
+    block = max(1, int(block_pulses) // m) * m
+    total = pairing.pulses
+    return [(p0, min(p0 + block, total)) for p0 in range(0, total, block)]
+
+
+def fit_block(
+    take: Callable[[int, int, int], FloatArray],
+    pairing: StreamedPairing,
+    m: int,
+    candidates: list[str],
+    shifts: Shifts | None,
+    p0: int,
+    p1: int,
+) -> BlockFit:
+    """The second pass over paired head-0 pulses [p0, p1): delays, local rate, angle
+    differences and each whole revolution's fit (Kokuyama et al. 2015, §3), by the arithmetic
+    of ``self_calibrate`` (the same bits).
+
+    ``take(i, a, b)``: pulses a … b − 1 of head i (s). ``shifts``: the heads' line shifts per
+    sense, or None to take them from this block's revolutions (the first block's).
+    """
+    n = pairing.index_offsets.size
+    lo, total, off = pairing.first, pairing.pulses, pairing.index_offsets
+    revs = total // m
+    w = min(RATE_WINDOW, max(1, (total - 1) // 2))
+    pitch = 360.0 / m
+    # the rate at pulse p is taken over p ± w, clamped to the record's inner pulses
+    c0 = min(max(p0, w), total - w - 1)
+    c1 = min(max(p1 - 1, w), total - w - 1)
+    q0, q1 = min(p0, c0 - w), max(p1, c1 + w + 1)
+    t0 = take(0, lo + q0, lo + q1)
+    delays = np.empty((n, q1 - q0))
+    for i in range(n):
+        delays[i] = take(i, lo + q0 + int(off[i]), lo + q1 + int(off[i])) - t0
+    _check_drift(delays, t0, pairing)
+    mean_times = t0 + delays.mean(axis=0)
+    idx = np.clip(np.arange(p0, p1), w, total - w - 1) - q0
+    rate = 2 * w * pitch / (mean_times[idx + w] - mean_times[idx - w])
+    diff = delays[1:, p0 - q0 : p1 - q0] * (rate * 3600.0)  # arcsec, (n − 1, p1 − p0)
+    del delays, mean_times, rate
+    need_mean = min(total, period_check_pulses(m))
+    need_diff = min(total, closure_check_pulses(m))
+    mean = diff.mean(axis=0)[: need_mean - p0] if p0 < need_mean else None
+    first = diff[:, : need_diff - p0].copy() if p0 < need_diff else None
+    k = max(0, (min(p1, revs * m) - p0) // m)  # whole revolutions in this block
+    used = diff[:, : k * m].reshape(n - 1, k, m).transpose(1, 0, 2)  # (k, n − 1, m)
+    offsets = used.mean(axis=2)
+    if shifts is None:
+        mean0 = offsets.mean(axis=0)
+        shifts = {c: _data_shifts(n, m, c, mean0) for c in candidates}
+    fits = fit_revolutions(used, shifts, m) if k > 0 else {}
+    return BlockFit(shifts, offsets, {c: (f[0], f[1]) for c, f in fits.items()}, mean, first)
+
+
+class PassSums:
+    """The second pass's blocks merged in order (what ``self_calibrate_chunked`` keeps)."""
+
+    def __init__(self, pairing: StreamedPairing, m: int, spill_dir: str | None) -> None:
+        self.m, self.roll, self.spill_dir = m, pairing.first % m, spill_dir
+        self.senses: dict[str, _Sense] | None = None
+        self.rev_offsets: list[FloatArray] = []
+        self.prefix = _Prefix()
+
+    @property
+    def shifts(self) -> Shifts | None:
+        """The line shifts the blocks after the first use (None before the first)."""
+        return None if self.senses is None else {c: s.shifts for c, s in self.senses.items()}
+
+    def add(self, block: BlockFit) -> None:
+        """Merge the next block."""
+        if block.mean is not None:
+            self.prefix.mean.append(block.mean)
+        if block.diff is not None:
+            self.prefix.diff.append(block.diff)
+        if not block.fits:
+            return
+        self.rev_offsets.append(block.offsets)
+        if self.senses is None:
+            self.senses = {c: _Sense(block.shifts[c], self.m, self.spill_dir) for c in block.fits}
+        for c, (a, ss) in block.fits.items():
+            self.senses[c].add(a, ss, self.m, self.roll)
+
+
+def _fit_pass(
+    heads: Sequence[Iterable[ArrayLike]],
+    pairing: StreamedPairing,
+    m: int,
+    candidates: list[str],
+    shifts: Shifts | None,
+    block_pulses: int,
+    spill_dir: str | None,
+    progress: Callable[[int], None] | None,
+) -> PassSums:
+    """The second pass in one process: :func:`fit_block` over the blocks in order, the heads
+    read once in order; ``shifts`` as there."""
+    n = pairing.index_offsets.size
+    if len(heads) != n:
+        raise CaptureError(
+            f"the capture gave {len(heads)} heads on its second reading, {n} on its first."
         )
+    streams = [HeadStream(h, f"head_{i}", check=False) for i, h in enumerate(heads)]
+    sums = PassSums(pairing, m, spill_dir)
+    if shifts is not None:
+        sums.senses = {c: _Sense(shifts[c], m, spill_dir) for c in candidates}
+    for p0, p1 in fit_blocks(pairing, m, block_pulses):
+        sums.add(
+            fit_block(
+                lambda i, a, b: streams[i].take(a, b), pairing, m, candidates, sums.shifts, p0, p1
+            )
+        )
+        if progress is not None:
+            progress(p1 * n)
+    return sums
+
+
+def finish_chunked(
+    pairing: StreamedPairing,
+    m: int,
+    rotation: str,
+    specs: InstrumentSpecs | None,
+    run_pass: Callable[[list[str], Shifts | None], PassSums],
+) -> SelfCalibration:
+    """The second pass (``run_pass(candidates, shifts)``, again in the rare case that the whole
+    record moves a head to another line) and the result, from the first pass's pairing."""
+    n = pairing.index_offsets.size
+    _check_head0_length(pairing.sizes[0], m)
+    revs = _whole_revolutions(pairing.pulses, m, pairing.notes)
+    candidates: list[str] = ["forward", "reverse"] if rotation == "auto" else [rotation]
+    shifts: Shifts | None = None
+    while True:
+        sums = run_pass(candidates, shifts)
+        senses = sums.senses
+        assert senses is not None  # revs ≥ 1: the first block holds a whole revolution
+        rev_offsets = np.concatenate(sums.rev_offsets)
         offsets_mean = rev_offsets.mean(axis=0)
         final = {c: _data_shifts(n, m, c, offsets_mean) for c in candidates}
         if all(np.array_equal(final[c], senses[c].shifts) for c in candidates):
             break
+        for s in senses.values():
+            s.spill.close()
         shifts = final  # the whole record places a head on another line: fit again with it
+    prefix = sums.prefix
     head_mean = np.concatenate(prefix.mean)
     period_checked = check_period(head_mean, m)
     notes = list(pairing.notes)
@@ -207,76 +365,6 @@ def self_calibrate_chunked(
         notes,
         specs,
     )
-
-
-def _fit_pass(
-    heads: Sequence[Iterable[ArrayLike]],
-    pairing: StreamedPairing,
-    m: int,
-    revs: int,
-    candidates: list[str],
-    shifts: dict[str, NDArray[np.int64]] | None,
-    block_pulses: int,
-    spill_dir: str | None,
-    progress: Callable[[int], None] | None,
-) -> tuple[dict[str, _Sense], FloatArray, _Prefix]:
-    """The second pass: delays, local rate, angle differences and the fit, block by block.
-
-    The arithmetic per pulse is that of ``self_calibrate`` (the same bits for the delays, the
-    rate and each revolution's fit); ``shifts``: the heads' line shifts per sense, or None to
-    take them from the first block's revolutions.
-    """
-    n = pairing.index_offsets.size
-    if len(heads) != n:
-        raise CaptureError(
-            f"the capture gave {len(heads)} heads on its second reading, {n} on its first."
-        )
-    streams = [HeadStream(h, f"head_{i}", check=False) for i, h in enumerate(heads)]
-    lo, total, off = pairing.first, pairing.pulses, pairing.index_offsets
-    w = min(RATE_WINDOW, max(1, (total - 1) // 2))
-    pitch = 360.0 / m
-    block = max(1, int(block_pulses) // m) * m
-    senses = None if shifts is None else {c: _Sense(shifts[c], m, spill_dir) for c in candidates}
-    rev_offsets: list[FloatArray] = []
-    prefix = _Prefix()
-    need_mean = min(total, period_check_pulses(m))
-    need_diff = min(total, closure_check_pulses(m))
-    for p0 in range(0, total, block):
-        p1 = min(p0 + block, total)
-        # the rate at pulse p is taken over p ± w, clamped to the record's inner pulses
-        c0 = min(max(p0, w), total - w - 1)
-        c1 = min(max(p1 - 1, w), total - w - 1)
-        q0, q1 = min(p0, c0 - w), max(p1, c1 + w + 1)
-        t0 = streams[0].take(lo + q0, lo + q1)
-        delays = np.empty((n, q1 - q0))
-        for i, s in enumerate(streams):
-            delays[i] = s.take(lo + q0 + int(off[i]), lo + q1 + int(off[i])) - t0
-        _check_drift(delays, t0, pairing)
-        mean_times = t0 + delays.mean(axis=0)
-        idx = np.clip(np.arange(p0, p1), w, total - w - 1) - q0
-        rate = 2 * w * pitch / (mean_times[idx + w] - mean_times[idx - w])
-        diff = delays[1:, p0 - q0 : p1 - q0] * (rate * 3600.0)  # arcsec, (n − 1, p1 − p0)
-        del delays, mean_times, rate
-        if p0 < need_mean:
-            prefix.mean.append(diff.mean(axis=0)[: need_mean - p0])
-        if p0 < need_diff:
-            prefix.diff.append(diff[:, : need_diff - p0].copy())
-        k = (min(p1, revs * m) - p0) // m  # whole revolutions in this block
-        if k > 0:
-            used = diff[:, : k * m].reshape(n - 1, k, m).transpose(1, 0, 2)  # (k, n − 1, m)
-            offsets = used.mean(axis=2)
-            rev_offsets.append(offsets)
-            if senses is None:
-                mean0 = offsets.mean(axis=0)
-                senses = {c: _Sense(_data_shifts(n, m, c, mean0), m, spill_dir) for c in candidates}
-            fits = fit_revolutions(used, {c: senses[c].shifts for c in candidates}, m)
-            for c in candidates:
-                a, ss, _ = fits[c]
-                senses[c].add(a, ss, m, lo % m)
-        if progress is not None:
-            progress(p1 * n)
-    assert senses is not None  # revs ≥ 1: the first block holds a whole revolution
-    return senses, np.concatenate(rev_offsets), prefix
 
 
 def _check_drift(delays: FloatArray, t0: FloatArray, pairing: StreamedPairing) -> None:
