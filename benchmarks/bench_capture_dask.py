@@ -9,7 +9,9 @@
 - ``encoder``: ``rotacal motion encoder --lines 36000`` of the twin encoder capture of
   ``bench_motion_stream.py`` (time_s, a, b at 1 MHz, a 2 Hz motion);
 - ``scale-factor``: ``rotacal gyro scale-factor`` of a rate-table log (rate_deg_s, output)
-  stepping through 11 set rates up and down.
+  stepping through 11 set rates up and down;
+- ``fog``: ``rotacal motion fog`` of the twin FOG capture of ``bench_motion_stream.py``
+  (time_s, rate_deg_s at 10 kHz).
 
 On the file it times:
 
@@ -22,7 +24,7 @@ seconds of ``--repeat`` runs, the ratio to the baseline, the CPU seconds of the 
 machine the steadier figure) and the peak RSS of the largest process (the command's, or a Dask
 worker's: the kernel counts waited-for descendants too). No asserts.
 
-Run: ``python benchmarks/bench_capture_dask.py [--analysis allan|rate|encoder|scale-factor]
+Run: ``python benchmarks/bench_capture_dask.py [--analysis allan|rate|encoder|scale-factor|fog]
 [--samples 1e8] [--workers 1,2] [--repeat 1]``
 """
 
@@ -99,6 +101,13 @@ def write_encoder(path: Path, n: int) -> None:
     write_npz(path, "encoder", n)
 
 
+def write_fog(path: Path, n: int) -> None:
+    """The twin FOG capture of ``bench_motion_stream.py`` (10 kHz)."""
+    from bench_motion_stream import write_npz
+
+    write_npz(path, "fog", n)
+
+
 def write_pulses(path: Path, n: int) -> None:
     """One head of ``n`` pulse times: ``bench_rate.py``'s twin (HDF5)."""
     from bench_rate import write_h5
@@ -112,6 +121,7 @@ ANALYSES = {
     "rate": (write_pulses, "pulses.h5", ["rate", "--pulses-per-rev", "18000"]),
     "encoder": (write_encoder, "capture.npz", ["motion", "encoder", "--lines", "36000"]),
     "scale-factor": (write_log, "log.npz", ["gyro", "scale-factor"]),
+    "fog": (write_fog, "fog.npz", ["motion", "fog"]),
 }
 
 

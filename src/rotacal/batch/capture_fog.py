@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rotacal._threads import one_blas_thread
-from rotacal.batch._blocks import CaptureRows, Ticks, block_starts, task_round
+from rotacal.batch._blocks import CaptureRows, Ticks, block_starts, check_task, task_round
 from rotacal.errors import CaptureError
 
 if TYPE_CHECKING:
@@ -59,26 +59,6 @@ __all__ = ["calibrate_fog_motion_on_dask"]
 
 #: Rows of a block, the unit of work of a task: the single-process path's chunk.
 CHUNK_ROWS = 2_000_000
-
-
-def _check_task(source: CaptureRows, rows: int) -> Checked:
-    """The single-process path's first pass over the whole file, in order."""
-    from rotacal.io import iter_capture_chunks
-    from rotacal.table._stream_checks import check_pass
-    from rotacal.table._stream_source import Passes
-
-    def chunks() -> Iterator[dict[str, np.ndarray]]:
-        return iter_capture_chunks(
-            source.path,
-            source.columns,
-            chunk_rows=rows,
-            mapping=source.mapping,
-            group=source.group,
-            read_options=source.read_options,
-        )
-
-    name = source.columns[1]
-    return check_pass(Passes(chunks, None, source.columns), {name: None}, keep=name)
 
 
 def _crossings_task(
@@ -343,7 +323,8 @@ def calibrate_fog_motion_on_dask(
     )
     source.read(0, min(n, 1))  # a format without row offsets is refused before any work
     split = _Split(client, source, n, chunk_rows, Ticks(progress))
-    checked = client.submit(_check_task, source, chunk_rows, pure=False)
+    name = FOG_COLUMNS[1]
+    checked = client.submit(check_task, source, chunk_rows, {name: None}, name, pure=False)
     found, clipped = _checks(checked, n, str(path), allow_clipped)
     split.tick()
     return _calibrate(
