@@ -72,6 +72,20 @@ def test_split_over_workers_equals_one_process_and_memory(
         assert largest_difference(got.to_dict(), memory.to_dict()) < 1e-9
 
 
+def test_a_slow_motion_takes_the_start_frequency_from_a_strided_copy(
+    dask_client: Client, tmp_path: Path
+) -> None:
+    """The first 2²⁰ samples hold ~3 periods (< 4): the start frequency comes from every
+    stride-th sample of the capture, which the split reads itself, as the check pass keeps it."""
+    slow = sim.SineMotion(amplitude_deg=0.5, frequency_hz=0.15)
+    cols = sim.simulate_fog(slow, snr_db=40.0, fs_hz=50_000.0, duration_s=26.0, seed=2).columns
+    path = write_capture(tmp_path / "slow.npz", cols)
+    got = calibrate_fog_motion_on_dask(str(path), client=dask_client, chunk_rows=1 << 18)
+    one = calibrate_fog_motion_chunked(fog_chunks_from_file(path, chunk_rows=1 << 18))
+    assert np.array_equal(got.reversal_times_s, one.reversal_times_s)
+    assert largest_difference(got.to_dict(), one.to_dict()) < 1e-9
+
+
 def _nan(cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     cols["rate_deg_s"][5 * ROWS + 17] = np.nan
     return cols

@@ -7,9 +7,11 @@ rows (a shared file system; NPZ without compression, HDF5 or TDMS). The single-p
 (:mod:`rotacal.table._stream_fog`) become:
 
 * **Checks** — one task reads the file through once, in order, with every check of the
-  single-process path's first pass; its fault, if any, is the one reported (the first in file
-  order). Its first samples and strided copy give the fit's start frequency, so the rounds
-  below wait for it.
+  single-process path's first pass; it runs beside the rounds below until the reversals are
+  cut, and its fault, if any, is the one reported (the first in file order).
+* **Start** — what that pass gives the fit: the first chunk's median time step and the start
+  frequency of the first 2²⁰ samples or, when they hold fewer than 4 periods, of the strided
+  copy (every stride-th row, the stride the pass ends with), read by tasks of their own.
 * **Fit of the whole rate** (eqs. (9)–(10)) and, on n whole periods, the **analysis fit** — the
   multi-harmonic fit's block moments are accumulated per task on the single-process block grid
   (:func:`~rotacal.table._stream_fit.add_ranges`; the first add, which sets the working offset,
@@ -59,6 +61,51 @@ __all__ = ["calibrate_fog_motion_on_dask"]
 
 #: Rows of a block, the unit of work of a task: the single-process path's chunk.
 CHUNK_ROWS = 2_000_000
+
+
+def _start_task(source: CaptureRows, n: int, rows: int) -> tuple[float, float, bool]:
+    """What the first pass gives the fit's start: the frequency (Hz) of the first 2²⁰ samples
+    (whether that is the in-memory estimate's, or they hold ≥ 4 periods: else the strided copy
+    decides) and the first chunk's median time step (s)."""
+    from rotacal.signal._checks import TYPICAL_STEPS
+    from rotacal.signal._freq import estimate_frequency_unchecked
+    from rotacal.table._stream_checks import _COPY_SAMPLES
+
+    cols = source.read(0, min(n, _COPY_SAMPLES))
+    t, y = cols["time_s"], cols["rate_deg_s"]
+    typical = float(np.median(np.diff(t[: min(rows, TYPICAL_STEPS + 1)])))
+    f = estimate_frequency_unchecked(t, y)
+    return f, typical, n <= _COPY_SAMPLES or f * float(t[-1] - t[0]) >= 4.0
+
+
+def _strided_task(source: CaptureRows, a: int, b: int, stride: int) -> tuple[np.ndarray, ...]:
+    """Rows a … b − 1 whose index is a multiple of ``stride``: t (s) and rate (deg/s)."""
+    cols = source.read(a, b)
+    s0 = (-a) % stride
+    return cols["time_s"][s0::stride].copy(), cols["rate_deg_s"][s0::stride].copy()
+
+
+def _start(split: _Split) -> tuple[float, float]:
+    """The start frequency (Hz) and the typical time step (s) that the check pass gives
+    (:func:`~rotacal.table._stream_checks.start_frequency`), from reads of their own: the first
+    2²⁰ samples, and when they hold too few periods every stride-th sample of the capture
+    (the stride :class:`~rotacal.table._stream_checks.StridedCopy` ends with: the least power
+    of two that keeps at most 2²¹ samples)."""
+    from rotacal.signal._freq import estimate_frequency_unchecked
+    from rotacal.table._stream_checks import _COPY_SAMPLES
+
+    f, typical, enough = split.round(_start_task, [(split.source, split.n, split.rows)])[0]
+    if enough:
+        return f, typical
+    stride = 1
+    while -(-split.n // stride) > 2 * _COPY_SAMPLES:
+        stride *= 2
+    got = split.round(
+        _strided_task, [(split.source, lo, hi, stride) for lo, hi in split.pieces(0, split.n - 1)]
+    )
+    t = np.concatenate([g[0] for g in got])
+    y = np.concatenate([g[1] for g in got])
+    return estimate_frequency_unchecked(t, y), typical
 
 
 def _crossings_task(
@@ -325,17 +372,20 @@ def calibrate_fog_motion_on_dask(
     split = _Split(client, source, n, chunk_rows, Ticks(progress))
     name = FOG_COLUMNS[1]
     checked = client.submit(check_task, source, chunk_rows, {name: None}, name, pure=False)
-    found, clipped = _checks(checked, n, str(path), allow_clipped)
-    split.tick()
-    return _calibrate(
-        split,
-        found,
-        clipped,
-        (harmonics, drift),
-        periods,
-        (set_amplitude_deg, set_frequency_hz),
-        specs,
-    )
+    try:
+        return _calibrate(
+            split,
+            checked,
+            allow_clipped,
+            (harmonics, drift),
+            periods,
+            (set_amplitude_deg, set_frequency_hz),
+            specs,
+        )
+    except Exception:
+        # the fault the single-process path finds first, if the file has one
+        _checks(checked, n, str(path), allow_clipped)
+        raise
 
 
 def _checks(
@@ -355,22 +405,27 @@ def _checks(
 
 def _calibrate(
     split: _Split,
-    found: Checked,
-    clipped: tuple[str, ...],
+    checked: Future,
+    allow_clipped: bool,
     model: tuple[int, bool],
     periods: int | None,
     set_values: tuple[float | None, float | None],
     specs: InstrumentSpecs | None,
 ) -> MotionResult:
-    """The rounds of :func:`calibrate_fog_motion_on_dask` after the checks (see the module)."""
+    """The rounds of :func:`calibrate_fog_motion_on_dask` (see the module), the check task
+    running beside them until the reversals are cut."""
     from rotacal.table import _stream_fog as fog
     from rotacal.table._stream_fit import accumulator, block_length, true_time
     from rotacal.table.motion import _cut
     from rotacal.table.streaming import _GATHER_MAX_SAMPLES
 
     harmonics, drift = model
-    n, dt = split.n, found.typical
-    f_start = fog.start_frequency_of(found)
+    n = split.n
+    if n < 16 or split.rows < 2:  # the check's refusal, or a first chunk without a step
+        found, _ = _checks(checked, n, split.source.path, allow_clipped)
+        f_start, dt = fog.start_frequency_of(found), found.typical
+    else:
+        f_start, dt = _start(split)
     acc = accumulator(f_start, harmonics, dt)
     rate = _Rows(split.source, split.rows, 0)
     _, (dec_t, dec_w), _ = split.accumulate(
@@ -382,6 +437,8 @@ def _calibrate(
     )
     rev_times = np.concatenate([x[0] for x in found_x])
     rev_idx = np.clip(np.concatenate([x[1] for x in found_x]), 0, n - 1)
+    found, clipped = _checks(checked, n, split.source.path, allow_clipped)
+    split.tick()
     first, last, n_periods = _cut(rev_idx, periods, "FOG capture")
     to_true = true_time(specs, float(found.first_t))
     f0 = first_fit.frequency_hz
