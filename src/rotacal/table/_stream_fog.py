@@ -7,9 +7,11 @@ After the checks (:mod:`rotacal.table._stream_checks`):
 - the zero crossings of that fitted rate (the reversing moments), each between two samples of
   one chunk or across a boundary (the last sample of the chunk before carried);
 - after the analysis fit of n whole periods (:mod:`rotacal.table._stream_fit`), the angle
-  integrated from the measured rate less D0 by the trapezoid rule with the running sum carried
-  (the same sums in the same order as in memory), its mean, the SNR's sums (Feng et al. 2023,
-  §5), decimated copies, and eq. (2)'s three-parameter fit accumulated beside.
+  integrated from the measured rate less D0 by the trapezoid rule — each chunk's own running
+  sum plus a prefix, the angle at the chunk before's last sample (the in-memory cumsum's steps;
+  rounding differs by the prefix's one add, ~1e-16 relative, and a chunk's angle needs only its
+  prefix: :mod:`rotacal.batch.capture_fog` splits it so) —, its mean, the SNR's sums (Feng et
+  al. 2023, §5), decimated copies, and eq. (2)'s three-parameter fit accumulated beside.
 """
 
 from __future__ import annotations
