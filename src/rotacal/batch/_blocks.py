@@ -10,12 +10,12 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import numpy as np
 
 if TYPE_CHECKING:
-    from distributed import Client
+    from distributed import Client, Future
 
     from rotacal.io.read_options import ReadOptions
     from rotacal.table._stream_checks import Checked
 
-__all__ = ["CaptureRows", "Ticks", "block_starts", "check_task", "task_round"]
+__all__ = ["CaptureRows", "Ticks", "block_starts", "check_findings", "check_task", "task_round"]
 
 T = TypeVar("T")
 
@@ -74,6 +74,26 @@ def check_task(
         )
 
     return check_pass(Passes(chunks, None, source.columns), companions, keep=keep)
+
+
+def check_findings(
+    checked: Future,
+    n: int,
+    path: str,
+    allow_clipped: bool,
+    raise_faults: Callable[[Checked], None],
+) -> tuple[Checked, tuple[str, ...]]:
+    """The findings of :func:`check_task` (a future), its faults raised by ``raise_faults`` as
+    one process raises them, and the clipping warnings; a file whose rows are not the ``n``
+    declared is refused."""
+    from rotacal.errors import CaptureError
+
+    found: Checked = checked.result()
+    raise_faults(found)
+    clipped = found.clipping(allow_clipped)
+    if found.n != n:
+        raise CaptureError(f"{path}: {found.n} rows were read, {n} declared; the file changed")
+    return found, clipped
 
 
 class Ticks:

@@ -43,8 +43,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rotacal._threads import one_blas_thread
-from rotacal.batch._blocks import CaptureRows, Ticks, block_starts, check_task, task_round
-from rotacal.errors import CaptureError
+from rotacal.batch._blocks import (
+    CaptureRows,
+    Ticks,
+    block_starts,
+    check_findings,
+    check_task,
+    task_round,
+)
 
 if TYPE_CHECKING:
     from distributed import Client, Future
@@ -395,12 +401,9 @@ def _checks(
     clipping warnings."""
     from rotacal.table._stream_checks import raise_signal_faults
 
-    found = checked.result()
-    raise_signal_faults(found, "rate_deg_s")
-    clipped = found.clipping(allow_clipped)
-    if found.n != n:
-        raise CaptureError(f"{path}: {found.n} rows were read, {n} declared; the file changed")
-    return found, clipped
+    return check_findings(
+        checked, n, path, allow_clipped, lambda found: raise_signal_faults(found, "rate_deg_s")
+    )
 
 
 def _calibrate(
