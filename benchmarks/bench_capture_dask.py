@@ -14,6 +14,8 @@
   stepping through 11 set rates up and down;
 - ``selfcal``: ``rotacal selfcal --pulses-per-rev 18000`` of ``bench_selfcal_stream.py``'s twin
   (12 ragged heads; ``--samples`` pulse times in all, rounded to whole revolutions).
+- ``fog``: ``rotacal motion fog`` of the twin FOG capture of ``bench_motion_stream.py``
+  (time_s, rate_deg_s at 10 kHz).
 
 On the file it times:
 
@@ -27,7 +29,7 @@ machine the steadier figure) and the peak RSS of the largest process (the comman
 worker's: the kernel counts waited-for descendants too). No asserts.
 
 Run: ``python benchmarks/bench_capture_dask.py [--analysis NAME] [--samples 1e8] [--workers 1,2]
-[--repeat 1]`` (NAME: allan, rate, encoder, lts, scale-factor, selfcal)
+[--repeat 1]`` (NAME: allan, rate, encoder, lts, fog, scale-factor, selfcal)
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -96,18 +99,17 @@ def write_record(path: Path, n: int) -> None:
     _write_columns(path, n, fill)
 
 
-def write_encoder(path: Path, n: int) -> None:
-    """The twin encoder capture of ``bench_motion_stream.py`` (1 MHz, a 2 Hz motion)."""
-    from bench_motion_stream import write_npz
+def motion_writer(scheme: str) -> Callable[[Path, int], None]:
+    """The writer of ``bench_motion_stream.py``'s twin capture of a motion ``scheme`` (encoder:
+    time_s, a, b at 1 MHz, a 2 Hz motion; lts: displacement_mm at 10 kHz, 0.5 Hz; fog:
+    rate_deg_s at 10 kHz)."""
 
-    write_npz(path, "encoder", n)
+    def write(path: Path, n: int) -> None:
+        from bench_motion_stream import write_npz
 
+        write_npz(path, scheme, n)
 
-def write_lts(path: Path, n: int) -> None:
-    """The twin LTS capture of ``bench_motion_stream.py`` (10 kHz, a 0.5 Hz motion)."""
-    from bench_motion_stream import write_npz
-
-    write_npz(path, "lts", n)
+    return write
 
 
 def write_pulses(path: Path, n: int) -> None:
@@ -128,10 +130,11 @@ def write_heads(path: Path, n: int) -> None:
 ANALYSES = {
     "allan": (write_record, "rate.npz", ["allan", "--taus", "octave"]),
     "rate": (write_pulses, "pulses.h5", ["rate", "--pulses-per-rev", "18000"]),
-    "encoder": (write_encoder, "capture.npz", ["motion", "encoder", "--lines", "36000"]),
-    "lts": (write_lts, "lts.npz", ["motion", "lts", "--radius-mm", "100"]),
+    "encoder": (motion_writer("encoder"), "capture.npz", ["motion", "encoder", "--lines", "36000"]),
+    "lts": (motion_writer("lts"), "lts.npz", ["motion", "lts", "--radius-mm", "100"]),
     "scale-factor": (write_log, "log.npz", ["gyro", "scale-factor"]),
     "selfcal": (write_heads, "heads.npz", ["selfcal", "--pulses-per-rev", "18000"]),
+    "fog": (motion_writer("fog"), "fog.npz", ["motion", "fog"]),
 }
 
 

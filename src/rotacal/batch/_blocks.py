@@ -4,17 +4,18 @@ record is split into, and a round of tasks whose results come back in block orde
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
 if TYPE_CHECKING:
-    from distributed import Client
+    from distributed import Client, Future
 
     from rotacal.io.read_options import ReadOptions
+    from rotacal.table._stream_checks import Checked
 
-__all__ = ["CaptureRows", "Ticks", "block_starts", "task_round"]
+__all__ = ["CaptureRows", "Ticks", "block_starts", "check_findings", "check_task", "task_round"]
 
 T = TypeVar("T")
 
@@ -50,6 +51,49 @@ class CaptureRows:
     def column(self, name: str, start: int, stop: int) -> np.ndarray:
         """Rows ``start`` … ``stop - 1`` of one column."""
         return dataclasses.replace(self, columns=(name,)).read(start, stop)[name]
+
+
+def check_task(
+    source: CaptureRows, rows: int, companions: dict[str, str | None], keep: str | None = None
+) -> Checked:
+    """A task: the first pass of a single-process motion path over the whole file, in order, in
+    chunks of ``rows`` (:func:`~rotacal.table._stream_checks.check_pass` with ``companions``
+    and ``keep``)."""
+    from rotacal.io import iter_capture_chunks
+    from rotacal.table._stream_checks import check_pass
+    from rotacal.table._stream_source import Passes
+
+    def chunks() -> Iterator[dict[str, np.ndarray]]:
+        return iter_capture_chunks(
+            source.path,
+            source.columns,
+            chunk_rows=rows,
+            mapping=source.mapping,
+            group=source.group,
+            read_options=source.read_options,
+        )
+
+    return check_pass(Passes(chunks, None, source.columns), companions, keep=keep)
+
+
+def check_findings(
+    checked: Future,
+    n: int,
+    path: str,
+    allow_clipped: bool,
+    raise_faults: Callable[[Checked], None],
+) -> tuple[Checked, tuple[str, ...]]:
+    """The findings of :func:`check_task` (a future), its faults raised by ``raise_faults`` as
+    one process raises them, and the clipping warnings; a file whose rows are not the ``n``
+    declared is refused."""
+    from rotacal.errors import CaptureError
+
+    found: Checked = checked.result()
+    raise_faults(found)
+    clipped = found.clipping(allow_clipped)
+    if found.n != n:
+        raise CaptureError(f"{path}: {found.n} rows were read, {n} declared; the file changed")
+    return found, clipped
 
 
 class Ticks:

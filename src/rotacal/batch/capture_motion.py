@@ -45,8 +45,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rotacal._threads import one_blas_thread
-from rotacal.batch._blocks import CaptureRows, Ticks, block_starts, task_round
-from rotacal.errors import CaptureError
+from rotacal.batch._blocks import (
+    CaptureRows,
+    Ticks,
+    block_starts,
+    check_findings,
+    check_task,
+    task_round,
+)
 
 if TYPE_CHECKING:
     from distributed import Client, Future
@@ -66,25 +72,6 @@ __all__ = ["calibrate_encoder_motion_on_dask"]
 CHUNK_ROWS = 2_000_000
 
 _SIGNALS = ("a", "b")
-
-
-def _check_task(source: CaptureRows, rows: int) -> Checked:
-    """The single-process path's first pass over the whole file, in order."""
-    from rotacal.io import iter_capture_chunks
-    from rotacal.table._stream_checks import check_pass
-    from rotacal.table._stream_source import Passes
-
-    def chunks() -> Iterator[dict[str, np.ndarray]]:
-        return iter_capture_chunks(
-            source.path,
-            source.columns,
-            chunk_rows=rows,
-            mapping=source.mapping,
-            group=source.group,
-            read_options=source.read_options,
-        )
-
-    return check_pass(Passes(chunks, None), {"a": "b", "b": "a"})
 
 
 def _signals(source: CaptureRows, a: int, b: int) -> dict[str, np.ndarray]:
@@ -412,7 +399,7 @@ def calibrate_encoder_motion_on_dask(
     tick = Ticks(progress)
 
     split = _Split(client, source, n, chunk_rows, tick)
-    checked = client.submit(_check_task, source, chunk_rows, pure=False)
+    checked = client.submit(check_task, source, chunk_rows, {"a": "b", "b": "a"}, pure=False)
     try:
         return _calibrate(
             split,
@@ -441,12 +428,9 @@ def _checks(
     from rotacal.table._stream_checks import raise_encoder_faults
     from rotacal.table._stream_encoder import MIN_SAMPLES
 
-    found = checked.result()
-    raise_encoder_faults(found, MIN_SAMPLES)
-    clipped = found.clipping(allow_clipped)
-    if found.n != n:
-        raise CaptureError(f"{path}: {found.n} rows were read, {n} declared; the file changed")
-    return found, clipped
+    return check_findings(
+        checked, n, path, allow_clipped, lambda found: raise_encoder_faults(found, MIN_SAMPLES)
+    )
 
 
 def _calibrate(

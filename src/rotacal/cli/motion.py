@@ -436,10 +436,17 @@ def _dask_lts(
 )
 @click.argument("capture", type=INPUT_FILE)
 @_chunked_option
+@dask_options("NPZ without compression, HDF5 or TDMS: for a capture larger than one process's time")
 @_motion_common
 @_names_capture
 def motion_fog(
-    capture: str, chunked: bool | None, columns: Sequence[str], group: str | None, **kw: Any
+    capture: str,
+    chunked: bool | None,
+    workers: int | None,
+    scheduler: str | None,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
 ) -> None:
     """Fibre-optic gyro (FOG) scheme: columns time_s, rate_deg_s.
 
@@ -450,7 +457,9 @@ def motion_fog(
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    if _streams(capture, "rate_deg_s", chunked, columns, group):
+    if split_wanted(workers, scheduler, chunked):
+        result = _dask_fog(capture, columns, group, (workers, scheduler), kw)
+    elif _streams(capture, "rate_deg_s", chunked, columns, group):
         from rotacal.table import calibrate_fog_motion_chunked, fog_chunks_from_file
 
         # checks, fit of the whole rate, zero crossings, fit, angle, position error
@@ -469,3 +478,33 @@ def motion_fog(
         with _status("fitting"):
             result = calibrate_fog_motion(cap["time_s"], cap["rate_deg_s"], **kw)
     _finish_motion(result, capture, json_path, report_path)
+
+
+def _dask_fog(
+    capture: str,
+    columns: Sequence[str],
+    group: str | None,
+    cluster: tuple[int | None, str | None],
+    kw: dict[str, Any],
+) -> Any:
+    """The FOG calibration split over a Dask cluster's workers
+    (:func:`rotacal.batch.capture_fog.calibrate_fog_motion_on_dask`), noted as such."""
+    from rotacal.batch.capture_fog import CHUNK_ROWS, calibrate_fog_motion_on_dask
+    from rotacal.io import capture_length, parse_column_mapping
+
+    mapping = parse_column_mapping(columns)
+    options = current_read_options()
+    reading: dict[str, Any] = {"mapping": mapping, "group": group, "read_options": options}
+    n = capture_length(capture, "rate_deg_s", **reading)
+    return run_on_dask(
+        cluster,
+        8 * (-(-n // CHUNK_ROWS)) + 4,  # at most: the rounds over the blocks, checks, first adds
+        "calibrating",
+        lambda client, progress: calibrate_fog_motion_on_dask(
+            capture, client=client, progress=progress, **reading, **kw
+        ),
+        capture=capture,
+        columns=["rate_deg_s"],
+        rows=n,
+        reading=reading,
+    )

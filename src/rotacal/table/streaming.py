@@ -48,7 +48,6 @@ import numpy as np
 from rotacal._threads import one_blas_thread
 from rotacal.encoder import QuadratureCorrection, correct_quadrature
 from rotacal.errors import ConfigError
-from rotacal.signal import displacement_amplitudes_from_rate
 from rotacal.table import _stream_encoder as enc
 from rotacal.table import _stream_fog as fog
 from rotacal.table import _stream_lts as lts
@@ -57,7 +56,6 @@ from rotacal.table._stream_checks import (
     check_pass,
     raise_encoder_faults,
     raise_signal_faults,
-    start_frequency,
 )
 from rotacal.table._stream_fit import (
     Segment,
@@ -89,8 +87,6 @@ from rotacal.table.motion_drift import drift_free_hysteresis
 from rotacal.table.motion_lts_fog import (
     TRIGGER_PERCENTILES,
     check_reach,
-    fog_angle,
-    fog_bias_note,
     lts_angle,
     trigger_levels,
 )
@@ -651,86 +647,29 @@ def calibrate_fog_motion_chunked(
     raise_signal_faults(found, name)
     clipped = found.clipping(allow_clipped)
     n = found.n
-    t0 = float(found.first_t)
-    assert found.first_samples is not None and found.strided is not None
-    strided = found.strided.arrays()
-    f_start = start_frequency(
-        found.first_samples,
-        strided,
-        whole=found.strided.stride == 1 and strided[0].size == found.first_samples[0].size,
-    )
+    f_start = fog.start_frequency_of(found)
     first_fit, plot_t, plot_w = fog.whole_fit(passes, n, f_start, harmonics, drift, found.typical)
     rev_times, rev_idx = fog.zero_crossings(passes, first_fit, n)
     first, last, n_periods = _cut(rev_idx, periods, "FOG capture")
-    rates = fog.rate_segment(passes, first, last)
-    seg = fit_segment(
-        rates,
-        first,
-        last,
+    seg, angle, error = fog.analysed(
+        fog.rate_segment(passes, first, last),
+        (first, last, _GATHER_MAX_SAMPLES),
         first_fit.frequency_hz,
-        harmonics,
-        drift,
-        gather_max=_GATHER_MAX_SAMPLES,
-        rate=True,
-        dt=found.typical,
+        (harmonics, drift),
+        (set_amplitude_deg, set_frequency_hz),
+        true_time(specs, float(found.first_t)),
+        found.typical,
     )
-    fit = seg.fit
-    to_true = true_time(specs, t0)
-    with_set = set_amplitude_deg is not None and set_frequency_hz is not None
-    acc3 = None
-    if set_frequency_hz is not None and with_set and not seg.gathered:
-        acc3 = accumulator(set_frequency_hz, 1, found.typical)
-    angle = fog.integrate(rates, fit, first, last, [] if acc3 is None else [(acc3, to_true)])
-    error = None
-    if acc3 is not None and set_amplitude_deg is not None and set_frequency_hz is not None:
-        # eq. (2) on the angle not centred: the fit's offset takes the mean, err is the same
-        error = position_error_pass(
-            fog.angle_segment(rates, fit),
-            first,
-            last,
-            set_amplitude_deg,
-            set_frequency_hz,
-            acc3=acc3,
-            to_true=to_true,
-        )
-    # gathered: the in-memory angle, whose position error _finish then takes
-    angle_used = None if seg.y_used is None else fog_angle(seg.t_used, seg.y_used, fit)
-    plot = {
-        "t": plot_t,
-        "rate_deg_s": plot_w,
-        "t_used": seg.t_plot,
-        "residual_deg_s": seg.residual_plot,
-        "angle_deg_integrated": angle.angle_plot,
-        "unit": "deg/s",
-    }
-    detection = ReversalDetection(
-        method="rate_zero",
-        fit=first_fit,
-        sample_interval_s=float(found.last_t - found.first_t) / max(n - 1, 1),
-        capture_start_s=t0,
+    return fog.fog_result(
+        found,
+        first_fit,
+        (plot_t, plot_w),
+        (rev_times, n_periods),
+        (seg, angle, error),
+        (set_amplitude_deg, set_frequency_hz),
+        specs,
+        clipped,
     )
-    result = _finish(
-        scheme="fog",
-        fit=fit,
-        displacement_amplitudes=displacement_amplitudes_from_rate(fit.amplitudes, fit.frequency_hz),
-        displacement_amplitudes_u=displacement_amplitudes_from_rate(
-            fit.amplitudes_u, fit.frequency_hz
-        ),
-        offset_deg=float(np.mean(angle_used)) if angle_used is not None else angle.centred_mean_deg,
-        residual_rms_deg=float(fit.residual_rms / (_TWO_PI * fit.frequency_hz)),
-        reversal_times=rev_times,
-        periods=n_periods,
-        t_used=seg.t_used,
-        angle_used=angle_used,
-        set_amplitude_deg=set_amplitude_deg,
-        set_frequency_hz=set_frequency_hz,
-        notes=[fog_bias_note(fit)],
-        snr=angle.snr_db,
-        plot=plot,
-        detection=detection,
-        specs=specs,
-    )
-    return with_segment(result, seg, error, clipped)
 
 
 def encoder_chunks_from_file(
