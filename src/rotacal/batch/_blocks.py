@@ -81,7 +81,7 @@ def check_findings(
     n: int,
     path: str,
     allow_clipped: bool,
-    raise_faults: Callable[[Checked], None],
+    raise_faults: Callable[[Checked], object],
 ) -> tuple[Checked, tuple[str, ...]]:
     """The findings of :func:`check_task` (a future), its faults raised by ``raise_faults`` as
     one process raises them, and the clipping warnings; a file whose rows are not the ``n``

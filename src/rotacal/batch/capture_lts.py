@@ -34,15 +34,14 @@ IEEE Std 1057-2017, §4.1.3.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rotacal._threads import one_blas_thread
-from rotacal.batch._blocks import CaptureRows, Ticks
+from rotacal.batch._blocks import CaptureRows, Ticks, check_findings, check_task
 from rotacal.batch.capture_motion import _accumulate, _fit, _Split
-from rotacal.errors import CaptureError
 
 if TYPE_CHECKING:
     from distributed import Client, Future
@@ -83,26 +82,6 @@ class _Trigger:
         from rotacal.table._stream_lts import trigger_piece
 
         return trigger_piece(source.read(a, b), self.radius_mm, self.trend, self.t0)
-
-
-def _check_task(source: CaptureRows, rows: int, drift: bool) -> Checked:
-    """The single-process path's first pass over the whole file, in order."""
-    from rotacal.io import iter_capture_chunks
-    from rotacal.table._stream_checks import check_pass
-    from rotacal.table._stream_source import LTS_COLUMNS, Passes
-
-    def chunks() -> Iterator[dict[str, np.ndarray]]:
-        return iter_capture_chunks(
-            source.path,
-            source.columns,
-            chunk_rows=rows,
-            mapping=source.mapping,
-            group=source.group,
-            read_options=source.read_options,
-        )
-
-    passes = Passes(chunks, None, LTS_COLUMNS)
-    return check_pass(passes, {_SIGNAL: None}, keep=_SIGNAL if drift else None)
 
 
 def _range_task(source: CaptureRows, a: int, b: int, trig: _Trigger) -> tuple[float, float]:
@@ -294,7 +273,9 @@ def calibrate_lts_motion_on_dask(
     n = capture_length(path, _SIGNAL, mapping=mapping, group=group, read_options=read_options)
     source.read(0, min(n, 1))  # a format without row offsets is refused before any work
     split = _LtsSplit(client, source, n, chunk_rows, Ticks(progress), radius_mm=float(radius_mm))
-    checked = client.submit(_check_task, source, chunk_rows, drift, pure=False)
+    checked = client.submit(
+        check_task, source, chunk_rows, {_SIGNAL: None}, _SIGNAL if drift else None, pure=False
+    )
     checks = _Checks(checked, n, str(path), float(radius_mm), allow_clipped, split.tick)
     try:
         return _calibrate(
@@ -328,12 +309,13 @@ class _Checks:
         from rotacal.table.streaming import lts_faults
 
         if self.got is None:
-            found = self.checked.result()
-            clipped = lts_faults(found, self.radius_mm, self.allow_clipped)
-            if found.n != self.n:
-                raise CaptureError(
-                    f"{self.path}: {found.n} rows were read, {self.n} declared; the file changed"
-                )
+            found, clipped = check_findings(
+                self.checked,
+                self.n,
+                self.path,
+                self.allow_clipped,
+                lambda found: lts_faults(found, self.radius_mm, self.allow_clipped),
+            )
             self.tick()
             self.got = found, clipped
         return self.got
