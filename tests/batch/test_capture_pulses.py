@@ -4,10 +4,12 @@ refusals with the same messages."""
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import cloudpickle
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -33,6 +35,11 @@ WINDOW = 512
 
 def _set_window(size: int) -> None:
     summaries_peak.WINDOW = size
+
+
+# the workers cannot import this test module (a worker's sys.path need not hold the checkout):
+# its functions travel by value
+cloudpickle.register_pickle_by_value(sys.modules[__name__])
 
 
 @pytest.fixture(scope="module")
