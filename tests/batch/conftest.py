@@ -1,9 +1,9 @@
 """Fixtures of the batch tests: a real ``distributed.LocalCluster`` of two worker processes (one
-per module) and folders of twin plans."""
+per test process for the huge-capture tests; test_batch.py has its own) and folders of twin
+plans."""
 
 from __future__ import annotations
 
-import contextlib
 import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -18,18 +18,12 @@ from rotacal.batch.testing import write_twin_plans
 COMMANDS = ("gyro rotations",)
 
 
-@contextlib.contextmanager
-def local_client() -> Iterator[Client]:
-    """A client of a new local cluster of two worker processes, as ``rotacal batch --workers 2``
-    makes it."""
-    with cluster.dask_client(2, None, None) as client:
-        yield client
-
-
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def dask_client() -> Iterator[Client]:
-    """A local cluster of two workers shared by a module's tests (each waits for both)."""
-    with local_client() as client:
+    """A local cluster of two workers shared by the tests of one huge capture on Dask (one per
+    test process: starting a cluster costs 2–3 s). The batch tests, which kill workers, have
+    their own (test_batch.py)."""
+    with cluster.dask_client(2, None, None) as client:  # as `rotacal batch --workers 2` makes it
         yield client
 
 

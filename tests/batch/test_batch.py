@@ -8,7 +8,7 @@ import json
 import os
 import shutil
 import signal
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -17,6 +17,7 @@ from click.testing import CliRunner
 from distributed import Client, Future
 
 from rotacal.batch import BatchInterruptedError, BatchResult, expected_plan_sha256, run_batch
+from rotacal.batch.cluster import dask_client as cluster_client
 from rotacal.batch.tasks import open_store_urls
 from rotacal.cli import cli
 from rotacal.errors import ConfigError
@@ -25,6 +26,14 @@ from rotacal.records import models as m
 from rotacal.records import open_store
 
 CERTIFICATE_FILES = {"certificate.pdf", "certificate.xml", "results.json"}
+
+
+@pytest.fixture(scope="module")
+def dask_client() -> Iterator[Client]:
+    """This module's own local cluster of two workers (as ``rotacal batch --workers 2`` makes
+    it): its tests kill workers and cancel work on it."""
+    with cluster_client(2, None, None) as client:
+        yield client
 
 
 def _records(url: str) -> dict[str, str]:
