@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import click
@@ -227,7 +227,18 @@ def motion_encoder(
     if not split and chunked is None:
         chunked = n > _IN_MEMORY_MAX_SAMPLES
     if split:
-        result = _dask_encoder(capture, n, (mapping, group), (workers, scheduler), lines, kw)
+        from rotacal.batch.capture_motion import calibrate_encoder_motion_on_dask
+
+        result = _dask_motion(
+            capture,
+            columns,
+            group,
+            (workers, scheduler),
+            "a",
+            8,  # correction points, phase twice, windows, fit, position error
+            calibrate_encoder_motion_on_dask,
+            {**kw, "lines": lines},
+        )
     elif chunked:  # the streaming modules are imported only here (start-up of the in-memory path)
         from rotacal.table import calibrate_encoder_motion_chunked, encoder_chunks_from_file
 
@@ -250,41 +261,6 @@ def motion_encoder(
             result, (f"--correction-from {correction_from}: {w}" for w in kw["correction"].warnings)
         )
     _finish_motion(result, capture, json_path, report_path)
-
-
-def _dask_encoder(
-    capture: str,
-    n: int,
-    reading: tuple[dict[str, str] | None, str | None],
-    cluster: tuple[int | None, str | None],
-    lines: int,
-    kw: dict[str, Any],
-) -> Any:
-    """The encoder calibration split over a Dask cluster's workers
-    (:func:`rotacal.batch.capture_motion.calibrate_encoder_motion_on_dask`), noted as such."""
-    from rotacal.batch.capture_motion import CHUNK_ROWS, calibrate_encoder_motion_on_dask
-
-    mapping, group = reading
-    options = current_read_options()
-    return run_on_dask(
-        cluster,
-        8 * (-(-n // CHUNK_ROWS)) + 3,  # at most: the rounds over the blocks and the checks
-        "calibrating",
-        lambda client, progress: calibrate_encoder_motion_on_dask(
-            capture,
-            client=client,
-            lines=lines,
-            mapping=mapping,
-            group=group,
-            read_options=options,
-            progress=progress,
-            **kw,
-        ),
-        capture=capture,
-        columns=["a"],
-        rows=n,
-        reading={"mapping": mapping, "group": group, "read_options": options},
-    )
 
 
 def _chunked_option(func: F) -> F:
@@ -369,7 +345,18 @@ def motion_lts(
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     if split_wanted(workers, scheduler, chunked):
-        result = _dask_lts(capture, columns, group, (workers, scheduler), radius_mm, kw)
+        from rotacal.batch.capture_lts import calibrate_lts_motion_on_dask
+
+        result = _dask_motion(
+            capture,
+            columns,
+            group,
+            (workers, scheduler),
+            "displacement_mm",
+            12,  # range, ~4 rank passes, swings, windows, fit and error (drift: 3 more)
+            calibrate_lts_motion_on_dask,
+            {**kw, "radius_mm": radius_mm},
+        )
     elif _streams(capture, "displacement_mm", chunked, columns, group):
         from rotacal.table import calibrate_lts_motion_chunked, lts_chunks_from_file
 
@@ -393,38 +380,6 @@ def motion_lts(
                 cap["time_s"], cap["displacement_mm"], radius_mm=radius_mm, **kw
             )
     _finish_motion(result, capture, json_path, report_path)
-
-
-def _dask_lts(
-    capture: str,
-    columns: Sequence[str],
-    group: str | None,
-    cluster: tuple[int | None, str | None],
-    radius_mm: float,
-    kw: dict[str, Any],
-) -> Any:
-    """The LTS calibration split over a Dask cluster's workers
-    (:func:`rotacal.batch.capture_lts.calibrate_lts_motion_on_dask`), noted as such."""
-    from rotacal.batch.capture_lts import CHUNK_ROWS, calibrate_lts_motion_on_dask
-    from rotacal.io import capture_length, parse_column_mapping
-
-    mapping = parse_column_mapping(columns)
-    options = current_read_options()
-    reading: dict[str, Any] = {"mapping": mapping, "group": group, "read_options": options}
-    n = capture_length(capture, "displacement_mm", **reading)
-    return run_on_dask(
-        cluster,
-        # at most: range, ~4 rank passes, swings, windows, fit and error (drift: 3 more), checks
-        12 * (-(-n // CHUNK_ROWS)) + 4,
-        "calibrating",
-        lambda client, progress: calibrate_lts_motion_on_dask(
-            capture, client=client, radius_mm=radius_mm, progress=progress, **reading, **kw
-        ),
-        capture=capture,
-        columns=["displacement_mm"],
-        rows=n,
-        reading=reading,
-    )
 
 
 @motion.command(
@@ -458,7 +413,18 @@ def motion_fog(
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     if split_wanted(workers, scheduler, chunked):
-        result = _dask_fog(capture, columns, group, (workers, scheduler), kw)
+        from rotacal.batch.capture_fog import calibrate_fog_motion_on_dask
+
+        result = _dask_motion(
+            capture,
+            columns,
+            group,
+            (workers, scheduler),
+            "rate_deg_s",
+            8,  # whole fit, crossings, analysis fit, angle twice, eq. (2)
+            calibrate_fog_motion_on_dask,
+            kw,
+        )
     elif _streams(capture, "rate_deg_s", chunked, columns, group):
         from rotacal.table import calibrate_fog_motion_chunked, fog_chunks_from_file
 
@@ -480,31 +446,35 @@ def motion_fog(
     _finish_motion(result, capture, json_path, report_path)
 
 
-def _dask_fog(
+def _dask_motion(
     capture: str,
     columns: Sequence[str],
     group: str | None,
     cluster: tuple[int | None, str | None],
+    column: str,
+    rounds: int,
+    calibrate: Callable[..., Any],
     kw: dict[str, Any],
 ) -> Any:
-    """The FOG calibration split over a Dask cluster's workers
-    (:func:`rotacal.batch.capture_fog.calibrate_fog_motion_on_dask`), noted as such."""
-    from rotacal.batch.capture_fog import CHUNK_ROWS, calibrate_fog_motion_on_dask
+    """A motion calibration split over a Dask cluster's workers, noted as such: ``calibrate`` is
+    one of :mod:`rotacal.batch`'s ``calibrate_*_motion_on_dask``, ``column`` the capture's
+    signal, ``rounds`` the most rounds of tasks it makes over each block (for the bar)."""
+    from rotacal.batch.capture_motion import CHUNK_ROWS
     from rotacal.io import capture_length, parse_column_mapping
 
     mapping = parse_column_mapping(columns)
     options = current_read_options()
     reading: dict[str, Any] = {"mapping": mapping, "group": group, "read_options": options}
-    n = capture_length(capture, "rate_deg_s", **reading)
+    n = capture_length(capture, column, **reading)
     return run_on_dask(
         cluster,
-        8 * (-(-n // CHUNK_ROWS)) + 4,  # at most: the rounds over the blocks, checks, first adds
+        rounds * (-(-n // CHUNK_ROWS)) + 4,  # the rounds over the blocks, checks, first adds
         "calibrating",
-        lambda client, progress: calibrate_fog_motion_on_dask(
+        lambda client, progress: calibrate(
             capture, client=client, progress=progress, **reading, **kw
         ),
         capture=capture,
-        columns=["rate_deg_s"],
+        columns=[column],
         rows=n,
         reading=reading,
     )
