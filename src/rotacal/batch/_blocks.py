@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Iterator, Sequence
+from os import PathLike
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
@@ -106,6 +107,29 @@ class Ticks:
         self.done += 1
         if self.progress is not None:
             self.progress(self.done)
+
+
+def open_capture(
+    path: str | PathLike[str],
+    columns: Sequence[str],
+    counted: str,
+    chunk_rows: int,
+    mapping: dict[str, str] | None = None,
+    group: str | None = None,
+    read_options: ReadOptions | None = None,
+) -> tuple[CaptureRows, int]:
+    """The rows the tasks read (``columns``) and the capture's number of rows (of the column
+    ``counted``), having refused a ``chunk_rows`` that is not a whole number ≥ 1 and a format without
+    row offsets (CSV, a compressed NPZ member) before any work."""
+    from rotacal.errors import ConfigError
+    from rotacal.io import capture_length
+
+    if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
+        raise ConfigError(f"chunk_rows must be a whole number ≥ 1, not {chunk_rows!r}")
+    source = CaptureRows(str(path), tuple(columns), mapping, group, read_options)
+    n = capture_length(path, counted, mapping=mapping, group=group, read_options=read_options)
+    source.read(0, min(n, 1))
+    return source, n
 
 
 def block_starts(n: int, rows: int) -> list[int]:

@@ -49,6 +49,7 @@ from rotacal.batch._blocks import (
     block_starts,
     check_findings,
     check_task,
+    open_capture,
     task_round,
 )
 
@@ -361,20 +362,14 @@ def calibrate_fog_motion_on_dask(
     ----------
     Feng et al. (2023), Sensors 23:4876, §4, eqs. (2), (9)–(14), §5; IEEE Std 1057-2017, §4.1.3.
     """
-    from rotacal.errors import ConfigError
-    from rotacal.io import capture_length
     from rotacal.table._stream_source import FOG_COLUMNS
     from rotacal.table.motion import _check_set_values, _check_settings
 
     _check_settings(harmonics, periods)
     _check_set_values(set_amplitude_deg, set_frequency_hz)
-    if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
-        raise ConfigError(f"chunk_rows must be a whole number ≥ 1, not {chunk_rows!r}")
-    source = CaptureRows(str(path), FOG_COLUMNS, mapping, group, read_options)
-    n = capture_length(
-        path, FOG_COLUMNS[1], mapping=mapping, group=group, read_options=read_options
+    source, n = open_capture(
+        path, FOG_COLUMNS, FOG_COLUMNS[1], chunk_rows, mapping, group, read_options
     )
-    source.read(0, min(n, 1))  # a format without row offsets is refused before any work
     split = _Split(client, source, n, chunk_rows, Ticks(progress))
     name = FOG_COLUMNS[1]
     checked = client.submit(check_task, source, chunk_rows, {name: None}, name, pure=False)

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rotacal._threads import one_blas_thread
-from rotacal.batch._blocks import CaptureRows, Ticks, check_findings, check_task
+from rotacal.batch._blocks import CaptureRows, Ticks, check_findings, check_task, open_capture
 from rotacal.batch.capture_motion import _accumulate, _fit, _Split
 
 if TYPE_CHECKING:
@@ -261,17 +261,11 @@ def calibrate_lts_motion_on_dask(
     ----------
     Feng et al. (2023), Sensors 23:4876, §5, eqs. (1), (2), (15); IEEE Std 1057-2017, §4.1.3.
     """
-    from rotacal.errors import ConfigError
-    from rotacal.io import capture_length
     from rotacal.table._stream_source import LTS_COLUMNS
     from rotacal.table.streaming import check_lts_run
 
     check_lts_run(harmonics, periods, radius_mm, set_amplitude_deg, set_frequency_hz)
-    if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
-        raise ConfigError(f"chunk_rows must be a whole number ≥ 1, not {chunk_rows!r}")
-    source = CaptureRows(str(path), LTS_COLUMNS, mapping, group, read_options)
-    n = capture_length(path, _SIGNAL, mapping=mapping, group=group, read_options=read_options)
-    source.read(0, min(n, 1))  # a format without row offsets is refused before any work
+    source, n = open_capture(path, LTS_COLUMNS, _SIGNAL, chunk_rows, mapping, group, read_options)
     split = _LtsSplit(client, source, n, chunk_rows, Ticks(progress), radius_mm=float(radius_mm))
     checked = client.submit(
         check_task, source, chunk_rows, {_SIGNAL: None}, _SIGNAL if drift else None, pure=False

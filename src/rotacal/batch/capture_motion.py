@@ -51,6 +51,7 @@ from rotacal.batch._blocks import (
     block_starts,
     check_findings,
     check_task,
+    open_capture,
     task_round,
 )
 
@@ -385,20 +386,12 @@ def calibrate_encoder_motion_on_dask(
     Feng et al. (2023), Sensors 23:4876, §3 and eqs. (1)–(8); IEEE Std 1057-2017, §4.1.3;
     Heydemann 1981, Appl. Opt. 20:3382.
     """
-    from rotacal.errors import ConfigError
-    from rotacal.io import capture_length
     from rotacal.table._stream_source import ENCODER_COLUMNS
     from rotacal.table.streaming import check_encoder_settings
 
     check_encoder_settings(lines, harmonics, periods, set_amplitude_deg, set_frequency_hz)
-    if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
-        raise ConfigError(f"chunk_rows must be a whole number ≥ 1, not {chunk_rows!r}")
-    source = CaptureRows(str(path), ENCODER_COLUMNS, mapping, group, read_options)
-    n = capture_length(path, "a", mapping=mapping, group=group, read_options=read_options)
-    source.read(0, min(n, 1))  # a format without row offsets is refused before any work
-    tick = Ticks(progress)
-
-    split = _Split(client, source, n, chunk_rows, tick)
+    source, n = open_capture(path, ENCODER_COLUMNS, "a", chunk_rows, mapping, group, read_options)
+    split = _Split(client, source, n, chunk_rows, Ticks(progress))
     checked = client.submit(check_task, source, chunk_rows, {"a": "b", "b": "a"}, pure=False)
     try:
         return _calibrate(

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rotacal.batch._blocks import CaptureRows, Ticks, block_starts, task_round
+from rotacal.batch._blocks import CaptureRows, Ticks, block_starts, open_capture, task_round
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -110,19 +110,16 @@ def calibrate_scale_factor_on_dask(
     ----------
     Kokuyama et al. (2015), §4; Chan, Golub & LeVeque (1983), eq. 2.1.
     """
-    from rotacal.errors import ConfigError
     from rotacal.gyro.scale_factor import _check_options
     from rotacal.gyro.scale_factor_merge import merge_point_sums, merge_rate_points, points_seen
     from rotacal.gyro.scale_factor_stream import _Reader, check_points, result_of_sums
-    from rotacal.io import capture_length, iter_capture_chunks
+    from rotacal.io import iter_capture_chunks
 
     opts = _check_options(**options)
-    if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
-        raise ConfigError(f"chunk_rows must be a whole number of rows ≥ 1, not {chunk_rows!r}")
-    source = CaptureRows(str(path), (_RATE, _OUTPUT), mapping, group, read_options)
+    source, n = open_capture(
+        path, (_RATE, _OUTPUT), _RATE, chunk_rows, mapping, group, read_options
+    )
     reading: dict[str, Any] = {"mapping": mapping, "group": group, "read_options": read_options}
-    n = capture_length(path, _RATE, **reading)
-    source.read(0, min(n, 1))  # a format without row offsets is refused before any task
     starts = block_starts(n, chunk_rows)
     tick = Ticks(progress)
 
