@@ -4,6 +4,7 @@ record is split into, and a round of tasks whose results come back in block orde
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Callable, Iterator, Sequence
 from os import PathLike
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -24,7 +25,8 @@ T = TypeVar("T")
 @dataclasses.dataclass(frozen=True)
 class CaptureRows:
     """Where a task reads its rows: the capture, its columns and how to read it (pickled to the
-    workers, which must see ``path``: a shared file system)."""
+    workers, which must see ``path``: a shared file system). ``path`` is made absolute where the
+    object is made: a running scheduler's workers were started in folders of their own."""
 
     path: str
     columns: tuple[str, ...]
@@ -32,11 +34,33 @@ class CaptureRows:
     group: str | None = None
     read_options: ReadOptions | None = None
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "path", os.path.abspath(self.path))
+
+    def visible(self) -> None:
+        """Refuse, naming the worker, a capture that this process cannot see (a worker on another
+        machine without the file system that holds it)."""
+        if os.path.exists(self.path):
+            return
+        from rotacal.errors import CaptureError
+
+        try:
+            from distributed import get_worker
+
+            where = f"Dask worker {get_worker().address}"
+        except (ImportError, ValueError):
+            where = "this process"
+        raise CaptureError(
+            f"{where} cannot see the capture {self.path}: every worker must see it at the same "
+            "path (a shared file system), or use --workers N for workers on this machine"
+        )
+
     def read(self, start: int, stop: int) -> dict[str, np.ndarray]:
         """Rows ``start`` … ``stop - 1`` of every column, validated as the reader validates a
         whole capture (empty arrays when ``stop <= start``)."""
         from rotacal.io import read_capture_rows
 
+        self.visible()
         if stop <= start:
             return {name: np.empty(0) for name in self.columns}
         return read_capture_rows(
@@ -44,6 +68,21 @@ class CaptureRows:
             list(self.columns),
             start,
             stop,
+            mapping=self.mapping,
+            group=self.group,
+            read_options=self.read_options,
+        )
+
+    def chunks(self, columns: Sequence[str], rows: int) -> Iterator[dict[str, np.ndarray]]:
+        """``columns`` of the whole capture in order, in chunks of ``rows`` rows, read and checked
+        as the single-process path reads them."""
+        from rotacal.io import iter_capture_chunks
+
+        self.visible()
+        return iter_capture_chunks(
+            self.path,
+            list(columns),
+            chunk_rows=rows,
             mapping=self.mapping,
             group=self.group,
             read_options=self.read_options,
@@ -60,19 +99,11 @@ def check_task(
     """A task: the first pass of a single-process motion path over the whole file, in order, in
     chunks of ``rows`` (:func:`~rotacal.table._stream_checks.check_pass` with ``companions``
     and ``keep``)."""
-    from rotacal.io import iter_capture_chunks
     from rotacal.table._stream_checks import check_pass
     from rotacal.table._stream_source import Passes
 
     def chunks() -> Iterator[dict[str, np.ndarray]]:
-        return iter_capture_chunks(
-            source.path,
-            source.columns,
-            chunk_rows=rows,
-            mapping=source.mapping,
-            group=source.group,
-            read_options=source.read_options,
-        )
+        return source.chunks(source.columns, rows)
 
     return check_pass(Passes(chunks, None, source.columns), companions, keep=keep)
 

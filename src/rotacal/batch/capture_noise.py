@@ -118,16 +118,7 @@ def _block_task(
 def _crc_task(source: CaptureRows, columns: list[str], rows: int) -> None:
     """Recompute the CRC-32s an NPZ stores for its columns: a pass over the file in order (the
     blocks' reads check everything else), fed while each chunk is scanned, its pages released."""
-    from rotacal.io import iter_capture_chunks
-
-    for _ in iter_capture_chunks(
-        source.path,
-        columns,
-        chunk_rows=rows,
-        mapping=source.mapping,
-        group=source.group,
-        read_options=source.read_options,
-    ):
+    for _ in source.chunks(columns, rows):
         pass
 
 

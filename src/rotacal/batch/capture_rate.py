@@ -97,17 +97,8 @@ def _read_through(source: CaptureRows, rows: int) -> int:
     """Read the column through once, in order, as the single-process path reads it: a stored
     checksum (an NPZ member's CRC-32) covers the whole column and is checked at its end. The
     rows read."""
-    from rotacal.io import iter_capture_chunks
-
     name, n = source.columns[0], 0
-    for part in iter_capture_chunks(
-        source.path,
-        [name],
-        chunk_rows=rows,
-        mapping=source.mapping,
-        group=source.group,
-        read_options=source.read_options,
-    ):
+    for part in source.chunks([name], rows):
         n += part[name].size
     return n
 

@@ -55,16 +55,7 @@ WAVE = 16
 def _head_chunks(source: CaptureRows, name: str, chunk_rows: int) -> Iterator[np.ndarray]:
     """One head's pulse times in chunks of ``chunk_rows``, as the single-process command reads
     them."""
-    from rotacal.io import iter_capture_chunks
-
-    chunks = iter_capture_chunks(
-        source.path,
-        [name],
-        chunk_rows=chunk_rows,
-        mapping=source.mapping,
-        group=source.group,
-        read_options=source.read_options,
-    )
+    chunks = source.chunks([name], chunk_rows)
     return (chunk[name] for chunk in chunks)
 
 
