@@ -39,8 +39,8 @@ from rotacal.results import Result
 
 __all__ = [
     "MIN_POINTS_PER_SIGN",
-    "SignedScaleFactors",
     "ScaleFactorRepeatability",
+    "SignedScaleFactors",
     "scale_factor_repeatability",
     "signed_or_flag",
     "signed_scale_factors",
@@ -208,10 +208,18 @@ def signed_or_flag(
     rates = np.asarray(rates_deg_s, dtype=float)
     u = np.full(rates.size, math.nan) if u_means is None else np.asarray(u_means, dtype=float)
     try:
-        return signed_scale_factors(
-            rates, means, u, scale_factor=scale_factor, eps_mean=eps_mean, u_eps=u_eps
-        ), None, None
+        return (
+            signed_scale_factors(
+                rates, means, u, scale_factor=scale_factor, eps_mean=eps_mean, u_eps=u_eps
+            ),
+            None,
+            None,
+        )
     except CaptureError as e:
         if np.any(rates > 0) and np.any(rates < 0):
             return None, None, f"no scale factors per sign: {e}"
-        return None, f"the rates are of one sign: no scale factors per sign nor asymmetry ({e})", None
+        return (
+            None,
+            f"the rates are of one sign: no scale factors per sign nor asymmetry ({e})",
+            None,
+        )

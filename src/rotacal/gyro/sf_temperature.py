@@ -116,7 +116,9 @@ def temperature_coefficients(
     u = np.asarray(u_means, dtype=float)
     t = np.asarray(temperature_c, dtype=float)
     if not np.all(np.isfinite(t)):
-        raise CaptureError("column temperature_c holds NaN or inf: every point needs a temperature.")
+        raise CaptureError(
+            "column temperature_c holds NaN or inf: every point needs a temperature."
+        )
     span = float(np.ptp(t))
     if span < MIN_TEMPERATURE_SPAN_C:
         raise CaptureError(

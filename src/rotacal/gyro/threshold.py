@@ -158,11 +158,16 @@ def _levels(
     np.minimum.at(worst, gid, ratios)
     met = worst >= CRITERION
     if not met[-1]:
-        return None, None, None, [
-            f"the largest {what} input tested ({levels[-1]:.4g} °/s) did not reach "
-            f"{100 * CRITERION:g} % of the expected output: the {what} is above it; test larger "
-            "increments."
-        ]
+        return (
+            None,
+            None,
+            None,
+            [
+                f"the largest {what} input tested ({levels[-1]:.4g} °/s) did not reach "
+                f"{100 * CRITERION:g} % of the expected output: the {what} is above it; test larger "
+                "increments."
+            ],
+        )
     failing = np.flatnonzero(~met)
     k = int(failing[-1]) + 1 if failing.size else 0  # the smallest level from which on all meet
     lo, hi = (float(levels[k - 1]) if k else 0.0), float(levels[k])
@@ -232,7 +237,7 @@ def small_step_test(
         raise CaptureError("rate_deg_s and output must be finite on every row (no NaN or inf).")
     check_magnitudes("rate_deg_s", rate, what="a set rate")
     check_magnitudes("output", y, what="a gyro output")
-    set_rate, mean, se, n, dwell = _dwells(rate, y, tol, int(settle_samples))
+    set_rate, mean, se, _, dwell = _dwells(rate, y, tol, int(settle_samples))
     if set_rate.size < 2:
         raise CaptureError(
             "the log holds one set rate: a small-step test needs the table to step between rates."
@@ -250,7 +255,9 @@ def small_step_test(
     else:
         s, source = float(scale_factor), "nominal"
         if not math.isfinite(s) or s == 0:
-            raise ConfigError(f"scale_factor must be a finite non-zero number, got {scale_factor!r}.")
+            raise ConfigError(
+                f"scale_factor must be a finite non-zero number, got {scale_factor!r}."
+            )
     before, after = set_rate[:-1], set_rate[1:]
     change = after - before
     dv = np.diff(mean)

@@ -201,7 +201,9 @@ def simulate_gyro_rates(
     rng = np.random.default_rng(seed)
     run_std = _finite("run_scale_factor_std_ppm", run_scale_factor_std_ppm)
     if run_std < 0:
-        raise ConfigError(f"run_scale_factor_std_ppm must be ≥ 0, got {run_scale_factor_std_ppm!r}.")
+        raise ConfigError(
+            f"run_scale_factor_std_ppm must be ≥ 0, got {run_scale_factor_std_ppm!r}."
+        )
     # drawn only when asked, so that the noise of a capture without it stays as it was
     s = s * (1.0 + 1e-6 * run_std * float(rng.standard_normal())) if run_std > 0 else s
     half_a = 0.5e-6 * _finite("asymmetry_ppm", asymmetry_ppm)
@@ -230,7 +232,9 @@ def simulate_gyro_rates(
     rate_col = np.repeat(rates, counts)
     out = np.repeat(clean_pts, counts)
     if sigma > 0:
-        out = out + (rng if run_std > 0 else np.random.default_rng(seed)).normal(0.0, sigma, out.size)
+        out = out + (rng if run_std > 0 else np.random.default_rng(seed)).normal(
+            0.0, sigma, out.size
+        )
     if q is not None:
         out = q * np.round(out / q)
     saturated: list[float] = []
