@@ -156,7 +156,10 @@ def gyro_scale_factor(
         rate_files,
         columns,
         group,
-        lambda path: _scale_factor_here([path], rate_files, columns, group, options, chunked),
+        # each run needs S and its GUM u only: the Monte Carlo of NL at its smallest
+        lambda path: _scale_factor_here(
+            [path], rate_files, columns, group, {**options, "mc_trials": 2000}, chunked
+        ),
     )
     _emit_warnings(result)
     data = result.to_dict()

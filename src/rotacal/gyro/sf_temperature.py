@@ -124,7 +124,7 @@ def temperature_coefficients(
         raise CaptureError(
             f"the rate points' temperatures span {span:.3g} °C, less than "
             f"{MIN_TEMPERATURE_SPAN_C:g} °C: too small to tell the temperature coefficients; test "
-            "at temperatures further apart, or leave temperature_c out."
+            "at temperatures further apart, or map the column away (--column temperature_c=room_c)."
         )
     ref = float(np.mean(t))
     dt = t - ref
