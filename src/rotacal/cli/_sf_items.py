@@ -121,26 +121,29 @@ def scale_factor_items(
     )
 
 
+def _pm(value: float, u: float, unit: str = "", digits: int = 4, more: str = "") -> str:
+    """value ± U unit (k = 2, p = 95 %): U = 2u, the normal approximation of the items' u."""
+    unit = f" {unit}" if unit else ""
+    return f"{value:.{digits}g} ± {2.0 * u:.2g}{unit} (k = 2, p = 95 %{more})"
+
+
 def item_lines(result: Any) -> list[str]:
-    """The summary lines of the items a result holds (value ± u, standard uncertainty)."""
+    """The summary lines of the items a result holds."""
     lines = []
     sg, rep, t = result.signed, result.repeatability, result.temperature
     if sg is not None:
         lines += [
-            f"S positive        {sg.scale_factor_positive:.8g} ± {sg.scale_factor_positive_u:.2g} (u)",
-            f"S negative        {sg.scale_factor_negative:.8g} ± {sg.scale_factor_negative_u:.2g} (u)",
-            f"asymmetry         {sg.asymmetry_ppm:.4g} ± {sg.asymmetry_ppm_u:.2g} ppm (u)",
+            f"S positive        {_pm(sg.scale_factor_positive, sg.scale_factor_positive_u, digits=8)}",
+            f"S negative        {_pm(sg.scale_factor_negative, sg.scale_factor_negative_u, digits=8)}",
+            f"asymmetry         {_pm(sg.asymmetry_ppm, sg.asymmetry_ppm_u, 'ppm')}",
         ]
     if rep is not None:
         lines.append(
-            f"repeatability     {rep.scale_factor_repeatability_ppm:.3g} ± "
-            f"{rep.scale_factor_repeatability_ppm_u:.2g} ppm (u, {rep.runs} runs)"
+            f"repeatability     {_pm(rep.scale_factor_repeatability_ppm, rep.scale_factor_repeatability_ppm_u, 'ppm', 3, f'; {rep.runs} runs')}"
         )
     if t is not None:
         lines += [
-            f"S temp. coeff.    {t.scale_factor_temperature_coefficient_ppm_per_c:.4g} ± "
-            f"{t.scale_factor_temperature_coefficient_ppm_per_c_u:.2g} ppm/deg C (u, {t.temperature_model})",
-            f"bias temp. coeff. {t.bias_temperature_coefficient_deg_h_per_c:.4g} ± "
-            f"{t.bias_temperature_coefficient_deg_h_per_c_u:.2g} (deg/h)/deg C (u)",
+            f"S temp. coeff.    {_pm(t.scale_factor_temperature_coefficient_ppm_per_c, t.scale_factor_temperature_coefficient_ppm_per_c_u, 'ppm/deg C', more=f'; {t.temperature_model}')}",
+            f"bias temp. coeff. {_pm(t.bias_temperature_coefficient_deg_h_per_c, t.bias_temperature_coefficient_deg_h_per_c_u, '(deg/h)/deg C')}",
         ]
     return lines

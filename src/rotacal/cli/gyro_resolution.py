@@ -29,8 +29,8 @@ from .gyro import gyro
 @gyro.command(
     "resolution",
     epilog=example(
-        "rotacal simulate gyro-steps --out steps.csv",
         "rotacal gyro resolution steps.csv --scale-factor 0.0125 --report steps.html",
+        "rotacal simulate gyro-steps --out steps.csv",
     ),
 )
 @click.argument("capture", type=INPUT_FILE)

@@ -98,7 +98,10 @@ def signed_scale_factors(
         Stated mean relative error of the table's set rate and its standard uncertainty
         (dimensionless; ``table.set_rate_relative``): S± = S±₀/(1 + ε̄), u_B = |S±|·u(ε).
 
-    Raises CaptureError when a sign has fewer than :data:`MIN_POINTS_PER_SIGN` points.
+    Raises
+    ------
+    CaptureError
+        A sign has fewer than :data:`MIN_POINTS_PER_SIGN` points.
     """
     rates = np.asarray(rates_deg_s, dtype=float)
     y = np.asarray(means, dtype=float)
@@ -165,7 +168,10 @@ def scale_factor_repeatability(
     scale_factors_u : array or None
         Their standard uncertainties (same unit), for ``within_run_ppm``; None: NaN.
 
-    Raises CaptureError for fewer than two runs or a zero mean scale factor.
+    Raises
+    ------
+    CaptureError
+        Fewer than two runs, or a zero mean scale factor.
     """
     s = np.asarray(scale_factors, dtype=float).reshape(-1)
     if s.size < 2:

@@ -57,13 +57,15 @@ from rotacal.gyro.scale_factor_points import _group, output_quantum
 from rotacal.results import Result
 from rotacal.signal._values import check_magnitudes
 
-__all__ = ["CRITERION", "SmallStep", "SmallStepResult", "small_step_test"]
+__all__ = ["CRITERION", "K_RECTANGULAR_95", "SmallStep", "SmallStepResult", "small_step_test"]
 
 #: The fraction of the expected output change a step must reach (IEEE Std 528: 50 %).
 CRITERION = 0.5
 #: Set rates closer than this (°/s) on consecutive rows are one dwell: well below any increment.
 DEFAULT_STEP_TOLERANCE_DEG_S = 1e-9
 _NOISE_SIGMAS = 2.0
+#: Coverage factor of a rectangular distribution for p = 95 % (√3·0.95; GUM G.2.3 / G.6.6 note).
+K_RECTANGULAR_95 = 1.65
 
 
 @dataclasses.dataclass(frozen=True)
@@ -107,7 +109,7 @@ class SmallStepResult(Result):
     notes: tuple[str, ...] = ()
 
     def summary_lines(self) -> list[str]:
-        """value ± u (bracket) of each, for the CLI."""
+        """value ± U (rectangular, p = 95 %) and the bracket of each, for the CLI."""
         out = []
         for name in ("threshold", "resolution"):
             v = getattr(self, f"{name}_deg_s")
@@ -116,7 +118,10 @@ class SmallStepResult(Result):
                 continue
             lo, hi = getattr(self, f"{name}_bracket_deg_s")
             u = getattr(self, f"{name}_deg_s_u")
-            out.append(f"{name:<11} {v:.4g} ± {u:.2g} deg/s (between {lo:.4g} and {hi:.4g})")
+            out.append(
+                f"{name:<11} {v:.4g} ± {K_RECTANGULAR_95 * u:.2g} deg/s (k = "
+                f"{K_RECTANGULAR_95:g}, p = 95 %; between {lo:.4g} and {hi:.4g})"
+            )
         return out
 
 

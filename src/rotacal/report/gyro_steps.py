@@ -10,28 +10,29 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from rotacal.gyro.threshold import SmallStepResult
+from rotacal.gyro.threshold import K_RECTANGULAR_95, SmallStepResult
 from rotacal.numbers import fixed
 from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
 from rotacal.report.uncertainty import result_row
 from rotacal.report.wording import paragraph
 
-__all__ = ["small_step_figure", "small_step_section", "standard_u_row"]
+__all__ = ["small_step_figure", "small_step_plot", "small_step_section", "standard_u_row"]
 
 _C = {"met": "#1f5f99", "not": "#b22222", "band": "#f2e3c6", "grid": "#e3e7eb"}
 
 
 def standard_u_row(
-    quantity: str, value: float | None, u: float | None, unit: str, note: str = ""
+    quantity: str, value: float | None, u: float | None, unit: str, note: str = "", k: float = 2.0
 ) -> ResultRow:
-    """A result row from a value and its standard uncertainty: U = 2u (k = 2, p ≈ 95 %)."""
+    """A result row from a value and its standard uncertainty: U = k·u, p ≈ 95 % (k = 2 for a
+    normal distribution, 1.65 for a rectangular one)."""
     if value is None or u is None or not np.isfinite(u):
         return result_row(quantity, value, unit, note=note or "no uncertainty")
-    return result_row(quantity, value, unit, U=2.0 * u, k=2, p=0.95, note=note)
+    return result_row(quantity, value, unit, U=k * u, k=k, p=0.95, note=note)
 
 
-def small_step_figure(r: SmallStepResult) -> Figure:
-    """Ratio of each step's output change to the expected one, against its input, per item."""
+def small_step_plot(r: SmallStepResult) -> Any:
+    """The matplotlib figure of :func:`small_step_figure` (also drawn for the method page)."""
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.2), sharey=True)
     for ax, kind in zip(axes, ("threshold", "resolution"), strict=True):
         steps = [s for s in r.steps if s.kind == kind]
@@ -68,8 +69,13 @@ def small_step_figure(r: SmallStepResult) -> Figure:
         ax.legend(fontsize=7, loc="lower right", frameon=False)
     axes[0].set_ylabel("output change / (S·input change)")
     fig.tight_layout()
+    return fig
+
+
+def small_step_figure(r: SmallStepResult) -> Figure:
+    """Ratio of each step's output change to the expected one, against its input, per item."""
     return figure_from_matplotlib(
-        fig,
+        small_step_plot(r),
         "Output change of each step against its input",
         "Each point is one step between dwells: its output change over what the scale factor "
         "predicts (1: the gyro follows; 0: it does not). Shaded: the interval in which the "
@@ -86,6 +92,7 @@ def small_step_section(r: SmallStepResult, title: str | None = None) -> Section:
             r.threshold_deg_s_u,
             "°/s",
             note="middle of its bracket, rectangular u",
+            k=K_RECTANGULAR_95,
         ),
         standard_u_row(
             "resolution (small-step test)",
@@ -93,6 +100,7 @@ def small_step_section(r: SmallStepResult, title: str | None = None) -> Section:
             r.resolution_deg_s_u,
             "°/s",
             note="middle of its bracket, rectangular u",
+            k=K_RECTANGULAR_95,
         ),
     ]
     own = r.output_resolution
