@@ -124,7 +124,7 @@ def scale_factor_items(
 def _pm(value: float, u: float, unit: str = "", digits: int = 4, more: str = "") -> str:
     """value ± U unit (k = 2, p = 95 %): U = 2u, the normal approximation of the items' u."""
     unit = f" {unit}" if unit else ""
-    return f"{value:.{digits}g} ± {2.0 * u:.2g}{unit} (k = 2, p = 95 %{more})"
+    return f"{value:.{digits}g} ± {2.0 * u:.2g}{unit} (k = 2, p = 95 %){more}"
 
 
 def item_lines(result: Any) -> list[str]:
@@ -132,18 +132,24 @@ def item_lines(result: Any) -> list[str]:
     lines = []
     sg, rep, t = result.signed, result.repeatability, result.temperature
     if sg is not None:
+        pos = _pm(sg.scale_factor_positive, sg.scale_factor_positive_u, digits=8)
+        neg = _pm(sg.scale_factor_negative, sg.scale_factor_negative_u, digits=8)
         lines += [
-            f"S positive        {_pm(sg.scale_factor_positive, sg.scale_factor_positive_u, digits=8)}",
-            f"S negative        {_pm(sg.scale_factor_negative, sg.scale_factor_negative_u, digits=8)}",
+            f"S positive        {pos}",
+            f"S negative        {neg}",
             f"asymmetry         {_pm(sg.asymmetry_ppm, sg.asymmetry_ppm_u, 'ppm')}",
         ]
     if rep is not None:
-        lines.append(
-            f"repeatability     {_pm(rep.scale_factor_repeatability_ppm, rep.scale_factor_repeatability_ppm_u, 'ppm', 3, f'; {rep.runs} runs')}"
-        )
+        value, u = rep.scale_factor_repeatability_ppm, rep.scale_factor_repeatability_ppm_u
+        lines.append(f"repeatability     {_pm(value, u, 'ppm', 3, f', {rep.runs} runs')}")
     if t is not None:
+        k_s = t.scale_factor_temperature_coefficient_ppm_per_c
+        k_s_u = t.scale_factor_temperature_coefficient_ppm_per_c_u
+        k_b = t.bias_temperature_coefficient_deg_h_per_c
+        k_b_u = t.bias_temperature_coefficient_deg_h_per_c_u
+        model = f", {t.temperature_model} model"
         lines += [
-            f"S temp. coeff.    {_pm(t.scale_factor_temperature_coefficient_ppm_per_c, t.scale_factor_temperature_coefficient_ppm_per_c_u, 'ppm/deg C', more=f'; {t.temperature_model}')}",
-            f"bias temp. coeff. {_pm(t.bias_temperature_coefficient_deg_h_per_c, t.bias_temperature_coefficient_deg_h_per_c_u, '(deg/h)/deg C')}",
+            f"S temp. coeff.    {_pm(k_s, k_s_u, 'ppm/deg C', more=model)}",
+            f"bias temp. coeff. {_pm(k_b, k_b_u, '(deg/h)/deg C')}",
         ]
     return lines

@@ -120,7 +120,7 @@ class SmallStepResult(Result):
             u = getattr(self, f"{name}_deg_s_u")
             out.append(
                 f"{name:<11} {v:.4g} ± {K_RECTANGULAR_95 * u:.2g} deg/s (k = "
-                f"{K_RECTANGULAR_95:g}, p = 95 %; between {lo:.4g} and {hi:.4g})"
+                f"{K_RECTANGULAR_95:g}, p = 95 %), between {lo:.4g} and {hi:.4g}"
             )
         return out
 
