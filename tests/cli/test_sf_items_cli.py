@@ -7,21 +7,7 @@ import json
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
-
-from rotacal.cli import cli
-
-
-def run(*args: str):
-    return CliRunner().invoke(cli, list(args), prog_name="rotacal")
-
-
-def one_line_error(result, *needles):
-    assert result.exit_code == 2, result.output
-    err = result.stderr.strip()
-    assert err.count("\n") == 0 and "Traceback" not in result.output, err
-    for n in needles:
-        assert n.lower() in err.lower(), err
+from tests.cli.test_gyro_cli import one_line_error, run
 
 
 def simulate(path: Path, kind: str, *args: str) -> dict:

@@ -41,6 +41,7 @@ __all__ = [
     "MIN_POINTS_PER_SIGN",
     "ScaleFactorRepeatability",
     "SignedScaleFactors",
+    "least_squares_with_u",
     "scale_factor_repeatability",
     "signed_or_flag",
     "signed_scale_factors",
@@ -49,6 +50,20 @@ __all__ = [
 #: Rate points each sign needs: one fixes a slope through the shared bias only when the bias is
 #: known exactly; two leave the slope determined by that sign's own points.
 MIN_POINTS_PER_SIGN = 2
+
+
+def least_squares_with_u(
+    x: np.ndarray, y: np.ndarray, u: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """θ of the unweighted least-squares fit y ≈ x·θ and its covariance from the standard
+    uncertainties u of y: P·diag(u²)·Pᵀ with P = (XᵀX)⁻¹Xᵀ (GUM §5.1.2, the fit being linear in
+    y). Raises CaptureError when the columns of x are not independent."""
+    norm = np.max(np.abs(x), axis=0)
+    xs = x / norm  # the columns scaled alike, for the conditioning of the solve
+    if np.linalg.matrix_rank(xs) < x.shape[1]:
+        raise CaptureError("the design of the fit has dependent columns")
+    pinv = np.linalg.pinv(xs) / norm[:, None]
+    return pinv @ y, (pinv * u**2) @ pinv.T
 
 
 @dataclasses.dataclass(frozen=True)
@@ -113,12 +128,7 @@ def signed_scale_factors(
             f"of each sign and the asymmetry need at least {MIN_POINTS_PER_SIGN} of each sign."
         )
     x = np.column_stack([np.maximum(rates, 0.0), np.minimum(rates, 0.0), np.ones_like(rates)])
-    # scale the columns for conditioning, solve, and propagate the point uncertainties
-    norm = np.max(np.abs(x), axis=0)
-    xs = x / norm
-    pinv = np.linalg.pinv(xs) / norm[:, None]  # θ = pinv·y
-    theta = pinv @ y
-    cov = (pinv * u**2) @ pinv.T
+    theta, cov = least_squares_with_u(x, y, u)
     k = 1.0 + eps_mean
     s_pos, s_neg = theta[0] / k, theta[1] / k
     var_pos, var_neg, cov_pn = cov[0, 0] / k**2, cov[1, 1] / k**2, cov[0, 1] / k**2

@@ -37,6 +37,7 @@ import math
 import numpy as np
 
 from rotacal.errors import CaptureError
+from rotacal.gyro.sf_items import least_squares_with_u
 from rotacal.results import Result
 
 __all__ = ["MIN_TEMPERATURE_SPAN_C", "TemperatureCoefficients", "temperature_coefficients"]
@@ -71,18 +72,15 @@ class TemperatureCoefficients(Result):
 
 def _fit(x: np.ndarray, y: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, int]:
     """θ, its covariance (Birge-scaled), the residual sum of squares and ν of one model."""
-    norm = np.max(np.abs(x), axis=0)
-    xs = x / norm
-    if np.linalg.matrix_rank(xs) < x.shape[1]:
+    try:
+        theta, cov = least_squares_with_u(x, y, u)
+    except CaptureError:
         raise CaptureError(
             "the rate points do not separate the scale factor's change with temperature from the "
             "bias's: test at least two rates at each of two temperatures."
-        )
-    pinv = np.linalg.pinv(xs) / norm[:, None]
-    theta = pinv @ y
+        ) from None
     resid = y - x @ theta
     dof = y.size - x.shape[1]
-    cov = (pinv * u**2) @ pinv.T
     birge2 = float(np.sum((resid / u) ** 2)) / dof if dof > 0 and np.all(u > 0) else 1.0
     return theta, cov * max(birge2, 1.0), float(resid @ resid), dof
 
