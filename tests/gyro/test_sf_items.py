@@ -140,3 +140,27 @@ def test_temperature_refuses_what_it_cannot_tell():
         temperature_coefficients(
             np.array([10.0, 10.0, 10.0]), np.ones(3), np.ones(3), np.array([0.0, 10.0, 20.0])
         )
+
+
+def test_temperature_u_matches_the_spread_of_twin_repeats():
+    z_s, z_b = [], []
+    for seed in range(30):
+        parts = []
+        for i, temp in enumerate((0.0, 20.0, 40.0, 60.0)):
+            cap = simulate_gyro_rates(
+                temperature_c=temp,
+                temperature_ref_c=30.0,
+                scale_factor_tc_ppm_per_c=80.0,
+                bias_tc_per_c=2e-4,
+                nonlinearity=None,
+                samples_per_point=200,
+                seed=100 * seed + i,
+            )
+            parts.append(_points(cap))
+        tc = temperature_coefficients(*(np.concatenate(k) for k in zip(*parts, strict=True)))
+        key_s = "scale_factor_temperature_coefficient_ppm_per_c"
+        key_b = "bias_temperature_coefficient_deg_h_per_c"
+        z_s.append((getattr(tc, key_s) - cap.truth[key_s]) / getattr(tc, f"{key_s}_u"))
+        z_b.append((getattr(tc, key_b) - cap.truth[key_b]) / getattr(tc, f"{key_b}_u"))
+    for z in (z_s, z_b):
+        assert 0.7 < np.std(z) < 1.4 and abs(np.mean(z)) < 0.6

@@ -19,7 +19,7 @@ import numpy as np
 
 from rotacal.errors import CaptureError
 
-from ._common import _naming_file, _read
+from ._common import _naming_file
 from ._reading import current_read_options
 
 
@@ -39,17 +39,21 @@ def _has_temperature(path: str, columns: Sequence[str], group: str | None) -> bo
 def _point_temperatures(
     path: str, result: Any, columns: Sequence[str], group: str | None
 ) -> np.ndarray:
-    """The mean temperature_c (°C) of the rows of each rate point of ``result`` (one capture)."""
-    from rotacal.gyro.scale_factor_points import _group
+    """The mean temperature_c (°C) of the rows of each rate point of ``result`` (one capture),
+    read in chunks (flat memory on a long log): each row goes to the rate point nearest its set
+    rate (the points lie further apart than the grouping tolerance)."""
+    from ._rate_files import _file_chunks
 
-    cap = _read(path, ["rate_deg_s", "temperature_c"], columns, group)
-    rate, temp = np.asarray(cap["rate_deg_s"]), np.asarray(cap["temperature_c"])
-    gid, rates, _ = _group(rate, result.rate_tolerance_deg_s)
-    if rates.size != result.n_points or not np.allclose(rates, result.rates_deg_s, atol=1e-9):
-        raise CaptureError(
-            f"{path}: the rate points of temperature_c's rows do not match those analysed."
-        )
-    return np.bincount(gid, weights=temp, minlength=rates.size) / np.bincount(gid)
+    rates = np.asarray(result.rates_deg_s, dtype=float)
+    edges = 0.5 * (rates[1:] + rates[:-1])
+    sums = np.zeros(rates.size)
+    counts = np.zeros(rates.size)
+    with _naming_file(path):
+        for chunk in _file_chunks(path, ["rate_deg_s", "temperature_c"], columns, group):
+            point = np.searchsorted(edges, np.asarray(chunk["rate_deg_s"]))
+            sums += np.bincount(point, weights=chunk["temperature_c"], minlength=rates.size)
+            counts += np.bincount(point, minlength=rates.size)
+    return sums / np.maximum(counts, 1)
 
 
 def _points(result: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
