@@ -57,6 +57,7 @@ def captures(tmp_path_factory) -> dict[str, Path]:
         "gyro-triad": ["--samples-per-point", "20"],
         "gyro-noise": ["--duration-s", "600"],
         "gyro-rotations": [],
+        "gyro-steps": ["--samples-per-dwell", "20"],
         "multiposition": [],
     }
     out = {}
@@ -77,6 +78,7 @@ ANALYSES: dict[tuple[str, ...], tuple[str, list[str]]] = {
     ("allan",): ("gyro-noise", []),
     ("inspect",): ("fog", []),
     ("gyro", "multiposition"): ("multiposition", ["--axis", "x", "--latitude-deg", "45.75"]),
+    ("gyro", "resolution"): ("gyro-steps", []),
     ("gyro", "rotations"): ("gyro-rotations", ["--sections", "{gyro-rotations}.truth.json"]),
     ("gyro", "scale-factor"): ("gyro-rates", []),
     ("gyro", "triad"): ("gyro-triad", []),
@@ -101,6 +103,7 @@ WRITERS: dict[tuple[str, ...], list[str]] = {
             "gyro-noise",
             "gyro-rates",
             "gyro-rotations",
+            "gyro-steps",
             "gyro-triad",
             "lts",
             "multiposition",

@@ -33,6 +33,7 @@ from ._dask import dask_options, run_on_dask, split_wanted
 from ._help import example
 from ._rate_files import rate_file_options, rate_row_chunks, rate_row_count, read_rate_rows
 from ._reading import current_read_options
+from ._sf_items import item_lines, scale_factor_items
 
 
 @cli.group(
@@ -149,6 +150,17 @@ def gyro_scale_factor(
         )
     else:
         result = _scale_factor_here(captures, rate_files, columns, group, options, chunked)
+    result = scale_factor_items(  # repeatability over runs, temperature coefficients
+        result,
+        captures,
+        rate_files,
+        columns,
+        group,
+        # each run needs S and its GUM u only: the Monte Carlo of NL at its smallest
+        lambda path: _scale_factor_here(
+            [path], rate_files, columns, group, {**options, "mc_trials": 2000}, chunked
+        ),
+    )
     _emit_warnings(result)
     data = result.to_dict()
     _write_json(data, json_path)
@@ -253,6 +265,8 @@ def _print_scale_factor(result: Any, data: dict[str, Any]) -> None:
         click.echo(f"resolution        {value} ({result.resolution.basis})")
     if result.decision_with_uncertainty is not None:
         click.echo(f"  {result.decision_with_uncertainty.line}")
+    for line in item_lines(result):  # the IEEE Std 952/1431 items
+        click.echo(line)
 
 
 @gyro.command(
@@ -542,3 +556,6 @@ def _drift_coefficient(data: dict[str, Any], name: str) -> dict[str, Any]:
         "k": {name: k.get(name)},
         "coverage_probability": data.get("coverage_probability"),
     }
+
+
+from . import gyro_resolution as _gyro_resolution  # noqa: E402,F401  (registers `gyro resolution`)

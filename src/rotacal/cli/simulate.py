@@ -441,6 +441,30 @@ def simulate_pulses_cmd(
 @click.option(
     "--quantum", type=float, default=None, help="Output quantisation step (output unit) [none]."
 )
+@click.option(
+    "--asymmetry-ppm", type=float, default=None, help="Scale-factor asymmetry (S+ - S-)/S, ppm [0]."
+)
+@click.option(
+    "--run-scale-factor-std-ppm",
+    type=float,
+    default=None,
+    help="Run-to-run spread of S (ppm): each --seed is one run of the same gyro [0].",
+)
+@click.option(
+    "--temperature-c",
+    type=float,
+    default=None,
+    help="Temperature of this run (deg C): writes a temperature_c column [none].",
+)
+@click.option(
+    "--scale-factor-tc-ppm-per-c", type=float, default=None, help="dS/dT over S (ppm/deg C) [0]."
+)
+@click.option(
+    "--bias-tc-per-c", type=float, default=None, help="dV0/dT (output unit per deg C) [0]."
+)
+@click.option(
+    "--temperature-ref-c", type=float, default=None, help="Where S and V0 hold (deg C) [25]."
+)
 def simulate_gyro_rates_cmd(out: str, overwrite: bool, **kw: Any) -> None:
     """Single-axis gyro on a rate table.
 
@@ -451,6 +475,33 @@ def simulate_gyro_rates_cmd(out: str, overwrite: bool, **kw: Any) -> None:
 
     options = {k: v for k, v in kw.items() if v is not None}
     _sim_write(simulate_gyro_rates(**options), out, overwrite)
+
+
+@simulate.command(
+    "gyro-steps",
+    epilog=example("rotacal simulate gyro-steps --resolution-deg-s 0.004 --out steps.csv"),
+)
+@_sim_common
+@click.option(
+    "--resolution-deg-s", type=float, default=None, help="Stick-slip size r (deg/s) [0.0042]."
+)
+@click.option(
+    "--dead-zone-deg-s", type=float, default=None, help="Dead zone half-width d (deg/s) [0.007]."
+)
+@click.option(
+    "--noise-std", type=float, default=None, help="Output noise, rms (output unit) [2.5e-5]."
+)
+@click.option("--samples-per-dwell", type=int, default=None, help="Samples at each dwell [2000].")
+def simulate_gyro_steps_cmd(out: str, overwrite: bool, **kw: Any) -> None:
+    """A gyro's small-step test: rate_deg_s, output.
+
+    Small increments around 0 and +-10 deg/s; the gyro has a known threshold max(r, d) and
+    resolution r (IEEE Std 528 definitions), for `rotacal gyro resolution`.
+    """
+    from rotacal.sim import simulate_gyro_steps
+
+    options = {k: v for k, v in kw.items() if v is not None}
+    _sim_write(simulate_gyro_steps(**options), out, overwrite)
 
 
 @simulate.command(

@@ -35,6 +35,9 @@ if TYPE_CHECKING:
         calibrate_scale_factor_chunked,
         scale_factor_chunks,
     )
+    from rotacal.gyro.sf_items import scale_factor_repeatability, signed_scale_factors
+    from rotacal.gyro.sf_temperature import temperature_coefficients
+    from rotacal.gyro.threshold import SmallStepResult, small_step_test
     from rotacal.gyro.triad import (
         RATE_COLUMNS,
         TRIAD_OUTPUT_COLUMNS,
@@ -58,6 +61,7 @@ __all__ = [
     "MultipositionResult",
     "RotationCalibration",
     "ScaleFactorResult",
+    "SmallStepResult",
     "TriadPlanCheck",
     "TriadResult",
     "apply_triad_calibration",
@@ -79,6 +83,10 @@ __all__ = [
     "multiposition_plan",
     "resolve_requirement",
     "scale_factor_chunks",
+    "scale_factor_repeatability",
+    "signed_scale_factors",
+    "small_step_test",
+    "temperature_coefficients",
     "triad_plan",
     "triad_plan_check",
 ]

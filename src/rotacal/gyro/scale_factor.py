@@ -101,6 +101,7 @@ from rotacal.gyro.scale_factor_requirement import (
     resolve_requirement,
 )
 from rotacal.gyro.scale_factor_result import RatePoint, ScaleFactorResult
+from rotacal.gyro.sf_items import signed_or_flag
 from rotacal.gyro.uncertainty import as_specs
 from rotacal.signal._values import check_magnitudes, check_not_copies, check_setting
 from rotacal.signal.clipping import check_clipping
@@ -503,6 +504,16 @@ def _finish(points: PointData, opts: _Options) -> ScaleFactorResult:
         nl_corr = max(nl - nl_bias, 0.0) if math.isfinite(nl_bias) else math.nan
         if lof:
             notes.append(lof)
+    # S₊, S₋ and the asymmetry (IEEE Std 528/952; rotacal.gyro.sf_items)
+    signed, sign_note, sign_warning = signed_or_flag(
+        rates,
+        means,
+        u_pt,
+        scale_factor=s,
+        eps_mean=eps_mean,
+        u_eps=0.0 if eps_dist is None else float(eps_dist.std),
+    )
+    notes += [sign_note] if sign_note else []
     s_u = budgets["scale_factor"].u if budgets else math.nan
     v0_u = budgets["bias"].u if budgets else math.nan
 
@@ -565,8 +576,10 @@ def _finish(points: PointData, opts: _Options) -> ScaleFactorResult:
         decision_with_uncertainty=decision,
         resolution=res,
         _budgets=budgets,
+        signed=signed,
         warnings=(
             *points.clipped,
+            *([sign_warning] if sign_warning else []),
             *scale_factor_warnings(
                 scale_factor=s,
                 nonlinearity_percent_fs=nl,

@@ -10,11 +10,15 @@ import numpy as np
 
 from rotacal.gyro.resolution import OutputResolution
 from rotacal.gyro.scale_factor_requirement import DecisionWithU, RequirementVerdict
+from rotacal.gyro.sf_items import ScaleFactorRepeatability, SignedScaleFactors
+from rotacal.gyro.sf_temperature import TemperatureCoefficients
 from rotacal.gyro.uncertainty import uncertainty_json
 from rotacal.results import Result, to_jsonable
 from rotacal.uncertainty.budget import UncertaintyBudget
 
 __all__ = ["RatePoint", "ScaleFactorResult"]
+
+_SIGNED_KEYS = [f.name for f in dataclasses.fields(SignedScaleFactors)]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -84,6 +88,11 @@ class ScaleFactorResult(Result):
     _budgets: dict[str, UncertaintyBudget] = dataclasses.field(
         default_factory=dict, repr=False, compare=False
     )
+    #: the IEEE Std 952/1431 items (rotacal.gyro.sf_items, rotacal.gyro.sf_temperature), their
+    #: keys at the top level of the JSON (those of ``signed`` always, null when not found)
+    signed: SignedScaleFactors | None = None
+    repeatability: ScaleFactorRepeatability | None = None
+    temperature: TemperatureCoefficients | None = None
 
     @property
     def nonlinearity_percent_fs_interval(self) -> tuple[float, float] | None:
@@ -96,6 +105,12 @@ class ScaleFactorResult(Result):
         out = super().to_dict()
         if self._budgets:
             out.update(to_jsonable(uncertainty_json(self._budgets)))
+        for name in ("signed", "repeatability", "temperature"):
+            item = out.pop(name) or {}
+            item.pop("warnings", None)  # the result's own warnings hold theirs
+            out.update(item)
+        if self.signed is None:
+            out.update(dict.fromkeys(_SIGNED_KEYS))
         return out
 
     def summary_lines(self) -> list[str]:

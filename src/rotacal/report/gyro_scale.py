@@ -13,6 +13,7 @@ import numpy as np
 from rotacal.gyro.scale_factor import ScaleFactorResult
 from rotacal.numbers import fixed
 from rotacal.references import cite
+from rotacal.report.gyro_sf_items import sf_item_figures, sf_item_rows, sf_item_tables
 from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
 from rotacal.report.uncertainty import budget_details, budget_results, result_row
 from rotacal.report.wording import (
@@ -230,7 +231,7 @@ def scale_factor_section(
     budgets = dict(r._budgets)
     if any(row.quantity.startswith("nonlinearity") for row in judged):
         budgets.pop("nonlinearity_percent_fs", None)  # stated once, with its limit and verdict
-    results = readable_rows(budget_results(budgets, names=names)) + judged
+    results = readable_rows(budget_results(budgets, names=names)) + judged + sf_item_rows(r)
     tables = []
     if truth is not None:
         tables.append(
@@ -297,14 +298,15 @@ def scale_factor_section(
             caption="Rate points (diagnostics, not results)",
         )
     )
-    references = ["kokuyama2015", "gum", "ilac_p14"]
+    tables += sf_item_tables(r)  # sign, runs, temperature (IEEE Std 952/1431)
+    references = ["kokuyama2015", "ieee952", "ieee1431", "gum", "ilac_p14"]
     if r.requirement is not None:
         references += ["fmvss126", "ilac_g8"]
     return Section(
         title=title or "Gyro scale factor and nonlinearity",
         paragraphs=paragraphs,
         tables=tables,
-        figures=[scale_factor_figure(r)] if figures else [],
+        figures=[scale_factor_figure(r), *sf_item_figures(r)] if figures else [],
         anchor="gyro-scale",
         results=results,
         details=readable_tables(budget_details(r._budgets)),

@@ -69,6 +69,12 @@ def simulate_gyro_rates(
     quantum: float | None = None,
     saturation: tuple[float, float] | None = None,
     rate_relative_error: float = 0.0,
+    asymmetry_ppm: float = 0.0,
+    run_scale_factor_std_ppm: float = 0.0,
+    temperature_c: float | Sequence[float] | None = None,
+    temperature_ref_c: float = 25.0,
+    scale_factor_tc_ppm_per_c: float = 0.0,
+    bias_tc_per_c: float = 0.0,
     seed: int = 0,
 ) -> SimCapture:
     """A rate-table test of a single-axis gyro: ``samples_per_point`` outputs at each set rate.
@@ -100,6 +106,23 @@ def simulate_gyro_rates(
         Relative error ε of the table's rate (dimensionless, > −1): the table turns at
         Ω·(1 + ε) while the capture records the set rate Ω (the systematic effect behind the
         specification ``table.set_rate_relative``; draw it per run to check a budget).
+    asymmetry_ppm : float
+        Scale-factor asymmetry A (ppm): the linear slope is S·(1 + A/2·1e-6) for Ω > 0 and
+        S·(1 − A/2·1e-6) for Ω < 0 (IEEE Std 528's asymmetry, S₊ − S₋ = A·S).
+    run_scale_factor_std_ppm : float
+        Run-to-run standard deviation of S (ppm, ≥ 0): this run's S is S·(1 + σ·z·1e-6), z a
+        standard normal drawn from ``seed`` (truth ``run_scale_factor``); several seeds make
+        several runs of one gyro.
+    temperature_c : float or sequence of float or None
+        Temperature of the test (°C; one number, or one per rate): writes a ``temperature_c``
+        column and makes S and V0 depend on it: S(T) = S·(1 + k_S·1e-6·(T − T_ref)),
+        V0(T) = V0 + k_B·(T − T_ref).
+    temperature_ref_c : float
+        T_ref (°C), where S and V0 hold.
+    scale_factor_tc_ppm_per_c : float
+        k_S (ppm/°C).
+    bias_tc_per_c : float
+        k_B (output units per °C); the truth states it as (°/h)/°C, 3600·k_B/S.
     seed : int
         Seed of ``numpy.random.default_rng``.
 
@@ -175,13 +198,26 @@ def simulate_gyro_rates(
             )
         rails = (lo, hi)
 
-    def clean(w: np.ndarray) -> np.ndarray:
-        v = v0 + s * w
+    rng = np.random.default_rng(seed)
+    run_std = _finite("run_scale_factor_std_ppm", run_scale_factor_std_ppm)
+    if run_std < 0:
+        raise ConfigError(
+            f"run_scale_factor_std_ppm must be ≥ 0, got {run_scale_factor_std_ppm!r}."
+        )
+    # drawn only when asked, so that the noise of a capture without it stays as it was
+    s = s * (1.0 + 1e-6 * run_std * float(rng.standard_normal())) if run_std > 0 else s
+    half_a = 0.5e-6 * _finite("asymmetry_ppm", asymmetry_ppm)
+    temps, t_ref, k_s, k_b = _temperatures(
+        temperature_c, rates, temperature_ref_c, scale_factor_tc_ppm_per_c, bias_tc_per_c
+    )
+
+    def clean(w: np.ndarray, dt: np.ndarray | float = 0.0) -> np.ndarray:
+        v = v0 + k_b * dt + s * (1.0 + 1e-6 * k_s * dt) * w * (1.0 + np.sign(w) * half_a)
         for p, c in coeffs.items():
             v = v + c * w**p
         return v
 
-    clean_pts = clean(rates * (1.0 + eps))
+    clean_pts = clean(rates * (1.0 + eps), 0.0 if temps is None else temps - t_ref)
     # Truth of the fit: least-squares line of the noise-free analog response against the realised
     # rates, one point per distinct set rate (a rate run twice is still one point: the method
     # groups equal set rates).
@@ -196,7 +232,9 @@ def simulate_gyro_rates(
     rate_col = np.repeat(rates, counts)
     out = np.repeat(clean_pts, counts)
     if sigma > 0:
-        out = out + np.random.default_rng(seed).normal(0.0, sigma, out.size)
+        out = out + (rng if run_std > 0 else np.random.default_rng(seed)).normal(
+            0.0, sigma, out.size
+        )
     if q is not None:
         out = q * np.round(out / q)
     saturated: list[float] = []
@@ -210,6 +248,8 @@ def simulate_gyro_rates(
     truth: dict[str, Any] = {
         "kind": "gyro-rates",
         "scale_factor": s,
+        "run_scale_factor": s,
+        **_signed_truth(true_uniq, clean_uniq, float(ls_s)),
         "bias": v0,
         "nonlinearity_coefficients": {str(p): c for p, c in sorted(coeffs.items())},
         "ls_scale_factor": float(ls_s),
@@ -233,7 +273,55 @@ def simulate_gyro_rates(
             "run_order_deg_s": rates,
         },
     }
-    return SimCapture("gyro-rates", {"rate_deg_s": rate_col, "output": out}, truth)
+    columns = {"rate_deg_s": rate_col, "output": out}
+    if temps is not None:
+        columns["temperature_c"] = np.repeat(temps, counts)
+        truth.update(
+            temperature_c=temps,
+            temperature_ref_c=t_ref,
+            scale_factor_temperature_coefficient_ppm_per_c=k_s,
+            bias_temperature_coefficient_deg_h_per_c=3600.0 * k_b / s,
+        )
+    return SimCapture("gyro-rates", columns, truth)
+
+
+def _temperatures(
+    temperature_c: Any, rates: np.ndarray, ref: Any, k_s: Any, k_b: Any
+) -> tuple[np.ndarray | None, float, float, float]:
+    """(temperature of each run point in °C or None, T_ref, k_S ppm/°C, k_B output/°C)."""
+    t_ref = _finite("temperature_ref_c", ref)
+    ks, kb = _finite("scale_factor_tc_ppm_per_c", k_s), _finite("bias_tc_per_c", k_b)
+    if temperature_c is None:
+        if ks or kb:
+            raise ConfigError("temperature coefficients need temperature_c (the test's °C).")
+        return None, t_ref, 0.0, 0.0
+    try:
+        temps = np.broadcast_to(np.asarray(temperature_c, dtype=float), rates.shape).copy()
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"temperature_c must be a number or one number per rate (°C), got {temperature_c!r}."
+        ) from None
+    if not np.all(np.isfinite(temps)):
+        raise ConfigError("temperature_c must be finite (°C).")
+    return temps, t_ref, ks, kb
+
+
+def _signed_truth(true_rates: np.ndarray, clean: np.ndarray, ls_s: float) -> dict[str, float]:
+    """S₊, S₋ (two slopes, one intercept) of the noise-free response and 1e6·(S₊ − S₋)/S_ls,
+    by numpy.linalg.lstsq (shares nothing with rotacal.gyro.sf_items); NaN below 2 per sign."""
+    if min(np.count_nonzero(true_rates > 0), np.count_nonzero(true_rates < 0)) < 2:
+        nan = float("nan")
+        return {"scale_factor_positive": nan, "scale_factor_negative": nan, "asymmetry_ppm": nan}
+    design = np.column_stack(
+        [np.where(true_rates > 0, true_rates, 0.0), np.where(true_rates < 0, true_rates, 0.0)]
+    )
+    design = np.column_stack([design, np.ones(true_rates.size)])
+    (sp, sn, _), *_ = np.linalg.lstsq(design, clean, rcond=None)
+    return {
+        "scale_factor_positive": float(sp),
+        "scale_factor_negative": float(sn),
+        "asymmetry_ppm": 1e6 * float(sp - sn) / ls_s,
+    }
 
 
 register_kind("gyro-rates", simulate_gyro_rates)
