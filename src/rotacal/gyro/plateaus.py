@@ -28,16 +28,16 @@ their median; the output enters the band after the last pair of consecutive firs
 outside it (a transient lasts, an outlier sample does not). Inside the band the transient still
 biases the plateau's mean, so its envelope, taken as exponential from the largest deviation d₀ to
 the band, is extended down to a tenth of the plateau mean's standard error (at most half the
-plateau). The default ``settle_s`` is the largest settling time over the
-plateaus, and at least one window (the DUT lags the table). IEEE Std 952-1997 §12.3.5 and
-IEEE Std 1431-2004 §10.3.2 (scale factor tests) ask that readings at each rate be taken after the
-output has stabilised; this states how long "stabilised" took in the log itself.
+plateau). The default ``settle_s`` is the largest settling time over the plateaus, and at least
+one window (the DUT lags the table). Rate-table scale-factor procedures (IEEE Std 952, IEEE Std
+1431) take the readings at each rate after the output has stabilised; this states how long that
+took in the log itself.
 
 References
 ----------
 Basseville M., Nikiforov I. V., *Detection of Abrupt Changes: Theory and Application*, Prentice
-Hall (1993), §2.1 (filtered-derivative detectors). IEEE Std 952-1997, §12.3.5; IEEE Std
-1431-2004, §10.3.2.
+Hall (1993), §2.1 (elementary algorithms: the filtered-derivative detector). Kokuyama et al.
+(2015), §4 (the rate points of the scale-factor fit).
 """
 
 from __future__ import annotations
@@ -317,7 +317,7 @@ def find_plateaus(
         settle_rows = math.ceil(settle / dt - 1e-9)
     else:
         settle_rows = max(h, 0 if y is None else _settling_rows(y, runs, h))
-        settle, source = settle_rows * dt, ("output" if y is not None else "window")
+        settle, source = round(settle_rows * dt, 9), ("output" if y is not None else "window")
     min_rows = max(10, math.ceil(min_s / dt - 1e-9))
 
     used: list[Plateau] = []
