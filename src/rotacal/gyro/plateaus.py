@@ -17,9 +17,11 @@ not move the median) and r_tol the rate tolerance of a rate point (0.001 °/s, a
 samples between changes are the steady spans. A step at sample s makes |D| large for
 |k − s| < h, so a run starts ~h samples late; each edge is then moved to the sample where the
 rate itself enters its plateau's band, |r − r̄| ≤ z·σ + r_tol, which puts the edge at the step
-(commanded rate) or where the ramp reaches the plateau within the noise (measured rate). Runs
-separated by a short gap (< 2h) whose means agree within the change threshold are one plateau
-(an outlier sample cannot split a plateau).
+(commanded rate) or where the ramp reaches the plateau within the noise (measured rate).
+Neighbouring runs whose means, and the mean of the rows between them, agree within z standard
+errors (of the larger of σ and the runs' own standard deviations) are one plateau (an
+outlier sample cannot split a plateau, nor can a plateau noisier than the rest, which is then
+judged whole). A run shorter than the window is no plateau (the crest of a ramp or a sine).
 
 The DUT's settling (the default ``settle_s``) is read from the output: within each plateau the
 output is averaged in blocks of h/10 samples (short enough to follow a ringing DUT); the band is 5
@@ -194,18 +196,30 @@ def _refine(r: np.ndarray, runs: np.ndarray, band: float, reach: int) -> np.ndar
     return out
 
 
-def _merge(r: np.ndarray, runs: np.ndarray, gap: int, thr: float) -> np.ndarray:
-    """Join neighbouring runs split by a short gap when their means agree within ``thr``."""
+def _merge(r: np.ndarray, runs: np.ndarray, sigma: float, tol: float) -> np.ndarray:
+    """Join neighbouring runs whose means, and the mean of the rows between them, agree within
+    the change threshold taken with the noisier of σ and the runs' own standard deviations (an
+    outlier cannot split a plateau; a plateau noisier than the log is not cut in pieces but
+    stays one, to be judged whole)."""
     merged: list[list[int]] = []
-    last_mean = math.nan
+    last_mean = last_sd = math.nan
     for a, b in runs:
-        mean = float(np.mean(r[a:b]))
-        if merged and a - merged[-1][1] < gap and abs(mean - last_mean) <= thr:
-            merged[-1][1] = int(b)
-            last_mean = float(np.mean(r[merged[-1][0] : b]))
-        else:
-            merged.append([int(a), int(b)])
-            last_mean = mean
+        mean, sd = float(np.mean(r[a:b])), float(np.std(r[a:b]))
+        if merged:
+            spread = _Z * max(sigma, sd, last_sd)
+            n_last = merged[-1][1] - merged[-1][0]
+            same = abs(mean - last_mean) <= spread * math.sqrt(1.0 / (b - a) + 1.0 / n_last) + tol
+            gap = r[merged[-1][1] : a]
+            if same and gap.size:
+                limit = spread * math.sqrt(1.0 / gap.size + 1.0 / n_last) + tol
+                same = abs(float(gap.mean()) - last_mean) <= limit
+            if same:
+                merged[-1][1] = int(b)
+                seg = r[merged[-1][0] : b]
+                last_mean, last_sd = float(np.mean(seg)), float(np.std(seg))
+                continue
+        merged.append([int(a), int(b)])
+        last_mean, last_sd = mean, sd
     return np.asarray(merged, dtype=np.int64).reshape(-1, 2)
 
 
@@ -305,12 +319,15 @@ def find_plateaus(
     thr = _Z * sigma * math.sqrt(2.0 / h) + tol
     runs = _steady_runs(r, h, thr)
     if runs.size:
-        runs = _merge(r, _refine(r, runs, _Z * sigma + tol, 2 * h), 2 * h, thr)
-    runs = runs[runs[:, 1] - runs[:, 0] >= 2] if runs.size else runs
-    if runs.shape[0] == 0:
+        runs = _merge(r, _refine(r, runs, _Z * sigma + tol, 2 * h), sigma, tol)
+    # a steady run shorter than the window is no plateau (a ramp's turning point, a sine's crest)
+    runs = runs[runs[:, 1] - runs[:, 0] >= h] if runs.size else runs
+    min_rows = max(10, math.ceil(min_s / dt - 1e-9))
+    if not np.any(runs[:, 1] - runs[:, 0] >= min_rows):
         raise CaptureError(
-            f"the table rate never settles: no span of {h} rows ({h * dt:.3g} s) holds a steady "
-            f"rate (noise σ = {sigma:.3g} °/s); a continuous log must hold each rate for a while"
+            f"the table rate never settles: no span of {min_rows} rows ({min_rows * dt:.3g} s) "
+            f"holds a steady rate (noise σ = {sigma:.3g} °/s); a continuous log must hold each "
+            "rate for a while"
         )
     if settle_s is not None:
         settle, source = _positive("settle_s", settle_s, 0.0), "given"
@@ -318,7 +335,6 @@ def find_plateaus(
     else:
         settle_rows = max(h, 0 if y is None else _settling_rows(y, runs, h))
         settle, source = round(settle_rows * dt, 9), ("output" if y is not None else "window")
-    min_rows = max(10, math.ceil(min_s / dt - 1e-9))
 
     used: list[Plateau] = []
     rejected: list[Plateau] = []
