@@ -125,3 +125,15 @@ def test_xinli_files_concatenated_give_their_plateaus_and_published_scale_factor
         assert p["end_s"] == pytest.approx((b - 1) * 0.1, abs=1e-9)
         assert p["rate_deg_s"] == rate[0]
     assert res.scale_factor == pytest.approx(1.000199, abs=3e-6)
+
+
+def test_a_drifting_plateau_is_rejected_as_not_steady():
+    cap = _twin()
+    t, rate, out = (cap.columns[k].copy() for k in ("time_s", "rate_deg_s", "output"))
+    p = cap.truth["plateaus"][5]
+    inside = (t >= p["start_s"]) & (t <= p["end_s"])
+    # 0.09 °/s over 30 s: a creep within the noise's reach (σ 0.02 °/s), not a step
+    rate[inside] += 0.003 * (t[inside] - p["start_s"])
+    r = find_plateaus(t, rate, out)
+    assert [q.reason.split(":")[0] for q in r.rejected] == ["not steady"]
+    assert r.rejected[0].rate_deg_s == pytest.approx(p["rate_deg_s"], abs=0.1)

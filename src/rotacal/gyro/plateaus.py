@@ -3,7 +3,9 @@
 A real rate-table test is one long log: the table steps through set rates, the DUT's output lags
 and rings after each step. :func:`find_plateaus` finds the spans where the table's rate
 (``rate_deg_s``, commanded or measured) is steady, drops the first ``settle_s`` seconds of each
-(the DUT's transient), rejects spans that are too short or whose table rate is too noisy, and
+(the DUT's transient), rejects spans that are too short (``min_plateau_s`` after settling), whose
+table rate is too noisy (σ above 4× the median over the plateaus) or drifts (its last third's mean
+differs from its first's by more than 6 standard errors), and
 returns the spans used. :func:`plateau_rows` turns them into the rows the rate-table
 scale-factor fit takes (each plateau one rate point: its mean table rate on every row).
 
@@ -58,6 +60,7 @@ __all__ = [
     "Plateau",
     "PlateauSearch",
     "find_plateaus",
+    "plateau_rates",
     "plateau_rows",
 ]
 
@@ -229,6 +232,11 @@ def _drift(seg: np.ndarray) -> float:
     return abs(float(seg[-k:].mean() - seg[:k].mean())) if k else 0.0
 
 
+def _drift_limit(n: int, sigma: float, sd: float, tol: float) -> float:
+    """z standard errors of the difference of two thirds' means of ``n`` rows (°/s), plus tol."""
+    return _Z * max(sigma, sd) * math.sqrt(2.0 / max(n // 3, 1)) + tol
+
+
 def _settling_rows(y: np.ndarray, runs: np.ndarray, h: int) -> int:
     """The largest settling (rows) of the output over the plateaus (module docstring)."""
     m = max(1, h // 10)  # blocks of a tenth of the window: they follow a ringing DUT
@@ -350,33 +358,33 @@ def find_plateaus(
         a2 = min(a + settle_rows, b)
         span = (a2, b) if b - a2 >= 1 else (a, b)
         seg = r[span[0] : span[1]]
-        p = dict(
-            start_s=float(t[span[0]]),
-            end_s=float(t[span[1] - 1]),
-            rate_deg_s=float(seg.mean()),
-            samples=span[1] - span[0],
-            rate_std_deg_s=float(seg.std()) if seg.size > 1 else 0.0,
+        values = (
+            float(t[span[0]]),
+            float(t[span[1] - 1]),
+            float(seg.mean()),
+            span[1] - span[0],
+            float(seg.std()) if seg.size > 1 else 0.0,
         )
         if b - a2 < min_rows:
             why = (
                 f"too short: {b - a2} rows ({(b - a2) * dt:.3g} s) after settling "
                 f"{settle:.3g} s, fewer than {min_rows} ({min_rows * dt:.3g} s)"
             )
-        elif (drift := _drift(r[a2:b])) > thr:
-            why = (
-                f"not steady: the table rate drifts by {drift:.3g} °/s from its first to its "
-                f"last third, above the change threshold {thr:.3g} °/s"
-            )
         elif sd > _NOISY_FACTOR * typical + tol:
             why = (
                 f"too noisy: table rate σ = {sd:.3g} °/s, above {_NOISY_FACTOR:g}× the plateaus' "
                 f"median {typical:.3g} °/s (+ {tol:g} °/s)"
             )
+        elif (drift := _drift(r[a2:b])) > (limit := _drift_limit(b - a2, sigma, sd, tol)):
+            why = (
+                f"not steady: the table rate drifts by {drift:.3g} °/s from its first to its "
+                f"last third, more than {limit:.3g} °/s ({_Z:g} standard errors)"
+            )
         else:
-            used.append(Plateau(**p))
+            used.append(Plateau(*values))
             rows.append((a2, b))
             continue
-        rejected.append(Plateau(**p, reason=why))
+        rejected.append(Plateau(*values, reason=why))
     warnings = tuple(
         f"plateau {p.start_s:.6g}–{p.end_s:.6g} s at {p.rate_deg_s:+.6g} °/s rejected, {p.reason}"
         for p in rejected

@@ -19,7 +19,13 @@ from typing import Any
 import numpy as np
 
 from rotacal.errors import CaptureError
-from rotacal.gyro.plateaus import Plateau, PlateauSearch, find_plateaus
+from rotacal.gyro.plateaus import (
+    Plateau,
+    PlateauSearch,
+    find_plateaus,
+    plateau_rates,
+    plateau_rows,
+)
 from rotacal.gyro.scale_factor import calibrate_scale_factor
 from rotacal.gyro.scale_factor_result import ScaleFactorResult
 
@@ -148,10 +154,7 @@ def calibrate_scale_factor_log(
     if chunked:
         fit = calibrate_scale_factor_chunked(_slices(search, y), **options)
     else:
-        rows = np.concatenate([y[a:b] for a, b in search._rows])
-        counts = search._rows[:, 1] - search._rows[:, 0]
-        rates = np.repeat([p.rate_deg_s for p in search.plateaus], counts)
-        fit = calibrate_scale_factor(rates, rows, **options)
+        fit = calibrate_scale_factor(plateau_rates(search), plateau_rows(search, y), **options)
     t = np.asarray(time_s, dtype=float).reshape(-1)
     stride = max(1, t.size // _FIGURE_ROWS)
     rate = np.asarray(rate_deg_s, dtype=float).reshape(-1)
