@@ -70,8 +70,8 @@ DEFAULT_PLATEAU_WINDOW_S = 1.0
 #: Change threshold in standard errors of D: for Gaussian noise a false change per boundary has a
 #: probability ~2·10⁻⁹, and a false change splits a plateau that the merge joins again.
 _Z = 6.0
-#: Settling band: block means of the plateau's first half farther than this many standard
-#: deviations of the second half's block means from their mean are still settling.
+#: Settling band: block means of the plateau's first half farther than this many robust standard
+#: deviations of the second half's block means from their median are still settling.
 _SETTLE_SIGMAS = 5.0
 #: A plateau whose table-rate standard deviation exceeds this many times the median over the
 #: plateaus (and the rate tolerance) is too noisy.

@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt
 from rotacal.gyro.scale_factor_log import LogScaleFactorResult
 from rotacal.numbers import fixed
 from rotacal.references import cite
+from rotacal.report.gyro_scale import _style
 from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
 
 __all__ = ["plateaus_figure", "plateaus_section"]
@@ -67,8 +68,7 @@ def plateaus_figure(r: LogScaleFactorResult) -> Figure:
     ax2.set_ylabel(f"DUT output ({unit})")
     ax2.set_xlabel("time (s)")
     for ax in (ax1, ax2):
-        ax.grid(True, color="#e3e7eb", linewidth=0.7)
-        ax.spines[["top", "right"]].set_visible(False)
+        _style(ax)
     ax1.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, 1.18), ncols=3, frameon=False)
     fig.align_ylabels((ax1, ax2))
     fig.tight_layout()

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from rotacal.errors import ConfigError
-from rotacal.sim.gyro_rates import _powers
+from rotacal.sim.gyro_rates import _powers, set_rates, static_response
 from rotacal.sim.motion import _finite
 from rotacal.sim.sensors import SimCapture, register_kind
 
@@ -130,14 +130,7 @@ def simulate_gyro_log(
         ``nonlinearity_percent_fs`` (FS: the largest |set rate|), ``settle_time_s`` and every
         setting under ``sensor``.
     """
-    try:
-        rates = np.asarray(rates_deg_s, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ConfigError(
-            f"rates_deg_s must be a sequence of numbers, got {rates_deg_s!r}."
-        ) from None
-    if not np.all(np.isfinite(rates)) or np.unique(rates).size < 2:
-        raise ConfigError("rates_deg_s must hold at least 2 distinct finite set rates (°/s).")
+    rates = set_rates(rates_deg_s)
     plateau = _finite("plateau_s", plateau_s)
     accel = _finite("acceleration_deg_s2", acceleration_deg_s2)
     fs = _finite("fs_hz", fs_hz)
@@ -156,12 +149,7 @@ def simulate_gyro_log(
             "damping_ratio > 0 and natural_frequency_hz below fs_hz/4."
         )
     coeffs = _powers(nonlinearity)
-
-    def static(w: np.ndarray) -> np.ndarray:
-        v = v0 + s * w
-        for p, c in coeffs.items():
-            v = v + c * w**p
-        return v
+    static = static_response(s, v0, coeffs)
 
     t, omega, spans = _profile(rates, plateau, accel, fs)
     rng = np.random.default_rng(seed)

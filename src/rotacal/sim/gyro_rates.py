@@ -58,6 +58,35 @@ def _powers(nonlinearity: Any) -> dict[int, float]:
     return out
 
 
+def set_rates(rates_deg_s: Any) -> np.ndarray:
+    """The set rates (°/s) of a twin as a 1-D float array: at least 2 distinct, finite."""
+    try:
+        rates = np.asarray(rates_deg_s, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"rates_deg_s must be a sequence of numbers, got {rates_deg_s!r}."
+        ) from None
+    if rates.size < 2 or np.unique(rates).size < 2:
+        raise ConfigError(
+            "rates_deg_s must hold at least 2 distinct set rates (Kokuyama et al. 2015: ≥ 11)."
+        )
+    if not np.all(np.isfinite(rates)):
+        raise ConfigError("rates_deg_s must be finite numbers.")
+    return rates
+
+
+def static_response(s: float, v0: float, coeffs: Mapping[int, float]) -> Any:
+    """The DUT's static response V(Ω) = V0 + S·Ω + Σ c_p·Ω^p (Ω in °/s, V in output units)."""
+
+    def clean(w: np.ndarray) -> np.ndarray:
+        v = v0 + s * w
+        for p, c in coeffs.items():
+            v = v + c * w**p
+        return v
+
+    return clean
+
+
 def simulate_gyro_rates(
     *,
     rates_deg_s: Sequence[float] = DEFAULT_RATES_DEG_S,
@@ -120,18 +149,7 @@ def simulate_gyro_rates(
     Kokuyama et al., "Development of angular velocity calibration facility using self-calibratable
     rotary encoder", §4 (V(Ω) = S·Ω + V0 + δ(Ω), ≥ 11 points, NL in %FS).
     """
-    try:
-        rates = np.asarray(rates_deg_s, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ConfigError(
-            f"rates_deg_s must be a sequence of numbers, got {rates_deg_s!r}."
-        ) from None
-    if rates.size < 2 or np.unique(rates).size < 2:
-        raise ConfigError(
-            "rates_deg_s must hold at least 2 distinct set rates (Kokuyama et al. 2015: ≥ 11)."
-        )
-    if not np.all(np.isfinite(rates)):
-        raise ConfigError("rates_deg_s must be finite numbers.")
+    rates = set_rates(rates_deg_s)
     s = _finite("scale_factor", scale_factor)
     if s == 0:
         raise ConfigError("scale_factor must be nonzero.")
@@ -175,12 +193,7 @@ def simulate_gyro_rates(
             )
         rails = (lo, hi)
 
-    def clean(w: np.ndarray) -> np.ndarray:
-        v = v0 + s * w
-        for p, c in coeffs.items():
-            v = v + c * w**p
-        return v
-
+    clean = static_response(s, v0, coeffs)
     clean_pts = clean(rates * (1.0 + eps))
     # Truth of the fit: least-squares line of the noise-free analog response against the realised
     # rates, one point per distinct set rate (a rate run twice is still one point: the method
