@@ -137,3 +137,15 @@ def test_a_drifting_plateau_is_rejected_as_not_steady():
     r = find_plateaus(t, rate, out)
     assert [q.reason.split(":")[0] for q in r.rejected] == ["not steady"]
     assert r.rejected[0].rate_deg_s == pytest.approx(p["rate_deg_s"], abs=0.1)
+
+
+def test_each_plateau_states_its_mean_temperature():
+    c = _twin().columns
+    temperature = 20.0 + c["time_s"] / 100.0  # 1 °C per 100 s
+    r = calibrate_scale_factor_log(
+        c["time_s"], c["rate_deg_s"], c["output"], temperature_c=temperature
+    )
+    for p in r.plateaus:
+        assert p["temperature_c"] == pytest.approx(
+            20.0 + (p["start_s"] + p["end_s"]) / 200.0, abs=1e-3
+        )
