@@ -318,8 +318,8 @@ def find_plateaus(
     h = max(3, round(window / dt))
     if 2 * h >= r.size:
         raise CaptureError(
-            f"the log spans {r.size} rows ({t[-1] - t[0]:.6g} s): too short for plateaus with a "
-            f"{h}-row window ({window:g} s); give a shorter window_s"
+            f"the log spans {r.size} rows ({t[-1] - t[0]:.6g} s): too short to find plateaus in "
+            f"with a window of {h} rows ({h * dt:.3g} s)"
         )
     min_s = _positive("min_plateau_s", min_plateau_s, 5.0 * h * dt)
     tol = _positive("rate_tolerance_deg_s", rate_tolerance_deg_s, DEFAULT_RATE_TOLERANCE_DEG_S)
@@ -333,9 +333,9 @@ def find_plateaus(
     min_rows = max(10, math.ceil(min_s / dt - 1e-9))
     if not np.any(runs[:, 1] - runs[:, 0] >= min_rows):
         raise CaptureError(
-            f"the table rate never settles: no span of {min_rows} rows ({min_rows * dt:.3g} s) "
-            f"holds a steady rate (noise σ = {sigma:.3g} °/s); a continuous log must hold each "
-            "rate for a while"
+            f"the table rate never settles: no span of {min_rows} rows ({min_rows * dt:.3g} s, "
+            f"min_plateau_s) holds a steady rate (noise σ = {sigma:.3g} °/s); a continuous log "
+            "must hold each rate for a while"
         )
     if settle_s is not None:
         settle, source = _positive("settle_s", settle_s, 0.0), "given"
