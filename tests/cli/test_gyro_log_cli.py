@@ -29,7 +29,7 @@ def test_given_settling_and_the_rate_table_path(tmp_path):
     r = run("gyro", "scale-factor", str(path), "--settle-s", "3", "--json", "-")
     d = json.loads(r.stdout)
     assert d["settle_s"] == 3.0 and d["settle_source"] == "given"
-    # --no-plateaus: the rows grouped by their (noisy) rate, as a rate-table capture
+    # a rate-table capture (no time_s) has no plateaus, and refuses the log options
     rates, _ = simulated(tmp_path, "gyro-rates")
     r = run("gyro", "scale-factor", str(rates), "--json", "-")
     assert "plateaus" not in json.loads(r.stdout)
