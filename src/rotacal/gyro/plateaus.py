@@ -170,10 +170,12 @@ def _steady_runs(r: np.ndarray, h: int, thr: float) -> np.ndarray:
     c = np.empty(n + 1)
     c[0] = 0.0
     np.cumsum(r - r[0], out=c[1:])  # less the first value: the sums keep their digits
-    k = np.arange(h, n - h + 1)
-    d = (c[k + h] - 2.0 * c[k] + c[k - h]) / h
+    # D at boundaries k = h … n − h from shifted views (no index arrays): h·D = c[k+h] − 2c[k] + c[k−h]
+    d = c[2 * h :] - c[h : n + 1 - h]
+    d -= c[h : n + 1 - h]
+    d += c[: n + 1 - 2 * h]
     change = np.zeros(n + 1, dtype=bool)  # boundary k: between rows k − 1 and k
-    change[h : n - h + 1] = np.abs(d) > thr
+    change[h : n - h + 1] = np.abs(d) > thr * h
     # a row is unsteady when the boundary before it is a change (the first h rows follow the
     # first computed boundary, the last h rows the last one)
     unsteady = change[:n].copy()
