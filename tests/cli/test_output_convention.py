@@ -100,6 +100,7 @@ WRITERS: dict[tuple[str, ...], list[str]] = {
         for kind in (
             "encoder",
             "fog",
+            "gyro-log",
             "gyro-noise",
             "gyro-rates",
             "gyro-rotations",
@@ -116,6 +117,7 @@ WRITERS: dict[tuple[str, ...], list[str]] = {
 WRITER_ARGS = {
     ("simulate", "pulses"): ["--heads", "3", "--pulses-per-rev", "360", "--revolutions", "1.5"],
     ("simulate", "gyro-noise"): ["--duration-s", "60"],
+    ("simulate", "gyro-log"): ["--plateau-s", "5"],
     ("simulate", "encoder"): ["--duration-s", "1"],
     ("simulate", "lts"): ["--duration-s", "1"],
     ("simulate", "fog"): ["--duration-s", "1"],
@@ -331,6 +333,10 @@ def test_provenance_of_an_analysis(captures, tmp_path):
         "rest-from": [],
         "rest-band-deg-s": 0.5,
         "rest-guard-samples": 3,
+        "plateaus": None,  # a continuous log or not: chosen by a time_s column
+        "settle-s": None,
+        "plateau-window-s": None,
+        "min-plateau-s": None,
         "full-scale-deg-s": 100.0,
         "requirement": None,
         "output-unit": "",

@@ -30,6 +30,7 @@ from ._common import (
     _write_report,
 )
 from ._dask import dask_options, run_on_dask, split_wanted
+from ._gyro_log import continuous_log, log_options, log_sections, scale_factor_from_log
 from ._help import example
 from ._rate_files import rate_file_options, rate_row_chunks, rate_row_count, read_rate_rows
 from ._reading import current_read_options
@@ -69,6 +70,7 @@ _SCALE_FACTOR_IN_MEMORY_MAX_ROWS = 1_000_000
 @click.argument("capture", type=INPUT_FILE)
 @click.argument("more_captures", nargs=-1, type=INPUT_FILE)
 @rate_file_options
+@log_options
 @click.option(
     "--full-scale-deg-s",
     type=float,
@@ -112,6 +114,7 @@ def gyro_scale_factor(
     capture: str,
     more_captures: tuple[str, ...],
     rate_files: dict[str, Any],
+    log_opts: dict[str, Any],
     full_scale_deg_s: float | None,
     requirement: str | None,
     output_unit: str,
@@ -130,7 +133,8 @@ def gyro_scale_factor(
     rows of each set rate are averaged and V(Ω) = S·Ω + V0 is fitted by least squares
     (Kokuyama et al. 2015, §4). FS is the full scale, the largest set rate in magnitude unless given. A test kept as
     one file per set rate takes the rate of each file from its name (--rate-from-name) or from a
-    table (--rates).
+    table (--rates). One continuous log with time_s (the table stepping through rates) is cut
+    into its plateaus first (--settle-s drops each plateau's start).
     """
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
@@ -144,7 +148,9 @@ def gyro_scale_factor(
         "bandwidth_hz": bandwidth_hz,
         "allow_clipped": kw.pop("allow_clipped"),
     }
-    if split_wanted(workers, scheduler, chunked):
+    if continuous_log(captures, rate_files, columns, group, log_opts, (workers, scheduler)):
+        result = scale_factor_from_log(capture, columns, group, options, log_opts, chunked)
+    elif split_wanted(workers, scheduler, chunked):
         result = _dask_scale_factor(
             captures, rate_files, columns, group, options, (workers, scheduler)
         )
@@ -170,7 +176,7 @@ def gyro_scale_factor(
         _write_report(
             "Gyro scale factor and nonlinearity",
             "Kokuyama et al. (2015), §4: V(Ω) = S·Ω + V0 + δ(Ω), NL = max|δ|/FS",
-            [scale_factor_section(result)],
+            [scale_factor_section(result), *log_sections(result)],
             capture,
             report_path,
             warnings=result.warnings,

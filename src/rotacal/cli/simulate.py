@@ -505,6 +505,37 @@ def simulate_gyro_steps_cmd(out: str, overwrite: bool, **kw: Any) -> None:
 
 
 @simulate.command(
+    "gyro-log",
+    epilog=example("rotacal simulate gyro-log --lag-s 0.3 --out log.npz"),
+)
+@_sim_common
+@click.option("--plateau-s", type=float, default=None, help="Seconds at each set rate [30].")
+@click.option(
+    "--rate-noise-deg-s", type=float, default=None, help="Table rate noise, rms (deg/s) [0.02]."
+)
+@click.option("--lag-s", type=float, default=None, help="DUT's first-order lag τ (s) [0.05].")
+@click.option(
+    "--ringing-hz",
+    "natural_frequency_hz",
+    type=float,
+    default=None,
+    help="DUT's ringing frequency (Hz; 0: none) [2].",
+)
+@click.option("--fs-hz", type=float, default=None, help="Sample rate (Hz) [100].")
+def simulate_gyro_log_cmd(out: str, overwrite: bool, **kw: Any) -> None:
+    """Continuous rate-table log of a single-axis gyro.
+
+    Columns time_s, rate_deg_s (the table's measured rate, stepping through eleven plateaus
+    from 0 to ±100 deg/s) and output (the DUT lagging and ringing after each step), with the
+    plateaus, scale factor, bias and nonlinearity in FILE.truth.json.
+    """
+    from rotacal.sim import simulate_gyro_log
+
+    options = {k: v for k, v in kw.items() if v is not None}
+    _sim_write(simulate_gyro_log(**options), out, overwrite)
+
+
+@simulate.command(
     "gyro-triad",
     epilog=example("rotacal simulate gyro-triad --outlier-fraction 0.01 --out triad.h5"),
 )

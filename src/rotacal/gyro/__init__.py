@@ -19,6 +19,7 @@ if TYPE_CHECKING:
         multiposition_plan,
     )
     from rotacal.gyro.noise import GyroNoise, gyro_noise, gyro_noise_from_angle
+    from rotacal.gyro.plateaus import Plateau, PlateauSearch, find_plateaus
     from rotacal.gyro.rotations import (
         RotationCalibration,
         calibrate_triad_rotations,
@@ -31,6 +32,7 @@ if TYPE_CHECKING:
         evaluate_requirement,
         resolve_requirement,
     )
+    from rotacal.gyro.scale_factor_log import LogScaleFactorResult, calibrate_scale_factor_log
     from rotacal.gyro.scale_factor_stream import (
         calibrate_scale_factor_chunked,
         scale_factor_chunks,
@@ -57,8 +59,11 @@ __all__ = [
     "REQUIREMENTS",
     "TRIAD_OUTPUT_COLUMNS",
     "GyroNoise",
+    "LogScaleFactorResult",
     "MultipositionPlan",
     "MultipositionResult",
+    "Plateau",
+    "PlateauSearch",
     "RotationCalibration",
     "ScaleFactorResult",
     "SmallStepResult",
@@ -68,6 +73,7 @@ __all__ = [
     "calibrate_multiposition",
     "calibrate_scale_factor",
     "calibrate_scale_factor_chunked",
+    "calibrate_scale_factor_log",
     "calibrate_triad",
     "calibrate_triad_columns",
     "calibrate_triad_rotations",
@@ -78,6 +84,7 @@ __all__ = [
     "earth_rate_and_gravity",
     "evaluate_requirement",
     "ferraris_sections",
+    "find_plateaus",
     "gyro_noise",
     "gyro_noise_from_angle",
     "multiposition_plan",

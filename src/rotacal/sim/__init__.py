@@ -4,6 +4,7 @@ Its truth is independent of rotacal's methods: it imports only numpy, scipy, rot
 rotacal.results (``SimCapture.write`` imports ``rotacal.io`` lazily).
 """
 
+from rotacal.sim.gyro_log import simulate_gyro_log
 from rotacal.sim.gyro_noise import simulate_gyro_noise
 from rotacal.sim.gyro_rates import simulate_gyro_rates
 from rotacal.sim.gyro_steps import simulate_gyro_steps
@@ -38,6 +39,7 @@ __all__ = [
     "simulate",
     "simulate_encoder",
     "simulate_fog",
+    "simulate_gyro_log",
     "simulate_gyro_noise",
     "simulate_gyro_rates",
     "simulate_gyro_rotations",

@@ -58,6 +58,46 @@ def _powers(nonlinearity: Any) -> dict[int, float]:
     return out
 
 
+def set_rates(rates_deg_s: Any) -> np.ndarray:
+    """The set rates (°/s) of a twin as a 1-D float array: at least 2 distinct, finite."""
+    try:
+        rates = np.asarray(rates_deg_s, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"rates_deg_s must be a sequence of numbers, got {rates_deg_s!r}."
+        ) from None
+    if rates.size < 2 or np.unique(rates).size < 2:
+        raise ConfigError(
+            "rates_deg_s must hold at least 2 distinct set rates (Kokuyama et al. 2015: ≥ 11)."
+        )
+    if not np.all(np.isfinite(rates)):
+        raise ConfigError("rates_deg_s must be finite numbers.")
+    return rates
+
+
+def static_response(
+    s: float,
+    v0: float,
+    coeffs: Mapping[int, float],
+    half_asymmetry: float = 0.0,
+    scale_tc_ppm_per_c: float = 0.0,
+    bias_tc_per_c: float = 0.0,
+) -> Any:
+    """The DUT's static response ``clean(Ω, ΔT)`` = V0 + k_b·ΔT + S·(1 + 1e-6·k_S·ΔT)·Ω·(1 ± a/2)
+    + Σ c_p·Ω^p (Ω in °/s, V in output units, ΔT in °C from the reference temperature; the sign
+    of Ω picks ±: ``half_asymmetry`` = a/2, dimensionless; k_S in ppm/°C, k_b in output units/°C).
+    """
+
+    def clean(w: np.ndarray, dt: np.ndarray | float = 0.0) -> np.ndarray:
+        v = v0 + bias_tc_per_c * dt
+        v = v + s * (1.0 + 1e-6 * scale_tc_ppm_per_c * dt) * w * (1.0 + np.sign(w) * half_asymmetry)
+        for p, c in coeffs.items():
+            v = v + c * w**p
+        return v
+
+    return clean
+
+
 def simulate_gyro_rates(
     *,
     rates_deg_s: Sequence[float] = DEFAULT_RATES_DEG_S,
@@ -143,18 +183,7 @@ def simulate_gyro_rates(
     Kokuyama et al., "Development of angular velocity calibration facility using self-calibratable
     rotary encoder", §4 (V(Ω) = S·Ω + V0 + δ(Ω), ≥ 11 points, NL in %FS).
     """
-    try:
-        rates = np.asarray(rates_deg_s, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ConfigError(
-            f"rates_deg_s must be a sequence of numbers, got {rates_deg_s!r}."
-        ) from None
-    if rates.size < 2 or np.unique(rates).size < 2:
-        raise ConfigError(
-            "rates_deg_s must hold at least 2 distinct set rates (Kokuyama et al. 2015: ≥ 11)."
-        )
-    if not np.all(np.isfinite(rates)):
-        raise ConfigError("rates_deg_s must be finite numbers.")
+    rates = set_rates(rates_deg_s)
     s = _finite("scale_factor", scale_factor)
     if s == 0:
         raise ConfigError("scale_factor must be nonzero.")
@@ -210,13 +239,7 @@ def simulate_gyro_rates(
     temps, t_ref, k_s, k_b = _temperatures(
         temperature_c, rates, temperature_ref_c, scale_factor_tc_ppm_per_c, bias_tc_per_c
     )
-
-    def clean(w: np.ndarray, dt: np.ndarray | float = 0.0) -> np.ndarray:
-        v = v0 + k_b * dt + s * (1.0 + 1e-6 * k_s * dt) * w * (1.0 + np.sign(w) * half_a)
-        for p, c in coeffs.items():
-            v = v + c * w**p
-        return v
-
+    clean = static_response(s, v0, coeffs, half_a, k_s, k_b)
     clean_pts = clean(rates * (1.0 + eps), 0.0 if temps is None else temps - t_ref)
     # Truth of the fit: least-squares line of the noise-free analog response against the realised
     # rates, one point per distinct set rate (a rate run twice is still one point: the method

@@ -1,0 +1,157 @@
+"""``rotacal gyro scale-factor`` on a continuous log: the options, the choice of path and the read.
+
+A capture with ``time_s``, ``rate_deg_s`` and ``output`` (optional ``temperature_c``) is one long
+rate-table log: :func:`rotacal.gyro.scale_factor_log.calibrate_scale_factor_log` finds its
+plateaus and fits them. The three columns are read whole (memory-mapped where the format allows):
+the detection is whole-array NumPy over the log (a 24-h, 100 Hz log is 8.6·10⁶ rows, 0.2 GB for
+three columns); the fit then streams the used rows plateau by plateau when there are many.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
+
+import click
+
+from rotacal.errors import ConfigError
+
+from ._common import _status
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+_KEYS = ("plateaus", "settle_s", "plateau_window_s", "min_plateau_s")
+
+
+def log_options(func: F) -> F:
+    """Add ``--plateaus/--no-plateaus``, ``--settle-s``, ``--plateau-window-s`` and
+    ``--min-plateau-s``; the command receives them as one dict ``log_opts``."""
+
+    @functools.wraps(func)
+    def command(*args: Any, **kwargs: Any) -> Any:
+        kwargs["log_opts"] = {k: kwargs.pop(k) for k in _KEYS}
+        return func(*args, **kwargs)
+
+    options = [
+        click.option(
+            "--plateaus/--no-plateaus",
+            default=None,
+            help="Treat the capture as one continuous log and find the table's plateaus (or "
+            "not) [default: when one capture has a time_s column].",
+        ),
+        click.option(
+            "--settle-s",
+            type=float,
+            default=None,
+            help="Continuous log: seconds dropped from each plateau's start [default: the "
+            "DUT's settling read from the output, at least one window].",
+        ),
+        click.option(
+            "--plateau-window-s",
+            type=float,
+            default=None,
+            help="Continuous log: window of the step detector (s) [default: 1].",
+        ),
+        click.option(
+            "--min-plateau-s",
+            type=float,
+            default=None,
+            help="Continuous log: shortest plateau used after settling (s) [default: 5 windows].",
+        ),
+    ]
+    wrapped: Any = command
+    for option in reversed(options):
+        wrapped = option(wrapped)
+    return wrapped
+
+
+def continuous_log(
+    captures: Sequence[str],
+    rate_files: dict[str, Any],
+    columns: Sequence[str],
+    group: str | None,
+    log_opts: dict[str, Any],
+    where: tuple[int | None, str | None],
+) -> bool:
+    """Whether the captures are one continuous log (``--plateaus``, or one capture with time_s)."""
+    from rotacal.io import capture_columns, parse_column_mapping
+
+    from ._reading import current_read_options
+
+    wanted = log_opts["plateaus"]
+    single = len(captures) == 1 and not (
+        rate_files["rate_from_name"] or rate_files["rates_path"] is not None
+    )
+    if wanted is None and single and not rate_files["rest_from"]:
+        names = capture_columns(
+            captures[0],
+            mapping=parse_column_mapping(columns),
+            group=group,
+            read_options=current_read_options(),
+        )
+        wanted = "time_s" in names
+    given = [k for k in _KEYS[1:] if log_opts[k] is not None]
+    if not wanted:
+        if given:
+            raise ConfigError(
+                f"--{given[0].replace('_', '-')} applies to a continuous log (one capture with "
+                "time_s, rate_deg_s and output); drop it or give --plateaus"
+            )
+        return False
+    if not single or rate_files["rest_from"]:
+        raise ConfigError(
+            "--plateaus reads one continuous log: give one capture, without --rate-from-name, "
+            "--rates or --rest-from"
+        )
+    if any(w is not None for w in where):
+        raise ConfigError(
+            "a continuous log is analysed in this process: drop --workers/--scheduler"
+        )
+    return True
+
+
+def scale_factor_from_log(
+    capture: str,
+    columns: Sequence[str],
+    group: str | None,
+    options: dict[str, Any],
+    log_opts: dict[str, Any],
+    chunked: bool | None,
+) -> Any:
+    """Read the log's columns and run :func:`calibrate_scale_factor_log` on them."""
+    from rotacal.gyro.scale_factor_log import calibrate_scale_factor_log
+    from rotacal.io import capture_columns, parse_column_mapping, read_capture
+
+    from ._common import _naming_file
+    from ._reading import current_read_options
+
+    mapping, reading = parse_column_mapping(columns), current_read_options()
+    names = capture_columns(capture, mapping=mapping, group=group, read_options=reading)
+    needed = ["time_s", "rate_deg_s", "output"]
+    needed += ["temperature_c"] if "temperature_c" in names else []
+    with _naming_file(capture), _status(f"reading {capture}"):
+        cap = read_capture(
+            capture, columns=needed, mapping=mapping, group=group, read_options=reading
+        )
+    with _naming_file(capture), _status("finding the plateaus and fitting"):
+        return calibrate_scale_factor_log(
+            cap["time_s"],
+            cap["rate_deg_s"],
+            cap["output"],
+            temperature_c=cap.columns.get("temperature_c"),
+            settle_s=log_opts["settle_s"],
+            window_s=log_opts["plateau_window_s"],
+            min_plateau_s=log_opts["min_plateau_s"],
+            chunked=chunked,
+            **options,
+        )
+
+
+def log_sections(result: Any) -> list[Any]:
+    """The plateau figure's section of a continuous log's result (none for a rate-table one)."""
+    if not hasattr(result, "plateaus"):
+        return []
+    from rotacal.report.gyro_plateaus import plateaus_section
+
+    return [plateaus_section(result)]
