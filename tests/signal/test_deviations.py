@@ -11,6 +11,7 @@ from __future__ import annotations
 import allantools
 import numpy as np
 import pytest
+from tests.signal.test_allan import KINDS, noise_phase, read_column, read_stable32
 
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.signal import deviations as devs
@@ -21,7 +22,6 @@ from rotacal.signal.deviations import (
     longest_cluster,
     stability_deviation,
 )
-from tests.signal.test_allan import KINDS, noise_phase, read_column, read_stable32
 
 ALLANTOOLS = {
     "mdev": allantools.mdev,
@@ -232,7 +232,7 @@ def literal_variances(kind: str, x: np.ndarray, m: int) -> np.ndarray:
     if kind == "hdev":
         d = x[:, 3 * m :] - 3 * x[:, 2 * m : -m] + 3 * x[:, m : -2 * m] - x[:, : -3 * m]
         return np.mean(d**2, axis=1) / 6.0
-    d = x[:, 2 * m :] - 2 * x[:, m : -m] + x[:, : -2 * m]
+    d = x[:, 2 * m :] - 2 * x[:, m:-m] + x[:, : -2 * m]
     c = np.concatenate((np.zeros((x.shape[0], 1)), np.cumsum(d, axis=1)), axis=1)
     inner = c[:, m:] - c[:, :-m]
     return np.mean(inner**2, axis=1) / (2.0 * m**2)

@@ -70,7 +70,9 @@ def _sz(t: np.ndarray, f: np.ndarray, alpha: int, d: int = 2) -> np.ndarray:
     """Eq. (9): the d-th difference of ``sx``, Σ_k (−1)^k·C(2d, d + k)·sx(t + k), |k| ≤ d."""
     out = math.comb(2 * d, d) * _sx(t, f, alpha)
     for k in range(1, d + 1):
-        out = out + (-1) ** k * math.comb(2 * d, d + k) * (_sx(t - k, f, alpha) + _sx(t + k, f, alpha))
+        out = out + (-1) ** k * math.comb(2 * d, d + k) * (
+            _sx(t - k, f, alpha) + _sx(t + k, f, alpha)
+        )
     return out
 
 
@@ -149,8 +151,10 @@ def edf_greenhall(
         ones = np.ones(m.size)
         sz0 = float(_sz(np.zeros(1), np.ones(1), alpha, d)[0])
         if small.any():
-            out[small] = sz0**2 * big_m[small] / _basic_sum(
-                j_[small], big_m[small], s_[small], ones[small], alpha, d
+            out[small] = (
+                sz0**2
+                * big_m[small]
+                / _basic_sum(j_[small], big_m[small], s_[small], ones[small], alpha, d)
             )
         if table.any():
             out[table] = r[table] / (a0 - a1 / r[table])
@@ -207,4 +211,6 @@ def edf_totdev(n_phase: int, m: np.ndarray, alpha: int) -> np.ndarray:
         return b * (n / m) - c
     if alpha == 2:
         return (n + 1.0) * (n - 2.0 * m) / (2.0 * (n - m))
-    return np.exp(np.sqrt(np.log((n - 1.0) / (2.0 * m)) * np.log((2.0 * m + 1.0) * (n - 1.0) / 4.0)))
+    return np.exp(
+        np.sqrt(np.log((n - 1.0) / (2.0 * m)) * np.log((2.0 * m + 1.0) * (n - 1.0) / 4.0))
+    )

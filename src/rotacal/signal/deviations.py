@@ -158,7 +158,9 @@ def edf_deviation(kind: str, n_phase: int, cluster_sizes: Any, noise_alpha: Any 
     m = np.asarray(cluster_sizes, dtype=np.int64).ravel()
     top = longest_cluster(kind, int(n_phase))[0]
     if m.size and (m.min() < 1 or m.max() > top):
-        raise ConfigError(f"cluster sizes of the {kind} must satisfy 1 ≤ m ≤ {top} for N = {n_phase}.")
+        raise ConfigError(
+            f"cluster sizes of the {kind} must satisfy 1 ≤ m ≤ {top} for N = {n_phase}."
+        )
     alphas = _check_alpha(noise_alpha, m.size)
     out = np.empty(m.size)
     for a in np.unique(alphas).tolist():
@@ -277,7 +279,11 @@ def stability_deviation(
             f"no τ of the {kind} is representable with {n_phase} phase points; supply a longer "
             "record."
         )
-    if isinstance(taus, str) and taus.lower() == "all" and ms.size * float(n_phase) > ALL_TAUS_BUDGET:
+    if (
+        isinstance(taus, str)
+        and taus.lower() == "all"
+        and ms.size * float(n_phase) > ALL_TAUS_BUDGET
+    ):
         raise ConfigError(
             f"--taus all for the {kind} sums each of its {ms.size} τ over the whole record "
             f"({ms.size * float(n_phase):.2g} terms, beyond {ALL_TAUS_BUDGET:.0e}): use log, "
