@@ -58,6 +58,7 @@ def modified_sums(x: np.ndarray, ms: np.ndarray) -> np.ndarray:
     n = x.size
     out = np.empty(ms.size)
     work = np.empty(n)
+    buf = np.empty(_CHUNK)
     for idx, m in enumerate(ms.tolist()):
         length = n - 2 * m
         c = work[:length]
@@ -68,8 +69,10 @@ def modified_sums(x: np.ndarray, ms: np.ndarray) -> np.ndarray:
         acc = float(c[m - 1]) ** 2
         for s in range(0, length - m, _CHUNK):
             e = min(length - m, s + _CHUNK)
-            d = c[s + m : e + m] - c[s:e]
-            acc += float(np.dot(d, d))
+            b = buf[: e - s]
+            np.subtract(c[s + m : e + m], c[s:e], out=b)
+            np.multiply(b, b, out=b)
+            acc += float(b.sum())  # not BLAS's dot: its threads' start-up dominated (5×)
         out[idx] = acc
     return out
 

@@ -44,6 +44,7 @@ from rotacal.signal.allan import (
 __all__ = [
     "DEVIATIONS",
     "StabilityDeviation",
+    "deviation_keys",
     "edf_deviation",
     "longest_cluster",
     "stability_deviation",
@@ -320,3 +321,24 @@ def stability_deviation(
         notes=tuple(notes),
         warnings=clipped,
     )
+
+
+def deviation_keys(dev: StabilityDeviation) -> dict[str, Any]:
+    """The JSON keys of one deviation as ``rotacal allan --deviation`` writes them.
+
+    ``deviation`` (its name), ``<kind>_tau_s`` (s), ``<kind>_deg_s`` with its interval
+    ``<kind>_low_deg_s``/``<kind>_high_deg_s`` (the rate unit, °/s for a record in °/s) and
+    ``<kind>_edf``; the TDEV, an angle, as ``tdev_deg``/``tdev_low_deg``/``tdev_high_deg`` (° for a
+    record in °/s). For a record in another unit the values are in that unit (rate) or that unit
+    times seconds (TDEV), as ``adev_deg_s`` is.
+    """
+    unit = "deg" if dev.kind == "tdev" else "deg_s"
+    k = dev.kind
+    return {
+        "deviation": k,
+        f"{k}_tau_s": np.asarray(dev.tau_s, dtype=np.float64).tolist(),
+        f"{k}_{unit}": np.asarray(dev.deviation, dtype=np.float64).tolist(),
+        f"{k}_low_{unit}": np.asarray(dev.low, dtype=np.float64).tolist(),
+        f"{k}_high_{unit}": np.asarray(dev.high, dtype=np.float64).tolist(),
+        f"{k}_edf": np.asarray(dev.edf, dtype=np.float64).tolist(),
+    }
