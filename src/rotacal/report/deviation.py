@@ -58,9 +58,10 @@ def _figure(dev: StabilityDeviation, adev: tuple[np.ndarray, np.ndarray] | None)
         fig,
         f"{name[0].upper()}{name[1:]} with its {level} interval",
         f"{dev.n_samples} samples at {fixed(dev.fs_hz)} Hz. Shaded: the χ² interval with the "
-        f"equivalent degrees of freedom of {cite('greenhall2003')} for noise exponent "
-        f"α = {dev.noise_alpha} (white rate noise for α = 0)"
-        + (" (total deviation: NIST SP 1065 Table 8)." if dev.kind == "totdev" else "."),
+        f"equivalent degrees of freedom of {cite('greenhall2003')} for the noise exponent "
+        f"α = {dev.noise_alpha}"
+        + (" (white rate noise)" if dev.noise_alpha == 0 else "")
+        + ("; the total deviation's from NIST SP 1065 Table 8." if dev.kind == "totdev" else "."),
     )
 
 

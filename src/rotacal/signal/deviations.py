@@ -43,6 +43,7 @@ from rotacal.signal.allan import (
 
 __all__ = [
     "DEVIATIONS",
+    "DEVIATION_NAMES",
     "StabilityDeviation",
     "deviation_keys",
     "edf_deviation",
