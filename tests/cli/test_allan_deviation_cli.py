@@ -77,7 +77,7 @@ def test_streamed_path_refuses_in_one_line(tmp_path):
 
 
 def test_report_has_the_deviation_figure(tmp_path):
-    path, _ = capture(tmp_path / "g.npz")
+    path, _ = capture(tmp_path / "g.npz", n=4000)
     html = tmp_path / "r.html"
     r = run("allan", str(path), "--deviation", "totdev", "--report", str(html))
     assert r.exit_code == 0, r.output
