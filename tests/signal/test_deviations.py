@@ -1,7 +1,7 @@
 """Tests of rotacal.signal.deviations: MDEV, overlapping HDEV, TDEV, TOTDEV, their edf and CI.
 
 Truth from outside the method: allantools 2019.9 (an independent implementation) on records of
-each power-law noise, Stable32's printed deviations and confidence limits on real clock data
+each power-law noise, NIST SP 1065's published NBS14 values, Stable32's printed deviations and confidence limits on real clock data
 (../shared/data/allantools), the literal definitions summed term by term, a closed form (the
 third difference annihilates a rate ramp) and a Monte Carlo of the estimator's spread (edf).
 """
@@ -14,6 +14,7 @@ import pytest
 from tests.signal.test_allan import (
     KINDS,
     assert_stable32_rows,
+    nbs14_1000,
     noise_phase,
     read_column,
     read_stable32,
@@ -130,6 +131,22 @@ def test_hadamard_ignores_a_rate_ramp():
     np.testing.assert_allclose(with_ramp.deviation, without.deviation, rtol=1e-9)
     adev = overlapping_adev(y + ramp, fs=1.0, taus="octave")
     assert adev.adev[-1] > 100 * with_ramp.deviation[-1]
+
+
+#: NIST SP 1065 (Riley 2008), Table 31: the NBS14 1000-point set at AF 1, 10, 100 (MDEV, TDEV,
+#: overlapping HDEV, TOTDEV "doubly reflected"), 7 significant digits.
+NBS14_1000 = {
+    "mdev": [2.922319e-01, 6.172376e-02, 2.170921e-02],
+    "tdev": [1.687202e-01, 3.563623e-01, 1.253382e00],
+    "hdev": [2.943883e-01, 9.581083e-02, 3.237638e-02],
+    "totdev": [2.922319e-01, 9.134743e-02, 3.406530e-02],
+}
+
+
+@pytest.mark.parametrize("kind", sorted(NBS14_1000))
+def test_nbs14_1000_point_published_values(kind):
+    res = stability_deviation(nbs14_1000(), fs=1.0, kind=kind, taus=[1.0, 10.0, 100.0])
+    np.testing.assert_allclose(res.deviation, NBS14_1000[kind], rtol=2e-6)
 
 
 # ============================================================================== Stable32
