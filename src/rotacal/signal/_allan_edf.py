@@ -5,7 +5,7 @@ Greenhall's algorithm for variances based on finite differences (Greenhall & Ril
 overlapping (stride S = m) estimators: unmodified (filter factor F = m; d = 2 the Allan variance,
 d = 3 the Hadamard variance) and modified (F = 1; d = 2 the modified Allan and time variances),
 for the power-law noises α = 2, 1, 0, −1, −2 (S_y(f) ∝ f^α); and the total variance's edf
-(NIST SP 1065, Table 8). Whole-array over the cluster sizes.
+(NIST SP 1065, Tables 8 and 5). Whole-array over the cluster sizes.
 """
 
 from __future__ import annotations
