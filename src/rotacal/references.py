@@ -245,6 +245,14 @@ REFERENCES: dict[str, Reference] = {
             "Proc. 35th Annual Precise Time and Time Interval (PTTI) Meeting, 267–280",
         ),
         _r(
+            "riley2008",
+            "Riley W. J.",
+            "Riley",
+            "2008",
+            "Handbook of frequency stability analysis",
+            "NIST Special Publication 1065, §5.2 (the Allan family of variances) and §5.3 (edf)",
+        ),
+        _r(
             "clopper1934",
             "Clopper C. J., Pearson E. S.",
             "Clopper and Pearson",

@@ -38,6 +38,7 @@ from ._reading import current_read_options
         "rotacal allan static.npz --report noise.html",
         "rotacal allan gyro.csv --column gyro_z --fs-hz 100 --taus all",
         "rotacal allan rlg.csv --column angle_deg --angle",
+        "rotacal allan gyro.csv --column gyro_z --deviation mdev --report mdev.html",
     ),
 )
 @click.argument("capture", type=INPUT_FILE)
@@ -57,6 +58,15 @@ from ._reading import current_read_options
     default=None,
     help="τ grid: 'all' computes every cluster size (O(N log² N)); 'log' and 'all' need the "
     "record in memory. [default: log; octave for a capture read in chunks]",
+)
+@click.option(
+    "--deviation",
+    type=click.Choice(["adev", "mdev", "hdev", "tdev", "totdev"]),
+    default="adev",
+    show_default=True,
+    help="Deviation to report beside the noise terms: overlapping Allan, modified Allan, "
+    "overlapping Hadamard, time (in deg) or total; with its edf and 68 % interval. Other than "
+    "adev: in memory only.",
 )
 @click.option(
     "--chunked/--in-memory",
@@ -80,6 +90,7 @@ def allan_cmd(
     fs_hz: float | None,
     unit: str,
     taus: str | None,
+    deviation: str,
     chunked: bool | None,
     workers: int | None,
     scheduler: str | None,
@@ -120,7 +131,7 @@ def allan_cmd(
     options = {"fs_hz": fs_hz, "unit": unit, "taus": taus}
     options |= {"specs": kw["specs"], "allow_clipped": kw["allow_clipped"]}
     reading = {"mapping": mapping, "group": group, "read_options": read_options}
-    stream = _Stream(capture, rate_column, reading, options, is_angle)
+    stream = _Stream(capture, rate_column, reading, options, is_angle, deviation)
     n = None
     if split_wanted(workers, scheduler, chunked):
         result = _dask_noise(stream, workers, scheduler)
@@ -157,7 +168,30 @@ def allan_cmd(
             specs=kw["specs"],
             allow_clipped=kw["allow_clipped"],
         )
-    _finish(result, capture, json_path, report_path)
+    family = None
+    if deviation != "adev":
+        family = _family_deviation(
+            cap[rate_column], result, deviation, taus or "log", is_angle, kw["allow_clipped"]
+        )
+    _finish(result, capture, json_path, report_path, family)
+
+
+def _family_deviation(
+    values: Any, result: Any, kind: str, taus: str, is_angle: bool, allow_clipped: bool
+) -> Any:
+    """The ``--deviation`` of the record at the sampling rate the noise analysis found
+    (:func:`rotacal.signal.deviations.stability_deviation`; an angle column as phase data)."""
+    from rotacal.signal.deviations import stability_deviation
+
+    with _status(f"computing the {kind}"):
+        return stability_deviation(
+            values,
+            fs=result.fs_hz,
+            kind=kind,
+            taus=taus,
+            data_type="phase" if is_angle else "rate",
+            allow_clipped=allow_clipped,
+        )
 
 
 #: Rows read at a time on the chunked path, and the phase values it carries (32 MB; longer τ
@@ -176,6 +210,7 @@ class _Stream:
     reading: dict[str, Any]  # mapping, group and read_options of rotacal.io's readers
     options: dict[str, Any]  # fs_hz, unit, taus, specs, allow_clipped
     is_angle: bool
+    deviation: str = "adev"
 
     @property
     def taus(self) -> str | None:
@@ -183,6 +218,11 @@ class _Stream:
 
     def check(self, how: str) -> None:
         """Refuse what needs the whole record in memory."""
+        if self.deviation != "adev":
+            raise ConfigError(
+                f"--deviation {self.deviation} is computed in memory only (the streamed paths sum "
+                f"the adev); this capture is {how}: give --in-memory, or --deviation adev"
+            )
         if self.taus in ("all", "log"):
             raise ConfigError(
                 f"--taus {self.taus} needs the whole record in memory; this capture is {how}: "
@@ -250,18 +290,34 @@ def _dask_noise(stream: _Stream, workers: int | None, scheduler: str | None) -> 
     return stream.noted(result, "split over workers")
 
 
-def _finish(result: Any, capture: str, json_path: str | None, report_path: str | None) -> None:
-    """Warnings, JSON, report and the terminal summary of one noise result."""
+def _finish(
+    result: Any,
+    capture: str,
+    json_path: str | None,
+    report_path: str | None,
+    family: Any = None,
+) -> None:
+    """Warnings, JSON, report and the terminal summary of one noise result (and of the
+    ``--deviation`` other than the ADEV, ``family``)."""
     _emit_warnings(result)
     data = result.to_dict()
+    if family is not None:
+        from rotacal.signal.deviations import deviation_keys
+
+        data |= deviation_keys(family)
     _write_json(data, json_path)
     if report_path:
         from rotacal.report.noise import noise_section
 
+        sections = [noise_section(result)]
+        if family is not None:
+            from rotacal.report.deviation import deviation_section
+
+            sections.append(deviation_section(family, (data["tau_s"], data["adev_deg_s"])))
         _write_report(
             "Gyro noise: Allan deviation",
             "IEEE Std 952-1997 Annex C: overlapping Allan deviation and noise terms",
-            [noise_section(result)],
+            sections,
             capture,
             report_path,
             warnings=result.warnings,
@@ -278,3 +334,10 @@ def _finish(result: Any, capture: str, json_path: str | None, report_path: str |
             click.echo(f"{label:<18} {text}")
         for note in result.notes:
             click.echo(f"note               {note}")
+        if family is not None:
+            unit = "deg" if family.kind == "tdev" else "deg/s"
+            click.echo(
+                f"{family.kind:<18} {family.deviation[0]:.4g} {unit} at τ = {family.tau_s[0]:.4g} s "
+                f"… {family.deviation[-1]:.4g} {unit} at τ = {family.tau_s[-1]:.4g} s "
+                f"({family.tau_s.size} τ, 68 % intervals in the JSON)"
+            )

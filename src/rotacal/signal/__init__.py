@@ -1,5 +1,6 @@
-"""rotacal.signal — instrument-independent signal maths: IEEE 1057 sine fits, THD, SNR, Allan
-deviation and IEEE 952 noise terms, and the detector of clipped (saturated) signals."""
+"""rotacal.signal — instrument-independent signal maths: IEEE 1057 sine fits, THD, SNR, the Allan
+deviation and its family (MDEV, HDEV, TDEV, TOTDEV), IEEE 952 noise terms, and the detector of
+clipped (saturated) signals."""
 
 from typing import TYPE_CHECKING
 
@@ -24,6 +25,14 @@ if TYPE_CHECKING:
         find_clipping,
         find_quadrature_clipping,
     )
+    from rotacal.signal.deviations import (
+        DEVIATIONS,
+        StabilityDeviation,
+        deviation_keys,
+        edf_deviation,
+        longest_cluster,
+        stability_deviation,
+    )
     from rotacal.signal.sinefit import (
         DriftCheck,
         HarmonicFitAccumulator,
@@ -39,6 +48,7 @@ if TYPE_CHECKING:
     )
 
 __all__ = [
+    "DEVIATIONS",
     "AllanDeviation",
     "ClippedSignalError",
     "Clipping",
@@ -48,10 +58,13 @@ __all__ = [
     "NoiseTerms",
     "RailDetector",
     "SineFit",
+    "StabilityDeviation",
     "adev_confidence_interval",
     "check_clipping",
     "check_sampling",
+    "deviation_keys",
     "displacement_amplitudes_from_rate",
+    "edf_deviation",
     "edf_overlapping_adev",
     "estimate_frequency",
     "find_clipping",
@@ -59,9 +72,11 @@ __all__ = [
     "fit_harmonics",
     "fit_sine_3p",
     "fit_sine_4p",
+    "longest_cluster",
     "noise_terms",
     "overlapping_adev",
     "snr_db",
+    "stability_deviation",
     "thd_percent",
     "thd_standard_uncertainty_percent",
 ]

@@ -233,9 +233,19 @@ def _check_variation(y: np.ndarray, data_type: str, allow_clipped: bool) -> tupl
 
 
 # ====================================================================================== τ lists
-def _cluster_sizes(taus: Any, n_phase: int, fs: float) -> tuple[np.ndarray, list[str]]:
-    """Cluster sizes m for the τ specification, and notes about rounding or dropping."""
-    m_max = (n_phase - 1) // 2
+def _cluster_sizes(
+    taus: Any, n_phase: int, fs: float, m_max: int | None = None, m_list: int | None = None
+) -> tuple[np.ndarray, list[str]]:
+    """Cluster sizes m for the τ specification, and notes about rounding or dropping.
+
+    ``m_max`` is the longest cluster the deviation can use (default the Allan deviation's
+    ⌊(N − 1)/2⌋, which leaves one second difference); ``m_list`` the longest that the octave
+    and decade lists keep (default ⌊(N − 2)/2⌋: at least two terms, as allantools).
+    """
+    if m_max is None:
+        m_max = (n_phase - 1) // 2
+    if m_list is None:
+        m_list = (n_phase - 2) // 2
     notes: list[str] = []
     if taus is None:
         taus = "octave"
@@ -256,7 +266,8 @@ def _cluster_sizes(taus: Any, n_phase: int, fs: float) -> tuple[np.ndarray, list
             raise ConfigError(
                 f"taus must be 'octave', 'decade', 'log', 'all' or an array of τ in s; got {taus!r}."
             )
-        ms = ms[(ms < n_phase) & (n_phase - 2 * ms >= 2)]
+        # allantools' octave/decade lists keep at least two terms (for the ADEV: N − 2m ≥ 2)
+        ms = ms[ms <= min(m_max, m_list)]
         return np.unique(ms), notes
     try:
         t = np.asarray(taus, dtype=np.float64).ravel()
@@ -410,6 +421,37 @@ def _chi2_ppf(q: float, nu: np.ndarray) -> np.ndarray:
     return np.asarray(np.exp(spline(np.log(nu))) * nu)
 
 
+def prepared_phase(
+    data: Any, fs: Any, data_type: str, confidence: Any, allow_clipped: bool, what: str
+) -> tuple[float, float, np.ndarray, int, tuple[str, ...]]:
+    """The checks every deviation makes of its input, and the phase it is computed from.
+
+    Returns (fs in Hz, confidence, phase with its best line removed, samples given, clipping
+    warnings); raises what :func:`overlapping_adev` documents (``what`` names the deviation).
+    """
+    fs_hz = _check_fs(fs)
+    if data_type not in ("rate", "phase"):
+        raise ConfigError(f"data_type must be 'rate' or 'phase'; got {data_type!r}.")
+    conf = _check_confidence(confidence)
+    y = as_samples("data", data)
+    if y.size + (data_type == "rate") < MIN_SAMPLES:
+        raise CaptureError(
+            f"the record holds {y.size} {data_type} samples; {what} needs at least "
+            f"{MIN_SAMPLES} phase points ({MIN_SAMPLES} phase or {MIN_SAMPLES - 1} rate samples): "
+            "supply a longer record."
+        )
+    check_finite("data", y)
+    check_magnitudes("data", y, what=f"{data_type} data")
+    clipped = _check_variation(y, data_type, allow_clipped)
+    x = _phase(y, fs_hz, data_type)
+    if not float(np.max(np.abs(x))) > 1e-12 * float(np.max(np.abs(y))):
+        raise CaptureError(
+            f"the phase record is a straight line (constant rate) to the last bit: {what} is "
+            "zero at every τ; check that the column holds the sensor output."
+        )
+    return fs_hz, conf, x, int(y.size), clipped
+
+
 def overlapping_adev(
     data: Any,
     *,
@@ -475,29 +517,12 @@ def overlapping_adev(
     eq. (C.4) ff.; NIST SP 1065 (Riley 2008), eq. (11) (overlapping ADEV from phase data) and
     §5.3 (edf, Greenhall & Riley 2003).
     """
-    fs_hz = _check_fs(fs)
-    if data_type not in ("rate", "phase"):
-        raise ConfigError(f"data_type must be 'rate' or 'phase'; got {data_type!r}.")
     if method not in ("auto", "direct"):
         raise ConfigError(f"method must be 'auto' or 'direct'; got {method!r}.")
-    conf = _check_confidence(confidence)
-    y = as_samples("data", data)
-    if y.size + (data_type == "rate") < MIN_SAMPLES:
-        raise CaptureError(
-            f"the record holds {y.size} {data_type} samples; the Allan deviation needs at least "
-            f"{MIN_SAMPLES} phase points ({MIN_SAMPLES} phase or {MIN_SAMPLES - 1} rate samples): "
-            "supply a longer record."
-        )
-    check_finite("data", y)
-    check_magnitudes("data", y, what=f"{data_type} data")
-    clipped = _check_variation(y, data_type, allow_clipped)
-    x = _phase(y, fs_hz, data_type)
+    fs_hz, conf, x, n_samples, clipped = prepared_phase(
+        data, fs, data_type, confidence, allow_clipped, "the Allan deviation"
+    )
     n_phase = x.size
-    if not float(np.max(np.abs(x))) > 1e-12 * float(np.max(np.abs(y))):
-        raise CaptureError(
-            "the phase record is a straight line (constant rate) to the last bit: its Allan "
-            "deviation is zero at every τ; check that the column holds the sensor output."
-        )
     ms, notes = _cluster_sizes(taus, n_phase, fs_hz)
     if ms.size == 0:
         raise ConfigError(
@@ -513,7 +538,7 @@ def overlapping_adev(
         sums,
         ms,
         n_phase=int(n_phase),
-        n_samples=int(y.size),
+        n_samples=n_samples,
         fs_hz=fs_hz,
         data_type=data_type,
         confidence=conf,
