@@ -542,3 +542,6 @@ def _drift_coefficient(data: dict[str, Any], name: str) -> dict[str, Any]:
         "k": {name: k.get(name)},
         "coverage_probability": data.get("coverage_probability"),
     }
+
+
+from . import gyro_frequency  # noqa: E402,F401  (registers `gyro frequency-response`)

@@ -1,0 +1,173 @@
+"""``rotacal gyro frequency-response``: a gyro's dynamic response on a sinusoidal table.
+
+Registered on the ``gyro`` group by the import at the end of :mod:`rotacal.cli.gyro`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import click
+
+from rotacal.numbers import fixed
+
+from ._common import (
+    INPUT_FILE,
+    _analysis_options,
+    _check_outputs,
+    _clipping_option,
+    _emit_warnings,
+    _names_capture,
+    _naming_file,
+    _read,
+    _status,
+    _summary_wanted,
+    _write_json,
+    _write_report,
+)
+from ._help import example
+from .gyro import gyro
+
+
+@gyro.command(
+    "frequency-response",
+    epilog=example(
+        "rotacal gyro frequency-response f1.csv f2.csv f5.csv f10.csv --lines 3600",
+        "rotacal gyro frequency-response sweep/*.h5 --channel-skew-s 0 --report bode.html",
+    ),
+)
+@click.argument("capture", type=INPUT_FILE)
+@click.argument("more_captures", nargs=-1, type=INPUT_FILE)
+@click.option(
+    "--lines",
+    type=int,
+    default=None,
+    help="Encoder lines per revolution: the reference is the encoder's a and b. Without it the "
+    "reference is the angle_deg column.",
+)
+@click.option(
+    "--harmonics",
+    type=click.IntRange(1, 50),
+    default=5,
+    show_default=True,
+    help="Harmonics fitted to the angle and to the DUT's rate (lowered below Nyquist).",
+)
+@click.option(
+    "--channel-skew-s",
+    type=click.FloatRange(min=0.0),
+    default=None,
+    help="Bound of the time skew between the reference and DUT channels (s), a Type B input "
+    "of the phase (rectangular); 0 for a simultaneous-sampling DAQ. [default: one sample "
+    "interval, as a multiplexing DAQ may convert the channels a whole interval apart]",
+)
+@click.option(
+    "--delay", is_flag=True, help="Fit a pure delay τ with the second-order model (delay_s)."
+)
+@click.option(
+    "--max-thd-percent",
+    type=click.FloatRange(min=0.0, min_open=True),
+    default=10.0,
+    show_default=True,
+    help="Refuse a DUT rate whose THD exceeds this (not sinusoidal).",
+)
+@click.option(
+    "--dut-sign",
+    type=click.Choice(["1", "-1"]),
+    default="1",
+    show_default=True,
+    help="-1 when the DUT's sensitive axis points against the encoder's positive direction.",
+)
+@_clipping_option
+@_analysis_options
+@_names_capture
+def gyro_frequency_response(
+    capture: str,
+    more_captures: tuple[str, ...],
+    lines: int | None,
+    harmonics: int,
+    channel_skew_s: float | None,
+    delay: bool,
+    max_thd_percent: float,
+    dut_sign: str,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Frequency response of a gyro on a sinusoidal table.
+
+    One capture per frequency, with time_s, the DUT's rate_deg_s and the table's angle (a and b
+    of its encoder with --lines, or angle_deg). Both are sine-fitted (IEEE Std 1057): amplitude
+    ratio and phase of the DUT's rate against the table's rate at each frequency, then the
+    second-order model ωn²/(s² + 2ζωn·s + ωn²) fitted across them: natural frequency, damping
+    and −3 dB bandwidth, each with its standard uncertainty.
+    """
+    from rotacal.gyro.frequency_response import calibrate_frequency_response
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    kw.pop("specs")
+    paths = [capture, *more_captures]
+    needed = ["time_s", "rate_deg_s", *(["a", "b"] if lines is not None else ["angle_deg"])]
+    data = []
+    for path in paths:
+        with _naming_file(path):
+            cap = _read(path, needed, columns, group)
+            one = {name: cap[name] for name in needed}
+        if dut_sign == "-1":
+            one["rate_deg_s"] = -one["rate_deg_s"]
+        data.append(one)
+    with _status("fitting"):
+        result = calibrate_frequency_response(
+            data,
+            names=[Path(p).name for p in paths],
+            lines=lines,
+            harmonics=harmonics,
+            channel_skew_s=channel_skew_s,
+            delay=delay,
+            max_thd_percent=max_thd_percent,
+            allow_clipped=kw.pop("allow_clipped"),
+        )
+    _emit_warnings(result)
+    _write_json(result.to_dict(), json_path)
+    if report_path:
+        from rotacal.report.frequency_response import frequency_response_section
+
+        _write_report(
+            "Gyro frequency response",
+            "IEEE Std 1057 sine fits per frequency; second-order model ωn²/(s² + 2ζωn·s + ωn²)",
+            [frequency_response_section(result)],
+            ", ".join(paths) if len(paths) > 1 else capture,
+            report_path,
+            warnings=result.warnings,
+        )
+    if _summary_wanted():
+        _print_frequency_response(result)
+
+
+def _print_frequency_response(r: Any) -> None:
+    click.echo("frequency (Hz)  ratio      u         ratio (dB)  phase (deg)  u (deg)")
+    for f, ratio, ratio_u, db, ph, ph_u in zip(
+        r.frequency_hz,
+        r.amplitude_ratio,
+        r.amplitude_ratio_u,
+        r.amplitude_ratio_db,
+        r.phase_deg,
+        r.phase_deg_u,
+        strict=True,
+    ):
+        click.echo(
+            f"{fixed(f, 6):<15} {fixed(ratio, 6):<10} {fixed(ratio_u, 2):<9} "
+            f"{fixed(db, 4):<11} {fixed(ph, 5):<12} {fixed(ph_u, 2)}"
+        )
+    click.echo(
+        f"natural frequency {fixed(r.natural_frequency_hz, 6)} Hz, "
+        f"u = {fixed(r.natural_frequency_hz_u, 2)} Hz"
+    )
+    click.echo(f"damping ratio     {fixed(r.damping_ratio, 5)}, u = {fixed(r.damping_ratio_u, 2)}")
+    click.echo(
+        f"bandwidth −3 dB   {fixed(r.bandwidth_hz, 6)} Hz, u = {fixed(r.bandwidth_hz_u, 2)} Hz"
+    )
+    if r.delay_s is not None:
+        click.echo(f"delay             {fixed(r.delay_s, 4)} s, u = {fixed(r.delay_s_u, 2)} s")
