@@ -11,7 +11,7 @@ from typing import Any
 
 import click
 
-from rotacal.numbers import fixed
+from rotacal.numbers import format_plain, format_quantity
 
 from ._common import (
     INPUT_FILE,
@@ -147,27 +147,24 @@ def gyro_frequency_response(
 
 
 def _print_frequency_response(r: Any) -> None:
-    click.echo("frequency (Hz)  ratio      u         ratio (dB)  phase (deg)  u (deg)")
-    for f, ratio, ratio_u, db, ph, ph_u in zip(
-        r.frequency_hz,
-        r.amplitude_ratio,
-        r.amplitude_ratio_u,
-        r.amplitude_ratio_db,
-        r.phase_deg,
-        r.phase_deg_u,
-        strict=True,
-    ):
-        click.echo(
-            f"{fixed(f, 6):<15} {fixed(ratio, 6):<10} {fixed(ratio_u, 2):<9} "
-            f"{fixed(db, 4):<11} {fixed(ph, 5):<12} {fixed(ph_u, 2)}"
+    """Each point's ratio and phase, then the model's parameters, each ± U (k, p)."""
+    p, k = r.coverage_probability, r.k
+    for i, f in enumerate(r.frequency_hz):
+        ratio = format_quantity(
+            r.amplitude_ratio[i], U=k["amplitude_ratio"] * r.amplitude_ratio_u[i]
         )
-    click.echo(
-        f"natural frequency {fixed(r.natural_frequency_hz, 6)} Hz, "
-        f"u = {fixed(r.natural_frequency_hz_u, 2)} Hz"
-    )
-    click.echo(f"damping ratio     {fixed(r.damping_ratio, 5)}, u = {fixed(r.damping_ratio_u, 2)}")
-    click.echo(
-        f"bandwidth −3 dB   {fixed(r.bandwidth_hz, 6)} Hz, u = {fixed(r.bandwidth_hz_u, 2)} Hz"
-    )
-    if r.delay_s is not None:
-        click.echo(f"delay             {fixed(r.delay_s, 4)} s, u = {fixed(r.delay_s_u, 2)} s")
+        phase = format_quantity(
+            r.phase_deg[i], "deg", U=k["phase_deg"] * r.phase_deg_u[i], k=k["phase_deg"], p=p
+        )
+        click.echo(f"{format_plain(f, 'Hz'):<12} ratio {ratio:<22} phase {phase}")
+    for label, key, unit in (
+        ("natural frequency", "natural_frequency_hz", "Hz"),
+        ("damping ratio    ", "damping_ratio", ""),
+        ("bandwidth −3 dB  ", "bandwidth_hz", "Hz"),
+        ("delay            ", "delay_s", "s"),
+    ):
+        value = getattr(r, key)
+        if value is not None:
+            u = getattr(r, f"{key}_u")
+            text = format_quantity(value, unit, U=k[key] * u, k=k[key], p=p)
+            click.echo(f"{label} {text}")

@@ -38,6 +38,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+from scipy import stats
 
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.frequency_model import SecondOrderFit, fit_second_order
@@ -56,6 +57,8 @@ MAX_THD_PERCENT = 10.0
 SAME_FREQUENCY_RELATIVE = 1e-3
 #: The DUT's fundamental must stand this many standard uncertainties above zero.
 MIN_AMPLITUDE_SIGMAS = 5.0
+#: Coverage probability of the expanded uncertainties (``*_U``, the summary and the report).
+COVERAGE_PROBABILITY = 0.95
 _DB = 20.0 / math.log(10.0)
 
 
@@ -289,7 +292,10 @@ class FrequencyResponse(Result):
     """A gyro's frequency response on a sinusoidal table (INTERFACE.md, ``gyro frequency-response``).
 
     The lists hold one value per capture, in the order the captures were given; ``phase_deg`` is
-    unwrapped across them in frequency order. The model is H(s) = ωn²/(s² + 2ζωn·s + ωn²)
+    unwrapped across them in frequency order. ``k`` holds the coverage factor of each point's
+    list (``amplitude_ratio``, ``phase_deg``: the normal 1.96 of their many degrees of freedom) and
+    of each model parameter (1.96, or Student's t for the fit's ν when the Birge ratio scaled the
+    covariance), for ``coverage_probability``; ``*_U`` = k·u of the model's parameters. The model is H(s) = ωn²/(s² + 2ζωn·s + ωn²)
     (× e^(−sτ) with ``delay``), see :mod:`rotacal.gyro.frequency_model`.
     """
 
@@ -318,6 +324,11 @@ class FrequencyResponse(Result):
     reference_amplitude_deg: list[float]
     channel_skew_s: list[float]
     captures: list[str]
+    coverage_probability: float
+    k: dict[str, float]
+    natural_frequency_hz_U: float
+    damping_ratio_U: float
+    bandwidth_hz_U: float
     _points: tuple[FrequencyPoint, ...] = dataclasses.field(repr=False)
     _fit: SecondOrderFit = dataclasses.field(repr=False)
 
@@ -438,6 +449,12 @@ def calibrate_frequency_response(
         )
     cov = fit.covariance
     corr = float(cov[0, 1] / math.sqrt(cov[0, 0] * cov[1, 1]))
+    k_point = float(stats.norm.ppf(0.5 + COVERAGE_PROBABILITY / 2.0))
+    k_model = (
+        float(stats.t.ppf(0.5 + COVERAGE_PROBABILITY / 2.0, fit.degrees_of_freedom))
+        if fit.birge_ratio > 1.0
+        else k_point
+    )
     model = "H(s) = ωn²/(s² + 2ζωn·s + ωn²)" + (" · exp(−s·τ)" if delay else "")
     return FrequencyResponse(
         frequency_hz=f.tolist(),
@@ -465,6 +482,16 @@ def calibrate_frequency_response(
         reference_amplitude_deg=[p.reference_amplitude_deg for p in points],
         channel_skew_s=[p.channel_skew_s for p in points],
         captures=list(names),
+        coverage_probability=COVERAGE_PROBABILITY,
+        k={
+            "amplitude_ratio": k_point,
+            "phase_deg": k_point,
+            **dict.fromkeys(("natural_frequency_hz", "damping_ratio", "bandwidth_hz"), k_model),
+            **({"delay_s": k_model} if delay else {}),
+        },
+        natural_frequency_hz_U=k_model * fit.natural_frequency_hz_u,
+        damping_ratio_U=k_model * fit.damping_ratio_u,
+        bandwidth_hz_U=k_model * fit.bandwidth_hz_u,
         _points=tuple(points),
         _fit=fit,
         warnings=tuple(dict.fromkeys(warnings)),

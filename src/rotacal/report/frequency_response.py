@@ -12,9 +12,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from rotacal.gyro.frequency_response import FrequencyResponse
-from rotacal.numbers import fixed
+from rotacal.numbers import fixed, format_quantity
 from rotacal.references import cite
-from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
+from rotacal.report.html import Figure, Section, Table, figure_from_matplotlib
+from rotacal.report.uncertainty import result_row
 from rotacal.report.wording import diagnostics_table, paragraph
 
 __all__ = ["bode_figure", "bode_matplotlib", "frequency_response_section"]
@@ -99,27 +100,25 @@ def bode_figure(r: FrequencyResponse) -> Figure:
     )
 
 
-def _q(value: float, u: float, unit: str = "", digits: int = 6) -> str:
-    return f"{fixed(value, digits)}{unit}, u = {fixed(u, 2)}{unit}"
-
-
 def frequency_response_section(r: FrequencyResponse, *, figures: bool = True) -> Section:
     """The fitted parameters in the summary, a table of the points, the Bode figure."""
+    k, p = r.k, r.coverage_probability
     results = [
-        ResultRow(
-            "natural frequency fn", _q(r.natural_frequency_hz, r.natural_frequency_hz_u, " Hz")
-        ),
-        ResultRow("damping ratio ζ", _q(r.damping_ratio, r.damping_ratio_u)),
-        ResultRow("−3 dB bandwidth", _q(r.bandwidth_hz, r.bandwidth_hz_u, " Hz")),
+        result_row(name, getattr(r, key), unit, U=k[key] * getattr(r, f"{key}_u"), k=k[key], p=p)
+        for name, key, unit in (
+            ("natural frequency fn", "natural_frequency_hz", "Hz"),
+            ("damping ratio ζ", "damping_ratio", ""),
+            ("−3 dB bandwidth", "bandwidth_hz", "Hz"),
+            ("delay τ", "delay_s", "s"),
+        )
+        if getattr(r, key) is not None
     ]
-    if r.delay_s is not None and r.delay_s_u is not None:
-        results.append(ResultRow("delay τ", _q(r.delay_s * 1e3, r.delay_s_u * 1e3, " ms")))
     rows = [
         [
             name,
             fixed(f, 7),
-            _q(ratio, ratio_u, digits=6),
-            _q(ph, ph_u, "°", digits=5),
+            format_quantity(ratio, U=k["amplitude_ratio"] * ratio_u),
+            format_quantity(ph, "°", U=k["phase_deg"] * ph_u),
             fixed(thd, 3),
         ]
         for name, f, ratio, ratio_u, ph, ph_u, thd in zip(
@@ -136,7 +135,8 @@ def frequency_response_section(r: FrequencyResponse, *, figures: bool = True) ->
     points = Table(
         ["capture", "frequency (Hz)", "amplitude ratio", "phase", "DUT THD (%)"],
         rows,
-        caption="Each capture: the DUT's rate against the table's rate (standard uncertainties)",
+        caption="Each capture: the DUT's rate against the table's rate, ± U "
+        f"(k = {k['phase_deg']:.2f}, p = {100 * p:g} %)",
     )
     diag = diagnostics_table(
         [
