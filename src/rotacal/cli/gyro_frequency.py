@@ -70,7 +70,8 @@ from .gyro import gyro
     type=click.FloatRange(min=0.0, min_open=True),
     default=10.0,
     show_default=True,
-    help="Refuse a DUT rate whose THD exceeds this (not sinusoidal).",
+    help="Refuse a DUT rate as not sinusoidal when its THD exceeds the table rate's by more "
+    "than this (root-sum-square).",
 )
 @click.option(
     "--dut-sign",

@@ -77,6 +77,9 @@ class FrequencyPoint(Result):
     reference_rate_amplitude_deg_s : 2πf·A_θ (deg/s).
     dut_amplitude_deg_s : A_rate (deg/s).
     dut_thd_percent : THD of the DUT rate's fit (%), Feng et al. 2023 eq. (1).
+    reference_rate_thd_percent : THD of the table's rate (%), from θ's harmonics h·A_h (eq. (14)
+        read backwards); the DUT is refused when its THD exceeds this by more than
+        ``max_thd_percent`` (root-sum-square).
     dut_snr_db : 20·log10 of the DUT's fundamental rms over its residual rms (dB).
     channel_skew_s : the skew bound used (s), rectangular half-width.
     harmonics : harmonics fitted to θ and to the rate.
@@ -94,6 +97,7 @@ class FrequencyPoint(Result):
     reference_rate_amplitude_deg_s: float
     dut_amplitude_deg_s: float
     dut_thd_percent: float
+    reference_rate_thd_percent: float
     dut_snr_db: float
     channel_skew_s: float
     harmonics: int
@@ -181,7 +185,8 @@ def response_at_frequency(
     harmonics : int — harmonics fitted to θ and to the rate (lowered below Nyquist).
     channel_skew_s : float, optional — bound of the time skew between reference and DUT (s),
         rectangular; None: one mean sample interval (module docstring).
-    max_thd_percent : float — the DUT rate is refused as not sinusoidal above this THD (%).
+    max_thd_percent : float — the DUT rate is refused as not sinusoidal when its THD exceeds the
+        table rate's by more than this (%, root-sum-square).
     allow_clipped : bool — analyse clipped signals anyway (named in ``warnings``).
 
     Returns
@@ -241,10 +246,15 @@ def response_at_frequency(
             f"{u_dut:.2g} deg/s): is rate_deg_s the gyro on this table?"
         )
     thd = thd_percent(dut.amplitudes) if nh > 1 else 0.0
-    if thd > max_thd_percent:
+    # the table's own distortion reaches the DUT too: judge only what the DUT adds to it
+    h = np.arange(1, nh + 1)
+    thd_ref = thd_percent(h * ref.amplitudes) if nh > 1 else 0.0
+    excess = math.sqrt(max(thd * thd - thd_ref * thd_ref, 0.0))
+    if excess > max_thd_percent:
         raise CaptureError(
-            f"the DUT's rate is not sinusoidal at {f:.6g} Hz: THD {thd:.3g} % above "
-            f"{max_thd_percent:g} %; a response ratio of a distorted output is not defined"
+            f"the DUT's rate is not sinusoidal at {f:.6g} Hz: THD {thd:.3g} % where the "
+            f"table's rate has {thd_ref:.3g} %, {excess:.3g} % beyond it (above "
+            f"{max_thd_percent:g} %); a response ratio of a distorted output is not defined"
         )
     if dut.residual_rms > a_dut / math.sqrt(2.0):
         raise CaptureError(
@@ -277,6 +287,7 @@ def response_at_frequency(
         reference_rate_amplitude_deg_s=w * a_ref,
         dut_amplitude_deg_s=a_dut,
         dut_thd_percent=thd,
+        reference_rate_thd_percent=thd_ref,
         dut_snr_db=snr,
         channel_skew_s=skew,
         harmonics=nh,
@@ -320,6 +331,7 @@ class FrequencyResponse(Result):
     chi_squared: float
     degrees_of_freedom: int
     dut_thd_percent: list[float]
+    reference_rate_thd_percent: list[float]
     dut_snr_db: list[float]
     reference_amplitude_deg: list[float]
     channel_skew_s: list[float]
@@ -405,7 +417,7 @@ def calibrate_frequency_response(
     order = np.argsort(f, kind="stable")
     close = np.flatnonzero(np.diff(f[order]) <= SAME_FREQUENCY_RELATIVE * f[order][1:])
     if close.size:
-        i, j = order[close[0]], order[close[0] + 1]
+        i, j = sorted((int(order[close[0]]), int(order[close[0] + 1])))
         raise CaptureError(
             f"{names[i]} and {names[j]} are at the same frequency ({f[i]:.6g} and {f[j]:.6g} "
             "Hz): each capture must be one distinct frequency"
@@ -478,6 +490,7 @@ def calibrate_frequency_response(
         chi_squared=fit.chi_squared,
         degrees_of_freedom=fit.degrees_of_freedom,
         dut_thd_percent=[p.dut_thd_percent for p in points],
+        reference_rate_thd_percent=[p.reference_rate_thd_percent for p in points],
         dut_snr_db=[p.dut_snr_db for p in points],
         reference_amplitude_deg=[p.reference_amplitude_deg for p in points],
         channel_skew_s=[p.channel_skew_s for p in points],
