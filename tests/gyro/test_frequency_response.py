@@ -47,7 +47,7 @@ def encoder_sweep():
 
 
 def test_each_point_lies_within_its_uncertainty_of_the_closed_form(encoder_sweep):
-    caps, r = encoder_sweep
+    _, r = encoder_sweep
     h = h_closed_form(np.array(r.frequency_hz))
     ratio_err = (np.array(r.amplitude_ratio) - np.abs(h)) / np.array(r.amplitude_ratio_u)
     phase_err = (np.array(r.phase_deg) - np.degrees(np.unwrap(np.angle(h)))) / np.array(
@@ -81,8 +81,7 @@ def test_model_recovers_the_twins_dut_at_two_noise_levels(noise, reference, enco
 
 def test_stated_uncertainty_matches_the_spread_of_repeated_sweeps():
     fits = [
-        analyse(sweep(1.0, "angle", seed=100 + 10 * k, periods=3, fs_hz=1000.0))
-        for k in range(16)
+        analyse(sweep(1.0, "angle", seed=100 + 10 * k, periods=3, fs_hz=1000.0)) for k in range(16)
     ]
     for key in ("natural_frequency_hz", "damping_ratio", "bandwidth_hz"):
         values = np.array([getattr(r, key) for r in fits])
@@ -105,7 +104,9 @@ def test_table_distortion_does_not_bias_the_fundamental():
 def test_bandwidth_closed_form_against_root_search():
     assert bandwidth_from_model(10.0, 1 / math.sqrt(2)) == pytest.approx(10.0, rel=1e-14)
     for zeta in (0.05, 0.3, 0.5, 1.0, 2.5):
-        found = brentq(lambda f: abs(h_closed_form(f, 10.0, zeta)) - 1 / math.sqrt(2), 1e-3, 1e3)
+        found = brentq(
+            lambda f, z=zeta: abs(h_closed_form(f, 10.0, z)) - 1 / math.sqrt(2), 1e-3, 1e3
+        )
         assert bandwidth_from_model(10.0, zeta) == pytest.approx(found, rel=1e-12)
 
 
@@ -154,9 +155,9 @@ def test_phase_uncertainty_of_the_sine_fit_matches_its_spread():
 # ------------------------------------------------------------------------------------ refusals
 def test_refuses_fewer_frequencies_than_parameters():
     caps = sweep(frequencies=(2.0, 6.0))
-    with pytest.raises(CaptureError, match="2 captures .* 3 parameters"):
+    with pytest.raises(CaptureError, match=r"2 captures .* 3 parameters"):
         analyse(caps, delay=True)
-    with pytest.raises(CaptureError, match="1 capture .* 2 parameters"):
+    with pytest.raises(CaptureError, match=r"1 capture .* 2 parameters"):
         analyse(caps[:1])
 
 
@@ -176,7 +177,7 @@ def test_refuses_a_dut_rate_that_is_not_sinusoidal():
     c = simulate_gyro_sine(1.0, noise_deg_s=0.0).columns
     rng = np.random.default_rng(1)
     rate = c["rate_deg_s"] / 30.0 + rng.normal(0, 2.0, c["time_s"].size)
-    with pytest.raises(CaptureError, match="not sinusoidal.*residual .* exceeds the sine"):
+    with pytest.raises(CaptureError, match=r"not sinusoidal.*residual .* exceeds the sine"):
         response_at_frequency(c["time_s"], rate, a=c["a"], b=c["b"], lines=3600)
     with pytest.raises(CaptureError, match="shows no sine"):
         response_at_frequency(

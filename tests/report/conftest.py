@@ -95,10 +95,19 @@ def cli_reports(
     report("turntable budget", "turntable", "budget", str(config), "--runs", "20000")
     sweep = [folder / f"sine{f}.npz" for f in (1, 4, 8, 12)]
     for i, path in enumerate(sweep):
-        _run("simulate", "gyro-sine", "--frequency-hz", path.stem[4:], "--seed", str(i),
-             "--out", str(path))
-    report("gyro frequency-response", "gyro", "frequency-response", *map(str, sweep),
-           "--lines", "3600")
+        _run(
+            "simulate",
+            "gyro-sine",
+            "--frequency-hz",
+            path.stem[4:],
+            "--seed",
+            str(i),
+            "--out",
+            str(path),
+        )
+    report(
+        "gyro frequency-response", "gyro", "frequency-response", *map(str, sweep), "--lines", "3600"
+    )
     return reports
 
 

@@ -1,12 +1,25 @@
 """rotacal.gyro — gyroscope calibrations on the table: scale factor and nonlinearity (Kokuyama et al. 2015),
 3-axis calibration (robot-manipulator study 2023) and calibration from rotations through a known angle (Ferraris),
-multiposition drift coefficients (GyroWheel study), noise terms (IEEE Std 952)."""
+multiposition drift coefficients (GyroWheel study), noise terms (IEEE Std 952), frequency response on a
+sinusoidal table (IEEE Std 1057 sine fits, second-order model)."""
 
 from typing import TYPE_CHECKING
 
 from rotacal._lazy import attach
 
 if TYPE_CHECKING:
+    from rotacal.gyro.frequency_model import (
+        SecondOrderFit,
+        bandwidth_from_model,
+        fit_second_order,
+        second_order_response,
+    )
+    from rotacal.gyro.frequency_response import (
+        FrequencyPoint,
+        FrequencyResponse,
+        calibrate_frequency_response,
+        response_at_frequency,
+    )
     from rotacal.gyro.multiposition import (
         EARTH_RATE_DEG_H,
         MultipositionPlan,
@@ -53,14 +66,19 @@ __all__ = [
     "RATE_COLUMNS",
     "REQUIREMENTS",
     "TRIAD_OUTPUT_COLUMNS",
+    "FrequencyPoint",
+    "FrequencyResponse",
     "GyroNoise",
     "MultipositionPlan",
     "MultipositionResult",
     "RotationCalibration",
     "ScaleFactorResult",
+    "SecondOrderFit",
     "TriadPlanCheck",
     "TriadResult",
     "apply_triad_calibration",
+    "bandwidth_from_model",
+    "calibrate_frequency_response",
     "calibrate_multiposition",
     "calibrate_scale_factor",
     "calibrate_scale_factor_chunked",
@@ -74,11 +92,14 @@ __all__ = [
     "earth_rate_and_gravity",
     "evaluate_requirement",
     "ferraris_sections",
+    "fit_second_order",
     "gyro_noise",
     "gyro_noise_from_angle",
     "multiposition_plan",
     "resolve_requirement",
+    "response_at_frequency",
     "scale_factor_chunks",
+    "second_order_response",
     "triad_plan",
     "triad_plan_check",
 ]
