@@ -35,7 +35,7 @@ from .gyro import gyro
     "frequency-response",
     epilog=example(
         "rotacal gyro frequency-response f1.csv f2.csv f5.csv f10.csv --lines 3600",
-        "rotacal gyro frequency-response sweep/*.h5 --channel-skew-s 0 --report bode.html",
+        "rotacal gyro frequency-response f1.h5 f2.h5 f5.h5 --channel-skew-s 0 --report bode.html",
     ),
 )
 @click.argument("capture", type=INPUT_FILE)
