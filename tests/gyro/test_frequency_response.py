@@ -207,3 +207,27 @@ def test_refuses_a_dut_in_antiphase_and_a_capture_without_reference():
     bare = {k: v for k, v in caps[0].columns.items() if k != "angle_deg"}
     with pytest.raises(CaptureError, match="no reference"):
         calibrate_frequency_response([bare, *(c.columns for c in caps[1:])])
+
+
+def test_a_stated_timebase_error_corrects_the_frequencies_and_widens_fn():
+    from rotacal.uncertainty.specs import load_specs
+
+    e = 2e-3  # a clock 0.2 % fast stamps every interval 0.2 % long
+    caps = sweep(reference="angle", frequencies=(1.0, 4.0, 8.0, 12.0))
+    slow = [dict(c.columns, time_s=c.columns["time_s"] * (1 + e)) for c in caps]
+    plain = calibrate_frequency_response(slow, channel_skew_s=0.0)
+    # unstated, the clock makes the table's rate 0.2 % slow against the DUT's: no unit-gain fit
+    assert any("does not fit" in w for w in plain.warnings)
+    specs = load_specs(
+        {"timebase": {"relative_error": {"distribution": "normal", "value": e, "u": 1e-4}}}
+    )
+    r = calibrate_frequency_response(slow, channel_skew_s=0.0, specs=specs)
+    np.testing.assert_allclose(r.frequency_hz, [1.0, 4.0, 8.0, 12.0], rtol=1e-5)
+    assert r.warnings == ()
+    h = np.abs(h_closed_form(np.array(r.frequency_hz)))
+    assert np.all(np.abs(np.array(r.amplitude_ratio) - h) < 3 * np.array(r.amplitude_ratio_u))
+    for key in ("natural_frequency_hz", "damping_ratio", "bandwidth_hz"):
+        assert abs(getattr(r, key) - caps[0].truth[key]) < 3 * getattr(r, f"{key}_u"), key
+    # the timebase's u reaches fn (scaled with every frequency) and each point's ratio
+    assert r.natural_frequency_hz_u > FN * 1e-4
+    assert min(r.amplitude_ratio_u) > 1e-4 * min(r.amplitude_ratio)

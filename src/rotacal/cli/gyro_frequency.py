@@ -108,7 +108,6 @@ def gyro_frequency_response(
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    kw.pop("specs")
     paths = [capture, *more_captures]
     needed = ["time_s", "rate_deg_s", *(["a", "b"] if lines is not None else ["angle_deg"])]
     data = []
@@ -129,6 +128,7 @@ def gyro_frequency_response(
             delay=delay,
             max_thd_percent=max_thd_percent,
             allow_clipped=kw.pop("allow_clipped"),
+            specs=kw.pop("specs"),
         )
     _emit_warnings(result)
     _write_json(result.to_dict(), json_path)

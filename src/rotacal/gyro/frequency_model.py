@@ -20,8 +20,9 @@ solution (GUM, JCGM 100:2008, §5.1 and annex H.3 for the least-squares case), m
 Birge ratio χ²/ν when that exceeds one (the points scatter more than their uncertainties say: the
 spread, not the stated uncertainties, then sets the parameters' uncertainty). A time skew common
 to every capture (a Type B input of the phase, the same at every frequency, hence fully
-correlated) is propagated into the parameters through their sensitivity to it, ``(JᵀJ)⁻¹Jᵀ·g``
-with g the change of the weighted phase residuals per second of skew; the bandwidth's uncertainty
+correlated), or a timebase error, is propagated into the parameters through their sensitivity to
+it, ``(JᵀJ)⁻¹Jᵀ·g`` with g the change of the weighted data per unit of the input
+(:class:`CommonInput`); the bandwidth's uncertainty
 follows from the parameters' covariance by the first-order propagation of GUM §5.2.2.
 """
 
@@ -29,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -37,6 +39,7 @@ from scipy import optimize, stats
 from rotacal.errors import CaptureError
 
 __all__ = [
+    "CommonInput",
     "SecondOrderFit",
     "bandwidth_from_model",
     "fit_second_order",
@@ -98,6 +101,28 @@ def _bandwidth_gradient(fn: float, zeta: float) -> np.ndarray:
     x = c + root
     dx_dzeta = -4.0 * zeta * (1.0 + c / root)
     return np.array([math.sqrt(x), fn * dx_dzeta / (2.0 * math.sqrt(x))])
+
+
+@dataclasses.dataclass(frozen=True)
+class CommonInput:
+    """A Type B input common to every point (fully correlated across frequencies).
+
+    Attributes
+    ----------
+    name : str — what it is, for messages.
+    ratio_shift : array — change of each measured amplitude ratio per unit of the input (-).
+    phase_shift_deg : array — change of each measured phase per unit of the input (deg).
+    u : float — the input's standard uncertainty (its unit).
+    parameter_relative_shift : array, optional — relative change of (fn, ζ[, τ]) per unit of the
+        input that does not go through the points (a timebase error e scales every frequency by
+        1 + e: fn by 1 + e, τ by 1/(1 + e), i.e. (1, 0, −1)).
+    """
+
+    name: str
+    ratio_shift: np.ndarray
+    phase_shift_deg: np.ndarray
+    u: float
+    parameter_relative_shift: np.ndarray | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -185,7 +210,7 @@ def fit_second_order(
     phase_deg_u: Any,
     *,
     delay: bool = False,
-    skew_u_s: float = 0.0,
+    common: Sequence[CommonInput] = (),
 ) -> SecondOrderFit:
     """Weighted least-squares fit of H(s) = ωn²/(s² + 2ζωn s + ωn²) [· e^(−sτ)] to measured points.
 
@@ -197,8 +222,8 @@ def fit_second_order(
     phase_deg, phase_deg_u : array_like — arg H measured, continuous across f (deg), and its
         standard uncertainty (deg) without the common time skew.
     delay : bool — fit the pure delay τ as a third parameter.
-    skew_u_s : float — standard uncertainty (s) of a time skew between reference and DUT common
-        to every point (Type B, fully correlated across f); propagated into the parameters.
+    common : sequence of CommonInput — Type B inputs that move every point together (a time skew
+        between the channels, a timebase error), propagated into the parameters.
 
     Returns
     -------
@@ -256,12 +281,14 @@ def fit_second_order(
     dof = 2 * f.size - n_par
     birge = chi2 / dof if dof > 0 and chi2 > dof else 1.0
     cov = cov_a * birge
-    if skew_u_s > 0:
-        # a skew δ shifts every measured phase by −360·f·δ; the weighted phase residual
-        # (model − phase)/u then grows by +360·f·δ/u
-        g = np.concatenate((np.zeros(f.size), 360.0 * f / args[3]))
-        s = cov_a @ (j.T @ g)
-        cov = cov + np.outer(s, s) * skew_u_s**2
+    for c in common:
+        # the optimum moves by (JᵀJ)⁻¹Jᵀ·(δy/u) when the data move by δy (the weighted
+        # residuals are (model − y)/u), plus what the input does to the parameters directly
+        g = np.concatenate((c.ratio_shift / args[1], c.phase_shift_deg / args[3]))
+        sens = cov_a @ (j.T @ g)
+        if c.parameter_relative_shift is not None:
+            sens = sens + sol.x * np.asarray(c.parameter_relative_shift, dtype=float)[:n_par]
+        cov = cov + np.outer(sens, sens) * c.u**2
     fn, zeta = float(sol.x[0]), float(sol.x[1])
     grad = _bandwidth_gradient(fn, zeta)
     sub = cov[:2, :2]

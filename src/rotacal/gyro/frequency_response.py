@@ -21,7 +21,9 @@ channels: a capture states one ``time_s`` for both, but a multiplexing DAQ conve
 one after another within a sample interval Δt, so unless the skew bound is given
 (``channel_skew_s``, 0 for simultaneous sampling) it is taken as rectangular within ±Δt (GUM
 §4.3.7), u = Δt/√3, contributing 360·f·u degrees. The skew is common to every capture: in the
-model fit it is a fully correlated input (:mod:`rotacal.gyro.frequency_model`).
+model fit it is a fully correlated input (:mod:`rotacal.gyro.frequency_model`). A stated timebase
+error (``specs``: ``timebase.relative_error``) corrects the frequencies and the ratios and is
+propagated likewise (:func:`calibrate_frequency_response`).
 
 References
 ----------
@@ -41,8 +43,9 @@ import numpy as np
 from scipy import stats
 
 from rotacal.errors import CaptureError, ConfigError
-from rotacal.gyro.frequency_model import SecondOrderFit, fit_second_order
+from rotacal.gyro.frequency_model import CommonInput, SecondOrderFit, fit_second_order
 from rotacal.results import Result
+from rotacal.uncertainty.specs import InstrumentSpecs
 
 __all__ = [
     "FrequencyPoint",
@@ -362,6 +365,7 @@ def calibrate_frequency_response(
     delay: bool = False,
     max_thd_percent: float = MAX_THD_PERCENT,
     allow_clipped: bool = False,
+    specs: InstrumentSpecs | None = None,
 ) -> FrequencyResponse:
     """Amplitude ratio and phase at each capture's frequency, and the second-order model fitted.
 
@@ -373,6 +377,10 @@ def calibrate_frequency_response(
     lines : int, optional — encoder lines per revolution (-).
     harmonics, channel_skew_s, max_thd_percent, allow_clipped : see :func:`response_at_frequency`.
     delay : bool — fit a pure delay τ with the second-order model.
+    specs : InstrumentSpecs, optional — Type B inputs: ``timebase.relative_error`` e (its mean
+        corrects every frequency, f·(1 + e), and ratio, R/(1 + e): the table's rate comes from
+        the stamped times, the DUT's does not; its u enters both and, fully correlated, the
+        model's parameters; the phases do not depend on it, both channels sharing one clock).
 
     Returns
     -------
@@ -413,7 +421,14 @@ def calibrate_frequency_response(
             )
         except CaptureError as e:
             raise type(e)(f"{name}: {e}") from None
-    f = np.array([p.frequency_hz for p in points])
+    e0 = 0.0 if specs is None else float(specs.mean("timebase.relative_error"))
+    dist = None if specs is None else specs.get("timebase.relative_error")
+    u_e = 0.0 if dist is None else float(dist.std)
+    # a clock e fast stamps every interval (1 + e) long: the true frequency is f·(1 + e), the
+    # table's true rate 2πf(1 + e)·A_θ, so the ratio is R/(1 + e); the phase does not move (both
+    # channels are sampled at the same instants)
+    f = np.array([p.frequency_hz for p in points]) * (1.0 + e0)
+    f_u = np.hypot(np.array([p.frequency_hz_u for p in points]) * (1.0 + e0), f * u_e)
     order = np.argsort(f, kind="stable")
     close = np.flatnonzero(np.diff(f[order]) <= SAME_FREQUENCY_RELATIVE * f[order][1:])
     if close.size:
@@ -429,17 +444,23 @@ def calibrate_frequency_response(
             f"({phase[order[0]]:.1f}° at {f[order[0]]:.6g} Hz): its sensitive axis points "
             "against the encoder's positive direction; negate rate_deg_s (CLI: --dut-sign -1)"
         )
-    ratio = np.array([p.amplitude_ratio for p in points])
-    ratio_u = np.array([p.amplitude_ratio_u for p in points])
+    ratio = np.array([p.amplitude_ratio for p in points]) / (1.0 + e0)
+    ratio_u_fit = np.array([p.amplitude_ratio_u for p in points]) / (1.0 + e0)
+    ratio_u = np.hypot(ratio_u_fit, ratio * u_e)
     skews = {p.channel_skew_s for p in points}
+    none = np.zeros(f.size)
+    common = [CommonInput("channel skew", none, -360.0 * f, max(skews) / math.sqrt(3.0))]
+    if u_e > 0:
+        # the frequencies scale with (1 + e): fn with them, τ against them
+        common.append(CommonInput("timebase", -ratio, none, u_e, np.array([1.0, 0.0, -1.0])))
     fit = fit_second_order(
         f,
         ratio,
-        ratio_u,
+        ratio_u_fit,
         phase,
         np.array([p.phase_deg_u_fit for p in points]),
         delay=delay,
-        skew_u_s=max(skews) / math.sqrt(3.0),
+        common=common,
     )
     warnings = [w for p in points for w in p.warnings]
     if fit.lack_of_fit:
@@ -470,7 +491,7 @@ def calibrate_frequency_response(
     model = "H(s) = ωn²/(s² + 2ζωn·s + ωn²)" + (" · exp(−s·τ)" if delay else "")
     return FrequencyResponse(
         frequency_hz=f.tolist(),
-        frequency_hz_u=[p.frequency_hz_u for p in points],
+        frequency_hz_u=f_u.tolist(),
         amplitude_ratio=ratio.tolist(),
         amplitude_ratio_u=ratio_u.tolist(),
         amplitude_ratio_db=(20.0 * np.log10(ratio)).tolist(),
