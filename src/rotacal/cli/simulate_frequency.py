@@ -23,7 +23,7 @@ from .simulate import _sim_common, _sim_write, simulate
 )
 @_sim_common
 @click.option(
-    "--frequency-hz", type=float, required=True, help="Frequency of the table's sine (Hz)."
+    "--frequency-hz", type=float, default=None, help="Frequency of the table's sine (Hz) [2]."
 )
 @click.option(
     "--rate-amplitude-deg-s",
