@@ -125,8 +125,10 @@ def _reference_angle(
     lines: int | None,
     allow_clipped: bool,
 ) -> tuple[np.ndarray, tuple[str, ...]]:
-    """θ (deg) of the table: the angle column, or the encoder's signals demodulated."""
-    if angle_deg is not None:
+    """θ (deg) of the table: the encoder's signals demodulated (given with ``lines``), else the
+    angle column."""
+    encoder = a is not None and b is not None and lines is not None
+    if angle_deg is not None and not encoder:
         theta = _as_column("angle_deg", angle_deg)
         if theta.size != n:
             raise CaptureError(
@@ -184,7 +186,8 @@ def response_at_frequency(
     time_s : array_like — sample times (s), strictly increasing, shared by every column.
     rate_deg_s : array_like — the DUT's rate (deg/s).
     angle_deg : array_like, optional — the table's angle θ (deg), the reference; or
-    a, b, lines : the encoder's quadrature signals (signal units) and its lines per revolution (-).
+    a, b, lines : the encoder's quadrature signals (signal units) and its lines per revolution (-),
+        the reference when all three are given.
     harmonics : int — harmonics fitted to θ and to the rate (lowered below Nyquist).
     channel_skew_s : float, optional — bound of the time skew between reference and DUT (s),
         rectangular; None: one mean sample interval (module docstring).
@@ -404,11 +407,14 @@ def calibrate_frequency_response(
         )
     points = []
     for name, cap in zip(names, captures, strict=True):
+        missing = [c for c in ("time_s", "rate_deg_s") if c not in cap]
+        if missing:
+            raise CaptureError(f"{name}: no column {missing[0]!r} (the DUT's rate and its times)")
         try:
             points.append(
                 response_at_frequency(
-                    cap["time_s"] if "time_s" in cap else None,
-                    cap["rate_deg_s"] if "rate_deg_s" in cap else None,
+                    cap["time_s"],
+                    cap["rate_deg_s"],
                     angle_deg=cap.get("angle_deg"),
                     a=cap.get("a"),
                     b=cap.get("b"),
