@@ -55,6 +55,13 @@ GYRO_TRIAD = CommandColumns("gyro triad", RATE_COLUMNS + TRIAD_OUTPUT_COLUMNS)
 GYRO_ROTATIONS = CommandColumns("gyro rotations", TRIAD_OUTPUT_COLUMNS, ("time_s",))
 GYRO_MULTIPOSITION = CommandColumns("gyro multiposition", ("phi1_deg", "phi2_deg", "output_deg_h"))
 ALLAN = CommandColumns("allan", ("rate_deg_s",), ("time_s",))
+#: The reference is the encoder's a, b (with --lines) or an angle column: two ways to fit.
+GYRO_FREQUENCY_RESPONSE = CommandColumns(
+    "gyro frequency-response", ("time_s", "rate_deg_s", "a", "b")
+)
+GYRO_FREQUENCY_RESPONSE_ANGLE = CommandColumns(
+    "gyro frequency-response", ("time_s", "rate_deg_s", "angle_deg")
+)
 SELFCAL = CommandColumns("selfcal", (), min_heads=2)
 RATE = CommandColumns("rate", (), min_heads=1)
 
@@ -65,6 +72,8 @@ COMMANDS: tuple[CommandColumns, ...] = (
     GYRO_TRIAD,
     GYRO_ROTATIONS,
     GYRO_MULTIPOSITION,
+    GYRO_FREQUENCY_RESPONSE,
+    GYRO_FREQUENCY_RESPONSE_ANGLE,
     MOTION_ENCODER,
     MOTION_LTS,
     MOTION_FOG,
@@ -81,4 +90,4 @@ CANONICAL_NAMES: tuple[str, ...] = tuple(
 def fitting_commands(names: Iterable[str]) -> tuple[str, ...]:
     """The analysis commands whose columns a capture with these column names has."""
     have = list(names)
-    return tuple(c.command for c in COMMANDS if c.fits(have))
+    return tuple(dict.fromkeys(c.command for c in COMMANDS if c.fits(have)))

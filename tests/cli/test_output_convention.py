@@ -59,11 +59,13 @@ def captures(tmp_path_factory) -> dict[str, Path]:
         "gyro-rotations": [],
         "gyro-steps": ["--samples-per-dwell", "20"],
         "multiposition": [],
+        "gyro-sine": ["--frequency-hz", "2", "--periods", "3"],
+        "gyro-sine-6": ["--frequency-hz", "6", "--periods", "3"],
     }
     out = {}
     for kind, more in small.items():
         path = folder / f"{kind}.npz"
-        r = run("simulate", kind, "--out", str(path), *more)
+        r = run("simulate", kind.removesuffix("-6"), "--out", str(path), *more)
         assert r.exit_code == 0, r.output
         out[kind] = path
     out["table"] = folder / "table.toml"
@@ -77,6 +79,7 @@ def captures(tmp_path_factory) -> dict[str, Path]:
 ANALYSES: dict[tuple[str, ...], tuple[str, list[str]]] = {
     ("allan",): ("gyro-noise", []),
     ("inspect",): ("fog", []),
+    ("gyro", "frequency-response"): ("gyro-sine", ["{gyro-sine-6}", "--lines", "3600"]),
     ("gyro", "multiposition"): ("multiposition", ["--axis", "x", "--latitude-deg", "45.75"]),
     ("gyro", "resolution"): ("gyro-steps", []),
     ("gyro", "rotations"): ("gyro-rotations", ["--sections", "{gyro-rotations}.truth.json"]),
@@ -104,6 +107,7 @@ WRITERS: dict[tuple[str, ...], list[str]] = {
             "gyro-noise",
             "gyro-rates",
             "gyro-rotations",
+            "gyro-sine",
             "gyro-steps",
             "gyro-triad",
             "lts",
@@ -118,6 +122,7 @@ WRITER_ARGS = {
     ("simulate", "pulses"): ["--heads", "3", "--pulses-per-rev", "360", "--revolutions", "1.5"],
     ("simulate", "gyro-noise"): ["--duration-s", "60"],
     ("simulate", "gyro-log"): ["--plateau-s", "5"],
+    ("simulate", "gyro-sine"): ["--frequency-hz", "2", "--periods", "2"],
     ("simulate", "encoder"): ["--duration-s", "1"],
     ("simulate", "lts"): ["--duration-s", "1"],
     ("simulate", "fog"): ["--duration-s", "1"],
@@ -140,7 +145,12 @@ def _analysis_argv(path: tuple[str, ...], captures: dict[str, Path]) -> list[str
     return [
         *path,
         str(captures[kind]),
-        *(m.replace("{gyro-rotations}", str(captures["gyro-rotations"])) for m in more),
+        *(
+            m.replace("{gyro-rotations}", str(captures["gyro-rotations"])).replace(
+                "{gyro-sine-6}", str(captures["gyro-sine-6"])
+            )
+            for m in more
+        ),
     ]
 
 
@@ -258,7 +268,12 @@ def _dummy_argv(path: tuple[str, ...], tmp_path: Path) -> list[str]:
     return [
         *path,
         str(capture),
-        *(m.replace("{gyro-rotations}.truth.json", str(sections)) for m in more),
+        *(
+            m.replace("{gyro-rotations}.truth.json", str(sections)).replace(
+                "{gyro-sine-6}", str(capture)
+            )
+            for m in more
+        ),
     ]
 
 

@@ -65,6 +65,7 @@ def _inputs(path: tuple[str, ...]) -> list[click.Parameter]:
 EXPECTED_INPUTS = {
     ("inspect",): {"capture"},
     ("allan",): {"capture", "specs"},
+    ("gyro", "frequency-response"): {"capture", "more_captures", "specs"},
     ("gyro", "multiposition"): {"capture", "specs"},
     ("gyro", "resolution"): {"capture", "specs"},
     ("gyro", "rotations"): {"capture", "sections_path", "specs"},

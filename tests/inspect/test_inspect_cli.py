@@ -28,6 +28,7 @@ TWIN_FITS = {
     "gyro-noise": "allan",
     "gyro-rotations": "gyro rotations",
     "multiposition": "gyro multiposition",
+    "gyro-sine": "gyro frequency-response",
 }
 
 

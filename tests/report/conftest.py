@@ -93,6 +93,21 @@ def cli_reports(
     config = folder / "table.toml"
     _run("turntable", "example", "--out", str(config))
     report("turntable budget", "turntable", "budget", str(config), "--runs", "20000")
+    sweep = [folder / f"sine{f}.npz" for f in (1, 4, 8, 12)]
+    for i, path in enumerate(sweep):
+        _run(
+            "simulate",
+            "gyro-sine",
+            "--frequency-hz",
+            path.stem[4:],
+            "--seed",
+            str(i),
+            "--out",
+            str(path),
+        )
+    report(
+        "gyro frequency-response", "gyro", "frequency-response", *map(str, sweep), "--lines", "3600"
+    )
     return reports
 
 

@@ -564,4 +564,5 @@ def _drift_coefficient(data: dict[str, Any], name: str) -> dict[str, Any]:
     }
 
 
+from . import gyro_frequency  # noqa: E402,F401  (registers `gyro frequency-response`)
 from . import gyro_resolution as _gyro_resolution  # noqa: E402,F401  (registers `gyro resolution`)

@@ -687,3 +687,6 @@ def demo(out: str, overwrite: bool) -> None:
         written = run_demo(Path(out), progress=advance, overwrite=overwrite)
     for path in written:
         _wrote(path)
+
+
+from . import simulate_frequency  # noqa: E402,F401  (registers `simulate gyro-sine`)

@@ -1,12 +1,25 @@
 """rotacal.gyro — gyroscope calibrations on the table: scale factor and nonlinearity (Kokuyama et al. 2015),
 3-axis calibration (robot-manipulator study 2023) and calibration from rotations through a known angle (Ferraris),
-multiposition drift coefficients (GyroWheel study), noise terms (IEEE Std 952)."""
+multiposition drift coefficients (GyroWheel study), noise terms (IEEE Std 952), frequency response on a
+sinusoidal table (IEEE Std 1057 sine fits, second-order model)."""
 
 from typing import TYPE_CHECKING
 
 from rotacal._lazy import attach
 
 if TYPE_CHECKING:
+    from rotacal.gyro.frequency_model import (
+        SecondOrderFit,
+        bandwidth_from_model,
+        fit_second_order,
+        second_order_response,
+    )
+    from rotacal.gyro.frequency_response import (
+        FrequencyPoint,
+        FrequencyResponse,
+        calibrate_frequency_response,
+        response_at_frequency,
+    )
     from rotacal.gyro.multiposition import (
         EARTH_RATE_DEG_H,
         MultipositionPlan,
@@ -58,6 +71,8 @@ __all__ = [
     "RATE_COLUMNS",
     "REQUIREMENTS",
     "TRIAD_OUTPUT_COLUMNS",
+    "FrequencyPoint",
+    "FrequencyResponse",
     "GyroNoise",
     "LogScaleFactorResult",
     "MultipositionPlan",
@@ -66,10 +81,13 @@ __all__ = [
     "PlateauSearch",
     "RotationCalibration",
     "ScaleFactorResult",
+    "SecondOrderFit",
     "SmallStepResult",
     "TriadPlanCheck",
     "TriadResult",
     "apply_triad_calibration",
+    "bandwidth_from_model",
+    "calibrate_frequency_response",
     "calibrate_multiposition",
     "calibrate_scale_factor",
     "calibrate_scale_factor_chunked",
@@ -85,12 +103,15 @@ __all__ = [
     "evaluate_requirement",
     "ferraris_sections",
     "find_plateaus",
+    "fit_second_order",
     "gyro_noise",
     "gyro_noise_from_angle",
     "multiposition_plan",
     "resolve_requirement",
+    "response_at_frequency",
     "scale_factor_chunks",
     "scale_factor_repeatability",
+    "second_order_response",
     "signed_scale_factors",
     "small_step_test",
     "temperature_coefficients",

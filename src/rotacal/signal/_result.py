@@ -47,6 +47,8 @@ class SineFit(Result):
     drift_check : the same data refitted with a drift term at the fitted frequency (a fit without
         drift asked for it with ``drift_check=True``), to judge whether an unfitted drift matters;
         None otherwise.
+    phases_u_rad : standard uncertainty of φ_h (rad), as ``amplitudes_u`` (GUM first-order
+        propagation of the covariance of a_h, b_h through φ = atan2(a, b)); not in the JSON.
     """
 
     frequency_hz: float
@@ -65,6 +67,7 @@ class SineFit(Result):
     drift: float | None = None
     drift_u: float | None = None
     drift_check: DriftCheck | None = dataclasses.field(default=None, repr=False)
+    phases_u_rad: np.ndarray | None = dataclasses.field(default=None, repr=False)
 
     @property
     def harmonics(self) -> int:
@@ -211,6 +214,10 @@ def build_sine_fit(
         var_amp = (a * a * vaa + b * b * vbb + 2.0 * a * b * vab) / (amp * amp)
     var_amp = np.where(amp > 0, var_amp, 0.5 * (vaa + vbb))
     amp_u = np.sqrt(np.maximum(var_amp, 0.0))
+    # φ = atan2(a, b): ∂φ/∂a = b/A², ∂φ/∂b = −a/A²
+    with np.errstate(invalid="ignore", divide="ignore"):
+        var_phase = (b * b * vaa + a * a * vbb - 2.0 * a * b * vab) / (amp * amp) ** 2
+    phase_u = np.sqrt(np.maximum(np.where(amp > 0, var_phase, np.inf), 0.0))
     f_u = math.sqrt(max(float(cov[-1, -1]), 0.0)) if refined else 0.0
     extra: dict[str, Any] = {}
     if drift is not None:
@@ -232,6 +239,7 @@ def build_sine_fit(
         amplitudes_u=amp_u,
         frequency_u_hz=f_u,
         offset_u=math.sqrt(max(float(cov[0, 0]), 0.0)),
+        phases_u_rad=phase_u,
         **extra,
     )
 

@@ -7,6 +7,7 @@ rotacal.results (``SimCapture.write`` imports ``rotacal.io`` lazily).
 from rotacal.sim.gyro_log import simulate_gyro_log
 from rotacal.sim.gyro_noise import simulate_gyro_noise
 from rotacal.sim.gyro_rates import simulate_gyro_rates
+from rotacal.sim.gyro_sine import simulate_gyro_sine
 from rotacal.sim.gyro_steps import simulate_gyro_steps
 from rotacal.sim.gyro_triad import simulate_gyro_rotations, simulate_gyro_triad
 from rotacal.sim.motion import SineMotion
@@ -43,6 +44,7 @@ __all__ = [
     "simulate_gyro_noise",
     "simulate_gyro_rates",
     "simulate_gyro_rotations",
+    "simulate_gyro_sine",
     "simulate_gyro_steps",
     "simulate_gyro_triad",
     "simulate_lts",
