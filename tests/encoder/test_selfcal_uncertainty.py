@@ -253,9 +253,9 @@ def zero_runs():
 @pytest.fixture(scope="module")
 def moderate_runs():
     """One true deviation of 0.1 arcsec peak-to-peak (about 20 times the noise of a line),
-    measured RUNS times with new timing noise."""
+    measured RUNS times with new timing noise (M_COVER lines: its tests' bounds are the runs')."""
     cfg = {**NOISY, "harmonics": ((1, 0.05, 0.3), (2, 0.02, 1.1)), "graduation_noise_arcsec": 0.003}
-    runs = _summaries(cfg, 3000, fixed=True)
+    runs = _summaries(cfg, 3000, fixed=True, m=M_COVER)
     assert len({t["pp"] for _, t in runs}) == 1  # the twin kept the truth
     return runs
 
