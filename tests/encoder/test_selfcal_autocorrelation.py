@@ -17,3 +17,21 @@ def test_autocorrelation_is_the_direct_sum(n):
     got = _autocorrelation(x, lags)
     assert got.shape == (lags,)
     np.testing.assert_allclose(got, direct[:lags], rtol=0, atol=1e-12 * direct[0])
+
+
+def test_fast_length_is_scipys_and_import_free():
+    """The FFT length is scipy.fft.next_fast_len(n, real=True) (the same padding, the same
+    sums), found without importing scipy.fft: a rate command does not pay for it."""
+    import subprocess
+    import sys
+
+    from scipy.fft import next_fast_len
+
+    from rotacal.encoder.selfcal_checks import fast_length
+
+    rng = np.random.default_rng(17)
+    sizes = [*range(1, 2000), *rng.integers(2000, 10**10, 2000).tolist()]
+    assert [fast_length(int(n)) for n in sizes] == [next_fast_len(int(n), real=True) for n in sizes]
+    code = "import sys, rotacal.encoder.selfcal_checks; print('scipy.fft' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"

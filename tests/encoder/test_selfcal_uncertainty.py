@@ -30,6 +30,9 @@ from rotacal.uncertainty.summaries import (
 )
 
 M, N_HEADS = 3600, 4
+#: Lines of the coverage twins whose bounds depend on the number of runs alone (binomial, χ²
+#: over runs): half the lines of M, half the cost of a run, the same paths and bounds.
+M_COVER = 1800
 RUNS = 40
 
 
@@ -213,15 +216,22 @@ def test_points_are_honest_type_a(type_a_runs):
 
 # ------------------------------------------------------------------ pp and rms: coverage
 def _summaries(
-    cfg: dict, seed0: int, runs: int = RUNS, specs=None, truth_key="detectable", fixed=False
+    cfg: dict,
+    seed0: int,
+    runs: int = RUNS,
+    specs=None,
+    truth_key="detectable",
+    fixed=False,
+    m: int = M,
 ):
-    """Self-calibrate ``runs`` twin captures; ``fixed``: one truth (scale, heads, table: seed0),
-    new timing noise per run (noise_seed) — repeated measurements of the same curve."""
+    """Self-calibrate ``runs`` twin captures of m lines; ``fixed``: one truth (scale, heads,
+    table: seed0), new timing noise per run (noise_seed) — repeated measurements of the same
+    curve."""
     out = []
     for k in range(runs):
         seeds = {"seed": seed0, "noise_seed": k} if fixed else {"seed": seed0 + k}
-        cap = simulate_pulses(heads=N_HEADS, pulses_per_rev=M, revolutions=3.2, **seeds, **cfg)
-        r = self_calibrate(_heads(cap), pulses_per_rev=M, specs=specs)
+        cap = simulate_pulses(heads=N_HEADS, pulses_per_rev=m, revolutions=3.2, **seeds, **cfg)
+        r = self_calibrate(_heads(cap), pulses_per_rev=m, specs=specs)
         key = "deviation_detectable_arcsec" if truth_key == "detectable" else "deviation_arcsec"
         t = np.asarray(cap.truth[key])
         truth = {"pp": float(np.ptp(t)), "rms": float(np.sqrt(np.mean(t**2))), "curve": t}
@@ -234,16 +244,18 @@ NOISY = {"jitter_s": 2e-8}  # curve noise ≈ 0.005 arcsec per line
 
 @pytest.fixture(scope="module")
 def zero_runs():
-    """The true (detectable) deviation is exactly 0: pp and rms of the data are all noise."""
-    return _summaries({**NOISY, "harmonics": None, "graduation_noise_arcsec": 0.0}, 1000)
+    """The true (detectable) deviation is exactly 0: pp and rms of the data are all noise
+    (M_COVER lines: its tests' bounds are the runs')."""
+    cfg = {**NOISY, "harmonics": None, "graduation_noise_arcsec": 0.0}
+    return _summaries(cfg, 1000, m=M_COVER)
 
 
 @pytest.fixture(scope="module")
 def moderate_runs():
     """One true deviation of 0.1 arcsec peak-to-peak (about 20 times the noise of a line),
-    measured RUNS times with new timing noise."""
+    measured RUNS times with new timing noise (M_COVER lines: its tests' bounds are the runs')."""
     cfg = {**NOISY, "harmonics": ((1, 0.05, 0.3), (2, 0.02, 1.1)), "graduation_noise_arcsec": 0.003}
-    runs = _summaries(cfg, 3000, fixed=True)
+    runs = _summaries(cfg, 3000, fixed=True, m=M_COVER)
     assert len({t["pp"] for _, t in runs}) == 1  # the twin kept the truth
     return runs
 
@@ -294,14 +306,14 @@ def test_noise_bias_of_the_peak_to_peak(moderate_runs):
 def test_points_and_intervals_with_the_undetectable_specification():
     """The twin's random graduation puts 1/n of its variance at the undetectable orders; stating
     that rms makes the curve's u and the summaries' intervals cover the full truth (Type B)."""
-    sigma_g, runs = 0.3, 30
-    u_spec = sigma_g * math.sqrt(_undetectable_fraction(M, N_HEADS))
+    sigma_g, runs = 0.3, 30  # M_COVER lines: the bounds are the runs'
+    u_spec = sigma_g * math.sqrt(_undetectable_fraction(M_COVER, N_HEADS))
     specs = InstrumentSpecs(entries={UNDETECTABLE_SPEC: Normal(0.0, u_spec)}, source="test")
     cfg = {
         "harmonics": ((1, 3.0, 0.3), (2, 0.4, 1.1), (3, 0.15, 2.0)),  # detectable orders only
         "graduation_noise_arcsec": sigma_g,
     }
-    out = _summaries(cfg, 900, runs, specs=specs, truth_key="full")
+    out = _summaries(cfg, 900, runs, specs=specs, truth_key="full", m=M_COVER)
     err2, u2, misses, rms_err, rms_u = [], [], {"pp": 0, "rms": 0}, [], []
     for r, truth in out:
         err2.append(np.mean((r.deviation_arcsec - truth["curve"]) ** 2))

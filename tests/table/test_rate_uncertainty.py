@@ -19,6 +19,10 @@ from rotacal.table.rate import calibrate_rate, timing_jitter
 from rotacal.uncertainty import InstrumentSpecs, Normal, load_specs
 
 M = 3600
+#: Lines of the honesty twins whose bounds depend on the number of runs alone (binomial, χ²
+#: over runs): half the lines of M, half the cost of a run, the same paths (self-calibration,
+#: compensation, every budget) and the same bounds.
+M_COVER = 1800
 RUNS = 40
 CRYSTAL = '[timebase]\nrelative_error = { distribution = "rectangular", half_width = 2e-6 }\n'
 
@@ -133,20 +137,21 @@ def test_bias_budget_adds_the_tables_wander_per_revolution():
 # ------------------------------------------------------------------ honesty with the twin
 @pytest.fixture(scope="module")
 def twin_mean_rates():
-    """RUNS captures without and with a ±2 ppm timebase error drawn per run by the twin."""
+    """RUNS captures without and with a ±2 ppm timebase error drawn per run by the twin
+    (M_COVER lines: the bounds are the runs')."""
     specs = load_specs(CRYSTAL)
     out: dict[str, list[tuple[float, float]]] = {"A": [], "B": []}
     for k in range(RUNS):
         for kind, half, sp in (("A", 0.0, None), ("B", 2e-6, specs)):
             cap = simulate_pulses(
                 heads=4,
-                pulses_per_rev=M,
+                pulses_per_rev=M_COVER,
                 revolutions=3.2,
                 timebase_error_half_width=half,
                 seed=300 + k,
             )
             r = calibrate_rate(
-                [cap.columns["head_0"]], pulses_per_rev=M, compensate=False, specs=sp
+                [cap.columns["head_0"]], pulses_per_rev=M_COVER, compensate=False, specs=sp
             )
             true = cap.truth["mean_rate_whole_revs_deg_s"]
             out[kind].append((r.mean_rate_deg_s - true, r.budgets["mean_rate_deg_s"].u))
@@ -224,12 +229,12 @@ def test_bias_and_mean_rate_get_the_same_validation():
 DETECTABLE = ((1, 3.0, 0.3), (2, 0.4, 1.1))  # scale orders 4 heads can see
 
 
-def _undetectable_specs(sigma_g: float) -> InstrumentSpecs:
+def _undetectable_specs(sigma_g: float, m: int = M) -> InstrumentSpecs:
     """The rms that iid line errors of σ_g leave at the orders 4 heads cannot see (1/4 of their
-    variance) as encoder.undetectable_harmonics_arcsec."""
-    q = np.arange(M // 2 + 1)
-    weight = np.where((q == 0) | (2 * q == M), 1.0, 2.0)
-    frac = float(np.sum(weight[(q % 4 == 0) & (q > 0)]) / M)
+    variance, m lines) as encoder.undetectable_harmonics_arcsec."""
+    q = np.arange(m // 2 + 1)
+    weight = np.where((q == 0) | (2 * q == m), 1.0, 2.0)
+    frac = float(np.sum(weight[(q % 4 == 0) & (q > 0)]) / m)
     return InstrumentSpecs(
         entries={UNDETECTABLE_SPEC: Normal(0.0, sigma_g * math.sqrt(frac))}, source="test"
     )
@@ -243,17 +248,18 @@ def _rate_runs(
     fixed: bool = False,
     sigma_g: float = 0.003,
     specs: InstrumentSpecs | None = None,
+    m: int = M,
 ):
-    """``runs`` compensated rate calibrations of the 4-head twin with 20 ns timing noise (about
-    9·10⁻⁴ % per rate point) and a scale the heads nearly fully see (the 0.003″ random lines
-    leave ~6·10⁻⁵ % at the orders they cannot); ``fixed``: one truth (table and scale), new
-    timing noise per run."""
+    """``runs`` compensated rate calibrations of the 4-head twin of m lines with 20 ns timing
+    noise (about 9·10⁻⁴ % per rate point at 3600 lines) and a scale the heads nearly fully see
+    (the 0.003″ random lines leave ~6·10⁻⁵ % at the orders they cannot); ``fixed``: one truth
+    (table and scale), new timing noise per run."""
     out = []
     for k in range(runs):
         seeds = {"seed": seed0, "noise_seed": k} if fixed else {"seed": seed0 + k}
         cap = simulate_pulses(
             heads=4,
-            pulses_per_rev=M,
+            pulses_per_rev=m,
             revolutions=revs,
             harmonics=DETECTABLE,
             graduation_noise_arcsec=sigma_g,  # a little: the lines' pattern confirms m
@@ -261,7 +267,7 @@ def _rate_runs(
             jitter_s=2e-8,
             **seeds,
         )
-        r = calibrate_rate(_heads(cap), pulses_per_rev=M, specs=specs)
+        r = calibrate_rate(_heads(cap), pulses_per_rev=m, specs=specs)
         dev = _true_deviation(cap)
         out.append(
             (r, {"rms": float(np.sqrt(np.mean(dev**2))), "peak": float(np.max(np.abs(dev)))})
@@ -277,18 +283,19 @@ def rate_zero_runs():
 
 @pytest.fixture(scope="module")
 def rate_moderate_runs():
-    """One table with a 0.003 % fluctuation (a few times the noise of a point), measured anew."""
-    return _rate_runs(3.2, 0.003, 2100, fixed=True)
+    """One table with a 0.003 % fluctuation (several times the noise of a point), measured anew
+    (M_COVER lines: its tests' bounds are the runs')."""
+    return _rate_runs(3.2, 0.003, 2100, fixed=True, m=M_COVER)
 
 
 @pytest.fixture(scope="module")
 def rate_short_runs():
     """1.5 revolutions (timing noise only bounded, one-revolution self-calibration: its noise
     unknown), both a table without fluctuation and one with 0.003 %; the twin's usual 0.03″
-    random lines, their undetectable part stated (Type B)."""
-    specs = _undetectable_specs(0.03)
-    return _rate_runs(1.5, 0.0, 2200, sigma_g=0.03, specs=specs) + _rate_runs(
-        1.5, 0.003, 2300, sigma_g=0.03, specs=specs
+    random lines, their undetectable part stated (Type B); M_COVER lines (binomial bounds)."""
+    specs = _undetectable_specs(0.03, M_COVER)
+    return _rate_runs(1.5, 0.0, 2200, sigma_g=0.03, specs=specs, m=M_COVER) + _rate_runs(
+        1.5, 0.003, 2300, sigma_g=0.03, specs=specs, m=M_COVER
     )
 
 
@@ -376,20 +383,21 @@ def test_short_records_and_specifications_are_never_subtracted(rate_short_runs):
 def test_rate_deviation_intervals_with_the_undetectable_specification():
     """The twin's random graduation leaves 1/n of its variance at orders no head arrangement
     sees; stated as encoder.undetectable_harmonics_arcsec, it is what the compensated rate still
-    holds (Type B: the intervals must cover the truth, the value is not corrected for it)."""
+    holds (Type B: the intervals must cover the truth, the value is not corrected for it);
+    M_COVER lines (binomial bounds)."""
     sigma_g, runs = 0.1, 40
-    specs = _undetectable_specs(sigma_g)
+    specs = _undetectable_specs(sigma_g, M_COVER)
     misses = {"rms": 0, "peak": 0}
     for k in range(runs):
         cap = simulate_pulses(
             heads=4,
-            pulses_per_rev=M,
+            pulses_per_rev=M_COVER,
             revolutions=3.2,
             harmonics=DETECTABLE,
             graduation_noise_arcsec=sigma_g,
             seed=6000 + k,
         )
-        r = calibrate_rate(_heads(cap), pulses_per_rev=M, specs=specs)
+        r = calibrate_rate(_heads(cap), pulses_per_rev=M_COVER, specs=specs)
         dev = _true_deviation(cap)
         for key, value in (("rms", np.sqrt(np.mean(dev**2))), ("peak", np.max(np.abs(dev)))):
             lo, hi = r.budgets[f"rate_deviation_{key}_percent"].interval
