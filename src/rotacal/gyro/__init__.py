@@ -19,6 +19,7 @@ if TYPE_CHECKING:
         multiposition_plan,
     )
     from rotacal.gyro.noise import GyroNoise, gyro_noise, gyro_noise_from_angle
+    from rotacal.gyro.noise_fit import NoiseFit, avar_covariance, fit_noise_terms
     from rotacal.gyro.rotations import (
         RotationCalibration,
         calibrate_triad_rotations,
@@ -57,10 +58,12 @@ __all__ = [
     "MultipositionPlan",
     "MultipositionResult",
     "RotationCalibration",
+    "NoiseFit",
     "ScaleFactorResult",
     "TriadPlanCheck",
     "TriadResult",
     "apply_triad_calibration",
+    "avar_covariance",
     "calibrate_multiposition",
     "calibrate_scale_factor",
     "calibrate_scale_factor_chunked",
@@ -74,6 +77,7 @@ __all__ = [
     "earth_rate_and_gravity",
     "evaluate_requirement",
     "ferraris_sections",
+    "fit_noise_terms",
     "gyro_noise",
     "gyro_noise_from_angle",
     "multiposition_plan",
