@@ -57,7 +57,7 @@ def run(name: str, seeds: int, duration: float) -> None:
     kw = TWINS[name]
     truth = np.array([float(kw.get(k, 0.0)) for k in _KEYS])
     hits = np.zeros(5)
-    values, deltas = [], []
+    values, deltas, widths = [], [], []
     cpu = time.process_time()
     for seed in range(seeds):
         cap = simulate_gyro_noise(duration_s=duration, fs_hz=100.0, seed=seed, **kw)
@@ -66,15 +66,16 @@ def run(name: str, seeds: int, duration: float) -> None:
         iv = np.array([nt[f"{k}_interval"] for k in _KEYS])
         hits += (iv[:, 0] <= truth) & (truth <= iv[:, 1])
         values.append([nt[k] for k in _KEYS])
+        widths.append([nt[f"{k}_U"] for k in _KEYS])
         deltas.append(r.fit.discrepancy)
     cpu = (time.process_time() - cpu) / seeds
-    v = np.array(values)
+    v, w = np.array(values), np.array(widths)
     print(f"\n{name}: {seeds} seeds of {duration:g} s, {cpu:.2f} s CPU per record")
-    print(f"  {'term':<24}{'truth':>10}{'mean':>12}{'std':>12}{'coverage':>10}")
+    print(f"  {'term':<24}{'truth':>10}{'mean':>12}{'std':>12}{'mean U':>12}{'coverage':>10}")
     for j, key in enumerate(_KEYS):
         print(
             f"  {key:<24}{truth[j]:>10.4g}{v[:, j].mean():>12.4g}{v[:, j].std(ddof=1):>12.3g}"
-            f"{hits[j] / seeds:>10.3f}"
+            f"{w[:, j].mean():>12.3g}{hits[j] / seeds:>10.3f}"
         )
     print(f"  model discrepancy δ: median {np.median(deltas):.3g}, max {np.max(deltas):.3g}")
 

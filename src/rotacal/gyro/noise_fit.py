@@ -387,9 +387,11 @@ def fit_noise_terms(
     weighs each point by its own χ² variance 2σ̂⁴·m/N; then, up to 8 times, the covariance of
     the estimator is computed for the fitted mixture (:func:`avar_covariance`) and the fit
     repeated, until c changes by < 1e-6 relative; each time with the discrepancy δ that makes
-    χ² = ν when χ² > ν (module). Uncertainty: cov(ĉ) = (AᵀA)⁻¹ on the terms the fit keeps
-    (A = L⁻¹G whitened, ν = points − terms); a term the fit sets to zero
-    gets the variance it would have if added alone. Each c_j gets [c − k·u, c + k·u] ∩ [0, ∞)
+    χ² = ν when χ² > ν (module). Uncertainty: cov(ĉ) = (AᵀA)⁻¹ (A = L⁻¹G whitened) on the
+    terms the fit keeps and those whose slope lies between two kept ones (NNLS may set such a
+    term to 0 where the data cannot tell it from its neighbours; leaving it out made the ramp's
+    interval too narrow on the five-term twin); ν = points − terms kept; any other term set to
+    zero gets the variance it would have if added alone. Each c_j gets [c − k·u, c + k·u] ∩ [0, ∞)
     (k = t_0.975(ν)), mapped by √ to the coefficient; U = the larger distance from C to either
     end, so that C ± U (clipped at 0) holds that interval: one interval per term. The model
     assumes Gaussian noise of the five types and a sensor whose bandwidth is well above 1/τ:
@@ -429,11 +431,14 @@ def fit_noise_terms(
     chi2 = _chi2(g, v, cov, c)
     active = np.flatnonzero(c > 0)
     dof = max(1, t.size - active.size)
+    # the covariance spans the terms kept and any term whose slope lies between two of them
+    # (NNLS may set such a term to 0 where the data cannot tell it from its neighbours)
+    span = np.arange(active.min(), active.max() + 1) if active.size else active
     c_u = np.zeros(5)
-    if active.size:
-        c_u[active] = np.sqrt(np.diag(_inverse_information(a[:, active])))
-    for j in np.flatnonzero(c <= 0):
-        c_u[j] = math.sqrt(float(_inverse_information(a[:, np.append(active, j)])[-1, -1]))
+    if span.size:
+        c_u[span] = np.sqrt(np.diag(_inverse_information(a[:, span])))
+    for j in np.setdiff1d(np.arange(5), span):
+        c_u[j] = math.sqrt(float(_inverse_information(a[:, np.append(span, j)])[-1, -1]))
     k = float(stdtrit(dof, 0.5 + COVERAGE / 2.0))
     coef = np.sqrt(c)
     lo = np.sqrt(np.maximum(0.0, c - k * c_u))
