@@ -179,7 +179,7 @@ def test_allan_refuses_one_sample_of_1e300_and_the_twin_keeps_its_truth() -> Non
     rate = cap.columns["rate_deg_s"].copy()
     clean = gyro_noise(rate, fs_hz=100.0)
     # truth: the twin's ARW 0.3 °/√h, within the result's own 95 % interval
-    low, high = clean.intervals["angle_random_walk"]
+    low, high = clean.noise_terms["arw_deg_rt_h_interval"]
     assert low <= cap.truth["arw_deg_rt_h"] <= high
     rate[12345] = 1e300
     with pytest.raises(CaptureError, match=r"column 'rate_deg_s' holds 1e\+300 at sample 12345"):

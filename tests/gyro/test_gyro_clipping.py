@@ -96,8 +96,9 @@ def test_a_gyro_output_at_its_rails_is_refused_then_allowed(make, run, column):
     found = sum(rail.samples for c in exc.value.clippings for rail in c.rails)
     assert beyond <= found <= 1.5 * beyond + 1
     r = run(cap, allow_clipped=True)
-    # outputs held at the rails also leave the model (rotacal.gyro.plausibility): lack of fit
-    clipping = [w for w in r.warnings if not w.startswith("lack of fit:")]
+    # outputs held at the rails also leave the model (rotacal.gyro.plausibility): lack of fit;
+    # 600 s of noise is too short to resolve the bias instability, and says so
+    clipping = [w for w in r.warnings if not w.startswith(("lack of fit:", "no bias instability"))]
     assert [w.split("; analysed anyway")[0] for w in clipping] == [
         c.describe() for c in exc.value.clippings
     ]

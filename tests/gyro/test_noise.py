@@ -13,6 +13,7 @@ from click.testing import CliRunner
 from rotacal.cli import cli
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.noise import gyro_noise
+from rotacal.gyro.noise_fit import fit_noise_terms
 
 DATA = Path(
     os.environ.get(
@@ -28,8 +29,8 @@ def test_white_rate_noise_gives_its_angle_random_walk():
     fs, sigma = 200.0, 0.2
     r = gyro_noise(sigma * rng.standard_normal(2_000_000), fs_hz=fs)
     assert r.arw_deg_rt_h == pytest.approx(60 * sigma / np.sqrt(fs), rel=0.05)
-    low, high = r.intervals["angle_random_walk"]
-    assert low < r.arw_deg_rt_h < high
+    low, high = r.noise_terms["arw_deg_rt_h_interval"]
+    assert low < 60 * sigma / np.sqrt(fs) < high
 
 
 def test_rate_random_walk_closed_form():
@@ -45,19 +46,44 @@ def test_rate_random_walk_closed_form():
 
 @pytest.mark.parametrize("imu", [1, 2, 3, 4, 5, 6])
 def test_real_adis16405_matches_its_published_figures(imu, shared_data):
-    """imudata_smac README: ARW about 2.4–2.7 °/√h, minimum deviation 0.004–0.009 °/s (datasheet
-    ARW 2.0 °/√h, bias stability 0.007 °/s). The README's "0.036 °/s at τ ≈ 1 s" is looser than
-    its own ARW range (2.4 °/√h is 0.040 °/s at 1 s): checked to 25 %."""
+    """imudata_smac README: ARW about 2.4–2.7 °/√h (σ at 1 s), minimum deviation 0.004–0.009 °/s
+    (datasheet ARW 2.0 °/√h, bias stability 0.007 °/s). The README's "0.036 °/s at τ ≈ 1 s" is
+    looser than its own ARW range (2.4 °/√h is 0.040 °/s at 1 s): checked to 25 %. The fitted N
+    is the white part alone: at most 60·σ(1 s) (the other terms add to σ(1 s)) and within 3 % of
+    it; the sensor's internal averaging lowers σ at the shortest τ, which the fit leaves out."""
     data = np.load(shared_data("imudata_smac", "npz") / f"adis_16405_imu{imu}.npz")["data"]
     r = gyro_noise(data[:, 0], fs_hz=100.0)
     tau = np.asarray(r.tau_s)
     at_1s = float(np.exp(np.interp(0.0, np.log(tau), np.log(r.adev_deg_s))))
     assert at_1s == pytest.approx(0.036, rel=0.25)
-    assert 2.4 < r.arw_deg_rt_h < 2.7
-    assert r.arw_deg_rt_h == pytest.approx(60 * at_1s, rel=0.05)  # white noise dominates at 1 s
-    assert 0.004 < min(r.adev_deg_s[: np.searchsorted(tau, 1000.0)]) < 0.009
-    assert r.bias_instability_deg_h is not None
-    assert 0.004 / 0.664 * 3600 < r.bias_instability_deg_h < 0.009 / 0.664 * 3600
+    assert 2.35 < r.arw_deg_rt_h < 2.7
+    assert 0.97 * 60 * at_1s < r.arw_deg_rt_h <= 60 * at_1s
+    assert r.fit.dropped > 0 and any("inside the sensor" in n for n in r.notes)
+    floor = min(r.adev_deg_s[: np.searchsorted(tau, 1000.0)])
+    assert 0.004 < floor < 0.009
+    # B: resolved (its interval excludes 0); its plateau 0.664·B is the floor less what N and K
+    # add there: below the floor (10 % for the floor's own noise), and not far below it
+    assert r.noise_terms["bias_instability_deg_h_interval"][0] > 0
+    assert 0.5 * floor < 0.664 * r.bias_instability_deg_h / 3600 < 1.1 * floor
+
+
+def test_imu_utils_curves_give_its_white_noise(shared_data):
+    """imu_utils' fitted white-noise density gyr_n (rad/s/√Hz) of the x gyro against the fit of
+    its own Allan-deviation curve (τ, deg/h; record length unknown, taken as 2 h: it sets the
+    weights' scale, not the values): within 6 % for A3 and N3. Its 16448 and BMI160 values
+    exceed 60·σ(1 s) of their own curves (no white part can), so they are not a reference."""
+    folder = shared_data("imu_utils", "data")
+    for imu in ("A3", "N3"):
+        text = (folder / f"{imu}_imu_param.yaml").read_text()
+        x_axis = text.split("x-axis:")[1]
+        gyr_n = float(x_axis.split("gyr_n:")[1].split()[0])
+        tau = np.loadtxt(folder / f"data_{imu}_gyr_t.txt")
+        adev = np.loadtxt(folder / f"data_{imu}_gyr_x.txt") / 3600.0
+        fs = 1.0 / tau[0]
+        fit = fit_noise_terms(tau, adev, np.rint(tau * fs), int(7200 * fs) + 1, fs)
+        ours = fit.coefficients[1] * 60.0  # °/√h
+        theirs = gyr_n * 180.0 / np.pi * 60.0
+        assert ours == pytest.approx(theirs, rel=0.06), imu
 
 
 def test_time_column_and_bad_input():

@@ -574,11 +574,21 @@ def simulate_gyro_triad_cmd(out: str, overwrite: bool, **kw: Any) -> None:
     "--bias-instability-deg-h", type=float, default=None, help="Bias instability (deg/h) [3]."
 )
 @click.option("--rrw-deg-h-rt-h", type=float, default=None, help="Rate random walk (deg/h/√h) [0].")
+@click.option(
+    "--quantization-arcsec", type=float, default=None, help="Angle quantization Q (arcsec) [0]."
+)
+@click.option("--rate-ramp-deg-h2", type=float, default=None, help="Rate ramp R (deg/h²) [0].")
+@click.option(
+    "--bias-model",
+    type=click.Choice(["flicker", "gauss-markov"]),
+    default=None,
+    help="Bias instability as true flicker noise, or Gauss–Markov processes over a band [flicker].",
+)
 def simulate_gyro_noise_cmd(out: str, overwrite: bool, **kw: Any) -> None:
     """A gyro at rest with known noise terms: time_s, rate_deg_s.
 
-    White rate noise (angle random walk), bias instability and rate random walk as named in
-    IEEE Std 952-1997, for `rotacal allan`.
+    Angle quantization, white rate noise (angle random walk), bias instability (flicker), rate
+    random walk and rate ramp as named in IEEE Std 952-1997, for `rotacal allan`.
     """
     from rotacal.sim import simulate_gyro_noise
 

@@ -32,6 +32,7 @@ if TYPE_CHECKING:
         multiposition_plan,
     )
     from rotacal.gyro.noise import GyroNoise, gyro_noise, gyro_noise_from_angle
+    from rotacal.gyro.noise_fit import NoiseFit, avar_covariance, fit_noise_terms
     from rotacal.gyro.plateaus import Plateau, PlateauSearch, find_plateaus
     from rotacal.gyro.rotations import (
         RotationCalibration,
@@ -77,6 +78,7 @@ __all__ = [
     "LogScaleFactorResult",
     "MultipositionPlan",
     "MultipositionResult",
+    "NoiseFit",
     "Plateau",
     "PlateauSearch",
     "RotationCalibration",
@@ -86,6 +88,7 @@ __all__ = [
     "TriadPlanCheck",
     "TriadResult",
     "apply_triad_calibration",
+    "avar_covariance",
     "bandwidth_from_model",
     "calibrate_frequency_response",
     "calibrate_multiposition",
@@ -103,6 +106,7 @@ __all__ = [
     "evaluate_requirement",
     "ferraris_sections",
     "find_plateaus",
+    "fit_noise_terms",
     "fit_second_order",
     "gyro_noise",
     "gyro_noise_from_angle",
