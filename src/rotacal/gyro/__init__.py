@@ -7,6 +7,13 @@ from typing import TYPE_CHECKING
 from rotacal._lazy import attach
 
 if TYPE_CHECKING:
+    from rotacal.gyro.accel_triad import (
+        ACCEL_OUTPUT_COLUMNS,
+        AccelTriadCalibration,
+        calibrate_accel_triad,
+        normal_gravity,
+    )
+    from rotacal.gyro.ferraris import FerrarisGyroCalibration, calibrate_ferraris
     from rotacal.gyro.multiposition import (
         EARTH_RATE_DEG_H,
         MultipositionPlan,
@@ -49,10 +56,13 @@ if TYPE_CHECKING:
     )
 
 __all__ = [
+    "ACCEL_OUTPUT_COLUMNS",
     "EARTH_RATE_DEG_H",
     "RATE_COLUMNS",
     "REQUIREMENTS",
     "TRIAD_OUTPUT_COLUMNS",
+    "AccelTriadCalibration",
+    "FerrarisGyroCalibration",
     "GyroNoise",
     "MultipositionPlan",
     "MultipositionResult",
@@ -61,6 +71,8 @@ __all__ = [
     "TriadPlanCheck",
     "TriadResult",
     "apply_triad_calibration",
+    "calibrate_accel_triad",
+    "calibrate_ferraris",
     "calibrate_multiposition",
     "calibrate_scale_factor",
     "calibrate_scale_factor_chunked",
@@ -77,6 +89,7 @@ __all__ = [
     "gyro_noise",
     "gyro_noise_from_angle",
     "multiposition_plan",
+    "normal_gravity",
     "resolve_requirement",
     "scale_factor_chunks",
     "triad_plan",

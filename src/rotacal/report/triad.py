@@ -408,6 +408,19 @@ def rotations_section(
             caption="Rotations",
         ),
     ]
+    if "g_sensitivity" in data:  # gyro.ferraris: K_ga separated from K
+        tables.insert(
+            1,
+            Table(
+                ["output", "a_x", "a_y", "a_z"],
+                [
+                    [out[i], *(element_of(data, "g_sensitivity", (i, j)) for j in range(3))]
+                    for i in range(3)
+                ],
+                caption="g-sensitivity K_ga in u = K·(ω + Ω_E) + b + K_ga·a",
+                note=f"In {unit or 'output units'}/(m/s²); each element ± its expanded U.",
+            ),
+        )
     if reference is not None:
         kref = np.asarray(reference["scale_misalignment"], dtype=float)
         bref = np.asarray(reference["bias"], dtype=float)
