@@ -57,6 +57,7 @@ def captures(tmp_path_factory) -> dict[str, Path]:
         "gyro-triad": ["--samples-per-point", "20"],
         "gyro-noise": ["--duration-s", "600"],
         "gyro-rotations": [],
+        "ferraris": [],
         "multiposition": [],
     }
     out = {}
@@ -78,6 +79,7 @@ ANALYSES: dict[tuple[str, ...], tuple[str, list[str]]] = {
     ("inspect",): ("fog", []),
     ("gyro", "multiposition"): ("multiposition", ["--axis", "x", "--latitude-deg", "45.75"]),
     ("gyro", "rotations"): ("gyro-rotations", ["--sections", "{gyro-rotations}.truth.json"]),
+    ("gyro", "accelerometer"): ("ferraris", ["--sections", "{ferraris}.truth.json"]),
     ("gyro", "scale-factor"): ("gyro-rates", []),
     ("gyro", "triad"): ("gyro-triad", []),
     ("motion", "encoder"): ("encoder", ["--lines", "36000"]),
@@ -97,6 +99,7 @@ WRITERS: dict[tuple[str, ...], list[str]] = {
         ("simulate", kind): ["x.npz", "x.npz.truth.json"]
         for kind in (
             "encoder",
+            "ferraris",
             "fog",
             "gyro-noise",
             "gyro-rates",
@@ -135,7 +138,12 @@ def _analysis_argv(path: tuple[str, ...], captures: dict[str, Path]) -> list[str
     return [
         *path,
         str(captures[kind]),
-        *(m.replace("{gyro-rotations}", str(captures["gyro-rotations"])) for m in more),
+        *(
+            m.replace("{gyro-rotations}", str(captures["gyro-rotations"])).replace(
+                "{ferraris}", str(captures["ferraris"])
+            )
+            for m in more
+        ),
     ]
 
 
@@ -253,7 +261,12 @@ def _dummy_argv(path: tuple[str, ...], tmp_path: Path) -> list[str]:
     return [
         *path,
         str(capture),
-        *(m.replace("{gyro-rotations}.truth.json", str(sections)) for m in more),
+        *(
+            m.replace("{gyro-rotations}.truth.json", str(sections)).replace(
+                "{ferraris}.truth.json", str(sections)
+            )
+            for m in more
+        ),
     ]
 
 

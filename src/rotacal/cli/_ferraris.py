@@ -63,6 +63,21 @@ def gravity_options(func: F) -> F:
     return func
 
 
+#: Output units that are °/s: the nominal sensitivity is then 1.
+DEG_S_UNITS = ("deg/s", "°/s", "dps", "degree/s")
+
+
+def nominal_scale_option(func: F) -> F:
+    """``--nominal-scale``."""
+    return click.option(
+        "--nominal-scale",
+        type=float,
+        default=None,
+        help="Nominal gyro sensitivity (output unit per deg/s): each turn must then come within "
+        "10 % of the set angle, which catches a partial turn. [1 when --output-unit is deg/s]",
+    )(func)
+
+
 def read_sections(path: str) -> tuple[dict[str, Any], float | None]:
     """(the sections, the angle the file states or None): imucal's list, a
     ``{"rotations", "static"}`` mapping, or a twin's truth (its ``sections`` or those keys)."""

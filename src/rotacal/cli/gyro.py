@@ -29,7 +29,15 @@ from ._common import (
     _write_report,
 )
 from ._dask import dask_options, run_on_dask, split_wanted
-from ._ferraris import echo_matrix, gravity_options, read_sections, read_triads, sections_option
+from ._ferraris import (
+    DEG_S_UNITS,
+    echo_matrix,
+    gravity_options,
+    nominal_scale_option,
+    read_sections,
+    read_triads,
+    sections_option,
+)
 from ._help import example
 from ._rate_files import rate_file_options, rate_row_chunks, rate_row_count, read_rate_rows
 from ._reading import current_read_options
@@ -356,6 +364,7 @@ def _print_triad(result: Any, data: dict[str, Any]) -> None:
     "[default: the sections file's angle_deg, else -360]",
 )
 @gravity_options
+@nominal_scale_option
 @click.option(
     "--output-unit",
     default="",
@@ -372,6 +381,7 @@ def gyro_rotations(
     latitude_deg: float | None,
     gravity_m_s2: float | None,
     position_u_deg: float,
+    nominal_scale: float | None,
     output_unit: str,
     columns: Sequence[str],
     group: str | None,
@@ -403,6 +413,9 @@ def gyro_rotations(
         raise ConfigError(f"{Path(capture).name} has no time_s column: give --fs-hz")
     common = {
         "angle_deg": angle_deg,
+        "nominal_scale": 1.0
+        if nominal_scale is None and output_unit.strip().lower() in DEG_S_UNITS
+        else nominal_scale,
         "output_unit": output_unit,
         "specs": kw.pop("specs"),
         "allow_clipped": kw.pop("allow_clipped"),

@@ -127,6 +127,14 @@ class AccelTriadCalibration(Result):
         return out
 
 
+def check_disjoint(sections: Mapping[str, tuple[int, int]]) -> None:
+    """Refuse two named sample ranges [start, stop) that overlap, with one line."""
+    order = sorted(sections.items(), key=lambda kv: kv[1][0])
+    for (a, (_, ea)), (b, (sb, _)) in itertools.pairwise(order):
+        if sb < ea:
+            raise ConfigError(f"sections {a} and {b} overlap; fix the section list.")
+
+
 def static_positions(static: Any, n: int) -> dict[str, tuple[int, int]]:
     """The six named static positions (``x_p`` … ``z_a``) as half-open sample ranges, refused with
     one line when one is missing or two overlap."""
@@ -141,10 +149,7 @@ def static_positions(static: Any, n: int) -> dict[str, tuple[int, int]]:
             f"each axis up and down ({', '.join(FERRARIS_STATIC)})."
         )
     out = {k: _range(f"static {k}", static[k], n) for k in FERRARIS_STATIC}
-    order = sorted(out.items(), key=lambda kv: kv[1][0])
-    for (a, (_, ea)), (b, (sb, _)) in itertools.pairwise(order):
-        if sb < ea:
-            raise ConfigError(f"static positions {a} and {b} overlap; fix the section list.")
+    check_disjoint(out)
     return out
 
 

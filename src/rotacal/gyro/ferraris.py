@@ -50,12 +50,13 @@ from rotacal.gyro.accel_triad import (
     ACCEL_OUTPUT_COLUMNS,
     AccelTriadCalibration,
     calibrate_accel_triad,
+    check_disjoint,
     check_latitude,
     jacobian_budgets,
     static_positions,
 )
 from rotacal.gyro.multiposition_model import EARTH_RATE_DEG_H
-from rotacal.gyro.rotation_sections import FERRARIS_ANGLE_DEG, ferraris_sections
+from rotacal.gyro.rotation_sections import FERRARIS_ANGLE_DEG, _range, ferraris_sections
 from rotacal.gyro.rotations import RotationCalibration, calibrate_triad_rotations
 from rotacal.gyro.triad import TRIAD_OUTPUT_COLUMNS
 from rotacal.gyro.uncertainty import element_key
@@ -112,6 +113,7 @@ def calibrate_ferraris(
     gravity_m_s2: float | None = None,
     angle_deg: float = FERRARIS_ANGLE_DEG,
     position_u_deg: float = 0.0,
+    nominal_scale: float | None = None,
     columns: Sequence[str] = TRIAD_OUTPUT_COLUMNS,
     acc_columns: Sequence[str] = ACCEL_OUTPUT_COLUMNS,
     specs: InstrumentSpecs | None = None,
@@ -141,6 +143,9 @@ def calibrate_ferraris(
         turn).
     position_u_deg : float
         Standard uncertainty of each static position's tilt (deg), for the accelerometer.
+    nominal_scale : float, optional
+        The gyro's nominal sensitivity (output unit per °/s): each turn must come within 10 % of
+        the set angle with it (see :func:`~rotacal.gyro.rotations.calibrate_triad_rotations`).
     columns, acc_columns : sequence of 3 str
         Names of the gyro and accelerometer columns, for messages.
     specs : InstrumentSpecs or None
@@ -176,6 +181,7 @@ def calibrate_ferraris(
         )
     n = ug.shape[0]
     pos = static_positions(static, n)
+    check_disjoint({**pos, **{f"{k}_rot": _range(f"{k}_rot", v, n) for k, v in rotations.items()}})
     lat = None if latitude_deg is None else check_latitude(latitude_deg)
     accel = calibrate_accel_triad(
         ua,
@@ -293,6 +299,7 @@ def calibrate_ferraris(
             earth_angle_deg=earth_rot,
             earth_angle_u_deg=earth_rot_u,
             angle_deg=angle_deg,
+            nominal_scale=nominal_scale,
             columns=columns,
             specs=specs,
             output_unit=output_unit,

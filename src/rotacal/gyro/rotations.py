@@ -83,12 +83,17 @@ __all__ = [
     "FERRARIS_ANGLE_DEG",
     "FERRARIS_ROTATIONS",
     "FERRARIS_STATIC",
+    "NOMINAL_ANGLE_TOLERANCE",
     "RotationCalibration",
     "calibrate_triad_rotations",
     "ferraris_sections",
 ]
 
 _AXES = "xyz"
+#: Largest relative difference between a rotation's angle seen with the nominal sensitivity and
+#: its set angle: MEMS gyros' scale factors are within a few % of nominal, a quarter turn short
+#: of 360° is 25 % off.
+NOMINAL_ANGLE_TOLERANCE = 0.1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -236,6 +241,7 @@ def calibrate_triad_rotations(
     earth_angle_u_deg: Any = None,
     angle_deg: float = FERRARIS_ANGLE_DEG,
     angle_u_deg: float = 0.0,
+    nominal_scale: float | None = None,
     columns: Sequence[str] = TRIAD_OUTPUT_COLUMNS,
     specs: InstrumentSpecs | None = None,
     output_unit: str = "",
@@ -287,6 +293,12 @@ def calibrate_triad_rotations(
         Standard uncertainty of each realised rotation angle (deg, normal, independent between
         rotations), for the uncertainties; leave it 0 when ``specs`` states
         ``table.set_angle_arcsec``.
+    nominal_scale : float, optional
+        The gyro's nominal sensitivity (output unit per °/s; 1 for outputs in °/s). With it, each
+        rotation's integrated output along its own axis, divided by it, must come within
+        :data:`NOMINAL_ANGLE_TOLERANCE` of the set angle: three rotations determine K exactly, so
+        a turn that was not the angle set (a partial turn, a section cut short, the wrong sign)
+        would otherwise pass into K unseen.
     columns : sequence of 3 str
         Names of the rate columns, for messages.
     specs : InstrumentSpecs or None
@@ -449,6 +461,8 @@ def calibrate_triad_rotations(
 
     # --- integrate each rotation: Θ_l = Σ (u − offset)/fs; a clock ε_t long samples at fs·(1 + ε_t)
     theta = np.column_stack([np.sum(u[s:e] - offset[s:e], axis=0) / fs for *_, s, e, _ in rots])
+    if nominal_scale is not None:
+        _check_angles(theta, rots, nominal_scale)
     pinv = phi.T @ np.linalg.inv(phi @ phi.T)  # m×3: K = Θ·pinv
     kmat = theta @ pinv / (1.0 + eps_t)
     if not np.isfinite(kmat).all() or abs(np.linalg.det(kmat)) <= 1e-12 * np.abs(kmat).max() ** 3:
@@ -560,6 +574,26 @@ def calibrate_triad_rotations(
             ),
         ),
     )
+
+
+def _check_angles(theta: np.ndarray, rots: Sequence[tuple], nominal_scale: float) -> None:
+    """Refuse a rotation whose integrated output along its axis, over the nominal sensitivity,
+    is not within :data:`NOMINAL_ANGLE_TOLERANCE` of its set angle."""
+    try:
+        s0 = float(nominal_scale)
+    except (TypeError, ValueError):
+        raise ConfigError(f"nominal_scale must be a number, got {nominal_scale!r}.") from None
+    if not (math.isfinite(s0) and s0 != 0):
+        raise ConfigError(f"nominal_scale must be finite and non-zero, got {nominal_scale!r}.")
+    for i, (name, label, axis, _, _, a) in enumerate(rots):
+        seen = float(axis @ theta[:, i]) / s0
+        if abs(seen / a - 1.0) > NOMINAL_ANGLE_TOLERANCE:
+            raise CaptureError(
+                f"the rotation about {label} (section {name}) integrates to {seen:.4g}° with the "
+                f"nominal sensitivity {s0:g} per °/s, not the set {a:g}° (±"
+                f"{100 * NOMINAL_ANGLE_TOLERANCE:g} %): not a full turn, a section that misses "
+                "part of it, or the other sense of rotation; fix the section list or --angle-deg."
+            )
 
 
 def _per_rotation(name: str, value: Any, m: int) -> np.ndarray:
