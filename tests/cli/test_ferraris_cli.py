@@ -8,24 +8,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from rotacal.cli import cli
+from .test_gyro_cli import one_line_error, run
 
 ACC = ("--column", "acc_x=ax", "--column", "acc_y=ay", "--column", "acc_z=az")
 GYR = ("--column", "gyr_x=ux", "--column", "gyr_y=uy", "--column", "gyr_z=uz")
-
-
-def run(*args: str):
-    return CliRunner().invoke(cli, list(args), prog_name="rotacal")
-
-
-def one_line_error(result, *needles):
-    assert result.exit_code == 2, result.output
-    err = result.stderr.strip()
-    assert err.count("\n") == 0 and "Traceback" not in result.output, err
-    for n in needles:
-        assert n.lower() in err.lower(), err
 
 
 @pytest.fixture(scope="module")
