@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from rotacal.columns import ACCEL_OUTPUT_COLUMNS
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.rotation_sections import FERRARIS_STATIC, _range
 from rotacal.gyro.triad import apply_triad_calibration, decompose_scale_misalignment
@@ -49,8 +50,6 @@ __all__ = [
     "normal_gravity",
 ]
 
-#: Canonical column names of the accelerometer outputs.
-ACCEL_OUTPUT_COLUMNS = ("ax", "ay", "az")
 #: Standard gravity (m/s², CGPM 1901), used when neither g nor the latitude is given.
 STANDARD_GRAVITY = 9.80665
 _AXES = "xyz"
