@@ -122,13 +122,18 @@ def test_the_uncertainty_matches_the_scatter_over_twins() -> None:
 
 def test_quantised_twin_is_no_clipping_and_a_clipped_one_is_refused() -> None:
     """Many repeated values everywhere (a 16-bit MEMS's steps) are quantisation, not a rail."""
-    quantised = simulate_ferraris(quantum=2000 / 32768, acc_quantum=0.00479, noise_std=0.02)
-    r = _fit(quantised, latitude_deg=49.6)
-    assert r.warnings == ()
-    t = _truth(quantised.truth)
-    assert np.all(
-        np.abs(r.scale_misalignment - t["scale_misalignment"]) < 4 * r.scale_misalignment_u
-    )
+    for noise, acc_noise in ((0.02, 0.002), (0.0, 0.0)):  # dithered by noise, and not at all
+        quantised = simulate_ferraris(
+            quantum=2000 / 32768, acc_quantum=0.00479, noise_std=noise, acc_noise_std=acc_noise
+        )
+        r = _fit(quantised, latitude_deg=49.6)
+        assert r.warnings == ()
+        # the rounding a noise-free output leaves in each mean is in the uncertainty
+        t = _truth(quantised.truth)
+        for key in ("scale_misalignment", "bias", "g_sensitivity"):
+            assert np.all(np.abs(getattr(r, key) - t[key]) < 4 * getattr(r, f"{key}_u")), key
+        acc, truth = r.accelerometer, quantised.truth["acc_scale_misalignment"]
+        assert np.all(np.abs(acc.scale_misalignment - truth) < 4 * acc.scale_misalignment_u)
     # the gyro at a rail during the turns (peak 180 °/s, range 150 °/s)
     clipped = simulate_ferraris(output_limit=150.0, quantum=2000 / 32768)
     with pytest.raises(ClippedSignalError) as exc:

@@ -34,6 +34,7 @@ import numpy as np
 from rotacal.columns import ACCEL_OUTPUT_COLUMNS
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.rotation_sections import FERRARIS_STATIC, _range
+from rotacal.gyro.scale_factor_points import output_quantum
 from rotacal.gyro.triad import apply_triad_calibration, decompose_scale_misalignment
 from rotacal.gyro.uncertainty import element_key, linear_gum, uncertainty_json
 from rotacal.results import Result, to_jsonable
@@ -167,6 +168,59 @@ def _six_means(u: np.ndarray, pos: Mapping[str, tuple[int, int]]) -> tuple[np.nd
 def _solve(up: np.ndarray, ua: np.ndarray, g: float) -> tuple[np.ndarray, np.ndarray]:
     """K_a·R_a and b_a of eqs. (19)–(22)."""
     return (up - ua) / (2.0 * g), np.diag(up + ua) / 2.0
+
+
+def rounding_u(static: np.ndarray, whole: np.ndarray, noise: np.ndarray) -> np.ndarray:
+    """Standard uncertainty of the rounding left in a mean of each column (output unit):
+    (q/√12)·exp(−2π²σ²/q²), σ the column's noise and q its step — the grid
+    :func:`~rotacal.gyro.scale_factor_points.output_quantum` sees in the static rows (densely
+    used) or in the whole column (every gap between its values a multiple of the smallest, however
+    sparse), else, for a column without any noise, the smallest gap between its values (an upper
+    bound). Without noise a mean keeps up to ±q/2 of rounding, uniform (GUM
+    F.2.2.1); noise dithers it away as the quantised Gaussian's characteristic function at 2π/q,
+    exp(−2π²σ²/q²) (Widrow & Kollár 2008, Quantization Noise, ch. 4). 0 for a noisy column
+    without a visible grid."""
+    out = np.zeros(static.shape[1])
+    for c in range(static.shape[1]):
+        col = whole[np.isfinite(whole[:, c]), c]
+        # a grid used sparsely (few levels, a coarse step) still counts: every gap a multiple
+        q = output_quantum(static[:, c]) or output_quantum(col, max_median_steps=math.inf) or 0.0
+        if not q and noise[c] <= 1e-12 * float(np.max(np.abs(col), initial=0.0)):
+            gaps = np.diff(np.unique(col))  # no noise at all: the smallest gap bounds the step
+            q = float(gaps.min()) if gaps.size else 0.0
+        if q:
+            out[c] = q / math.sqrt(12.0) * math.exp(-2.0 * math.pi**2 * (noise[c] / q) ** 2)
+    return out
+
+
+def rounding_inputs(
+    uq: np.ndarray, cols: Sequence[str], names: Sequence[str], unit: str
+) -> list[Input]:
+    """Type B inputs of the rounding of each position mean (:func:`rounding_u`): one per position
+    and column (positions far apart on the grid round independently), then one per column common
+    to all positions (positions at nearly the same level round alike); the model adds both."""
+
+    def one(name: str, u: float) -> Input:
+        return Input(
+            name,
+            0.0,
+            float(u),
+            unit=unit,
+            source="output quantum",
+            description="Type B: rectangular, the output's step not dithered by its noise",
+        )
+
+    return [
+        one(f"rounding of the mean of {cols[c]} in {names[p]}", uq[c])
+        for p in range(len(names))
+        for c in range(len(cols))
+    ] + [one(f"rounding of {cols[c]} common to the positions", uq[c]) for c in range(len(cols))]
+
+
+def with_rounding(x: np.ndarray, start: int) -> np.ndarray:
+    """The 18 position means of ``x`` (first 18 entries) plus their rounding inputs at
+    ``start`` (18 per position and column, then 3 common), as (6, 3)."""
+    return (x[:18] + x[start : start + 18]).reshape(6, 3) + x[start + 18 : start + 21]
 
 
 def jacobian_budgets(
@@ -318,6 +372,7 @@ def calibrate_accel_triad(
         for p in range(6)
         for c in range(3)
     ]
+    inputs += rounding_inputs(rounding_u(used, u, noise), cols, names, ou)
     tilt_u = math.radians(_nonnegative("position_u_deg", position_u_deg))
     tilts = [(p, k) for p in range(6) for k in range(3) if k != p % 3] if tilt_u > 0 else []
     inputs += [
@@ -334,9 +389,9 @@ def calibrate_accel_triad(
     inputs.append(Input("gravity g", g, gu, unit="m/s²", source="gravity_u_m_s2"))
 
     def model(x: np.ndarray) -> dict[str, np.ndarray]:
-        v = x[:18].reshape(6, 3).copy()
+        v = with_rounding(x, 18)
         for i, (p, k) in enumerate(tilts):  # the tilt adds g·δ along axis k to the reading
-            v[p] -= m[:, k] * g * x[18 + i]
+            v[p] -= m[:, k] * g * x[39 + i]
         mm, bb = _solve(v[:3].T, v[3:].T, x[-1])
         return {
             "scale_misalignment": mm,

@@ -53,7 +53,10 @@ from rotacal.gyro.accel_triad import (
     check_disjoint,
     check_latitude,
     jacobian_budgets,
+    rounding_inputs,
+    rounding_u,
     static_positions,
+    with_rounding,
 )
 from rotacal.gyro.multiposition_model import EARTH_RATE_DEG_H
 from rotacal.gyro.rotation_sections import FERRARIS_ANGLE_DEG, _range, ferraris_sections
@@ -239,6 +242,8 @@ def calibrate_ferraris(
     )
     a_rot = np.array([a[s:e].mean(axis=0) for s, e in rot_rows])  # (3, 3) m/s²
 
+    uq = rounding_u(ug[np.concatenate([np.arange(*pos[k]) for k in names])], ug, noise)
+    rounding = rounding_inputs(uq, columns, names, output_unit or "output unit")
     kmat = np.eye(3)  # K enters only the Earth's terms: the first pass starts from unity
     budgets: dict[str, Any] = {}
     result: RotationCalibration | None = None
@@ -270,10 +275,11 @@ def calibrate_ferraris(
             for p in range(6)
             for c in range(3)
         ]
+        inputs += rounding
         km = kmat
 
         def model(x: np.ndarray, km: np.ndarray = km) -> dict[str, np.ndarray]:
-            kk, bb = static_model(x[:18].reshape(6, 3), em + x[18:].reshape(6, 3), km)
+            kk, bb = static_model(with_rounding(x, 36), em + x[18:36].reshape(6, 3), km)
             return {"g_sensitivity": kk, "bias": bb}
 
         unit = output_unit or "output unit"
@@ -300,6 +306,7 @@ def calibrate_ferraris(
             earth_angle_u_deg=earth_rot_u,
             angle_deg=angle_deg,
             nominal_scale=nominal_scale,
+            rounding_u=uq,
             columns=columns,
             specs=specs,
             output_unit=output_unit,

@@ -242,6 +242,7 @@ def calibrate_triad_rotations(
     angle_deg: float = FERRARIS_ANGLE_DEG,
     angle_u_deg: float = 0.0,
     nominal_scale: float | None = None,
+    rounding_u: Any = None,
     columns: Sequence[str] = TRIAD_OUTPUT_COLUMNS,
     specs: InstrumentSpecs | None = None,
     output_unit: str = "",
@@ -299,6 +300,10 @@ def calibrate_triad_rotations(
         :data:`NOMINAL_ANGLE_TOLERANCE` of the set angle: three rotations determine K exactly, so
         a turn that was not the angle set (a partial turn, a section cut short, the wrong sign)
         would otherwise pass into K unseen.
+    rounding_u : array_like (3,), optional
+        Per-sample rounding of a quantised output that its noise does not dither (output unit;
+        :func:`rotacal.gyro.accel_triad.rounding_u`): added to the noise of each integrated
+        rotation, whose samples sweep the grid and round independently.
     columns : sequence of 3 str
         Names of the rate columns, for messages.
     specs : InstrumentSpecs or None
@@ -434,6 +439,9 @@ def calibrate_triad_rotations(
         excess = np.zeros(3)
         u_b_white = np.zeros(3)
 
+    noise_theta = noise  # the noise of each integrated rotation's samples
+    if rounding_u is not None:
+        noise_theta = np.sqrt(noise**2 + _per_rotation("rounding_u", rounding_u, 1)[0] ** 2)
     notes: list[str] = []
     if bias is None:
         assert b_static is not None
@@ -478,7 +486,7 @@ def calibrate_triad_rotations(
         labels=[label for _, label, _, _, _, _ in rots],
         samples=np.array([e - s for *_, s, e, _ in rots], dtype=float),
         fs=fs,
-        noise=noise,
+        noise=noise_theta,
         noise_dof=float(max(static_samples - len(stats_), 1)),
         b_out=np.asarray(b_out, dtype=float),
         u_b=u_b,
@@ -570,7 +578,7 @@ def calibrate_triad_rotations(
                 offset,
                 [(label, s, e) for _, label, _, s, e, _ in rots],
                 resid,
-                _angle_u(noise, kmat, [e - s for *_, s, e, _ in rots], fs),
+                _angle_u(noise_theta, kmat, [e - s for *_, s, e, _ in rots], fs),
             ),
         ),
     )
