@@ -66,6 +66,7 @@ EXPECTED_INPUTS = {
     ("inspect",): {"capture"},
     ("allan",): {"capture", "specs"},
     ("gyro", "multiposition"): {"capture", "specs"},
+    ("gyro", "accelerometer"): {"capture", "sections_path", "specs"},
     ("gyro", "rotations"): {"capture", "sections_path", "specs"},
     ("gyro", "scale-factor"): {"capture", "more_captures", "rates_path", "rest_from", "specs"},
     ("gyro", "triad"): {"capture", "specs"},

@@ -88,7 +88,7 @@ def accel_section(r: AccelTriadCalibration, title: str | None = None) -> Section
         f"{cite('ferraris1995')}: with each axis up and down, half the sum of the two readings of "
         "that axis is its bias and their difference over 2g a column of K_a·R_a; the row norms "
         "are K_a, the unit rows R_a. Uncertainties: the white noise of each position's mean, "
-        "the stated tilt of the positions and u(g)."
+        "the rounding a quantised output keeps in it, the stated tilt of the positions and u(g)."
     ]
     paragraphs += [paragraph(n) for n in r.notes]
     return Section(
