@@ -32,7 +32,9 @@ def main() -> None:
         (-0.17, None, "#b0b7bf", "no latitude: Earth rate left in, in the uncertainty"),
         (0.17, 49.6, "#1f4e79", "--latitude-deg 49.6: vertical Earth rate removed"),
     ):
-        r = calibrate_ferraris(g, a, 100.0, t["sections"], latitude_deg=lat, gravity_m_s2=9.80665)
+        r = calibrate_ferraris(
+            g, a, 100.0, t["sections"], latitude_deg=lat, gravity_m_s2=t["gravity_m_s2"]
+        )
         err = (r.g_sensitivity - np.asarray(t["g_sensitivity"])).ravel() * 1e4
         big_u = 2.0 * r.g_sensitivity_u.ravel() * 1e4
         ax.errorbar(x + shift, err, yerr=big_u, fmt="o", color=color, ms=4, capsize=2, label=label)

@@ -86,7 +86,7 @@ def simulate_ferraris(
     acc_bias: Any = None,
     latitude_deg: float = 49.6,
     heading_deg: float = 30.0,
-    gravity_m_s2: float = 9.80665,
+    gravity_m_s2: float | None = None,
     earth_rate: bool = True,
     angle_deg: float = -360.0,
     rotation_s: float = 4.0,
@@ -118,8 +118,9 @@ def simulate_ferraris(
     heading_deg : float
         Heading of the first horizontal axis in the first position (deg from North); position p
         adds 47°·p (the DUT is set down at a different heading each time, as by hand).
-    gravity_m_s2 : float
-        Local gravity g (m/s²).
+    gravity_m_s2 : float or None
+        Local gravity g (m/s²); None: the WGS 84 normal gravity at the latitude, height 0
+        (Somigliana's closed form, NIMA TR8350.2 eq. 4-1), as a laboratory there measures it.
     earth_rate : bool
         Include the Earth's rotation in ω (False: a non-rotating Earth).
     angle_deg, rotation_s, static_s, margin_s, fs_hz
@@ -150,7 +151,11 @@ def simulate_ferraris(
     lat = _finite("latitude_deg", latitude_deg)
     if abs(lat) > 90:
         raise ConfigError(f"latitude_deg must lie in −90…90, got {latitude_deg!r}.")
-    g = _finite("gravity_m_s2", gravity_m_s2)
+    if gravity_m_s2 is None:
+        s2 = math.sin(math.radians(lat)) ** 2
+        g = 9.7803253359 * (1 + 0.00193185265241 * s2) / math.sqrt(1 - 0.00669437999013 * s2)
+    else:
+        g = _finite("gravity_m_s2", gravity_m_s2)
     ang = _finite("angle_deg", angle_deg)
     fs = _finite("fs_hz", fs_hz)
     if fs <= 0 or ang == 0:
