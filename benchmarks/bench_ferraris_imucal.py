@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from rotacal.gyro.ferraris import calibrate_ferraris
-from rotacal.gyro.rotation_sections import ferraris_sections
+from rotacal.gyro.rotation_sections import ferraris_sections, sections_from_labels
 from rotacal.gyro.rotations import calibrate_triad_rotations
 
 STATIC = ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a")
@@ -39,15 +39,8 @@ def _load_102(root: Path) -> tuple:
 def _load_204(root: Path) -> tuple:
     with open(root / "example_data" / "annotated_session.csv", newline="") as fh:
         rows = list(csv.reader(fh))
-    parts = np.array([r[0] for r in rows[1:]])
-    vals = np.array([[float(x) for x in r[1:]] for r in rows[1:]])
-    cols = {name: vals[:, i - 1] for i, name in enumerate(rows[0]) if i > 0}
-    sec = {}
-    for name in dict.fromkeys(parts):
-        idx = np.flatnonzero(parts == name)
-        sec[str(name)] = (int(idx[0]), int(idx[-1]) + 1)
-    gyr = np.column_stack([cols[f"gyr_{a}"] for a in "xyz"])
-    acc = np.column_stack([cols[f"acc_{a}"] for a in "xyz"])
+    vals = np.array([r[2:] for r in rows[1:]], dtype=float)  # acc_x … acc_z, gyr_x … gyr_z
+    gyr, acc, sec = vals[:, 3:6], vals[:, 0:3], sections_from_labels([r[0] for r in rows[1:]])
     return gyr, acc, sec, 204.8, root / "tests" / "snapshots" / "example_cal.json"
 
 

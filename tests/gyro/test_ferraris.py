@@ -14,6 +14,7 @@ import pytest
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.accel_triad import calibrate_accel_triad, normal_gravity
 from rotacal.gyro.ferraris import calibrate_ferraris
+from rotacal.gyro.rotation_sections import sections_from_labels
 from rotacal.signal.clipping import ClippedSignalError
 from rotacal.sim import simulate_ferraris
 
@@ -169,6 +170,9 @@ def test_refusals_in_one_line() -> None:
     assert "\n" not in str(exc.value)
     with pytest.raises(ConfigError, match="latitude"):
         _fit(cap, latitude_deg=95.0)
+    assert sections_from_labels(["a", "a", "b", "b", "b"]) == {"a": (0, 2), "b": (2, 5)}
+    with pytest.raises(ConfigError, match="section a is not one contiguous block"):
+        sections_from_labels(["a", "b", "a"])
 
 
 def test_normal_gravity_closed_form() -> None:
@@ -193,15 +197,9 @@ def _load_102(imucal: Path):
 def _load_204(imucal: Path):
     with open(imucal / "example_data" / "annotated_session.csv", newline="") as fh:
         rows = list(csv.reader(fh))
-    parts = np.array([r[0] for r in rows[1:]])
-    vals = np.array([[float(x) for x in r[1:]] for r in rows[1:]])
-    cols = {name: vals[:, i - 1] for i, name in enumerate(rows[0]) if i > 0}
-    sec = {}
-    for name in dict.fromkeys(parts):
-        idx = np.flatnonzero(parts == name)
-        sec[str(name)] = (int(idx[0]), int(idx[-1]) + 1)
-    gyr = np.column_stack([cols[f"gyr_{a}"] for a in "xyz"])
-    return gyr, np.column_stack([cols[f"acc_{a}"] for a in "xyz"]), sec
+    assert rows[0][2:] == ["acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"]
+    vals = np.array([r[2:] for r in rows[1:]], dtype=float)
+    return vals[:, 3:6], vals[:, 0:3], sections_from_labels([r[0] for r in rows[1:]])
 
 
 SESSIONS = [

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
         multiposition_plan,
     )
     from rotacal.gyro.noise import GyroNoise, gyro_noise, gyro_noise_from_angle
+    from rotacal.gyro.rotation_sections import sections_from_labels
     from rotacal.gyro.rotations import (
         RotationCalibration,
         calibrate_triad_rotations,
@@ -92,6 +93,7 @@ __all__ = [
     "normal_gravity",
     "resolve_requirement",
     "scale_factor_chunks",
+    "sections_from_labels",
     "triad_plan",
     "triad_plan_check",
 ]
