@@ -17,6 +17,8 @@ HEAD_NAME = re.compile(r"^head_(\d+)$")
 RATE_COLUMNS = ("wx_deg_s", "wy_deg_s", "wz_deg_s")
 #: Raw outputs of the "3-axis gyro test" capture (and of rotations through a known angle).
 TRIAD_OUTPUT_COLUMNS = ("ux", "uy", "uz")
+#: Raw outputs of an accelerometer triad (a Ferraris session's other sensor).
+ACCEL_OUTPUT_COLUMNS = ("ax", "ay", "az")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -52,7 +54,10 @@ MOTION_LTS = CommandColumns("motion lts", ("time_s", "displacement_mm"))
 MOTION_FOG = CommandColumns("motion fog", ("time_s", "rate_deg_s"))
 GYRO_SCALE_FACTOR = CommandColumns("gyro scale-factor", ("rate_deg_s", "output"))
 GYRO_TRIAD = CommandColumns("gyro triad", RATE_COLUMNS + TRIAD_OUTPUT_COLUMNS)
-GYRO_ROTATIONS = CommandColumns("gyro rotations", TRIAD_OUTPUT_COLUMNS, ("time_s",))
+GYRO_ROTATIONS = CommandColumns(
+    "gyro rotations", TRIAD_OUTPUT_COLUMNS, ("time_s", *ACCEL_OUTPUT_COLUMNS)
+)
+GYRO_ACCELEROMETER = CommandColumns("gyro accelerometer", ACCEL_OUTPUT_COLUMNS)
 GYRO_MULTIPOSITION = CommandColumns("gyro multiposition", ("phi1_deg", "phi2_deg", "output_deg_h"))
 ALLAN = CommandColumns("allan", ("rate_deg_s",), ("time_s",))
 #: The reference is the encoder's a, b (with --lines) or an angle column: two ways to fit.
@@ -71,6 +76,7 @@ COMMANDS: tuple[CommandColumns, ...] = (
     GYRO_SCALE_FACTOR,
     GYRO_TRIAD,
     GYRO_ROTATIONS,
+    GYRO_ACCELEROMETER,
     GYRO_MULTIPOSITION,
     GYRO_FREQUENCY_RESPONSE,
     GYRO_FREQUENCY_RESPONSE_ANGLE,

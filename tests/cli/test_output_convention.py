@@ -58,6 +58,7 @@ def captures(tmp_path_factory) -> dict[str, Path]:
         "gyro-noise": ["--duration-s", "600"],
         "gyro-rotations": [],
         "gyro-steps": ["--samples-per-dwell", "20"],
+        "ferraris": [],
         "multiposition": [],
         "gyro-sine": ["--frequency-hz", "2", "--periods", "3"],
         "gyro-sine-6": ["--frequency-hz", "6", "--periods", "3"],
@@ -83,6 +84,7 @@ ANALYSES: dict[tuple[str, ...], tuple[str, list[str]]] = {
     ("gyro", "multiposition"): ("multiposition", ["--axis", "x", "--latitude-deg", "45.75"]),
     ("gyro", "resolution"): ("gyro-steps", []),
     ("gyro", "rotations"): ("gyro-rotations", ["--sections", "{gyro-rotations}.truth.json"]),
+    ("gyro", "accelerometer"): ("ferraris", ["--sections", "{ferraris}.truth.json"]),
     ("gyro", "scale-factor"): ("gyro-rates", []),
     ("gyro", "triad"): ("gyro-triad", []),
     ("motion", "encoder"): ("encoder", ["--lines", "36000"]),
@@ -102,6 +104,7 @@ WRITERS: dict[tuple[str, ...], list[str]] = {
         ("simulate", kind): ["x.npz", "x.npz.truth.json"]
         for kind in (
             "encoder",
+            "ferraris",
             "fog",
             "gyro-log",
             "gyro-noise",
@@ -146,9 +149,9 @@ def _analysis_argv(path: tuple[str, ...], captures: dict[str, Path]) -> list[str
         *path,
         str(captures[kind]),
         *(
-            m.replace("{gyro-rotations}", str(captures["gyro-rotations"])).replace(
-                "{gyro-sine-6}", str(captures["gyro-sine-6"])
-            )
+            m.replace("{gyro-rotations}", str(captures["gyro-rotations"]))
+            .replace("{gyro-sine-6}", str(captures["gyro-sine-6"]))
+            .replace("{ferraris}", str(captures["ferraris"]))
             for m in more
         ),
     ]
@@ -269,9 +272,9 @@ def _dummy_argv(path: tuple[str, ...], tmp_path: Path) -> list[str]:
         *path,
         str(capture),
         *(
-            m.replace("{gyro-rotations}.truth.json", str(sections)).replace(
-                "{gyro-sine-6}", str(capture)
-            )
+            m.replace("{gyro-rotations}.truth.json", str(sections))
+            .replace("{gyro-sine-6}", str(capture))
+            .replace("{ferraris}.truth.json", str(sections))
             for m in more
         ),
     ]

@@ -68,6 +68,7 @@ EXPECTED_INPUTS = {
     ("gyro", "frequency-response"): {"capture", "more_captures", "specs"},
     ("gyro", "multiposition"): {"capture", "specs"},
     ("gyro", "resolution"): {"capture", "specs"},
+    ("gyro", "accelerometer"): {"capture", "sections_path", "specs"},
     ("gyro", "rotations"): {"capture", "sections_path", "specs"},
     ("gyro", "scale-factor"): {"capture", "more_captures", "rates_path", "rest_from", "specs"},
     ("gyro", "triad"): {"capture", "specs"},

@@ -27,6 +27,7 @@ TWIN_FITS = {
     "gyro-triad": "gyro triad",
     "gyro-noise": "allan",
     "gyro-rotations": "gyro rotations",
+    "ferraris": "gyro accelerometer",
     "multiposition": "gyro multiposition",
     "gyro-sine": "gyro frequency-response",
 }
@@ -149,7 +150,7 @@ def test_each_command_reads_the_columns_of_the_table(tmp_path, spec):
     kept = {c: rng.normal(size=50) for c in (*rest, "other")}
     path = write_capture(tmp_path / "c.csv", kept)
     options = COMMAND_OPTIONS.get(spec.command, [])
-    if spec.command == "gyro rotations":
+    if spec.command in ("gyro rotations", "gyro accelerometer"):
         sections = tmp_path / "sections.json"
         sections.write_text('{"rotations": {"x": [0, 10]}}')
         options = ["--sections", str(sections)]

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -30,6 +29,15 @@ from ._common import (
     _write_report,
 )
 from ._dask import dask_options, run_on_dask, split_wanted
+from ._ferraris import (
+    DEG_S_UNITS,
+    echo_matrix,
+    gravity_options,
+    nominal_scale_option,
+    read_sections,
+    read_triads,
+    sections_option,
+)
 from ._gyro_log import continuous_log, log_options, log_sections, scale_factor_from_log
 from ._help import example
 from ._rate_files import rate_file_options, rate_row_chunks, rate_row_count, read_rate_rows
@@ -359,18 +367,12 @@ def _print_triad(result: Any, data: dict[str, Any]) -> None:
     epilog=example(
         "rotacal gyro rotations rot.csv --sections rot.csv.truth.json",
         "rotacal gyro rotations session.csv --sections session_list.json --fs-hz 102.4 "
-        "--column gyr_x=ux --column gyr_y=uy --column gyr_z=uz",
+        "--column gyr_x=ux --column gyr_y=uy --column gyr_z=uz "
+        "--column acc_x=ax --column acc_y=ay --column acc_z=az --latitude-deg 49.6",
     ),
 )
 @click.argument("capture", type=INPUT_FILE)
-@click.option(
-    "--sections",
-    "sections_path",
-    type=INPUT_FILE,
-    required=True,
-    help="JSON of sample ranges: imucal's Ferraris list (x_p … z_a, x_rot, y_rot, z_rot) or "
-    "{'rotations': {'x': [start, stop], …}, 'static': {…}} (a twin's truth file works).",
-)
+@sections_option
 @click.option("--fs-hz", type=float, default=None, help="Sampling rate, when there is no time_s.")
 @click.option(
     "--angle-deg",
@@ -381,6 +383,8 @@ def _print_triad(result: Any, data: dict[str, Any]) -> None:
     "convention; the gyro reads negative), +360 one counter-clockwise turn. "
     "[default: the sections file's angle_deg, else -360]",
 )
+@gravity_options
+@nominal_scale_option
 @click.option(
     "--output-unit",
     default="",
@@ -394,6 +398,10 @@ def gyro_rotations(
     sections_path: str,
     fs_hz: float | None,
     angle_deg: float | None,
+    latitude_deg: float | None,
+    gravity_m_s2: float | None,
+    position_u_deg: float,
+    nominal_scale: float | None,
     output_unit: str,
     columns: Sequence[str],
     group: str | None,
@@ -402,49 +410,19 @@ def gyro_rotations(
     """Triad from rotations through a known angle (Ferraris).
 
     Columns ux, uy, uz (and time_s, or --fs-hz): the outputs integrated over each rotation
-    give K and the bias of a three-axis gyro.
+    give K and the bias of a three-axis gyro. With the accelerometer's ax, ay, az and the six
+    static positions, its g-sensitivity K_ga and the Earth rate are separated from K.
     """
-    from rotacal.gyro import TRIAD_OUTPUT_COLUMNS, calibrate_triad_rotations, ferraris_sections
+    from rotacal.gyro import calibrate_ferraris, calibrate_triad_rotations, ferraris_sections
     from rotacal.gyro.rotations import FERRARIS_ANGLE_DEG
-    from rotacal.io import parse_column_mapping, read_capture
     from rotacal.signal import check_sampling
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    try:
-        spec = json.loads(Path(sections_path).read_text(encoding="utf-8"))
-    except OSError as e:
-        raise ConfigError(f"--sections {sections_path}: cannot read it ({e.strerror})") from None
-    except json.JSONDecodeError as e:
-        raise ConfigError(
-            f"--sections {sections_path} is not JSON ({e.msg}, line {e.lineno})"
-        ) from None
-    if not isinstance(spec, dict):
-        raise ConfigError(f"--sections {sections_path} must hold a JSON object of sample ranges")
-    if "rotations" in spec:
-        rotations, static = spec["rotations"], spec.get("static")
-    else:
-        rotations, static = ferraris_sections(spec)
+    sections, stated_angle = read_sections(sections_path)
     if angle_deg is None:  # a twin's truth file states the angle it turned through
-        angle_deg = spec.get("angle_deg", FERRARIS_ANGLE_DEG)
-        if isinstance(angle_deg, bool) or not isinstance(angle_deg, (int, float)):
-            raise ConfigError(
-                f"--sections {sections_path}: angle_deg must be a number of degrees, got "
-                f"{angle_deg!r}; fix it or give --angle-deg"
-            )
-    with _status(f"reading {capture}"):
-        cap = read_capture(
-            capture,
-            mapping=parse_column_mapping(columns),
-            group=group,
-            read_options=current_read_options(),
-        )
-    missing = [c for c in TRIAD_OUTPUT_COLUMNS if c not in cap.columns]
-    if missing:
-        raise CaptureError(
-            f"{Path(capture).name} has no column {missing[0]!r}; map the gyro outputs with "
-            "--column gyr_x=ux (and uy, uz)"
-        )
+        angle_deg = FERRARIS_ANGLE_DEG if stated_angle is None else stated_angle
+    cap, rate, acc = read_triads(capture, columns, group)
     if "time_s" in cap.columns:
         check_sampling(cap["time_s"], "time_s")
         if cap["time_s"].size < 2:
@@ -453,18 +431,38 @@ def gyro_rotations(
         fs_hz = 1.0 / step if fs_hz is None else fs_hz
     if fs_hz is None:
         raise ConfigError(f"{Path(capture).name} has no time_s column: give --fs-hz")
-    rate = np.column_stack([cap[c] for c in TRIAD_OUTPUT_COLUMNS])
+    common = {
+        "angle_deg": angle_deg,
+        "nominal_scale": 1.0
+        if nominal_scale is None and output_unit.strip().lower() in DEG_S_UNITS
+        else nominal_scale,
+        "output_unit": output_unit,
+        "specs": kw.pop("specs"),
+        "allow_clipped": kw.pop("allow_clipped"),
+    }
     with _status("integrating the rotations"):
-        result = calibrate_triad_rotations(
-            rate,
-            fs_hz,
-            rotations,
-            static=static,
-            angle_deg=angle_deg,
-            output_unit=output_unit,
-            specs=kw.pop("specs"),
-            allow_clipped=kw.pop("allow_clipped"),
-        )
+        if acc is not None and "rotations" not in sections:
+            result: Any = calibrate_ferraris(
+                rate,
+                acc,
+                fs_hz,
+                sections,
+                latitude_deg=latitude_deg,
+                gravity_m_s2=gravity_m_s2,
+                position_u_deg=position_u_deg,
+                **common,
+            )
+        elif latitude_deg is not None or gravity_m_s2 is not None:
+            raise ConfigError(
+                "--latitude-deg and --gravity-m-s2 need the accelerometer columns ax, ay, az and "
+                "imucal's six static positions (x_p … z_a) in --sections"
+            )
+        else:
+            if "rotations" in sections:
+                rotations, static = sections["rotations"], sections.get("static")
+            else:
+                rotations, static = ferraris_sections(sections)
+            result = calibrate_triad_rotations(rate, fs_hz, rotations, static=static, **common)
     _emit_warnings(result)
     data = result.to_dict()
     _write_json(data, json_path)
@@ -481,6 +479,8 @@ def gyro_rotations(
         )
     if _summary_wanted():
         _print_triad(result, data)
+        if "g_sensitivity" in data:
+            echo_matrix(data, "g_sensitivity", "K_ga", f"{output_unit or 'output unit'}/(m/s²)")
 
 
 @gyro.command(
@@ -564,5 +564,6 @@ def _drift_coefficient(data: dict[str, Any], name: str) -> dict[str, Any]:
     }
 
 
-from . import gyro_frequency  # noqa: E402,F401  (registers `gyro frequency-response`)
-from . import gyro_resolution as _gyro_resolution  # noqa: E402,F401  (registers `gyro resolution`)
+# each registers its subcommand on `gyro` as it is imported: accelerometer, frequency-response,
+# resolution
+from . import gyro_accel, gyro_frequency, gyro_resolution  # noqa: E402,F401

@@ -622,6 +622,28 @@ def simulate_gyro_rotations_cmd(out: str, overwrite: bool, **kw: Any) -> None:
 
 
 @simulate.command(
+    "ferraris",
+    epilog=example("rotacal simulate ferraris --out session.csv --latitude-deg 49.6"),
+)
+@_sim_common
+@click.option("--latitude-deg", type=float, default=None, help="Latitude (deg) [49.6].")
+@click.option("--noise-std", type=float, default=None, help="Gyro noise, rms (deg/s) [0.05].")
+@click.option("--quantum", type=float, default=None, help="Gyro output step (deg/s) [none].")
+@click.option("--fs-hz", type=float, default=None, help="Sampling rate (Hz) [100].")
+def simulate_ferraris_cmd(out: str, overwrite: bool, **kw: Any) -> None:
+    """A Ferraris session of a 6-DOF IMU on the rotating Earth.
+
+    Columns time_s, ux, uy, uz (gyro, deg/s), ax, ay, az (m/s²): six static positions, then a
+    turn of -360° about each axis; the sections (imucal's names) and the true K, b, K_ga, K_a·R_a,
+    b_a are in FILE.truth.json, which `rotacal gyro rotations --sections` reads.
+    """
+    from rotacal.sim import simulate_ferraris
+
+    options = {k: v for k, v in kw.items() if v is not None}
+    _sim_write(simulate_ferraris(**options), out, overwrite)
+
+
+@simulate.command(
     "multiposition",
     epilog=example("rotacal simulate multiposition --axis x --latitude-deg 45.75 --out mp.csv"),
 )

@@ -8,6 +8,13 @@ from typing import TYPE_CHECKING
 from rotacal._lazy import attach
 
 if TYPE_CHECKING:
+    from rotacal.gyro.accel_triad import (
+        ACCEL_OUTPUT_COLUMNS,
+        AccelTriadCalibration,
+        calibrate_accel_triad,
+        normal_gravity,
+    )
+    from rotacal.gyro.ferraris import FerrarisGyroCalibration, calibrate_ferraris
     from rotacal.gyro.frequency_model import (
         SecondOrderFit,
         bandwidth_from_model,
@@ -34,6 +41,7 @@ if TYPE_CHECKING:
     from rotacal.gyro.noise import GyroNoise, gyro_noise, gyro_noise_from_angle
     from rotacal.gyro.noise_fit import NoiseFit, avar_covariance, fit_noise_terms
     from rotacal.gyro.plateaus import Plateau, PlateauSearch, find_plateaus
+    from rotacal.gyro.rotation_sections import sections_from_labels
     from rotacal.gyro.rotations import (
         RotationCalibration,
         calibrate_triad_rotations,
@@ -68,10 +76,13 @@ if TYPE_CHECKING:
     )
 
 __all__ = [
+    "ACCEL_OUTPUT_COLUMNS",
     "EARTH_RATE_DEG_H",
     "RATE_COLUMNS",
     "REQUIREMENTS",
     "TRIAD_OUTPUT_COLUMNS",
+    "AccelTriadCalibration",
+    "FerrarisGyroCalibration",
     "FrequencyPoint",
     "FrequencyResponse",
     "GyroNoise",
@@ -90,6 +101,8 @@ __all__ = [
     "apply_triad_calibration",
     "avar_covariance",
     "bandwidth_from_model",
+    "calibrate_accel_triad",
+    "calibrate_ferraris",
     "calibrate_frequency_response",
     "calibrate_multiposition",
     "calibrate_scale_factor",
@@ -111,11 +124,13 @@ __all__ = [
     "gyro_noise",
     "gyro_noise_from_angle",
     "multiposition_plan",
+    "normal_gravity",
     "resolve_requirement",
     "response_at_frequency",
     "scale_factor_chunks",
     "scale_factor_repeatability",
     "second_order_response",
+    "sections_from_labels",
     "signed_scale_factors",
     "small_step_test",
     "temperature_coefficients",

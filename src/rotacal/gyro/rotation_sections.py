@@ -25,7 +25,13 @@ from rotacal.signal._values import (
     check_setting,
 )
 
-__all__ = ["FERRARIS_ANGLE_DEG", "FERRARIS_ROTATIONS", "FERRARIS_STATIC", "ferraris_sections"]
+__all__ = [
+    "FERRARIS_ANGLE_DEG",
+    "FERRARIS_ROTATIONS",
+    "FERRARIS_STATIC",
+    "ferraris_sections",
+    "sections_from_labels",
+]
 
 #: Section names of a Ferraris recording (imucal's): six static positions and three rotations.
 FERRARIS_STATIC = ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a")
@@ -182,3 +188,35 @@ def ferraris_sections(
     rotations = {ax: pair(k) for k, ax in FERRARIS_ROTATIONS.items()}
     static = {k: pair(k) for k in FERRARIS_STATIC}
     return rotations, static
+
+
+def sections_from_labels(labels: Any) -> dict[str, tuple[int, int]]:
+    """Sample ranges from a section label per row (imucal's annotated sessions: the section name
+    as the first index level, e.g. ``annotated_session.csv``'s ``part`` column).
+
+    Parameters
+    ----------
+    labels : array_like of str, (n,)
+        The section of each row; each name must occupy one contiguous block of rows.
+
+    Returns
+    -------
+    dict
+        name → half-open range [start, stop), in the order the sections first appear.
+
+    Raises
+    ------
+    ConfigError
+        A name whose rows are not one contiguous block.
+    """
+    lab = np.asarray(labels).astype(str).reshape(-1)
+    out: dict[str, tuple[int, int]] = {}
+    for name in dict.fromkeys(lab.tolist()):
+        idx = np.flatnonzero(lab == name)
+        if idx[-1] - idx[0] + 1 != idx.size:
+            raise ConfigError(
+                f"section {name} is not one contiguous block of rows (rows {idx[0]} to {idx[-1]} "
+                f"hold {idx.size} of its rows); label each section once."
+            )
+        out[name] = (int(idx[0]), int(idx[-1]) + 1)
+    return out

@@ -83,12 +83,17 @@ __all__ = [
     "FERRARIS_ANGLE_DEG",
     "FERRARIS_ROTATIONS",
     "FERRARIS_STATIC",
+    "NOMINAL_ANGLE_TOLERANCE",
     "RotationCalibration",
     "calibrate_triad_rotations",
     "ferraris_sections",
 ]
 
 _AXES = "xyz"
+#: Largest relative difference between a rotation's angle seen with the nominal sensitivity and
+#: its set angle: MEMS gyros' scale factors are within a few % of nominal, a quarter turn short
+#: of 360° is 25 % off.
+NOMINAL_ANGLE_TOLERANCE = 0.1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -167,7 +172,10 @@ class RotationCalibration(Result):
         """The JSON fields plus the uncertainty keys (arrays shaped like K and b)."""
         out = super().to_dict()
         if self._budgets:
-            keys = uncertainty_json(self._budgets, {"scale_misalignment": (3, 3), "bias": (3,)})
+            shapes = {"scale_misalignment": (3, 3), "bias": (3,)}
+            if element_key("g_sensitivity", (0, 0)) in self._budgets:  # gyro.ferraris's K_ga
+                shapes["g_sensitivity"] = (3, 3)
+            keys = uncertainty_json(self._budgets, shapes)
             out.update(to_jsonable(keys))
         return out
 
@@ -227,8 +235,14 @@ def calibrate_triad_rotations(
     *,
     static: Any = None,
     bias: Any = None,
+    bias_u: Any = None,
+    offset_change_u: Any = None,
+    earth_angle_deg: Any = None,
+    earth_angle_u_deg: Any = None,
     angle_deg: float = FERRARIS_ANGLE_DEG,
     angle_u_deg: float = 0.0,
+    nominal_scale: float | None = None,
+    rounding_u: Any = None,
     columns: Sequence[str] = TRIAD_OUTPUT_COLUMNS,
     specs: InstrumentSpecs | None = None,
     output_unit: str = "",
@@ -258,6 +272,19 @@ def calibrate_triad_rotations(
     bias : array_like, (3,) or (n, 3), optional
         The offset to remove instead of the static mean (output unit): a constant, or one row per
         sample (for example b + K_ga·a with the g-sensitivity and the calibrated acceleration).
+    bias_u : array_like (3,), optional
+        Standard uncertainty of a given ``bias`` (output unit), common to every rotation; without
+        it the given bias counts as exact.
+    offset_change_u : array_like (m, 3), optional
+        Standard uncertainty of the mean offset during each rotation beyond ``bias_u`` (output
+        unit; one row per rotation, independent between rotations): e.g. K_ga's uncertainty
+        times g along the rotation's axis. Replaces the spread of the static means.
+    earth_angle_deg : array_like (m, 3), optional
+        The angle vector the Earth turns the DUT through during each rotation, in the DUT's axes
+        (deg): added to the set angle vector (Θ_l = K·(φ_l·e_l + E_l)).
+    earth_angle_u_deg : array_like (m, 3), optional
+        Its standard uncertainty per component (deg), Type B (the part of the Earth rate whose
+        projection is unknown without the heading).
     angle_deg : float
         Set angle of each rotation given without its own (deg, right-hand rule about the named
         axis). Default −360: one clockwise turn seen from the tip of the +axis, the Ferraris
@@ -267,6 +294,16 @@ def calibrate_triad_rotations(
         Standard uncertainty of each realised rotation angle (deg, normal, independent between
         rotations), for the uncertainties; leave it 0 when ``specs`` states
         ``table.set_angle_arcsec``.
+    nominal_scale : float, optional
+        The gyro's nominal sensitivity (output unit per °/s; 1 for outputs in °/s). With it, each
+        rotation's integrated output along its own axis, divided by it, must come within
+        :data:`NOMINAL_ANGLE_TOLERANCE` of the set angle: three rotations determine K exactly, so
+        a turn that was not the angle set (a partial turn, a section cut short, the wrong sign)
+        would otherwise pass into K unseen.
+    rounding_u : array_like (3,), optional
+        Per-sample rounding of a quantised output that its noise does not dither (output unit;
+        :func:`rotacal.gyro.accel_triad.rounding_u`): added to the noise of each integrated
+        rotation, whose samples sweep the grid and round independently.
     columns : sequence of 3 str
         Names of the rate columns, for messages.
     specs : InstrumentSpecs or None
@@ -361,6 +398,16 @@ def calibrate_triad_rotations(
                 )
     # 3×m true angle vectors (deg): the set angles plus the stated mean angle error
     phi = np.column_stack([v * (a + ang_mean_deg) for _, _, v, _, _, a in rots])
+    m_rot = len(rots)
+    earth, earth_u, change_u = (
+        np.zeros((m_rot, 3)) if x is None else _per_rotation(name, x, m_rot)
+        for name, x in (
+            ("earth_angle_deg", earth_angle_deg),
+            ("earth_angle_u_deg", earth_angle_u_deg),
+            ("offset_change_u", offset_change_u),
+        )
+    )
+    phi = phi + earth.T
     if np.linalg.matrix_rank(phi, tol=1e-9 * np.abs(phi).max()) < 3:
         have = ", ".join(label for _, label, _, _, _, _ in rots)
         raise ConfigError(
@@ -392,6 +439,9 @@ def calibrate_triad_rotations(
         excess = np.zeros(3)
         u_b_white = np.zeros(3)
 
+    noise_theta = noise  # the noise of each integrated rotation's samples
+    if rounding_u is not None:
+        noise_theta = np.sqrt(noise**2 + _per_rotation("rounding_u", rounding_u, 1)[0] ** 2)
     notes: list[str] = []
     if bias is None:
         assert b_static is not None
@@ -413,11 +463,14 @@ def calibrate_triad_rotations(
             )
         if not np.isfinite(bb).all():
             raise ConfigError("bias has a non-finite value (NaN or inf); give finite offsets.")
-        u_b = np.zeros(3)
-        notes.append("bias given by the caller: its uncertainty is not included")
+        u_b = np.zeros(3) if bias_u is None else _per_rotation("bias_u", bias_u, 1)[0]
+        if bias_u is None:
+            notes.append("bias given by the caller: its uncertainty is not included")
 
     # --- integrate each rotation: Θ_l = Σ (u − offset)/fs; a clock ε_t long samples at fs·(1 + ε_t)
     theta = np.column_stack([np.sum(u[s:e] - offset[s:e], axis=0) / fs for *_, s, e, _ in rots])
+    if nominal_scale is not None:
+        _check_angles(theta, rots, nominal_scale)
     pinv = phi.T @ np.linalg.inv(phi @ phi.T)  # m×3: K = Θ·pinv
     kmat = theta @ pinv / (1.0 + eps_t)
     if not np.isfinite(kmat).all() or abs(np.linalg.det(kmat)) <= 1e-12 * np.abs(kmat).max() ** 3:
@@ -433,13 +486,19 @@ def calibrate_triad_rotations(
         labels=[label for _, label, _, _, _, _ in rots],
         samples=np.array([e - s for *_, s, e, _ in rots], dtype=float),
         fs=fs,
-        noise=noise,
+        noise=noise_theta,
         noise_dof=float(max(static_samples - len(stats_), 1)),
         b_out=np.asarray(b_out, dtype=float),
         u_b=u_b,
-        excess=excess if bias is None else np.zeros(3),
+        excess=np.broadcast_to(excess if bias is None else np.zeros(3), (m_rot, 3))
+        if offset_change_u is None
+        else change_u,
+        earth_u=earth_u,
         sections=len(stats_),
-        bias_given=bias is not None,
+        bias_given=bias is not None and bias_u is None,
+        bias_source=("static mean", "Type A: white noise of the static samples")
+        if bias is None
+        else ("the offset given", "bias_u, as stated by the caller"),
         ang_in=ang_in,
         tb_in=tb_in,
         spec=spec,
@@ -455,7 +514,9 @@ def calibrate_triad_rotations(
             f"K = K₀/(1 + {eps_t:.3g}) for the timebase"
         )
 
-    measured = apply_triad_calibration(theta.T / (1.0 + eps_t), kmat, np.zeros(3))  # m×3, deg
+    # m×3 (deg): what the calibrated gyro integrates, less the Earth's turn
+    measured = apply_triad_calibration(theta.T / (1.0 + eps_t), kmat, np.zeros(3)) - earth
+    phi = phi - earth.T
     resid = measured - phi.T
     scale, axes_r, mis = decompose_scale_misalignment(kmat)
     diag_dom = np.all(np.abs(np.diag(kmat)) > np.sum(np.abs(kmat), axis=1) - np.abs(np.diag(kmat)))
@@ -517,10 +578,41 @@ def calibrate_triad_rotations(
                 offset,
                 [(label, s, e) for _, label, _, s, e, _ in rots],
                 resid,
-                _angle_u(noise, kmat, [e - s for *_, s, e, _ in rots], fs),
+                _angle_u(noise_theta, kmat, [e - s for *_, s, e, _ in rots], fs),
             ),
         ),
     )
+
+
+def _check_angles(theta: np.ndarray, rots: Sequence[tuple], nominal_scale: float) -> None:
+    """Refuse a rotation whose integrated output along its axis, over the nominal sensitivity,
+    is not within :data:`NOMINAL_ANGLE_TOLERANCE` of its set angle."""
+    try:
+        s0 = float(nominal_scale)
+    except (TypeError, ValueError):
+        raise ConfigError(f"nominal_scale must be a number, got {nominal_scale!r}.") from None
+    if not (math.isfinite(s0) and s0 != 0):
+        raise ConfigError(f"nominal_scale must be finite and non-zero, got {nominal_scale!r}.")
+    for i, (name, label, axis, _, _, a) in enumerate(rots):
+        seen = float(axis @ theta[:, i]) / s0
+        if abs(seen / a - 1.0) > NOMINAL_ANGLE_TOLERANCE:
+            raise CaptureError(
+                f"the rotation about {label} (section {name}) integrates to {seen:.4g}° with the "
+                f"nominal sensitivity {s0:g} per °/s, not the set {a:g}° (±"
+                f"{100 * NOMINAL_ANGLE_TOLERANCE:g} %): not a full turn, a section that misses "
+                "part of it, or the other sense of rotation; fix the section list or --angle-deg."
+            )
+
+
+def _per_rotation(name: str, value: Any, m: int) -> np.ndarray:
+    """An (m, 3) array of per-rotation values (a (3,) value is the same for every rotation)."""
+    try:
+        arr = np.broadcast_to(np.asarray(value, dtype=float), (m, 3)).copy()
+    except (TypeError, ValueError):
+        raise ConfigError(f"{name} must have shape (3,) or ({m}, 3), got {value!r}.") from None
+    if not np.isfinite(arr).all() or ("_u" in name and np.any(arr < 0)):
+        raise ConfigError(f"{name} must be finite (and ≥ 0 for an uncertainty), got {value!r}.")
+    return arr
 
 
 def _angle_u(noise: np.ndarray, kmat: np.ndarray, samples: Sequence[int], fs: float) -> np.ndarray:
@@ -545,8 +637,10 @@ def _rotation_budgets(
     b_out: np.ndarray,
     u_b: np.ndarray,
     excess: np.ndarray,
+    earth_u: np.ndarray,
     sections: int,
     bias_given: bool,
+    bias_source: tuple[str, str],
     ang_in: Input | None,
     tb_in: Input | None,
     spec: InstrumentSpecs | None,
@@ -609,12 +703,12 @@ def _rotation_budgets(
                     )
                 )
                 sens.append(p / g)
-                if excess[c] > 0:
+                if excess[ln, c] > 0:
                     ins.append(
                         Input(
                             f"offset change during the {rot}",
                             0.0,
-                            float(excess[c]),
+                            float(excess[ln, c]),
                             float(max(sections - 1, 1)),
                             "normal",
                             ou,
@@ -625,16 +719,28 @@ def _rotation_budgets(
                 if ang_in is not None:
                     ins.append(dataclasses.replace(ang_in, name=f"angle error of the {rot}"))
                     sens.append(-float(kmat[c] @ axes[:, ln]) * p / 3600.0)
+                for k in np.flatnonzero(earth_u[ln] > 0):
+                    ins.append(
+                        Input(
+                            f"Earth's turn about {_AXES[k]} during the {rot}",
+                            0.0,
+                            float(earth_u[ln, k]),
+                            unit="deg",
+                            source="earth rate",
+                            description="Type B: the projection unknown without the heading",
+                        )
+                    )
+                    sens.append(-float(kmat[c, k]) * p)
             if not bias_given:
                 ins.append(
                     Input(
-                        f"bias b_{_AXES[c]} subtracted (static mean)",
+                        f"bias b_{_AXES[c]} subtracted ({bias_source[0]})",
                         float(b_out[c]),
                         float(u_b[c]),
                         noise_dof,
                         "normal",
                         ou,
-                        "Type A: white noise of the static mean, common to every rotation",
+                        f"{bias_source[1]}, common to every rotation",
                     )
                 )
                 sens.append(-float(dur @ pinv[:, j]) / g)
@@ -652,13 +758,13 @@ def _rotation_budgets(
             extra = ["bias given by the caller: its uncertainty is not included."]
         else:
             b0 = Input(
-                f"{name}: mean of the static sections",
+                f"{name}: {bias_source[0]}",
                 float(b_out[c]),
                 float(u_b[c]),
                 noise_dof,
                 "normal",
                 ou,
-                "Type A: white noise of the static samples",
+                bias_source[1],
             )
             extra = []
         b = linear_gum(name, ou, float(b_out[c]), [b0], [1.0]).budget(0)

@@ -408,6 +408,19 @@ def rotations_section(
             caption="Rotations",
         ),
     ]
+    if "g_sensitivity" in data:  # gyro.ferraris: K_ga separated from K
+        tables.insert(
+            1,
+            Table(
+                ["output", "a_x", "a_y", "a_z"],
+                [
+                    [out[i], *(element_of(data, "g_sensitivity", (i, j)) for j in range(3))]
+                    for i in range(3)
+                ],
+                caption="g-sensitivity K_ga in u = K·(ω + Ω_E) + b + K_ga·a",
+                note=f"In {unit or 'output units'}/(m/s²); each element ± its expanded U.",
+            ),
+        )
     if reference is not None:
         kref = np.asarray(reference["scale_misalignment"], dtype=float)
         bref = np.asarray(reference["bias"], dtype=float)
@@ -436,6 +449,15 @@ def rotations_section(
         f"of the static means), {fixed(r.angle_u_deg * 3600, 3)}″ on each realised angle, and the DAQ "
         "timebase when stated; one budget per element of K and b below."
     ]
+    if "g_sensitivity" in data:
+        paragraphs.append(
+            "With the accelerometer (gyro.ferraris): K_ga from the six static positions, less "
+            "the vertical Earth rate at the stated latitude; b + K_ga·a is removed sample by "
+            "sample before the rotations are integrated, and the Earth's turn is added to each "
+            "set angle. The offset's uncertainties come from the positions' noise and the "
+            "horizontal Earth rate (heading not recorded), not from the spread of the static "
+            "means."
+        )
     paragraphs += [paragraph(n) for n in r.notes]
     return Section(
         title=title or "Gyro triad from rotations through known angles",

@@ -4,6 +4,7 @@ Its truth is independent of rotacal's methods: it imports only numpy, scipy, rot
 rotacal.results (``SimCapture.write`` imports ``rotacal.io`` lazily).
 """
 
+from rotacal.sim.ferraris import simulate_ferraris
 from rotacal.sim.gyro_log import simulate_gyro_log
 from rotacal.sim.gyro_noise import simulate_gyro_noise
 from rotacal.sim.gyro_rates import simulate_gyro_rates
@@ -39,6 +40,7 @@ __all__ = [
     "register_kind",
     "simulate",
     "simulate_encoder",
+    "simulate_ferraris",
     "simulate_fog",
     "simulate_gyro_log",
     "simulate_gyro_noise",

@@ -1,0 +1,106 @@
+"""``rotacal gyro accelerometer``: the accelerometer triad of a Ferraris session (six static
+positions against gravity, Ferraris et al. 1995)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import click
+
+from ._common import (
+    INPUT_FILE,
+    _analysis_options,
+    _check_outputs,
+    _clipping_option,
+    _emit_warnings,
+    _names_capture,
+    _status,
+    _summary_wanted,
+    _write_json,
+    _write_report,
+)
+from ._ferraris import (
+    echo_matrix,
+    echo_vector,
+    gravity_options,
+    read_sections,
+    read_triads,
+    sections_option,
+)
+from ._help import example
+from .gyro import gyro
+
+
+@gyro.command(
+    "accelerometer",
+    epilog=example(
+        "rotacal gyro accelerometer session.csv --sections session_list.json "
+        "--column acc_x=ax --column acc_y=ay --column acc_z=az --latitude-deg 49.6",
+    ),
+)
+@click.argument("capture", type=INPUT_FILE)
+@sections_option
+@gravity_options
+@click.option(
+    "--output-unit",
+    default="",
+    help="Unit of the outputs ax, ay, az (e.g. m/s^2, g, LSB), for the results and the report.",
+)
+@_clipping_option
+@_analysis_options
+@_names_capture
+def gyro_accelerometer(
+    capture: str,
+    sections_path: str,
+    latitude_deg: float | None,
+    gravity_m_s2: float | None,
+    position_u_deg: float,
+    output_unit: str,
+    columns: Sequence[str],
+    group: str | None,
+    **kw: Any,
+) -> None:
+    """Accelerometer triad from six static positions (Ferraris).
+
+    Columns ax, ay, az and the positions x_p, x_a, y_p, y_a, z_p, z_a (each axis up, then down)
+    in --sections: K_a, R_a (misalignment) and b_a in u = K_a·R_a·a + b_a, with uncertainties.
+    """
+    from rotacal.gyro.accel_triad import calibrate_accel_triad
+
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    kw.pop("specs")  # no instrument specification applies to the static means
+    sections, _ = read_sections(sections_path)
+    _, _, acc = read_triads(capture, columns, group, gyro=False)
+    static = sections.get("static", sections) if isinstance(sections, dict) else sections
+    with _status("averaging the positions"):
+        result = calibrate_accel_triad(
+            acc,
+            {k: v for k, v in static.items() if not k.endswith("_rot")},
+            gravity_m_s2=gravity_m_s2,
+            latitude_deg=latitude_deg,
+            position_u_deg=position_u_deg,
+            output_unit=output_unit,
+            allow_clipped=kw.pop("allow_clipped"),
+        )
+    _emit_warnings(result)
+    data = result.to_dict()
+    _write_json(data, json_path)
+    if report_path:
+        from rotacal.report.accel import accel_section
+
+        _write_report(
+            "Accelerometer triad from six static positions",
+            "Ferraris et al. (1995), eqs. (19)–(23): u = K_a·R_a·a + b_a against gravity",
+            [accel_section(result)],
+            capture,
+            report_path,
+            warnings=result.warnings,
+        )
+    if _summary_wanted():
+        unit = output_unit or "output unit"
+        echo_matrix(data, "scale_misalignment", "K_a·R_a", f"{unit}/(m/s²)")
+        echo_vector(data, "scale_factors", "K_a", f"{unit}/(m/s²)")
+        echo_vector(data, "bias", "b_a", unit)
+        click.echo(f"g                 {result.gravity_m_s2:.6f} m/s²")
