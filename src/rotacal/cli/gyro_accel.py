@@ -61,7 +61,7 @@ def gyro_accelerometer(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """Accelerometer triad from six static positions (Ferraris).
+    """Accelerometer triad from six static positions.
 
     Columns ax, ay, az and the positions x_p, x_a, y_p, y_a, z_p, z_a (each axis up, then down)
     in --sections: K_a, R_a (misalignment) and b_a in u = K_a·R_a·a + b_a, with uncertainties.
