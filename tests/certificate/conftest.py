@@ -64,7 +64,7 @@ FIVE: list[dict[str, Any]] = [
     {
         "name": "Noise, x axis (Allan deviation)",
         "command": "allan",
-        "limits": {"arw_deg_rt_h": {"max": 0.5}, "bias_instability_deg_h": {"max": 5.0}},
+        "limits": {"arw_deg_rt_h": {"max": 0.5}, "bias_instability_deg_h": {"max": 3.5}},
     },
     {
         "name": "Self-calibration of the table's encoder",
