@@ -40,7 +40,7 @@ def _cli_error(path, tmp_path) -> str:
 
 
 def _deferred(path) -> DeferredChecks:
-    cap, checks = read_capture_deferred(path, columns=["time_s", "a", "b"])
+    _, checks = read_capture_deferred(path, columns=["time_s", "a", "b"])
     assert checks._thread is not None  # the threaded path is the one under test
     return checks
 

@@ -397,7 +397,7 @@ def _steps(ka: FloatArray, k0: float) -> tuple[NDArray[np.int8], int, int, tuple
     if n == 0:
         return direction, 0, 0, (k0, k0)
     skipped = 0
-    top = lo = hi = None  # NaN propagates through np.maximum/np.minimum, as through max()
+    tops, los, his = [], [], []  # of each chunk; np.max/np.min keep a NaN, as max() of dk did
     buf = np.empty(min(n, _STEP_CHUNK))
     for s in range(0, n, _STEP_CHUNK):
         e = min(n, s + _STEP_CHUNK)
@@ -408,13 +408,12 @@ def _steps(ka: FloatArray, k0: float) -> tuple[NDArray[np.int8], int, int, tuple
         else:
             np.subtract(ka[s:e], ka[s - 1 : e - 1], out=dk)
         skipped += int(np.count_nonzero(dk > 1.0)) + int(np.count_nonzero(dk < -1.0))
-        big = np.maximum(dk.max(), -dk.min())
-        part = ka[s:e]
-        top = big if top is None else np.maximum(top, big)
-        lo = part.min() if lo is None else np.minimum(lo, part.min())
-        hi = part.max() if hi is None else np.maximum(hi, part.max())
+        tops.append(np.maximum(dk.max(), -dk.min()))
+        los.append(ka[s:e].min())
+        his.append(ka[s:e].max())
         np.subtract((dk > 0).view(np.int8), (dk < 0).view(np.int8), out=direction[s:e])
-    return direction, skipped, int(top), (min(k0, float(lo)), max(k0, float(hi)))
+    top, lo, hi = float(np.max(tops)), float(np.min(los)), float(np.max(his))
+    return direction, skipped, int(top), (min(k0, lo), max(k0, hi))
 
 
 def _windows(
