@@ -252,7 +252,7 @@ def motion_encoder(
         from rotacal.table import calibrate_encoder_motion
 
         prefetch_quantiles()  # the budgets' coverage factors need SciPy: imported beside the work
-        cap, checks = _read_checking(capture, list(MOTION_ENCODER.required), columns, group)
+        cap, checks = _read(capture, list(MOTION_ENCODER.required), columns, group, True)
         # one calibration, then the process ends: Numba only where this call repays its load;
         # the capture's values and CRC-32s are checked on a second thread meanwhile, and a fault
         # they find is the one reported
@@ -263,24 +263,6 @@ def motion_encoder(
             result, (f"--correction-from {correction_from}: {w}" for w in kw["correction"].warnings)
         )
     _finish_motion(result, capture, json_path, report_path)
-
-
-def _read_checking(
-    path: str, needed: list[str], columns: Sequence[str], group: str | None
-) -> tuple[Any, Any]:
-    """``_read``, with the values' and CRC-32 checks left running on a second thread
-    (:func:`rotacal.io.read_capture_deferred`): use the checks as a context manager around the
-    analysis, before anything is written."""
-    from rotacal.io import parse_column_mapping, read_capture_deferred
-
-    with _status(f"reading {path}"):
-        return read_capture_deferred(
-            path,
-            columns=needed,
-            mapping=parse_column_mapping(columns),
-            group=group,
-            read_options=current_read_options(),
-        )
 
 
 def _chunked_option(func: F) -> F:
