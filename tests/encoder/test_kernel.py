@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -143,3 +144,14 @@ def test_the_angle_extremes_are_those_of_the_angle(twin):
     assert d.angle_min_deg == d.angle_deg.min()
     assert d.angle_max_deg == d.angle_deg.max()
     assert math.isfinite(d.angle_min_deg)
+
+
+@pytest.mark.parametrize("jit", [False, True])
+def test_an_untilted_correction_equals_the_separate_steps(twin, jit):
+    """A phase error of exactly 0 skips the tilt term in both correction paths alike."""
+    _, _, a, b = twin
+    corr = dataclasses.replace(fit_quadrature_correction(a, b), phase_error_rad=0.0)
+    phase, _, idx, _, _, _ = _steps(a, b, corr)
+    run = phase_pass(a, b, corr, jit=jit)
+    np.testing.assert_array_equal(run.phase_rad, phase)
+    np.testing.assert_array_equal(run.indices, idx)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rotacal.encoder import plan_reversals, reversal_point_in_window
-from rotacal.encoder.reversals import ReversalPlan, _candidates, _pinned
+from rotacal.encoder.reversals import ReversalPlan, _candidates, _direction, _pinned
 
 
 def _transitions(seed: int, noise: float) -> tuple[np.ndarray, np.ndarray, float]:
@@ -40,7 +40,7 @@ def test_windows_and_pairs_equal_a_loop_over_the_candidates(noise):
     assert plan.skipped_transitions == sum(abs(d) > 1 for d in dk)
     assert plan.skipped_transitions > 0 or noise < 0.1  # the noisy count skips subintervals
     assert plan.max_step_subintervals == int(max(abs(d) for d in dk))
-    first, run, kinds, level = _candidates(ka, dk)
+    first, run, kinds, level = _candidates(ka, _direction(dk))
     assert list(kinds) == [int(np.sign(dk[j - 1])) for j in first]  # the trend before the run
     cand = []
     for j0, n, lv in zip(first, run, level, strict=True):
@@ -85,3 +85,21 @@ def test_chp_of_all_windows_at_once_equals_each_window_alone():
         assert g == want
         if last > f:
             assert reversal_point_in_window(u[lo : hi + 1], v[lo : hi + 1]) == want - lo
+
+
+@pytest.mark.parametrize("chunk", [1, 7, 1 << 16])
+def test_the_steps_of_k_by_chunks_are_those_of_the_whole_list(monkeypatch, chunk):
+    """The plan's summary of the steps of k, chunk by chunk, against np.diff of the whole list."""
+    from rotacal.encoder import reversals
+
+    rng = np.random.default_rng(7)
+    k0 = 3.0
+    ka = k0 + np.cumsum(rng.choice([-3, -1, 1, 2], size=1000, p=[0.01, 0.5, 0.48, 0.01]))
+    ka = ka.astype(np.float64)
+    dk = np.diff(ka, prepend=k0)
+    monkeypatch.setattr(reversals, "_STEP_CHUNK", chunk)
+    direction, skipped, max_step, (lo, hi) = reversals._steps(ka, k0)
+    np.testing.assert_array_equal(direction, np.sign(dk).astype(np.int8))
+    assert skipped == np.count_nonzero(np.abs(dk) > 1) > 0
+    assert max_step == int(np.abs(dk).max()) == 3
+    assert (lo, hi) == (min(k0, ka.min()), max(k0, ka.max()))

@@ -211,3 +211,23 @@ def test_the_drift_checks_residual_is_its_own_residual(jit, drift, monkeypatch):
     )  # fmt: skip
     assert check.residual_rms**2 * t.size == pytest.approx(want, rel=1e-9)
     assert check.residual_rms == pytest.approx(2e-7, rel=0.02)  # the added noise
+
+
+@pytest.mark.parametrize("jitter", [0.0, 1e-3])
+def test_residual_sums_split_over_two_threads_are_those_of_one(jitter, monkeypatch):
+    """The NumPy grid path's two-thread split (long records) adds the same parts in the same
+    order as one thread: the same bits; off the grid both give None."""
+    from rotacal.signal import _residual
+
+    f = 3.1
+    rng, t, t_ref, a, b = _clocked_series(5, jitter, 8)
+    y = _direct_model(t, t_ref, f, 0.1, a, b, -0.02) + 1e-6 * rng.standard_normal(t.size)
+    args = (t, y, t_ref, 2 * math.pi * f, (t[-1] - t[0]) / (t.size - 1), 1e-9)
+    models = _arrays([(0.1, a, b, -0.02), (0.1, a * 1.001, b, 0.0)])
+    monkeypatch.setattr(_residual.os, "cpu_count", lambda: 2)
+    monkeypatch.setattr(_residual, "_GRID_GROUP", 4)  # steps of 4096 samples: halves of 8 steps
+    one = _residual.grid_residual_sums(*args, *models)
+    monkeypatch.setattr(_residual, "SPLIT_SAMPLES", 1000)
+    split = _residual.grid_residual_sums(*args, *models)
+    assert (one is None) == (split is None) == (jitter > 0)
+    assert split == one

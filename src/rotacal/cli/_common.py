@@ -326,11 +326,15 @@ def _clipping_option(func: F) -> F:
     )(func)
 
 
-def _read(path: str, needed: list[str], columns: Sequence[str], group: str | None) -> Any:
-    from rotacal.io import parse_column_mapping, read_capture
+def _read(
+    path: str, needed: list[str], columns: Sequence[str], group: str | None, deferred: bool = False
+) -> Any:
+    """The capture's columns; with ``deferred`` (capture, checks) of
+    :func:`rotacal.io.read_capture_deferred`: the checks run on while the caller analyses."""
+    from rotacal.io import parse_column_mapping, read_capture, read_capture_deferred
 
     with _status(f"reading {path}"):
-        return read_capture(
+        return (read_capture_deferred if deferred else read_capture)(
             path,
             columns=needed,
             mapping=parse_column_mapping(columns),

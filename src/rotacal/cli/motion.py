@@ -252,9 +252,11 @@ def motion_encoder(
         from rotacal.table import calibrate_encoder_motion
 
         prefetch_quantiles()  # the budgets' coverage factors need SciPy: imported beside the work
-        cap = _read(capture, list(MOTION_ENCODER.required), columns, group)
-        # one calibration, then the process ends: Numba only where this call repays its load
-        with _status("demodulating and fitting"), single_call(ENCODER_CALL_SAMPLES):
+        cap, checks = _read(capture, list(MOTION_ENCODER.required), columns, group, True)
+        # one calibration, then the process ends: Numba only where this call repays its load;
+        # the capture's values and CRC-32s are checked on a second thread meanwhile, and a fault
+        # they find is the one reported
+        with checks, _status("demodulating and fitting"), single_call(ENCODER_CALL_SAMPLES):
             result = calibrate_encoder_motion(cap["time_s"], cap["a"], cap["b"], lines=lines, **kw)
     if correction_from is not None:  # a clipped reference analysed with --allow-clipped
         result = with_warnings(

@@ -6,9 +6,10 @@ integer cycle count, the 30° subinterval count k = ⌊φ/(π/6)⌋ with its tra
 carried, so the corrected signals never exist as whole arrays. Two twins give the same numbers:
 the NumPy path composes :func:`correct_quadrature`, :func:`unwrapped_phase` and
 :func:`subinterval_transitions` on each block (bit for bit what they give on the whole chunk);
-the Numba path (:mod:`rotacal.encoder._kernel_jit`, for long captures) corrects and takes
-``arctan2`` with NumPy too (its SIMD ``arctan2`` beats a compiled loop's libm call) and runs
-the state carried from sample to sample in one compiled loop: bit for bit the same numbers.
+the Numba path (:mod:`rotacal.encoder._kernel_jit`, for long captures) corrects each block in
+one compiled pass, takes ``arctan2`` with NumPy (its SIMD ``arctan2`` beats a compiled loop's
+libm call) and runs the state carried from sample to sample in one compiled loop: bit for bit
+the same numbers.
 """
 
 from __future__ import annotations
@@ -149,9 +150,21 @@ def _phase_jit(
     offset: int,
     scale: float | None,
 ) -> ChunkPhase:
-    from rotacal.encoder._kernel_jit import phase_block
+    from rotacal.encoder._kernel_jit import correct_block, phase_block
 
     consts = np.array([2.0 * math.pi, _INV_SUB, math.pi])
+    alpha = c.phase_error_rad  # the factors correct_quadrature multiplies by, formed alike
+    coefs = np.array(
+        [
+            c.offset_a,
+            c.offset_b,
+            1.0 / c.amplitude_a,
+            1.0 / (c.amplitude_b * math.cos(alpha)),
+            math.tan(alpha),
+        ]
+    )
+    u = np.empty(min(a.size, BLOCK))
+    v = np.empty(u.size)
     has_prev = state is not None
     carry = np.array([0.0, 0.0, 0.0, math.inf, -math.inf])
     if state is not None and previous_k is not None:
@@ -171,8 +184,8 @@ def _phase_jit(
             size = min(n, 2 * out_i.size)
             out_i = np.concatenate((out_i[:total], np.empty(size - total, dtype=np.int64)))
             out_k = np.concatenate((out_k[:total], np.empty(size - total)))
-        u, v = correct_quadrature(a[s:e], b[s:e], c)
-        wrapped = np.arctan2(v, u, out=u)
+        correct_block(a[s:e], b[s:e], coefs, alpha != 0.0, u, v)
+        wrapped = np.arctan2(v[: e - s], u[: e - s], out=u[: e - s])
         total += phase_block(
             wrapped,
             consts,

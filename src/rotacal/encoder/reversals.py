@@ -101,30 +101,34 @@ def _no_reversals(hyst: int, n_trans: int, skipped: int, max_step: int) -> Rever
     )
 
 
+def _direction(dk: FloatArray) -> NDArray[np.int8]:
+    """sign(dk) as int8 from two comparisons (no float temporary; 0 where dk is 0)."""
+    return (dk > 0).view(np.int8) - (dk < 0).view(np.int8)
+
+
 def _candidates(
-    k_after: FloatArray, dk: FloatArray
+    k_after: FloatArray, direction: NDArray[np.int8]
 ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.int8], FloatArray]:
     """Reversal candidates of eqs. (5)–(6): runs of an odd number of consecutive trend changes.
 
-    Transition j leads from subinterval visit j to visit j+1; visit m ≥ 1 holds the count
-    ``k_after[m-1]``. A trend change at transition j makes visit j a turning visit, so a run of L
-    changes starting at transition j0 has the turning visits j0 .. j0+L-1.
+    ``direction`` is the sign of each transition's step of k (:func:`_direction`). Transition j
+    leads from subinterval visit j to visit j+1; visit m ≥ 1 holds the count ``k_after[m-1]``. A
+    trend change at transition j makes visit j a turning visit, so a run of L changes starting at
+    transition j0 has the turning visits j0 .. j0+L-1.
 
     Returns the first transition j0 and length L of each odd run, its kind (+1: a maximum of θ,
     the direction before the run was increasing) and its level (the extreme k of its turning
     visits: the highest for a maximum, the lowest for a minimum).
     """
-    # sign(dk) as int8 from two comparisons (no float temporary; 0 where dk is 0)
-    direction = (dk > 0).view(np.int8) - (dk < 0).view(np.int8)
     first_change, run_len = _odd_runs(direction)
     if first_change.size == 0:
         return first_change, run_len, np.empty(0, dtype=np.int8), np.empty(0)
     kinds = direction[first_change - 1]
-    seg = np.empty(2 * first_change.size, dtype=np.intp)
-    seg[0::2] = first_change - 1
-    seg[1::2] = first_change - 1 + run_len
-    hi = np.maximum.reduceat(k_after, seg)[0::2]
-    lo = np.minimum.reduceat(k_after, seg)[0::2]
+    # the extremes over the turning visits alone (a few per run), not over every transition
+    starts, rows = _window_rows(first_change - 1, run_len)
+    turning = k_after[rows]
+    hi = np.maximum.reduceat(turning, starts)
+    lo = np.minimum.reduceat(turning, starts)
     return first_change, run_len, kinds, np.where(kinds > 0, hi, lo)
 
 
@@ -157,7 +161,7 @@ def reversing_subintervals(
     if idx.size < 2:
         empty = np.empty(0, dtype=np.intp)
         return empty, empty.copy(), np.empty(0, dtype=np.int8)
-    first_change, run_len, kinds, _ = _candidates(k_after, dk)
+    first_change, run_len, kinds, _ = _candidates(k_after, _direction(dk))
     middle = first_change + (run_len - 1) // 2
     return idx[middle - 1], idx[middle] - 1, kinds
 
@@ -361,23 +365,13 @@ def plan_reversals(
     ka = np.asarray(k_after, dtype=np.float64)
     k0 = float(k_start)
     n_trans = int(idx.size)
-    dk = np.empty(n_trans)  # np.diff(ka, prepend=k0) without its concatenated copy
-    if n_trans:
-        dk[0] = ka[0] - k0
-        np.subtract(ka[1:], ka[:-1], out=dk[1:])
-    # |dk| without a temporary of its own: counts from comparisons, the extreme from both ends
-    skipped = int(np.count_nonzero(dk > 1.0)) + int(np.count_nonzero(dk < -1.0))
-    max_step = int(max(dk.max(), -dk.min())) if n_trans else 0
-    if n_trans:
-        k_range = (min(k0, float(ka.min())), max(k0, float(ka.max())))
-    else:
-        k_range = (k0, k0)
+    direction, skipped, max_step, k_range = _steps(ka, k0)
     if n_trans < 2:
         first_change = run_len = np.empty(0, dtype=np.intp)
         kinds = np.empty(0, dtype=np.int8)
         level: FloatArray = np.empty(0)
     else:
-        first_change, run_len, kinds, level = _candidates(ka, dk)
+        first_change, run_len, kinds, level = _candidates(ka, direction)
     return plan_from_candidates(
         kinds,
         level,
@@ -387,6 +381,39 @@ def plan_reversals(
         hysteresis_subintervals=hysteresis_subintervals,
         stacklevel=stacklevel + 1,
     )
+
+
+#: Transitions per chunk of :func:`_steps`: a chunk's steps of k stay in the L2 cache while
+#: they are counted, compared and signed.
+_STEP_CHUNK = 1 << 16
+
+
+def _steps(ka: FloatArray, k0: float) -> tuple[NDArray[np.int8], int, int, tuple[float, float]]:
+    """What the plan needs of the steps ``dk`` of k (``np.diff(ka, prepend=k0)``), chunk by chunk
+    without the whole array of them: their signs (:func:`_direction`), how many skipped a
+    subinterval (|dk| > 1), the largest |dk| and the lowest and highest k (with ``k0``)."""
+    n = ka.size
+    direction = np.empty(n, dtype=np.int8)
+    if n == 0:
+        return direction, 0, 0, (k0, k0)
+    skipped = 0
+    tops, los, his = [], [], []  # of each chunk; np.max/np.min keep a NaN, as max() of dk did
+    buf = np.empty(min(n, _STEP_CHUNK))
+    for s in range(0, n, _STEP_CHUNK):
+        e = min(n, s + _STEP_CHUNK)
+        dk = buf[: e - s]
+        if s == 0:
+            dk[0] = ka[0] - k0
+            np.subtract(ka[1:e], ka[: e - 1], out=dk[1:])
+        else:
+            np.subtract(ka[s:e], ka[s - 1 : e - 1], out=dk)
+        skipped += int(np.count_nonzero(dk > 1.0)) + int(np.count_nonzero(dk < -1.0))
+        tops.append(np.maximum(dk.max(), -dk.min()))
+        los.append(ka[s:e].min())
+        his.append(ka[s:e].max())
+        np.subtract((dk > 0).view(np.int8), (dk < 0).view(np.int8), out=direction[s:e])
+    top, lo, hi = float(np.max(tops)), float(np.min(los)), float(np.max(his))
+    return direction, skipped, int(top), (min(k0, lo), max(k0, hi))
 
 
 def _windows(
@@ -432,7 +459,8 @@ def transition_candidates(
     ka = np.asarray(k_after, dtype=np.float64)
     if idx.size < 2:
         return np.empty(0, dtype=np.int8), np.empty(0), np.empty((0, 2), dtype=np.intp)
-    first_change, run_len, kinds, level = _candidates(ka, np.diff(ka, prepend=float(k_before)))
+    dk = np.diff(ka, prepend=float(k_before))
+    first_change, run_len, kinds, level = _candidates(ka, _direction(dk))
     return kinds.astype(np.int8), level, _windows(idx, ka, first_change, run_len, level)
 
 

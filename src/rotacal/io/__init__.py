@@ -11,11 +11,13 @@ if TYPE_CHECKING:
     from ._common import FORMATS, check_time
     from .capture import (
         Capture,
+        DeferredChecks,
         capture_columns,
         capture_length,
         iter_capture_chunks,
         parse_column_mapping,
         read_capture,
+        read_capture_deferred,
         read_capture_rows,
     )
     from .read_options import ReadOptions
@@ -24,6 +26,7 @@ if TYPE_CHECKING:
 __all__ = [
     "FORMATS",
     "Capture",
+    "DeferredChecks",
     "ReadOptions",
     "capture_columns",
     "capture_length",
@@ -31,6 +34,7 @@ __all__ = [
     "iter_capture_chunks",
     "parse_column_mapping",
     "read_capture",
+    "read_capture_deferred",
     "read_capture_rows",
     "write_capture",
 ]

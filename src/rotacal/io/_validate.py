@@ -222,8 +222,30 @@ def to_float_column(
         out = out[: trailing_nan_start(out)]
     if out.shape[0] == 0:
         raise CaptureError(f"{fname} {what} is empty; give a capture with data in it")
+    if not allow_nonfinite:
+        check_values(
+            out, fname=fname, what=what, locate=locate, integrity=integrity, ragged=ragged,
+            offset=offset,
+        )  # fmt: skip
+    return out
+
+
+def check_values(
+    out: np.ndarray,
+    *,
+    fname: str,
+    what: str,
+    locate: Callable[[int], str],
+    integrity: Integrity | None = None,
+    ragged: bool = False,
+    offset: int = 0,
+) -> None:
+    """Refuse a NaN/inf in the float64 column ``out`` (arguments as :func:`to_float_column`),
+    feeding ``integrity`` the rows as they are scanned; damage (a CRC-32 that does not match) is
+    blamed before the value. Touches nothing but ``out`` and ``integrity``, so it can run on a
+    second thread while the column is analysed (:class:`rotacal.io.capture.DeferredChecks`)."""
     feed = None if integrity is None else (lambda lo, hi: integrity.feed(offset + lo, offset + hi))
-    bad = -1 if allow_nonfinite else first_nonfinite(out, on_block=feed)
+    bad = first_nonfinite(out, on_block=feed)
     if bad >= 0:
         if integrity is not None:
             integrity.check()
@@ -235,7 +257,6 @@ def to_float_column(
         )
         value = float(out[bad])
         raise CaptureError(f"{fname} {what} holds {value} at {where}, not a finite number{hint}")
-    return out
 
 
 def equal_lengths(fname: str, lengths: dict[str, int]) -> None:

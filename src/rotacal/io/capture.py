@@ -12,7 +12,8 @@ from __future__ import annotations
 import contextlib
 import mmap
 import os
-from collections.abc import Iterable, Iterator, Mapping
+import threading
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,6 +35,7 @@ from ._validate import (
     Reader,
     check_file_names,
     check_requested_name,
+    check_values,
     declared_length,
     equal_lengths,
     label,
@@ -347,15 +349,115 @@ def read_capture(
     CaptureError
         One line naming the file and the column/row at fault.
     """
+    capture, _ = _read(
+        path, columns, mapping, group, read_options, ragged=ragged,
+        allow_nonfinite=allow_nonfinite, defer=False,
+    )  # fmt: skip
+    return capture
+
+
+def read_capture_deferred(
+    path: PathLike,
+    *,
+    columns: Iterable[str] | None = None,
+    mapping: MappingArg = None,
+    group: str | None = None,
+    read_options: ReadOptions | None = None,
+) -> tuple[Capture, DeferredChecks]:
+    """:func:`read_capture`, with the scan of the values (NaN/inf) and of the stored CRC-32s
+    left to a second thread, so that the caller can analyse the columns meanwhile.
+
+    The scan is deferred only where it is all that is left to check: every column memory-mapped
+    or read as 1-D native float64, none empty, all of one length. Otherwise everything is checked
+    here, as by :func:`read_capture`, and the returned checks have nothing left to do. The caller
+    must use the returned :class:`DeferredChecks` as a context manager around its use of the
+    columns, and trust nothing it computed before that block has ended: a fault of the file is
+    then raised (the one line :func:`read_capture` gives) in place of whatever the analysis
+    raised or returned. Arguments as :func:`read_capture` (the columns of equal length).
+    """
+    capture, checks = _read(
+        path, columns, mapping, group, read_options, ragged=False, allow_nonfinite=False,
+        defer=True,
+    )  # fmt: skip
+    return capture, checks if checks is not None else DeferredChecks(None)
+
+
+class DeferredChecks:
+    """The value and CRC-32 checks of :func:`read_capture_deferred`, running on a thread
+    (zlib's CRC-32 and NumPy's scans release the GIL).
+
+    ``with checks: ...`` waits for them at the end of the block; when they found a fault its
+    CaptureError is raised, superseding an exception of the block (an analysis of damaged or
+    non-finite values may fail in its own words first).
+    """
+
+    def __init__(self, job: Callable[[], None] | None) -> None:
+        self._error: BaseException | None = None
+        self._thread: threading.Thread | None = None
+        if job is not None:
+            self._thread = threading.Thread(
+                target=self._run, args=(job,), name="rotacal-capture-checks", daemon=True
+            )
+            self._thread.start()
+
+    def _run(self, job: Callable[[], None]) -> None:
+        try:
+            job()
+        except BaseException as exc:  # handed to the caller's thread by wait()
+            self._error = exc
+
+    def wait(self) -> None:
+        """Block until the checks are done; raise what they found."""
+        if self._thread is not None:
+            self._thread.join()
+        if self._error is not None:
+            raise self._error.with_traceback(None)
+
+    def __enter__(self) -> DeferredChecks:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.wait()
+
+
+def _deferrable(raw: dict[str, Any]) -> bool:
+    """Whether only the scan of the values is left to check of these raw columns."""
+    arrays = list(raw.values())
+    return all(
+        isinstance(a, np.ndarray)
+        and a.ndim == 1
+        and a.dtype == np.float64
+        and a.dtype.isnative
+        and a.shape[0] > 0
+        and a.shape[0] == arrays[0].shape[0]
+        for a in arrays
+    )
+
+
+def _read(
+    path: PathLike,
+    columns: Iterable[str] | None,
+    mapping: MappingArg,
+    group: str | None,
+    read_options: ReadOptions | None,
+    *,
+    ragged: bool,
+    allow_nonfinite: bool,
+    defer: bool,
+) -> tuple[Capture, DeferredChecks | None]:
+    """:func:`read_capture` (``defer`` False) and :func:`read_capture_deferred` (True)."""
     mapped = _normalise_mapping(mapping)
     reader = _open_reader(path, group, read_options)
     fname = reader.fname
+    owned = True  # closed here, unless the deferred checks still read through it
     try:
         available, wanted = _resolve(reader, mapped, columns)
         _declared(reader, wanted)
         with reading(reader):
             raw = reader.read(list(wanted.values()), ragged)
+        defer = defer and _deferrable(raw)
         cols: dict[str, np.ndarray] = {}
+        scans: list[tuple[np.ndarray, str, Any]] = []
         for canon, fcol in wanted.items():
             what = label(canon, fcol, reader.noun)
             with reading(reader, what):
@@ -367,20 +469,38 @@ def read_capture(
                 locate=reader.locate,
                 integrity=integrity,
                 ragged=ragged,
-                allow_nonfinite=allow_nonfinite,
+                allow_nonfinite=allow_nonfinite or defer,
             )
-            if integrity is not None:
+            if defer:
+                scans.append((cols[canon], what, integrity))
+            elif integrity is not None:
                 integrity.check()
         if not ragged:
             equal_lengths(fname, {k: v.shape[0] for k, v in cols.items()})
-        return Capture(
+        capture = Capture(
             columns=cols,
             source=str(path),
             metadata=dict(reader.metadata),
             file_columns=available,
         )
+        if not defer:
+            return capture, None
+
+        def scan() -> None:
+            try:  # column by column, as read_capture checks them: the same fault first
+                for col, what, integrity in scans:
+                    check_values(col, fname=fname, what=what, locate=reader.locate,
+                                 integrity=integrity)  # fmt: skip
+                    if integrity is not None:
+                        integrity.check()
+            finally:
+                _close(reader)
+
+        owned = False
+        return capture, DeferredChecks(scan)
     finally:
-        _close(reader)
+        if owned:
+            _close(reader)
 
 
 def _check_chunk_rows(chunk_rows: int) -> int:

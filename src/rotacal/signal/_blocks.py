@@ -57,8 +57,9 @@ _DEFAULT_MOMENTS = 22
 _LONG_MOMENTS = 28
 # below this block length (of the default plan) a one-shot fit takes _LONG_MOMENTS: at 10,000
 # periods of 10⁷ samples (19-sample blocks) the fit took 210 ms with 22 moments, 131 ms with 28;
-# at 1,000 periods (190-sample blocks) 42 and 38 ms; at 100 periods (1,909) 20 and 32 ms
-_SHORT_BLOCK = 128
+# at 1,000 periods (190-sample blocks) 42 and 38 ms (the whole fit of the encoder's angle, with
+# its residual pass: 94 and 87 ms); at 100 periods (1,909) 20 and 32 ms
+_SHORT_BLOCK = 256
 # below this block length the samples themselves (10⁷ samples, 10 harmonics: ~100 ms CPU at any
 # number of periods; with moments 78 ms at 5,000 periods (38-sample blocks), 142 ms at 10,000
 # (19), 650 ms at 30,000 (6), 2.4 s at 100,000 (samples kept one by one))

@@ -9,7 +9,9 @@ sample (the Numba twin in :mod:`rotacal.signal._residual_jit`, for long records)
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -23,6 +25,9 @@ _CHUNK = 1 << 14
 GRID_BLOCK = 1024
 #: Blocks per matrix product of the NumPy grid path.
 _GRID_GROUP = 64
+#: From this many samples on, the NumPy grid path sums the second half of the record on a second
+#: thread (where the machine has two cores): the same sums, in about half the wall time.
+SPLIT_SAMPLES = 1 << 21
 #: On a uniform grid a sample's angle may differ from its table angle by at most this (rad)
 #: over H: the first-order correction then leaves (H·δ)²/2 ≤ 5e-17 of a harmonic's amplitude.
 _GRID_DELTA = 1e-8
@@ -164,11 +169,13 @@ def grid_residual_sums(
     phi = np.arange(GRID_BLOCK) * (omega * dt)
     ang = np.outer(harm, phi)
     table = np.vstack([np.cos(ang), np.sin(ang)])  # (2H, GRID_BLOCK)
-    sums = np.zeros(nm)
-    tau_sums = np.zeros(nm)
     step = GRID_BLOCK * _GRID_GROUP
-    with blas_one_thread():
-        for s in range(0, n, step):
+
+    def steps_sums(first: int, stop: int) -> list[tuple[np.ndarray, np.ndarray]] | None:
+        """``Σ r²`` and ``Σ r·τ`` of each model over each part of the steps from sample
+        ``first`` (a multiple of ``step``) to ``stop``, in sample order; None off the grid."""
+        out = []
+        for s in range(first, stop, step):
             e = min(n, s + step)
             full = (e - s) // GRID_BLOCK
             parts = [(s, full, GRID_BLOCK)] if full else []
@@ -192,6 +199,7 @@ def grid_residual_sums(
                     [np.concatenate([al, be], axis=2), np.concatenate([harm * be, -harm * al], 2)]
                 ).reshape(2 * nm * nb, 2 * nh)
                 prod = coef @ table[:, :size]
+                rr, rt = np.empty(nm), np.empty(nm)
                 for j in range(nm):
                     model = prod[j * nb : (j + 1) * nb]
                     model += delta * prod[(nm + j) * nb : (nm + j + 1) * nb]
@@ -199,6 +207,27 @@ def grid_residual_sums(
                     if drifts[j]:
                         model += drifts[j] * tau
                     r = np.subtract(ys, model, out=model).reshape(-1)
-                    sums[j] += float(r @ r)
-                    tau_sums[j] += float(r @ tau.reshape(-1))
+                    rr[j] = float(r @ r)
+                    rt[j] = float(r @ tau.reshape(-1))
+                out.append((rr, rt))
+        return out
+
+    with blas_one_thread():
+        if n < SPLIT_SAMPLES or (os.cpu_count() or 1) < 2:
+            pieces = [steps_sums(0, n)]
+        else:
+            # the second half on a second core (NumPy and BLAS release the GIL); the parts'
+            # sums are added below in sample order, so the result is that of one thread's pass
+            half = (n // 2) // step * step
+            with ThreadPoolExecutor(1) as pool:
+                later = pool.submit(steps_sums, half, n)
+                pieces = [steps_sums(0, half), later.result()]
+    sums = np.zeros(nm)
+    tau_sums = np.zeros(nm)
+    for piece in pieces:
+        if piece is None:
+            return None
+        for rr, rt in piece:
+            sums += rr
+            tau_sums += rt
     return [float(x) for x in sums], [float(x) for x in tau_sums]
