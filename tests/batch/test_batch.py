@@ -336,3 +336,25 @@ def test_a_certificate_folder_without_its_record_is_moved_aside_and_its_number_v
     finally:
         store.close()
     assert "RC-2026-0042" in voided
+
+
+def test_a_plan_a_lost_worker_issued_counts_as_issued_with_a_note(tmp_path: Path) -> None:
+    """The race the killed-worker test meets now and then: the lost worker kept the record and
+    put the folder in place, then died before it reported; Dask ran the plan again, and the
+    retry found it done. It is this batch's certificate: issued, with a note; a certificate
+    found done that is not in this batch's folder stays skipped."""
+    from types import SimpleNamespace
+
+    from rotacal.batch.run import PlanOutcome, _Run
+    from rotacal.batch.tasks import Failed
+
+    out = tmp_path / "certs"
+    (out / "RC-7").mkdir(parents=True)
+    entries = [SimpleNamespace(path=tmp_path / f"p{i}.toml", sha256=None) for i in range(2)]
+    outcomes = [PlanOutcome(str(e.path)) for e in entries]
+    run = _Run(None, None, out, tmp_path, entries, outcomes, lambda label: None, True)  # type: ignore[arg-type]
+    run._fail(0, Failed("already certified", 0.1, certified_as="RC-7"))
+    run._fail(1, Failed("already certified", 0.1, certified_as="RC-3"))
+    assert (outcomes[0].status, outcomes[0].number) == ("issued", "RC-7")
+    assert "lost before it reported" in outcomes[0].warnings[0]
+    assert (outcomes[1].status, outcomes[1].number) == ("skipped", "RC-3")

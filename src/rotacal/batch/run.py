@@ -222,7 +222,12 @@ class _Run:
         if earlier is None and sha is not None:  # issued meanwhile by another writer?
             with contextlib.suppress(RotacalError):
                 earlier = self.store.issued_with(sha)
-        if earlier is not None:
+        if earlier is not None and (self.out / earlier).is_dir():
+            # this batch's own certificate: a worker issued it and was lost before it reported,
+            # and Dask ran the plan again, which found it done (not done when the batch started)
+            note = "issued by a worker that was lost before it reported (the retry found it)"
+            self._end(index, "issued", earlier, failure.seconds, (note,))
+        elif earlier is not None:
             self._end(index, "skipped", earlier, failure.seconds)
         else:
             self._end(index, "failed", None, failure.seconds, error=failure.error)
