@@ -391,6 +391,33 @@ def _names_capture(func: F) -> F:
     return command  # type: ignore[return-value]
 
 
+def _publish(
+    result: Any,
+    json_path: str | None,
+    report_path: str | None,
+    capture: str,
+    title: str,
+    subtitle: str,
+    section: tuple[str, str],
+    more: Callable[[], Sequence[Any]] = lambda: (),
+) -> dict[str, Any]:
+    """What every analysis command does with its result: its warnings on stderr, its JSON, and
+    with ``report_path`` its report — ``section`` names the report's section function as
+    (module of ``rotacal.report``, function), imported only when a report is asked for and called
+    with the result; ``more()`` gives further sections after it. Returns the JSON's data."""
+    import importlib
+
+    _emit_warnings(result)
+    data = result.to_dict()
+    _write_json(data, json_path)
+    if report_path:
+        module, name = section
+        draw = getattr(importlib.import_module(f"rotacal.report.{module}"), name)
+        sections = [draw(result), *more()]
+        _write_report(title, subtitle, sections, capture, report_path, warnings=result.warnings)
+    return data
+
+
 def _emit_warnings(result: Any) -> None:
     """Print each of the result's ``warnings`` as one ``rotacal: warning:`` line on stderr."""
     for line in getattr(result, "warnings", ()):

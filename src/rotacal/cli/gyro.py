@@ -19,14 +19,12 @@ from ._common import (
     _analysis_options,
     _check_outputs,
     _clipping_option,
-    _emit_warnings,
     _names_capture,
+    _publish,
     _read,
     _sample_progress,
     _status,
     _summary_wanted,
-    _write_json,
-    _write_report,
 )
 from ._dask import dask_options, run_on_dask, split_wanted
 from ._ferraris import (
@@ -175,20 +173,16 @@ def gyro_scale_factor(
             [path], rate_files, columns, group, {**options, "mc_trials": 2000}, chunked
         ),
     )
-    _emit_warnings(result)
-    data = result.to_dict()
-    _write_json(data, json_path)
-    if report_path:
-        from rotacal.report.gyro_scale import scale_factor_section
-
-        _write_report(
-            "Gyro scale factor and nonlinearity",
-            "Kokuyama et al. (2015), §4: V(Ω) = S·Ω + V0 + δ(Ω), NL = max|δ|/FS",
-            [scale_factor_section(result), *log_sections(result)],
-            capture,
-            report_path,
-            warnings=result.warnings,
-        )
+    data = _publish(
+        result,
+        json_path,
+        report_path,
+        capture,
+        "Gyro scale factor and nonlinearity",
+        "Kokuyama et al. (2015), §4: V(Ω) = S·Ω + V0 + δ(Ω), NL = max|δ|/FS",
+        ("gyro_scale", "scale_factor_section"),
+        lambda: log_sections(result),
+    )
     if _summary_wanted():
         _print_scale_factor(result, data)
 
@@ -329,20 +323,15 @@ def gyro_triad(
             specs=kw.pop("specs"),
             allow_clipped=kw.pop("allow_clipped"),
         )
-    _emit_warnings(result)
-    data = result.to_dict()
-    _write_json(data, json_path)
-    if report_path:
-        from rotacal.report.triad import triad_section
-
-        _write_report(
-            "3-axis gyro calibration",
-            "Modified six-position method (IEEE A&E Systems Magazine 2023): u = K·ω + b by least squares",
-            [triad_section(result)],
-            capture,
-            report_path,
-            warnings=result.warnings,
-        )
+    data = _publish(
+        result,
+        json_path,
+        report_path,
+        capture,
+        "3-axis gyro calibration",
+        "Modified six-position method (IEEE A&E Systems Magazine 2023): u = K·ω + b by least squares",
+        ("triad", "triad_section"),
+    )
     if _summary_wanted():
         _print_triad(result, data)
         click.echo(f"outliers rejected {result.outliers_rejected}")
@@ -463,20 +452,15 @@ def gyro_rotations(
             else:
                 rotations, static = ferraris_sections(sections)
             result = calibrate_triad_rotations(rate, fs_hz, rotations, static=static, **common)
-    _emit_warnings(result)
-    data = result.to_dict()
-    _write_json(data, json_path)
-    if report_path:
-        from rotacal.report.triad import rotations_section
-
-        _write_report(
-            "Gyro triad from rotations",
-            "Rotations through a known angle (Ferraris et al.): Θ = K·Φ by least squares",
-            [rotations_section(result)],
-            capture,
-            report_path,
-            warnings=result.warnings,
-        )
+    data = _publish(
+        result,
+        json_path,
+        report_path,
+        capture,
+        "Gyro triad from rotations",
+        "Rotations through a known angle (Ferraris et al.): Θ = K·Φ by least squares",
+        ("triad", "rotations_section"),
+    )
     if _summary_wanted():
         _print_triad(result, data)
         if "g_sensitivity" in data:
@@ -532,20 +516,15 @@ def gyro_multiposition(
             specs=kw.pop("specs"),
             allow_clipped=kw.pop("allow_clipped"),
         )
-    _emit_warnings(result)
-    data = result.to_dict()
-    _write_json(data, json_path)
-    if report_path:
-        from rotacal.report.multiposition import multiposition_section
-
-        _write_report(
-            "Multiposition calibration of drift coefficients",
-            "GyroWheel study, eqs. (1)–(6): Earth rate and gravity at each turntable position",
-            [multiposition_section(result)],
-            capture,
-            report_path,
-            warnings=result.warnings,
-        )
+    data = _publish(
+        result,
+        json_path,
+        report_path,
+        capture,
+        "Multiposition calibration of drift coefficients",
+        "GyroWheel study, eqs. (1)–(6): Earth rate and gravity at each turntable position",
+        ("multiposition", "multiposition_section"),
+    )
     if _summary_wanted():
         units = data.get("drift_coefficient_units", {})
         for name in result.drift_coefficients:

@@ -13,12 +13,10 @@ from ._common import (
     _analysis_options,
     _check_outputs,
     _clipping_option,
-    _emit_warnings,
     _names_capture,
+    _publish,
     _status,
     _summary_wanted,
-    _write_json,
-    _write_report,
 )
 from ._ferraris import (
     echo_matrix,
@@ -84,20 +82,15 @@ def gyro_accelerometer(
             output_unit=output_unit,
             allow_clipped=kw.pop("allow_clipped"),
         )
-    _emit_warnings(result)
-    data = result.to_dict()
-    _write_json(data, json_path)
-    if report_path:
-        from rotacal.report.accel import accel_section
-
-        _write_report(
-            "Accelerometer triad from six static positions",
-            "Ferraris et al. (1995), eqs. (19)–(23): u = K_a·R_a·a + b_a against gravity",
-            [accel_section(result)],
-            capture,
-            report_path,
-            warnings=result.warnings,
-        )
+    data = _publish(
+        result,
+        json_path,
+        report_path,
+        capture,
+        "Accelerometer triad from six static positions",
+        "Ferraris et al. (1995), eqs. (19)–(23): u = K_a·R_a·a + b_a against gravity",
+        ("accel", "accel_section"),
+    )
     if _summary_wanted():
         unit = output_unit or "output unit"
         echo_matrix(data, "scale_misalignment", "K_a·R_a", f"{unit}/(m/s²)")

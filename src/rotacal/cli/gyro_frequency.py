@@ -18,14 +18,12 @@ from ._common import (
     _analysis_options,
     _check_outputs,
     _clipping_option,
-    _emit_warnings,
     _names_capture,
     _naming_file,
+    _publish,
     _read,
     _status,
     _summary_wanted,
-    _write_json,
-    _write_report,
 )
 from ._help import example
 from .gyro import gyro
@@ -130,19 +128,15 @@ def gyro_frequency_response(
             allow_clipped=kw.pop("allow_clipped"),
             specs=kw.pop("specs"),
         )
-    _emit_warnings(result)
-    _write_json(result.to_dict(), json_path)
-    if report_path:
-        from rotacal.report.frequency_response import frequency_response_section
-
-        _write_report(
-            "Gyro frequency response",
-            "IEEE Std 1057 sine fits per frequency; second-order model ωn²/(s² + 2ζωn·s + ωn²)",
-            [frequency_response_section(result)],
-            ", ".join(paths) if len(paths) > 1 else capture,
-            report_path,
-            warnings=result.warnings,
-        )
+    _publish(
+        result,
+        json_path,
+        report_path,
+        ", ".join(paths) if len(paths) > 1 else capture,
+        "Gyro frequency response",
+        "IEEE Std 1057 sine fits per frequency; second-order model ωn²/(s² + 2ζωn·s + ωn²)",
+        ("frequency_response", "frequency_response_section"),
+    )
     if _summary_wanted():
         _print_frequency_response(result)
 

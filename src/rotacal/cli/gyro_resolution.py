@@ -14,13 +14,11 @@ from ._common import (
     INPUT_FILE,
     _analysis_options,
     _check_outputs,
-    _emit_warnings,
     _names_capture,
+    _publish,
     _read,
     _status,
     _summary_wanted,
-    _write_json,
-    _write_report,
 )
 from ._help import example
 from .gyro import gyro
@@ -98,20 +96,16 @@ def gyro_resolution(
             sample_rate_hz=sample_rate_hz,
             output_unit=output_unit,
         )
-    _emit_warnings(result)
-    _write_json(result.to_dict(), json_path)
-    if report_path:
-        from rotacal.report.gyro_steps import small_step_section
-
-        _write_report(
-            "Gyro threshold and resolution",
-            "IEEE Std 528-2001 / IEEE Std 1431-2004: smallest input (change) giving ≥ 50 % of "
-            "the expected output",
-            [small_step_section(result)],
-            capture,
-            report_path,
-            warnings=result.warnings,
-        )
+    _publish(
+        result,
+        json_path,
+        report_path,
+        capture,
+        "Gyro threshold and resolution",
+        "IEEE Std 528-2001 / IEEE Std 1431-2004: smallest input (change) giving ≥ 50 % of "
+        "the expected output",
+        ("gyro_steps", "small_step_section"),
+    )
     if _summary_wanted():
         for line in result.summary_lines():
             click.echo(line)

@@ -10,11 +10,9 @@ from ._app import cli
 from ._common import (
     INPUT_FILE,
     _check_outputs,
-    _emit_warnings,
     _names_capture,
+    _publish,
     _status,
-    _write_json,
-    _write_report,
 )
 from ._reading import current_read_options, reading_options
 
@@ -70,18 +68,14 @@ def inspect_cmd(
             group=group,
             read_options=current_read_options(),
         )
-    _emit_warnings(result)
-    _write_json(result.to_dict(), json_path)
-    if report_path:
-        from rotacal.report.inspect import inspect_section
-
-        _write_report(
-            "First look at a file",
-            "rotacal inspect: columns, sampling, gaps and the analyses that fit",
-            [inspect_section(result)],
-            capture,
-            report_path,
-            warnings=result.warnings,
-        )
+    _publish(
+        result,
+        json_path,
+        report_path,
+        capture,
+        "First look at a file",
+        "rotacal inspect: columns, sampling, gaps and the analyses that fit",
+        ("inspect", "inspect_section"),
+    )
     if json_path != "-":
         click.echo("\n".join(summary_lines(result)))
