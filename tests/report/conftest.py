@@ -104,7 +104,9 @@ def cli_runs(
         if kind == "pulses":
             lines = str(truth["pulses_per_rev"])
             rate = str(truth["set_rate_deg_s"])
-            report("rate", "rate", str(capture), "--pulses-per-rev", lines, "--set-rate-deg-s", rate)
+            report(
+                "rate", "rate", str(capture), "--pulses-per-rev", lines, "--set-rate-deg-s", rate
+            )
             report("inspect", "inspect", str(capture))
     config = folder / "table.toml"
     _run("turntable", "example", "--out", str(config))
