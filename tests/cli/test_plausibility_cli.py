@@ -1,4 +1,5 @@
-"""Plausibility warnings from the command line: every twin's defaults say nothing; faults speak."""
+"""Plausibility warnings from the command line: faults speak (that every twin's defaults say
+nothing: tests/report/test_warning_free.py)."""
 
 from __future__ import annotations
 
@@ -23,43 +24,9 @@ def simulated(tmp_path: Path, kind: str) -> tuple[str, dict]:
     return str(path), json.loads(Path(f"{path}.truth.json").read_text())
 
 
-KINDS = [
-    "encoder",
-    "lts",
-    "fog",
-    "pulses",
-    "gyro-rates",
-    "gyro-triad",
-    "gyro-noise",
-    "gyro-rotations",
-    "multiposition",
-]
-
-
-@pytest.mark.parametrize("kind", KINDS)
-def test_every_twin_with_defaults_is_warning_free(tmp_path, kind, analysis_args) -> None:
-    path, truth = simulated(tmp_path, kind)
-    r = run(*analysis_args(kind, path, truth), "--json", "-")
-    assert r.exit_code == 0, r.output
-    assert json.loads(r.stdout)["warnings"] == []
-    assert "warning" not in r.stderr
-
-
-def test_rate_of_the_pulse_twin_is_warning_free(tmp_path) -> None:
-    path, truth = simulated(tmp_path, "pulses")
-    rate = truth.get("rate_deg_s", 300.0)
-    r = run("rate", path, "--pulses-per-rev", "18000", "--set-rate-deg-s", str(rate), "--json", "-")
-    assert r.exit_code == 0, r.output
-    assert json.loads(r.stdout)["warnings"] == []
-
-
-@pytest.mark.xdist_group("demo")  # the example table's allocations: tests/conftest.py
-def test_turntable_example_budget_is_warning_free(tmp_path) -> None:
-    config = tmp_path / "table.toml"
-    assert run("turntable", "example", "--out", str(config)).exit_code == 0
-    r = run("turntable", "budget", str(config), "--runs", "20000", "--json", "-")
-    assert r.exit_code == 0, r.output
-    assert json.loads(r.stdout)["warnings"] == []
+# Every twin's analysis with its defaults (and ``rate`` of the pulse twin, the example table's
+# budget) is checked warning-free in tests/report/test_warning_free.py, on the runs whose reports
+# the browser reads: each twin simulated and analysed once per session.
 
 
 def test_the_issues_encoder_with_a_tenth_of_its_lines_warns_on_stderr(

@@ -74,9 +74,11 @@ def task(job: dict[str, Any]) -> Callable[[], Any]:
 
 def warm_up() -> None:
     """Do here, once, what every process would do first: import what certify imports lazily
-    (rotacal.gyro for the tests' rotation test; the PostgreSQL driver), parse the DCC schema,
-    load the store's migrations. Not a whole certification: the PDF renderer starts threads,
-    and a process forked from one with threads may hang."""
+    (rotacal.gyro's modules for the tests' rotation test: the package is lazy, and its names
+    pull in SciPy's stats, ~2 s of CPU that each of eight forked writers paid again; the
+    PostgreSQL driver), parse the DCC schema, load the store's migrations. Not a whole
+    certification: the PDF renderer starts threads, and a process forked from one with threads
+    may hang."""
     import psycopg  # noqa: F401
     import rich.progress  # noqa: F401
     import typst  # noqa: F401
@@ -85,8 +87,11 @@ def warm_up() -> None:
     import rotacal.certificate.issue
     import rotacal.certificate.pdf
     import rotacal.cli._provenance
-    import rotacal.gyro  # noqa: F401
+    import rotacal.gyro
     from rotacal.certificate.dcc import _schema
+
+    for name in rotacal.gyro.__all__:  # each lazy name imports its module (none starts a thread)
+        getattr(rotacal.gyro, name)
 
     _schema()
     with tempfile.TemporaryDirectory() as folder:

@@ -4,6 +4,7 @@ headless browser (Debian's chromium, driven by Playwright — never a downloaded
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 from collections.abc import Callable, Iterator
@@ -52,43 +53,60 @@ def browser() -> Iterator[Any]:
         chromium.close()
 
 
-#: Small twins (seconds each, in-process) and the extra options of their analysis commands.
-_TWINS: dict[str, list[str]] = {
-    "encoder": ["--duration-s", "3.1"],
-    "lts": [],
-    "fog": [],
-    "pulses": ["--pulses-per-rev", "3600", "--revolutions", "3.2"],
-    "gyro-rates": [],
-    "gyro-triad": [],
-    "gyro-noise": ["--duration-s", "1800"],
-    "gyro-rotations": [],
-    "multiposition": [],
-}
+#: The twins of ``rotacal simulate`` whose analysis writes a report, each with its defaults (the
+#: defaults must give warning-free results: tests/report/test_warning_free.py).
+_TWINS = [
+    "encoder",
+    "lts",
+    "fog",
+    "pulses",
+    "gyro-rates",
+    "gyro-triad",
+    "gyro-noise",
+    "gyro-rotations",
+    "multiposition",
+]
+
+
+@dataclasses.dataclass(frozen=True)
+class CliRun:
+    """One CLI analysis of the session: its report, its JSON result, what it wrote on stderr."""
+
+    report: Path
+    result: dict[str, Any]
+    stderr: str
 
 
 @pytest.fixture(scope="session")
-def cli_reports(
+def cli_runs(
     tmp_path_factory: pytest.TempPathFactory,
     analysis_args: Callable[[str, str, dict[str, Any]], list[str]],
-) -> dict[str, Path]:
-    """One report of each command that writes one (``--report``), made from small twins:
-    {command: path}."""
+) -> dict[str, CliRun]:
+    """One run of each command that writes a report (``--report``, and ``--json`` beside it), on
+    the twins with their defaults: {command: CliRun}. The browser reads the reports
+    (test_browser.py); the results' warnings are checked by test_warning_free.py, so each twin
+    is simulated and analysed once per session for both."""
     folder = tmp_path_factory.mktemp("cli-reports")
-    reports: dict[str, Path] = {}
+    runs: dict[str, CliRun] = {}
 
     def report(name: str, *args: str) -> None:
         path = folder / f"{name.replace(' ', '-')}.html"
-        _run(*args, "--report", str(path))
-        reports[name] = path
+        result = path.with_suffix(".json")
+        done = _run(*args, "--report", str(path), "--json", str(result))
+        runs[name] = CliRun(path, json.loads(result.read_text()), done.stderr)
 
-    for kind, options in _TWINS.items():
+    for kind in _TWINS:
         capture = folder / f"{kind}.npz"
-        _run("simulate", kind, "--out", str(capture), *options)
+        _run("simulate", kind, "--out", str(capture))
         truth = json.loads(Path(f"{capture}.truth.json").read_text())
         args = analysis_args(kind, str(capture), truth)
         report(" ".join(args[: args.index(str(capture))]), *args)  # "gyro triad"
         if kind == "pulses":
-            report("rate", "rate", str(capture), "--pulses-per-rev", "3600")
+            lines = str(truth["pulses_per_rev"])
+            rate = str(truth["set_rate_deg_s"])
+            report(
+                "rate", "rate", str(capture), "--pulses-per-rev", lines, "--set-rate-deg-s", rate
+            )
             report("inspect", "inspect", str(capture))
     config = folder / "table.toml"
     _run("turntable", "example", "--out", str(config))
@@ -108,7 +126,13 @@ def cli_reports(
     report(
         "gyro frequency-response", "gyro", "frequency-response", *map(str, sweep), "--lines", "3600"
     )
-    return reports
+    return runs
+
+
+@pytest.fixture(scope="session")
+def cli_reports(cli_runs: dict[str, CliRun]) -> dict[str, Path]:
+    """One report of each command that writes one: {command: path} (``cli_runs``' reports)."""
+    return {name: run.report for name, run in cli_runs.items()}
 
 
 @pytest.fixture(scope="session")
