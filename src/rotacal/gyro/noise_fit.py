@@ -141,7 +141,7 @@ def _pair_moments(a: int, b: int, n_phase: int) -> np.ndarray:
     """The (5, 5) moments M with K_a·K_b·cov-numerator = Σ_tu c_t c_u·M_tu (before scaling).
 
     Stochastic t, u ∈ {Q, N, B, K}: M_tu = Σ_δ n(δ)·C_t(δ)·C_u(δ); ramp row: Σ_δ n(δ)·C_t(δ).
-    Kept by pair (read-only; 4096 pairs ≈ 1 MB), free of τ₀: records of one length whose τ₀
+    Kept by pair (read-only; 4096 pairs ≈ 2 MB), free of τ₀: records of one length whose τ₀
     differ (a clock error, each time column's own) choose other cluster sizes but share many
     pairs, where the whole (n, n) set of :func:`_moments` would be computed anew.
     """
