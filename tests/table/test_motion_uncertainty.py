@@ -430,8 +430,10 @@ def _misses(kind, sensor, thd_percent, n):
         ("fog", 1.0),
         ("encoder", 0.0),
         ("encoder", 3e-4),  # about the encoder's noise level (FOG: 0.1 % is)
+        # 300 times the encoder's noise: detected harmonics, the central belt (P ≫ P*). A THD
+        # ten times larger takes the same path (its u against the runs' spread: the honesty
+        # twin of DISTORTED, 1.28 %, below)
         ("encoder", 0.1),
-        ("encoder", 1.0),
     ],
 )
 def test_thd_interval_covers_the_true_thd(kind, thd_percent):

@@ -136,10 +136,14 @@ def _counts(ka: int, kb: int, lags: np.ndarray) -> np.ndarray:
     return np.maximum(0.0, np.minimum(ka, kb - lags) - np.maximum(0.0, -lags))
 
 
+@functools.lru_cache(maxsize=4096)
 def _pair_moments(a: int, b: int, n_phase: int) -> np.ndarray:
     """The (5, 5) moments M with K_a·K_b·cov-numerator = Σ_tu c_t c_u·M_tu (before scaling).
 
     Stochastic t, u ∈ {Q, N, B, K}: M_tu = Σ_δ n(δ)·C_t(δ)·C_u(δ); ramp row: Σ_δ n(δ)·C_t(δ).
+    Kept by pair (read-only; 4096 pairs ≈ 2 MB), free of τ₀: records of one length whose τ₀
+    differ (a clock error, each time column's own) choose other cluster sizes but share many
+    pairs, where the whole (n, n) set of :func:`_moments` would be computed anew.
     """
     ka, kb = n_phase - 2 * a, n_phase - 2 * b
     reach = 2 * max(a, b)  # flicker FM correlates beyond the overlap (decays as δ⁻²)
@@ -163,6 +167,7 @@ def _pair_moments(a: int, b: int, n_phase: int) -> np.ndarray:
     out[0, 0] = float(np.sum(sn * sv * sv))
     out[0, 1:4] = out[1:4, 0] = (sc * (sn * sv)).sum(axis=1)
     out[4, 0] = float(np.sum(sn * sv))
+    out.flags.writeable = False
     return out
 
 

@@ -496,16 +496,23 @@ class SineMotion:
             raise ConfigError(
                 f"harmonics must be between 1 and {points // 2 - 1}, got {harmonics!r}."
             )
-        t = np.arange(points) * (self.period_s / points)
-        spec = np.fft.rfft(self.angle_no_vibration_deg(t))
-        amps = 2.0 * np.abs(spec[1 : n_h + 1]) / points
-        # θ ⊃ A_h·sin(2πhft + φ_h)  ⇒  X_h = (M/2)·A_h·e^{i(φ_h − π/2)}
-        phases = np.mod(np.angle(spec[1 : n_h + 1]) + 0.5 * math.pi + math.pi, TWO_PI) - math.pi
-        return {
-            "amplitudes_deg": amps,
-            "phases_rad": phases,
-            "mean_deg": float(spec[0].real / points),
-        }
+        key = (n_h, int(points))
+        if key not in self._harmonic_truths:
+            # the periodic motion's own property: computed once per motion and kept (a truth of
+            # every capture of it, which would otherwise evaluate and transform 2¹⁶ points)
+            t = np.arange(points) * (self.period_s / points)
+            spec = np.fft.rfft(self.angle_no_vibration_deg(t))
+            amps = 2.0 * np.abs(spec[1 : n_h + 1]) / points
+            # θ ⊃ A_h·sin(2πhft + φ_h)  ⇒  X_h = (M/2)·A_h·e^{i(φ_h − π/2)}
+            phases = np.mod(np.angle(spec[1 : n_h + 1]) + 0.5 * math.pi + math.pi, TWO_PI)
+            self._harmonic_truths[key] = (amps, phases - math.pi, float(spec[0].real / points))
+        amps, phases, mean = self._harmonic_truths[key]
+        return {"amplitudes_deg": amps.copy(), "phases_rad": phases.copy(), "mean_deg": mean}
+
+    @functools.cached_property
+    def _harmonic_truths(self) -> dict[tuple[int, int], tuple[np.ndarray, np.ndarray, float]]:
+        """:meth:`harmonic_truth`'s results by (harmonics, points), filled as they are asked."""
+        return {}
 
     @functools.cached_property
     def _period_reversals(self) -> np.ndarray:
