@@ -16,7 +16,10 @@ equivalent degrees of freedom and a chi-squared confidence interval for each τ.
 :func:`noise_terms` reads the IEEE Std 952-1997 Annex C terms off a curve: quantization Q (slope
 −1), angle random walk N (−½), bias instability B (0), rate random walk K (+½) and rate ramp R (+1),
 each where the local log-log slope shows that it dominates, with a confidence interval from the
-number of independent clusters.
+number of independent clusters. It is the quick reading by eye that IEEE Std 952 Annex C
+describes; ``rotacal allan`` and :func:`rotacal.gyro.gyro_noise` give the terms of one weighted
+least-squares fit of all five on the whole curve instead (:mod:`rotacal.gyro.noise_fit`), which
+separates terms that overlap (the slope reading takes B where N still adds, e.g.).
 """
 
 from __future__ import annotations
@@ -671,7 +674,8 @@ def _runs(mask: np.ndarray) -> list[np.ndarray]:
 def noise_terms(
     adev: AllanDeviation, *, unit: str = "deg/s", min_clusters: float = MIN_CLUSTERS
 ) -> NoiseTerms:
-    """IEEE Std 952 noise terms from an overlapping Allan deviation curve (slope method).
+    """IEEE Std 952 noise terms from an overlapping Allan deviation curve (slope method; the
+    commands use the five-term fit of :func:`rotacal.gyro.noise_fit.fit_noise_terms`).
 
     Rule. Points with at least ``min_clusters`` independent clusters N/m are kept (a dense curve
     is thinned to 16 points per decade). The local log-log slope at each point is the
