@@ -34,9 +34,10 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize
 
 from rotacal.errors import CaptureError
+from rotacal.uncertainty.quantiles import chi2_ppf
 
 __all__ = [
     "CommonInput",
@@ -292,7 +293,7 @@ def fit_second_order(
     fn, zeta = float(sol.x[0]), float(sol.x[1])
     grad = _bandwidth_gradient(fn, zeta)
     sub = cov[:2, :2]
-    lack = dof > 0 and chi2 > stats.chi2.ppf(LACK_OF_FIT_QUANTILE, dof)
+    lack = dof > 0 and chi2 > chi2_ppf(LACK_OF_FIT_QUANTILE, dof)
     return SecondOrderFit(
         natural_frequency_hz=fn,
         natural_frequency_hz_u=math.sqrt(cov[0, 0]),

@@ -40,11 +40,11 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.gyro.frequency_model import CommonInput, SecondOrderFit, fit_second_order
 from rotacal.results import Result
+from rotacal.uncertainty.quantiles import norm_ppf, t_ppf
 from rotacal.uncertainty.specs import InstrumentSpecs
 
 __all__ = [
@@ -488,9 +488,9 @@ def calibrate_frequency_response(
         )
     cov = fit.covariance
     corr = float(cov[0, 1] / math.sqrt(cov[0, 0] * cov[1, 1]))
-    k_point = float(stats.norm.ppf(0.5 + COVERAGE_PROBABILITY / 2.0))
+    k_point = norm_ppf(0.5 + COVERAGE_PROBABILITY / 2.0)
     k_model = (
-        float(stats.t.ppf(0.5 + COVERAGE_PROBABILITY / 2.0, fit.degrees_of_freedom))
+        t_ppf(0.5 + COVERAGE_PROBABILITY / 2.0, fit.degrees_of_freedom)
         if fit.birge_ratio > 1.0
         else k_point
     )

@@ -18,7 +18,6 @@ import math
 from collections.abc import Iterator
 
 import numpy as np
-from scipy import stats
 
 from rotacal.gyro.uncertainty import TScale, linear_gum, monte_carlo_budget, validated
 from rotacal.uncertainty.budget import BudgetRow, UncertaintyBudget
@@ -26,6 +25,7 @@ from rotacal.uncertainty.distributions import Distribution, Normal
 from rotacal.uncertainty.gum import Input, welch_satterthwaite
 from rotacal.uncertainty.linear_fit import linear_fit_uncertainty
 from rotacal.uncertainty.montecarlo import MonteCarloResult, monte_carlo
+from rotacal.uncertainty.quantiles import chi2_ppf
 from rotacal.uncertainty.specs import InstrumentSpecs, spec_input, type_a_note
 
 __all__ = ["DEFAULT_MC_TRIALS"]
@@ -485,7 +485,7 @@ def _scale_factor_budgets(
         var_mean = float(np.mean(u_pt**2))
         if var_mean > 0:
             ratio = float(resid @ resid) / ((n - 2) * var_mean)
-            if ratio > float(stats.chi2.ppf(_LACK_OF_FIT_P, n - 2)) / (n - 2):
+            if ratio > chi2_ppf(_LACK_OF_FIT_P, n - 2) / (n - 2):
                 s2 = float(resid @ resid) / (n - 2)
                 u_h3 = math.sqrt(s2 / sxx) / abs(1.0 + eps)
                 lof = (

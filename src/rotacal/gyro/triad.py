@@ -36,7 +36,6 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from rotacal.columns import RATE_COLUMNS, TRIAD_OUTPUT_COLUMNS
 from rotacal.errors import CaptureError, ConfigError
@@ -63,6 +62,7 @@ from rotacal.signal._values import check_magnitudes, check_not_constant, check_n
 from rotacal.signal.clipping import check_clipping
 from rotacal.uncertainty.budget import UncertaintyBudget
 from rotacal.uncertainty.gum import Input
+from rotacal.uncertainty.quantiles import norm_isf
 from rotacal.uncertainty.specs import InstrumentSpecs, spec_input, type_a_note
 
 __all__ = [
@@ -341,7 +341,7 @@ def _quantum(y: np.ndarray) -> float:
 
 def _default_k(n: int) -> float:
     """Bonferroni threshold: P(any of n good Gaussian measurements rejected) = 5 %; at least 3."""
-    return max(3.0, float(stats.norm.isf(0.025 / max(n, 1))))
+    return max(3.0, norm_isf(0.025 / max(n, 1)))
 
 
 def _groups(omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

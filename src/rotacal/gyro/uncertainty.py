@@ -32,13 +32,13 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
-from scipy import stats
 
 from rotacal.errors import ConfigError
 from rotacal.uncertainty.budget import BudgetRow, UncertaintyBudget, uncertainty_keys
 from rotacal.uncertainty.distributions import Distribution
 from rotacal.uncertainty.gum import GUMResult, Input, coverage_factor, propagate
 from rotacal.uncertainty.montecarlo import MonteCarloResult, validate_gum
+from rotacal.uncertainty.quantiles import norm_isf, norm_pdf
 from rotacal.uncertainty.specs import InstrumentSpecs, load_specs
 
 __all__ = [
@@ -152,8 +152,8 @@ def validated(gum: GUMResult, mc: MonteCarloResult, notes: Sequence[str] = ()) -
     lo, hi = check["mc_interval"]
     unit = f" {b.unit}" if b.unit else ""
     tail = 0.5 * (1.0 - float(mc.p))
-    z = float(stats.norm.isf(tail))
-    s_q = float(mc.u) * math.sqrt(tail * (1.0 - tail) / mc.trials) / float(stats.norm.pdf(z))
+    z = norm_isf(tail)
+    s_q = float(mc.u) * math.sqrt(tail * (1.0 - tail) / mc.trials) / norm_pdf(z)
     tol = max(float(check["delta"]), 3.0 * s_q)
     if check["d_low"] <= tol and check["d_high"] <= tol:
         out.append(

@@ -188,9 +188,9 @@ def chi_square_test(residuals: Any, u: Any, dof: int) -> FitTest | None:
     chi2 = float(np.sum((r / uu) ** 2))
     if not math.isfinite(chi2):
         return None
-    from scipy import stats  # ~0.4 s to import: only when a test is made
+    from rotacal.uncertainty.quantiles import chi2_sf
 
-    return FitTest(chi2, int(dof), float(stats.chi2.sf(chi2, dof)))
+    return FitTest(chi2, int(dof), chi2_sf(chi2, dof))
 
 
 def lack_of_fit_warning(what: str, test: FitTest | None, cause: str) -> str | None:
@@ -265,6 +265,6 @@ def replicate_lack_of_fit(
         return None
     s2 = ss_pe / df_pe
     f = float(np.sum(means**2 / (s2 / counts[present] + max(extra_variance, 0.0)))) / df_lof
-    from scipy import stats  # ~0.4 s to import: only when a test is made
+    from rotacal.uncertainty.quantiles import f_sf
 
-    return FitTest(f * df_lof, df_lof, float(stats.f.sf(f, df_lof, df_pe)), "F")
+    return FitTest(f * df_lof, df_lof, f_sf(f, df_lof, df_pe), "F")

@@ -415,9 +415,9 @@ def thd_uncertainty(
     if u_thd > 0:
         k = big_u / u_thd
     else:
-        from scipy import stats
+        from rotacal.uncertainty.quantiles import norm_isf
 
-        k = float(stats.norm.isf(tail))
+        k = norm_isf(tail)
     bias = mc_mean - corrected
 
     # first-order GUM for the rows and the comparison with the interval
