@@ -59,6 +59,10 @@ GYRO_ROTATIONS = CommandColumns(
 )
 GYRO_ACCELEROMETER = CommandColumns("gyro accelerometer", ACCEL_OUTPUT_COLUMNS)
 GYRO_MULTIPOSITION = CommandColumns("gyro multiposition", ("phi1_deg", "phi2_deg", "output_deg_h"))
+TURNTABLE_IDENTIFY = CommandColumns(
+    "turntable identify",
+    ("phi1_deg", "phi2_deg", "dpsi_arcsec", "dtheta_arcsec", "dgamma_arcsec"),
+)
 ALLAN = CommandColumns("allan", ("rate_deg_s",), ("time_s",))
 #: The reference is the encoder's a, b (with --lines) or an angle column: two ways to fit.
 GYRO_FREQUENCY_RESPONSE = CommandColumns(
@@ -78,6 +82,7 @@ COMMANDS: tuple[CommandColumns, ...] = (
     GYRO_ROTATIONS,
     GYRO_ACCELEROMETER,
     GYRO_MULTIPOSITION,
+    TURNTABLE_IDENTIFY,
     GYRO_FREQUENCY_RESPONSE,
     GYRO_FREQUENCY_RESPONSE_ANGLE,
     MOTION_ENCODER,

@@ -217,3 +217,6 @@ def specs_example(out: str, overwrite: bool) -> None:
     _check_toml_output(out)
     write_output(out, example_specs_toml(), label=f"--out {out}", overwrite=overwrite)
     _wrote(out)
+
+
+from . import turntable_identify  # noqa: E402,F401  (registers `turntable identify`)

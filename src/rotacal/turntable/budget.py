@@ -63,7 +63,7 @@ from rotacal.turntable.requirement import (
 )
 from rotacal.turntable.seed001 import is_seed_table, reproduce_seed001
 
-__all__ = ["TurntableBudget", "calibration_check", "turntable_budget"]
+__all__ = ["TurntableBudget", "budget_allocation", "calibration_check", "turntable_budget"]
 
 
 def _arcmin(values: Mapping[str, float | None]) -> dict[str, float | None]:
@@ -339,6 +339,69 @@ def _paper_reading_calibration(
     }
 
 
+def _allocation_step(
+    table: Turntable,
+    derivation: str | None,
+    constraint_step: float | None,
+    cal_settings: Mapping[str, Any],
+) -> tuple[
+    dict[str, float], str, Allocation, DerivedRequirement | None, OrientationRequirement | None
+]:
+    """Steps 1–2 of :func:`turntable_budget`: the requirement (stated or derived), its source
+    text, the allocation, and the derivation's record (None for a stated requirement)."""
+    requirement_obj: OrientationRequirement | None = None
+    derived: DerivedRequirement | None = None
+    if table.requirement is not None:
+        requirement = dict(table.requirement)
+        source = "stated in the configuration"
+        alloc = allocate(table, requirement, constraint_step_deg=constraint_step)
+    elif table.calibration_requirement_deg_h is not None:
+        if not _seed_geometry(table):
+            raise ConfigError(
+                "calibration_deg_h needs a table of the GyroWheel study's geometry (outer axis about y, inner "
+                "about z); state [requirement] psi, theta, gamma for this table instead."
+            )
+        p1, p2 = _plan_angles(cal_settings)
+        derived = derive_requirement(
+            table,
+            table.calibration_requirement_deg_h,
+            derivation or DEFAULT_DERIVATION,
+            phi1_deg=p1,
+            phi2_deg=p2,
+            latitude_deg=cal_settings["latitude_deg"],
+            constraint_step_deg=constraint_step,
+        )
+        requirement_obj = derived.box
+        requirement = dict(derived.requirement_rad)
+        alloc = derived.allocation
+        source = _derivation_text(derived)
+    else:
+        raise ConfigError(
+            "the configuration states no requirement: add [requirement] psi, theta, gamma or "
+            "calibration_deg_h."
+        )
+    return requirement, source, alloc, derived, requirement_obj
+
+
+def budget_allocation(
+    table: Turntable,
+    *,
+    requirement_derivation: str | None = None,
+    constraint_angles: float | str | None = None,
+) -> Allocation:
+    """The allocation :func:`turntable_budget` makes for ``table`` (its steps 1–2: the
+    requirement stated or derived, eqs. (7)–(16); the upper bounds, eqs. (29)–(34)), without
+    the Monte Carlo and calibration checks — what ``rotacal turntable identify --config``
+    compares the identified errors with.
+
+    References
+    ----------
+    Seed 001, eqs. (7)–(16), (29)–(34).
+    """
+    derivation, constraint_step = _options(table, requirement_derivation, constraint_angles)
+    return _allocation_step(table, derivation, constraint_step, _calibration_settings(table))[2]
+
+
 def turntable_budget(
     config: Turntable | str | Path,
     *,
@@ -384,38 +447,8 @@ def turntable_budget(
     check_draws(runs, seed)  # a refusal before the allocation's seconds of work, not after
     cal_settings = _calibration_settings(table)
     derivation, constraint_step = _options(table, requirement_derivation, constraint_angles)
-
-    requirement_obj: OrientationRequirement | None = None
-    derived: DerivedRequirement | None = None
-    if table.requirement is not None:
-        requirement = dict(table.requirement)
-        source = "stated in the configuration"
-        alloc = allocate(table, requirement, constraint_step_deg=constraint_step)
-    elif table.calibration_requirement_deg_h is not None:
-        if not _seed_geometry(table):
-            raise ConfigError(
-                "calibration_deg_h needs a table of the GyroWheel study's geometry (outer axis about y, inner "
-                "about z); state [requirement] psi, theta, gamma for this table instead."
-            )
-        p1, p2 = _plan_angles(cal_settings)
-        derived = derive_requirement(
-            table,
-            table.calibration_requirement_deg_h,
-            derivation or DEFAULT_DERIVATION,
-            phi1_deg=p1,
-            phi2_deg=p2,
-            latitude_deg=cal_settings["latitude_deg"],
-            constraint_step_deg=constraint_step,
-        )
-        requirement_obj = derived.box
-        requirement = dict(derived.requirement_rad)
-        alloc = derived.allocation
-        source = _derivation_text(derived)
-    else:
-        raise ConfigError(
-            "the configuration states no requirement: add [requirement] psi, theta, gamma or "
-            "calibration_deg_h."
-        )
+    step = _allocation_step(table, derivation, constraint_step, cal_settings)
+    requirement, source, alloc, derived, requirement_obj = step
 
     mc = monte_carlo_check(
         table,
