@@ -152,8 +152,8 @@ def _column(values: ArrayLike, name: str) -> np.ndarray:
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
         raise CaptureError(
-            f"column {name!r} has a non-finite value ({arr[bad[0]]}) at row {bad[0]}: remove or "
-            "repair that position."
+            f"column {name!r} has a non-finite value ({arr[bad[0]]}) at data row {bad[0] + 1}: "
+            "remove or repair that position."
         )
     return arr
 
@@ -184,15 +184,15 @@ def _inputs(
         out = np.flatnonzero(np.abs(c) > _ANGLE_LIMIT_DEG)
         if out.size:
             raise CaptureError(
-                f"column {name!r} row {out[0]}: {c[out[0]]:g}° is outside ±360°; give the "
-                "turntable angle in degrees."
+                f"column {name!r} data row {out[0] + 1}: {c[out[0]]:g}° is outside ±360°; give "
+                "the turntable angle in degrees."
             )
     limit = SMALL_ANGLE_LIMIT_RAD / ARCSEC
     for c, name in zip(cols[2:], names[2:], strict=True):
         out = np.flatnonzero(np.abs(c) > limit)
         if out.size:
             raise CaptureError(
-                f"column {name!r} row {out[0]}: {c[out[0]]:g} arcsec is beyond the small-angle "
+                f"column {name!r} data row {out[0] + 1}: {c[out[0]]:g} arcsec is beyond the small-angle "
                 f"model's {limit:.0f} arcsec (0.1 rad); give orientation errors in arcsec."
             )
     y = np.stack([cols[2], cols[3], cols[4]], axis=-1) * ARCSEC
