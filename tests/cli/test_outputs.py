@@ -78,6 +78,7 @@ EXPECTED_INPUTS = {
     ("rate",): {"capture", "selfcal_path", "specs"},
     ("selfcal",): {"capture", "specs"},
     ("turntable", "budget"): {"config"},
+    ("turntable", "identify"): {"capture", "config_path", "budget_path", "specs"},
 }
 
 #: The options a command needs besides its files (to get as far as its outputs).
@@ -96,6 +97,8 @@ OUTPUT_PARAMETERS = {("simulate", "out"), ("demo", "out"), ("turntable", "out"),
 FILES = {
     "capture": "cap.npz",
     "config": "table.toml",
+    "config_path": "table.toml",
+    "budget_path": "budget.json",
     "correction_from": "ref.npz",
     "more_captures": "more.npz",
     "rates_path": "rates.csv",

@@ -182,14 +182,16 @@ def turntable_identify_cmd(
 def _print_summary(result: Any) -> None:
     click.echo(
         f"{result.positions} positions, {result.rank} separable combinations, ν = {result.dof}, "
-        f"s = {result.s_arcsec:.3g} arcsec, k = {result.k:.3g}"
+        f"s = {result.s_arcsec:.3g} arcsec"
     )
+    coverage = f"(k = {result.k:.3g}, p = {result.coverage_probability * 100:.0f} %)"
     decisions = {}
     if result.allocation is not None:
         decisions = {e["name"]: e for e in result.allocation["combinations"]}
     for combo in result.combinations:
         line = (
-            f"{combo['name']:<28} {combo['value_arcsec']:>10.3f} ± {combo['U_arcsec']:.3f} arcsec"
+            f"{combo['name']:<28} {combo['value_arcsec']:>10.3f} ± {combo['U_arcsec']:.3f} arcsec "
+            + coverage
         )
         entry = decisions.get(combo["name"])
         if entry is not None and entry["bound_arcsec"] is not None:
