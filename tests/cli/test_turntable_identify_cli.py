@@ -24,8 +24,15 @@ def test_twin_end_to_end_with_budget_and_report(twin, tmp_path):
     budget.write_text(json.dumps({"upper_bounds_arcmin": bounds}))
     report = tmp_path / "identify.html"
     r = run(
-        "turntable", "identify", str(path), "--budget", str(budget), "--json", "-",
-        "--report", str(report),
+        "turntable",
+        "identify",
+        str(path),
+        "--budget",
+        str(budget),
+        "--json",
+        "-",
+        "--report",
+        str(report),
     )
     assert r.exit_code == 0, r.output
     d = json.loads(r.stdout)

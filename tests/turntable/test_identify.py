@@ -51,7 +51,12 @@ def test_separable_combinations_are_eq26_sums(full_grid):
         "eta",
     }
     groups = {tuple(g["names"]): g for g in r.inseparable}
-    assert set(groups) == {("phi_y1", "eps_y"), ("phi_z2", "alpha_z1"), ("alpha_x1", "eps_x"), ("eta",)}
+    assert set(groups) == {
+        ("phi_y1", "eps_y"),
+        ("phi_z2", "alpha_z1"),
+        ("alpha_x1", "eps_x"),
+        ("eta",),
+    }
     assert all(g["structural"] for g in groups.values())
     assert "position" in groups[("eta",)]["separate_by"][0]
     assert "autocollimator" in groups[("phi_y1", "eps_y")]["separate_by"][0]
@@ -106,7 +111,11 @@ def test_phi2_fixed_is_flagged_and_the_design_repairs_it():
     assert r.rank == 3
     assert "alpha_x2" in r.unidentifiable and "alpha_y2" in r.unidentifiable
     names = {c["name"] for c in r.combinations}
-    assert names == {"phi_y1 + alpha_y2 + eps_y", "phi_z2 + alpha_z1", "alpha_x1 + alpha_x2 + eps_x"}
+    assert names == {
+        "phi_y1 + alpha_y2 + eps_y",
+        "phi_z2 + alpha_z1",
+        "alpha_x1 + alpha_x2 + eps_x",
+    }
     for c in r.combinations:
         assert abs(c["value_arcsec"] - _truth(c, cap.truth)) <= 3.0 * c["u_arcsec"]
     design_gaps = [g for g in r.inseparable if not g["structural"]]
@@ -115,12 +124,9 @@ def test_phi2_fixed_is_flagged_and_the_design_repairs_it():
     assert all(p[1] % 360 != 0 for p in r.next_positions_deg[:1])
 
 
-def test_allocation_decisions(full_grid):
-    cap, _ = full_grid
+def test_allocation_decisions():
     bounds = {"alpha_x2": 17.6, "alpha_y2": 3.95, "phi_y1": 26.8, "eps_y": 26.8}
-    big = simulate_orientation_errors(
-        noise_arcsec=0.5, seed=1, errors_arcsec={"alpha_x2": 40.0}
-    )
+    big = simulate_orientation_errors(noise_arcsec=0.5, seed=1, errors_arcsec={"alpha_x2": 40.0})
     r = _identify(big, bounds_arcsec=bounds, bounds_source="test", next_positions=0)
     by = {e["name"]: e for e in r.allocation["combinations"]}
     assert by["alpha_x2"]["decision"] == "outside"  # 40 ± 0.1 against 17.6

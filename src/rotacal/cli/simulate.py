@@ -721,5 +721,5 @@ def demo(out: str, overwrite: bool) -> None:
         _wrote(path)
 
 
-from . import simulate_frequency  # noqa: E402,F401  (registers `simulate gyro-sine`)
-from . import simulate_orientation  # noqa: E402,F401  (registers `simulate orientation-errors`)
+# registers `simulate gyro-sine` and `simulate orientation-errors`
+from . import simulate_frequency, simulate_orientation  # noqa: E402,F401

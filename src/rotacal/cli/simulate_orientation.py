@@ -51,9 +51,7 @@ def _named_values(items: Sequence[str]) -> dict[str, float]:
 @click.option(
     "--inner-steps", type=int, default=None, help="Inner-axis positions per turn (1: fixed) [8]."
 )
-@click.option(
-    "--noise-arcsec", type=float, default=None, help="Reading noise, rms (arcsec) [0.5]."
-)
+@click.option("--noise-arcsec", type=float, default=None, help="Reading noise, rms (arcsec) [0.5].")
 def simulate_orientation_errors_cmd(
     out: str, overwrite: bool, errors: Sequence[str], **kw: Any
 ) -> None:

@@ -149,9 +149,7 @@ def turntable_identify_cmd(
     elif config_path is not None:
         with _status("allocating"), _naming_file(config_path, "--config"):
             alloc = budget_allocation(table)
-        bounds = {
-            n: (None if v is None else v / ARCSEC) for n, v in alloc.upper_bounds_rad.items()
-        }
+        bounds = {n: (None if v is None else v / ARCSEC) for n, v in alloc.upper_bounds_rad.items()}
         source = f"the allocation of --config {config_path}"
     cap = _read(capture, list(TURNTABLE_IDENTIFY.required), columns, group)
     with _status("fitting"):

@@ -69,8 +69,14 @@ def estimates_figure(r: TurntableIdentification) -> Figure:
             entry["decision"] if entry else "", "#1f6fb2"
         )
         ax.errorbar(
-            combo["value_arcsec"], y, xerr=combo["U_arcsec"], fmt="o", color=colour, ms=5,
-            capsize=4, zorder=2,
+            combo["value_arcsec"],
+            y,
+            xerr=combo["U_arcsec"],
+            fmt="o",
+            color=colour,
+            ms=5,
+            capsize=4,
+            zorder=2,
         )
     ax.set_yticks(ys)
     ax.set_yticklabels([c["name"] for c in combos], fontsize=8.5)
@@ -159,8 +165,7 @@ def identify_section(r: TurntableIdentification, title: str | None = None) -> Se
     verdict = []
     if r.allocation is not None:
         verdict.append(
-            f"Against {r.allocation['source']}: {r.allocation['verdict']} "
-            f"({r.allocation['rule']})."
+            f"Against {r.allocation['source']}: {r.allocation['verdict']} ({r.allocation['rule']})."
         )
     return Section(
         title=title or f"Geometric errors of {r.table}",

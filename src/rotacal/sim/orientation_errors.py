@@ -67,7 +67,9 @@ def _errors(values: Mapping[str, float] | None) -> dict[str, float]:
         except (TypeError, ValueError):
             raise ConfigError(f"table error {name} must be a number (arcsec), got {v!r}.") from None
         if not math.isfinite(f) or (name != "eta" and abs(f) > 3600.0):
-            raise ConfigError(f"table error {name} must be finite and within ±3600 arcsec, got {v!r}.")
+            raise ConfigError(
+                f"table error {name} must be finite and within ±3600 arcsec, got {v!r}."
+            )
         out[name] = f
     return out
 

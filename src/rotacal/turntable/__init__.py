@@ -4,7 +4,8 @@ gyro calibration.
 
 Start from :func:`seed_table` (the paper's two-axis table) or :func:`load_turntable` (a TOML
 description of any serial table) and :func:`turntable_budget` (what ``rotacal turntable budget``
-runs). :func:`orientation_error` is the model of the GyroWheel study's table, eqs. (17)–(24), radians in and out.
+runs). :func:`identify_turntable` is the inverse (``rotacal turntable identify``): the errors
+from orientation errors measured at many positions. :func:`orientation_error` is the model of the GyroWheel study's table, eqs. (17)–(24), radians in and out.
 """
 
 from rotacal.turntable.allocation import (
@@ -14,7 +15,12 @@ from rotacal.turntable.allocation import (
     monte_carlo_check,
     worst_case,
 )
-from rotacal.turntable.budget import TurntableBudget, calibration_check, turntable_budget
+from rotacal.turntable.budget import (
+    TurntableBudget,
+    budget_allocation,
+    calibration_check,
+    turntable_budget,
+)
 from rotacal.turntable.calibration import (
     OrientationRequirement,
     orientation_matrix,
@@ -24,6 +30,7 @@ from rotacal.turntable.calibration import (
     rate_sensing_error_from_rotation,
 )
 from rotacal.turntable.config import load_turntable, seed_table, seed_table_toml
+from rotacal.turntable.identify import TurntableIdentification, identify_turntable
 from rotacal.turntable.model import (
     COMPONENTS,
     ErrorSpec,
@@ -41,8 +48,11 @@ __all__ = [
     "OrientationRequirement",
     "Turntable",
     "TurntableBudget",
+    "TurntableIdentification",
     "allocate",
+    "budget_allocation",
     "calibration_check",
+    "identify_turntable",
     "load_turntable",
     "monte_carlo_check",
     "orientation_error",

@@ -44,23 +44,24 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
-from rotacal.turntable.chain import COMPONENTS, SMALL_ANGLE_LIMIT_RAD
+from rotacal.turntable.chain import COMPONENTS, SMALL_ANGLE_LIMIT_RAD, Model
 from rotacal.turntable.geometry import Turntable
+from rotacal.turntable.identify_design import (
+    advice,
+    compare_with_bounds,
+    first_order_rows,
+    groups_of,
+    recommend,
+)
 
-__all__ = [
-    "ARCSEC",
-    "TurntableIdentification",
-    "first_order_rows",
-    "identify_turntable",
-    "model_and_jacobian",
-]
+__all__ = ["ARCSEC", "TurntableIdentification", "identify_turntable", "model_and_jacobian"]
 
 #: One arc second in radians.
 ARCSEC = math.pi / (180.0 * 3600.0)
@@ -221,16 +222,11 @@ def model_and_jacobian(
     shifts = np.zeros((2 * p + 1, p))
     shifts[1 : p + 1] = np.eye(p) * _STEP_RAD
     shifts[p + 1 :] = -np.eye(p) * _STEP_RAD
-    values = table.orientation_error([phi1, phi2], (chi + shifts)[:, None, :], model=model)
+    values = table.orientation_error(
+        [phi1, phi2], (chi + shifts)[:, None, :], model=cast(Model, model)
+    )
     jac = (values[1 : p + 1] - values[p + 1 :]) / (2.0 * _STEP_RAD)  # (p, n, 3)
     return values[0], jac.reshape(p, -1).T
-
-
-def first_order_rows(table: Turntable, phi1: np.ndarray, phi2: np.ndarray) -> np.ndarray:
-    """The first-order Jacobian at χ = 0 (3n, p), rows as :func:`model_and_jacobian`'s: the
-    generalised eq. (26) (:meth:`Turntable.linear_coefficients`), exact sines and cosines."""
-    coefficients = table.linear_coefficients([phi1, phi2])  # (n, 3, p)
-    return coefficients.reshape(-1, coefficients.shape[-1])
 
 
 def _rref(rows: np.ndarray) -> np.ndarray:
@@ -259,31 +255,8 @@ def _combination_name(coefficients: Mapping[str, float]) -> str:
         sign = "−" if c < 0 else "+"
         mag = abs(c)
         term = name if abs(mag - 1.0) < 1e-9 else f"{mag:.4g}·{name}"
-        text += (f"{'−' if c < 0 else ''}{term}" if not text else f" {sign} {term}")
+        text += f"{'−' if c < 0 else ''}{term}" if not text else f" {sign} {term}"
     return text
-
-
-def _groups(null: np.ndarray) -> list[list[int]]:
-    """Indices of parameters connected through the null space (its projector's nonzeros)."""
-    proj = null @ null.T
-    p = proj.shape[0]
-    involved = [i for i in range(p) if proj[i, i] > _TINY]
-    seen: set[int] = set()
-    groups = []
-    for i in involved:
-        if i in seen:
-            continue
-        stack, group = [i], []
-        seen.add(i)
-        while stack:
-            j = stack.pop()
-            group.append(j)
-            for m in involved:
-                if m not in seen and abs(proj[j, m]) > _TINY:
-                    seen.add(m)
-                    stack.append(m)
-        groups.append(sorted(group))
-    return groups
 
 
 def _fit(
@@ -298,7 +271,9 @@ def _fit(
     p = len(table.angular_error_names)
     chi = np.zeros(p)
     target = y.reshape(-1)
-    for it in range(1, _MAX_ITERATIONS + 1):
+    iterations = 0
+    while iterations < _MAX_ITERATIONS:
+        iterations += 1
         f, jac = model_and_jacobian(table, phi1, phi2, chi, model)
         u, s, vt = np.linalg.svd(jac, full_matrices=False)
         rank = int(np.sum(s > rcond * s[0])) if s[0] > 0 else 0
@@ -314,7 +289,7 @@ def _fit(
     f, jac = model_and_jacobian(table, phi1, phi2, chi, model)
     s = np.linalg.svd(jac, compute_uv=False)
     rank = int(np.sum(s > rcond * s[0])) if s[0] > 0 else 0
-    return chi, f, jac, rank, it
+    return chi, f, jac, rank, iterations
 
 
 def identify_turntable(
@@ -375,7 +350,6 @@ def identify_turntable(
     Seed 001, eqs. (17)–(26); GUM §G.3.
     """
     from rotacal.turntable.config import seed_table
-    from rotacal.turntable.identify_design import advice, compare_with_bounds, recommend
     from rotacal.uncertainty.quantiles import t_ppf
 
     if model not in ("seed", "exact"):
@@ -423,8 +397,7 @@ def identify_turntable(
         )
     basis = vt0[:rank]
     alone = [
-        np.linalg.norm(np.eye(chi.size)[i] - basis.T @ basis[:, i]) < 1e-6
-        for i in range(chi.size)
+        np.linalg.norm(np.eye(chi.size)[i] - basis.T @ basis[:, i]) < 1e-6 for i in range(chi.size)
     ]
     errors: dict[str, float | None] = {}
     errors_u: dict[str, float | None] = {}
@@ -436,7 +409,7 @@ def identify_turntable(
     unidentifiable = tuple(n_ for n_ in table.error_names if errors[n_] is None)
 
     null = vt0[rank:].T
-    groups = [[names[i] for i in g] for g in _groups(null)]
+    groups = [[names[i] for i in g] for g in groups_of(null)]
     inseparable = advice(table, groups, design_step_deg)
     next_deg, design = recommend(table, phi1, phi2, next_positions, design_step_deg)
     rms = {c: float(np.sqrt(np.mean(resid[:, j] ** 2))) / ARCSEC for j, c in enumerate(COMPONENTS)}

@@ -39,7 +39,14 @@ import numpy as np
 from rotacal.errors import ConfigError
 from rotacal.turntable.geometry import Turntable
 
-__all__ = ["advice", "candidate_grid", "compare_with_bounds", "recommend"]
+__all__ = [
+    "advice",
+    "candidate_grid",
+    "compare_with_bounds",
+    "first_order_rows",
+    "groups_of",
+    "recommend",
+]
 
 _TINY = 1e-9
 
@@ -66,10 +73,34 @@ def candidate_grid(step_deg: float) -> tuple[np.ndarray, np.ndarray]:
     return p1.reshape(-1), p2.reshape(-1)
 
 
-def _rows(table: Turntable, phi1: np.ndarray, phi2: np.ndarray) -> np.ndarray:
-    from rotacal.turntable.identify import first_order_rows
+def first_order_rows(table: Turntable, phi1: np.ndarray, phi2: np.ndarray) -> np.ndarray:
+    """The first-order Jacobian at χ = 0 (3n, p), rows position-major (ψ, θ, γ per position): the
+    generalised eq. (26) (:meth:`Turntable.linear_coefficients`), exact sines and cosines."""
+    coefficients = table.linear_coefficients([phi1, phi2])  # (n, 3, p)
+    return coefficients.reshape(-1, coefficients.shape[-1])
 
-    return first_order_rows(table, phi1, phi2)
+
+def groups_of(null: np.ndarray) -> list[list[int]]:
+    """Indices of parameters connected through the null space (its projector's nonzeros)."""
+    proj = null @ null.T
+    p = proj.shape[0]
+    involved = [i for i in range(p) if proj[i, i] > _TINY]
+    seen: set[int] = set()
+    groups = []
+    for i in involved:
+        if i in seen:
+            continue
+        stack, group = [i], []
+        seen.add(i)
+        while stack:
+            j = stack.pop()
+            group.append(j)
+            for m in involved:
+                if m not in seen and abs(proj[j, m]) > _TINY:
+                    seen.add(m)
+                    stack.append(m)
+        groups.append(sorted(group))
+    return groups
 
 
 def _link_of(table: Turntable) -> dict[str, tuple[int, str]]:
@@ -110,13 +141,9 @@ def _structural_text(table: Turntable, names: Sequence[str]) -> str:
     )
 
 
-def _groups_of(null: np.ndarray) -> list[list[int]]:
-    from rotacal.turntable.identify import _groups
-
-    return _groups(null)
-
-
-def advice(table: Turntable, groups: Sequence[Sequence[str]], step_deg: float) -> list[dict[str, Any]]:
+def advice(
+    table: Turntable, groups: Sequence[Sequence[str]], step_deg: float
+) -> list[dict[str, Any]]:
     """For each inseparable group: ``names``, ``structural`` and ``separate_by`` (list of text).
 
     A group is *structural* when no position of the (φ1, φ2) grid of ``step_deg`` separates any
@@ -125,10 +152,10 @@ def advice(table: Turntable, groups: Sequence[Sequence[str]], step_deg: float) -
     """
     names = table.angular_error_names
     p1, p2 = candidate_grid(step_deg)
-    grid = _rows(table, p1, p2)
+    grid = first_order_rows(table, p1, p2)
     _, sv, vt = np.linalg.svd(grid, full_matrices=True)
     rank = int(np.sum(sv > 1e-9 * sv[0]))
-    structural_groups = [[names[i] for i in g] for g in _groups_of(vt[rank:].T)]
+    structural_groups = [[names[i] for i in g] for g in groups_of(vt[rank:].T)]
     out: list[dict[str, Any]] = []
     for group in groups:
         inside = [g for g in structural_groups if set(g) <= set(group)]
@@ -167,13 +194,13 @@ def recommend(
     if isinstance(count, bool) or not float(count).is_integer() or not 0 <= int(count) <= 100:
         raise ConfigError(f"next positions must be an integer from 0 to 100, got {count!r}.")
     g1, g2 = candidate_grid(step_deg)
-    grid = _rows(table, g1, g2)
+    grid = first_order_rows(table, g1, g2)
     _, sv, vt = np.linalg.svd(grid, full_matrices=False)
     basis = vt[: int(np.sum(sv > 1e-9 * sv[0]))].T  # (p, r_g)
     r_g = basis.shape[1]
     blocks = (grid @ basis).reshape(g1.size, 3, r_g)
     gains = np.einsum("cij,cik->cjk", blocks, blocks)  # (candidates, r_g, r_g)
-    current = _rows(table, phi1, phi2) @ basis
+    current = first_order_rows(table, phi1, phi2) @ basis
     info = current.T @ current
     ridge = 1e-6 * float(np.trace(gains.mean(axis=0))) / max(r_g, 1)
     before = info.copy()
@@ -182,7 +209,9 @@ def recommend(
         _, scores = np.linalg.slogdet(info + gains + ridge * np.eye(r_g))
         best = int(np.argmax(scores))
         info = info + gains[best]
-        chosen.append([round(float(np.degrees(g1[best])), 9), round(float(np.degrees(g2[best])), 9)])
+        chosen.append(
+            [round(float(np.degrees(g1[best])), 9), round(float(np.degrees(g2[best])), 9)]
+        )
     design = {
         "criterion": CRITERION,
         "grid_step_deg": float(step_deg),
@@ -235,9 +264,8 @@ def compare_with_bounds(
         several = len(coefficients) > 1
         if abs(value) + big_u <= bound:
             decision = "inside"
-            statement = (
-                f"|{value:.3g}| + U {big_u:.2g} ≤ {bound:.3g} arcsec"
-                + (": the allocation's guarantee holds for this sum" if several else "")
+            statement = f"|{value:.3g}| + U {big_u:.2g} ≤ {bound:.3g} arcsec" + (
+                ": the allocation's guarantee holds for this sum" if several else ""
             )
         elif abs(value) - big_u > bound:
             decision = "outside"
