@@ -366,6 +366,19 @@ GLOSSARY: dict[str, Term] = {
         "requirement.",
         "UB",
     ),
+    "errors_arcsec": _t(
+        "identified geometric error",
+        "″",
+        "A turntable error estimated from orientation errors measured at many positions; empty "
+        "for an error the positions cannot separate from others (see the combinations).",
+        "χ",
+    ),
+    "unidentifiable": _t(
+        "errors not separable alone",
+        "",
+        "The table's errors that orientation errors at these positions see only in sums with "
+        "others (or, for a translation, not at all).",
+    ),
     "max_abs_arcmin": _t(
         "largest orientation error among the tables drawn",
         "′",
