@@ -60,7 +60,7 @@ def captures(tmp_path_factory) -> dict[str, Path]:
         "gyro-steps": ["--samples-per-dwell", "20"],
         "ferraris": [],
         "multiposition": [],
-        "orientation-errors": [],
+        "orientation": [],
         "gyro-sine": ["--frequency-hz", "2", "--periods", "3"],
         "gyro-sine-6": ["--frequency-hz", "6", "--periods", "3"],
     }
@@ -94,7 +94,7 @@ ANALYSES: dict[tuple[str, ...], tuple[str, list[str]]] = {
     ("rate",): ("pulses", ["--pulses-per-rev", "360"]),
     ("selfcal",): ("pulses", ["--pulses-per-rev", "360"]),
     # the paper's derivation allocates once, the default twice: the outputs are the same kind
-    ("turntable", "identify"): ("orientation-errors", []),
+    ("turntable", "identify"): ("orientation", []),
     ("turntable", "budget"): (
         "table",
         ["--runs", "2000", "--requirement-derivation", "earth-rate-only"],
@@ -117,7 +117,7 @@ WRITERS: dict[tuple[str, ...], list[str]] = {
             "gyro-triad",
             "lts",
             "multiposition",
-            "orientation-errors",
+            "orientation",
             "pulses",
         )
     },

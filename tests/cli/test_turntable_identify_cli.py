@@ -1,4 +1,4 @@
-"""`rotacal turntable identify` and `rotacal simulate orientation-errors`: the twin end to end, the
+"""`rotacal turntable identify` and `rotacal simulate orientation`: the twin end to end, the
 allocation's bounds, the report, refusals in one line."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ KEYS = {"errors_arcsec", "errors_u_arcsec", "unidentifiable", "warnings", "prove
 
 @pytest.fixture(scope="module")
 def twin(tmp_path_factory):
-    return simulated(tmp_path_factory.mktemp("identify"), "orientation-errors", "--seed", "4")
+    return simulated(tmp_path_factory.mktemp("identify"), "orientation", "--seed", "4")
 
 
 def test_twin_end_to_end_with_budget_and_report(twin, tmp_path):
@@ -49,7 +49,7 @@ def test_twin_end_to_end_with_budget_and_report(twin, tmp_path):
 
 
 def test_degenerate_twin_names_what_is_missing(tmp_path):
-    path, _ = simulated(tmp_path, "orientation-errors", "--inner-steps", "1")
+    path, _ = simulated(tmp_path, "orientation", "--inner-steps", "1")
     r = run("turntable", "identify", str(path), "--next", "2")
     assert r.exit_code == 0, r.output
     assert "not separable alone" in r.stdout and "alpha_x2" in r.stdout
@@ -78,6 +78,6 @@ def test_refusals_are_one_line(tmp_path, twin):
         run("turntable", "identify", str(path), "--budget", str(nobudget)), "upper_bounds_arcmin"
     )
     one_line_error(
-        run("simulate", "orientation-errors", "--out", str(tmp_path / "x.csv"), "--error", "zz=1"),
+        run("simulate", "orientation", "--out", str(tmp_path / "x.csv"), "--error", "zz=1"),
         "zz",
     )

@@ -1,4 +1,4 @@
-"""``rotacal simulate orientation-errors``: a turntable's orientation errors at many positions, for
+"""``rotacal simulate orientation``: a turntable's orientation errors at many positions, for
 ``turntable identify``.
 
 Registered on the ``simulate`` group by the import at the end of :mod:`rotacal.cli.simulate`.
@@ -33,10 +33,10 @@ def _named_values(items: Sequence[str]) -> dict[str, float]:
 
 
 @simulate.command(
-    "orientation-errors",
+    "orientation",
     epilog=example(
-        "rotacal simulate orientation-errors --out errors.csv",
-        "rotacal simulate orientation-errors --inner-steps 1 --error alpha_x2=20 --out fixed.csv",
+        "rotacal simulate orientation --out errors.csv",
+        "rotacal simulate orientation --inner-steps 1 --error alpha_x2=20 --out fixed.csv",
     ),
 )
 @_sim_common

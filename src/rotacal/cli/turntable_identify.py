@@ -59,7 +59,6 @@ def _budget_bounds(path: str) -> dict[str, float | None]:
 @turntable.command(
     "identify",
     epilog=example(
-        "rotacal simulate orientation-errors --out errors.csv",
         "rotacal turntable identify errors.csv --config table.toml --report identify.html",
         "rotacal turntable identify errors.csv --budget budget.json --json identify.json",
     ),

@@ -119,7 +119,7 @@ def simulate_orientation_errors(
     Returns
     -------
     SimCapture
-        ``kind="orientation-errors"``, columns ``phi1_deg``, ``phi2_deg``, ``dpsi_arcsec``,
+        ``kind="orientation"``, columns ``phi1_deg``, ``phi2_deg``, ``dpsi_arcsec``,
         ``dtheta_arcsec``, ``dgamma_arcsec``; ``truth`` holds ``errors_arcsec``, the noise-free
         readings ``clean_arcsec`` and the settings.
 
@@ -155,7 +155,7 @@ def simulate_orientation_errors(
     clean = np.stack([dr[:, 0, 2], dr[:, 1, 0], dr[:, 2, 1]], axis=-1) / _ARCSEC
     noisy = clean + np.random.default_rng(seed).normal(0.0, sigma, clean.shape)
     truth: dict[str, Any] = {
-        "kind": "orientation-errors",
+        "kind": "orientation",
         "errors_arcsec": e,
         "positions_deg": pos.tolist(),
         "clean_arcsec": clean.tolist(),
@@ -168,7 +168,7 @@ def simulate_orientation_errors(
         "dtheta_arcsec": noisy[:, 1],
         "dgamma_arcsec": noisy[:, 2],
     }
-    return SimCapture("orientation-errors", columns, truth)
+    return SimCapture("orientation", columns, truth)
 
 
-register_kind("orientation-errors", simulate_orientation_errors)
+register_kind("orientation", simulate_orientation_errors)
