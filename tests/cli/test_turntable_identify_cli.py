@@ -81,3 +81,28 @@ def test_refusals_are_one_line(tmp_path, twin):
         run("simulate", "orientation", "--out", str(tmp_path / "x.csv"), "--error", "zz=1"),
         "zz",
     )
+
+
+def test_config_compares_with_its_allocation(twin, tmp_path, monkeypatch):
+    # the allocation itself (seconds) is tested with `turntable budget`; here the bounds it gives
+    # must reach the comparison in arcsec, the chain from the same file
+    import types
+
+    import rotacal.turntable.budget as budget
+
+    ub = {"alpha_x2": 1e-5, "alpha_y2": 2e-4, "eta": None}  # rad: 2.06″ and 41.3″
+    seen = []
+    monkeypatch.setattr(
+        budget,
+        "budget_allocation",
+        lambda table: seen.append(table.name) or types.SimpleNamespace(upper_bounds_rad=ub),
+    )
+    path, _ = twin
+    config = tmp_path / "table.toml"
+    assert run("turntable", "example", "--out", str(config)).exit_code == 0
+    r = run("turntable", "identify", str(path), "--config", str(config), "--json", "-")
+    assert r.exit_code == 0, r.output
+    by = {e["name"]: e for e in json.loads(r.stdout)["allocation"]["combinations"]}
+    assert by["alpha_x2"]["bound_arcsec"] == pytest.approx(2.0626480625)
+    assert by["alpha_x2"]["decision"] == "outside" and by["alpha_y2"]["decision"] == "inside"
+    assert seen == ["Two-axis turntable of the GyroWheel study"]

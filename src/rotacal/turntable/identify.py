@@ -59,6 +59,7 @@ from rotacal.turntable.identify_design import (
     first_order_rows,
     groups_of,
     recommend,
+    right_singular,
 )
 
 __all__ = ["ARCSEC", "TurntableIdentification", "identify_turntable", "model_and_jacobian"]
@@ -349,14 +350,14 @@ def identify_turntable(
     ----------
     Seed 001, eqs. (17)–(26); GUM §G.3.
     """
-    from rotacal.turntable.config import seed_table
+    from rotacal.turntable.model import _seed_cached
     from rotacal.uncertainty.quantiles import t_ppf
 
     if model not in ("seed", "exact"):
         raise ConfigError(f"model {model!r} is unknown: use 'seed' or 'exact'.")
     if not (isinstance(rcond, (int, float)) and 0.0 < float(rcond) < 1.0):
         raise ConfigError(f"rcond must be a number between 0 and 1, got {rcond!r}.")
-    table = seed_table() if table is None else table
+    table = _seed_cached() if table is None else table
     _two_angles(table)
     phi1, phi2, y = _inputs(phi1_deg, phi2_deg, dpsi_arcsec, dtheta_arcsec, dgamma_arcsec)
     n = phi1.size
@@ -379,7 +380,7 @@ def identify_turntable(
     cov = s2 * (vt[:rank].T / sv[:rank] ** 2) @ vt[:rank]
 
     # separable combinations from the first-order row space (exact sums at χ = 0)
-    _, _, vt0 = np.linalg.svd(first_order_rows(table, phi1, phi2), full_matrices=True)
+    _, vt0 = right_singular(first_order_rows(table, phi1, phi2))
     rows = _rref(vt0[:rank])
     k = t_ppf(0.5 + _COVERAGE / 2.0, dof)
     combos = []

@@ -46,6 +46,7 @@ __all__ = [
     "first_order_rows",
     "groups_of",
     "recommend",
+    "right_singular",
 ]
 
 _TINY = 1e-9
@@ -78,6 +79,13 @@ def first_order_rows(table: Turntable, phi1: np.ndarray, phi2: np.ndarray) -> np
     generalised eq. (26) (:meth:`Turntable.linear_coefficients`), exact sines and cosines."""
     coefficients = table.linear_coefficients([phi1, phi2])  # (n, 3, p)
     return coefficients.reshape(-1, coefficients.shape[-1])
+
+
+def right_singular(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Singular values and all p right singular vectors (rows of a (p, p) Vᵀ) of an (m, p)
+    matrix, without the (m, m) U of a full SVD when m ≫ p."""
+    _, s, vt = np.linalg.svd(m, full_matrices=m.shape[0] < m.shape[1])
+    return s, vt
 
 
 def groups_of(null: np.ndarray) -> list[list[int]]:
@@ -153,7 +161,7 @@ def advice(
     names = table.angular_error_names
     p1, p2 = candidate_grid(step_deg)
     grid = first_order_rows(table, p1, p2)
-    _, sv, vt = np.linalg.svd(grid, full_matrices=True)
+    sv, vt = right_singular(grid)
     rank = int(np.sum(sv > 1e-9 * sv[0]))
     structural_groups = [[names[i] for i in g] for g in groups_of(vt[rank:].T)]
     out: list[dict[str, Any]] = []
@@ -195,7 +203,7 @@ def recommend(
         raise ConfigError(f"next positions must be an integer from 0 to 100, got {count!r}.")
     g1, g2 = candidate_grid(step_deg)
     grid = first_order_rows(table, g1, g2)
-    _, sv, vt = np.linalg.svd(grid, full_matrices=False)
+    sv, vt = right_singular(grid)
     basis = vt[: int(np.sum(sv > 1e-9 * sv[0]))].T  # (p, r_g)
     r_g = basis.shape[1]
     blocks = (grid @ basis).reshape(g1.size, 3, r_g)
