@@ -111,6 +111,10 @@ def cli_runs(
     config = folder / "table.toml"
     _run("turntable", "example", "--out", str(config))
     report("turntable budget", "turntable", "budget", str(config), "--runs", "20000")
+    errors = folder / "orientation.npz"
+    _run("simulate", "orientation", "--out", str(errors))
+    budget = folder / "turntable-budget.json"
+    report("turntable identify", "turntable", "identify", str(errors), "--budget", str(budget))
     sweep = [folder / f"sine{f}.npz" for f in (1, 4, 8, 12)]
     for i, path in enumerate(sweep):
         _run(
