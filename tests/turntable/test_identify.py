@@ -165,3 +165,12 @@ def test_too_few_positions():
         identify_turntable(*_columns(), model="paper")
     with pytest.raises(ConfigError, match="design step"):
         identify_turntable(*_columns(), design_step_deg=7.0)
+
+
+def test_large_errors_warn_that_second_order_terms_appear():
+    big = dict.fromkeys(("phi_y1", "eps_x", "alpha_z1", "eps_y"), 3000.0)  # 0.015 rad each
+    cap = simulate_orientation_errors(errors_arcsec=big, noise_arcsec=0.5)
+    r = _identify(cap, next_positions=0)
+    assert r.rank == 5 and any("second-order" in w for w in r.warnings)
+    quiet = _identify(simulate_orientation_errors(noise_arcsec=0.5), next_positions=0)
+    assert quiet.warnings == ()

@@ -9,10 +9,12 @@ uses (``model="seed"``: the small-angle matrices multiplied as printed in eqs. (
 
 **Fit.** Gauss–Newton from χ = 0 with steps restricted to the separable subspace (the truncated
 SVD of the Jacobian, columns in rad/rad, central differences of the model): at each iteration
-δ = V_r·Σ_r⁻¹·U_rᵀ·(y − f(χ)) over the r singular values above ``rcond``·σ_max, so the directions
-the data cannot see stay at zero (a minimum-norm solution) instead of wandering. The model is a
-polynomial of low degree in χ (products of three error matrices), so it converges in two or three
-iterations.
+δ = V_r·Σ_r⁻¹·U_rᵀ·(y − f(χ)) over the top r singular directions, so the directions the data
+cannot see stay at zero (a minimum-norm solution) instead of wandering. The rank r counts the
+singular values of the first-order Jacobian (eq. (26)) above ``rcond``·σ_max; at the solution the
+Jacobian of the full model is checked against the same tolerance (a warning when its second-order
+terms would lift a further direction above it). The model is a polynomial of low degree in χ
+(products of three error matrices), so it converges in two or three iterations.
 
 **Uncertainty.** s² = Σ residual² / ν with ν = 3n − r degrees of freedom (one pooled variance for
 the three components), and Cov(χ̂) = s²·(JᵀJ)⁺ with the pseudo-inverse truncated at rank r
@@ -24,9 +26,9 @@ not on η at all: "the intersection error has no effect on the orientation error
 The full model sees the individual errors only through products of two errors, whose share of the
 Jacobian is of order |χ| (≈10⁻⁴ for a table within its allocation) — below ``rcond`` = 10⁻³: such
 directions are reported as inseparable rather than estimated with a u larger than the error
-itself. The separable combinations are read from the row space of the first-order Jacobian
-(at χ = 0, :meth:`Turntable.linear_coefficients`, where they are exact sums) in reduced row-echelon form with the errors in χ order, so
-they come out as named sums; each is estimated as C·χ̂ with u from C·Cov·Cᵀ. An error is
+itself. The separable combinations are read from the row space of the first-order Jacobian (at
+χ = 0, :meth:`Turntable.linear_coefficients`, where they are exact sums) in reduced row-echelon
+form with the errors in χ order, so they come out as named sums; each is estimated as C·χ̂ with u from C·Cov·Cᵀ. An error is
 identifiable alone when its unit vector lies in that row space. Parameters the positions cannot
 separate are grouped (connected through the null space) and each group says what further
 measurement would separate it (:func:`rotacal.turntable.identify_design.advice`).
@@ -266,18 +268,17 @@ def _fit(
     phi2: np.ndarray,
     y: np.ndarray,
     model: str,
-    rcond: float,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
-    """Gauss–Newton on the truncated-SVD subspace: (χ̂, f(χ̂), J(χ̂), rank, iterations)."""
-    p = len(table.angular_error_names)
-    chi = np.zeros(p)
+    rank: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Gauss–Newton on the top-``rank`` right singular directions of the Jacobian at each
+    iterate (a truncated-SVD step): (χ̂, f(χ̂), J(χ̂), iterations)."""
+    chi = np.zeros(len(table.angular_error_names))
     target = y.reshape(-1)
     iterations = 0
     while iterations < _MAX_ITERATIONS:
         iterations += 1
         f, jac = model_and_jacobian(table, phi1, phi2, chi, model)
         u, s, vt = np.linalg.svd(jac, full_matrices=False)
-        rank = int(np.sum(s > rcond * s[0])) if s[0] > 0 else 0
         step = vt[:rank].T @ ((u[:, :rank].T @ (target - f.reshape(-1))) / s[:rank])
         chi = chi + step
         if np.max(np.abs(chi)) > SMALL_ANGLE_LIMIT_RAD:
@@ -285,12 +286,10 @@ def _fit(
                 "the fit leaves the small-angle model (an error beyond 0.1 rad): the orientation "
                 "errors are not in arcsec, or the table's chain is not the one measured."
             )
-        if np.max(np.abs(step)) <= 1e-12 * max(1.0, float(np.max(np.abs(chi))) / ARCSEC) * ARCSEC:
+        if np.max(np.abs(step)) <= 1e-10 * max(float(np.max(np.abs(chi))), ARCSEC):
             break
     f, jac = model_and_jacobian(table, phi1, phi2, chi, model)
-    s = np.linalg.svd(jac, compute_uv=False)
-    rank = int(np.sum(s > rcond * s[0])) if s[0] > 0 else 0
-    return chi, f, jac, rank, iterations
+    return chi, f, jac, iterations
 
 
 def identify_turntable(
@@ -367,7 +366,11 @@ def identify_turntable(
             "3 readings; the table has up to 5 separable combinations)."
         )
     names = table.angular_error_names
-    chi, f, jac, rank, iterations = _fit(table, phi1, phi2, y, model, float(rcond))
+    # the rank from the first-order Jacobian (exact 0, ±1, sines and cosines), checked at the
+    # solution below: the full model adds products of errors, O(|χ|) of the Jacobian
+    sv0, vt0 = right_singular(first_order_rows(table, phi1, phi2))
+    rank = int(np.sum(sv0 > rcond * sv0[0])) if sv0[0] > 0 else 0
+    chi, f, jac, iterations = _fit(table, phi1, phi2, y, model, rank)
     dof = 3 * n - rank
     if dof < 1:
         raise CaptureError(
@@ -378,9 +381,9 @@ def identify_turntable(
     s2 = float(np.sum(resid**2)) / dof
     _, sv, vt = np.linalg.svd(jac, full_matrices=False)
     cov = s2 * (vt[:rank].T / sv[:rank] ** 2) @ vt[:rank]
+    second_order = sv.size > rank and sv[rank] > rcond * sv[0]
 
     # separable combinations from the first-order row space (exact sums at χ = 0)
-    _, vt0 = right_singular(first_order_rows(table, phi1, phi2))
     rows = _rref(vt0[:rank])
     k = t_ppf(0.5 + _COVERAGE / 2.0, dof)
     combos = []
@@ -415,6 +418,12 @@ def identify_turntable(
     next_deg, design = recommend(table, phi1, phi2, next_positions, design_step_deg)
     rms = {c: float(np.sqrt(np.mean(resid[:, j] ** 2))) / ARCSEC for j, c in enumerate(COMPONENTS)}
     warnings = _warnings(dof, rms)
+    if second_order:
+        warnings.append(
+            f"at the solution the full model's second-order terms separate a further direction "
+            f"(σ/σmax = {sv[rank] / sv[0]:.2g} > rcond {rcond:g}): the errors are large for the "
+            "small-angle model; that direction is still reported as inseparable."
+        )
     allocation = None
     if bounds_arcsec is not None:
         allocation = compare_with_bounds(combos, bounds_arcsec, k, bounds_source, table)
