@@ -66,6 +66,9 @@ def test_refusals_are_one_line(tmp_path, twin):
         run("turntable", "identify", str(path), "--budget", str(nobudget)), "upper_bounds_arcmin"
     )
     one_line_error(
+        run("turntable", "identify", str(path), "--design-step-deg", "7"), "--design-step-deg"
+    )
+    one_line_error(
         run("simulate", "orientation", "--out", str(tmp_path / "x.csv"), "--error", "zz=1"),
         "zz",
     )

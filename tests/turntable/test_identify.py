@@ -163,6 +163,8 @@ def test_too_few_positions():
         identify_turntable(*(c[:1] for c in _columns()))
     with pytest.raises(ConfigError, match="model"):
         identify_turntable(*_columns(), model="paper")
+    with pytest.raises(ConfigError, match="rcond"):
+        identify_turntable(*_columns(), rcond=1e-300)
     with pytest.raises(ConfigError, match="design step"):
         identify_turntable(*_columns(), design_step_deg=7.0)
 

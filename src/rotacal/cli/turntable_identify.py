@@ -91,7 +91,7 @@ def _budget_bounds(path: str) -> dict[str, float | None]:
 )
 @click.option(
     "--rcond",
-    type=float,
+    type=click.FloatRange(1e-9, 1.0, max_open=True),
     default=1e-3,
     show_default=True,
     help="Directions with singular value below rcond·σmax are reported as inseparable.",
@@ -99,7 +99,7 @@ def _budget_bounds(path: str) -> dict[str, float | None]:
 @click.option(
     "--next",
     "next_positions",
-    type=int,
+    type=click.IntRange(0, 100),
     default=6,
     show_default=True,
     help="How many positions to recommend measuring next (D-optimal).",
@@ -135,11 +135,16 @@ def turntable_identify_cmd(
     from rotacal.turntable import load_turntable, seed_table
     from rotacal.turntable.budget import budget_allocation
     from rotacal.turntable.identify import ARCSEC, identify_turntable
+    from rotacal.turntable.identify_design import candidate_grid
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     if kw.pop("specs") is not None:
         raise ConfigError("--specs: turntable identify takes no Type B inputs; drop the option.")
+    try:
+        candidate_grid(design_step_deg)
+    except ConfigError as e:
+        raise ConfigError(f"--design-step-deg: {e}") from None
     table = seed_table() if config_path is None else load_turntable(Path(config_path))
     bounds: dict[str, float | None] | None = None
     source = ""

@@ -75,6 +75,8 @@ _MAX_ITERATIONS = 30
 #: The measured angles' range (deg): one turn either way.
 _ANGLE_LIMIT_DEG = 360.0
 _COVERAGE = 0.95
+#: The smallest rank tolerance: the first-order Jacobian's null directions are zero to ~1e-16.
+_RCOND_MIN = 1e-9
 #: Entries of a first-order row basis below this are zeros (they are exact 0, ±1, cos, sin).
 _TINY = 1e-9
 
@@ -323,7 +325,7 @@ def identify_turntable(
     model : {"seed", "exact"}
         The forward model's error matrices (:meth:`Turntable.orientation_error`).
     rcond : float
-        Directions of the Jacobian with σ_i < rcond·σ_max are inseparable (0 < rcond < 1).
+        Directions of the Jacobian with σ_i < rcond·σ_max are inseparable (10⁻⁹ ≤ rcond < 1).
     bounds_arcsec : mapping, optional
         Upper bounds of an allocation (arcsec; ``None`` for no bound) to compare with.
     bounds_source : str
@@ -354,8 +356,11 @@ def identify_turntable(
 
     if model not in ("seed", "exact"):
         raise ConfigError(f"model {model!r} is unknown: use 'seed' or 'exact'.")
-    if not (isinstance(rcond, (int, float)) and 0.0 < float(rcond) < 1.0):
-        raise ConfigError(f"rcond must be a number between 0 and 1, got {rcond!r}.")
+    if not (isinstance(rcond, (int, float)) and _RCOND_MIN <= float(rcond) < 1.0):
+        raise ConfigError(
+            f"rcond must be a number from {_RCOND_MIN:g} to below 1 (default 1e-3), got {rcond!r}: "
+            "below it, rounding noise of the Jacobian would count as a separable direction."
+        )
     table = _seed_cached() if table is None else table
     _two_angles(table)
     phi1, phi2, y = _inputs(phi1_deg, phi2_deg, dpsi_arcsec, dtheta_arcsec, dgamma_arcsec)
