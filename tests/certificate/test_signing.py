@@ -378,3 +378,26 @@ def test_a_certificate_not_yet_valid_on_the_issue_date_is_refused(keys) -> None:
     signer = load_signer(*keys["ec"])
     with pytest.raises(ConfigError, match="not yet valid on the date of issue 2024-01-01"):
         signer.check_valid_on(dt.date(2024, 1, 1))
+
+
+def test_verify_follows_the_output_convention(signed: Path, tmp_path: Path) -> None:
+    """``wrote`` line, --overwrite, provenance and warnings, the same JSON run to run, and no
+    --json over the certificate's own files."""
+    target = tmp_path / "verdict.json"
+    first = CliRunner().invoke(cli, ["verify", str(signed), "--json", str(target)])
+    assert first.exit_code == 0 and f"wrote {target}" in first.stderr
+    doc = json.loads(target.read_text())
+    assert doc["warnings"] == [] and doc["provenance"]["command"] == "verify"
+    assert doc["provenance"]["inputs"][0]["path"].endswith("certificate.xml")
+    again = CliRunner().invoke(cli, ["verify", str(signed), "--json", str(target)])
+    assert again.exit_code == 2 and "--overwrite" in again.stderr
+    text = target.read_bytes()
+    assert (
+        CliRunner()
+        .invoke(cli, ["verify", str(signed), "--json", str(target), "--overwrite"])
+        .exit_code
+        == 0
+    )
+    assert target.read_bytes() == text
+    over = CliRunner().invoke(cli, ["verify", str(signed), "--json", str(signed / "results.json")])
+    assert over.exit_code == 2 and not over.stdout

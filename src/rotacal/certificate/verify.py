@@ -100,7 +100,7 @@ class Verification:
         if self.problems:
             return f"{head}: NOT VERIFIED — " + "; ".join(self.problems)
         assert self.signer is not None
-        trust = "chains to the trust anchor" if self.signer["trusted"] else "no --trust given"
+        trust = "trusted through --trust" if self.signer["trusted"] else "no --trust given"
         parts = [
             f"signed by {self.signer['name']} (certificate SHA-256 "
             f"{self.signer['fingerprint_sha256'][:16]}…, {trust})",

@@ -7,7 +7,7 @@ import sys
 import click
 
 from ._app import cli
-from ._common import _check_outputs, _write_json
+from ._common import INPUT_FILE, _check_outputs, _write_json
 from ._help import example
 
 
@@ -22,6 +22,7 @@ from ._help import example
 @click.argument("path", metavar="PATH")
 @click.option(
     "--trust",
+    type=INPUT_FILE,
     metavar="CERT.pem",
     default=None,
     help="Trust anchors (PEM): the signer's certificate must be one of them or chain to one, "
@@ -36,6 +37,7 @@ from ._help import example
 @click.option(
     "--plan",
     "plan",
+    type=INPUT_FILE,
     metavar="PLAN.toml",
     default=None,
     help="The plan file [default: the plan results.json names, beside the certificate folder].",
@@ -62,6 +64,7 @@ def verify_command(
     """
     from rotacal.certificate.verify import verify_certificate
 
+    _declare_certificate(path)
     _check_outputs(json_path, None, overwrite)
     found = verify_certificate(path, trust=trust, recompute=recompute, plan=plan)
     _write_json(found.to_dict(), json_path)
@@ -71,3 +74,22 @@ def verify_command(
             click.echo(f"note: {note}", err=True)
     if not found.ok:
         sys.exit(1)
+
+
+def _declare_certificate(path: str) -> None:
+    """Declare the certificate's files as the command's inputs: certificate.xml in the
+    provenance, and no --json may replace it or results.json."""
+    from pathlib import Path
+
+    from rotacal.io.outputs import InputFile
+
+    from ._common import _INPUT_PATHS_KEY, _INPUTS_KEY
+
+    ctx = click.get_current_context()
+    given = Path(path)
+    xml = given / "certificate.xml" if given.is_dir() else given
+    for file in (xml, xml.parent / "results.json"):
+        if file.is_file():
+            ctx.meta.setdefault(_INPUTS_KEY, []).append(InputFile(str(file), f"PATH {file}"))
+    if xml.is_file():
+        ctx.meta.setdefault(_INPUT_PATHS_KEY, {})["path"] = [str(xml)]
