@@ -12,6 +12,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 from cryptography import x509
@@ -131,10 +132,10 @@ def keys(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
 def signed(tmp_path_factory: pytest.TempPathFactory, keys: dict[str, Any]) -> Path:
     """A plan of one measurement on a small twin, certified and signed with the CA's RSA signer."""
     folder = tmp_path_factory.mktemp("signed")
-    result = _run(
-        "simulate", "gyro-rates", "--samples-per-point", "400", "--out", str(folder / "rates.npz")
-    )
-    assert result.exit_code == 0, result.output
+    # a rate-table test: 11 set rates, 200 samples each, S = 0.0125 V/(°/s), bias 0.01 V
+    rates = np.repeat(np.linspace(-100.0, 100.0, 11), 200)
+    noise = np.random.default_rng(21).normal(0.0, 2e-3, rates.size)
+    np.savez(folder / "rates.npz", rate_deg_s=rates, output=0.0125 * rates + 0.01 + noise)
     measurement = {
         "name": "Scale factor",
         "command": "gyro scale-factor",
@@ -198,15 +199,15 @@ def test_another_trust_anchor_is_refused(signed: Path, keys) -> None:
     assert "does not chain to --trust" in line and SIGNER in line
 
 
-def test_the_signed_dcc_is_valid_against_ptbs_schema_with_xmldsig(signed: Path, dcc_schema) -> None:
-    """xmlschema (not libxml2, which certify uses) with PTB's DCC 3.1.2 and W3C's xmldsig."""
+def test_the_signed_dcc_is_valid_against_ptbs_schema_with_xmldsig(signed: Path) -> None:
+    """xmlschema (not libxml2, which certify uses) with PTB's DCC 3.1.2 from the shared standards
+    folder and W3C's xmldsig schema."""
     import signxml
     import xmlschema
 
+    dcc = Path(__file__).resolve().parents[3] / "shared" / "standards" / "dcc" / "dcc.xsd"
     xsd = Path(signxml.__file__).parent / "schemas" / "xmldsig-core-schema.xsd"
-    schema = xmlschema.XMLSchema(
-        [dcc_schema.url, str(xsd)], build=True, base_url=str(Path(dcc_schema.url).parent)
-    )
+    schema = xmlschema.XMLSchema([str(dcc), str(xsd)], base_url=str(dcc.parent))
     root = etree.parse(str(signed / "certificate.xml")).getroot()
     assert root.find("dcc:comment/ds:Signature", NS) is not None
     schema.validate(str(signed / "certificate.xml"))
@@ -340,21 +341,18 @@ def test_unusable_input_is_exit_2(tmp_path: Path) -> None:
     ],
 )
 def test_a_bad_signing_key_or_certificate_issues_nothing(
-    signed: Path, keys, tmp_path_factory, tmp_path: Path, monkeypatch, key, cert, said
+    signed: Path, keys, tmp_path: Path, monkeypatch, key, cert, said
 ) -> None:
     monkeypatch.delenv("ROTACAL_SIGN_PASSPHRASE", raising=False)
-    store = tmp_path_factory.mktemp("records") / "records.sqlite"
-    monkeypatch.setenv("ROTACAL_DB", f"sqlite:///{store}")
     folder = keys["folder"]
     for name in ("plan.toml", "rates.npz"):
         shutil.copy(signed.parent / name, tmp_path / name)
-    plan = tmp_path / "plan.toml"
-    plan.write_text(plan.read_text().replace('number = "RC-2026-0042"', 'number = "auto"'))
     result = CliRunner().invoke(
         cli,
         [
             "certify",
-            str(plan),
+            str(tmp_path / "plan.toml"),
+            "--no-record",
             "--sign-key",
             str(folder / f"{key}.key"),
             "--sign-cert",
@@ -363,6 +361,27 @@ def test_a_bad_signing_key_or_certificate_issues_nothing(
     )
     assert result.exit_code == 2, result.output
     assert said in result.output and result.output.count("\n") == 1, result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan.toml", "rates.npz"]
+
+
+def test_an_expired_certificate_draws_no_number(signed: Path, keys, tmp_path: Path) -> None:
+    """The signer is refused before the records store is asked anything."""
+    from rotacal.certificate.issue import certify
+
+    asked: list[str] = []
+
+    class Registry:
+        def __getattr__(self, name: str) -> Any:
+            asked.append(name)
+            raise AssertionError(f"the store was asked {name}")
+
+    for name in ("plan.toml", "rates.npz"):
+        shutil.copy(signed.parent / name, tmp_path / name)
+    plan = tmp_path / "plan.toml"
+    plan.write_text(plan.read_text().replace('number = "RC-2026-0042"', 'number = "auto"'))
+    with pytest.raises(ConfigError, match="expired on the date of issue"):
+        certify(plan, registry=Registry(), signer=load_signer(*keys["expired"]))  # type: ignore[arg-type]
+    assert asked == []
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plan.toml", "rates.npz"]
 
 
