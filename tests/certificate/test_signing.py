@@ -187,7 +187,7 @@ def test_the_signed_certificate_verifies_against_its_ca(signed: Path, keys) -> N
     code, _, doc = _verify(signed, "--trust", str(keys["ca"]))
     assert code == 0 and set(KEYS) <= set(doc)
     assert doc["signed"] and doc["signature_valid"] and doc["schema_valid"] and doc["consistent"]
-    assert doc["recomputed"] is None and doc["problems"] == []
+    assert doc["recomputed"] is None and doc["problems"] == [] and doc["pdf_matches"] is True
     cert = x509.load_pem_x509_certificate(keys["rsa"][1].read_bytes())
     assert doc["signer"]["name"] == SIGNER and doc["signer"]["trusted"] is True
     assert doc["signer"]["fingerprint_sha256"] == cert.fingerprint(hashes.SHA256()).hex()
@@ -240,6 +240,7 @@ def test_an_ecdsa_signature_verifies_with_its_own_certificate(signed: Path, keys
     folder = signed.parent / "ec-copy"
     shutil.copytree(signed, folder)
     (folder / "certificate.xml").write_bytes(out)
+    (folder / "certificate.pdf").unlink()  # it names the RSA-signed XML's hash
     code, line, doc = _verify(folder, "--trust", str(keys["ec"][1]))
     shutil.rmtree(folder)
     assert code == 0, line
@@ -300,6 +301,18 @@ def test_a_swapped_embedded_certificate_is_caught_and_named(copy: Path, keys) ->
     code, line, doc = _verify(copy)
     assert code == 1 and not doc["signature_valid"]
     assert "CN=Mallory" in line and "embedded certificate was replaced" in line
+
+
+def test_a_pdf_of_another_certificate_xml_is_caught(copy: Path) -> None:
+    import hashlib
+
+    pdf = copy / "certificate.pdf"
+    digest = hashlib.sha256((copy / "certificate.xml").read_bytes()).hexdigest().encode()
+    other = digest[:-1] + (b"0" if digest[-1:] != b"0" else b"1")
+    pdf.write_bytes(pdf.read_bytes().replace(digest, other))
+    code, line, doc = _verify(copy)
+    assert code == 1 and doc["pdf_matches"] is False and doc["signature_valid"]
+    assert "certificate.pdf does not name the SHA-256 of this certificate.xml" in line
 
 
 def test_a_removed_signature_is_caught(copy: Path) -> None:

@@ -73,6 +73,7 @@ class Verification:
     problems: tuple[str, ...]
     notes: tuple[str, ...]
     inputs_checked: int
+    pdf_matches: bool | None = None
 
     @property
     def ok(self) -> bool:
@@ -90,6 +91,7 @@ class Verification:
             "consistent": self.consistent,
             "recomputed": self.recomputed,
             "inputs_checked": self.inputs_checked,
+            "pdf_matches": self.pdf_matches,
             "problems": list(self.problems),
             "notes": list(self.notes),
         }
@@ -108,6 +110,8 @@ class Verification:
             f"valid DCC {SCHEMA_VERSION}",
             "results.json agrees",
         ]
+        if self.pdf_matches:
+            parts.append("certificate.pdf names this certificate.xml")
         if self.inputs_checked:
             parts.append(f"plan and captures match ({self.inputs_checked} files)")
         if self.recomputed:
@@ -290,6 +294,23 @@ def _digest_problem(message: str) -> str:
             "the document differs from the signed one)"
         )
     return f"the signed properties or key information were changed after signing ({message})"
+
+
+def _check_pdf(folder: Path, data: bytes, problems: list[str], notes: list[str]) -> bool | None:
+    """Whether certificate.pdf names the SHA-256 of this certificate.xml (a signed certificate's
+    PDF carries it on its last page and in its XMP metadata, which PDF/A keeps uncompressed)."""
+    pdf = folder / "certificate.pdf"
+    if not pdf.is_file():
+        notes.append("no certificate.pdf beside certificate.xml: the PDF was not checked")
+        return None
+    digest = hashlib.sha256(data).hexdigest()
+    if digest.encode("ascii") in pdf.read_bytes():
+        return True
+    problems.append(
+        f"certificate.pdf does not name the SHA-256 of this certificate.xml ({digest[:16]}…): "
+        "the PDF belongs to another certificate.xml, or one of them was changed"
+    )
+    return False
 
 
 # --- 3. results.json against the XML ----------------------------------------------------------
@@ -571,6 +592,7 @@ def verify_certificate(
     signed, signature_valid, signer = _check_signature(
         data, root, Path(trust) if trust is not None else None, problems, notes
     )
+    pdf_matches = _check_pdf(folder, data, problems, notes) if signed else None
     fault = validate_signed_dcc(data)
     if fault is not None:
         problems.append(
@@ -619,4 +641,5 @@ def verify_certificate(
         problems=tuple(problems),
         notes=tuple(notes),
         inputs_checked=checked,
+        pdf_matches=pdf_matches,
     )
