@@ -17,7 +17,7 @@ import pytest
 from click.testing import CliRunner
 from cryptography import x509
 from cryptography.hazmat.primitives import hashes, serialization
-from cryptography.hazmat.primitives.asymmetric import ec, rsa
+from cryptography.hazmat.primitives.asymmetric import ec, ed25519, rsa
 from cryptography.x509.oid import NameOID
 from lxml import etree
 
@@ -81,7 +81,8 @@ def make_cert(
             x509.AuthorityKeyIdentifier.from_issuer_public_key(issuer[0].public_key()),
             critical=False,
         )
-    return builder.sign(signing_key, hashes.SHA256())
+    algorithm = None if isinstance(signing_key, ed25519.Ed25519PrivateKey) else hashes.SHA256()
+    return builder.sign(signing_key, algorithm)
 
 
 def write_pair(
@@ -108,7 +109,7 @@ def _run(*args: str) -> Any:
 def keys(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """A CA (ECDSA) and its RSA signer, a self-signed ECDSA signer, another ECDSA key."""
     folder = tmp_path_factory.mktemp("keys")
-    ca_key = ec.generate_private_key(ec.SECP256R1())
+    ca_key, ed_key = ec.generate_private_key(ec.SECP256R1()), ed25519.Ed25519PrivateKey.generate()
     ca = make_cert(ca_key, "Rate Lab CA", ca=True, days=(-3650, 7300))
     rsa_key = rsa.generate_private_key(public_exponent=65537, key_size=2048)
     ec_key, other_key = (
@@ -122,6 +123,7 @@ def keys(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         "other": write_pair(folder, "other", other_key, make_cert(other_key, "Mallory")),
         "expired": write_pair(folder, "expired", ec_key, make_cert(ec_key, days=(-800, -400))),
         "encrypted": write_pair(folder, "encrypted", ec_key, make_cert(ec_key), b"s3cret"),
+        "edwards": write_pair(folder, "edwards", ed_key, make_cert(ed_key)),
         "ca": folder / "ca.pem",
     }
     out["ca"].write_bytes(ca.public_bytes(serialization.Encoding.PEM))
@@ -351,6 +353,7 @@ def test_unusable_input_is_exit_2(tmp_path: Path) -> None:
         ("missing", "ec", "cannot be read"),
         ("encrypted", "encrypted", "is encrypted: set its passphrase in ROTACAL_SIGN_PASSPHRASE"),
         ("ec", "other", "does not match the certificate"),
+        ("edwards", "edwards", "cannot sign a DCC here; use an RSA or ECDSA key"),
     ],
 )
 def test_a_bad_signing_key_or_certificate_issues_nothing(
