@@ -84,5 +84,6 @@ def certify_command(
     click.echo(
         f"certificate {issued.number}: {len(issued.content.measurements)} measurements"
         + (f"; conformity: {summary}" if summary else "")
+        + (f"; signed by {signer.name}" if signer is not None else "")
         + (f"; recorded in {store.shown}" if store is not None else "; not recorded")
     )
