@@ -7,7 +7,7 @@ import sys
 import click
 
 from ._app import cli
-from ._common import INPUT_FILE, _check_outputs, _write_json
+from ._common import _check_outputs, _write_json
 from ._help import example
 
 
@@ -22,7 +22,6 @@ from ._help import example
 @click.argument("path", metavar="PATH")
 @click.option(
     "--trust",
-    type=INPUT_FILE,
     metavar="CERT.pem",
     default=None,
     help="Trust anchors (PEM): the signer's certificate must be one of them or chain to one, "
@@ -37,7 +36,6 @@ from ._help import example
 @click.option(
     "--plan",
     "plan",
-    type=INPUT_FILE,
     metavar="PLAN.toml",
     default=None,
     help="The plan file [default: the plan results.json names, beside the certificate folder].",
@@ -64,7 +62,7 @@ def verify_command(
     """
     from rotacal.certificate.verify import verify_certificate
 
-    _declare_certificate(path)
+    _declare_inputs(path, trust, plan)
     _check_outputs(json_path, None, overwrite)
     found = verify_certificate(path, trust=trust, recompute=recompute, plan=plan)
     _write_json(found.to_dict(), json_path)
@@ -76,9 +74,9 @@ def verify_command(
         sys.exit(1)
 
 
-def _declare_certificate(path: str) -> None:
-    """Declare the certificate's files as the command's inputs: certificate.xml in the
-    provenance, and no --json may replace it or results.json."""
+def _declare_inputs(path: str, trust: str | None, plan: str | None) -> None:
+    """Declare the files verify reads as the command's inputs: certificate.xml, --trust and
+    --plan in the provenance, and no --json may replace them or results.json."""
     from pathlib import Path
 
     from rotacal.io.outputs import InputFile
@@ -88,8 +86,16 @@ def _declare_certificate(path: str) -> None:
     ctx = click.get_current_context()
     given = Path(path)
     xml = given / "certificate.xml" if given.is_dir() else given
-    for file in (xml, xml.parent / "results.json"):
+    named: dict[str, Path | None] = {
+        "path": xml,
+        "trust": Path(trust) if trust else None,
+        "plan": Path(plan) if plan else None,
+    }
+    inputs = [("PATH", xml), ("PATH", xml.parent / "results.json")]
+    inputs += [(f"--{n}", f) for n, f in named.items() if n != "path" and f is not None]
+    for label, file in inputs:
         if file.is_file():
-            ctx.meta.setdefault(_INPUTS_KEY, []).append(InputFile(str(file), f"PATH {file}"))
-    if xml.is_file():
-        ctx.meta.setdefault(_INPUT_PATHS_KEY, {})["path"] = [str(xml)]
+            ctx.meta.setdefault(_INPUTS_KEY, []).append(InputFile(str(file), f"{label} {file}"))
+    for name, given_file in named.items():
+        if given_file is not None and given_file.is_file():
+            ctx.meta.setdefault(_INPUT_PATHS_KEY, {})[name] = [str(given_file)]
