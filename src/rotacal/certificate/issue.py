@@ -19,7 +19,7 @@ import shutil
 import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from rotacal.errors import ConfigError, RotacalError
 from rotacal.plan.model import Measurement, Plan
@@ -30,6 +30,9 @@ from .conformity import judge
 from .content import CaptureRef, CertificateContent, Figure, MeasurementResult
 from .methods import method_of
 from .quantities import reported_quantities
+
+if TYPE_CHECKING:
+    from .sign import Signer
 
 __all__ = [
     "IssuedCertificate",
@@ -245,8 +248,9 @@ def _draw(content: CertificateContent, folder: Path) -> CertificateContent:
     return dataclasses.replace(content, measurements=tuple(measurements))
 
 
-def _render(content: CertificateContent, folder: Path) -> None:
-    """Write results.json, certificate.xml (checked against the DCC schema) and certificate.pdf."""
+def _render(content: CertificateContent, folder: Path, signer: Signer | None = None) -> None:
+    """Write results.json, certificate.xml (checked against the DCC schema; signed with
+    ``signer``, whose signature the PDF's last page names) and certificate.pdf."""
     from .dcc import dcc_xml, validate_dcc
     from .pdf import render_pdf
 
@@ -254,8 +258,13 @@ def _render(content: CertificateContent, folder: Path) -> None:
     (folder / JSON_NAME).write_text(text + "\n", encoding="utf-8")
     xml = dcc_xml(content)
     validate_dcc(xml)  # a certificate that is not a valid DCC is not issued
+    signature = None
+    if signer is not None:
+        from .sign import sign_dcc
+
+        xml, signature = sign_dcc(xml, signer)
     (folder / XML_NAME).write_bytes(xml)
-    (folder / PDF_NAME).write_bytes(render_pdf(content, folder))
+    (folder / PDF_NAME).write_bytes(render_pdf(content, folder, signature=signature))
 
 
 def _check_free(folder: Path, overwrite: bool) -> None:
@@ -344,6 +353,7 @@ def certify(
     registry: Registry | None = None,
     into: str | Path | None = None,
     staging_in: str | Path | None = None,
+    signer: Signer | None = None,
 ) -> IssuedCertificate:
     """Run a plan's measurements and issue its certificate (INTERFACE.md, ``rotacal certify``).
 
@@ -368,6 +378,9 @@ def certify(
     staging_in : str or Path, optional
         Where the hidden staging folder is made [default: the certificate folder's parent]; it
         must be on the same file system as the certificate folder.
+    signer : Signer, optional
+        Sign certificate.xml (XAdES-BES, :func:`rotacal.certificate.sign.load_signer`); its
+        certificate must be valid on the date of issue [default: unsigned].
 
     Returns
     -------
@@ -380,6 +393,8 @@ def certify(
         written and nothing recorded.
     """
     plan = read_plan(plan_path)
+    if signer is not None:  # refused before anything is measured or a number drawn
+        signer.check_valid_on(plan.issue_date)
     if registry is not None:
         registry.check_plan(plan)
     elif plan.number == "auto":
@@ -408,7 +423,7 @@ def certify(
         try:
             folder = target if target is not None else home / number
             _check_free(folder, overwrite)
-            content = render_into(content, number, staging)
+            content = render_into(content, number, staging, signer)
             publish(content, staging, folder, registry, overwrite=overwrite)
         except BaseException as e:
             if plan.number == "auto" and registry is not None:
@@ -446,11 +461,14 @@ def measure_into(
     return _draw(build_content(plan, runs, plan.number, __version__), staging)
 
 
-def render_into(content: CertificateContent, number: str, staging: Path) -> CertificateContent:
-    """Give the measured ``content`` its ``number`` and write results.json, certificate.xml and
-    certificate.pdf into ``staging`` (beside the figures :func:`measure_into` drew)."""
+def render_into(
+    content: CertificateContent, number: str, staging: Path, signer: Signer | None = None
+) -> CertificateContent:
+    """Give the measured ``content`` its ``number`` and write results.json, certificate.xml
+    (signed with ``signer``) and certificate.pdf into ``staging`` (beside the figures
+    :func:`measure_into` drew)."""
     content = dataclasses.replace(content, number=number)
-    _render(content, staging)
+    _render(content, staging, signer)
     return content
 
 

@@ -31,11 +31,14 @@ from collections.abc import Iterable, Mapping
 from decimal import Decimal
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .conformity import RULE_TEXT
 from .content import CertificateContent, Conformity, MeasurementResult, ReportedQuantity
 from .quantities import standard_uncertainty
+
+if TYPE_CHECKING:
+    from .sign import SignatureInfo
 
 __all__ = [
     "END_MARKER",
@@ -321,10 +324,13 @@ def _rules(used: Iterable[str]) -> list[dict[str, str]]:
     return rules
 
 
-def certificate_data(content: CertificateContent, folder: Path) -> dict[str, Any]:
+def certificate_data(
+    content: CertificateContent, folder: Path, signature: SignatureInfo | None = None
+) -> dict[str, Any]:
     """The certificate as the template reads it: every text in its printed form.
 
-    ``folder`` holds the figure files that ``MeasurementResult.figures`` name.
+    ``folder`` holds the figure files that ``MeasurementResult.figures`` name; ``signature``
+    describes the signature of certificate.xml, which the last page names.
     """
     plan = content.plan
     conformity = _conformity(content)
@@ -383,6 +389,7 @@ def certificate_data(content: CertificateContent, folder: Path) -> dict[str, Any
             for m in content.measurements
             for c in m.captures
         ],
+        "signature": _signature(signature),
         "statements": {
             "only_item": ONLY_THE_ITEM,
             "not_reproduced": NOT_REPRODUCED,
@@ -391,7 +398,23 @@ def certificate_data(content: CertificateContent, folder: Path) -> dict[str, Any
     }
 
 
-def render_pdf(content: CertificateContent, folder: Path) -> bytes:
+def _signature(signature: SignatureInfo | None) -> dict[str, str] | None:
+    """The last page's signature block: who signed certificate.xml, with which certificate, and
+    the SHA-256 of the signed file — which ties this PDF to that DCC (a reader compares it with
+    ``sha256sum certificate.xml``; ``rotacal verify`` checks the signature itself)."""
+    if signature is None:
+        return None
+    return {
+        "signer": signature.signer,
+        "fingerprint": signature.fingerprint_sha256,
+        "time": signature.signing_time.replace("T", " ").replace("+00:00", " UTC"),
+        "xml_sha256": signature.xml_sha256,
+    }
+
+
+def render_pdf(
+    content: CertificateContent, folder: Path, signature: SignatureInfo | None = None
+) -> bytes:
     """The certificate as a PDF/A-2b document.
 
     Parameters
@@ -400,6 +423,10 @@ def render_pdf(content: CertificateContent, folder: Path) -> bytes:
         What the certificate states.
     folder : Path
         The folder that holds the figure files (SVG) named by each measurement's ``figures``.
+    signature : SignatureInfo, optional
+        The signature of certificate.xml (:func:`rotacal.certificate.sign.sign_dcc`): the last
+        page then names the signer, the certificate's SHA-256 fingerprint and the signed XML's
+        SHA-256.
 
     Returns
     -------
@@ -411,7 +438,7 @@ def render_pdf(content: CertificateContent, folder: Path) -> bytes:
     import typst
 
     template: bytes = resources.files("rotacal.certificate").joinpath(_TEMPLATE).read_bytes()
-    data = json.dumps(certificate_data(content, Path(folder)), ensure_ascii=False)
+    data = json.dumps(certificate_data(content, Path(folder), signature), ensure_ascii=False)
     # only the fonts inside the typst wheel (Libertinus Serif, New Computer Modern, DejaVu Sans
     # Mono): the machine's own fonts never enter, so every machine typesets the same
     fonts = typst.Fonts(include_system_fonts=False, include_embedded_fonts=True, font_paths=[])

@@ -41,6 +41,7 @@ COMMAND_MODULES = {
     "simulate": "simulate",
     "specs": "turntable",
     "turntable": "turntable",
+    "verify": "verify",
 }
 
 

@@ -9,6 +9,7 @@ import click
 from ._app import cli
 from ._common import _progress, _wrote
 from ._help import example
+from ._sign import load_sign_options, sign_options
 from ._store import db_option, open_db
 
 
@@ -23,6 +24,7 @@ def example_plan() -> str:
         "rotacal certify --example             # a commented plan",
         "rotacal certify plan.toml             # → a folder named by its number",
         "rotacal certify plan.toml --out cert --overwrite",
+        "rotacal certify plan.toml --sign-key lab.key --sign-cert lab.pem",
     ),
 )
 @click.argument("plan", required=False, metavar="PLAN.toml")
@@ -41,6 +43,7 @@ def example_plan() -> str:
 )
 @click.option("--overwrite", is_flag=True, help="Replace an existing certificate folder.")
 @click.option("--example", "show_example", is_flag=True, help="Print a commented plan and exit.")
+@sign_options
 def certify_command(
     plan: str | None,
     out: str | None,
@@ -48,6 +51,8 @@ def certify_command(
     no_record: bool,
     overwrite: bool,
     show_example: bool,
+    sign_key: str | None,
+    sign_cert: str | None,
 ) -> None:
     """Run a calibration plan and issue its certificate.
 
@@ -64,9 +69,12 @@ def certify_command(
         raise click.UsageError("give the plan file (PLAN.toml), or --example to see one")
     from rotacal.certificate.issue import certify, plan_measurement_count
 
+    signer = load_sign_options(sign_key, sign_cert)
     store = None if no_record else open_db(db)
     with _progress(plan_measurement_count(plan), "measuring") as advance:
-        issued = certify(plan, out=out, overwrite=overwrite, advance=advance, registry=store)
+        issued = certify(
+            plan, out=out, overwrite=overwrite, advance=advance, registry=store, signer=signer
+        )
     for name in issued.files:
         _wrote(issued.folder / name)
     verdicts = [c.verdict for m in issued.content.measurements for c in m.conformity]
@@ -76,5 +84,6 @@ def certify_command(
     click.echo(
         f"certificate {issued.number}: {len(issued.content.measurements)} measurements"
         + (f"; conformity: {summary}" if summary else "")
+        + (f"; signed by {signer.name}" if signer is not None else "")
         + (f"; recorded in {store.shown}" if store is not None else "; not recorded")
     )
