@@ -32,6 +32,7 @@ def window_option(func: F) -> F:
         "window_deg",
         default=None,
         metavar="W1,W2,…",
+        callback=lambda ctx, param, value: None if value is None else parse_windows(value),
         help="Rate accuracy and stability over consecutive windows of these angles (deg), e.g. "
         "1,10,360: each window's mean rate against --set-rate-deg-s, their spread.",
     )(func)
@@ -107,7 +108,7 @@ def _times(
 
 def add_windows(
     result: Any,
-    window_deg: str | None,
+    windows_deg: list[float] | None,
     *,
     capture: str,
     columns: Sequence[str],
@@ -115,12 +116,11 @@ def add_windows(
     settings: dict[str, Any],
 ) -> Any:
     """``result`` with the figures of ``--window-deg`` joined (unchanged without the option)."""
-    if window_deg is None:
+    if windows_deg is None:
         return result
     from rotacal.table.rate_windows import rate_windows_stream
     from rotacal.table.rate_windows_result import with_windows
 
-    windows_deg = parse_windows(window_deg)
     m = int(settings["pulses_per_rev"])
     deviation, shift, dev_u = _deviation(result, settings["selfcal"], m)
     with _naming_file(capture):

@@ -322,7 +322,7 @@ def rate_cmd(
     set_rate_deg_s: float | None,
     no_compensation: bool,
     chunked: bool | None,
-    window_deg: str | None,
+    window_deg: list[float] | None,
     workers: int | None,
     scheduler: str | None,
     columns: Sequence[str],
@@ -370,7 +370,9 @@ def rate_cmd(
         heads = _read_heads(capture, columns, group)
         with _status("timing the pulses"):
             result = calibrate_rate(heads, **settings)
-    result = add_windows(result, window_deg, capture=capture, columns=columns, group=group, settings=settings)
+    result = add_windows(
+        result, window_deg, capture=capture, columns=columns, group=group, settings=settings
+    )
     _finish_rate(result, capture, json_path, report_path)
 
 

@@ -383,7 +383,9 @@ def _finish(
         angle = ws.k * 360.0 / ws.m
         duration = angle / abs(mean)
         line = 0.0 if ws.k % ws.m == 0 else noise.line_arcsec
-        sigma_w = math.hypot(math.sqrt(2.0) * noise.jitter_s / duration, math.sqrt(2.0) * line / 3600.0 / angle)
+        sigma_w = math.hypot(
+            math.sqrt(2.0) * noise.jitter_s / duration, math.sqrt(2.0) * line / 3600.0 / angle
+        )
         rel_s = std / abs(mean)
         u_mean_rel = math.sqrt(
             (math.sqrt(2.0) * noise.jitter_s / (n * duration)) ** 2
@@ -462,14 +464,18 @@ def _noise_inputs(
     tb = spec_input(specs, "timebase.relative_error", name="timebase", unit="1")
     if compensated:
         und, _ = undetectable_input(specs)
-        line = math.hypot(deviation_u_arcsec or 0.0, 0.0 if und is None else math.hypot(und.value, und.u))
+        line = math.hypot(
+            deviation_u_arcsec or 0.0, 0.0 if und is None else math.hypot(und.value, und.u)
+        )
         if deviation_u_arcsec is None:
             notes.append(
                 "the self-calibration states no point uncertainty: the compensated angle of "
                 "windows shorter than 360° carries only the stated undetectable orders."
             )
     else:
-        grad = spec_input(specs, "encoder.graduation_error_arcsec", name="graduation", unit="arcsec")
+        grad = spec_input(
+            specs, "encoder.graduation_error_arcsec", name="graduation", unit="arcsec"
+        )
         line = 0.0 if grad is None else math.hypot(grad.value, grad.u)
         if grad is None:
             notes.append(
@@ -561,7 +567,9 @@ def rate_windows_stream(
         from rotacal.table.rate_jitter import JitterSums
 
         if pulses is None:
-            raise ConfigError("give timing_jitter_s, or pulses (the train's length) to estimate it.")
+            raise ConfigError(
+                "give timing_jitter_s, or pulses (the train's length) to estimate it."
+            )
         try:
             jitter = JitterSums(int(pulses), m)
         except CaptureError:
