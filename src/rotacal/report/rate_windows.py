@@ -11,7 +11,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from rotacal.numbers import fixed
+from rotacal.numbers import coverage, fixed, format_quantity
 from rotacal.references import cite
 from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
 from rotacal.report.motion import _style
@@ -100,21 +100,19 @@ def rate_windows_section(w: RateWindows, title: str = "Rate over angle windows")
     """The windows' table, figure and notes; each window's figures in the summary."""
     results = []
     for key in w.window_count:
-        results.append(
-            ResultRow(
-                f"rate stability over {key}°",
-                f"{fixed(w.rate_stability_percent[key], 3)} ± "
-                f"{fixed(w.rate_stability_percent_u[key], 2)} %",
-                coverage="k = 1",
-            )
-        )
-        if w.rate_accuracy_percent[key] is not None:
+        for name, value, u in (
+            ("stability", w.rate_stability_percent[key], w.rate_stability_percent_u[key]),
+            ("accuracy", w.rate_accuracy_percent[key], w.rate_accuracy_percent_u[key]),
+        ):
+            if value is None or u is None:
+                continue
+            # U = 2u: the summary's column is an expanded uncertainty (normal, p ≈ 95 %)
+            text = format_quantity(value, "%", U=2.0 * u, k=2.0, p=0.95)
             results.append(
                 ResultRow(
-                    f"rate accuracy over {key}°",
-                    f"{fixed(w.rate_accuracy_percent[key], 3)} ± "
-                    f"{fixed(w.rate_accuracy_percent_u[key], 2)} %",
-                    coverage="k = 1",
+                    f"rate {name} over {key}°",
+                    text.split(" (k", 1)[0],
+                    coverage=coverage(2.0, 0.95).strip("()"),
                 )
             )
     return Section(
