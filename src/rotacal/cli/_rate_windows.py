@@ -163,10 +163,10 @@ def print_windows(result: Any) -> None:
     windows = getattr(result, "windows", None)
     if windows is None:
         return
-    from rotacal.numbers import fixed
+    from rotacal.numbers import format_quantity
 
-    def pm(value: float | None, u: float | None) -> str:
-        return "—" if value is None or u is None else f"{fixed(value, 3)} ± {fixed(u, 2)} %"
+    def pm(value: float | None, u: float | None) -> str:  # value ± u, rounded as u (k = 1)
+        return "—" if value is None or u is None else format_quantity(value, "%", U=u)
 
     for key, count in windows.window_count.items():
         click.echo(

@@ -44,8 +44,8 @@ def rate_windows_figure(w: RateWindows) -> Figure:
         ax.axhline(0.0, color="#333", lw=0.6)
         ax.set_ylabel("rate − mean (%)", fontsize=8)
         ax.set_title(
-            f"over {key}°: {w.window_count[key]} windows, stability {fixed(s, 3)} %, "
-            f"peak {fixed(w.rate_stability_peak_percent[key], 3)} %"
+            f"over {key}°: {w.window_count[key]} windows, stability {s:#.3g} %, "
+            f"peak {w.rate_stability_peak_percent[key]:#.3g} %"
             + ("" if tr.block == 1 else f" (least and largest of each {tr.block} windows)"),
             fontsize=9,
             loc="left",
@@ -69,8 +69,8 @@ def rate_windows_figure(w: RateWindows) -> Figure:
 
 
 def _table(w: RateWindows) -> Table:
-    def pm(value: float | None, u: float | None) -> str:
-        return "—" if value is None or u is None else f"{fixed(value, 3)} ± {fixed(u, 2)} %"
+    def pm(value: float | None, u: float | None) -> str:  # value ± u, rounded as u
+        return "—" if value is None or u is None else format_quantity(value, "%", U=u)
 
     rows = [
         [
