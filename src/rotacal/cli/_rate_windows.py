@@ -72,9 +72,10 @@ def _deviation(result: Any, selfcal: Any, m: int) -> tuple[Any, int, float | Non
 
 def _times(
     result: Any, capture: str, columns: Sequence[str], group: str | None
-) -> tuple[Callable[[], Iterator[Any]], int]:
-    """The chunks of the train the rate used, and its length: the head's column read in chunks;
-    the head-averaged times (or a CSV, whose heads are padded) in memory."""
+) -> tuple[Callable[[], Iterator[Any]], int, int]:
+    """The chunks of the train the rate used, its length and the heads averaged in it: the
+    head's column read in chunks; the head-averaged times (or a CSV, whose heads are padded)
+    in memory."""
     from rotacal.io import capture_length, iter_capture_chunks, parse_column_mapping
 
     mapping = parse_column_mapping(columns)
@@ -88,7 +89,8 @@ def _times(
             t = pair_heads(heads, names).mean_times_s
         else:
             t = np.asarray(heads[int(result.head.split("_")[1])], dtype=np.float64)
-        return (lambda: iter([t])), int(t.size)
+        averaged = len(heads) if result.head == "all heads" else 1
+        return (lambda: iter([t])), int(t.size), averaged
     column = result.head
     n = capture_length(capture, column, mapping=mapping, group=group, read_options=options)
 
@@ -103,7 +105,7 @@ def _times(
         ):
             yield part[column]
 
-    return chunks, n
+    return chunks, n, 1
 
 
 def add_windows(
@@ -124,7 +126,7 @@ def add_windows(
     m = int(settings["pulses_per_rev"])
     deviation, shift, dev_u = _deviation(result, settings["selfcal"], m)
     with _naming_file(capture):
-        chunks, n = _times(result, capture, columns, group)
+        chunks, n, averaged = _times(result, capture, columns, group)
         with _sample_progress(n, "angle windows") as progress:
             done = [0]
 
@@ -142,6 +144,7 @@ def add_windows(
                 deviation_u_arcsec=dev_u,
                 timing_jitter_s=result.timing_jitter_s,
                 timebase_correction=result.timebase_correction,
+                heads_averaged=averaged,
                 specs=settings["specs"],
                 progress=step,
             )

@@ -452,6 +452,7 @@ def _noise_inputs(
     times_jitter_s: float | None,
     *,
     compensated: bool,
+    heads_averaged: int,
     deviation_u_arcsec: float | None,
     specs: Any,
     timebase_correction: float,
@@ -462,12 +463,22 @@ def _noise_inputs(
     from rotacal.uncertainty.specs import spec_input
 
     tb = spec_input(specs, "timebase.relative_error", name="timebase", unit="1")
-    if compensated:
+    if compensated or heads_averaged > 1:
         und, _ = undetectable_input(specs)
         line = math.hypot(
             deviation_u_arcsec or 0.0, 0.0 if und is None else math.hypot(und.value, und.u)
         )
-        if deviation_u_arcsec is None:
+        if heads_averaged > 1:
+            notes.append(
+                f"head-averaged times: every order of the scale's deviation but the multiples of "
+                f"{heads_averaged} cancels in the window angles"
+                + (
+                    "."
+                    if und is not None
+                    else "; those multiples count as 0 (state encoder.undetectable_harmonics_arcsec)."
+                )
+            )
+        elif deviation_u_arcsec is None:
             notes.append(
                 "the self-calibration states no point uncertainty: the compensated angle of "
                 "windows shorter than 360° carries only the stated undetectable orders."
@@ -503,6 +514,7 @@ def rate_windows_stream(
     timing_jitter_s: float | None = None,
     pulses: int | None = None,
     timebase_correction: float = 0.0,
+    heads_averaged: int = 1,
     specs: Any = None,
     progress: Callable[[int], None] | None = None,
 ) -> RateWindows:
@@ -530,9 +542,13 @@ def rate_windows_stream(
         The train's length, when σ_t is to be estimated here.
     timebase_correction : float
         δ̂, the stated mean timebase error the rates are corrected for (rate·(1 + δ̂)).
+    heads_averaged : int
+        n when the times are the average of n equally spaced heads (``--head all``): the
+        scale's orders that are not multiples of n cancel in them, as with compensation.
     specs : InstrumentSpecs, optional
         ``timebase.relative_error``, ``encoder.graduation_error_arcsec`` (uncompensated) and
-        ``encoder.undetectable_harmonics_arcsec`` (compensated) enter the uncertainty.
+        ``encoder.undetectable_harmonics_arcsec`` (compensated or head-averaged) enter the
+        uncertainty.
     progress : callable, optional
         Called with the pulses of each chunk handled.
 
@@ -587,6 +603,7 @@ def rate_windows_stream(
     noise = _noise_inputs(
         sigma_t,
         compensated=dev is not None,
+        heads_averaged=int(heads_averaged),
         deviation_u_arcsec=deviation_u_arcsec,
         specs=specs,
         timebase_correction=timebase_correction,
