@@ -104,6 +104,11 @@ def test_accuracy_stability_and_peak_against_the_closed_form(noisy):
         elif w == 1.0:  # uncompensated, the scale's 50th order is read as rate: far outside u
             off = abs(nominal.rate_stability_percent[key] - s_true)
             assert off > 5 * nominal.rate_stability_percent_u[key]
+    # the stated noise of one window rate is the spread of (measured − true) over the windows
+    for w in (1.0, 10.0):
+        _, r = window_rates(t, pulses_per_rev=M, window_deg=w, deviation_arcsec=dev)
+        spread = 100 * np.std(r / _truth_rates(cap, w) - 1)
+        assert spread == pytest.approx(comp.window_noise_percent[f"{w:g}"], rel=0.1)
     # the ripple's window average in closed form: a 1° window keeps almost all of it, and a
     # 10° window divides the 10-per-revolution part by sinc(π·10·10/360)
     assert comp.rate_stability_percent["1"] > comp.rate_stability_percent["10"]
