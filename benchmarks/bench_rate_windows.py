@@ -215,8 +215,8 @@ def main() -> None:
         one_size(n)
     print(
         "stream: × base = the windows' time over reading the same file's chunks (best of three, "
-        "same child); vs memory = the largest relative difference of any key from the in-memory "
-        "path. command: × base = `rotacal rate … --window-deg 1,10,360` over the same command "
+        "same child); vs memory = the largest relative difference of the mean rate, stability and "
+        "peak from the in-memory path. command: × base = `rotacal rate … --window-deg 1,10,360` over the same command "
         "without windows (same run)."
     )
 
