@@ -188,3 +188,12 @@ def test_refusals_name_the_window(noisy):
     with pytest.raises(ConfigError, match="twice"):
         rate_windows(t, pulses_per_rev=M, windows_deg=[10, 10.0])
     assert math.isclose(window_pitches(360, M), M)
+    bad = t.copy()
+    bad[5000] = np.nan
+    with pytest.raises(CaptureError, match="NaN or inf at pulse 5000"):
+        rate_windows_stream(
+            [bad[:4999], bad[4999:]], pulses_per_rev=M, windows_deg=[1], pulses=t.size
+        )
+    bad[5000] = bad[4998]
+    with pytest.raises(CaptureError, match="not strictly increasing at pulse 5000"):
+        rate_windows(bad, pulses_per_rev=M, windows_deg=[1])

@@ -146,6 +146,7 @@ def add_windows(
                 timebase_correction=result.timebase_correction,
                 heads_averaged=averaged,
                 specs=settings["specs"],
+                check=False,  # the rate's analysis checked the same train
                 progress=step,
             )
     return with_windows(result, windows)

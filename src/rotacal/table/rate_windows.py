@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rotacal.encoder.pulses import check_pulse_times
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
 
@@ -516,6 +517,7 @@ def rate_windows_stream(
     timebase_correction: float = 0.0,
     heads_averaged: int = 1,
     specs: Any = None,
+    check: bool = True,
     progress: Callable[[int], None] | None = None,
 ) -> RateWindows:
     """Rate accuracy and stability over angle windows from one head's pulse times in chunks.
@@ -549,6 +551,10 @@ def rate_windows_stream(
         ``timebase.relative_error``, ``encoder.graduation_error_arcsec`` (uncompensated) and
         ``encoder.undetectable_harmonics_arcsec`` (compensated or head-averaged) enter the
         uncertainty.
+    check : bool
+        Check the pulse times as they come (finite, increasing, no missing or extra pulse:
+        :func:`rotacal.encoder.pulses.check_pulse_times`, two pulses carried across chunks);
+        False when they were checked already (the rate command's analysis of the same train).
     progress : callable, optional
         Called with the pulses of each chunk handled.
 
@@ -561,7 +567,8 @@ def rate_windows_stream(
     ConfigError
         A window that is not positive or spans fewer than 2 pulse pitches.
     CaptureError
-        A record with fewer than 2 whole windows of a size (the message names the window).
+        A record with fewer than 2 whole windows of a size (the message names the window); bad
+        pulse times (``check``).
 
     References
     ----------
@@ -591,8 +598,15 @@ def rate_windows_stream(
         except CaptureError:
             notes.append("the record is too short to estimate the timing jitter: taken as 0.")
     source: Iterable[ArrayLike] = chunks() if callable(chunks) else chunks
+    tail, seen = np.zeros(0), 0
     for part in source:
         t = np.asarray(part, dtype=np.float64)
+        if check:
+            joined = np.concatenate((tail, t))
+            if joined.size >= 3:
+                check_pulse_times(joined, "head_0", first_index=seen - tail.size)
+            tail = joined[-2:].copy()
+            seen += t.size
         for ws in sums:
             ws.update(t)
         if jitter is not None:
