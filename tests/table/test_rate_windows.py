@@ -197,3 +197,32 @@ def test_refusals_name_the_window(noisy):
     bad[5000] = bad[4998]
     with pytest.raises(CaptureError, match="not strictly increasing at pulse 5000"):
         rate_windows(bad, pulses_per_rev=M, windows_deg=[1])
+
+
+def test_specifications_enter_the_budget(noisy):
+    """A stated timebase error widens the accuracy by its u (rectangular: a/√3); a stated
+    graduation error widens the uncompensated window noise by √2·u/(3600·W), not over 360°."""
+    from rotacal.uncertainty import load_specs
+
+    _, t, _ = noisy
+    specs = load_specs(
+        '[timebase]\nrelative_error = { distribution = "rectangular", half_width = 2e-6 }\n'
+        '[encoder]\ngraduation_error_arcsec = { distribution = "normal", u = 0.5 }\n'
+    )
+    kw = dict(pulses_per_rev=M, windows_deg=WINDOWS, set_rate_deg_s=RATE, timing_jitter_s=2e-7)
+    plain = rate_windows(t, **kw)
+    stated = rate_windows(t, specs=specs, **kw)
+    for w in WINDOWS:
+        key = f"{w:g}"
+        scale = stated.window_mean_rate_deg_s[key] / RATE
+        tb = 100 * 2e-6 / math.sqrt(3) * scale
+        line = 0.0 if w == 360 else 100 * math.sqrt(2) * 0.5 / 3600 / w
+        ends = line / stated.window_count[key] * scale  # the mean's two far ends
+        assert stated.rate_accuracy_percent_u[key] ** 2 == pytest.approx(
+            plain.rate_accuracy_percent_u[key] ** 2 + tb**2 + ends**2, rel=1e-9
+        )
+        assert stated.window_noise_percent[key] ** 2 == pytest.approx(
+            plain.window_noise_percent[key] ** 2 + line**2, rel=1e-9
+        )
+    assert not any("graduation_error_arcsec stated" in n for n in stated.notes)
+    assert any("graduation_error_arcsec stated" in n for n in plain.notes)
