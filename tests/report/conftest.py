@@ -105,8 +105,9 @@ def cli_runs(
             lines = str(truth["pulses_per_rev"])
             rate = str(truth["set_rate_deg_s"])
             report(
-                "rate", "rate", str(capture), "--pulses-per-rev", lines, "--set-rate-deg-s", rate
-            )
+                "rate", "rate", str(capture), "--pulses-per-rev", lines, "--set-rate-deg-s", rate,
+                "--window-deg", "1,10,360",
+            )  # fmt: skip
             report("inspect", "inspect", str(capture))
     config = folder / "table.toml"
     _run("turntable", "example", "--out", str(config))

@@ -32,6 +32,7 @@ from ._common import (
 )
 from ._dask import dask_options, run_on_dask, split_wanted
 from ._help import example
+from ._rate_windows import add_windows, print_windows, window_option, window_sections
 from ._reading import current_read_options
 
 _PULSES_PER_REV = click.option(
@@ -308,6 +309,7 @@ def _selfcal_dask(
     f"[default: chunked above {_IN_MEMORY_MAX_PULSES:.0e} pulses of the head, or "
     f"{_SELFCAL_IN_MEMORY_MAX:.0e} in all to self-calibrate, except CSV].",
 )
+@window_option
 @dask_options("one head as the streamed path takes it; NPZ without compression, HDF5 or TDMS")
 @_analysis_options
 @_names_capture
@@ -320,6 +322,7 @@ def rate_cmd(
     set_rate_deg_s: float | None,
     no_compensation: bool,
     chunked: bool | None,
+    window_deg: list[float] | None,
     workers: int | None,
     scheduler: str | None,
     columns: Sequence[str],
@@ -367,6 +370,9 @@ def rate_cmd(
         heads = _read_heads(capture, columns, group)
         with _status("timing the pulses"):
             result = calibrate_rate(heads, **settings)
+    result = add_windows(
+        result, window_deg, capture=capture, columns=columns, group=group, settings=settings
+    )
     _finish_rate(result, capture, json_path, report_path)
 
 
@@ -480,6 +486,7 @@ def _finish_rate(result: Any, capture: str, json_path: Any, report_path: Any) ->
         sections = [rate_section(result)]
         if result.selfcal is not None:
             sections.append(selfcal_section(result.selfcal))
+        sections.extend(window_sections(result))
         _write_report(
             "Angular-velocity stability of a rate table",
             _KOKUYAMA2015_TITLE,
@@ -515,6 +522,7 @@ def _print_rate(result: Any, data: dict[str, Any]) -> None:
         ):
             s_phi = element_of(_percent_of(data, "allan_relative"), "allan_relative", (i,), "%")
             click.echo(f"s({phi:.4g} deg)".ljust(19) + s_phi)
+    print_windows(result)
     for note in result.notes:
         click.echo(f"note               {note}")
 

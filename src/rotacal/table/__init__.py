@@ -17,6 +17,7 @@ if TYPE_CHECKING:
     )
     from rotacal.table.rate import RateResult, align_deviation, allan_versus_angle, calibrate_rate
     from rotacal.table.rate_file import calibrate_rate_file
+    from rotacal.table.rate_windows import RateWindows, rate_windows, rate_windows_stream
     from rotacal.table.streaming import (
         calibrate_encoder_motion_chunked,
         calibrate_fog_motion_chunked,
@@ -29,6 +30,7 @@ if TYPE_CHECKING:
 __all__ = [
     "MotionResult",
     "RateResult",
+    "RateWindows",
     "SchemeComparison",
     "align_deviation",
     "allan_versus_angle",
@@ -46,6 +48,8 @@ __all__ = [
     "fog_chunks_from_file",
     "lts_chunks_from_file",
     "position_error",
+    "rate_windows",
+    "rate_windows_stream",
 ]
 
 __getattr__, __dir__ = attach(__name__, __file__, __all__)
