@@ -47,7 +47,7 @@ def test_a_store_moves_to_either_engine_without_loss(source: str, store_url: str
     lines = [json.loads(line) for line in text.splitlines()]
     assert [line["type"] for line in lines] == [
         "rotacal-records", "setting", "counter", "counter", "voided",
-        "certificate", "certificate", "certificate",
+        "certificate", "certificate", "certificate", *["audit"] * 9,
     ]  # fmt: skip
     assert lines[4]["reason"] == "rendering failed: ünïcode"
 
