@@ -8,6 +8,7 @@ import dataclasses
 import datetime as dt
 import hashlib
 import json
+from pathlib import Path
 
 import pytest
 import sqlalchemy as sa
@@ -136,9 +137,9 @@ def test_a_failed_issue_leaves_a_voided_draft_and_no_issued_event(store_url: str
 
 
 def test_a_plan_without_an_approver_or_approved_by_its_performer_is_not_kept(
-    store_url: str,
+    tmp_path: Path,
 ) -> None:
-    store = open_store(store_url)
+    store = open_store(f"sqlite:///{tmp_path / 'records.sqlite'}")  # refused before any SQL
     for persons, needle in (
         (
             (Person("A. Operator", "performed"),),

@@ -59,7 +59,9 @@ def test_an_older_store_is_refused_until_upgraded_and_gets_its_trail(store_url: 
     ):
         open_store(store_url)
     _keep_as_before(store_url, make_content(VALUES, number="RC-2026-0001"), voided="RC-2026-0002")
-    _keep_as_before(store_url, make_content(VALUES, number="RC-2026-0003", supersedes="RC-2026-0001"))
+    _keep_as_before(
+        store_url, make_content(VALUES, number="RC-2026-0003", supersedes="RC-2026-0001")
+    )
     result = CliRunner().invoke(cli, ["records", "upgrade", "--db", store_url])
     assert result.exit_code == 0, result.output
     assert "upgraded from revision 0002 to 0003" in result.output

@@ -158,8 +158,7 @@ def show_cmd(
 
 def _event_text(e: dict[str, Any]) -> str:
     return (
-        f"{e['at'][:19]}Z  {e['from_state'] or '—'} → {e['to_state']}  by {e['who']}: "
-        f"{e['reason']}"
+        f"{e['at'][:19]}Z  {e['from_state'] or '—'} → {e['to_state']}  by {e['who']}: {e['reason']}"
     )
 
 

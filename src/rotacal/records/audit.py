@@ -96,7 +96,7 @@ def _utc(moment: dt.datetime) -> dt.datetime:
     return moment.astimezone(dt.timezone.utc)
 
 
-def _row_event(row: Mapping[str, Any]) -> dict[str, Any]:
+def _row_event(row: sa.RowMapping) -> dict[str, Any]:
     return {k: (utc_text(row[k]) if k == "at" else row[k]) for k in EVENT_KEYS}
 
 
@@ -109,7 +109,7 @@ def events_of(connection: sa.Connection, number: str | None = None) -> list[dict
     return [_row_event(r) for r in connection.execute(query).mappings()]
 
 
-def _last(connection: sa.Connection, number: str) -> Mapping[str, Any] | None:
+def _last(connection: sa.Connection, number: str) -> sa.RowMapping | None:
     t = _table()
     return (
         connection.execute(
@@ -183,7 +183,7 @@ def record_issue(connection: sa.Connection, record: Mapping[str, Any], at: dt.da
     approvers = names(record["persons"], "approved")
     if not approvers:
         raise StoreError(
-            f"{record['plan_name']}: no [[person]] with role = \"approved\"; a certificate is "
+            f'{record["plan_name"]}: no [[person]] with role = "approved"; a certificate is '
             "issued only when the plan names who approves it"
         )
     if _last(connection, number) is None:
@@ -322,9 +322,7 @@ def insert_events(
     new = chain[len(held) :]
     for event in new:
         connection.execute(
-            sa.insert(_table()).values(
-                {**event, "at": dt.datetime.fromisoformat(str(event["at"]))}
-            )
+            sa.insert(_table()).values({**event, "at": dt.datetime.fromisoformat(str(event["at"]))})
         )
     return len(new)
 

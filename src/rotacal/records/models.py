@@ -26,6 +26,7 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
 __all__ = [
     "IMMUTABLE_TABLES",
+    "AuditEvent",
     "Base",
     "Certificate",
     "CertificateFile",
@@ -38,7 +39,6 @@ __all__ = [
     "ReportedValue",
     "Setting",
     "Standard",
-    "AuditEvent",
     "VoidedNumber",
 ]
 
