@@ -109,9 +109,10 @@ def events_of(connection: sa.Connection, number: str | None = None) -> list[dict
     return [_row_event(r) for r in connection.execute(query).mappings()]
 
 
-def _last(connection: sa.Connection, number: str) -> sa.RowMapping | None:
+def _last(connection: sa.Connection, number: str) -> dict[str, Any] | None:
+    """The number's last event's ``seq``, ``to_state`` and ``hash`` (None: no event)."""
     t = _table()
-    return (
+    row = (
         connection.execute(
             sa.select(t.c.seq, t.c.to_state, t.c.hash)
             .where(t.c.number == number)
@@ -121,6 +122,7 @@ def _last(connection: sa.Connection, number: str) -> sa.RowMapping | None:
         .mappings()
         .first()
     )
+    return dict(row) if row is not None else None
 
 
 def append_event(
@@ -152,13 +154,26 @@ def append_event(
     StoreError
         The change is not one the store makes from the number's present state.
     """
-    last = _last(connection, number)
+    event = _next(_last(connection, number), number, to_state, who, station, at, reason)
+    _insert(connection, [event])
+    return event
+
+
+def _next(
+    last: Mapping[str, Any] | None,
+    number: str,
+    to_state: str,
+    who: str,
+    station: str,
+    at: dt.datetime,
+    reason: str,
+) -> dict[str, Any]:
+    """The event that follows ``last`` (the number's last event, None for its first)."""
     from_state = last["to_state"] if last is not None else None
     if (from_state, to_state) not in TRANSITIONS:
         raise StoreError(
             f"audit trail: {number} is {from_state or 'not drawn'}; it cannot become {to_state}"
         )
-    moment = _utc(at)
     event = {
         "number": number,
         "seq": (last["seq"] if last is not None else 0) + 1,
@@ -166,13 +181,19 @@ def append_event(
         "to_state": to_state,
         "who": who,
         "station": station[:256],
-        "at": utc_text(moment),
+        "at": utc_text(_utc(at)),
         "reason": " ".join(reason.split())[:2000],
         "prev_hash": last["hash"] if last is not None else GENESIS,
     }
     event["hash"] = event_hash(event)
-    connection.execute(sa.insert(_table()).values({**event, "at": moment}))
     return event
+
+
+def _insert(connection: sa.Connection, events: Sequence[Mapping[str, Any]]) -> None:
+    """Insert events as they are (``at`` from its ISO text), in one statement."""
+    rows = [{**e, "at": dt.datetime.fromisoformat(str(e["at"]))} for e in events]
+    if rows:
+        connection.execute(sa.insert(_table()), rows)
 
 
 def record_issue(connection: sa.Connection, record: Mapping[str, Any], at: dt.datetime) -> None:
@@ -186,15 +207,20 @@ def record_issue(connection: sa.Connection, record: Mapping[str, Any], at: dt.da
             f'{record["plan_name"]}: no [[person]] with role = "approved"; a certificate is '
             "issued only when the plan names who approves it"
         )
-    if _last(connection, number) is None:
-        append_event(
-            connection, number, "draft", who=names(record["persons"], "performed") or station,
-            station=station, at=at, reason="measured; number given by the plan",
+    last: Mapping[str, Any] | None = _last(connection, number)
+    events = []
+    if last is None:  # an explicit number: drafted and issued in this one transaction
+        last = _next(
+            None, number, "draft", names(record["persons"], "performed") or station, station,
+            at, "measured; number given by the plan",
         )  # fmt: skip
-    append_event(
-        connection, number, "issued", who=approvers, station=station, at=at,
-        reason=f"approved and issued; plan_sha256 {record['plan_sha256']}",
+        events.append(last)
+    issued = _next(
+        last, number, "issued", approvers, station, at,
+        f"approved and issued; plan_sha256 {record['plan_sha256']}",
     )  # fmt: skip
+    events.append(issued)
+    _insert(connection, events)
     if record["supersedes"]:
         append_event(
             connection, record["supersedes"], "superseded", who=approvers, station=station,
@@ -320,10 +346,7 @@ def insert_events(
             "nothing was imported"
         )
     new = chain[len(held) :]
-    for event in new:
-        connection.execute(
-            sa.insert(_table()).values({**event, "at": dt.datetime.fromisoformat(str(event["at"]))})
-        )
+    _insert(connection, new)
     return len(new)
 
 
