@@ -40,7 +40,9 @@ def _sha(event: dict) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def test_issue_and_supersede_are_events_of_one_chain_each(store_url: str, issue) -> None:
+def test_issue_supersede_and_a_failed_issue_are_events_of_one_chain_each(
+    store_url: str, issue
+) -> None:
     store = open_store(store_url, clock=_clock())
     first = issue(store, VALUES, number="auto")  # draft at 14:00, issued 14:01
     store.void_number(store.draw_number(first.plan.issue_date), "pdf failed")  # 14:02, 14:03
@@ -76,6 +78,20 @@ def test_issue_and_supersede_are_events_of_one_chain_each(store_url: str, issue)
     assert record["recorded_at"] == record["approved_at"]  # one clock, one transaction
     assert [e["to_state"] for e in record["audit"]] == ["draft", "issued", "superseded"]
     assert record["audit_intact"] is True
+    # an issue that fails (publishing its folder): rolled back, no issued event; then voided
+    content = make_content(VALUES, number="auto")
+    number = store.draw_number(content.plan.issue_date, plan=content.plan)
+    content = dataclasses.replace(content, number=number)
+    with pytest.raises(OSError, match="disk full"):
+        with store.keep(content, files_of(content)):
+            raise OSError("disk full")
+    store.void_number(number, "not issued: OSError: disk full")
+    trail = audit_trail(store, number)
+    assert trail["intact"], trail["problems"]
+    assert [(e["to_state"], e["who"], e["reason"]) for e in trail["events"]] == [
+        ("draft", "A. Operator", "measured; number drawn from the series"),
+        ("voided", here, "not issued: OSError: disk full"),
+    ]
 
 
 def test_the_database_refuses_to_change_an_event_and_a_change_behind_its_back_is_found(
@@ -116,24 +132,6 @@ def test_the_database_refuses_to_change_an_event_and_a_change_behind_its_back_is
     assert "audit trail broken: RC-2026-0001 event 2" in result.output
     shown = certificate_record(store, "RC-2026-0001")
     assert shown["audit_intact"] is False and shown["approved_by"] == "Mallory"
-
-
-def test_a_failed_issue_leaves_a_voided_draft_and_no_issued_event(store_url: str) -> None:
-    store = open_store(store_url, clock=_clock())
-    content = make_content(VALUES, number="auto")
-    number = store.draw_number(content.plan.issue_date, plan=content.plan)
-    content = dataclasses.replace(content, number=number)
-    with pytest.raises(OSError, match="disk full"):
-        with store.keep(content, files_of(content)):
-            raise OSError("disk full")  # publishing the folder failed: the transaction rolls back
-    store.void_number(number, "not issued: OSError: disk full")
-    trail = audit_trail(store, number)
-    assert trail["intact"], trail["problems"]
-    assert [(e["to_state"], e["who"]) for e in trail["events"]] == [
-        ("draft", "A. Operator"),
-        ("voided", station()),
-    ]
-    assert trail["events"][1]["reason"] == "not issued: OSError: disk full"
 
 
 def test_a_plan_without_an_approver_or_approved_by_its_performer_is_not_kept(
