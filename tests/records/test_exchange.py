@@ -130,3 +130,6 @@ def test_the_audit_trail_travels_whole_and_a_changed_event_is_refused(
     assert trail["intact"], trail["problems"]
     assert len(trail["events"]) == 9
     assert all("reconstructed on import of v1.jsonl" in e["reason"] for e in trail["events"])
+    # a chain that is not the beginning of the store's (here: other events) is refused
+    with pytest.raises(StoreError, match=r"audit trail of RC-2026-0001 differs"):
+        import_lines(target, io.StringIO(text), "backup.jsonl")
