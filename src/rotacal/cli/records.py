@@ -157,9 +157,8 @@ def show_cmd(
 
 
 def _event_text(e: dict[str, Any]) -> str:
-    return (
-        f"{e['at'][:19]}Z  {e['from_state'] or '—'} → {e['to_state']}  by {e['who']}: {e['reason']}"
-    )
+    change = f"{e['from_state'] or '—'} → {e['to_state']}"
+    return f"{e['at'][:19]}Z  {change}  by {e['who']}: {e['reason']}"
 
 
 @records_group.command(

@@ -8,7 +8,7 @@ States and the changes the store makes::
     (none) → draft       measured and numbered (``Store.draw_number``; with an explicit number,
                           in the transaction that issues it)
     draft → issued        approved and issued (``Store.keep``; ``who`` = the plan's approvers)
-    issued → superseded   a new certificate's plan says ``supersedes = "NUMBER"`` (same transaction)
+    issued → superseded   a new certificate says ``supersedes = "NUMBER"`` (same transaction)
     draft → voided        a drawn number that was not issued (``Store.void_number``)
 
 Tamper evidence: each number's events form a hash chain. An event's ``hash`` is the SHA-256 of

@@ -1,20 +1,20 @@
-"""Export and import of a whole store as JSON lines: a backup, or the move from SQLite to
-PostgreSQL, with nothing lost.
+"""Export and import of a whole store as JSON lines: a backup, or the move from SQLite to PostgreSQL,
+with nothing lost.
 
 The file's first line says what it is (``{"type": "rotacal-records", "version": 2, …}``); then the
 laboratory's settings, the number counters, the voided numbers, every certificate's record
 (:mod:`rotacal.records.record`; bytes as base64), in the order they were recorded, and the audit
 trail's events (``"type": "audit"``, :mod:`rotacal.records.audit`; by number, in chain order), one
-JSON object per line. The same store always exports to the same bytes, so an export, an import elsewhere and a
-second export can be compared byte for byte.
+JSON object per line. The same store always exports to the same bytes, so an export, an import
+elsewhere and a second export can be compared byte for byte.
 
 An import is one transaction: all of the file or nothing. A certificate already in the store is
-skipped when its record is identical and refused when it differs; every file is checked against
-its SHA-256 and every ``plan_sha256`` against the plan and its inputs before anything is written.
-Audit events are imported as they were, hashes and all: a number's chain is added where the store
-has none or only its beginning, and refused when it differs or is broken; the trail of the whole
-store is checked before the import commits. A version-1 export (made before the audit trail) gets
-the events its records imply, marked as reconstructed.
+skipped when its record is identical and refused when it differs; every file is checked against its
+SHA-256 and every ``plan_sha256`` against the plan and its inputs before anything is written. Audit
+events are imported as they were, hashes and all: a number's chain is added where the store has
+none or only its beginning, and refused when it differs or is broken; the trail of the whole store
+is checked before the import commits. A version-1 export (made before the audit trail) gets the
+events its records imply, marked as reconstructed.
 """
 
 from __future__ import annotations

@@ -237,7 +237,8 @@ class AuditEvent(Base):
     ``who`` (the persons responsible: performers for a draft, approvers for an issue or a
     supersession), ``station`` (user@computer that wrote it), ``at`` (UTC), ``reason``, and the
     chain: ``prev_hash`` (the number's previous event's ``hash``; 64 zeros for the first) and
-    ``hash`` (SHA-256 of this event's content and ``prev_hash``, :func:`rotacal.records.audit.event_hash`).
+    ``hash`` (SHA-256 of this event's content and ``prev_hash``:
+    :func:`rotacal.records.audit.event_hash`).
     No foreign key to ``certificates``: a drawn or voided number has no certificate."""
 
     __tablename__ = "audit_events"

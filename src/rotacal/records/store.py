@@ -4,9 +4,10 @@
 (:mod:`rotacal.records.engine`). A :class:`Store` draws certificate numbers, keeps an issued
 certificate in ONE transaction (:meth:`Store.keep`), and reads records back. Every change of a
 number's state — drawn (draft), issued, superseded, voided — appends an event to the audit trail
-in the same transaction (:mod:`rotacal.records.audit`), stamped by the store's ``clock``. It never changes or
-deletes an issued row: it has no method that would, an ORM session that tries is stopped before
-the database is touched, and the schema's triggers refuse it for any other program.
+in the same transaction (:mod:`rotacal.records.audit`), stamped by the store's ``clock``. It
+never changes or deletes an issued row: it has no method that would, an ORM session that tries
+is stopped before the database is touched, and the schema's triggers refuse it for any other
+program.
 
 ``rotacal certify`` uses a store through the small protocol that
 :class:`rotacal.certificate.issue.Registry` names, so the certificate code knows nothing of
