@@ -141,7 +141,7 @@ def test_every_command_has_a_recipe():
     # tests/records/test_cli.py, on a store of their own; batch's (its folder and batch.json,
     # which each run of the same batch rewrites, a foreign batch.json refused) in tests/batch;
     # verify's in tests/certificate/test_signing.py, on a signed certificate of its own
-    records = {("records", c) for c in ("list", "show", "history", "export", "import")}
+    records = {("records", c) for c in ("list", "show", "history", "audit", "export", "import")}
     records |= {("records", "upgrade"), ("records", "settings")}
     special = {("demo",), ("certify",), ("batch",), ("verify",), *records}
     assert set(_commands(cli)) == {*ANALYSES, *WRITERS, *special}

@@ -192,7 +192,14 @@ def test_a_missing_table_and_a_missing_person_role_are_named(folder: Path) -> No
         read_plan(path)
     path.write_text(text.replace('role = "approved"', 'role = "performed"'))
     with pytest.raises(
-        ConfigError, match=r'person \(line \d+\): needs a person with role = "approved"'
+        ConfigError,
+        match=r'plan.toml: person \(line \d+\): needs a \[\[person\]\] with role = "approved"',
+    ):
+        read_plan(path)
+    # the approver reviews another person's work: the performer (any case or spacing) may not
+    path.write_text(text.replace('name = "B. Manager"', 'name = "a.  OPERATOR"'))
+    with pytest.raises(
+        ConfigError, match=r"person\[2\] \(line \d+\): a.  OPERATOR both performed .* approves it"
     ):
         read_plan(path)
 

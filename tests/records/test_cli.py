@@ -172,6 +172,33 @@ def test_a_superseding_certificate_is_linked_both_ways(certified, tmp_path: Path
     assert "superseded by RC-2026-0002" in listed
     twice = run("certify", str(plan), "--db", db)
     one_line(twice, "RC-2026-0001 is already superseded by RC-2026-0002")
+    # the trail: the supersession and the new issue; a certify that fails after its number was
+    # drawn leaves that number's draft and voiding, never an issued event
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        PLAN.replace('name = "Gyro Maker Ltd"\naddress', 'name = "Gyro\\u0001"\naddress')
+    )
+    one_line(run("certify", str(bad), "--db", db), "control character U+0001")
+    audit = run("records", "audit", "--db", db, "--json", "-")
+    assert audit.exit_code == 0, audit.output
+    trail = json.loads(audit.output)
+    assert trail["intact"] is True and trail["problems"] == []
+    assert [(e["number"], e["to_state"], e["who"]) for e in trail["events"]] == [
+        ("RC-2026-0001", "draft", "A. Operator"),
+        ("RC-2026-0001", "issued", "B. Manager"),
+        ("RC-2026-0001", "superseded", "B. Manager"),
+        ("RC-2026-0002", "draft", "A. Operator"),
+        ("RC-2026-0002", "issued", "B. Manager"),
+        ("RC-2026-0003", "draft", "A. Operator"),
+        ("RC-2026-0003", "voided", trail["events"][-1]["station"]),
+    ]
+    assert "control character U+0001" in trail["events"][-1]["reason"]
+    text = run("records", "audit", "RC-2026-0001", "--db", db).output.splitlines()
+    assert text[-1] == "audit trail of RC-2026-0001: intact, 3 events"
+    assert text[2].endswith("issued → superseded  by B. Manager: superseded by RC-2026-0002")
+    assert "  approved    by B. Manager at 20" in shown.output
+    assert "issued → superseded  by B. Manager" in shown.output
+    one_line(run("records", "audit", "RC-1999-0001", "--db", db), "no certificate RC-1999-0001")
 
 
 def test_a_password_in_the_url_never_reaches_the_json(postgres, tmp_path: Path) -> None:

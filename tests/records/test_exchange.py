@@ -13,7 +13,7 @@ import pytest
 from rotacal.errors import ConfigError, StoreError
 from rotacal.records import open_store
 from rotacal.records.exchange import export_lines, import_lines
-from rotacal.records.query import list_certificates
+from rotacal.records.query import audit_trail, list_certificates
 
 VALUES = {"scale_factor_ppm": ("12.3", "0.52"), "bias_deg_h": ("-0.041", "0.012")}
 
@@ -47,7 +47,7 @@ def test_a_store_moves_to_either_engine_without_loss(source: str, store_url: str
     lines = [json.loads(line) for line in text.splitlines()]
     assert [line["type"] for line in lines] == [
         "rotacal-records", "setting", "counter", "counter", "voided",
-        "certificate", "certificate", "certificate",
+        "certificate", "certificate", "certificate", *["audit"] * 9,
     ]  # fmt: skip
     assert lines[4]["reason"] == "rendering failed: ünïcode"
 
@@ -107,3 +107,29 @@ def test_a_file_that_is_not_an_export_is_named(tmp_path: Path) -> None:
         import_lines(target, io.StringIO(header + "{oops\n"), "b.jsonl")
     with pytest.raises(ConfigError, match=r"b\.jsonl: empty"):
         import_lines(target, io.StringIO(""), "b.jsonl")
+
+
+def test_the_audit_trail_travels_whole_and_a_changed_event_is_refused(
+    source: str, tmp_path: Path
+) -> None:
+    text = _export(source)
+    lines = text.splitlines(keepends=True)
+    audit = [i for i, line in enumerate(lines) if json.loads(line)["type"] == "audit"]
+    forged = json.loads(lines[audit[1]])
+    forged["who"] = "Mallory"  # the issue of RC-2026-0001, approved by someone else
+    changed = [*lines[: audit[1]], json.dumps(forged) + "\n", *lines[audit[1] + 1 :]]
+    target = open_store(f"sqlite:///{tmp_path / 't.sqlite'}")
+    with pytest.raises(StoreError, match=r"RC-2026-0001 event 2 .*does not match its hash"):
+        import_lines(target, io.StringIO("".join(changed)), "forged.jsonl")
+    assert list_certificates(target) == []  # all or nothing
+    # an export made before the audit trail (version 1): its events are reconstructed
+    old = [line for i, line in enumerate(lines) if i not in audit]
+    old[0] = old[0].replace('"version":2', '"version":1')
+    import_lines(target, io.StringIO("".join(old)), "v1.jsonl")
+    trail = audit_trail(target)
+    assert trail["intact"], trail["problems"]
+    assert len(trail["events"]) == 9
+    assert all("reconstructed on import of v1.jsonl" in e["reason"] for e in trail["events"])
+    # a chain that is not the beginning of the store's (here: other events) is refused
+    with pytest.raises(StoreError, match=r"audit trail of RC-2026-0001 differs"):
+        import_lines(target, io.StringIO(text), "backup.jsonl")

@@ -3,6 +3,8 @@ refused until it is), a newer one or a foreign database is refused."""
 
 from __future__ import annotations
 
+import datetime as dt
+
 import pytest
 import sqlalchemy as sa
 from alembic import command
@@ -15,8 +17,11 @@ from rotacal.errors import RecordImmutableError, StoreError
 from rotacal.records import models as m
 from rotacal.records import open_store
 from rotacal.records.engine import make_engine
-from rotacal.records.query import list_certificates
+from rotacal.records.query import audit_trail, list_certificates
+from rotacal.records.record import insert_record, record_of
 from rotacal.records.schema import _config, head_revision
+
+from .conftest import files_of, make_content
 
 VALUES = {"scale_factor_ppm": ("12.3", "0.52")}
 
@@ -33,24 +38,53 @@ def _store_at(url: str, revision: str) -> None:
         command.upgrade(_config(connection), revision)
 
 
-def test_an_older_store_is_refused_until_upgraded_and_keeps_its_records(
-    store_url: str, issue
-) -> None:
-    _store_at(store_url, "0001")  # before the immutability triggers
+def _keep_as_before(url: str, content, *, voided: str | None = None) -> None:
+    """Keep a certificate the way a rotacal of schema 0002 did: its rows, no audit events."""
+    with make_engine(url).begin() as connection:
+        record = record_of(content, files_of(content))
+        record["recorded_at"] = "2026-11-25T09:00:00+00:00"
+        insert_record(connection, record)
+        if voided:
+            connection.execute(
+                sa.insert(m.VoidedNumber).values(
+                    number=voided, voided_at=dt.datetime(2026, 11, 25, 9, 30), reason="pdf failed"
+                )
+            )
+
+
+def test_an_older_store_is_refused_until_upgraded_and_gets_its_trail(store_url: str) -> None:
+    _store_at(store_url, "0002")  # the previous revision: before the audit trail
     with pytest.raises(
-        StoreError, match=r"revision 0001, this rotacal uses 0002; run `rotacal records upgrade"
+        StoreError, match=r"revision 0002, this rotacal uses 0003; run `rotacal records upgrade"
     ):
         open_store(store_url)
-    older = open_store(store_url, check_schema=False)
-    issue(older, VALUES, number="RC-2026-0001")  # a record the old schema let change
+    _keep_as_before(store_url, make_content(VALUES, number="RC-2026-0001"), voided="RC-2026-0002")
+    _keep_as_before(
+        store_url, make_content(VALUES, number="RC-2026-0003", supersedes="RC-2026-0001")
+    )
     result = CliRunner().invoke(cli, ["records", "upgrade", "--db", store_url])
     assert result.exit_code == 0, result.output
-    assert "upgraded from revision 0001 to 0002" in result.output
+    assert "upgraded from revision 0002 to 0003" in result.output
     store = open_store(store_url)
-    assert [r["number"] for r in list_certificates(store)] == ["RC-2026-0001"]
-    with pytest.raises(RecordImmutableError):
-        with store.begin() as connection:
-            connection.execute(sa.text("DELETE FROM reported_values"))
+    assert [r["number"] for r in list_certificates(store)] == ["RC-2026-0003", "RC-2026-0001"]
+    trail = audit_trail(store)
+    assert trail["intact"], trail["problems"]
+    states = [(e["number"], e["from_state"], e["to_state"], e["who"]) for e in trail["events"]]
+    assert states == [
+        ("RC-2026-0001", None, "draft", "A. Operator"),
+        ("RC-2026-0001", "draft", "issued", "B. Manager"),
+        ("RC-2026-0001", "issued", "superseded", "B. Manager"),
+        ("RC-2026-0002", None, "draft", "unknown"),
+        ("RC-2026-0002", "draft", "voided", "unknown"),
+        ("RC-2026-0003", None, "draft", "A. Operator"),
+        ("RC-2026-0003", "draft", "issued", "B. Manager"),
+    ]
+    assert all("reconstructed by the upgrade" in e["reason"] for e in trail["events"])
+    assert trail["events"][1]["at"] == "2026-11-25T09:00:00+00:00"  # when it was recorded
+    for table in ("reported_values", "audit_events"):
+        with pytest.raises(RecordImmutableError):
+            with store.begin() as connection:
+                connection.execute(sa.text(f"DELETE FROM {table}"))
     again = CliRunner().invoke(cli, ["records", "upgrade", "--db", store_url])
     assert again.exit_code == 0 and "already this rotacal's" in again.output
 
@@ -73,4 +107,4 @@ def test_a_database_of_something_else_is_not_taken_over(store_url: str) -> None:
 
 
 def test_the_head_is_the_newest_migration() -> None:
-    assert head_revision() == "0002"
+    assert head_revision() == "0003"

@@ -245,7 +245,7 @@ class _Run:
             # keep, and _fail then counts the plan as skipped: no query here for each plan
             number = plan.number
             if number == "auto":
-                number = self.store.draw_number(plan.issue_date)
+                number = self.store.draw_number(plan.issue_date, plan=plan)
                 self.drawn[index] = number
             if (self.out / number).exists():
                 raise ConfigError(

@@ -317,8 +317,8 @@ class Registry(Protocol):
     def check_unissued(self, plan: Plan, plan_sha256: str) -> None:
         """Refuse a plan and captures that were certified already."""
 
-    def draw_number(self, issue_date: dt.date) -> str:
-        """The next number of the series."""
+    def draw_number(self, issue_date: dt.date, *, plan: Plan | None = None) -> str:
+        """The next number of the series (drawn for ``plan``: its draft in the audit trail)."""
         ...
 
     def void_number(self, number: str, reason: str) -> None:
@@ -419,7 +419,7 @@ def certify(
         number = plan.number
         if number == "auto":
             assert registry is not None
-            number = registry.draw_number(plan.issue_date)
+            number = registry.draw_number(plan.issue_date, plan=plan)
         try:
             folder = target if target is not None else home / number
             _check_free(folder, overwrite)

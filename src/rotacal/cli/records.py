@@ -1,5 +1,5 @@
-"""``rotacal records``: the certificates issued — list, show, an item's history, export/import,
-the schema's upgrade and the laboratory's settings."""
+"""``rotacal records``: the certificates issued — list, show, an item's history, the audit trail,
+export/import, the schema's upgrade and the laboratory's settings."""
 
 from __future__ import annotations
 
@@ -25,12 +25,13 @@ _JSON_HELP = "Write the result as JSON ('-' = stdout)."
         "rotacal records list                 # newest first",
         "rotacal records show RC-2026-0001",
         "rotacal records history SN-0001 --report history.html",
+        "rotacal records audit                # every state change, chain checked",
         "rotacal records export --out backup.jsonl",
         "rotacal records import backup.jsonl --db postgresql+psycopg://lab@server/records",
     ),
 )
 def records_group() -> None:
-    """The certificates issued: list, show, history, backup.
+    """The certificates issued: list, show, history, audit trail, backup.
 
     The records of ISO/IEC 17025 §7.5 and §8.4.
 
@@ -147,7 +148,56 @@ def show_cmd(
         lines.append(f"  supersedes  {record['supersedes']}")
     if record["superseded_by"]:
         lines.append(f"  SUPERSEDED by {record['superseded_by']}")
+    if record["approved_by"]:
+        lines.append(f"  approved    by {record['approved_by']} at {record['approved_at']}")
+    lines.append("  audit trail" + ("" if record["audit_intact"] else " BROKEN"))
+    lines += [f"    {_event_text(e)}" for e in record["audit"]]
+    lines += [f"    ! {p}" for p in record["audit_problems"]]
     click.echo("\n".join(lines))
+
+
+def _event_text(e: dict[str, Any]) -> str:
+    change = f"{e['from_state'] or '—'} → {e['to_state']}"
+    return f"{e['at'][:19]}Z  {change}  by {e['who']}: {e['reason']}"
+
+
+@records_group.command(
+    "audit",
+    epilog=example(
+        "rotacal records audit                      # the whole store",
+        "rotacal records audit RC-2026-0001 --json -",
+    ),
+)
+@click.argument("number", required=False)
+@click.option("--json", "json_path", metavar="PATH", help=_JSON_HELP)
+@click.option("--overwrite", is_flag=True, help="Replace an existing --json file.")
+@db_option
+def audit_cmd(number: str | None, json_path: str | None, overwrite: bool, db: str | None) -> None:
+    """The audit trail, checked: every state change of each number.
+
+    Drawn (draft), issued (who approved, when), superseded, voided: appended in the transaction
+    of the change, never changed. Each number's events are a SHA-256 hash chain; the command
+    recomputes it and checks it against the records. Exit 0 when it holds; exit 1 and the first
+    broken event of each chain when it does not.
+    """
+    from rotacal.records.query import audit_trail
+
+    _check_outputs(json_path, None, overwrite)
+    store = open_db(db)
+    trail = audit_trail(store, number)
+    _write_json(trail, json_path)
+    events, problems = trail["events"], trail["problems"]
+    if json_path != "-":
+        for e in events:
+            click.echo((f"{e['number']}  " if number is None else "") + _event_text(e))
+        numbers = len({e["number"] for e in events})
+        where = number or f"{store.shown} ({numbers} numbers)"
+        if not problems:
+            click.echo(f"audit trail of {where}: intact, {len(events)} events")
+    for problem in problems:
+        click.echo(f"rotacal: audit trail broken: {problem}", err=True)
+    if problems:
+        sys.exit(1)
 
 
 @records_group.command(

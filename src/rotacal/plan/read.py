@@ -20,6 +20,7 @@ from typing import Any
 
 from rotacal.errors import ConfigError
 
+from .approval import approval_problem
 from .model import (
     DECISION_RULES,
     ITEM_KINDS,
@@ -229,13 +230,9 @@ class _Reader:
                     self.text(entry, key, "title", required=False),
                 )
             )
-        for role in PERSON_ROLES:
-            if not any(p.role == role for p in persons):
-                raise self.fail(
-                    "person",
-                    f'needs a person with role = "{role}" (ISO/IEC 17025 §7.8.2.1 names '
-                    "who performed the calibration and who authorised the certificate)",
-                )
+        problem = approval_problem(persons)
+        if problem is not None:
+            raise self.fail(*problem)
         return tuple(persons)
 
     def item(self, data: Mapping[str, Any]) -> Item:

@@ -44,6 +44,8 @@ DEFAULT_TIMEOUT_S = 30.0
 
 #: The word the schema's triggers put in their refusal (migrations/versions/0002).
 IMMUTABLE_MARK = "issued records are immutable"
+#: The words of the audit trail's triggers (migrations/versions/0003).
+APPEND_ONLY_MARK = "the audit trail is append-only"
 
 
 def data_dir() -> Path:
@@ -242,6 +244,11 @@ def store_errors(url: str, timeout_s: float = DEFAULT_TIMEOUT_S) -> Iterator[Non
             raise RecordImmutableError(
                 f"records store {shown}: {IMMUTABLE_MARK}; a correction is a new certificate "
                 'whose plan says supersedes = "NUMBER"'
+            ) from None
+        if APPEND_ONLY_MARK in lower:
+            raise RecordImmutableError(
+                f"records store {shown}: {APPEND_ONLY_MARK}; its events are never changed or "
+                "removed (`rotacal records audit` checks them)"
             ) from None
         if "database is locked" in lower or "database table is locked" in lower:
             raise StoreError(

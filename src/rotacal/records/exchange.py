@@ -1,15 +1,20 @@
-"""Export and import of a whole store as JSON lines: a backup, or the move from SQLite to
-PostgreSQL, with nothing lost.
+"""Export and import of a whole store as JSON lines: a backup, or the move from SQLite to PostgreSQL,
+with nothing lost.
 
-The file's first line says what it is (``{"type": "rotacal-records", "version": 1, …}``); then the
-laboratory's settings, the number counters, the voided numbers and every certificate's record
-(:mod:`rotacal.records.record`; bytes as base64), one JSON object per line, in the order they were
-recorded. The same store always exports to the same bytes, so an export, an import elsewhere and a
-second export can be compared byte for byte.
+The file's first line says what it is (``{"type": "rotacal-records", "version": 2, …}``); then the
+laboratory's settings, the number counters, the voided numbers, every certificate's record
+(:mod:`rotacal.records.record`; bytes as base64), in the order they were recorded, and the audit
+trail's events (``"type": "audit"``, :mod:`rotacal.records.audit`; by number, in chain order), one
+JSON object per line. The same store always exports to the same bytes, so an export, an import
+elsewhere and a second export can be compared byte for byte.
 
 An import is one transaction: all of the file or nothing. A certificate already in the store is
-skipped when its record is identical and refused when it differs; every file is checked against
-its SHA-256 and every ``plan_sha256`` against the plan and its inputs before anything is written.
+skipped when its record is identical and refused when it differs; every file is checked against its
+SHA-256 and every ``plan_sha256`` against the plan and its inputs before anything is written. Audit
+events are imported as they were, hashes and all: a number's chain is added where the store has
+none or only its beginning, and refused when it differs or is broken; the trail of the whole store
+is checked before the import commits. A version-1 export (made before the audit trail) gets the
+events its records imply, marked as reconstructed.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from rotacal.certificate.issue import plan_sha256
 from rotacal.errors import ConfigError, StoreError
 
 from . import models as m
+from .audit import EVENT_KEYS, check_trail, events_of, insert_events, reconstruct
 from .record import VALUE_COLUMNS, insert_for, insert_record, read_record, utc_text
 from .schema import head_revision
 from .store import Store
@@ -35,7 +41,9 @@ from .store import Store
 __all__ = ["FORMAT", "export_lines", "import_lines"]
 
 #: What the first line names, and the version of the file's layout.
-FORMAT, VERSION = "rotacal-records", 1
+FORMAT, VERSION = "rotacal-records", 2
+#: The versions this rotacal imports (1: before the audit trail).
+_READABLE = (1, 2)
 
 _CERTIFICATE_KEYS = {
     "number", "title", "laboratory", "customer", "start_date", "end_date", "issue_date", "item",
@@ -93,6 +101,8 @@ def export_lines(store: Store) -> Iterator[str]:
             record = read_record(connection, number)
             assert record is not None
             yield _line(_encode(record))
+        for event in events_of(connection):
+            yield _line({"type": "audit", **event})
 
 
 def _decode(record: dict[str, Any], where: str) -> dict[str, Any]:
@@ -152,7 +162,7 @@ def _read(lines: IO[str], name: str) -> Iterator[tuple[str, dict[str, Any]]]:
             raise ConfigError(f"{where}: not JSON ({e})") from None
         if not isinstance(obj, dict) or "type" not in obj:
             raise ConfigError(f"{where}: not a line of a rotacal records export")
-        if index == 1 and (obj["type"] != FORMAT or obj.get("version") != VERSION):
+        if index == 1 and (obj["type"] != FORMAT or obj.get("version") not in _READABLE):
             raise ConfigError(
                 f"{where}: not a rotacal records export (version {VERSION}); make one with "
                 "`rotacal records export`"
@@ -174,13 +184,15 @@ def import_lines(store: Store, lines: IO[str], name: str) -> dict[str, Any]:
     imported = unchanged = 0
     warnings: list[str] = []
     header_seen = False
+    version = VERSION
+    trails: dict[str, list[dict[str, Any]]] = {}
     with store.begin() as connection:
         insert = insert_for(connection)
         settings = dict(connection.execute(sa.select(m.Setting.key, m.Setting.value)).all())
         for where, obj in _read(lines, name):
             kind = obj["type"]
             if kind == FORMAT:
-                header_seen = True
+                header_seen, version = True, int(obj["version"])
             elif kind == "setting":
                 key, value = str(obj["key"]), str(obj["value"])
                 if key not in settings:
@@ -223,11 +235,36 @@ def import_lines(store: Store, lines: IO[str], name: str) -> dict[str, Any]:
                         f"{where}: certificate {record['number']} differs from the one the store "
                         f"({store.shown}) already holds; nothing was imported"
                     )
+            elif kind == "audit":
+                trails.setdefault(str(obj.get("number")), []).append(_event(obj, where))
             else:
                 raise ConfigError(f"{where}: unknown record type {kind!r}")
         if not header_seen:
             raise ConfigError(f"{name}: empty; not a rotacal records export")
+        for chain in trails.values():
+            insert_events(connection, chain, name)
+        if version == 1:
+            reconstruct(connection, f"reconstructed on import of {Path(name).name}")
+        trail = check_trail(connection)
+        if not trail["intact"]:
+            raise StoreError(
+                f"{name}: after the import the audit trail would not hold: "
+                f"{trail['problems'][0]}; nothing was imported"
+            )
     return {"imported": imported, "unchanged": unchanged, "warnings": warnings}
+
+
+def _event(obj: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """An audit line back to an event (its chain is checked with the number's other events)."""
+    missing = set(EVENT_KEYS) - obj.keys()
+    if missing:
+        raise ConfigError(f"{where}: an audit event without {', '.join(sorted(missing))}")
+    try:
+        _moment(str(obj["at"]))
+        int(obj["seq"])
+    except (TypeError, ValueError) as e:
+        raise ConfigError(f"{where}: audit event of {obj['number']}: damaged ({e})") from None
+    return {k: obj[k] for k in EVENT_KEYS}
 
 
 def _moment(text: str) -> dt.datetime:

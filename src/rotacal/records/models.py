@@ -7,6 +7,10 @@ hash that ties it to its plan and captures (``plan_sha256``), each capture's SHA
 the conformity statements, every file of the certificate folder (PDF, DCC XML, results.json,
 figures) with its SHA-256, the software version and the certificate it supersedes.
 
+Every change of a certificate's state (draft → issued → superseded, or draft → voided) is an
+:class:`AuditEvent`, appended in the transaction of the change and chained by SHA-256
+(:mod:`rotacal.records.audit`); the audit trail is append-only like the issued rows.
+
 Issued rows are never changed: the migrations put triggers on every table of an issued record that
 refuse UPDATE and DELETE (``IMMUTABLE_TABLES``), and :mod:`rotacal.records.store` refuses such
 changes before they reach the database. The schema is made and changed only by the Alembic
@@ -22,6 +26,7 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
 __all__ = [
     "IMMUTABLE_TABLES",
+    "AuditEvent",
     "Base",
     "Certificate",
     "CertificateFile",
@@ -226,8 +231,31 @@ class ReportedValue(Base):
     verdict: Mapped[str | None] = mapped_column(sa.String(16))
 
 
+class AuditEvent(Base):
+    """One change of a certificate number's state, in the order of its number's chain (``seq``
+    from 1): ``from_state`` → ``to_state`` (None → draft → issued → superseded, draft → voided),
+    ``who`` (the persons responsible: performers for a draft, approvers for an issue or a
+    supersession), ``station`` (user@computer that wrote it), ``at`` (UTC), ``reason``, and the
+    chain: ``prev_hash`` (the number's previous event's ``hash``; 64 zeros for the first) and
+    ``hash`` (SHA-256 of this event's content and ``prev_hash``:
+    :func:`rotacal.records.audit.event_hash`).
+    No foreign key to ``certificates``: a drawn or voided number has no certificate."""
+
+    __tablename__ = "audit_events"
+    number: Mapped[str] = mapped_column(sa.String(128), primary_key=True)
+    seq: Mapped[int] = mapped_column(primary_key=True, autoincrement=False)
+    from_state: Mapped[str | None] = mapped_column(sa.String(16))
+    to_state: Mapped[str] = mapped_column(sa.String(16))
+    who: Mapped[str] = mapped_column(sa.Text)
+    station: Mapped[str] = mapped_column(sa.String(256))
+    at: Mapped[dt.datetime] = mapped_column(sa.DateTime(timezone=True), index=True)
+    reason: Mapped[str] = mapped_column(sa.Text)
+    prev_hash: Mapped[str] = mapped_column(sa.String(64))
+    hash: Mapped[str] = mapped_column(sa.String(64), unique=True)
+
+
 #: The tables whose rows are part of an issued record: no UPDATE, no DELETE (the triggers of
-#: migration 0002 and the store's own check).
+#: migrations 0002 and 0003 and the store's own check).
 IMMUTABLE_TABLES = (
     "items",
     "persons",
@@ -239,4 +267,5 @@ IMMUTABLE_TABLES = (
     "certificate_standards",
     "reported_values",
     "voided_numbers",
+    "audit_events",
 )

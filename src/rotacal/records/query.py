@@ -1,5 +1,6 @@
-"""Reading the records: the certificates issued (``records list``) and one certificate's whole
-record (``records show``), with the supersession both ways."""
+"""Reading the records: the certificates issued (``records list``), one certificate's whole
+record (``records show``), with the supersession both ways and its audit trail, and the audit
+trail checked (``records audit``)."""
 
 from __future__ import annotations
 
@@ -17,10 +18,11 @@ import sqlalchemy as sa
 from rotacal.errors import ConfigError
 
 from . import models as m
+from .audit import approval_of, check_trail
 from .record import read_record, utc_text
 from .store import Store
 
-__all__ = ["certificate_record", "list_certificates", "restore_files"]
+__all__ = ["audit_trail", "certificate_record", "list_certificates", "restore_files"]
 
 
 def list_certificates(store: Store, serial: str | None = None) -> list[dict[str, Any]]:
@@ -106,6 +108,11 @@ def _raw_record(store: Store, number: str) -> dict[str, Any]:
         record["superseded_by"] = connection.execute(
             sa.select(m.Certificate.number).where(m.Certificate.supersedes == number)
         ).scalar()
+        trail = check_trail(connection, number)
+    record["approved_by"], record["approved_at"] = approval_of(trail["events"])
+    record["audit"] = trail["events"]
+    record["audit_intact"] = trail["intact"]
+    record["audit_problems"] = trail["problems"]
     return record
 
 
@@ -113,7 +120,9 @@ def certificate_record(store: Store, number: str) -> dict[str, Any]:
     """Certificate ``number``'s record for a reader (``records show``): what the record holds,
     with the plan as text, ``results`` as the JSON object it is, ``conformity`` (each
     ``measurement``, ``quantity``, ``verdict``, limits and decision rule), the files by name with
-    SHA-256 and size (``restore_files`` gives their bytes) and ``superseded_by``."""
+    SHA-256 and size (``restore_files`` gives their bytes), ``superseded_by``, who approved it
+    and when (``approved_by``, ``approved_at``: UTC), and its audit trail (``audit``: the events of
+    :mod:`rotacal.records.audit`, checked: ``audit_intact``, ``audit_problems``)."""
     record = _raw_record(store, number)
     plan: bytes = record.pop("plan")
     values = record.pop("values")
@@ -140,6 +149,23 @@ def certificate_record(store: Store, number: str) -> dict[str, Any]:
         {"name": f["name"], "sha256": f["sha256"], "bytes": len(f["content"])} for f in files
     ]
     return record
+
+
+def audit_trail(store: Store, number: str | None = None) -> dict[str, Any]:
+    """The audit trail of certificate ``number`` (of the whole store when None), checked
+    (``records audit``): ``store``, ``number``, ``events``, ``intact`` and ``problems``
+    (:func:`rotacal.records.audit.check_trail`).
+
+    Raises
+    ------
+    ConfigError
+        ``number`` was never drawn, issued or voided in this store.
+    """
+    with store.begin(read_only=True) as connection:
+        trail = check_trail(connection, number)
+        if number is not None and not trail["events"] and not trail["problems"]:
+            raise _missing(store, connection, number)
+    return {"store": store.shown, "number": number, **trail}
 
 
 def restore_files(store: Store, number: str, folder: Path) -> list[Path]:

@@ -30,7 +30,15 @@ from rotacal.certificate.content import CertificateContent
 
 from . import models as m
 
-__all__ = ["id_of", "insert_for", "insert_record", "read_record", "record_of", "utc_text"]
+__all__ = [
+    "id_of",
+    "insert_for",
+    "insert_record",
+    "read_record",
+    "record_of",
+    "station",
+    "utc_text",
+]
 
 #: The columns of a reported value a record carries (all but the certificate's id).
 VALUE_COLUMNS = tuple(
@@ -42,7 +50,7 @@ def _table(model: type[m.Base]) -> sa.Table:
     return cast(sa.Table, model.__table__)
 
 
-def _station() -> str:
+def station() -> str:
     """Who records: user@computer (the test station), as far as the system tells."""
     try:
         user = getpass.getuser()
@@ -62,9 +70,15 @@ def utc_text(moment: dt.datetime) -> str:
     return moment.astimezone(dt.timezone.utc).isoformat()
 
 
-def record_of(content: CertificateContent, files: Mapping[str, bytes]) -> dict[str, Any]:
+def record_of(
+    content: CertificateContent,
+    files: Mapping[str, bytes],
+    *,
+    recorded_at: dt.datetime | None = None,
+) -> dict[str, Any]:
     """The record of a certificate being issued: what it states (``content``, with its final
-    number) and every file of its folder (``files``: name → bytes)."""
+    number), every file of its folder (``files``: name → bytes) and when it is recorded
+    (``recorded_at``, timezone-aware; default now)."""
     plan = content.plan
     values = []
     for mr in content.measurements:
@@ -113,8 +127,8 @@ def record_of(content: CertificateContent, files: Mapping[str, bytes]) -> dict[s
         "results": files["results.json"].decode("utf-8"),
         "software_version": content.software_version,
         "supersedes": plan.supersedes,
-        "recorded_at": utc_text(dt.datetime.now(dt.timezone.utc)),
-        "recorded_by": _station(),
+        "recorded_at": utc_text(recorded_at or dt.datetime.now(dt.timezone.utc)),
+        "recorded_by": station(),
         "persons": [{"name": p.name, "title": p.title, "role": p.role} for p in plan.persons],
         "standards": [
             {"id": s.id, "name": s.name, "certificate": s.certificate, "due": s.due.isoformat()}

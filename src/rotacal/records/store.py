@@ -2,9 +2,12 @@
 
 :func:`open_store` opens (and on first use creates) the store named by a URL
 (:mod:`rotacal.records.engine`). A :class:`Store` draws certificate numbers, keeps an issued
-certificate in ONE transaction (:meth:`Store.keep`), and reads records back. It never changes or
-deletes an issued row: it has no method that would, an ORM session that tries is stopped before
-the database is touched, and the schema's triggers refuse it for any other program.
+certificate in ONE transaction (:meth:`Store.keep`), and reads records back. Every change of a
+number's state — drawn (draft), issued, superseded, voided — appends an event to the audit trail
+in the same transaction (:mod:`rotacal.records.audit`), stamped by the store's ``clock``. It
+never changes or deletes an issued row: it has no method that would, an ORM session that tries
+is stopped before the database is touched, and the schema's triggers refuse it for any other
+program.
 
 ``rotacal certify`` uses a store through the small protocol that
 :class:`rotacal.certificate.issue.Registry` names, so the certificate code knows nothing of
@@ -16,7 +19,7 @@ from __future__ import annotations
 import contextlib
 import datetime as dt
 import string
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from typing import Any, cast
 
 import sqlalchemy as sa
@@ -25,9 +28,11 @@ from sqlalchemy.orm import Session
 
 from rotacal.certificate.content import CertificateContent
 from rotacal.errors import AlreadyCertifiedError, ConfigError, RecordImmutableError, StoreError
+from rotacal.plan.approval import check_approval, performers
 from rotacal.plan.model import Plan
 
 from . import models as m
+from .audit import append_event, record_issue
 from .engine import (
     READ_ONLY,
     display_url,
@@ -36,7 +41,7 @@ from .engine import (
     store_errors,
     timeout_from_environment,
 )
-from .record import insert_for, insert_record, record_of
+from .record import insert_for, insert_record, record_of, station
 from .schema import ensure_schema
 
 __all__ = ["DEFAULT_SETTINGS", "Store", "open_store"]
@@ -67,6 +72,8 @@ def _refuse_changes(session: Session, _context: Any, _instances: Any) -> None:
     for obj in (*session.dirty, *session.deleted):
         table = getattr(obj, "__tablename__", None)
         if table in m.IMMUTABLE_TABLES and (obj in session.deleted or session.is_modified(obj)):
+            if table == "audit_events":
+                raise RecordImmutableError("audit_events: the audit trail is append-only")
             raise RecordImmutableError(
                 f"{table}: issued records are immutable; a correction is a new certificate "
                 'whose plan says supersedes = "NUMBER"'
@@ -76,8 +83,17 @@ def _refuse_changes(session: Session, _context: Any, _instances: Any) -> None:
 event.listen(Session, "before_flush", _refuse_changes)
 
 
+def utc_now() -> dt.datetime:
+    """The present moment in UTC (the store's default clock)."""
+    return dt.datetime.now(dt.timezone.utc)
+
+
 def open_store(
-    url: str | None = None, *, timeout_s: float | None = None, check_schema: bool = True
+    url: str | None = None,
+    *,
+    timeout_s: float | None = None,
+    check_schema: bool = True,
+    clock: Callable[[], dt.datetime] | None = None,
 ) -> Store:
     """Open the records store at ``url`` (``--db``; default ``ROTACAL_DB``, else the SQLite file
     in the user's data folder), making its schema when the database is empty.
@@ -91,6 +107,9 @@ def open_store(
         [default: ``ROTACAL_DB_TIMEOUT``, else 30 s].
     check_schema : bool
         Refuse a store whose schema is not this rotacal's (False only for ``records upgrade``).
+    clock : callable, optional
+        Gives the timezone-aware moment of each record and audit event [default: the system
+        clock in UTC]; tests give a fixed one.
 
     Raises
     ------
@@ -103,7 +122,7 @@ def open_store(
     if timeout_s is None:
         timeout_s = timeout_from_environment()
     engine = make_engine(resolved, timeout_s=timeout_s)
-    store = Store(engine, resolved, timeout_s)
+    store = Store(engine, resolved, timeout_s, clock)
     if check_schema:
         with store.errors():
             ensure_schema(engine, store.shown)
@@ -113,8 +132,16 @@ def open_store(
 class Store:
     """An open records store. Make one with :func:`open_store`."""
 
-    def __init__(self, engine: sa.Engine, url: str, timeout_s: float) -> None:
+    def __init__(
+        self,
+        engine: sa.Engine,
+        url: str,
+        timeout_s: float,
+        clock: Callable[[], dt.datetime] | None = None,
+    ) -> None:
         self.engine = engine
+        #: when a record is kept and an event happens (timezone-aware)
+        self.clock = clock or utc_now
         self._reader = engine.execution_options(**{READ_ONLY: True})
         self.url = url
         self.shown = display_url(url)
@@ -174,16 +201,18 @@ class Store:
     def _taken(self, connection: sa.Connection, number: str) -> bool:
         issued = sa.select(m.Certificate.id).where(m.Certificate.number == number)
         voided = sa.select(m.VoidedNumber.number).where(m.VoidedNumber.number == number)
-        return bool(
-            connection.execute(sa.select(sa.exists(issued) | sa.exists(voided))).scalar_one()
-        )
+        # a number with an audit event was drawn (perhaps by a process that never finished)
+        drawn = sa.select(m.AuditEvent.seq).where(m.AuditEvent.number == number)
+        exists = sa.exists(issued) | sa.exists(voided) | sa.exists(drawn)
+        return bool(connection.execute(sa.select(exists)).scalar_one())
 
-    def draw_number(self, issue_date: dt.date) -> str:
+    def draw_number(self, issue_date: dt.date, *, plan: Plan | None = None) -> str:
         """The next number of the laboratory's series for a certificate issued on
-        ``issue_date``; never one issued or voided before, whatever other writers do at the same
-        time (the count is incremented in the database, row-locked). A number drawn and then not
-        used must be given back with :meth:`void_number`, which keeps it out of the series with
-        its reason."""
+        ``issue_date``; never one issued, voided or drawn before, whatever other writers do at
+        the same time (the count is incremented in the database, row-locked). A number drawn and
+        then not used must be given back with :meth:`void_number`, which keeps it out of the
+        series with its reason. The draw is the number's ``draft`` event in the audit trail
+        (``who``: the ``plan``'s performers when given, else this station)."""
         fmt = check_number_format(self.settings()["number_format"])
         year = f"{issue_date.year:04d}"
         scope = year if "year" in fmt else "*"
@@ -202,26 +231,47 @@ class Store:
                 ).scalar_one()
                 number = fmt.format(year=year, count=count)
                 if not self._taken(connection, number):
+                    here = station()
+                    who = "; ".join(performers(plan)) if plan is not None else ""
+                    append_event(
+                        connection, number, "draft", who=who or here, station=here,
+                        at=self.clock(), reason="measured; number drawn from the series",
+                    )  # fmt: skip
                     return number
 
     def void_number(self, number: str, reason: str) -> None:
-        """Keep a drawn number out of the series for good, with the reason it was not issued."""
+        """Keep a drawn number out of the series for good, with the reason it was not issued
+        (and the ``voided`` event of its audit trail)."""
+        at = self.clock()
+        why = " ".join(reason.split())[:2000]
         with self.begin() as connection:
             insert = insert_for(connection)
-            connection.execute(
+            voided = connection.execute(
                 insert(m.VoidedNumber)
-                .values(
-                    number=number,
-                    voided_at=dt.datetime.now(dt.timezone.utc),
-                    reason=" ".join(reason.split())[:2000],
-                )
+                .values(number=number, voided_at=at, reason=why)
                 .on_conflict_do_nothing()
-            )
+                .returning(m.VoidedNumber.number)
+            ).first()
+            if voided is None:  # voided before: its event is there
+                return
+            here = station()
+            if not self._drawn(connection, number):  # voided without being drawn here
+                append_event(
+                    connection, number, "draft", who=here, station=here, at=at,
+                    reason="number given back without a draft in this store",
+                )  # fmt: skip
+            append_event(connection, number, "voided", who=here, station=here, at=at, reason=why)
+
+    def _drawn(self, connection: sa.Connection, number: str) -> bool:
+        drawn = sa.select(m.AuditEvent.seq).where(m.AuditEvent.number == number)
+        return bool(connection.execute(sa.select(sa.exists(drawn))).scalar_one())
 
     # -- the Registry protocol of rotacal.certificate.issue ------------------------------------
     def check_plan(self, plan: Plan) -> None:
         """Refuse, before anything is measured, a plan whose explicit number is taken or whose
-        ``supersedes`` names no issued certificate or one already superseded."""
+        ``supersedes`` names no issued certificate or one already superseded, or that names no
+        approver (or the performer as approver: :func:`rotacal.plan.approval.check_approval`)."""
+        check_approval(plan)
         with self.begin() as connection:
             if plan.number != "auto" and self._taken(connection, plan.number):
                 raise ConfigError(
@@ -285,7 +335,9 @@ class Store:
     def keep(self, content: CertificateContent, files: Mapping[str, bytes]) -> Iterator[None]:
         """Keep an issued certificate: every row of it in ONE transaction, committed when the
         block ends without an exception (the caller publishes the certificate folder inside the
-        block), rolled back otherwise.
+        block), rolled back otherwise. The same transaction appends the audit trail's events:
+        the issue, approved by the plan's approvers at the store's ``clock`` (which is also the
+        record's ``recorded_at``), and the supersession of the certificate it supersedes.
 
         Parameters
         ----------
@@ -300,7 +352,11 @@ class Store:
         try:
             with self.errors():
                 try:
-                    insert_record(connection, record_of(content, files))
+                    check_approval(content.plan)
+                    at = self.clock()
+                    record = record_of(content, files, recorded_at=at)
+                    insert_record(connection, record)
+                    record_issue(connection, record, at)
                 except sa.exc.IntegrityError as e:
                     raise self._conflict(content, e) from None
             yield
