@@ -13,6 +13,7 @@ from rotacal.sim.gyro_steps import simulate_gyro_steps
 from rotacal.sim.gyro_triad import simulate_gyro_rotations, simulate_gyro_triad
 from rotacal.sim.motion import SineMotion
 from rotacal.sim.multiposition import simulate_multiposition
+from rotacal.sim.position import simulate_position
 from rotacal.sim.pulses import simulate_pulses, table_angle_deg, table_rate_deg_s
 from rotacal.sim.scenarios import (
     FOG_NOISE_DENSITY_DEG_S_RT_HZ,
@@ -51,6 +52,7 @@ __all__ = [
     "simulate_gyro_triad",
     "simulate_lts",
     "simulate_multiposition",
+    "simulate_position",
     "simulate_pulses",
     "table1_scenarios",
     "table_angle_deg",
