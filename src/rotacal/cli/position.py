@@ -49,7 +49,6 @@ def _selfcal_mapping(path: str) -> dict[str, Any]:
 @cli.command(
     "position",
     epilog=example(
-        "rotacal simulate position --out pos.csv",
         "rotacal position pos.csv --harmonics 4 --report pos.html",
         "rotacal position poly.csv --polygon-faces 12 --json poly.json",
         "rotacal position own.csv --selfcal selfcal.json --reference-u-arcsec 0.05",
@@ -113,7 +112,7 @@ def position_cmd(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """Position accuracy of an indexing table: error curve, harmonics, ISO 230-2.
+    """Position accuracy of an indexing table (ISO 230-2).
 
     Columns position_deg (target position) and either reference_deg (a reference encoder's
     reading) or error_arcsec (the deviation, or an autocollimator's reading with
@@ -127,21 +126,20 @@ def position_cmd(
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     selfcal = _selfcal_mapping(selfcal_path) if selfcal_path is not None else None
     cap = _read(capture, None, columns, group)  # type: ignore[arg-type]
+    names = ", ".join(cap.columns)
     if "position_deg" not in cap.columns:
         raise CaptureError(
-            f"no column position_deg (columns: {', '.join(cap.names())}); map yours with "
-            "--column NAME=position_deg"
+            f"no column position_deg (columns: {names}); map yours with --column NAME=position_deg"
         )
     found = {name: cap.columns[name] for name in _OPTIONAL if name in cap.columns}
     if "reference_deg" not in found and "error_arcsec" not in found:
         raise CaptureError(
-            f"no column reference_deg or error_arcsec (columns: {', '.join(cap.names())}): "
+            f"no column reference_deg or error_arcsec (columns: {names}): "
             "give the reference's reading or the deviation (--column NAME=reference_deg)"
         )
     if "reference_deg" in found and "error_arcsec" in found:
         raise CaptureError(
-            "both reference_deg and error_arcsec are present: keep one (--column maps others "
-            "away)"
+            "both reference_deg and error_arcsec are present: keep one (--column maps others away)"
         )
     with _status("evaluating the positions"):
         result = position_accuracy(

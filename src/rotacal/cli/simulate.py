@@ -722,4 +722,4 @@ def demo(out: str, overwrite: bool) -> None:
 
 
 from . import simulate_frequency  # noqa: E402,F401  (registers `simulate gyro-sine`)
-from . import simulate_position  # noqa: E402,F401  (registers `simulate position`)
+from .simulate_position import simulate_position_cmd  # noqa: E402,F401  (registers it)

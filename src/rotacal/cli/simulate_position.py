@@ -72,9 +72,7 @@ def _triples(items: Sequence[str], option: str) -> list[tuple[float, float, floa
 @click.option(
     "--polygon-step-faces", type=int, default=None, help="Faces the polygon turns per run [1]."
 )
-@click.option(
-    "--face-error-arcsec", type=float, default=None, help="rms of the face errors [1.0]."
-)
+@click.option("--face-error-arcsec", type=float, default=None, help="rms of the face errors [1.0].")
 def simulate_position_cmd(
     out: str,
     overwrite: bool,

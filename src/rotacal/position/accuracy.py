@@ -123,36 +123,40 @@ class PositionAccuracy(Result):
         return out
 
     def summary_lines(self) -> list[str]:
-        """The headline numbers for the CLI."""
+        """The headline numbers for the CLI, each ± U (k = 2, p = 95 %)."""
+        from rotacal.numbers import format_quantity
+
+        def q(value: float, u: float | None) -> str:
+            return format_quantity(value, "arcsec", U=None if u is None else 2 * u, k=2, p=0.95)
+
         dirs = "both directions" if len(self.directions) == 2 else "one direction"
         lines = [
             f"reference {self.reference}: {self.positions_deg.size} positions, {self.runs} "
             f"run(s), {dirs}",
-            f"error curve peak-to-peak {self.error_pp_arcsec:.4g} ± "
-            f"{2 * self.error_pp_arcsec_u:.2g} arcsec (k = 2)",
+            f"{'error curve peak-to-peak':<34} {q(self.error_pp_arcsec, self.error_pp_arcsec_u)}",
         ]
-        v = self._stats.values
+        v, vu = self._stats.values, self._stats.values_u
         for name, label in (
             ("positioning_accuracy_bidirectional", "accuracy A"),
             ("positioning_accuracy_forward", "accuracy A↑"),
             ("repeatability_bidirectional", "repeatability R"),
-            ("repeatability_forward", "repeatability R↑"),
+            ("repeatability_forward", "repeatability R↑ (4s)"),
             ("reversal_value", "reversal value B"),
             ("systematic_deviation_bidirectional", "systematic deviation E"),
         ):
-            if v[name] is not None:
-                lines.append(f"{label:<24} {v[name]:.4g} arcsec (ISO 230-2)")
+            value = v[name]
+            if value is not None:
+                lines.append(f"{label + ' (ISO 230-2)':<34} {q(value, vu[name])}")
         fit = self._harmonics
         if fit is not None:
-            lines.append(
-                "harmonics (arcsec) "
-                + "  ".join(
-                    f"{h}: {a:.3g}±{u:.2g}"
-                    for h, a, u in zip(
-                        fit.orders, fit.amplitudes_arcsec, fit.amplitudes_arcsec_u, strict=True
-                    )
-                )
-            )
+            for h, a, u, phi in zip(
+                fit.orders,
+                fit.amplitudes_arcsec,
+                fit.amplitudes_arcsec_u,
+                fit.phases_deg,
+                strict=True,
+            ):
+                lines.append(f"{f'harmonic {h} (phase {phi:.1f}°)':<34} {q(float(a), float(u))}")
         return lines
 
 
@@ -348,7 +352,9 @@ def position_accuracy(
         fit = fit_harmonics(app.positions_deg, stats.curve, harmonics, u_ref_arcsec=u_ref)
         weak = [
             h
-            for h, a, u in zip(fit.orders, fit.amplitudes_arcsec, fit.amplitudes_arcsec_u, strict=True)
+            for h, a, u in zip(
+                fit.orders, fit.amplitudes_arcsec, fit.amplitudes_arcsec_u, strict=True
+            )
             if a < 2 * u
         ]
         if weak:

@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rotacal.errors import CaptureError
 
-__all__ = ["Approaches", "POSITION_DECIMALS", "arrange_approaches"]
+__all__ = ["POSITION_DECIMALS", "Approaches", "arrange_approaches"]
 
 #: Target positions are grouped after rounding to this many decimals of a degree (0.0036″):
 #: commanded positions are exact numbers, so anything finer is the file's float formatting.
@@ -69,6 +69,31 @@ def _direction_signs(direction: ArrayLike | None, n: int) -> NDArray[np.int64]:
 
 def _name(position: float) -> str:
     return f"{position:g}°"
+
+
+def _refuse_different_sets(
+    present: NDArray[np.int64],
+    targets: FloatArray,
+    run_labels: NDArray[np.int64],
+    directions: tuple[int, ...],
+) -> None:
+    """Name the first run (and direction) whose positions differ from the most common set."""
+    sets, inverse, counts = np.unique(present > 0, axis=0, return_inverse=True, return_counts=True)
+    usual = sets[int(np.argmax(counts))]
+    odd = int(np.flatnonzero(inverse.ravel() != int(np.argmax(counts)))[0])
+    d, r = divmod(odd, run_labels.size)
+    missing = targets[usual & ~(present[odd] > 0)]
+    extra = targets[~usual & (present[odd] > 0)]
+    parts = []
+    if missing.size:
+        parts.append("no reading at " + ", ".join(map(_name, missing[:4])))
+    if extra.size:
+        parts.append("readings at " + ", ".join(map(_name, extra[:4])) + " that the others lack")
+    raise CaptureError(
+        f"run {int(run_labels[r])} in direction {directions[d]:+d} has {' and '.join(parts)}: "
+        "every run and direction must measure the same positions (ISO 230-2 test cycle; without "
+        "a run column, run k is the k-th reading at each position)"
+    )
 
 
 def arrange_approaches(
@@ -134,13 +159,7 @@ def arrange_approaches(
             "approach (average repeated readings before, or number the runs in a run column)"
         )
     if np.any(count == 0):
-        d, r, p = (int(i[0]) for i in np.nonzero(count == 0))
-        how = "" if runs_from_column else " (without a run column, run k is the k-th reading at each position)"
-        raise CaptureError(
-            f"run {int(run_labels[r])} in direction {directions[d]:+d} has no reading at "
-            f"{_name(targets[p])}: every run and direction must measure the same positions "
-            f"(ISO 230-2 test cycle){how}"
-        )
+        _refuse_different_sets(count.reshape(-1, targets.size), targets, run_labels, directions)
     arranged = np.empty(shape)
     arranged.flat[cell] = vals
     rows = np.empty(shape, dtype=np.int64)

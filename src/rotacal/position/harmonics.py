@@ -25,11 +25,12 @@ from numpy.typing import NDArray
 
 from rotacal.errors import ConfigError
 
-__all__ = ["HarmonicFit", "MAX_CONDITION", "fit_harmonics"]
+__all__ = ["MAX_CONDITION", "HarmonicFit", "fit_harmonics"]
 
 #: Above this condition number of the design matrix the positions do not determine the
-#: harmonics asked for (e.g. all positions within a small arc): refused.
-MAX_CONDITION = 1e6
+#: harmonics asked for (e.g. all positions within a small arc; equal spacing over 360° gives √2):
+#: their u would be inflated by up to this factor, and the split between orders meaningless.
+MAX_CONDITION = 1e3
 
 FloatArray = NDArray[np.float64]
 
@@ -97,7 +98,7 @@ def fit_harmonics(
         raise ConfigError(
             f"positions from {lo:g}° to {hi:g}° do not determine harmonics 1…{harmonics} "
             f"(condition number {cond:.3g}): spread the positions over the whole revolution or "
-            "ask for fewer harmonics"
+            "ask for fewer harmonics (--harmonics 0: none)"
         )
     coef, *_ = np.linalg.lstsq(design, error_arcsec, rcond=None)
     fitted = design @ coef
@@ -112,7 +113,7 @@ def fit_harmonics(
     amp = np.hypot(a, b)
     with np.errstate(divide="ignore", invalid="ignore"):
         amp_u = np.sqrt((a * a * va + b * b * vb + 2 * a * b * cab) / (amp * amp))
-        phase_u = np.sqrt((b * b * va + a * a * vb - 2 * a * b * cab)) / (amp * amp)
+        phase_u = np.sqrt(b * b * va + a * a * vb - 2 * a * b * cab) / (amp * amp)
     amp_u = np.where(amp > 0, amp_u, np.sqrt(0.5 * (va + vb)))
     return HarmonicFit(
         orders=tuple(int(h) for h in orders),

@@ -62,9 +62,7 @@ def unresolved_orders(shifts: NDArray[np.int64], faces: int) -> tuple[int, ...]:
     """Orders h (1 … N/2) of the face errors that the polygon's positions ``shifts`` (faces
     turned, per run) cannot separate from the table: hΔ ≡ 0 (mod N) for every run's Δ."""
     delta = np.asarray(shifts) - shifts[0]
-    return tuple(
-        h for h in range(1, faces // 2 + 1) if np.all((h * delta) % faces == 0)
-    )
+    return tuple(h for h in range(1, faces // 2 + 1) if np.all((h * delta) % faces == 0))
 
 
 def separate_polygon(readings: FloatArray, shifts: NDArray[np.int64]) -> PolygonSeparation:
@@ -99,9 +97,11 @@ def separate_polygon(readings: FloatArray, shifts: NDArray[np.int64]) -> Polygon
     cov_diag = np.diag(inv)[:n_x] * sigma2 if sigma2 is not None else None
     faces = x[n_t : n_t + n]
     offsets = x[n_t + n :]
-    deviation = readings + faces[(np.arange(n)[None, :] + shifts[:, None]) % n][None] - offsets[
-        None, :, None
-    ]
+    deviation = (
+        readings
+        + faces[(np.arange(n)[None, :] + shifts[:, None]) % n][None]
+        - offsets[None, :, None]
+    )
     return PolygonSeparation(
         face_errors_arcsec=faces,
         face_errors_arcsec_u=None if cov_diag is None else np.sqrt(cov_diag[n_t : n_t + n]),
