@@ -55,7 +55,8 @@ def test_selfcal_file_as_reference_against_the_truth(captures, tmp_path):
     assert len(d["provenance"]["inputs"]) == 2
 
 
-def test_polygon_report_and_summary(captures, tmp_path):
+def test_polygon_report_and_summary(captures, tmp_path, unrendered_figures):
+    # the figure itself is drawn and read in a browser by tests/report (cli_runs)
     report = tmp_path / "poly.html"
     r = run(
         "position", str(captures["polygon"]), "--polygon-faces", "12", "--harmonics", "3",

@@ -193,6 +193,33 @@ def test_selfcal_curve_corrects_the_reference_encoder():
         assert d["reference_u_arcsec"] == pytest.approx(0.05)
 
 
+def test_a_real_self_calibration_serves_as_reference():
+    """The pulse twin's encoder self-calibrated by rotacal's own `selfcal`, then used to read a
+    table whose encoder carries the same graduation error: the table's harmonics come out."""
+    from rotacal.encoder.selfcal import self_calibrate
+    from rotacal.sim import simulate_pulses
+
+    scale = ((1, 15.0, 0.3), (2, 4.0, 1.1))  # A·cos(hθ + φ), φ in rad
+    pulses = simulate_pulses(
+        heads=4, pulses_per_rev=360, revolutions=3, harmonics=scale, graduation_noise_arcsec=0.0
+    )
+    heads = [pulses.columns[f"head_{i}"] for i in range(4)]
+    selfcal = self_calibrate(heads, pulses_per_rev=360).to_dict()
+    zero = pulses.truth["first_line_head0"] * 1.0  # line 0 of the curve is the first pulse's
+    grad = [(h, a, -np.rad2deg(p)) for h, a, p in scale]
+    cap = simulate_position(seed=4, graduation=grad, graduation_lines=360)
+    d = analyse(cap, selfcal=selfcal, selfcal_zero_deg=zero).to_dict()
+    amp = np.array(d["harmonic_amplitudes_arcsec"])
+    assert np.all(
+        np.abs(amp - amplitudes(cap.truth)) < 3 * np.array(d["harmonic_amplitudes_arcsec_u"])
+    )
+    wrong = analyse(cap, selfcal=selfcal, selfcal_zero_deg=zero + 90.0).to_dict()
+    assert (
+        abs(wrong["harmonic_amplitudes_arcsec"][0] - 6.0)
+        > 10 * wrong["harmonic_amplitudes_arcsec_u"][0]
+    )
+
+
 def test_selfcal_correction_interpolates_the_definition():
     m = 8
     dev = np.array([0.0, 1.0, 3.0, 2.0, -1.0, -2.0, -3.0, 0.0])

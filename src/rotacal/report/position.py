@@ -32,7 +32,8 @@ def position_plot(r: PositionAccuracy) -> Any:
     """Runs, each direction's mean with its ±2s band, the error curve and its harmonic fit; the
     harmonics' amplitudes (± 2u); a polygon's face errors when separated."""
     poly = r._polygon
-    fig = plt.figure(figsize=(10.0, 6.8))
+    # constrained layout runs when the figure is drawn (not when it is built)
+    fig = plt.figure(figsize=(10.0, 6.8), layout="constrained")
     grid = fig.add_gridspec(2, 2 if poly is not None else 1, height_ratios=[1.35, 1.0])
     ax = fig.add_subplot(grid[0, :])
     # a full circle is drawn closed: the reading at 0° is drawn again at 360°
@@ -78,6 +79,7 @@ def position_plot(r: PositionAccuracy) -> Any:
     ax2.set_xlabel("harmonic order (per revolution)")
     ax2.set_ylabel("amplitude (arcsec) ± 2u")
     ax2.grid(True, axis="y", color=_C["grid"], lw=0.7)
+    ax2.set_axisbelow(True)
     ax2.spines[["top", "right"]].set_visible(False)
     if poly is not None:
         ax3 = fig.add_subplot(grid[1, 1])
@@ -96,8 +98,8 @@ def position_plot(r: PositionAccuracy) -> Any:
             color="#666" if not poly.unresolved else "#b22222",
         )
         ax3.grid(True, axis="y", color=_C["grid"], lw=0.7)
+        ax3.set_axisbelow(True)
         ax3.spines[["top", "right"]].set_visible(False)
-    fig.tight_layout()
     return fig
 
 
