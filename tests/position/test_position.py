@@ -159,6 +159,24 @@ def test_polygon_face_errors_separated_by_closure():
     assert not np.any(fixed.to_dict()["polygon_face_errors_arcsec"])
 
 
+def test_a_certificates_face_errors_correct_a_polygon_never_turned():
+    cap = simulate_position(seed=6, reference="polygon", positions=12, runs=5, polygon_step_faces=0)
+    t = cap.truth
+    r = analyse(
+        cap,
+        polygon_faces=12,
+        harmonics=3,
+        polygon_face_errors_arcsec=t["face_errors_arcsec"],
+        polygon_face_u_arcsec=0.02,
+    )
+    d = r.to_dict()
+    assert d["polygon_face_errors_source"] == "stated" and not r.warnings
+    err = np.array(d["error_curve_arcsec"]) - t["error_curve_arcsec"]
+    assert np.all(np.abs(err - err.mean()) < 3.5 * np.array(d["error_curve_arcsec_u"]))
+    with pytest.raises(ConfigError, match="give 12 finite values"):
+        analyse(cap, polygon_faces=12, polygon_face_errors_arcsec=[0.0] * 11)
+
+
 def test_polygon_turned_by_two_faces_leaves_order_six_inseparable():
     cap = simulate_position(
         seed=2, reference="polygon", positions=12, runs=4, polygon_step_faces=2, noise_arcsec=0.0

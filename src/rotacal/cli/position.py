@@ -46,6 +46,18 @@ def _selfcal_mapping(path: str) -> dict[str, Any]:
     return data
 
 
+def _numbers(text: str | None) -> list[float] | None:
+    """``--polygon-face-errors-arcsec`` as numbers (one line when one is not a number)."""
+    if text is None:
+        return None
+    try:
+        return [float(v) for v in text.replace(";", ",").split(",") if v.strip()]
+    except ValueError:
+        raise ConfigError(
+            f"--polygon-face-errors-arcsec {text}: give numbers separated by commas"
+        ) from None
+
+
 @cli.command(
     "position",
     epilog=example(
@@ -77,6 +89,20 @@ def _selfcal_mapping(path: str) -> dict[str, Any]:
     "column) [0: never turned].",
 )
 @click.option(
+    "--polygon-face-errors-arcsec",
+    default=None,
+    metavar="F0,F1,…",
+    help="The polygon's face errors from its certificate (arcsec, faces 0 … N-1): the readings "
+    "are corrected by them instead of separating them.",
+)
+@click.option(
+    "--polygon-face-u-arcsec",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="Standard uncertainty of those face errors (arcsec).",
+)
+@click.option(
     "--reference-u-arcsec",
     type=float,
     default=0.0,
@@ -105,6 +131,8 @@ def position_cmd(
     harmonics: int,
     polygon_faces: int | None,
     polygon_step_faces: int | None,
+    polygon_face_errors_arcsec: str | None,
+    polygon_face_u_arcsec: float,
     reference_u_arcsec: float,
     selfcal_path: str | None,
     selfcal_zero_deg: float,
@@ -147,6 +175,8 @@ def position_cmd(
             harmonics=harmonics,
             polygon_faces=polygon_faces,
             polygon_step_faces=polygon_step_faces,
+            polygon_face_errors_arcsec=_numbers(polygon_face_errors_arcsec),
+            polygon_face_u_arcsec=polygon_face_u_arcsec,
             reference_u_arcsec=reference_u_arcsec,
             selfcal=selfcal,
             selfcal_zero_deg=selfcal_zero_deg,

@@ -722,4 +722,4 @@ def demo(out: str, overwrite: bool) -> None:
 
 
 from . import simulate_frequency  # noqa: E402,F401  (registers `simulate gyro-sine`)
-from .simulate_position import simulate_position_cmd  # noqa: E402,F401  (registers it)
+from . import simulate_position as _position  # noqa: E402,F401  (registers `simulate position`)

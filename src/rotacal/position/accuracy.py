@@ -74,21 +74,25 @@ class PositionAccuracy(Result):
     _harmonics: HarmonicFit | None = dataclasses.field(repr=False)
     _polygon: PolygonSeparation | None = dataclasses.field(repr=False)
     _polygon_shifts: tuple[int, ...] = dataclasses.field(repr=False)
+    _polygon_source: str = dataclasses.field(repr=False)
     _pooled: tuple[float, float] | None = dataclasses.field(repr=False)
     _selfcal: dict[str, Any] | None = dataclasses.field(repr=False)
 
     def by_direction(self, sign: int, what: str) -> FloatArray | None:
-        """x̄_i (``what="mean"``) or s_i (``"std"``) of the direction ``sign``, or None."""
+        """x̄_i (``what="mean"``), s_i (``"std"``) or their u (``"mean_u"``, ``"std_u"``) of the
+        direction ``sign``, or None."""
         if sign not in self.directions:
             return None
-        table = self._stats.mean if what == "mean" else self._stats.std
+        table = getattr(self._stats, what)
         return None if table is None else table[self.directions.index(sign)]
 
     def to_dict(self) -> dict[str, Any]:
         out = super().to_dict()
         for sign, word in ((1, "forward"), (-1, "reverse")):
             out[f"error_{word}_arcsec"] = _list(self.by_direction(sign, "mean"))
+            out[f"error_{word}_arcsec_u"] = _list(self.by_direction(sign, "mean_u"))
             out[f"std_{word}_arcsec"] = _list(self.by_direction(sign, "std"))
+            out[f"std_{word}_arcsec_u"] = _list(self.by_direction(sign, "std_u"))
         for name in AXIS_VALUES:
             out[f"{name}_arcsec"] = self._stats.values[name]
             out[f"{name}_arcsec_u"] = self._stats.values_u[name]
@@ -112,7 +116,8 @@ class PositionAccuracy(Result):
         if poly is not None:
             out["polygon_faces"] = poly.face_errors_arcsec.size
             out["polygon_shifts"] = list(self._polygon_shifts)
-            out["polygon_separated"] = not poly.unresolved
+            out["polygon_separated"] = self._polygon_source in ("closure", "stated")
+            out["polygon_face_errors_source"] = self._polygon_source
             out["polygon_unresolved_orders"] = list(poly.unresolved)
             out["polygon_face_errors_arcsec"] = _list(poly.face_errors_arcsec)
             out["polygon_face_errors_arcsec_u"] = _list(poly.face_errors_arcsec_u)
@@ -218,6 +223,8 @@ def position_accuracy(
     harmonics: int = DEFAULT_HARMONICS,
     polygon_faces: int | None = None,
     polygon_step_faces: int | None = None,
+    polygon_face_errors_arcsec: ArrayLike | None = None,
+    polygon_face_u_arcsec: float = 0.0,
     reference_u_arcsec: float = 0.0,
     selfcal: Mapping[str, Any] | None = None,
     selfcal_zero_deg: float = 0.0,
@@ -241,6 +248,12 @@ def position_accuracy(
         N of the polygon (the readings are then autocollimator readings).
     polygon_step_faces : int, optional
         Faces the polygon was turned between consecutive runs, when there is no ``face`` column.
+    polygon_face_errors_arcsec : array_like (N,), arcsec, optional
+        The polygon's face errors as its calibration certificate states them (same sign
+        convention as :mod:`rotacal.position.polygon`): the readings are corrected by them and
+        no separation is attempted.
+    polygon_face_u_arcsec : float, arcsec
+        Their standard uncertainty (Type B).
     reference_u_arcsec : float, arcsec
         Standard uncertainty of the reference at a position (Type B, e.g. its certificate).
     selfcal : mapping, optional
@@ -311,13 +324,34 @@ def position_accuracy(
     n_dir, n_runs, n_pos = app.values.shape
     u_ref = np.full(n_pos, math.sqrt(u_ref2))
     poly = None
+    source = ""
     shifts: NDArray[np.int64] = np.zeros(0, dtype=np.int64)
     std_scale: float | None = 1.0
     x = app.values
     if polygon_faces is not None:
         _check_polygon_positions(app.positions_deg, polygon_faces)
         shifts = _polygon_shifts(app, polygon_faces, face, polygon_step_faces)
-        poly = separate_polygon(app.values, shifts)
+        if polygon_face_errors_arcsec is None:
+            poly = separate_polygon(app.values, shifts)
+            source = (
+                "closure"
+                if not poly.unresolved
+                else "not separated"
+                if len(poly.unresolved) == polygon_faces // 2
+                else "partly separated"
+            )
+        else:
+            stated = _stated_faces(polygon_face_errors_arcsec, polygon_faces, polygon_face_u_arcsec)
+            j = (np.arange(polygon_faces)[None, :] + shifts[:, None]) % polygon_faces
+            poly = separate_polygon(app.values + stated[j][None], shifts, separate=False)
+            poly = dataclasses.replace(
+                poly,
+                face_errors_arcsec=stated,
+                face_errors_arcsec_u=np.full(polygon_faces, polygon_face_u_arcsec),
+                unresolved=(),
+            )
+            u_ref = np.hypot(u_ref, polygon_face_u_arcsec)
+            source = "stated"
         x = poly.deviation
         nu_iso = n_dir * n_pos * (n_runs - 1)
         std_scale = math.sqrt(nu_iso / poly.dof) if poly.dof > 0 and nu_iso > 0 else None
@@ -325,7 +359,8 @@ def position_accuracy(
             # the face errors' and zeros' estimates add to each position's mean (KKT covariance)
             extra = np.maximum(poly.table_var_arcsec2 - poly.sigma2 / n_runs, 0.0).mean(axis=0)
             u_ref = np.sqrt(u_ref**2 + extra)
-        warnings += _polygon_warnings(poly, polygon_faces, n_runs)
+        if source != "stated":
+            warnings += _polygon_warnings(poly, polygon_faces, n_runs)
     stats = axis_statistics(x, u_ref, directions=app.directions, std_scale=std_scale)
     if n_runs == 1:
         warnings.append(
@@ -380,10 +415,24 @@ def position_accuracy(
         _harmonics=fit,
         _polygon=poly,
         _polygon_shifts=tuple(int(s) for s in shifts),
+        _polygon_source=source,
         _pooled=pooled,
         _selfcal=selfcal_info,
         warnings=tuple(warnings),
     )
+
+
+def _stated_faces(values: ArrayLike, faces: int, u: float) -> FloatArray:
+    """A certificate's face errors (arcsec): N finite values; their mean is removed (closure)."""
+    f = np.asarray(values, dtype=np.float64).ravel()
+    if f.size != faces or not np.all(np.isfinite(f)):
+        raise ConfigError(
+            f"--polygon-face-errors-arcsec: give {faces} finite values, one per face 0 … "
+            f"{faces - 1} (got {f.size})"
+        )
+    if not (math.isfinite(u) and u >= 0):
+        raise ConfigError(f"--polygon-face-u-arcsec {u}: give a value ≥ 0")
+    return f - f.mean()
 
 
 def _polygon_warnings(poly: PolygonSeparation, faces: int, n_runs: int) -> list[str]:
@@ -393,7 +442,7 @@ def _polygon_warnings(poly: PolygonSeparation, faces: int, n_runs: int) -> list[
             "the polygon sat in the same position on the table in every run: its face errors "
             "cannot be separated from the table's, and the error curve is the table's deviation "
             "less the face errors (turn the polygon by one face between runs, column face or "
-            "--polygon-step-faces)"
+            "--polygon-step-faces; or give its certificate's --polygon-face-errors-arcsec)"
         )
     elif poly.unresolved:
         out.append(

@@ -65,9 +65,14 @@ def unresolved_orders(shifts: NDArray[np.int64], faces: int) -> tuple[int, ...]:
     return tuple(h for h in range(1, faces // 2 + 1) if np.all((h * delta) % faces == 0))
 
 
-def separate_polygon(readings: FloatArray, shifts: NDArray[np.int64]) -> PolygonSeparation:
+def separate_polygon(
+    readings: FloatArray, shifts: NDArray[np.int64], *, separate: bool = True
+) -> PolygonSeparation:
     """Separate table and polygon errors from autocollimator readings ``readings[d, r, k]``
-    (arcsec) at positions k·360°/N, the polygon turned by ``shifts[r]`` faces in run r."""
+    (arcsec) at positions k·360°/N, the polygon turned by ``shifts[r]`` faces in run r.
+
+    ``separate=False`` estimates no face error (every order held at zero: readings already
+    corrected by stated face errors); only the run zeros are then fitted."""
     n_dir, n_runs, n = readings.shape
     n_t = n_dir * n
     n_x = n_t + n + n_runs
@@ -78,7 +83,7 @@ def separate_polygon(readings: FloatArray, shifts: NDArray[np.int64]) -> Polygon
     design[rows, d_i * n + k_i] = 1.0
     design[rows, n_t + j_i] = -1.0
     design[rows, n_t + n + r_i] = 1.0
-    unresolved = unresolved_orders(shifts, n)
+    unresolved = unresolved_orders(shifts, n) if separate else tuple(range(1, n // 2 + 1))
     cons = [np.r_[np.zeros(n_t), np.ones(n), np.zeros(n_runs)]]
     cons.append(np.r_[np.zeros(n_t + n), np.ones(n_runs)])
     j = np.arange(n)
