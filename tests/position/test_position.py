@@ -173,7 +173,7 @@ def test_a_certificates_face_errors_correct_a_polygon_never_turned():
     assert d["polygon_face_errors_source"] == "stated" and not r.warnings
     err = np.array(d["error_curve_arcsec"]) - t["error_curve_arcsec"]
     assert np.all(np.abs(err - err.mean()) < 3.5 * np.array(d["error_curve_arcsec_u"]))
-    with pytest.raises(ConfigError, match="give 12 finite values"):
+    with pytest.raises(ConfigError, match="give 12 finite values below one turn"):
         analyse(cap, polygon_faces=12, polygon_face_errors_arcsec=[0.0] * 11)
 
 
@@ -304,3 +304,17 @@ def test_one_run_gives_no_repeatability_and_says_so():
     assert d["reversal_value_arcsec"] is None
     assert any("one run" in w for w in r.warnings)
     assert math.isfinite(d["error_pp_arcsec"])
+
+
+def test_values_no_table_can_give_are_refused():
+    pos = np.arange(8) * 45.0
+    with pytest.raises(CaptureError, match="error_arcsec"):
+        position_accuracy(pos, error_arcsec=np.r_[np.zeros(7), 1e300], harmonics=0)
+    with pytest.raises(CaptureError, match="position_deg"):
+        position_accuracy(np.r_[pos[:7], 1e12], error_arcsec=np.zeros(8), harmonics=0)
+    with pytest.raises(ConfigError, match="--reference-u-arcsec nan"):
+        position_accuracy(pos, error_arcsec=np.zeros(8), reference_u_arcsec=math.nan)
+    with pytest.raises(ConfigError, match="--selfcal-zero-deg nan"):
+        selfcal_correction(pos, {"deviation_arcsec": [0.0, 1.0]}, zero_deg=math.nan)
+    with pytest.raises(ConfigError, match="reference_deg.*or.*error_arcsec"):
+        position_accuracy(pos, reference_deg=pos, error_arcsec=np.zeros(8))

@@ -37,8 +37,15 @@ from rotacal.position.iso230 import AXIS_VALUES, ISO_RUNS, AxisStatistics, axis_
 from rotacal.position.polygon import PolygonSeparation, separate_polygon
 from rotacal.position.reference import selfcal_correction
 from rotacal.results import Result
+from rotacal.signal._values import check_magnitudes
 
 __all__ = ["DEFAULT_HARMONICS", "PositionAccuracy", "position_accuracy"]
+
+#: One turn in arcsec: no deviation (or uncertainty of one) is larger.
+TURN_ARCSEC = 1_296_000.0
+#: Angles beyond this many degrees (2778 turns) are refused: not a table's position, and their
+#: reduction modulo 360° would lose the arcsec digits in float64.
+MAX_ANGLE_DEG = 1e6
 
 #: Harmonics fitted by default (orders 1 … 4: eccentricity to the fourth-order lobing).
 DEFAULT_HARMONICS = 4
@@ -274,9 +281,21 @@ def position_accuracy(
         )
     if harmonics < 0:
         raise ConfigError(f"--harmonics {harmonics}: give 0 or more")
-    if not (math.isfinite(reference_u_arcsec) and reference_u_arcsec >= 0):
-        raise ConfigError(f"--reference-u-arcsec {reference_u_arcsec}: give a value ≥ 0")
+    if not (0 <= reference_u_arcsec <= TURN_ARCSEC):
+        raise ConfigError(
+            f"--reference-u-arcsec {reference_u_arcsec}: give a value from 0 to one turn "
+            f"({TURN_ARCSEC:g} arcsec)"
+        )
     pos = np.asarray(position_deg, dtype=np.float64)
+    check_magnitudes("position_deg", pos, what="an angle in degrees", largest=MAX_ANGLE_DEG)
+    if reference_deg is not None:
+        check_magnitudes(
+            "reference_deg", reference_deg, what="an angle in degrees", largest=MAX_ANGLE_DEG
+        )
+    if error_arcsec is not None:
+        check_magnitudes(
+            "error_arcsec", error_arcsec, what="a deviation in arcsec", largest=TURN_ARCSEC
+        )
     notes: list[str] = []
     warnings: list[str] = []
     u_ref2 = reference_u_arcsec**2
@@ -425,13 +444,13 @@ def position_accuracy(
 def _stated_faces(values: ArrayLike, faces: int, u: float) -> FloatArray:
     """A certificate's face errors (arcsec): N finite values; their mean is removed (closure)."""
     f = np.asarray(values, dtype=np.float64).ravel()
-    if f.size != faces or not np.all(np.isfinite(f)):
+    if f.size != faces or not np.all(np.abs(f) < TURN_ARCSEC):
         raise ConfigError(
-            f"--polygon-face-errors-arcsec: give {faces} finite values, one per face 0 … "
+            f"--polygon-face-errors-arcsec: give {faces} finite values below one turn, one per face 0 … "
             f"{faces - 1} (got {f.size})"
         )
-    if not (math.isfinite(u) and u >= 0):
-        raise ConfigError(f"--polygon-face-u-arcsec {u}: give a value ≥ 0")
+    if not (0 <= u <= TURN_ARCSEC):
+        raise ConfigError(f"--polygon-face-u-arcsec {u}: give a value from 0 to one turn")
     return f - f.mean()
 
 

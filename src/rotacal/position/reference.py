@@ -67,11 +67,13 @@ def selfcal_correction(
         curve = np.asarray(dev, dtype=np.float64)
     except (TypeError, ValueError):
         curve = np.empty(0)
-    if curve.ndim != 1 or curve.size < 2 or not np.all(np.isfinite(curve)):
+    if curve.ndim != 1 or curve.size < 2 or not np.all(np.abs(curve) < 1_296_000.0):
         raise ConfigError(
-            "--selfcal: deviation_arcsec must be a list of at least 2 finite numbers (the "
-            "`rotacal selfcal --json` result)"
+            "--selfcal: deviation_arcsec must be a list of at least 2 finite numbers below one "
+            "turn (the `rotacal selfcal --json` result)"
         )
+    if not abs(zero_deg) <= 1e6:
+        raise ConfigError(f"--selfcal-zero-deg {zero_deg}: give an angle in degrees")
     m = curve.size
     declared = selfcal.get("pulses_per_rev")
     if declared is not None and int(declared) != m:
