@@ -316,5 +316,5 @@ def test_values_no_table_can_give_are_refused():
         position_accuracy(pos, error_arcsec=np.zeros(8), reference_u_arcsec=math.nan)
     with pytest.raises(ConfigError, match="--selfcal-zero-deg nan"):
         selfcal_correction(pos, {"deviation_arcsec": [0.0, 1.0]}, zero_deg=math.nan)
-    with pytest.raises(ConfigError, match="reference_deg.*or.*error_arcsec"):
+    with pytest.raises(ConfigError, match=r"reference_deg.*or.*error_arcsec"):
         position_accuracy(pos, reference_deg=pos, error_arcsec=np.zeros(8))
