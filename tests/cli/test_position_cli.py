@@ -73,7 +73,7 @@ def test_polygon_report_and_summary(captures, tmp_path, unrendered_figures):
     [
         (["--harmonics", "6"], "--harmonics 6 needs at least 14 distinct positions"),
         (["--polygon-faces", "8"], "a 8-face polygon needs the 8 positions"),
-        (["--column", "error_arcsec=x"], "no column reference_deg or error_arcsec"),
+        (["--column", "error_arcsec=x"], "no column 'reference_deg' or 'error_arcsec'"),
     ],
 )
 def test_refusals_are_one_line(captures, extra, message):

@@ -27,9 +27,6 @@ from ._common import (
 )
 from ._help import example
 
-#: Columns the command reads when the file has them (besides position_deg).
-_OPTIONAL = ("reference_deg", "error_arcsec", "run", "direction", "face")
-
 
 def _selfcal_mapping(path: str) -> dict[str, Any]:
     """The ``rotacal selfcal --json`` result in ``path`` (one line on any fault)."""
@@ -157,12 +154,16 @@ def position_cmd(
     names = ", ".join(cap.columns)
     if "position_deg" not in cap.columns:
         raise CaptureError(
-            f"no column position_deg (columns: {names}); map yours with --column NAME=position_deg"
+            f"no column 'position_deg' (columns: {names}); map yours with "
+            "--column NAME=position_deg"
         )
-    found = {name: cap.columns[name] for name in _OPTIONAL if name in cap.columns}
+    from rotacal.columns import POSITION_OPTIONAL
+
+    wanted = ("reference_deg", "error_arcsec", *POSITION_OPTIONAL)
+    found = {name: cap.columns[name] for name in wanted if name in cap.columns}
     if "reference_deg" not in found and "error_arcsec" not in found:
         raise CaptureError(
-            f"no column reference_deg or error_arcsec (columns: {names}): "
+            f"no column 'reference_deg' or 'error_arcsec' (columns: {names}): "
             "give the reference's reading or the deviation (--column NAME=reference_deg)"
         )
     if "reference_deg" in found and "error_arcsec" in found:
