@@ -40,7 +40,13 @@ def test_selfcal_file_as_reference_against_the_truth(captures, tmp_path):
     t = truth(path)
     selfcal = tmp_path / "selfcal.json"
     selfcal.write_text(json.dumps({**t["selfcal"], "deviation_u_arcsec": 0.05}))
-    r = run("position", str(path), "--selfcal", str(selfcal), "--json", "-")
+    specs = tmp_path / "specs.toml"  # the reference encoder's reading error: rectangular ±1″
+    specs.write_text(
+        '[encoder]\ngraduation_error_arcsec = { distribution = "rectangular", half_width = 1.0 }\n'
+    )
+    r = run(
+        "position", str(path), "--selfcal", str(selfcal), "--specs", str(specs), "--json", "-"
+    )  # fmt: skip
     assert r.exit_code == 0, r.output
     d = json.loads(r.stdout)
     amp = np.array([h["amplitude_arcsec"] for h in t["harmonics"]])
@@ -51,8 +57,9 @@ def test_selfcal_file_as_reference_against_the_truth(captures, tmp_path):
     for key in ("error_pp_arcsec", "repeatability_bidirectional_arcsec", "reversal_value_arcsec"):
         assert key in d and f"{key}_u" in d, key
     assert d["selfcal"]["lines"] == 3600
+    assert d["reference_u_arcsec"] == pytest.approx(np.hypot(0.05, 1 / np.sqrt(3)))
     assert d["provenance"]["command"] == "position"
-    assert len(d["provenance"]["inputs"]) == 2
+    assert len(d["provenance"]["inputs"]) == 3
 
 
 def test_polygon_report_and_summary(captures, tmp_path, unrendered_figures):

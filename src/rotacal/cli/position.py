@@ -6,6 +6,7 @@ Loaded through :data:`rotacal.cli._app.COMMAND_MODULES` (``"position": "position
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -104,7 +105,8 @@ def _numbers(text: str | None) -> list[float] | None:
     type=float,
     default=0.0,
     show_default=True,
-    help="Standard uncertainty of the reference at one position (arcsec, Type B).",
+    help="Standard uncertainty of the reference at one position (arcsec, Type B); a reference "
+    "encoder's --specs encoder.graduation_error_arcsec adds to it.",
 )
 @click.option(
     "--selfcal",
@@ -170,6 +172,12 @@ def position_cmd(
         raise CaptureError(
             "both reference_deg and error_arcsec are present: keep one (--column maps others away)"
         )
+    specs = kw.pop("specs")
+    if specs is not None and "reference_deg" in found:
+        # a reference encoder's reading error (Type B) as the lab's specifications state it
+        stated = specs.get("encoder.graduation_error_arcsec")
+        if stated is not None:
+            reference_u_arcsec = math.hypot(reference_u_arcsec, stated.std)
     with _status("evaluating the positions"):
         result = position_accuracy(
             cap.columns["position_deg"],
