@@ -303,7 +303,7 @@ def test_one_run_gives_no_repeatability_and_says_so():
     )
     assert d["reversal_value_arcsec"] is None
     assert any("one run" in w for w in r.warnings)
-    assert math.isfinite(d["error_pp_arcsec"])
+    assert math.isfinite(d["error_pp_arcsec"]) and d["error_pp_arcsec_u"] is None
 
 
 def test_values_no_table_can_give_are_refused():

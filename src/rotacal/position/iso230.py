@@ -24,7 +24,8 @@ The standard's test cycle approaches every target position five times in each di
 runs are evaluated with a warning. Uncertainties (not part of ISO 230-2; GUM, JCGM 100:2008 §5.1.2,
 first order): u²(x̄_i↑) = s_i↑²/n + u_ref,i² with u_ref,i the reference's standard uncertainty at
 the position (the same for both directions, so it cancels in B_i); u(s) = s/√(2(n − 1)) (normal
-readings); a maximum or a range takes the u of the positions that decide it.
+readings); a maximum or a range takes the u of the positions that decide it. With one run (or no
+residual left) the scatter is unknown and the u are NaN (``null`` in the JSON).
 """
 
 from __future__ import annotations
@@ -112,7 +113,8 @@ def axis_statistics(
     n_dir, n_runs, _ = x.shape
     mean = x.mean(axis=1)
     std = std_u = None
-    var_of_mean = np.zeros_like(mean)
+    # without repeated approaches the readings' scatter is unknown, and so is every u below
+    var_of_mean = np.full_like(mean, np.nan)
     if n_runs > 1 and std_scale is not None:
         std = x.std(axis=1, ddof=1) * std_scale
         std_u = std / math.sqrt(2.0 * (n_runs - 1))
