@@ -159,6 +159,17 @@ class PositionAccuracy(Result):
             value = v[name]
             if value is not None:
                 lines.append(f"{label + ' (ISO 230-2)':<34} {q(value, vu[name])}")
+        poly = self._polygon
+        if poly is not None:
+            how = {
+                "closure": "separated by closure",
+                "stated": "as stated (certificate)",
+            }.get(self._polygon_source, f"{self._polygon_source} — in the error curve")
+            rms = float(np.sqrt(np.mean(poly.face_errors_arcsec**2)))
+            lines.append(
+                f"polygon {poly.face_errors_arcsec.size} faces: face errors {how}, "
+                f"rms {rms:.3g} arcsec"
+            )
         fit = self._harmonics
         if fit is not None:
             for h, a, u, phi in zip(
