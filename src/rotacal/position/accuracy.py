@@ -309,86 +309,25 @@ def position_accuracy(
         )
     notes: list[str] = []
     warnings: list[str] = []
-    u_ref2 = reference_u_arcsec**2
-    selfcal_info = None
-    if polygon_faces is not None:
-        if reference_deg is not None or selfcal is not None:
-            raise ConfigError(
-                "--polygon-faces reads autocollimator readings (column error_arcsec), not "
-                "reference_deg or --selfcal"
-            )
-        if polygon_faces < 3:
-            raise ConfigError(f"--polygon-faces {polygon_faces}: a polygon has 3 faces or more")
-        reference = "polygon"
-        values = np.asarray(error_arcsec, dtype=np.float64)
-    elif reference_deg is not None:
-        reading = np.asarray(reference_deg, dtype=np.float64)
-        reference = "encoder"
-        if selfcal is not None:
-            corr = selfcal_correction(reading, selfcal, zero_deg=selfcal_zero_deg)
-            reading = reading + corr.correction_arcsec / 3600.0
-            reference = "self-calibrated encoder"
-            if corr.u_arcsec is not None:
-                u_ref2 += corr.u_arcsec**2
-            else:
-                warnings.append(
-                    "the self-calibration states no uncertainty (deviation_u_arcsec): its "
-                    "correction counts as exact"
-                )
-            if corr.note:
-                notes.append(corr.note)
-            selfcal_info = {
-                "lines": corr.lines,
-                "heads": corr.heads,
-                "zero_deg": selfcal_zero_deg,
-                "correction_pp_arcsec": float(np.ptp(corr.correction_arcsec)),
-                "u_arcsec": corr.u_arcsec,
-            }
-        values = (np.mod(reading - pos + 180.0, 360.0) - 180.0) * 3600.0
-    else:
-        if selfcal is not None:
-            raise ConfigError("--selfcal corrects a reference_deg column; the capture has none")
-        reference = "deviation"
-        values = np.asarray(error_arcsec, dtype=np.float64)
+    reference, values, u_ref2, selfcal_info = _deviations(
+        pos, reference_deg, error_arcsec, polygon_faces, selfcal, selfcal_zero_deg, notes, warnings
+    )
     app = arrange_approaches(pos, values, run=run, direction=direction)
     n_dir, n_runs, n_pos = app.values.shape
-    u_ref = np.full(n_pos, math.sqrt(u_ref2))
-    poly = None
-    source = ""
+    u_ref = np.full(n_pos, math.sqrt(u_ref2 + reference_u_arcsec**2))
+    poly, source = None, ""
     shifts: NDArray[np.int64] = np.zeros(0, dtype=np.int64)
     std_scale: float | None = 1.0
     x = app.values
     if polygon_faces is not None:
         _check_polygon_positions(app.positions_deg, polygon_faces)
         shifts = _polygon_shifts(app, polygon_faces, face, polygon_step_faces)
-        if polygon_face_errors_arcsec is None:
-            poly = separate_polygon(app.values, shifts)
-            source = (
-                "closure"
-                if not poly.unresolved
-                else "not separated"
-                if len(poly.unresolved) == polygon_faces // 2
-                else "partly separated"
-            )
-        else:
-            stated = _stated_faces(polygon_face_errors_arcsec, polygon_faces, polygon_face_u_arcsec)
-            j = (np.arange(polygon_faces)[None, :] + shifts[:, None]) % polygon_faces
-            poly = separate_polygon(app.values + stated[j][None], shifts, separate=False)
-            poly = dataclasses.replace(
-                poly,
-                face_errors_arcsec=stated,
-                face_errors_arcsec_u=np.full(polygon_faces, polygon_face_u_arcsec),
-                unresolved=(),
-            )
-            u_ref = np.hypot(u_ref, polygon_face_u_arcsec)
-            source = "stated"
+        poly, source, u_ref = _polygon(
+            app, shifts, polygon_faces, polygon_face_errors_arcsec, polygon_face_u_arcsec, u_ref
+        )
         x = poly.deviation
         nu_iso = n_dir * n_pos * (n_runs - 1)
         std_scale = math.sqrt(nu_iso / poly.dof) if poly.dof > 0 and nu_iso > 0 else None
-        if poly.table_var_arcsec2 is not None and poly.sigma2 is not None:
-            # the face errors' and zeros' estimates add to each position's mean (KKT covariance)
-            extra = np.maximum(poly.table_var_arcsec2 - poly.sigma2 / n_runs, 0.0).mean(axis=0)
-            u_ref = np.sqrt(u_ref**2 + extra)
         if source != "stated":
             warnings += _polygon_warnings(poly, polygon_faces, n_runs)
     stats = axis_statistics(x, u_ref, directions=app.directions, std_scale=std_scale)
@@ -450,6 +389,95 @@ def position_accuracy(
         _selfcal=selfcal_info,
         warnings=tuple(warnings),
     )
+
+
+def _deviations(
+    pos: FloatArray,
+    reference_deg: ArrayLike | None,
+    error_arcsec: ArrayLike | None,
+    polygon_faces: int | None,
+    selfcal: Mapping[str, Any] | None,
+    selfcal_zero_deg: float,
+    notes: list[str],
+    warnings: list[str],
+) -> tuple[str, FloatArray, float, dict[str, Any] | None]:
+    """The reference's name, the readings as deviations (arcsec; a polygon's: autocollimator
+    readings), the self-calibration's u² (arcsec²) and what the JSON says of it."""
+    if polygon_faces is not None:
+        if reference_deg is not None or selfcal is not None:
+            raise ConfigError(
+                "--polygon-faces reads autocollimator readings (column error_arcsec), not "
+                "reference_deg or --selfcal"
+            )
+        if polygon_faces < 3:
+            raise ConfigError(f"--polygon-faces {polygon_faces}: a polygon has 3 faces or more")
+        return "polygon", np.asarray(error_arcsec, dtype=np.float64), 0.0, None
+    if reference_deg is None:
+        if selfcal is not None:
+            raise ConfigError("--selfcal corrects a reference_deg column; the capture has none")
+        return "deviation", np.asarray(error_arcsec, dtype=np.float64), 0.0, None
+    reading = np.asarray(reference_deg, dtype=np.float64)
+    reference, u2, info = "encoder", 0.0, None
+    if selfcal is not None:
+        corr = selfcal_correction(reading, selfcal, zero_deg=selfcal_zero_deg)
+        reading = reading + corr.correction_arcsec / 3600.0
+        reference = "self-calibrated encoder"
+        if corr.u_arcsec is not None:
+            u2 = corr.u_arcsec**2
+        else:
+            warnings.append(
+                "the self-calibration states no uncertainty (deviation_u_arcsec): its "
+                "correction counts as exact"
+            )
+        if corr.note:
+            notes.append(corr.note)
+        info = {
+            "lines": corr.lines,
+            "heads": corr.heads,
+            "zero_deg": selfcal_zero_deg,
+            "correction_pp_arcsec": float(np.ptp(corr.correction_arcsec)),
+            "u_arcsec": corr.u_arcsec,
+        }
+    # actual minus target, within ±180° (a reading of 359.99° at target 0° is −36″)
+    return reference, (np.mod(reading - pos + 180.0, 360.0) - 180.0) * 3600.0, u2, info
+
+
+def _polygon(
+    app: Approaches,
+    shifts: NDArray[np.int64],
+    faces: int,
+    stated_faces: ArrayLike | None,
+    stated_u: float,
+    u_ref: FloatArray,
+) -> tuple[PolygonSeparation, str, FloatArray]:
+    """The polygon's face errors separated by closure (or taken as stated), how, and the u of
+    each position's reference grown by them."""
+    if stated_faces is None:
+        poly = separate_polygon(app.values, shifts)
+        if not poly.unresolved:
+            source = "closure"
+        elif len(poly.unresolved) == faces // 2:
+            source = "not separated"
+        else:
+            source = "partly separated"
+    else:
+        stated = _stated_faces(stated_faces, faces, stated_u)
+        j = (np.arange(faces)[None, :] + shifts[:, None]) % faces
+        poly = separate_polygon(app.values + stated[j][None], shifts, separate=False)
+        poly = dataclasses.replace(
+            poly,
+            face_errors_arcsec=stated,
+            face_errors_arcsec_u=np.full(faces, stated_u),
+            unresolved=(),
+        )
+        u_ref = np.hypot(u_ref, stated_u)
+        source = "stated"
+    if poly.table_var_arcsec2 is not None and poly.sigma2 is not None:
+        # the face errors' and zeros' estimates add to each position's mean (KKT covariance)
+        n_runs = app.values.shape[1]
+        extra = np.maximum(poly.table_var_arcsec2 - poly.sigma2 / n_runs, 0.0).mean(axis=0)
+        u_ref = np.sqrt(u_ref**2 + extra)
+    return poly, source, u_ref
 
 
 def _stated_faces(values: ArrayLike, faces: int, u: float) -> FloatArray:
