@@ -201,6 +201,7 @@ def _analysis_args(kind: str, path: str, truth: dict[str, Any]) -> list[str]:
         "gyro-rates": ["gyro", "scale-factor", path],
         "gyro-triad": ["gyro", "triad", path],
         "gyro-noise": ["allan", path, "--column", "rate_deg_s"],
+        "position": ["position", path],
         "gyro-rotations": ["gyro", "rotations", path, "--sections", f"{path}.truth.json"],
         "multiposition": [
             "gyro",

@@ -71,6 +71,12 @@ GYRO_FREQUENCY_RESPONSE = CommandColumns(
 GYRO_FREQUENCY_RESPONSE_ANGLE = CommandColumns(
     "gyro frequency-response", ("time_s", "rate_deg_s", "angle_deg")
 )
+#: A position test: the reference encoder's reading, or the deviation (an autocollimator's).
+POSITION_OPTIONAL = ("run", "direction", "face")
+POSITION_REFERENCE = CommandColumns(
+    "position", ("position_deg", "reference_deg"), POSITION_OPTIONAL
+)
+POSITION_DEVIATION = CommandColumns("position", ("position_deg", "error_arcsec"), POSITION_OPTIONAL)
 SELFCAL = CommandColumns("selfcal", (), min_heads=2)
 RATE = CommandColumns("rate", (), min_heads=1)
 
@@ -88,6 +94,8 @@ COMMANDS: tuple[CommandColumns, ...] = (
     MOTION_ENCODER,
     MOTION_LTS,
     MOTION_FOG,
+    POSITION_REFERENCE,
+    POSITION_DEVIATION,
     RATE,
     SELFCAL,
 )

@@ -270,6 +270,23 @@ REFERENCES: dict[str, Reference] = {
             "Wiley, Hoboken",
             "10.1002/0471722162",
         ),
+        _r(
+            "iso230_2",
+            "",
+            "ISO 230-2",
+            "2014",
+            "Test code for machine tools — Part 2: Determination of accuracy and repeatability of "
+            "positioning of numerically controlled axes",
+            "International Organization for Standardization, ISO 230-2:2014",
+        ),
+        _r(
+            "evans1996",
+            "Evans C. J., Hocken R. J., Estler W. T.",
+            "Evans et al.",
+            "1996",
+            "Self-calibration: reversal, redundancy, error separation, and 'absolute testing'",
+            "CIRP Annals 45(2), 617–634",
+        ),
     )
 }
 

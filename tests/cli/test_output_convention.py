@@ -63,6 +63,7 @@ def captures(tmp_path_factory) -> dict[str, Path]:
         "orientation": [],
         "gyro-sine": ["--frequency-hz", "2", "--periods", "3"],
         "gyro-sine-6": ["--frequency-hz", "6", "--periods", "3"],
+        "position": ["--positions", "12", "--runs", "2"],
     }
     out = {}
     for kind, more in small.items():
@@ -91,6 +92,7 @@ ANALYSES: dict[tuple[str, ...], tuple[str, list[str]]] = {
     ("motion", "encoder"): ("encoder", ["--lines", "36000"]),
     ("motion", "fog"): ("fog", []),
     ("motion", "lts"): ("lts", ["--radius-mm", "100"]),
+    ("position",): ("position", ["--harmonics", "2"]),
     ("rate",): ("pulses", ["--pulses-per-rev", "360"]),
     ("selfcal",): ("pulses", ["--pulses-per-rev", "360"]),
     # the paper's derivation allocates once, the default twice: the outputs are the same kind
@@ -118,6 +120,7 @@ WRITERS: dict[tuple[str, ...], list[str]] = {
             "lts",
             "multiposition",
             "orientation",
+            "position",
             "pulses",
         )
     },

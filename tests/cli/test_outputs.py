@@ -75,6 +75,7 @@ EXPECTED_INPUTS = {
     ("motion", "encoder"): {"capture", "correction_from", "specs"},
     ("motion", "fog"): {"capture", "specs"},
     ("motion", "lts"): {"capture", "specs"},
+    ("position",): {"capture", "selfcal_path", "specs"},
     ("rate",): {"capture", "selfcal_path", "specs"},
     ("selfcal",): {"capture", "specs"},
     ("turntable", "budget"): {"config"},

@@ -65,6 +65,7 @@ _TWINS = [
     "gyro-noise",
     "gyro-rotations",
     "multiposition",
+    "position",
 ]
 
 

@@ -98,7 +98,8 @@ def test_the_index_links_every_report_and_only_those(demo_folder) -> None:
     "demo"
 )  # the browser and the example table's allocations: tests/conftest.py
 def test_every_commands_report_reads_in_a_browser(browser, cli_reports) -> None:
-    assert len(cli_reports) == 14  # motion ×3, selfcal, rate, inspect, gyro ×5, allan, turntable ×2
+    # motion ×3, selfcal, rate, inspect, gyro ×5, allan, turntable ×2, position
+    assert len(cli_reports) == 15
     for command, path in cli_reports.items():
         found = look_at(browser, path)
         try:

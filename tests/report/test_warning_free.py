@@ -13,7 +13,8 @@ import pytest
 
 @pytest.mark.xdist_group("demo")  # the session's cli_runs live on the demo's worker
 def test_every_twin_with_defaults_is_warning_free(cli_runs) -> None:
-    assert len(cli_runs) == 14  # motion ×3, selfcal, rate, inspect, gyro ×5, allan, turntable ×2
+    # motion ×3, selfcal, rate, inspect, gyro ×5, allan, turntable ×2, position
+    assert len(cli_runs) == 15
     for command, run in cli_runs.items():
         assert run.result["warnings"] == [], command
         assert "warning" not in run.stderr, command

@@ -35,6 +35,7 @@ COMMAND_MODULES = {
     "gyro": "gyro",
     "inspect": "inspect",
     "motion": "motion",
+    "position": "position",
     "rate": "pulses",
     "records": "records",
     "selfcal": "pulses",

@@ -721,5 +721,5 @@ def demo(out: str, overwrite: bool) -> None:
         _wrote(path)
 
 
-# registers `simulate gyro-sine` and `simulate orientation`
-from . import simulate_frequency, simulate_orientation  # noqa: E402,F401
+# registers `simulate gyro-sine`, `simulate orientation` and `simulate position`
+from . import simulate_frequency, simulate_orientation, simulate_position  # noqa: E402,F401

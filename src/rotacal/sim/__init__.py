@@ -14,6 +14,7 @@ from rotacal.sim.gyro_triad import simulate_gyro_rotations, simulate_gyro_triad
 from rotacal.sim.motion import SineMotion
 from rotacal.sim.multiposition import simulate_multiposition
 from rotacal.sim.orientation_errors import simulate_orientation_errors
+from rotacal.sim.position import simulate_position
 from rotacal.sim.pulses import simulate_pulses, table_angle_deg, table_rate_deg_s
 from rotacal.sim.scenarios import (
     FOG_NOISE_DENSITY_DEG_S_RT_HZ,
@@ -53,6 +54,7 @@ __all__ = [
     "simulate_lts",
     "simulate_multiposition",
     "simulate_orientation_errors",
+    "simulate_position",
     "simulate_pulses",
     "table1_scenarios",
     "table_angle_deg",
