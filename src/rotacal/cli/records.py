@@ -31,7 +31,7 @@ _JSON_HELP = "Write the result as JSON ('-' = stdout)."
     ),
 )
 def records_group() -> None:
-    """The certificates issued: list, show, history, audit trail, backup.
+    """Issued certificates: list, show, history, audit, backup.
 
     The records of ISO/IEC 17025 §7.5 and §8.4.
 

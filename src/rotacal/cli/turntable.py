@@ -30,7 +30,7 @@ from ._help import example
     ),
 )
 def turntable() -> None:
-    """Turntable geometric error budget.
+    """Turntable geometric errors: budget, identification.
 
     The error model of a serial turntable by homogeneous transforms, its sensitivities, the
     allocation of tolerances to the error sources and a Monte Carlo check (GyroWheel study,
