@@ -721,4 +721,4 @@ def demo(out: str, overwrite: bool) -> None:
         _wrote(path)
 
 
-from . import simulate_frequency  # noqa: E402,F401  (registers `simulate gyro-sine`)
+from . import simulate_angle, simulate_frequency  # noqa: E402,F401  (register `simulate angle`, `gyro-sine`)

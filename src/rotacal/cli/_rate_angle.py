@@ -1,0 +1,141 @@
+"""``rotacal rate`` on angle or counter readings (columns time_s and angle_deg or count).
+
+:func:`angle_readings` decorates the rate command: it adds the options that read a counter and,
+when the capture holds ``angle_deg`` or ``count`` and no ``head_k`` column, reduces the readings
+to the crossing times of ``--pulses-per-rev`` virtual marks in one streaming pass
+(:mod:`rotacal.table.rate_angle`) and runs the same rate analysis on them; pulse-timestamp
+captures go to the command as before.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+from collections.abc import Iterator, Sequence
+from typing import Any
+
+import click
+import numpy as np
+
+from rotacal.columns import HEAD_NAME
+from rotacal.errors import ConfigError, RotacalError
+
+from ._common import F, _check_outputs, _naming_file, _status
+from ._reading import current_read_options
+
+_CHUNK_ROWS = 1 << 20
+_OWN = ("counts_per_rev", "counter_bits", "signed", "allow_gaps")
+
+
+def _reading(capture: str, columns: Sequence[str], group: str | None) -> str | None:
+    """``"count"`` or ``"angle_deg"`` for a capture of readings without pulse columns, else None."""
+    from rotacal.io import capture_columns, parse_column_mapping
+
+    try:
+        names = capture_columns(
+            capture,
+            mapping=parse_column_mapping(columns),
+            group=group,
+            read_options=current_read_options(),
+        )
+    except RotacalError:
+        return None  # the rate command names what is wrong with the file
+    if any(HEAD_NAME.match(n) for n in names) or "time_s" not in names:
+        return None
+    return next((n for n in ("count", "angle_deg") if n in names), None)
+
+
+def angle_readings(func: F) -> F:
+    """The rate command's decorator for angle/count captures (module docstring)."""
+
+    @functools.wraps(func)
+    def command(**kw: Any) -> Any:
+        own = {k: kw.pop(k) for k in _OWN}
+        name = _reading(kw["capture"], kw["columns"], kw["group"])
+        if name is None:
+            if own["counts_per_rev"] is not None or own["counter_bits"] is not None:
+                raise ConfigError("--counts-per-rev and --counter-bits need a count column")
+            return func(**kw)
+        with _naming_file(kw["capture"]):
+            return _rate_of_readings(name, own, kw)
+
+    options = [
+        click.option(
+            "--counts-per-rev",
+            type=float,
+            default=None,
+            help="N of a count column (angle/counter captures: time_s with angle_deg or count, "
+            "timed at the crossings of --pulses-per-rev marks).",
+        ),
+        click.option(
+            "--counter-bits",
+            type=click.Choice(["8", "16", "24", "32", "64"]),
+            default=None,
+            help="Register width of a count column [default: inferred from its range].",
+        ),
+        click.option(
+            "--signed/--unsigned", default=None, help="A two's complement count register."
+        ),
+        click.option(
+            "--allow-gaps",
+            is_flag=True,
+            help="Readings: analyse more than 1 %% missing, duplicated or repeated samples.",
+        ),
+    ]
+    for option in reversed(options):
+        command = option(command)
+    return command  # type: ignore[return-value]
+
+
+def _rate_of_readings(name: str, own: dict[str, Any], kw: dict[str, Any]) -> None:
+    from rotacal.io import iter_capture_chunks, parse_column_mapping
+    from rotacal.signal.counter import infer_register
+    from rotacal.table.rate_angle import calibrate_rate_from_marks, mark_times_from_chunks
+
+    from .pulses import _finish_rate
+
+    capture = kw["capture"]
+    json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
+    _check_outputs(json_path, report_path, kw.pop("overwrite"))
+    if name == "count" and own["counts_per_rev"] is None:
+        raise ConfigError(f"{capture} holds a count column: give --counts-per-rev N")
+    if name == "angle_deg" and own["counts_per_rev"] is not None:
+        raise ConfigError(f"{capture} holds angle_deg, not count: drop --counts-per-rev")
+    if kw.get("selfcal_path") is not None or kw.get("head") not in (None, "0", "head_0"):
+        raise ConfigError("angle/count readings have one virtual head: drop --selfcal and --head")
+    reading_opts = {
+        "mapping": parse_column_mapping(kw["columns"]),
+        "group": kw["group"],
+        "read_options": current_read_options(),
+    }
+
+    def chunks() -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        for c in iter_capture_chunks(
+            capture, ("time_s", name), chunk_rows=_CHUNK_ROWS, **reading_opts
+        ):
+            yield c["time_s"], c[name]
+
+    reading: dict[str, Any] = {}
+    if name == "count":
+        bits, signed = own["counter_bits"], own["signed"]
+        if bits is None:  # the register from the whole record's range (one cheap pass)
+            lo, hi = np.inf, -np.inf
+            for _, c in chunks():
+                lo, hi = min(lo, float(np.min(c))), max(hi, float(np.max(c)))
+            bits, guess = infer_register(np.array([lo, hi]))
+            signed = guess if signed is None else signed
+        reading = {"counts_per_rev": own["counts_per_rev"], "counter_bits": int(bits)}
+        reading["signed"] = signed
+    with _status("timing the marks"):
+        marks = mark_times_from_chunks(chunks(), pulses_per_rev=kw["pulses_per_rev"], **reading)
+        result = calibrate_rate_from_marks(marks, allow_gaps=own["allow_gaps"], **_settings(kw))
+    _finish_rate(result, capture, json_path, report_path)
+
+
+def _settings(kw: dict[str, Any]) -> dict[str, Any]:
+    """The rate options ``calibrate_rate`` takes by name (``--window-deg`` and later ones too)."""
+    from rotacal.table.rate import calibrate_rate
+
+    accepted = inspect.signature(calibrate_rate).parameters
+    skip = {"heads", "selfcal", "head", "compensate"}
+    return {k: v for k, v in kw.items() if k in accepted and k not in skip}
