@@ -123,9 +123,10 @@ def _listed(first: tuple[int, ...], count: int) -> str:
 class DaqFaultFinder:
     """Finds :class:`DaqFaults` chunk by chunk; ``feed`` returns which samples to keep.
 
-    The last sample (time and value) is carried from chunk to chunk, so the result does not
-    depend on the chunking; the typical step comes from the first chunk (at least
-    :data:`TYPICAL_STEPS` steps, or the whole record when shorter).
+    The last sample (time and value) is carried from chunk to chunk; the typical step comes from
+    the first chunk with a positive step (its first :data:`TYPICAL_STEPS`), so the result does
+    not depend on the chunking once that chunk holds a representative stretch (the file readers'
+    chunks hold 10⁶ rows).
     """
 
     def __init__(self, name: str = "time_s") -> None:
@@ -159,14 +160,13 @@ class DaqFaultFinder:
             )
         if self._typical is None:
             positive = steps[steps > 0][:TYPICAL_STEPS]
-            if positive.size == 0:
-                raise CaptureError(f"column '{self.name}' does not advance: every time is the same")
-            self._typical = float(np.median(positive))
+            if positive.size:  # else no step of this chunk can be a gap
+                self._typical = float(np.median(positive))
         base = self._seen + (1 if self._last is None else 0)  # sample number of steps[0]'s end
         zero = steps == 0
         self._note("repeated", np.flatnonzero(zero & same), base)
         self._note("duplicated", np.flatnonzero(zero & ~same), base)
-        gap = np.flatnonzero(steps > GAP_STEPS * self._typical)
+        gap = np.flatnonzero(steps > GAP_STEPS * (self._typical or np.inf))
         self._note("gaps", gap, base)
         if gap.size:
             lost = np.rint(steps[gap] / self._typical).astype(np.int64) - 1
@@ -184,6 +184,8 @@ class DaqFaultFinder:
 
     def result(self) -> DaqFaults:
         """The faults of everything fed so far."""
+        if self._seen > 1 and self._typical is None:
+            raise CaptureError(f"column '{self.name}' does not advance: every time is the same")
         return DaqFaults(
             samples=self._seen,
             typical_step_s=float(self._typical or 0.0),

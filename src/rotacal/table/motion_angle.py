@@ -17,8 +17,8 @@ Before that, the DAQ's lost and doubled samples are found from ``time_s``
 References
 ----------
 Feng R., Yan J., Wu Y., Yu N., Yin X. (2023). Sensors 23, 4876, eqs. (1), (2), §3.3, §5.
-IEEE Std 1057-2017 §4.1.3 (sine fit); JCGM 100:2008 §4.3.7, F.2.2.1 (resolution of a digital
-indication: rectangular, half-width q/2).
+IEEE Std 1057-2017 §4.1.3 (sine fit); JCGM 100:2008 §4.3.7 (Type B); R. M. Gray (1990),
+Quantization noise spectra, IEEE Trans. Inf. Theory 36(6):1220 (the quantisation error of a sine).
 """
 
 from __future__ import annotations
@@ -53,12 +53,13 @@ __all__ = [
     "angle_quantum",
     "calibrate_angle_motion",
     "calibrate_count_motion",
+    "quantisation_u",
     "with_resolution",
 ]
 
 #: Samples looked at to tell a quantised readout (its values on a grid).
 _QUANTUM_SAMPLES = 200_000
-#: The budgets the resolution enters, and ∂y/∂(A) of each as a function of (A, f, set A, set f).
+#: The budgets the readout's quantisation of A₁ enters.
 _RESOLUTION_KEYS = (
     "amplitude_deg",
     "angular_acceleration_amplitude_deg_s2",
@@ -94,16 +95,65 @@ def angle_quantum(angle_deg: np.ndarray) -> float | None:
     return q
 
 
-def with_resolution(result: MotionResult, quantum_deg: float, what: str) -> MotionResult:
-    """``result`` with the readout's resolution in the amplitude's budgets (Type B).
+def quantisation_u(
+    quantum_deg: float,
+    amplitude_deg: float,
+    harmonics: int,
+    samples_per_period: float,
+    noise_deg: float = 0.0,
+) -> np.ndarray:
+    """Standard uncertainty (deg) of each harmonic amplitude A_h, h = 1…N, from a readout's
+    quantisation of a sinusoidal angle (Type B).
 
-    Model: the reading error ε± at the two extremes of the stroke is rectangular with half-width
-    q/2 (JCGM 100 F.2.2.1; a truncating readout's mean −q/2 is common to both and cancels), the
-    two independent; the amplitude is half the stroke, ``A = A_fit − (ε₊ − ε₋)/2``. So
-    ``∂A/∂ε± = ∓½``, ``∂α/∂ε± = ∓ω²/2`` and the errors against set values scale by
-    100/A_set and 100/α_set. Conservative when noise dithers the readout (then the fit averages
-    the quantisation, and its residual is in the Type A row too). THD and frequency are left as
-    the fit gives them (a quantisation error that is not averaged shows in the fit's residual).
+    The quantisation error of θ = A·sin φ + c is periodic in θ,
+    ``e = (q/π)·Σ_k ((−1)^k/k)·sin(2πkθ/q)``, so it repeats with the motion and is not averaged
+    by a fit over many periods. Two evaluations, the larger taken:
+
+    * continuous time (Gray 1990, eq. (21)): by the Jacobi–Anger expansion harmonic h of e has,
+      over an unknown offset c uniform within a quantum, the rms
+      ``(q/π)·√(2·Σ_k J_h(2πkA/q)²·g_k²/k²)``;
+    * sampled: with P samples per period (commensurate sampling repeats the same phases) the
+      error's repeating power ``(q²/2π²)·Σ_k g_k²/k²`` (= q²/12 without noise) is averaged over
+      one period's samples only, and the motion's symmetry θ(φ) = θ(π − φ) puts it all in one
+      quadrature of each harmonic: ``u = √(power·4/P)``.
+
+    Both are the rms of the error's magnitude at harmonic h (checked against a Monte Carlo over
+    the offset, commensurate and not: the larger of the two holds it, at most twice over).
+
+    ``g_k = exp(−2π²k²σ²/q²)`` is the attenuation by white noise σ on θ before the readout (a
+    dithered quantiser's error no longer repeats; the noise itself is in the fit's Type A).
+
+    Parameters
+    ----------
+    quantum_deg : q (deg); amplitude_deg : A (deg), the fundamental; harmonics : N;
+    samples_per_period : P; noise_deg : σ (deg).
+
+    References
+    ----------
+    R. M. Gray (1990), Quantization noise spectra, IEEE Trans. Inf. Theory 36(6):1220–1244, §IV
+    (sinusoidal input); JCGM 100:2008 §4.3.7.
+    """
+    from scipy.special import jv
+
+    q = float(quantum_deg)
+    k = np.arange(1, 4001, dtype=np.float64)  # terms fall as k^-3: 4000 leave < 10⁻⁷ of the sum
+    g = np.exp(-2.0 * (math.pi * k * float(noise_deg) / q) ** 2)
+    beta = 2.0 * math.pi * k * abs(float(amplitude_deg)) / q
+    h = np.arange(1, int(harmonics) + 1, dtype=np.float64)[:, None]
+    gray = (q / math.pi) * np.sqrt(2.0 * np.sum((jv(h, beta) * g) ** 2 / k**2, axis=1))
+    power = q * q / (2.0 * math.pi**2) * float(np.sum(g**2 / k**2))
+    sampled = math.sqrt(power * 4.0 / max(float(samples_per_period), 1.0))
+    return np.asarray(np.maximum(gray, sampled))
+
+
+def with_resolution(result: MotionResult, quantum_deg: float, what: str) -> MotionResult:
+    """``result`` with the readout's quantisation in the budgets of A, α, their errors and THD.
+
+    Each harmonic amplitude A_h gets the Type B u of :func:`quantisation_u` (q = the quantum;
+    P = samples per motion period; σ² = the fit's residual variance less q²/12, the noise that
+    dithers the readout). A_1's enters the amplitude budget (sensitivity 1; α: ω²; the errors
+    against set values: 100/A_set and 100·ω²/α_set); all enter the THD's evaluation
+    (:func:`~rotacal.table.motion_uncertainty.thd_uncertainty` with u_h² + u_q,h²).
 
     Parameters
     ----------
@@ -111,35 +161,51 @@ def with_resolution(result: MotionResult, quantum_deg: float, what: str) -> Moti
     quantum_deg : float, deg — the readout's resolution q (one count: 360/N).
     what : str — the resolution's name in the budget (e.g. ``"1 count of 36000/rev"``).
     """
+    from rotacal.table.motion_uncertainty import fit_dof, thd_uncertainty
+
     if not (math.isfinite(quantum_deg) and quantum_deg > 0):
         raise ConfigError(f"the readout's resolution must be positive, got {quantum_deg}")
+    q = float(quantum_deg)
+    sigma = math.sqrt(max(result.residual_rms_deg**2 - q * q / 12.0, 0.0))
+    per_period = result.samples_used / max(result.periods_used, 1)
+    amps = np.asarray(result.harmonic_amplitudes_deg, dtype=float)
+    u_q = quantisation_u(q, float(amps[0]), amps.size, per_period, sigma)
     budgets = dict(result._budgets)
     w = 2.0 * math.pi * result.frequency_hz
-    per_a = {
-        "amplitude_deg": 1.0,
-        "angular_acceleration_amplitude_deg_s2": w * w,
-    }
+    per_a = {"amplitude_deg": 1.0, "angular_acceleration_amplitude_deg_s2": w * w}
     if result.set_amplitude_deg is not None and result.set_frequency_hz is not None:
         set_acc = result.set_amplitude_deg * (2 * math.pi * result.set_frequency_hz) ** 2
         per_a["amplitude_error_percent"] = 100.0 / result.set_amplitude_deg
         per_a["angular_acceleration_error_percent"] = 100.0 * w * w / set_acc
-    half = quantum_deg / 2.0
     for key in _RESOLUTION_KEYS:
         if key in budgets and key in per_a:
-            budgets[key] = _add_resolution(budgets[key], per_a[key], half, what)
-    new = dataclasses.replace(
+            budgets[key] = _add_resolution(budgets[key], per_a[key], float(u_q[0]), what)
+    plot = dict(result._plot)
+    amps_u = np.hypot(np.asarray(plot["harmonic_amplitudes_u_deg"], dtype=float), u_q)
+    plot["harmonic_amplitudes_u_deg"] = amps_u
+    thd = thd_uncertainty(amps, amps_u, dof=fit_dof(result._fit)) if result._fit else None
+    extra: dict[str, Any] = {}
+    if thd is not None:
+        budgets["thd_percent"] = tidy(thd.budget, f"with the readout's quantisation ({what})")
+        extra = {
+            "thd_percent_u": thd.budget.u,
+            "thd_percent_bias": thd.bias,
+            "thd_percent_bias_corrected": thd.bias_corrected,
+        }
+    return dataclasses.replace(
         result,
         amplitude_deg_u=budgets["amplitude_deg"].u,
         _budgets=budgets,
-        notes=(*result.notes, f"readout resolution {quantum_deg:.6g}° ({what}) in the budgets"),
+        _plot=plot,
+        notes=(*result.notes, f"readout resolution {q:.6g}° ({what}) in the budgets"),
+        **extra,
     )
-    return new
 
 
 def _add_resolution(
-    b: UncertaintyBudget, per_a: float, half_deg: float, what: str
+    b: UncertaintyBudget, per_a: float, u_a1: float, what: str
 ) -> UncertaintyBudget:
-    """Budget ``b`` (a linear model, its rows independent) with ε₊, ε₋ added (``with_resolution``)."""
+    """Budget ``b`` (a linear model, its rows independent) with the quantisation of A_1 added."""
     inputs = [
         Input(
             r.source,
@@ -153,19 +219,17 @@ def _add_resolution(
         for r in b.rows
     ]
     sens = [r.sensitivity for r in b.rows]
-    for name, sign in (("θ max", 1.0), ("θ min", -1.0)):
-        inputs.append(
-            Input(
-                f"readout resolution at {name} ({what})",
-                0.0,
-                half_deg / math.sqrt(3.0),
-                distribution="rectangular",
-                unit="°",
-                source="Type B: resolution of the readout (JCGM 100 F.2.2.1)",
-                description=f"rectangular ±{half_deg:.3g}",
-            )
+    inputs.append(
+        Input(
+            f"readout quantisation of A₁ ({what})",
+            0.0,
+            u_a1,
+            unit="°",
+            source="Type B: quantisation of a sine (Gray 1990)",
+            description="rms over the readout's unknown offset",
         )
-        sens.append(-sign * 0.5 * per_a)
+    )
+    sens.append(per_a)
     jac = np.array([sens])
     x0 = np.array([i.value for i in inputs])
 
@@ -176,8 +240,8 @@ def _add_resolution(
         model, inputs, jacobian=lambda *x: jac, p=b.p, names_out=[b.quantity], units_out=[b.unit]
     )
     note = (
-        "the readout's resolution enters as the reading error at the two extremes of the stroke "
-        "(A is half the stroke): conservative when noise dithers the readout."
+        "the readout's quantisation error repeats with the motion, so the fit does not average "
+        "it: its share of A₁ is a Type B input (rotacal.table.motion_angle.quantisation_u)."
     )
     return tidy(gum.budget(0), *b.notes, note)
 
@@ -242,7 +306,7 @@ def calibrate_angle_motion(
     References
     ----------
     Feng et al. (2023), Sensors 23:4876, eqs. (1), (2), §3.3, §5; IEEE Std 1057-2017 §4.1.3;
-    JCGM 100:2008 F.2.2.1.
+    Gray (1990), IEEE Trans. Inf. Theory 36(6):1220 (quantisation).
     """
     del allow_clipped  # an angle readout has no rails
     _check_settings(harmonics, periods)
