@@ -115,3 +115,13 @@ def test_quantum_rule_and_refusals():
         calibrate_count_motion(t, np.arange(100), counts_per_rev=0)
     with pytest.raises(ConfigError, match="--resolution-deg"):
         calibrate_angle_motion(t, np.sin(t), resolution_deg=-1.0)
+
+
+def test_report_section_names_the_scheme():
+    from rotacal.report.motion import motion_section
+
+    cap = simulate_angle(MOTION, reading="angle", resolution_deg=0.001, seed=2)
+    r = calibrate_angle_motion(cap.columns["time_s"], cap.columns["angle_deg"])
+    section = motion_section(r, figures=False)
+    assert section.title == "Sinusoidal motion by angle readout"
+    assert any("readout resolution 0.001°" in p for p in section.paragraphs)
