@@ -11,38 +11,27 @@ from __future__ import annotations
 
 import functools
 import inspect
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import click
 import numpy as np
 
-from rotacal.columns import HEAD_NAME
 from rotacal.errors import ConfigError, RotacalError
 
 from ._common import F, _check_outputs, _naming_file, _status
-from ._reading import current_read_options
+from ._readings import reading_chunks, reading_name
 
-_CHUNK_ROWS = 1 << 20
 _OWN = ("counts_per_rev", "counter_bits", "signed", "allow_gaps")
 
 
 def _reading(capture: str, columns: Sequence[str], group: str | None) -> str | None:
-    """``"count"`` or ``"angle_deg"`` for a capture of readings without pulse columns, else None."""
-    from rotacal.io import capture_columns, parse_column_mapping
-
+    """The reading of an angle/count capture, else None (the rate command names what is wrong
+    with a file it cannot read)."""
     try:
-        names = capture_columns(
-            capture,
-            mapping=parse_column_mapping(columns),
-            group=group,
-            read_options=current_read_options(),
-        )
+        return reading_name(capture, columns, group)
     except RotacalError:
-        return None  # the rate command names what is wrong with the file
-    if any(HEAD_NAME.match(n) for n in names) or "time_s" not in names:
         return None
-    return next((n for n in ("count", "angle_deg") if n in names), None)
 
 
 def angle_readings(func: F) -> F:
@@ -88,7 +77,6 @@ def angle_readings(func: F) -> F:
 
 
 def _rate_of_readings(name: str, own: dict[str, Any], kw: dict[str, Any]) -> None:
-    from rotacal.io import iter_capture_chunks, parse_column_mapping
     from rotacal.signal.counter import infer_register
     from rotacal.table.rate_angle import calibrate_rate_from_marks, mark_times_from_chunks
 
@@ -103,26 +91,16 @@ def _rate_of_readings(name: str, own: dict[str, Any], kw: dict[str, Any]) -> Non
         raise ConfigError(f"{capture} holds angle_deg, not count: drop --counts-per-rev")
     if kw.get("selfcal_path") is not None or kw.get("head") not in (None, "0", "head_0"):
         raise ConfigError("angle/count readings have one virtual head: drop --selfcal and --head")
-    reading_opts = {
-        "mapping": parse_column_mapping(kw["columns"]),
-        "group": kw["group"],
-        "read_options": current_read_options(),
-    }
-
-    def chunks() -> Iterator[tuple[np.ndarray, np.ndarray]]:
-        for c in iter_capture_chunks(
-            capture, ("time_s", name), chunk_rows=_CHUNK_ROWS, **reading_opts
-        ):
-            yield c["time_s"], c[name]
-
+    chunks = reading_chunks(capture, name, kw["columns"], kw["group"])
     reading: dict[str, Any] = {}
     if name == "count":
         bits, signed = own["counter_bits"], own["signed"]
-        if bits is None:  # the register from the whole record's range (one cheap pass)
+        if bits is None or signed is None:  # the register from the whole record's range
             lo, hi = np.inf, -np.inf
             for _, c in chunks():
                 lo, hi = min(lo, float(np.min(c))), max(hi, float(np.max(c)))
-            bits, guess = infer_register(np.array([lo, hi]))
+            guess_bits, guess = infer_register(np.array([lo, hi]))
+            bits = guess_bits if bits is None else bits
             signed = guess if signed is None else signed
         reading = {"counts_per_rev": own["counts_per_rev"], "counter_bits": int(bits)}
         reading["signed"] = signed

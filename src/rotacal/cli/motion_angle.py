@@ -10,34 +10,15 @@ from typing import Any
 
 import click
 
-from rotacal.errors import CaptureError, ConfigError
+from rotacal.errors import ConfigError
 
-from ._common import INPUT_FILE, _check_outputs, _read, _status
+from ._common import INPUT_FILE, _check_outputs, _read, _sample_progress, _status
 from ._help import example
-from ._reading import current_read_options
-from .motion import _finish_motion, _motion_common, motion
+from ._readings import reading_chunks, reading_length, require_reading
+from .motion import _chunked_option, _finish_motion, _motion_common, _streams, motion
 
-#: The options that read a counter's register (shared with ``rate`` on count captures).
+#: The register widths of ``--counter-bits``.
 COUNTER_BITS = click.Choice(["8", "16", "24", "32", "64"])
-
-
-def reading_column(capture: str, columns: Sequence[str], group: str | None) -> str:
-    """``"count"`` or ``"angle_deg"``: the reading the capture holds (``count`` when both)."""
-    from rotacal.io import capture_columns, parse_column_mapping
-
-    names = capture_columns(
-        capture,
-        mapping=parse_column_mapping(columns),
-        group=group,
-        read_options=current_read_options(),
-    )
-    for name in ("count", "angle_deg"):
-        if name in names:
-            return name
-    raise CaptureError(
-        f"has no column angle_deg or count (it has {', '.join(names) or 'none'}): name the "
-        "reading with --column YOURS=angle_deg or --column YOURS=count"
-    )
 
 
 @motion.command(
@@ -80,6 +61,7 @@ def reading_column(capture: str, columns: Sequence[str], group: str | None) -> s
     help="Analyse a record with more than 1 %% of its samples missing, duplicated or repeated "
     "(always named in the warnings).",
 )
+@_chunked_option
 @_motion_common
 def motion_angle(
     capture: str,
@@ -87,6 +69,7 @@ def motion_angle(
     counter_bits: str | None,
     signed: bool | None,
     resolution_deg: float | None,
+    chunked: bool | None,
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -103,7 +86,7 @@ def motion_angle(
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
     with _naming_file(capture):
-        name = reading_column(capture, columns, group)
+        name = require_reading(capture, columns, group)
         if name == "count" and counts_per_rev is None:
             raise ConfigError(f"{capture} holds a count column: give --counts-per-rev N")
         if name == "count" and resolution_deg is not None:
@@ -113,6 +96,12 @@ def motion_angle(
                 f"{capture} holds angle_deg, not count: --counts-per-rev and --counter-bits "
                 "apply to counts only"
             )
+        bits = None if counter_bits is None else int(counter_bits)
+        if _streams(capture, name, chunked, columns, group):
+            kw["resolution_deg"] = resolution_deg
+            result = _chunked(capture, name, columns, group, counts_per_rev, bits, signed, kw)
+            _finish_motion(result, capture, json_path, report_path)
+            return
         cap = _read(capture, ["time_s", name], columns, group)
         with _status("fitting"):
             if name == "count":
@@ -121,7 +110,7 @@ def motion_angle(
                     cap["time_s"],
                     cap["count"],
                     counts_per_rev=counts_per_rev,
-                    counter_bits=None if counter_bits is None else int(counter_bits),
+                    counter_bits=bits,
                     signed=signed,
                     **kw,
                 )
@@ -130,3 +119,28 @@ def motion_angle(
                     cap["time_s"], cap["angle_deg"], resolution_deg=resolution_deg, **kw
                 )
     _finish_motion(result, capture, json_path, report_path)
+
+
+def _chunked(
+    capture: str,
+    name: str,
+    columns: Sequence[str],
+    group: str | None,
+    counts_per_rev: float | None,
+    bits: int | None,
+    signed: bool | None,
+    kw: dict[str, Any],
+) -> Any:
+    """The streamed calibration (:mod:`rotacal.table.motion_angle_stream`) with a progress bar
+    over the samples of its passes (about eight; two more with --drift or an inferred register)."""
+    from rotacal.table.motion_angle_stream import calibrate_angle_motion_chunked
+
+    n = reading_length(capture, name, columns, group)
+    with _sample_progress(10 * n, "calibrating (chunked)") as progress:
+        return calibrate_angle_motion_chunked(
+            reading_chunks(capture, name, columns, group, progress),
+            counts_per_rev=counts_per_rev,
+            counter_bits=bits,
+            signed=signed,
+            **kw,
+        )

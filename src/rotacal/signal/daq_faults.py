@@ -137,6 +137,11 @@ class DaqFaultFinder:
         self._lists: dict[str, list[int]] = {"gaps": [], "duplicated": [], "repeated": []}
         self._counts = {"gaps": 0, "duplicated": 0, "repeated": 0, "missing": 0}
 
+    @property
+    def seen(self) -> int:
+        """Samples fed so far."""
+        return self._seen
+
     def feed(self, t: np.ndarray, value: np.ndarray) -> np.ndarray:
         """The boolean mask of the chunk's samples to keep (repeated and duplicated dropped)."""
         t = np.asarray(t, dtype=np.float64)

@@ -69,6 +69,8 @@ _RESOLUTION_KEYS = (
 #: The amplitude-check hint of the LTS scheme's plausibility lines, and the angle's own.
 _LTS_HINT = "--radius-mm (laser spot to table axis, in mm) and --set-amplitude-deg"
 _ANGLE_HINT = "--counts-per-rev (or the readout's unit: degrees) and --set-amplitude-deg"
+#: The result's note on where θ comes from.
+READ_DIRECTLY = "θ read directly (angle readout or counter)"
 
 
 def angle_quantum(angle_deg: np.ndarray) -> float | None:
@@ -357,7 +359,7 @@ def calibrate_angle_motion(
         angle_used=angle[seg],
         set_amplitude_deg=set_amplitude_deg,
         set_frequency_hz=set_frequency_hz,
-        notes=["θ read directly (angle readout or counter)"],
+        notes=[READ_DIRECTLY],
         snr=None,
         plot=_displacement_plot(t, angle, seg, fit),
         detection=detection,

@@ -200,9 +200,7 @@ def mark_times_from_chunks(
             continue
         bad = np.flatnonzero(~np.isfinite(t))
         if bad.size:
-            raise CaptureError(
-                f"column 'time_s' has a NaN or inf at sample {faults._seen + bad[0]}"
-            )
+            raise CaptureError(f"column 'time_s' has a NaN or inf at sample {faults.seen + bad[0]}")
         if counts_per_rev is not None:
             if unwrap is None:
                 if counter_bits is None:
@@ -216,7 +214,7 @@ def mark_times_from_chunks(
             bad = np.flatnonzero(~np.isfinite(angle))
             if bad.size:
                 raise CaptureError(
-                    f"column angle_deg has a NaN or inf at sample {faults._seen + bad[0]}"
+                    f"column angle_deg has a NaN or inf at sample {faults.seen + bad[0]}"
                 )
         keep = faults.feed(t, angle)
         marks.feed(t[keep], angle[keep])
