@@ -69,6 +69,11 @@ GYRO_FREQUENCY_RESPONSE_ANGLE = CommandColumns(
 )
 SELFCAL = CommandColumns("selfcal", (), min_heads=2)
 RATE = CommandColumns("rate", (), min_heads=1)
+#: Angle or counter readings: `motion angle`, and `rate` timed at the angle's marks.
+MOTION_ANGLE = CommandColumns("motion angle", ("time_s", "angle_deg"))
+MOTION_COUNT = CommandColumns("motion angle", ("time_s", "count"))
+RATE_ANGLE = CommandColumns("rate", ("time_s", "angle_deg"))
+RATE_COUNT = CommandColumns("rate", ("time_s", "count"))
 
 #: Every analysis command that reads a capture, in the order ``rotacal --help`` lists them.
 COMMANDS: tuple[CommandColumns, ...] = (
@@ -83,7 +88,11 @@ COMMANDS: tuple[CommandColumns, ...] = (
     MOTION_ENCODER,
     MOTION_LTS,
     MOTION_FOG,
+    MOTION_ANGLE,
+    MOTION_COUNT,
     RATE,
+    RATE_ANGLE,
+    RATE_COUNT,
     SELFCAL,
 )
 

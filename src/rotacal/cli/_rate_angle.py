@@ -20,7 +20,7 @@ import numpy as np
 from rotacal.errors import ConfigError, RotacalError
 
 from ._common import F, _check_outputs, _naming_file, _status
-from ._readings import reading_chunks, reading_name
+from ._readings import capture_names, reading_chunks, reading_name
 
 _OWN = ("counts_per_rev", "counter_bits", "signed", "allow_gaps")
 
@@ -29,9 +29,10 @@ def _reading(capture: str, columns: Sequence[str], group: str | None) -> str | N
     """The reading of an angle/count capture, else None (the rate command names what is wrong
     with a file it cannot read)."""
     try:
-        return reading_name(capture, columns, group)
+        names = capture_names(capture, columns, group)
     except RotacalError:
         return None
+    return reading_name(names)
 
 
 def angle_readings(func: F) -> F:
@@ -40,7 +41,8 @@ def angle_readings(func: F) -> F:
     @functools.wraps(func)
     def command(**kw: Any) -> Any:
         own = {k: kw.pop(k) for k in _OWN}
-        name = _reading(kw["capture"], kw["columns"], kw["group"])
+        with _naming_file(kw["capture"]):
+            name = _reading(kw["capture"], kw["columns"], kw["group"])
         if name is None:
             if own["counts_per_rev"] is not None or own["counter_bits"] is not None:
                 raise ConfigError("--counts-per-rev and --counter-bits need a count column")

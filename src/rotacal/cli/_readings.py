@@ -26,24 +26,35 @@ def _reading_options(columns: Sequence[str], group: str | None) -> dict[str, Any
     }
 
 
-def reading_name(capture: str, columns: Sequence[str], group: str | None) -> str | None:
-    """``"count"`` or ``"angle_deg"`` (``count`` when both) for a capture with ``time_s`` and no
-    ``head_k`` pulse column, else None."""
+def capture_names(capture: str, columns: Sequence[str], group: str | None) -> list[str]:
+    """The canonical names of the capture's columns (from its header)."""
     from rotacal.io import capture_columns
 
-    names = capture_columns(capture, **_reading_options(columns, group))
-    if any(HEAD_NAME.match(n) for n in names) or "time_s" not in names:
+    return list(capture_columns(capture, **_reading_options(columns, group)))
+
+
+def reading_name(names: Sequence[str]) -> str | None:
+    """``"count"`` or ``"angle_deg"`` (``count`` when both) for a capture of readings without
+    ``head_k`` pulse columns, else None; one without ``time_s`` is refused."""
+    if any(HEAD_NAME.match(n) for n in names):
         return None
-    return next((n for n in ("count", "angle_deg") if n in names), None)
+    name = next((n for n in ("count", "angle_deg") if n in names), None)
+    if name is not None and "time_s" not in names:
+        raise CaptureError(
+            f"no column 'time_s' beside {name} (columns: {', '.join(names)}); name yours with "
+            "--column YOURS=time_s"
+        )
+    return name
 
 
 def require_reading(capture: str, columns: Sequence[str], group: str | None) -> str:
-    """:func:`reading_name`, refusing a capture without one."""
-    name = reading_name(capture, columns, group)
+    """:func:`reading_name` of the capture, refusing one without a reading."""
+    names = capture_names(capture, columns, group)
+    name = reading_name(names)
     if name is None:
         raise CaptureError(
-            "has no columns time_s with angle_deg or count: name yours with --column "
-            "YOURS=time_s and --column YOURS=angle_deg (or =count)"
+            f"no column 'angle_deg' or 'count' (columns: {', '.join(names)}); name yours with "
+            "--column YOURS=angle_deg (or =count)"
         )
     return name
 

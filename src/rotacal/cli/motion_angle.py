@@ -74,7 +74,7 @@ def motion_angle(
     group: str | None,
     **kw: Any,
 ) -> None:
-    """Angle readout or up/down counter: time_s and angle_deg or count.
+    """Angle readout or counter: time_s and angle_deg or count.
 
     The seed-000 calibration (IEEE 1057 multi-harmonic fit, THD, amplitude, acceleration,
     reversals, set-value errors) on the angle itself; a counter's wrap-around is unwrapped and

@@ -70,7 +70,7 @@ from .simulate import _motion_sim_options, _sim_motion, _sim_write, simulate
 @click.option("--drop-rows", type=int, default=0, show_default=True, help="Samples lost.")
 @click.option("--repeat-rows", type=int, default=0, show_default=True, help="Rows written twice.")
 def simulate_angle_cmd(out: str, harmonic_items: Sequence[str], overwrite: bool, **kw: Any) -> None:
-    """Angle readout or up/down counter on a table (sinusoidal motion, or a constant rate).
+    """Angle readout or counter on a table, moving or turning.
 
     Columns time_s and count (a register of --counter-bits that wraps around) or angle_deg;
     the DAQ may lose samples and write rows twice. The truth holds the motion and where the

@@ -81,19 +81,26 @@ class _Direction:
     def feed(self, t: np.ndarray, x: np.ndarray) -> None:
         if self.last is None:
             self.last = (float(t[0]), float(x[0]))
-        tt = np.concatenate(([self.last[0]], t))
-        cm = np.maximum.accumulate(np.concatenate(([self.last[1]], x)))
-        self.back = max(self.back, float(np.max(cm[1:] - x)))
-        k = np.floor(cm / self.spacing).astype(np.int64)
-        crossed = np.diff(k)
-        total = int(crossed.sum())
-        if total:
-            interval = np.repeat(np.arange(crossed.size), crossed)
-            first = np.repeat(np.cumsum(crossed) - crossed, crossed)
-            mark = (k[interval] + 1 + (np.arange(total) - first)) * self.spacing
-            lo, hi = cm[interval], cm[interval + 1]
-            frac = (mark - lo) / (hi - lo)
-            self.times.append(tt[interval] + frac * (tt[interval + 1] - tt[interval]))
+        t_prev, cm_prev = self.last
+        cm = np.maximum.accumulate(x)
+        np.maximum(cm, cm_prev, out=cm)
+        self.back = max(self.back, float(np.max(cm - x)))
+        k = np.floor(cm * (1.0 / self.spacing)).astype(np.int64)
+        k_prev = math.floor(cm_prev * (1.0 / self.spacing))
+        crossed = np.diff(k, prepend=k_prev)
+        at = np.flatnonzero(crossed)  # samples that passed one mark or more
+        if at.size:
+            many = crossed[at]
+            interval = np.repeat(at, many)
+            first = np.repeat(np.cumsum(many) - many, many)
+            k_before = np.where(at > 0, k[at - 1], k_prev)
+            mark = (
+                np.repeat(k_before, many) + 1 + (np.arange(interval.size) - first)
+            ) * self.spacing
+            t_lo = np.where(interval > 0, t[interval - 1], t_prev)
+            c_lo = np.where(interval > 0, cm[interval - 1], cm_prev)
+            c_hi, t_hi = cm[interval], t[interval]
+            self.times.append(t_lo + (mark - c_lo) / (c_hi - c_lo) * (t_hi - t_lo))
         self.last = (float(t[-1]), float(cm[-1]))
 
     def count(self) -> int:
