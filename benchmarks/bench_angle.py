@@ -29,6 +29,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+
 from bench_motion_stream import measured
 
 PIECE = 2_000_000
