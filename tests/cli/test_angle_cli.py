@@ -61,4 +61,6 @@ def test_refusals_are_one_line(tmp_path):
     )  # fmt: skip
     none = tmp_path / "none.npz"
     np.savez(none, time_s=t, theta=t)
-    one_line_error(run("motion", "angle", str(none)), "none.npz", "no column 'angle_deg' or 'count'")
+    one_line_error(
+        run("motion", "angle", str(none)), "none.npz", "no column 'angle_deg' or 'count'"
+    )
