@@ -15,7 +15,6 @@ from collections.abc import Sequence
 from typing import Any
 
 import click
-import numpy as np
 
 from rotacal.errors import ConfigError, RotacalError
 
@@ -79,7 +78,6 @@ def angle_readings(func: F) -> F:
 
 
 def _rate_of_readings(name: str, own: dict[str, Any], kw: dict[str, Any]) -> None:
-    from rotacal.signal.counter import infer_register
     from rotacal.table.rate_angle import calibrate_rate_from_marks, mark_times_from_chunks
 
     from .pulses import _finish_rate
@@ -96,18 +94,10 @@ def _rate_of_readings(name: str, own: dict[str, Any], kw: dict[str, Any]) -> Non
     chunks = reading_chunks(capture, name, kw["columns"], kw["group"])
     reading: dict[str, Any] = {}
     if name == "count":
-        bits, signed = own["counter_bits"], own["signed"]
-        if bits is None or signed is None:  # the register from the whole record's range
-            lo, hi = np.inf, -np.inf
-            for _, c in chunks():
-                lo, hi = min(lo, float(np.min(c))), max(hi, float(np.max(c)))
-            guess_bits, guess = infer_register(np.array([lo, hi]))
-            bits = guess_bits if bits is None else bits
-            signed = guess if signed is None else signed
-        reading = {"counts_per_rev": own["counts_per_rev"], "counter_bits": int(bits)}
-        reading["signed"] = signed
+        reading = {"counts_per_rev": own["counts_per_rev"], "signed": own["signed"]}
+        reading["counter_bits"] = None if own["counter_bits"] is None else int(own["counter_bits"])
     with _status("timing the marks"):
-        marks = mark_times_from_chunks(chunks(), pulses_per_rev=kw["pulses_per_rev"], **reading)
+        marks = mark_times_from_chunks(chunks, pulses_per_rev=kw["pulses_per_rev"], **reading)
         result = calibrate_rate_from_marks(marks, allow_gaps=own["allow_gaps"], **_settings(kw))
     _finish_rate(result, capture, json_path, report_path)
 

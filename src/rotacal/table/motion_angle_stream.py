@@ -2,9 +2,9 @@
 
 :func:`calibrate_angle_motion_chunked` takes the steps of
 :func:`~rotacal.table.motion_angle.calibrate_angle_motion` in passes over the capture, each pass
-a fresh :class:`_Clean` stream of the readings with the DAQ's repeated rows and duplicated
-times dropped and a counter unwrapped (the last reading carried from chunk to chunk), numbered
-as the cleaned record. The LTS scheme's streamed passes (:mod:`rotacal.table._stream_lts`) then
+a fresh :class:`~rotacal.signal.readings.CleanReadings` pass of the readings with the DAQ's
+repeated rows and duplicated times dropped and a counter unwrapped (the last reading carried
+from chunk to chunk), numbered as the cleaned record. The LTS scheme's streamed passes (:mod:`rotacal.table._stream_lts`) then
 run on it unchanged — they take (offset, t, θ) pieces: the exact 2–98 % percentiles of the
 trigger (order statistics), the swings' extremes with the trigger's state carried, the parabola
 of each extreme on its window — and the accumulated multi-harmonic fit with the position error
@@ -20,8 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Iterator, Mapping
-from typing import Any
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -29,8 +28,8 @@ from rotacal._threads import one_blas_thread
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import with_warnings
 from rotacal.signal._values import check_magnitudes, check_time_span
-from rotacal.signal.counter import CounterUnwrapper, infer_register
-from rotacal.signal.daq_faults import DaqFaultFinder, DaqFaults
+from rotacal.signal.daq_faults import DaqFaults
+from rotacal.signal.readings import CleanReadings, ReadingChunks, counter_register
 from rotacal.table import _stream_lts as lts
 from rotacal.table._stream_checks import StridedCopy, start_frequency
 from rotacal.table._stream_fit import accumulate, accumulator, block_length, true_time, with_segment
@@ -49,8 +48,6 @@ from rotacal.uncertainty import InstrumentSpecs
 
 __all__ = ["calibrate_angle_motion_chunked"]
 
-#: A chunk source: each call starts a fresh pass of (time_s, reading) chunks in record order.
-ReadingChunks = Callable[[], Iterator[tuple[np.ndarray, np.ndarray]]]
 _FIRST = 1 << 20  # samples kept for the start frequency (as the LTS check pass keeps)
 
 
@@ -71,52 +68,7 @@ class _Stats:
     strided: StridedCopy = dataclasses.field(default_factory=StridedCopy)
 
 
-class _Clean:
-    """Fresh passes of ``(offset, t, θ)`` over the cleaned readings (module docstring)."""
-
-    def __init__(self, chunks: ReadingChunks, counter: Mapping[str, Any] | None) -> None:
-        if not callable(chunks):
-            raise ConfigError("chunks must be a callable that starts a fresh pass of the capture")
-        self._chunks = chunks
-        self._counter = counter
-        self.last_faults: DaqFaults | None = None
-
-    def __call__(self) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
-        finder = DaqFaultFinder()
-        unwrap = None
-        if self._counter is not None:
-            unwrap = CounterUnwrapper(self._counter["bits"], self._counter["signed"])
-        origin: int | None = None
-        off = 0
-        for t, value in self._chunks():
-            t = np.asarray(t, dtype=np.float64)
-            if t.size == 0:
-                continue
-            bad = np.flatnonzero(~np.isfinite(t))
-            if bad.size:
-                raise CaptureError(
-                    f"column 'time_s' has a NaN or inf at sample {finder.seen + int(bad[0])}"
-                )
-            if unwrap is not None:
-                true = unwrap.feed(value)
-                origin = int(true[0]) if origin is None else origin
-                x = (true - origin).astype(np.float64) * (360.0 / self._counter["counts_per_rev"])  # type: ignore[index]
-            else:
-                x = np.asarray(value, dtype=np.float64)
-                bad = np.flatnonzero(~np.isfinite(x))
-                if bad.size:
-                    raise CaptureError(
-                        f"column angle_deg has a NaN or inf at sample {finder.seen + int(bad[0])}"
-                    )
-            keep = finder.feed(t, x)
-            if not keep.all():
-                t, x = t[keep], x[keep]
-            yield off, t, x
-            off += t.size
-        self.last_faults = finder.result()
-
-
-def _first_pass(clean: _Clean, angle: bool) -> _Stats:
+def _first_pass(clean: CleanReadings, angle: bool) -> _Stats:
     s = _Stats()
     held_t: list[np.ndarray] = []
     held_x: list[np.ndarray] = []
@@ -132,14 +84,14 @@ def _first_pass(clean: _Clean, angle: bool) -> _Stats:
             held_x.append(x[: _FIRST - off].copy())
         s.strided.add(off, t, x)
         s.n = off + t.size
-    s.faults = clean.last_faults
+    s.faults = clean.faults
     if s.n < 16:
         raise CaptureError(f"the capture has only {s.n} samples: too few for a sine fit")
     s.first = (np.concatenate(held_t), np.concatenate(held_x))
     return s
 
 
-def _prefit_drift(clean: _Clean, s: _Stats, harmonics: int, dt: float) -> float:
+def _prefit_drift(clean: CleanReadings, s: _Stats, harmonics: int, dt: float) -> float:
     """:func:`~rotacal.table.motion_drift.prefit_drift` streamed (as the LTS scheme's)."""
     t_mid = 0.5 * (s.first_t + s.last_t)
     slope = lts.line_slope([lts.line_sums(t, x, t_mid) for _, t, x in clean()], s.n)
@@ -193,21 +145,13 @@ def calibrate_angle_motion_chunked(
     del allow_clipped  # an angle readout has no rails
     _check_settings(harmonics, periods)
     _check_set_values(set_amplitude_deg, set_frequency_hz)
-    counter = None
     inferred = counter_bits is None
     if counts_per_rev is not None:
         if not (math.isfinite(counts_per_rev) and counts_per_rev > 0):
             raise ConfigError(f"--counts-per-rev must be positive, got {counts_per_rev}")
-        if counter_bits is None or signed is None:  # the register from the whole range
-            lo, hi = math.inf, -math.inf
-            for _, c in chunks():
-                lo, hi = min(lo, float(np.min(c))), max(hi, float(np.max(c)))
-            bits, guess = infer_register(np.array([lo, hi]))
-            counter_bits = bits if counter_bits is None else counter_bits
-            signed = guess if signed is None else signed
-        counter = {"bits": int(counter_bits), "signed": signed, "counts_per_rev": counts_per_rev}
-    clean = _Clean(chunks, counter)
-    s = _first_pass(clean, counter is None)
+        counter_bits, signed = counter_register(chunks(), counter_bits, signed)
+    clean = CleanReadings(chunks, counts_per_rev, counter_bits, signed)
+    s = _first_pass(clean, counts_per_rev is None)
     assert s.faults is not None
     s.faults.check(allow_gaps)
     dt = s.faults.typical_step_s
@@ -274,15 +218,15 @@ def calibrate_angle_motion_chunked(
         warnings=tuple(w.replace(_LTS_HINT, _ANGLE_HINT) for w in result.warnings),
     )
     q, what = resolution_deg, "stated"
-    if counter is not None:
-        q, what = 360.0 / float(counts_per_rev), f"1 count of {counts_per_rev:g}/rev"  # type: ignore[arg-type]
+    if counts_per_rev is not None:
+        q, what = 360.0 / float(counts_per_rev), f"1 count of {counts_per_rev:g}/rev"
     elif q is None and s.quantum is not None:
         q, what = s.quantum, "quantum of the readings"
     if q is not None:
         result = with_resolution(result, float(q), what)
-    if counter is not None:
-        kind = "signed" if counter["signed"] else "unsigned"
+    if counts_per_rev is not None:
+        kind = "signed" if signed else "unsigned"
         given = "inferred from the readings" if inferred else "given"
-        note = f"count unwrapped in a {counter['bits']}-bit {kind} register ({given})"
+        note = f"count unwrapped in a {counter_bits}-bit {kind} register ({given})"
         result = dataclasses.replace(result, notes=(*result.notes, note))
     return with_warnings(result, s.faults.warnings())

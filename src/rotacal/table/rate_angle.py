@@ -36,15 +36,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import with_warnings
-from rotacal.signal.counter import CounterUnwrapper, infer_register
-from rotacal.signal.daq_faults import DaqFaultFinder
+from rotacal.signal.readings import CleanReadings, ReadingChunks, counter_register
 
 __all__ = [
     "BACKWARD_MARKS",
@@ -172,23 +171,23 @@ class MarkCrossings:
 
 
 def mark_times_from_chunks(
-    chunks: Iterable[tuple[np.ndarray, np.ndarray]],
+    chunks: ReadingChunks,
     *,
     pulses_per_rev: int,
     counts_per_rev: float | None = None,
     counter_bits: int | None = None,
     signed: bool | None = None,
 ) -> MarkTimes:
-    """One streaming pass: (time_s, reading) chunks → DAQ faults, unwrap, mark crossings.
+    """One streaming pass over the cleaned readings (:class:`~rotacal.signal.readings.CleanReadings`:
+    DAQ faults, a counter unwrapped) to the crossing times of the marks.
 
     Parameters
     ----------
-    chunks : iterable of (array, array) — time (s) and angle (deg) or count, in record order.
+    chunks : callable — each call a fresh pass of ``(time_s, reading)`` chunks (s; deg or counts).
     pulses_per_rev : int — M, virtual marks per revolution.
     counts_per_rev : float, optional — N; given: the readings are counts (else angles in deg).
-    counter_bits, signed : the register (see :func:`~rotacal.signal.counter.unwrap_counts`);
-        ``counter_bits`` is needed with counts (infer it from the whole record first:
-        :func:`~rotacal.signal.counter.infer_register` of its extremes).
+    counter_bits, signed : the register (:func:`~rotacal.signal.readings.counter_register`: one
+        more pass when something is to be inferred from the readings' range).
 
     Returns
     -------
@@ -196,47 +195,31 @@ def mark_times_from_chunks(
     """
     from rotacal.table.motion_angle import angle_quantum
 
-    faults = DaqFaultFinder()
+    if counts_per_rev is not None:
+        if not (math.isfinite(counts_per_rev) and counts_per_rev > 0):
+            raise ConfigError(f"--counts-per-rev must be positive, got {counts_per_rev}")
+        counter_bits, signed = counter_register(chunks(), counter_bits, signed)
+    clean = CleanReadings(chunks, counts_per_rev, counter_bits, signed)
     marks = MarkCrossings(int(pulses_per_rev))
-    unwrap: CounterUnwrapper | None = None
-    notes: list[str] = []
     quantum: float | None = None if counts_per_rev is None else 360.0 / counts_per_rev
-    for t, value in chunks:
-        t = np.asarray(t, dtype=np.float64)
-        if t.size == 0:
-            continue
-        bad = np.flatnonzero(~np.isfinite(t))
-        if bad.size:
-            raise CaptureError(f"column 'time_s' has a NaN or inf at sample {faults.seen + bad[0]}")
-        if counts_per_rev is not None:
-            if unwrap is None:
-                if counter_bits is None:
-                    raise ConfigError("counter_bits is needed to unwrap counts chunk by chunk")
-                unwrap = CounterUnwrapper(int(counter_bits), signed)
-            angle = unwrap.feed(value).astype(np.float64) * (360.0 / counts_per_rev)
-        else:
-            angle = np.asarray(value, dtype=np.float64)
-            if marks._origin is None:
-                quantum = angle_quantum(angle)
-            bad = np.flatnonzero(~np.isfinite(angle))
-            if bad.size:
-                raise CaptureError(
-                    f"column angle_deg has a NaN or inf at sample {faults.seen + bad[0]}"
-                )
-        keep = faults.feed(t, angle)
-        marks.feed(t[keep], angle[keep])
+    for off, t, x in clean():
+        if off == 0 and counts_per_rev is None:
+            quantum = angle_quantum(x)
+        marks.feed(t, x)
+    assert clean.faults is not None
     times, direction = marks.result()
-    spacing = 360.0 / pulses_per_rev
-    notes.append(
+    notes = [
         f"pulse times: the angle's crossings of {pulses_per_rev} marks per revolution "
-        f"({spacing:.6g}° apart), linearly interpolated between samples"
-    )
-    if unwrap is not None:
-        kind = "signed" if unwrap.signed else "unsigned"
-        notes.append(f"count unwrapped in a {unwrap.bits}-bit {kind} register")
+        f"({360.0 / pulses_per_rev:.6g}° apart), linearly interpolated between samples"
+    ]
+    if clean.register is not None:
+        bits, is_signed = clean.register
+        notes.append(
+            f"count unwrapped in a {bits}-bit {'signed' if is_signed else 'unsigned'} register"
+        )
     if direction < 0:
         notes.append("the table turns backwards: the rate is stated as its magnitude")
-    return MarkTimes(times, direction, notes, faults.result(), quantum)
+    return MarkTimes(times, direction, notes, clean.faults, quantum)
 
 
 def calibrate_rate_from_marks(marks: MarkTimes, *, allow_gaps: bool = False, **rate_kw: Any) -> Any:
@@ -279,22 +262,23 @@ def _resolution_note(q: float, times: np.ndarray, rate_kw: Mapping[str, Any]) ->
 
 
 def _rate(
-    chunks: Iterable[tuple[np.ndarray, np.ndarray]],
-    allow_gaps: bool,
-    reading: Mapping[str, Any],
-    **rate_kw: Any,
+    chunks: ReadingChunks, allow_gaps: bool, reading: Mapping[str, Any], **rate_kw: Any
 ) -> Any:
     marks = mark_times_from_chunks(chunks, pulses_per_rev=rate_kw["pulses_per_rev"], **reading)
     return calibrate_rate_from_marks(marks, allow_gaps=allow_gaps, **rate_kw)
 
 
-def _pieces(t: Any, y: Any, rows: int) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+def _pieces(t: Any, y: Any, rows: int = 1 << 20) -> ReadingChunks:
     t = np.asarray(t)
     y = np.asarray(y)
     if t.ndim != 1 or t.shape != y.shape:
         raise CaptureError("time_s and the readings must be 1-D arrays of one length")
-    for s in range(0, t.size, rows):
-        yield t[s : s + rows], y[s : s + rows]
+
+    def chunks() -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        for s in range(0, t.size, rows):
+            yield t[s : s + rows], y[s : s + rows]
+
+    return chunks
 
 
 def calibrate_rate_from_angle(
@@ -314,9 +298,7 @@ def calibrate_rate_from_angle(
     -------
     RateResult — with the notes and warnings of the reduction.
     """
-    return _rate(
-        _pieces(t, angle_deg, 1 << 20), allow_gaps, {}, pulses_per_rev=pulses_per_rev, **rate_kw
-    )
+    return _rate(_pieces(t, angle_deg), allow_gaps, {}, pulses_per_rev=pulses_per_rev, **rate_kw)
 
 
 def calibrate_rate_from_counts(
@@ -331,13 +313,5 @@ def calibrate_rate_from_counts(
     **rate_kw: Any,
 ) -> Any:
     """:func:`calibrate_rate_from_angle` of an up/down counter (θ = 360·count/N, unwrapped)."""
-    if not (math.isfinite(counts_per_rev) and counts_per_rev > 0):
-        raise ConfigError(f"--counts-per-rev must be positive, got {counts_per_rev}")
-    if counter_bits is None:
-        counter_bits, guess = infer_register(np.asarray(count))
-        signed = guess if signed is None else signed
-    reading: dict[str, Any] = {"counts_per_rev": float(counts_per_rev), "signed": signed}
-    reading["counter_bits"] = counter_bits
-    return _rate(
-        _pieces(t, count, 1 << 20), allow_gaps, reading, pulses_per_rev=pulses_per_rev, **rate_kw
-    )
+    reading = {"counts_per_rev": counts_per_rev, "counter_bits": counter_bits, "signed": signed}
+    return _rate(_pieces(t, count), allow_gaps, reading, pulses_per_rev=pulses_per_rev, **rate_kw)
