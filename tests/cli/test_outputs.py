@@ -75,6 +75,7 @@ EXPECTED_INPUTS = {
     ("motion", "encoder"): {"capture", "correction_from", "specs"},
     ("motion", "fog"): {"capture", "specs"},
     ("motion", "lts"): {"capture", "specs"},
+    ("motion", "angle"): {"capture", "specs"},
     ("rate",): {"capture", "selfcal_path", "specs"},
     ("selfcal",): {"capture", "specs"},
     ("turntable", "budget"): {"config"},
@@ -85,6 +86,7 @@ REQUIRED = {
     ("gyro", "multiposition"): ["--axis", "x"],
     ("motion", "encoder"): ["--lines", "36000"],
     ("motion", "lts"): ["--radius-mm", "100"],
+    ("motion", "angle"): ["--counts-per-rev", "144000"],
     ("rate",): ["--pulses-per-rev", "18000"],
     ("selfcal",): ["--pulses-per-rev", "18000"],
 }

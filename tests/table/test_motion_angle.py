@@ -118,16 +118,6 @@ def test_quantum_rule_and_refusals():
         calibrate_angle_motion(t, np.sin(t), resolution_deg=-1.0)
 
 
-def test_report_section_names_the_scheme():
-    from rotacal.report.motion import motion_section
-
-    cap = simulate_angle(MOTION, reading="angle", resolution_deg=0.001, seed=2)
-    r = calibrate_angle_motion(cap.columns["time_s"], cap.columns["angle_deg"])
-    section = motion_section(r, figures=False)
-    assert section.title == "Sinusoidal motion by angle readout"
-    assert any("readout resolution 0.001°" in p for p in section.paragraphs)
-
-
 @pytest.mark.parametrize("drift", [False, True])
 def test_chunked_equals_in_memory(drift):
     """The streamed passes give the in-memory result: uneven chunks, DAQ faults, a wrapping

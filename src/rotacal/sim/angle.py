@@ -127,7 +127,7 @@ def simulate_angle(
     q = _nonneg("resolution_deg", resolution_deg)
     rng = np.random.default_rng(seed)
     if motion is not None:
-        t, fs, dur, t0 = _time_axis(motion, fs_hz, duration_s, 0.0)
+        t, fs, dur, _ = _time_axis(motion, fs_hz, duration_s, 0.0)
         theta = motion.angle_deg(t)
     else:
         w = _finite("rate_deg_s", rate_deg_s)
@@ -136,7 +136,6 @@ def simulate_angle(
         if not (fs > 0 and dur > 0 and w != 0):
             raise ConfigError("fs_hz, duration_s and rate_deg_s must be non-zero (fs, T > 0)")
         t = np.arange(round(dur * fs)) / fs
-        t0 = 0.0
         theta = constant_rate_angle_deg(t, w, fluctuation, fluctuation_hz)
     if noise > 0:
         theta = theta + rng.normal(0.0, noise, t.size)
@@ -178,7 +177,6 @@ def simulate_angle(
             "fluctuation_hz": float(fluctuation_hz),
             "sensor": sensor,
         }
-    del t0
     return SimCapture("angle", {"time_s": tt, name: vv}, truth)
 
 

@@ -278,7 +278,6 @@ def calibrate_angle_motion(
     drift: bool = False,
     allow_gaps: bool = False,
     resolution_name: str | None = None,
-    _warnings: tuple[str, ...] = (),
 ) -> MotionResult:
     """Sinusoidal-motion calibration from an angle readout (scheme ``"angle"``).
 
@@ -372,7 +371,7 @@ def calibrate_angle_motion(
     )
     if resolution_deg is not None:
         result = with_resolution(result, float(resolution_deg), resolution_name or "stated")
-    return with_warnings(result, [*_warnings, *faults.warnings()])
+    return with_warnings(result, faults.warnings())
 
 
 def calibrate_count_motion(
