@@ -45,6 +45,12 @@ def test_refusals_are_one_line(tmp_path):
     one_line_error(run("motion", "angle", str(path)), "--counts-per-rev")
     one_line_error(run("rate", str(path), "--pulses-per-rev", "360"), "--counts-per-rev")
     one_line_error(
+        run(
+            "rate", str(path), "--pulses-per-rev", "3600", "--counts-per-rev", "1", "--workers", "2"
+        ),
+        "--workers is not available",
+    )
+    one_line_error(
         run("motion", "angle", str(path), "--counts-per-rev", "144000", "--resolution-deg", "1"),
         "--resolution-deg",
     )

@@ -91,6 +91,7 @@ def _rate_of_readings(name: str, own: dict[str, Any], kw: dict[str, Any]) -> Non
         raise ConfigError(f"{capture} holds angle_deg, not count: drop --counts-per-rev")
     if kw.get("selfcal_path") is not None or kw.get("head") not in (None, "0", "head_0"):
         raise ConfigError("angle/count readings have one virtual head: drop --selfcal and --head")
+    settings = _settings(kw)
     chunks = reading_chunks(capture, name, kw["columns"], kw["group"])
     reading: dict[str, Any] = {}
     if name == "count":
@@ -98,14 +99,26 @@ def _rate_of_readings(name: str, own: dict[str, Any], kw: dict[str, Any]) -> Non
         reading["counter_bits"] = None if own["counter_bits"] is None else int(own["counter_bits"])
     with _status("timing the marks"):
         marks = mark_times_from_chunks(chunks, pulses_per_rev=kw["pulses_per_rev"], **reading)
-        result = calibrate_rate_from_marks(marks, allow_gaps=own["allow_gaps"], **_settings(kw))
+        result = calibrate_rate_from_marks(marks, allow_gaps=own["allow_gaps"], **settings)
     _finish_rate(result, capture, json_path, report_path)
 
 
+#: Options of the rate command that have no meaning for readings (one virtual head, in one pass).
+_PULSE_ONLY = {"capture", "columns", "group", "selfcal_path", "head", "no_compensation", "chunked"}
+
+
 def _settings(kw: dict[str, Any]) -> dict[str, Any]:
-    """The rate options ``calibrate_rate`` takes by name (``--window-deg`` and later ones too)."""
+    """The rate options ``calibrate_rate`` takes by name (``--window-deg`` and later ones too);
+    an option given that it does not take is refused rather than dropped."""
     from rotacal.table.rate import calibrate_rate
 
-    accepted = inspect.signature(calibrate_rate).parameters
-    skip = {"heads", "selfcal", "head", "compensate"}
-    return {k: v for k, v in kw.items() if k in accepted and k not in skip}
+    accepted = set(inspect.signature(calibrate_rate).parameters) - {
+        "heads",
+        "selfcal",
+        "compensate",
+    }
+    for key, value in kw.items():
+        if key not in accepted and key not in _PULSE_ONLY and value not in (None, False, ()):
+            option = "--" + key.replace("_", "-")
+            raise ConfigError(f"{option} is not available for angle/count readings (yet)")
+    return {k: v for k, v in kw.items() if k in accepted}
