@@ -1,6 +1,6 @@
 """Angle and counter readings: the unwrap's speed, and `motion angle` / `rate` streamed: s, peak RSS.
 
-Three measurements, each against a baseline measured in the same run:
+Three measurements, each against a baseline measured in the same run, and an accuracy check:
 
 1. ``unwrap``: :func:`rotacal.signal.counter.unwrap_counts` of N readings of a wrapping 16-bit
    register, whole and streamed in 2²⁰-row chunks (:class:`CounterUnwrapper`), against the least
@@ -13,7 +13,9 @@ Three measurements, each against a baseline measured in the same run:
    one-hour record at 300 °/s (10 kHz, 3.6·10⁷ rows, a 16-bit counter that wraps 4·10⁴ times),
    against the same baseline.
 
-    python benchmarks/bench_angle.py                     # unwrap 1e7, motion 1e7, rate 1 h
+4. ``accuracy``: `motion angle` against the twin's truth over 20 draws (:func:`bench_accuracy`).
+
+    python benchmarks/bench_angle.py                     # unwrap 1e7, accuracy, motion 1e7, rate 1 h
     python benchmarks/bench_angle.py --motion-sizes 1e7,1e8 --rate-hours 1
 """
 
@@ -67,6 +69,48 @@ def bench_unwrap(n: int) -> str:
         f"unwrap N={n:.0e}: baseline {base:.3f} s, whole {whole:.3f} s ({whole / base:.2f}×, "
         f"{n / whole / 1e6:.0f} M/s), chunked {chunks:.3f} s ({chunks / base:.2f}×)"
     )
+
+
+def bench_accuracy(draws: int) -> list[str]:
+    """`motion angle` against the twin's truth over ``draws`` noise draws: the spread of
+    (value − truth)/u of the amplitude (≈ 1 when u is right) and how many 95 % THD intervals
+    hold the true THD — a dithered 16-bit counter, and an undithered 0.002° readout sampled
+    commensurately (its quantisation error repeats every period)."""
+    from rotacal.sim import SineMotion, simulate_angle
+    from rotacal.table.motion_angle import calibrate_angle_motion, calibrate_count_motion
+
+    motion = SineMotion(
+        amplitude_deg=0.5, frequency_hz=2.0, harmonics={2: (0.005, 1.0), 3: (0.01, 0.3)}
+    )
+    lines = []
+    for label, make, calibrate in (
+        (
+            "counter, 16-bit, noise 0.002°",
+            lambda s: simulate_angle(motion, counter_bits=16, signed=True, noise_deg=0.002, seed=s),
+            lambda c: calibrate_count_motion(
+                c.columns["time_s"], c.columns["count"], counts_per_rev=CPR
+            ),
+        ),
+        (
+            "readout q = 0.002°, no noise",
+            lambda s: simulate_angle(
+                motion, reading="angle", resolution_deg=0.002, fs_hz=1000 + 37 * s, seed=s
+            ),
+            lambda c: calibrate_angle_motion(c.columns["time_s"], c.columns["angle_deg"]),
+        ),
+    ):
+        z, held = [], 0
+        for seed in range(draws):
+            cap = make(seed)
+            d = calibrate(cap).to_dict()
+            z.append((d["amplitude_deg"] - cap.truth["amplitude_deg"]) / d["amplitude_deg_u"])
+            lo, hi = d["thd_percent_interval"]
+            held += lo <= cap.truth["thd_percent"] <= hi
+        lines.append(
+            f"accuracy {label}: sd of (A − truth)/u over {draws} draws {np.std(z):.2f}; "
+            f"THD interval holds the truth {held}/{draws}"
+        )
+    return lines
 
 
 def _angle(kind: str, t: np.ndarray) -> np.ndarray:
@@ -134,6 +178,7 @@ def main() -> None:
     ap.add_argument("--unwrap-size", default="1e7")
     ap.add_argument("--motion-sizes", default="1e7")
     ap.add_argument("--rate-hours", type=float, default=1.0)
+    ap.add_argument("--draws", type=int, default=20, help="twin draws of the accuracy check")
     ap.add_argument("--dir", default="/tmp/bench-angle")
     ap.add_argument("--baseline", help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -144,6 +189,8 @@ def main() -> None:
     work.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ)
     print(bench_unwrap(int(float(args.unwrap_size))), flush=True)
+    if args.draws:
+        print("\n".join(bench_accuracy(args.draws)), flush=True)
     for n in [int(float(s)) for s in args.motion_sizes.split(",") if s]:
         print(case("motion", n, work, env), flush=True)
     if args.rate_hours > 0:
