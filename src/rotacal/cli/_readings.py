@@ -67,18 +67,24 @@ def reading_chunks(
     progress: Callable[[int], None] | None = None,
 ) -> Callable[[], Iterator[tuple[np.ndarray, np.ndarray]]]:
     """A chunk source of ``(time_s, name)``: each call a fresh streamed pass over the file;
-    ``progress`` gets the rows read so far, summed over the passes."""
+    ``progress`` gets the rows read so far, summed over the passes. Once a pass has read the
+    whole file with the reader's checks (CRC-32s, NaN/inf), later passes skip them, as
+    the motion commands' chunk sources do."""
     from rotacal.io import iter_capture_chunks
 
     options = _reading_options(columns, group)
     done = [0]
+    checked = [False]
 
     def chunks() -> Iterator[tuple[np.ndarray, np.ndarray]]:
-        for c in iter_capture_chunks(capture, ("time_s", name), chunk_rows=CHUNK_ROWS, **options):
+        for c in iter_capture_chunks(
+            capture, ("time_s", name), chunk_rows=CHUNK_ROWS, verified=checked[0], **options
+        ):
             done[0] += c["time_s"].size
             if progress is not None:
                 progress(done[0])
             yield c["time_s"], c[name]
+        checked[0] = True  # reached only when the pass ran to the end
 
     return chunks
 
