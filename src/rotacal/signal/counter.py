@@ -44,6 +44,8 @@ __all__ = [
 REGISTER_BITS = (8, 16, 24, 32, 64)
 #: A folded step of at least this fraction of the register is ambiguous (refused).
 AMBIGUOUS_FRACTION = 0.25
+#: Readings unwrapped per block by :func:`unwrap_counts`.
+_BLOCK = 1 << 18
 #: Largest |count| a float64 column holds exactly (2^53).
 _FLOAT_EXACT = float(2**53)
 
@@ -60,25 +62,25 @@ def _as_integers(count: np.ndarray, name: str, offset: int = 0) -> np.ndarray:
         return c.astype(np.int64, copy=False)
     if c.dtype.kind != "f":
         raise CaptureError(f"column {name} holds {c.dtype} values, not counts")
-    bad = np.flatnonzero(~np.isfinite(c))
-    if bad.size:
-        raise CaptureError(f"column {name} has a NaN or inf at sample {offset + int(bad[0])}")
-    frac = np.flatnonzero(c != np.round(c))
-    if frac.size:
-        i = int(frac[0])
-        raise CaptureError(
-            f"column {name} holds {c[i]!r} at sample {offset + i}: a counter's readings are whole "
-            "numbers (is this an angle? then name the column angle_deg)"
-        )
-    big = np.flatnonzero(np.abs(c) > _FLOAT_EXACT)
-    if big.size:
-        i = int(big[0])
+    lo, hi = (float(np.min(c)), float(np.max(c))) if c.size else (0.0, 0.0)
+    if not (np.isfinite(lo) and np.isfinite(hi)):  # NaN or inf somewhere: find it
+        i = int(np.flatnonzero(~np.isfinite(c))[0])
+        raise CaptureError(f"column {name} has a NaN or inf at sample {offset + i}")
+    if max(abs(lo), abs(hi)) > _FLOAT_EXACT:
+        i = int(np.flatnonzero(np.abs(c) > _FLOAT_EXACT)[0])
         raise CaptureError(
             f"column {name} holds {c[i]:.17g} at sample {offset + i}, beyond 2^53 where a "
             "floating-point column is no longer exact: store the counts as 64-bit integers "
             "(NPZ or HDF5)"
         )
-    return c.astype(np.int64)
+    ci = c.astype(np.int64)
+    if not np.array_equal(ci, c):
+        i = int(np.flatnonzero(ci != c)[0])
+        raise CaptureError(
+            f"column {name} holds {c[i]!r} at sample {offset + i}: a counter's readings are whole "
+            "numbers (is this an angle? then name the column angle_deg)"
+        )
+    return ci
 
 
 def infer_register(count: np.ndarray, name: str = "count") -> tuple[int, bool]:
@@ -146,7 +148,6 @@ class CounterUnwrapper:
     _last_raw: int | None = dataclasses.field(default=None, init=False, repr=False)
     _last_true: int = dataclasses.field(default=0, init=False, repr=False)
     _seen: int = dataclasses.field(default=0, init=False, repr=False)
-    wraps: int = dataclasses.field(default=0, init=False)
 
     def __post_init__(self) -> None:
         _check_register(self.bits, self.signed)
@@ -161,16 +162,19 @@ class CounterUnwrapper:
         self._check_values(c)
         bits = self.bits
         prev = c[0] if self._last_raw is None else self._last_raw
+        # in place, no temporaries: steps, folded into [−M/2, M/2), summed
+        out = np.empty(c.size, dtype=np.int64)
         with np.errstate(over="ignore"):  # 64-bit steps wrap modulo 2^64: that is the fold
-            steps = np.diff(c, prepend=np.int64(prev))
+            np.subtract(c[1:], c[:-1], out=out[1:])
+            out[0] = np.int64(c[0]) - np.int64(prev)
         if bits < 64:
             half = np.int64(1 << (bits - 1))
-            raw = steps
-            steps = ((steps + half) & np.int64((1 << bits) - 1)) - half
-            self.wraps += int(np.count_nonzero(raw != steps))
-        self._check_steps(steps)
+            out += half
+            out &= np.int64((1 << bits) - 1)
+            out -= half
+        self._check_steps(out)
         start = self._first_true(int(c[0])) if self._last_raw is None else self._last_true
-        out = np.cumsum(steps)
+        np.cumsum(out, out=out)
         out += np.int64(start)
         self._last_raw = int(c[-1])
         self._last_true = int(out[-1])
@@ -189,6 +193,8 @@ class CounterUnwrapper:
         low, high = _range(self.bits, bool(self.signed))
         if self.signed:  # a signed register logged as its unsigned bit pattern is fine too
             high = 2**self.bits - 1
+        if low <= int(np.min(c)) and int(np.max(c)) <= high:  # two reductions, no mask
+            return
         bad = np.flatnonzero((c < low) | (c > high))
         if bad.size:
             i = int(bad[0])
@@ -202,6 +208,8 @@ class CounterUnwrapper:
         limit = int(AMBIGUOUS_FRACTION * 2.0**self.bits)
         if self.bits == 64:
             return  # a quarter of 2^64 counts between two samples is not a motion
+        if -limit < int(np.min(steps)) and int(np.max(steps)) < limit:
+            return
         bad = np.flatnonzero(np.abs(steps) >= limit)
         if bad.size:
             i = int(bad[0])
@@ -244,8 +252,13 @@ def unwrap_counts(
     if bits is None:
         bits, inferred_signed = infer_register(count, name)
         signed = inferred_signed if signed is None else signed
+    c = np.asarray(count)
     u = CounterUnwrapper(int(bits), signed, name)
-    out = u.feed(np.asarray(count))
+    if signed is None and c.size > _BLOCK:  # decided on the whole record, as documented
+        u.signed = bool(np.min(c) < 0)
+    out = np.empty(c.size, dtype=np.int64)
+    for s in range(0, c.size, _BLOCK):  # in cache-sized blocks: no record-sized temporaries
+        out[s : s + _BLOCK] = u.feed(c[s : s + _BLOCK])
     return out, u.bits, bool(u.signed)
 
 

@@ -139,8 +139,7 @@ def calibrate_angle_motion_chunked(
     counts_per_rev : float, optional — N: the readings are counts (θ = 360·count/N).
     counter_bits, signed : the register; without ``counter_bits`` one extra pass finds the
         readings' range and :func:`~rotacal.signal.counter.infer_register` rules.
-    resolution_deg, harmonics, periods, set_amplitude_deg, set_frequency_hz, specs,
-    allow_clipped, drift, allow_gaps : as ``calibrate_angle_motion``.
+    resolution_deg, harmonics, periods, set_amplitude_deg, set_frequency_hz, specs, allow_clipped, drift, allow_gaps : as ``calibrate_angle_motion``.
     """
     del allow_clipped  # an angle readout has no rails
     _check_settings(harmonics, periods)
