@@ -70,3 +70,36 @@ def test_refusals_are_one_line(tmp_path):
     one_line_error(
         run("motion", "angle", str(none)), "none.npz", "no column 'angle_deg' or 'count'"
     )
+
+
+def test_window_deg_reaches_the_windows_of_the_crossing_times(tmp_path, monkeypatch):
+    """`rate --window-deg` (the rate command's option where it has it) runs the angle-window
+    analysis on the marks' crossing times: the wiring, with that analysis stood in for."""
+    import sys
+    import types
+
+    import rotacal.cli.pulses as pulses
+    from rotacal.cli import _rate_angle
+
+    seen, finished = {}, {}
+    windows = types.ModuleType("rotacal.table.rate_windows")
+    windows.rate_windows_stream = lambda chunks, **kw: (
+        seen.update(times=list(chunks()), **kw) or "W"
+    )
+    joined = types.ModuleType("rotacal.table.rate_windows_result")
+    joined.with_windows = lambda result, w: (result, w)
+    monkeypatch.setitem(sys.modules, "rotacal.table.rate_windows", windows)
+    monkeypatch.setitem(sys.modules, "rotacal.table.rate_windows_result", joined)
+    monkeypatch.setattr(pulses, "_finish_rate", lambda result, *a: finished.update(r=result))
+    t = np.arange(20_000) / 1_000
+    path = tmp_path / "spin.npz"
+    np.savez(path, time_s=t, angle_deg=30.0 * t)
+    kw = {"capture": str(path), "columns": (), "group": None, "json_path": None}
+    kw |= {"report_path": None, "overwrite": False, "pulses_per_rev": 360, "average": 10}
+    kw |= {"set_rate_deg_s": 30.0, "specs": None, "head": "0", "window_deg": [1.0, 10.0]}
+    own = {"counts_per_rev": None, "counter_bits": None, "signed": None, "allow_gaps": False}
+    _rate_angle._rate_of_readings("angle_deg", own, kw)
+    result, w = finished["r"]
+    assert w == "W" and seen["windows_deg"] == [1.0, 10.0] and seen["pulses_per_rev"] == 360
+    np.testing.assert_allclose(seen["times"][0], np.arange(1, 600) / 30.0, atol=1e-12)
+    assert seen["timing_jitter_s"] == result.timing_jitter_s and seen["check"] is False

@@ -91,6 +91,7 @@ def _rate_of_readings(name: str, own: dict[str, Any], kw: dict[str, Any]) -> Non
         raise ConfigError(f"{capture} holds angle_deg, not count: drop --counts-per-rev")
     if kw.get("selfcal_path") is not None or kw.get("head") not in (None, "0", "head_0"):
         raise ConfigError("angle/count readings have one virtual head: drop --selfcal and --head")
+    windows_deg = kw.pop("window_deg", None)  # the rate command's --window-deg, where it has one
     settings = _settings(kw)
     chunks = reading_chunks(capture, name, kw["columns"], kw["group"])
     reading: dict[str, Any] = {}
@@ -100,7 +101,28 @@ def _rate_of_readings(name: str, own: dict[str, Any], kw: dict[str, Any]) -> Non
     with _status("timing the marks"):
         marks = mark_times_from_chunks(chunks, pulses_per_rev=kw["pulses_per_rev"], **reading)
         result = calibrate_rate_from_marks(marks, allow_gaps=own["allow_gaps"], **settings)
+        if windows_deg:
+            result = _with_windows(result, marks.times, windows_deg, settings)
     _finish_rate(result, capture, json_path, report_path)
+
+
+def _with_windows(result: Any, times: Any, windows_deg: Any, settings: dict[str, Any]) -> Any:
+    """The rate over angle windows (``--window-deg``) of the marks' crossing times, joined to
+    ``result`` as the pulse-timestamp path joins them (one virtual head, uncompensated)."""
+    from rotacal.table.rate_windows import rate_windows_stream
+    from rotacal.table.rate_windows_result import with_windows
+
+    windows = rate_windows_stream(
+        lambda: iter([times]),
+        pulses_per_rev=int(settings["pulses_per_rev"]),
+        windows_deg=windows_deg,
+        set_rate_deg_s=settings.get("set_rate_deg_s"),
+        timing_jitter_s=result.timing_jitter_s,
+        timebase_correction=result.timebase_correction,
+        specs=settings.get("specs"),
+        check=False,  # the rate's analysis checked the same times
+    )
+    return with_windows(result, windows)
 
 
 #: Options of the rate command that have no meaning for readings (one virtual head, in one pass).
