@@ -79,6 +79,11 @@ POSITION_REFERENCE = CommandColumns(
 POSITION_DEVIATION = CommandColumns("position", ("position_deg", "error_arcsec"), POSITION_OPTIONAL)
 SELFCAL = CommandColumns("selfcal", (), min_heads=2)
 RATE = CommandColumns("rate", (), min_heads=1)
+#: Angle or counter readings: `motion angle`, and `rate` timed at the angle's marks.
+MOTION_ANGLE = CommandColumns("motion angle", ("time_s", "angle_deg"))
+MOTION_COUNT = CommandColumns("motion angle", ("time_s", "count"))
+RATE_ANGLE = CommandColumns("rate", ("time_s", "angle_deg"))
+RATE_COUNT = CommandColumns("rate", ("time_s", "count"))
 
 #: Every analysis command that reads a capture, in the order ``rotacal --help`` lists them.
 COMMANDS: tuple[CommandColumns, ...] = (
@@ -96,7 +101,11 @@ COMMANDS: tuple[CommandColumns, ...] = (
     MOTION_FOG,
     POSITION_REFERENCE,
     POSITION_DEVIATION,
+    MOTION_ANGLE,
+    MOTION_COUNT,
     RATE,
+    RATE_ANGLE,
+    RATE_COUNT,
     SELFCAL,
 )
 

@@ -52,6 +52,7 @@ def captures(tmp_path_factory) -> dict[str, Path]:
         "encoder": ["--duration-s", "3"],
         "lts": ["--duration-s", "3"],
         "fog": ["--duration-s", "3"],
+        "angle": ["--duration-s", "3"],
         "pulses": ["--heads", "4", "--pulses-per-rev", "360", "--revolutions", "3"],
         "gyro-rates": ["--samples-per-point", "50"],
         "gyro-triad": ["--samples-per-point", "20"],
@@ -93,6 +94,7 @@ ANALYSES: dict[tuple[str, ...], tuple[str, list[str]]] = {
     ("motion", "fog"): ("fog", []),
     ("motion", "lts"): ("lts", ["--radius-mm", "100"]),
     ("position",): ("position", ["--harmonics", "2"]),
+    ("motion", "angle"): ("angle", ["--counts-per-rev", "144000"]),
     ("rate",): ("pulses", ["--pulses-per-rev", "360"]),
     ("selfcal",): ("pulses", ["--pulses-per-rev", "360"]),
     # the paper's derivation allocates once, the default twice: the outputs are the same kind
@@ -107,6 +109,7 @@ WRITERS: dict[tuple[str, ...], list[str]] = {
     **{
         ("simulate", kind): ["x.npz", "x.npz.truth.json"]
         for kind in (
+            "angle",
             "encoder",
             "ferraris",
             "fog",
@@ -135,6 +138,7 @@ WRITER_ARGS = {
     ("simulate", "encoder"): ["--duration-s", "1"],
     ("simulate", "lts"): ["--duration-s", "1"],
     ("simulate", "fog"): ["--duration-s", "1"],
+    ("simulate", "angle"): ["--duration-s", "1"],
 }
 
 

@@ -76,6 +76,7 @@ EXPECTED_INPUTS = {
     ("motion", "fog"): {"capture", "specs"},
     ("motion", "lts"): {"capture", "specs"},
     ("position",): {"capture", "selfcal_path", "specs"},
+    ("motion", "angle"): {"capture", "specs"},
     ("rate",): {"capture", "selfcal_path", "specs"},
     ("selfcal",): {"capture", "specs"},
     ("turntable", "budget"): {"config"},
@@ -87,6 +88,7 @@ REQUIRED = {
     ("gyro", "multiposition"): ["--axis", "x"],
     ("motion", "encoder"): ["--lines", "36000"],
     ("motion", "lts"): ["--radius-mm", "100"],
+    ("motion", "angle"): ["--counts-per-rev", "144000"],
     ("rate",): ["--pulses-per-rev", "18000"],
     ("selfcal",): ["--pulses-per-rev", "18000"],
 }

@@ -136,6 +136,7 @@ COMMAND_OPTIONS = {
     "motion encoder": ["--lines", "100"],
     "motion lts": ["--radius-mm", "100"],
     "gyro multiposition": ["--axis", "x", "--latitude-deg", "45"],
+    "rate": ["--pulses-per-rev", "360"],
 }
 
 

@@ -480,3 +480,6 @@ def _dask_motion(
         rows=n,
         reading=reading,
     )
+
+
+from . import motion_angle  # noqa: E402,F401  (registers `motion angle`)

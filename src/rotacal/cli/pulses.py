@@ -32,6 +32,7 @@ from ._common import (
 )
 from ._dask import dask_options, run_on_dask, split_wanted
 from ._help import example
+from ._rate_angle import angle_readings  # time_s with angle_deg or count
 from ._rate_windows import add_windows, print_windows, window_option, window_sections
 from ._reading import current_read_options
 
@@ -313,6 +314,7 @@ def _selfcal_dask(
 @dask_options("one head as the streamed path takes it; NPZ without compression, HDF5 or TDMS")
 @_analysis_options
 @_names_capture
+@angle_readings
 def rate_cmd(
     capture: str,
     pulses_per_rev: int,

@@ -721,5 +721,5 @@ def demo(out: str, overwrite: bool) -> None:
         _wrote(path)
 
 
-# registers `simulate gyro-sine`, `simulate orientation` and `simulate position`
-from . import simulate_frequency, simulate_orientation, simulate_position  # noqa: E402,F401
+# registers `simulate gyro-sine`, `simulate orientation`, `simulate position` and `simulate angle`
+from . import simulate_angle, simulate_frequency, simulate_orientation, simulate_position  # noqa: E402,F401

@@ -30,7 +30,7 @@ from rotacal.uncertainty import UncertaintyBudget, coverage_factor, round_ilac
 
 __all__ = ["comparison_section", "motion_figures", "motion_section"]
 
-_SCHEME_NAMES = {"encoder": "OSE", "lts": "LTS", "fog": "FOG"}
+_SCHEME_NAMES = {"encoder": "OSE", "lts": "LTS", "fog": "FOG", "angle": "angle readout"}
 _COLORS = {"meas": "#1f5f99", "fit": "#d2691e", "rev_max": "#b22222", "rev_min": "#2e8b57"}
 
 

@@ -25,6 +25,13 @@ if TYPE_CHECKING:
         find_clipping,
         find_quadrature_clipping,
     )
+    from rotacal.signal.counter import (
+        CounterUnwrapper,
+        counts_to_angle_deg,
+        infer_register,
+        unwrap_counts,
+    )
+    from rotacal.signal.daq_faults import DaqFaultFinder, DaqFaults, find_daq_faults
     from rotacal.signal.deviations import (
         DEVIATIONS,
         StabilityDeviation,
@@ -33,6 +40,7 @@ if TYPE_CHECKING:
         longest_cluster,
         stability_deviation,
     )
+    from rotacal.signal.readings import CleanReadings, counter_register
     from rotacal.signal.sinefit import (
         DriftCheck,
         HarmonicFitAccumulator,
@@ -50,8 +58,12 @@ if TYPE_CHECKING:
 __all__ = [
     "DEVIATIONS",
     "AllanDeviation",
+    "CleanReadings",
     "ClippedSignalError",
     "Clipping",
+    "CounterUnwrapper",
+    "DaqFaultFinder",
+    "DaqFaults",
     "DriftCheck",
     "HarmonicFitAccumulator",
     "NoiseTerm",
@@ -62,16 +74,20 @@ __all__ = [
     "adev_confidence_interval",
     "check_clipping",
     "check_sampling",
+    "counter_register",
+    "counts_to_angle_deg",
     "deviation_keys",
     "displacement_amplitudes_from_rate",
     "edf_deviation",
     "edf_overlapping_adev",
     "estimate_frequency",
     "find_clipping",
+    "find_daq_faults",
     "find_quadrature_clipping",
     "fit_harmonics",
     "fit_sine_3p",
     "fit_sine_4p",
+    "infer_register",
     "longest_cluster",
     "noise_terms",
     "overlapping_adev",
@@ -79,6 +95,7 @@ __all__ = [
     "stability_deviation",
     "thd_percent",
     "thd_standard_uncertainty_percent",
+    "unwrap_counts",
 ]
 
 __getattr__, __dir__ = attach(__name__, __file__, __all__)

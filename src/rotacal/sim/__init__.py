@@ -4,6 +4,7 @@ Its truth is independent of rotacal's methods: it imports only numpy, scipy, rot
 rotacal.results (``SimCapture.write`` imports ``rotacal.io`` lazily).
 """
 
+from rotacal.sim.angle import simulate_angle
 from rotacal.sim.ferraris import simulate_ferraris
 from rotacal.sim.gyro_log import simulate_gyro_log
 from rotacal.sim.gyro_noise import simulate_gyro_noise
@@ -41,6 +42,7 @@ __all__ = [
     "known_kinds",
     "register_kind",
     "simulate",
+    "simulate_angle",
     "simulate_encoder",
     "simulate_ferraris",
     "simulate_fog",

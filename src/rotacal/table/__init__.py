@@ -15,7 +15,10 @@ if TYPE_CHECKING:
         extreme_reversals,
         position_error,
     )
+    from rotacal.table.motion_angle import calibrate_angle_motion, calibrate_count_motion
+    from rotacal.table.motion_angle_stream import calibrate_angle_motion_chunked
     from rotacal.table.rate import RateResult, align_deviation, allan_versus_angle, calibrate_rate
+    from rotacal.table.rate_angle import calibrate_rate_from_angle, calibrate_rate_from_counts
     from rotacal.table.rate_file import calibrate_rate_file
     from rotacal.table.rate_windows import RateWindows, rate_windows, rate_windows_stream
     from rotacal.table.streaming import (
@@ -34,6 +37,9 @@ __all__ = [
     "SchemeComparison",
     "align_deviation",
     "allan_versus_angle",
+    "calibrate_angle_motion",
+    "calibrate_angle_motion_chunked",
+    "calibrate_count_motion",
     "calibrate_encoder_motion",
     "calibrate_encoder_motion_chunked",
     "calibrate_fog_motion",
@@ -42,6 +48,8 @@ __all__ = [
     "calibrate_lts_motion_chunked",
     "calibrate_rate",
     "calibrate_rate_file",
+    "calibrate_rate_from_angle",
+    "calibrate_rate_from_counts",
     "compare_schemes",
     "encoder_chunks_from_file",
     "extreme_reversals",
