@@ -168,21 +168,30 @@ def _block_rss(
     y: np.ndarray, model: np.ndarray, tau: np.ndarray
 ) -> tuple:  # pragma: no cover - compiled
     """``Σ (y − model)²`` and ``Σ (y − model)·τ`` over ``y.size`` samples, each in four
-    interleaved partial sums (a vectorised loop; no less accurate than one running sum)."""
-    acc = np.zeros(4)
-    acc_t = np.zeros(4)
+    interleaved partial sums (a vectorised loop; no less accurate than one running sum), kept
+    in registers."""
+    r0 = r1 = r2 = r3 = 0.0
+    t0 = t1 = t2 = t3 = 0.0
     size = y.size
     full = size - size % 4
     for q in range(0, full, 4):
-        for lane in range(4):
-            r = y[q + lane] - model[q + lane]
-            acc[lane] += r * r
-            acc_t[lane] += r * tau[q + lane]
+        d0 = y[q] - model[q]
+        d1 = y[q + 1] - model[q + 1]
+        d2 = y[q + 2] - model[q + 2]
+        d3 = y[q + 3] - model[q + 3]
+        r0 += d0 * d0
+        r1 += d1 * d1
+        r2 += d2 * d2
+        r3 += d3 * d3
+        t0 += d0 * tau[q]
+        t1 += d1 * tau[q + 1]
+        t2 += d2 * tau[q + 2]
+        t3 += d3 * tau[q + 3]
     for q in range(full, size):
-        r = y[q] - model[q]
-        acc[0] += r * r
-        acc_t[0] += r * tau[q]
-    return (acc[0] + acc[1]) + (acc[2] + acc[3]), (acc_t[0] + acc_t[1]) + (acc_t[2] + acc_t[3])
+        d0 = y[q] - model[q]
+        r0 += d0 * d0
+        t0 += d0 * tau[q]
+    return (r0 + r1) + (r2 + r3), (t0 + t1) + (t2 + t3)
 
 
 @njit(cache=True, nogil=True)
