@@ -14,6 +14,7 @@ from rotacal.signal import (
     check_clipping,
     find_clipping,
     find_quadrature_clipping,
+    quadrature_rail_detectors,
 )
 from rotacal.signal.clipping import RAIL_RATIO
 
@@ -230,3 +231,24 @@ def test_check_clipping_refuses_with_one_line_or_warns():
 def test_companion_of_another_length_is_refused():
     with pytest.raises(CaptureError, match="differ in length"):
         find_clipping(np.zeros(10), "a", companion=np.zeros(9))
+
+
+def test_in_working_range_is_check_magnitudes_verdict():
+    """A detector that saw the whole column tells whether check_magnitudes would pass it: the
+    same verdict on ordinary, non-finite, huge, tiny and all-zero columns (both paths)."""
+    from rotacal.signal._values import check_magnitudes
+
+    base = _sine(5_000)
+    columns = {"ordinary": base, "zeros": np.zeros(5_000), "tiny": 1e-120 * base}
+    for name, value in (("nan", np.nan), ("inf", np.inf), ("huge", 1e120)):
+        columns[name] = base.copy()
+        columns[name][1234] = value
+    for name, x in columns.items():
+        try:
+            check_magnitudes(name, x)
+            passes = True
+        except CaptureError:
+            passes = False
+        for jit in (False, True):
+            det_x, _ = quadrature_rail_detectors(x, base, jit=jit)
+            assert det_x.in_working_range() == passes, (name, jit)

@@ -90,6 +90,7 @@ import numpy as np
 
 from rotacal._jit import use_numba
 from rotacal.errors import CaptureError
+from rotacal.signal._values import LARGEST, SMALLEST
 
 __all__ = [
     "RAIL_RATIO",
@@ -100,6 +101,7 @@ __all__ = [
     "check_clipping",
     "find_clipping",
     "find_quadrature_clipping",
+    "quadrature_rail_detectors",
 ]
 
 #: How many times more samples (or a longer stay) a rail holds than the honest reference.
@@ -522,6 +524,16 @@ class RailDetector:
             out.append((rail, self._verdict(side)))
         return out
 
+    def in_working_range(self) -> bool:
+        """Whether every sample fed was finite and the largest magnitude is 0 or within
+        [SMALLEST, LARGEST] (:mod:`rotacal.signal._values`): the column then passes
+        :func:`~rotacal.signal._values.check_magnitudes`, whose pass over it a caller holding
+        this detector can spare (False: run it, it names the fault)."""
+        if self._lead is not None or self._finite == 0 or self._finite != self._n:
+            return False
+        big = max(abs(self._hi.value), abs(self._lo.value))
+        return big == 0.0 or SMALLEST <= big <= LARGEST
+
     def _verdict(self, side: _Side) -> bool:
         if side.count < RAIL_RATIO * side.next_count:
             return False  # the extreme of a smooth peak or of a noise tail
@@ -649,10 +661,31 @@ def find_quadrature_clipping(
     a: Any, b: Any, names: tuple[str, str] = ("a", "b"), *, jit: bool | None = None
 ) -> tuple[Clipping | None, Clipping | None]:
     """:func:`find_clipping` of each channel of a quadrature pair with the other as its
-    companion, ``(of a, of b)``: the two detectors are fed piece by piece in turn, so each piece
-    of both channels is read from memory once for both (the same findings as two calls). A
-    long pair (:func:`rotacal._jit.use_numba`) is read once by a compiled pass
-    (:mod:`rotacal.signal._clipping_jit`) that leaves both detectors in the same state.
+    companion, ``(of a, of b)`` (the findings of two calls; see
+    :func:`quadrature_rail_detectors` for how the pair is read).
+
+    Parameters
+    ----------
+    a, b : array_like — the two channels, same rows (any unit).
+    names : (str, str) — their column names, for the messages.
+    jit : bool, optional — force the compiled pass (True) or the NumPy detectors (False);
+        default by size.
+    """
+    det_a, det_b = quadrature_rail_detectors(a, b, names, jit=jit)
+    return det_a.result(), det_b.result()
+
+
+def quadrature_rail_detectors(
+    a: Any, b: Any, names: tuple[str, str] = ("a", "b"), *, jit: bool | None = None
+) -> tuple[RailDetector, RailDetector]:
+    """The :class:`RailDetector` of each channel of a quadrature pair, fed the whole pair with
+    the other channel as its companion, ``(of a, of b)``: their ``result()`` is
+    :func:`find_quadrature_clipping`'s, and :meth:`RailDetector.in_working_range` tells a
+    caller whether the column's values need checking again.
+
+    The two detectors are fed piece by piece in turn, so each piece of both channels is read
+    from memory once for both; a long pair (:func:`rotacal._jit.use_numba`) is read once by a
+    compiled pass (:mod:`rotacal.signal._clipping_jit`) that leaves both in the same state.
 
     Parameters
     ----------
@@ -668,13 +701,13 @@ def find_quadrature_clipping(
         det_a.add(x, y)  # its one-line refusal
     det_a._with_companion = det_b._with_companion = True
     if x.size and use_numba(x.size, jit) and _compiled_pass(x, y, det_a, det_b):
-        return det_a.result(), det_b.result()
+        return det_a, det_b
     for s in range(0, x.size, _PIECE):
         xp, yp = x[s : s + _PIECE], y[s : s + _PIECE]
         rx, ry = _finite_range(xp), _finite_range(yp)
         det_a._add_piece(xp, yp, (rx, ry[:2]))
         det_b._add_piece(yp, xp, (ry, rx[:2]))
-    return det_a.result(), det_b.result()
+    return det_a, det_b
 
 
 def _compiled_pass(x: np.ndarray, y: np.ndarray, det_a: RailDetector, det_b: RailDetector) -> bool:
