@@ -25,6 +25,8 @@ _PART = 4096
 _MAX_STEP = 0.1
 #: Samples per block of the harmonics' vectorised loops (their arrays stay in the L1/L2 cache).
 _BLOCK = 1024
+#: All bits of a float64 but its sign.
+_MAGNITUDE = np.int64(0x7FFFFFFFFFFFFFFF)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -195,6 +197,17 @@ def _block_rss(
 
 
 @njit(cache=True, nogil=True)
+def _largest_magnitude_bits(bits: np.ndarray, size: int) -> int:  # pragma: no cover - compiled
+    """The bits of the largest |x| of the first ``size`` floats whose bits are ``bits`` (int64):
+    without their sign bit the bits of non-negative floats order as the floats do, and an
+    integer max is vectorised (a floating-point one is not). Compare with a bound's bits."""
+    worst = np.int64(0)
+    for q in range(size):
+        worst = max(worst, bits[q] & _MAGNITUDE)
+    return worst
+
+
+@njit(cache=True, nogil=True)
 def _grid_model(
     model: np.ndarray,
     slope: np.ndarray,
@@ -262,6 +275,8 @@ def residual_sums_grid(
             cq[h, q] = math.cos(ang)
             sq[h, q] = math.sin(ang)
     delta = np.empty(_BLOCK)
+    delta_bits = delta.view(np.int64)
+    tol_bits = np.array([tol]).view(np.int64)[0]
     tau = np.empty(_BLOCK)
     slope = np.empty(_BLOCK)
     model = np.empty((nm, _BLOCK))
@@ -270,14 +285,12 @@ def residual_sums_grid(
     for s in range(0, n, _BLOCK):
         size = min(n - s, _BLOCK)
         theta_s = omega * (t[s] - t_ref)
-        worst = 0.0
+        ts = t[s : s + size]
         for q in range(size):
-            tq = t[s + q] - t_ref
+            tq = ts[q] - t_ref
             tau[q] = tq
-            d = (omega * tq - theta_s) - q * wdt
-            delta[q] = d
-            worst = max(worst, abs(d))
-        if worst > tol:
+            delta[q] = (omega * tq - theta_s) - q * wdt
+        if _largest_magnitude_bits(delta_bits, size) > tol_bits:
             return out, False
         for j in range(nm):
             _grid_model(
