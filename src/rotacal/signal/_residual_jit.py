@@ -197,7 +197,7 @@ def _block_rss(
 
 
 @njit(cache=True, nogil=True)
-def _largest_magnitude_bits(bits: np.ndarray, size: int) -> int:  # pragma: no cover - compiled
+def _largest_magnitude_bits(bits: np.ndarray, size: int) -> np.int64:  # pragma: no cover
     """The bits of the largest |x| of the first ``size`` floats whose bits are ``bits`` (int64):
     without their sign bit the bits of non-negative floats order as the floats do, and an
     integer max is vectorised (a floating-point one is not). Compare with a bound's bits."""

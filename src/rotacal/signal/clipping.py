@@ -661,16 +661,8 @@ def find_quadrature_clipping(
     a: Any, b: Any, names: tuple[str, str] = ("a", "b"), *, jit: bool | None = None
 ) -> tuple[Clipping | None, Clipping | None]:
     """:func:`find_clipping` of each channel of a quadrature pair with the other as its
-    companion, ``(of a, of b)`` (the findings of two calls; see
-    :func:`quadrature_rail_detectors` for how the pair is read).
-
-    Parameters
-    ----------
-    a, b : array_like — the two channels, same rows (any unit).
-    names : (str, str) — their column names, for the messages.
-    jit : bool, optional — force the compiled pass (True) or the NumPy detectors (False);
-        default by size.
-    """
+    companion, ``(of a, of b)``: the findings of two calls. The arguments, and how the pair is
+    read, as :func:`quadrature_rail_detectors`."""
     det_a, det_b = quadrature_rail_detectors(a, b, names, jit=jit)
     return det_a.result(), det_b.result()
 
