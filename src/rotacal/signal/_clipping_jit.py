@@ -70,61 +70,13 @@ def _block_summary(
 
 
 @njit(cache=True, nogil=True)
-def _merge_side(
-    st: np.ndarray,
-    o: int,
-    top: float,
-    k_top: int,
-    first: int,
-    second: float,
-    k2: int,
-    c_lo: float,
-    c_hi: float,
-) -> float:  # pragma: no cover - compiled
-    """:meth:`rotacal.signal.clipping._Side.merge` on the side at column ``o`` of ``st``;
-    returns the run demoted from a passed extreme (0 when none)."""
-    demoted = 0.0
-    value = st[o]
-    if top > value:
-        if second > value:
-            st[o + 3] = second
-            st[o + 4] = k2
-        elif second == value:
-            st[o + 3] = second
-            st[o + 4] = k2 + st[o + 1]
-        else:
-            st[o + 3] = value
-            st[o + 4] = st[o + 1]
-        demoted = st[o + 7]
-        st[o + 7] = 0.0
-        st[o] = top
-        st[o + 1] = k_top
-        st[o + 2] = first
-        st[o + 5] = c_lo
-        st[o + 6] = c_hi
-    elif top == value:
-        st[o + 1] += k_top
-        st[o + 5] = min(st[o + 5], c_lo)
-        st[o + 6] = max(st[o + 6], c_hi)
-        if second > st[o + 3]:
-            st[o + 3] = second
-            st[o + 4] = k2
-        elif second == st[o + 3]:
-            st[o + 4] += k2
-    elif top > st[o + 3]:
-        st[o + 3] = top
-        st[o + 4] = k_top
-    elif top == st[o + 3]:
-        st[o + 4] += k_top
-    return demoted
-
-
-@njit(cache=True, nogil=True)
 def _side_block(
     x: np.ndarray, c: np.ndarray, s: int, e: int, sign: float, top: float, st: np.ndarray, o: int
 ) -> None:  # pragma: no cover - compiled
     """One block's extreme ``top`` (as sign·x) folded into the side at column ``o``: its count,
-    first row, the next value inward with its count and the companion's span at it."""
+    first row, the next value inward with its count and the companion's span at it, merged as
+    :meth:`rotacal.signal.clipping._Side.merge` merges a piece's (a run at an extreme that is
+    passed counts elsewhere)."""
     if top < st[o + 3]:
         return  # below both of the two largest values so far: nothing to add
     k = 0
@@ -146,21 +98,38 @@ def _side_block(
             k2 = 1
         elif w == second:
             k2 += 1
-    demoted = _merge_side(st, o, top, k, first, second, k2, c_lo, c_hi)
-    st[ELSEWHERE] = max(st[ELSEWHERE], demoted)
-
-
-@njit(cache=True, nogil=True)
-def _classify(st: np.ndarray, value: float, length: float) -> None:  # pragma: no cover
-    """A closed run of ``length`` ≥ 2 samples at ``value``: at an extreme, or elsewhere."""
-    at_hi = value == st[0]
-    at_lo = value == -st[SIDE_FIELDS]
-    if at_hi:
-        st[7] = max(st[7], length)
-    if at_lo:
-        st[SIDE_FIELDS + 7] = max(st[SIDE_FIELDS + 7], length)
-    if not (at_hi or at_lo):
-        st[ELSEWHERE] = max(st[ELSEWHERE], length)
+    value = st[o]
+    if top > value:
+        if second > value:
+            st[o + 3] = second
+            st[o + 4] = k2
+        elif second == value:
+            st[o + 3] = second
+            st[o + 4] = k2 + st[o + 1]
+        else:
+            st[o + 3] = value
+            st[o + 4] = st[o + 1]
+        st[ELSEWHERE] = max(st[ELSEWHERE], st[o + 7])
+        st[o + 7] = 0.0
+        st[o] = top
+        st[o + 1] = k
+        st[o + 2] = first
+        st[o + 5] = c_lo
+        st[o + 6] = c_hi
+    elif top == value:
+        st[o + 1] += k
+        st[o + 5] = min(st[o + 5], c_lo)
+        st[o + 6] = max(st[o + 6], c_hi)
+        if second > st[o + 3]:
+            st[o + 3] = second
+            st[o + 4] = k2
+        elif second == st[o + 3]:
+            st[o + 4] += k2
+    elif top > st[o + 3]:
+        st[o + 3] = top
+        st[o + 4] = k
+    elif top == st[o + 3]:
+        st[o + 4] += k
 
 
 @njit(cache=True, nogil=True)
@@ -169,11 +138,23 @@ def _runs_block(
 ) -> None:  # pragma: no cover - compiled
     """The block's runs of equal samples: a run closes (and counts when ≥ 2 long) where the value
     changes; the last one stays open for the next block."""
+
+    def classify(value: float, length: float) -> None:
+        # a closed run of ≥ 2 samples: at an extreme, or elsewhere
+        at_hi = value == st[0]
+        at_lo = value == -st[SIDE_FIELDS]
+        if at_hi:
+            st[7] = max(st[7], length)
+        if at_lo:
+            st[SIDE_FIELDS + 7] = max(st[SIDE_FIELDS + 7], length)
+        if not (at_hi or at_lo):
+            st[ELSEWHERE] = max(st[ELSEWHERE], length)
+
     value = st[OPEN_VALUE]
     length = st[OPEN_LEN]
     if not repeats and not (length > 0 and x[s] == value):
         if length > 1:  # no run inside the block nor across its start: only the open one closes
-            _classify(st, value, length)
+            classify(value, length)
         st[OPEN_VALUE] = x[e - 1]
         st[OPEN_LEN] = 1.0
         return
@@ -183,7 +164,7 @@ def _runs_block(
             length += 1
         else:
             if length > 1:
-                _classify(st, value, length)
+                classify(value, length)
             value = v
             length = 1.0
     st[OPEN_VALUE] = value
