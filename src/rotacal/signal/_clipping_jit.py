@@ -11,8 +11,9 @@ change an extreme's state (their extreme reaches the next value inward) or that 
 scanned sample by sample. The state it leaves is the one
 :class:`~rotacal.signal.clipping.RailDetector` reaches on the same column (the same extremes,
 counts, first rows, companion spans and runs: see that class for why they do not depend on where
-pieces are cut), so the verdicts and messages are the same. (One difference no verdict sees: a
-run of a single sample counts 0 here, 1 there; every rule reads a run as at least 1.)
+pieces are cut), so the verdicts and messages are the same. (Differences no verdict sees: a
+run of a single sample counts 0 here, 1 there, and every rule reads a run as at least 1; an
+extreme at zero where the block holds both −0 and +0 is +0 here, either one there.)
 Measured on 10⁷ samples of both channels: ~6.5 ms CPU against ~13.5 ms for the NumPy detectors.
 """
 
@@ -23,6 +24,7 @@ from numba import njit
 
 #: Samples per block (both channels' blocks stay in the L1 cache between the loops).
 _BLOCK = 2048
+#: All bits of a float64 but its sign (the order keys of :func:`_block_summary`).
 _MASK = np.int64(0x7FFFFFFFFFFFFFFF)
 #: Columns of a side's state: value, count, first row, next value, next count, companion's
 #: low and high over the rows at the extreme, longest run at it (values as sign·x).
