@@ -128,9 +128,9 @@ def budgets_cold(t: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 #: (label, module, attribute) of each stage of calibrate_encoder_motion, in the order it runs.
 STAGES = (
-    ("checks: signals a, b", "rotacal.encoder.quadrature", "_check_pair"),
+    ("checks: signals a, b and their rails", "rotacal.encoder.quadrature", "_check_pair_and_rails"),
     ("checks: time stamps", "rotacal.encoder.quadrature", "_check_time"),
-    ("checks: rails (clipping)", "rotacal.encoder.quadrature", "_clipping"),
+    ("checks: rails' verdict", "rotacal.encoder.quadrature", "_rails_verdict"),
     ("Heydemann ellipse fit", "rotacal.encoder.quadrature", "_fit"),
     ("fused pass", "rotacal.encoder._kernel", "phase_pass"),
     ("reversals: plan", "rotacal.encoder.quadrature", "plan_reversals"),

@@ -14,6 +14,7 @@ from rotacal.signal import (
     check_clipping,
     find_clipping,
     find_quadrature_clipping,
+    quadrature_rail_detectors,
 )
 from rotacal.signal.clipping import RAIL_RATIO
 
@@ -140,6 +141,49 @@ def test_a_quadrature_pair_gives_the_findings_of_two_calls():
         assert (want[0] is not None) == (gain > 1.0) and want[1] is None
 
 
+def _detector_state(det: RailDetector) -> tuple:
+    """Everything a detector's verdicts and messages read (a run of one sample counts as 1)."""
+    det._close_open_run()
+
+    def side(s):
+        return (s.value, s.count, s.first, s.next_value, s.next_count, s.comp_lo, s.comp_hi,
+                max(s.run, 1))  # fmt: skip
+
+    return (side(det._hi), side(det._lo), max(det._elsewhere_run, 1), det._comp_lo,
+            det._comp_hi, det._finite, det._mode_elsewhere())  # fmt: skip
+
+
+def test_the_compiled_pass_leaves_the_numpy_detectors_state():
+    """The Numba pass over a pair against the NumPy detectors fed piece by piece: the same
+    extremes, counts, first rows, companion spans, runs and subsample, so the same findings —
+    on a clipped quantised pair with runs, an unquantised one and a table at rest where a peaks
+    (more rows than one piece and one block); a NaN leaves the pair to the NumPy detectors."""
+    from rotacal.signal import clipping
+
+    n = 70_000
+    rng = np.random.default_rng(7)
+    phi = 30 * np.pi * np.clip(1.02 * np.sin(2 * np.pi * 4 * np.arange(n) / n), -1, 1)
+    pairs = [
+        (np.clip(_quantise(1.3 * np.cos(phi), 12), -1.0, 0.9), _quantise(np.sin(phi), 12)),
+        (np.cos(phi) + rng.normal(0, 1e-3, n), np.sin(phi) + rng.normal(0, 1e-3, n)),
+        (_quantise(np.cos(phi), 12), np.round(np.sin(phi) * 3)),  # long runs at every level
+    ]
+    for a, b in pairs:
+        numpy_dets = (RailDetector("a", n), RailDetector("b", n))
+        for det, x, c in ((numpy_dets[0], a, b), (numpy_dets[1], b, a)):
+            det.add(x, c)
+        jit_dets = (RailDetector("a", n), RailDetector("b", n))
+        assert clipping._compiled_pass(a, b, *jit_dets)
+        assert [_detector_state(d) for d in jit_dets] == [_detector_state(d) for d in numpy_dets]
+        assert find_quadrature_clipping(a, b, jit=True) == find_quadrature_clipping(a, b, jit=False)
+    assert find_quadrature_clipping(pairs[0][0], pairs[0][1], jit=True)[0] is not None
+    a, b = pairs[0]
+    a = a.copy()
+    a[66_666] = np.nan
+    assert not clipping._compiled_pass(a, b, RailDetector("a", n), RailDetector("b", n))
+    assert find_quadrature_clipping(a, b, jit=True) == find_quadrature_clipping(a, b, jit=False)
+
+
 def test_the_level_at_rest_is_not_a_rail():
     """A coarse output that rests at its minimum between one-way rotations."""
     t = np.arange(3000) / 100.0
@@ -187,3 +231,24 @@ def test_check_clipping_refuses_with_one_line_or_warns():
 def test_companion_of_another_length_is_refused():
     with pytest.raises(CaptureError, match="differ in length"):
         find_clipping(np.zeros(10), "a", companion=np.zeros(9))
+
+
+def test_in_working_range_is_check_magnitudes_verdict():
+    """A detector that saw the whole column tells whether check_magnitudes would pass it: the
+    same verdict on ordinary, non-finite, huge, tiny and all-zero columns (both paths)."""
+    from rotacal.signal._values import check_magnitudes
+
+    base = _sine(5_000)
+    columns = {"ordinary": base, "zeros": np.zeros(5_000), "tiny": 1e-120 * base}
+    for name, value in (("nan", np.nan), ("inf", np.inf), ("huge", 1e120)):
+        columns[name] = base.copy()
+        columns[name][1234] = value
+    for name, x in columns.items():
+        try:
+            check_magnitudes(name, x)
+            passes = True
+        except CaptureError:
+            passes = False
+        for jit in (False, True):
+            det_x, _ = quadrature_rail_detectors(x, base, jit=jit)
+            assert det_x.in_working_range() == passes, (name, jit)

@@ -123,7 +123,8 @@ def phase_pass(
     k_prev = previous_k
     for s in range(0, n, BLOCK):
         u, v = correct_quadrature(a[s : s + BLOCK], b[s : s + BLOCK], correction)
-        ph, state = unwrapped_phase(u, v, state=state)
+        # φ straight into its place in the output, scaled there once its counts are taken
+        ph, state = unwrapped_phase(u, v, state=state, out=phase[s : s + BLOCK])
         i, k, k0, k_prev = subinterval_transitions(ph, previous_k=k_prev, offset=offset + s)
         if s == 0:
             k_first = k0
@@ -131,10 +132,8 @@ def phase_pass(
         k_after.append(k)
         lo = min(lo, float(ph.min()))
         hi = max(hi, float(ph.max()))
-        if scale is None:
-            phase[s : s + ph.size] = ph
-        else:
-            np.multiply(ph, scale, out=phase[s : s + ph.size])
+        if scale is not None:
+            ph *= scale
     assert state is not None and k_prev is not None
     return ChunkPhase(
         phase, state, np.concatenate(idx), np.concatenate(k_after), k_first, k_prev, lo, hi

@@ -22,7 +22,12 @@ from rotacal.signal._values import (
     check_not_copies,
     in_working_range,
 )
-from rotacal.signal.clipping import check_clipping, find_quadrature_clipping
+from rotacal.signal.clipping import (
+    RailDetector,
+    check_clipping,
+    find_quadrature_clipping,
+    quadrature_rail_detectors,
+)
 
 FloatArray = NDArray[np.floating[Any]]
 _TWO_PI = 2.0 * math.pi
@@ -127,6 +132,35 @@ def _check_pair(a: ArrayLike, b: ArrayLike) -> tuple[FloatArray, FloatArray]:
     _check_finite(aa, "a")
     _check_finite(bb, "b")
     return aa, bb
+
+
+def _check_pair_and_rails(
+    a: ArrayLike, b: ArrayLike
+) -> tuple[FloatArray, FloatArray, tuple[RailDetector, RailDetector]]:
+    """:func:`_check_pair`'s checks and both channels' rail detectors in one reading of the
+    pair: a channel whose detector saw only finite values inside the working range needs no
+    pass of its own (:meth:`~rotacal.signal.clipping.RailDetector.in_working_range`; the
+    others get :func:`_check_finite`, which names the fault). The same refusals, in the same
+    order; judge the rails with :func:`_rails_verdict` when the other checks have passed."""
+    aa = _as_signal(a, "a")
+    bb = _as_signal(b, "b")
+    if aa.size != bb.size:
+        _check_pair(aa, bb)  # its one-line refusal
+    detectors = quadrature_rail_detectors(aa, bb)
+    for x, name, det in ((aa, "a", detectors[0]), (bb, "b", detectors[1])):
+        if not det.in_working_range():
+            _check_finite(x, name)
+    return aa, bb, detectors
+
+
+def _rails_verdict(
+    detectors: tuple[RailDetector, RailDetector], allow_clipped: bool
+) -> tuple[str, ...]:
+    """:func:`_clipping`'s refusal or warnings from the detectors of
+    :func:`_check_pair_and_rails`."""
+    return check_clipping(
+        {"a": detectors[0].result(), "b": detectors[1].result()}, allow_clipped=allow_clipped
+    )
 
 
 def _check_varies(a: FloatArray, b: FloatArray) -> None:
@@ -348,8 +382,8 @@ def fit_quadrature_correction(
     in interferometers, Appl. Opt. 20:3382–3384, eqs. (1)–(6).
     Feng et al. 2023, Sensors 23:4876, §3 (signal preprocessing before the subdivision).
     """
-    aa, bb = _check_pair(a, b)
-    clipped = _clipping(aa, bb, allow_clipped)
+    aa, bb, rails = _check_pair_and_rails(a, b)
+    clipped = _rails_verdict(rails, allow_clipped)
     return with_warnings(_fit(aa, bb, max_points), clipped)
 
 

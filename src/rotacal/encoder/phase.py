@@ -48,7 +48,7 @@ class PhaseState:
 
 
 def unwrapped_phase(
-    u: ArrayLike, v: ArrayLike, *, state: PhaseState | None = None
+    u: ArrayLike, v: ArrayLike, *, state: PhaseState | None = None, out: FloatArray | None = None
 ) -> tuple[FloatArray, PhaseState]:
     """Continuous signal phase φ from corrected quadrature signals, chunk by chunk if wanted.
 
@@ -63,6 +63,9 @@ def unwrapped_phase(
         Corrected signals ≈ (cos φ, sin φ) (dimensionless).
     state : PhaseState, optional
         State returned with the previous chunk; None for the first (or only) chunk.
+    out : ndarray, optional
+        Where to write φ (float64, the length of u): a caller's buffer or a slice of the
+        capture's phase array, instead of a fresh array (the same numbers).
 
     Returns
     -------
@@ -102,7 +105,7 @@ def unwrapped_phase(
     cycles = np.cumsum(steps, dtype=np.int64)
     if start_cycles:
         cycles += start_cycles
-    phase = cycles * _TWO_PI
+    phase = np.multiply(cycles, _TWO_PI, out=out)
     phase += wrapped
     return phase, PhaseState(float(wrapped[-1]), int(cycles[-1]))
 

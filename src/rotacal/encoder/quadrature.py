@@ -61,9 +61,11 @@ from rotacal.encoder.heydemann import (  # noqa: F401  (re-exported)
     QuadratureCorrection,
     _apply,
     _check_pair,
+    _check_pair_and_rails,
     _check_varies,
     _clipping,
     _fit,
+    _rails_verdict,
     _stride_for,
     check_correction,
     correct_quadrature,
@@ -271,9 +273,9 @@ def demodulate(
     Heydemann 1981, Appl. Opt. 20:3382 (signal correction).
     """
     _check_lines(lines)
-    aa, bb = _check_pair(a, b)
+    aa, bb, rails = _check_pair_and_rails(a, b)
     tt = _check_time(t, aa.size)
-    clipped = _clipping(aa, bb, allow_clipped)
+    clipped = _rails_verdict(rails, allow_clipped)
     if correction is None:
         correction = _fit(aa, bb, max_points)
     else:

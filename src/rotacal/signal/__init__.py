@@ -24,6 +24,7 @@ if TYPE_CHECKING:
         check_clipping,
         find_clipping,
         find_quadrature_clipping,
+        quadrature_rail_detectors,
     )
     from rotacal.signal.counter import (
         CounterUnwrapper,
@@ -91,6 +92,7 @@ __all__ = [
     "longest_cluster",
     "noise_terms",
     "overlapping_adev",
+    "quadrature_rail_detectors",
     "snr_db",
     "stability_deviation",
     "thd_percent",

@@ -25,6 +25,8 @@ _PART = 4096
 _MAX_STEP = 0.1
 #: Samples per block of the harmonics' vectorised loops (their arrays stay in the L1/L2 cache).
 _BLOCK = 1024
+#: All bits of a float64 but its sign.
+_MAGNITUDE = np.int64(0x7FFFFFFFFFFFFFFF)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -168,21 +170,41 @@ def _block_rss(
     y: np.ndarray, model: np.ndarray, tau: np.ndarray
 ) -> tuple:  # pragma: no cover - compiled
     """``Σ (y − model)²`` and ``Σ (y − model)·τ`` over ``y.size`` samples, each in four
-    interleaved partial sums (a vectorised loop; no less accurate than one running sum)."""
-    acc = np.zeros(4)
-    acc_t = np.zeros(4)
+    interleaved partial sums (a vectorised loop; no less accurate than one running sum), kept
+    in registers."""
+    r0 = r1 = r2 = r3 = 0.0
+    t0 = t1 = t2 = t3 = 0.0
     size = y.size
     full = size - size % 4
     for q in range(0, full, 4):
-        for lane in range(4):
-            r = y[q + lane] - model[q + lane]
-            acc[lane] += r * r
-            acc_t[lane] += r * tau[q + lane]
+        d0 = y[q] - model[q]
+        d1 = y[q + 1] - model[q + 1]
+        d2 = y[q + 2] - model[q + 2]
+        d3 = y[q + 3] - model[q + 3]
+        r0 += d0 * d0
+        r1 += d1 * d1
+        r2 += d2 * d2
+        r3 += d3 * d3
+        t0 += d0 * tau[q]
+        t1 += d1 * tau[q + 1]
+        t2 += d2 * tau[q + 2]
+        t3 += d3 * tau[q + 3]
     for q in range(full, size):
-        r = y[q] - model[q]
-        acc[0] += r * r
-        acc_t[0] += r * tau[q]
-    return (acc[0] + acc[1]) + (acc[2] + acc[3]), (acc_t[0] + acc_t[1]) + (acc_t[2] + acc_t[3])
+        d0 = y[q] - model[q]
+        r0 += d0 * d0
+        t0 += d0 * tau[q]
+    return (r0 + r1) + (r2 + r3), (t0 + t1) + (t2 + t3)
+
+
+@njit(cache=True, nogil=True)
+def _largest_magnitude_bits(bits: np.ndarray, size: int) -> np.int64:  # pragma: no cover
+    """The bits of the largest |x| of the first ``size`` floats whose bits are ``bits`` (int64):
+    without their sign bit the bits of non-negative floats order as the floats do, and an
+    integer max is vectorised (a floating-point one is not). Compare with a bound's bits."""
+    worst = np.int64(0)
+    for q in range(size):
+        worst = max(worst, bits[q] & _MAGNITUDE)
+    return worst
 
 
 @njit(cache=True, nogil=True)
@@ -253,6 +275,8 @@ def residual_sums_grid(
             cq[h, q] = math.cos(ang)
             sq[h, q] = math.sin(ang)
     delta = np.empty(_BLOCK)
+    delta_bits = delta.view(np.int64)
+    tol_bits = np.array([tol]).view(np.int64)[0]
     tau = np.empty(_BLOCK)
     slope = np.empty(_BLOCK)
     model = np.empty((nm, _BLOCK))
@@ -261,14 +285,12 @@ def residual_sums_grid(
     for s in range(0, n, _BLOCK):
         size = min(n - s, _BLOCK)
         theta_s = omega * (t[s] - t_ref)
-        worst = 0.0
+        ts = t[s : s + size]
         for q in range(size):
-            tq = t[s + q] - t_ref
+            tq = ts[q] - t_ref
             tau[q] = tq
-            d = (omega * tq - theta_s) - q * wdt
-            delta[q] = d
-            worst = max(worst, abs(d))
-        if worst > tol:
+            delta[q] = (omega * tq - theta_s) - q * wdt
+        if _largest_magnitude_bits(delta_bits, size) > tol_bits:
             return out, False
         for j in range(nm):
             _grid_model(

@@ -88,7 +88,9 @@ from typing import Any
 
 import numpy as np
 
+from rotacal._jit import use_numba
 from rotacal.errors import CaptureError
+from rotacal.signal._values import LARGEST, SMALLEST
 
 __all__ = [
     "RAIL_RATIO",
@@ -99,6 +101,7 @@ __all__ = [
     "check_clipping",
     "find_clipping",
     "find_quadrature_clipping",
+    "quadrature_rail_detectors",
 ]
 
 #: How many times more samples (or a longer stay) a rail holds than the honest reference.
@@ -521,6 +524,16 @@ class RailDetector:
             out.append((rail, self._verdict(side)))
         return out
 
+    def in_working_range(self) -> bool:
+        """Whether every sample fed was finite and the largest magnitude is 0 or within
+        [SMALLEST, LARGEST] (:mod:`rotacal.signal._values`): the column then passes
+        :func:`~rotacal.signal._values.check_magnitudes`, whose pass over it a caller holding
+        this detector can spare (False: run it, it names the fault)."""
+        if self._lead is not None or self._finite == 0 or self._finite != self._n:
+            return False
+        big = max(abs(self._hi.value), abs(self._lo.value))
+        return big == 0.0 or SMALLEST <= big <= LARGEST
+
     def _verdict(self, side: _Side) -> bool:
         if side.count < RAIL_RATIO * side.next_count:
             return False  # the extreme of a smooth peak or of a noise tail
@@ -645,16 +658,33 @@ def find_clipping(
 
 
 def find_quadrature_clipping(
-    a: Any, b: Any, names: tuple[str, str] = ("a", "b")
+    a: Any, b: Any, names: tuple[str, str] = ("a", "b"), *, jit: bool | None = None
 ) -> tuple[Clipping | None, Clipping | None]:
     """:func:`find_clipping` of each channel of a quadrature pair with the other as its
-    companion, ``(of a, of b)``: the two detectors are fed piece by piece in turn, so each piece
-    of both channels is read from memory once for both (the same findings as two calls).
+    companion, ``(of a, of b)``: the findings of two calls. The arguments, and how the pair is
+    read, as :func:`quadrature_rail_detectors`."""
+    det_a, det_b = quadrature_rail_detectors(a, b, names, jit=jit)
+    return det_a.result(), det_b.result()
+
+
+def quadrature_rail_detectors(
+    a: Any, b: Any, names: tuple[str, str] = ("a", "b"), *, jit: bool | None = None
+) -> tuple[RailDetector, RailDetector]:
+    """The :class:`RailDetector` of each channel of a quadrature pair, fed the whole pair with
+    the other channel as its companion, ``(of a, of b)``: their ``result()`` is
+    :func:`find_quadrature_clipping`'s, and :meth:`RailDetector.in_working_range` tells a
+    caller whether the column's values need checking again.
+
+    The two detectors are fed piece by piece in turn, so each piece of both channels is read
+    from memory once for both; a long pair (:func:`rotacal._jit.use_numba`) is read once by a
+    compiled pass (:mod:`rotacal.signal._clipping_jit`) that leaves both in the same state.
 
     Parameters
     ----------
     a, b : array_like — the two channels, same rows (any unit).
     names : (str, str) — their column names, for the messages.
+    jit : bool, optional — force the compiled pass (True) or the NumPy detectors (False);
+        default by size.
     """
     x = np.asarray(a, dtype=np.float64).reshape(-1)
     y = np.asarray(b, dtype=np.float64).reshape(-1)
@@ -662,12 +692,43 @@ def find_quadrature_clipping(
     if x.size != y.size:
         det_a.add(x, y)  # its one-line refusal
     det_a._with_companion = det_b._with_companion = True
+    if x.size and use_numba(x.size, jit) and _compiled_pass(x, y, det_a, det_b):
+        return det_a, det_b
     for s in range(0, x.size, _PIECE):
         xp, yp = x[s : s + _PIECE], y[s : s + _PIECE]
         rx, ry = _finite_range(xp), _finite_range(yp)
         det_a._add_piece(xp, yp, (rx, ry[:2]))
         det_b._add_piece(yp, xp, (ry, rx[:2]))
-    return det_a.result(), det_b.result()
+    return det_a, det_b
+
+
+def _compiled_pass(x: np.ndarray, y: np.ndarray, det_a: RailDetector, det_b: RailDetector) -> bool:
+    """Both detectors' state from one compiled pass over the pair; False (nothing set) when a
+    value is not finite, which the NumPy detectors then judge."""
+    from rotacal.signal import _clipping_jit as k
+
+    st = np.zeros((2, k.STATE_FIELDS))
+    for o in (0, k.SIDE_FIELDS):  # each side starts as _Side does
+        st[:, o] = st[:, o + 3] = -math.inf
+        st[:, o + 2] = -1.0
+        st[:, o + 5], st[:, o + 6] = math.inf, -math.inf
+    ranges = np.array([math.inf, -math.inf, math.inf, -math.inf])
+    if not k.quadrature_rails(x, y, st, ranges):
+        return False
+    for det, row, comp in ((det_a, st[0], ranges[2:]), (det_b, st[1], ranges[:2])):
+        det._n = det._finite = x.size
+        for side, o in ((det._hi, 0), (det._lo, k.SIDE_FIELDS)):
+            side.value, side.next_value = float(row[o]), float(row[o + 3])
+            side.count, side.first = int(row[o + 1]), int(row[o + 2])
+            side.next_count, side.run = int(row[o + 4]), int(row[o + 7])
+            side.comp_lo, side.comp_hi = float(row[o + 5]), float(row[o + 6])
+        det._elsewhere_run = int(row[k.ELSEWHERE])
+        det._open_value, det._open_len = float(row[k.OPEN_VALUE]), int(row[k.OPEN_LEN])
+        det._comp_lo, det._comp_hi = float(comp[0]), float(comp[1])
+        # the subsample of the most frequent value: the rows at the final stride (a view)
+        det._kept = [(x if det is det_a else y)[:: det._stride]]
+        det._kept_n = det._kept[0].size
+    return True
 
 
 def check_clipping(
