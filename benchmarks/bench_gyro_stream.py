@@ -77,12 +77,13 @@ def child(mode: str, path: str) -> None:
     print(json.dumps({"wall_s": time.perf_counter() - t0, **extra}))
 
 
-def run_child(mode: str, path: Path, timeout: float) -> dict:
-    """The case in a fresh process, reaped with ``os.wait4``: its peak RSS is that process's and
-    its waited-for descendants' largest (Linux), i.e. for the command the CLI process's."""
+def run_child(mode: str, path: Path, timeout: float, script: str = __file__) -> dict:
+    """The case in a fresh process (``script --child MODE PATH``), reaped with ``os.wait4``: its
+    peak RSS is that process's and its waited-for descendants' largest (Linux), i.e. for the
+    command the CLI process's."""
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
         proc = subprocess.Popen(
-            [sys.executable, __file__, "--child", mode, str(path)], stdout=out, stderr=err
+            [sys.executable, script, "--child", mode, str(path)], stdout=out, stderr=err
         )
         end = time.monotonic() + timeout
         while True:

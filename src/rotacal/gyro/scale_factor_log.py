@@ -177,6 +177,7 @@ def calibrate_scale_factor_log_chunked(
     window_s: float | None = None,
     min_plateau_s: float | None = None,
     progress: Callable[[int], None] | None = None,
+    fit_progress: Callable[[int], None] | None = None,
     **options: Any,
 ) -> LogScaleFactorResult:
     """:func:`calibrate_scale_factor_log` on a log read in chunks: the plateaus found in passes
@@ -196,8 +197,9 @@ def calibrate_scale_factor_log_chunked(
         Whether the log has ``temperature_c``.
     settle_s, window_s, min_plateau_s : float or None
         Of :func:`rotacal.gyro.plateaus.find_plateaus` (s).
-    progress : callable, optional
-        Called after each chunk with the rows read so far, summed over the passes.
+    progress, fit_progress : callable, optional
+        Called after each chunk with the rows read so far, summed over the passes of the
+        detection, and of the fit (the plateaus' rows, twice).
     **options
         The keywords of :func:`rotacal.gyro.calibrate_scale_factor`.
 
@@ -212,7 +214,7 @@ def calibrate_scale_factor_log_chunked(
         progress=progress,
         **_search_options(settle_s, window_s, min_plateau_s, options),
     )
-    fit = calibrate_scale_factor_chunked(_slices(search, chunks), **options)
+    fit = calibrate_scale_factor_chunked(_slices(search, chunks), progress=fit_progress, **options)
     return _log_result(search, fit)
 
 
