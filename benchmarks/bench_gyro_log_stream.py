@@ -10,7 +10,7 @@ RSS (``os.wait4``'s ``ru_maxrss``) is that case's alone:
 - **baseline**: read the three columns in chunks of 2·10⁶ rows
   (``rotacal.io.iter_capture_chunks``, pages handed back as the command does) and sum them;
 - **command**: ``python -m rotacal gyro scale-factor LOG --json OUT`` as a user runs it (it
-  streams by itself above 5·10⁶ rows); at 10⁷ rows ``--in-memory`` too, and the two JSONs are
+  streams by itself above 10⁶ rows); at 10⁷ rows ``--in-memory`` too, and the two JSONs are
   compared (largest relative difference of every number; must be ≤ 1e-9).
 
 It prints seconds, M rows/s, peak RSS (MB) and the ratio command/baseline of the same N, best of

@@ -25,8 +25,9 @@ from ._common import _status
 F = TypeVar("F", bound=Callable[..., Any])
 
 #: Logs longer than this stream: the in-memory detection holds the columns and a few arrays of
-#: the log's length (~80 bytes a row), the streamed one a chunk (benchmarks/bench_gyro_log_stream.py).
-LOG_IN_MEMORY_MAX_ROWS = 5_000_000
+#: the log's length (~150 bytes a row), the streamed one a chunk, and is the faster from 10⁶
+#: rows on (benchmarks/bench_gyro_log_stream.py: 3.5 s against 12.5 s at 10⁷).
+LOG_IN_MEMORY_MAX_ROWS = 1_000_000
 #: Rows per chunk of the streamed log (4 columns of float64: 64 MB).
 _CHUNK_ROWS = 2_000_000
 #: Passes over the log of the streamed analysis (for its progress bar): six of the detection,

@@ -722,3 +722,4 @@ def demo(out: str, overwrite: bool) -> None:
 
 
 from . import simulate_frequency  # noqa: E402,F401  (registers `simulate gyro-sine`)
+from . import simulate_triad_log  # noqa: E402,F401  (registers `simulate gyro-triad-log`)
