@@ -671,7 +671,7 @@ def _judge(
             rows.append((start, b))
             if measured.temp is not None:
                 total, finite = measured.temp[i]
-                temps.append(total / finite if finite else math.nan)
+                temps.append(float(total / finite) if finite else math.nan)
             continue
         rejected.append(Plateau(*values, reason=why))
     warnings = tuple(
