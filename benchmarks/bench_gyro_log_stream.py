@@ -22,13 +22,10 @@ It prints seconds, M rows/s, peak RSS (MB) and the ratio command/baseline of the
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
-import shutil
 import subprocess
 import sys
-import tempfile
 import time
 import zipfile
 from pathlib import Path
@@ -36,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_gyro_stream import run_child
+from bench_gyro_stream import measure_logs
 
 PIECE = 4_000_000
 FS_HZ = 1000.0
@@ -121,63 +118,31 @@ def _largest_difference(a, b, key: str = "") -> float:
     return 0.0 if a == b else float("inf")
 
 
+def _show(n: int, rows: dict) -> None:
+    base = rows["baseline"]
+    for m, r in rows.items():
+        label = {"command": "command (auto)", "in-memory": "command --in-memory"}
+        print(
+            f"  {label.get(m, m):<20} {r['wall_s']:7.1f} s wall {r['cpu_s']:7.1f} s CPU"
+            f"  {n / r['wall_s'] / 1e6:6.1f} M rows/s  peak RSS "
+            f"{r['peak_rss_mb']:6.0f} MB  ratio to baseline wall "
+            f"{r['wall_s'] / base['wall_s']:5.2f} CPU {r['cpu_s'] / base['cpu_s']:5.2f}",
+            flush=True,
+        )
+    if "in-memory" in rows:
+        d = _largest_difference(rows["command"]["json"], rows["in-memory"]["json"])
+        print(f"  streamed vs in-memory: largest relative difference {d:.2e}")
+    sf = rows["command"]["json"]
+    print(
+        f"  S = {sf['scale_factor']:.9g} V/(°/s), plateaus used "
+        f"{len(sf['plateaus'])}, settle {sf['settle_s']} s"
+    )
+
+
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--rows", type=float, nargs="+", default=[1e7, 1e8, 1e9])
-    ap.add_argument("--dir", default="/tmp", help="where the logs are written")
-    ap.add_argument("--timeout", type=float, default=7200.0, help="per case (s)")
-    ap.add_argument("--repeat", type=int, default=2, help="runs per case below 1e9 rows (best)")
-    ap.add_argument("--child", nargs=2, metavar=("MODE", "PATH"), help=argparse.SUPPRESS)
-    args = ap.parse_args()
-    if args.child:
-        child(*args.child)
-        return
-    work = Path(tempfile.mkdtemp(prefix="bench-gyrolog-", dir=args.dir))
-    try:
-        for n in (int(x) for x in args.rows):
-            need = 24 * n * 1.02
-            free = shutil.disk_usage(args.dir).free
-            if free < need:
-                print(f"N = {n:.0e}: skipped, {free / 1e9:.1f} GB free, {need / 1e9:.1f} GB needed")
-                continue
-            path = work / f"log_{n}.npz"
-            try:
-                t0 = time.perf_counter()
-                write_log(path, n)
-                print(
-                    f"N = {n:.0e}: wrote {path.stat().st_size / 1e9:.2f} GB in "
-                    f"{time.perf_counter() - t0:.0f} s",
-                    flush=True,
-                )
-                modes = ["baseline", "command"] + (["in-memory"] if n <= 1e7 else [])
-                rows: dict[str, dict] = {}
-                for _ in range(args.repeat if n < 1e9 else 1):
-                    for m in modes:
-                        r = run_child(m, path, args.timeout, script=__file__)
-                        if m not in rows or r["wall_s"] < rows[m]["wall_s"]:
-                            rows[m] = r
-                base = rows["baseline"]
-                for m, r in rows.items():
-                    label = {"command": "command (auto)", "in-memory": "command --in-memory"}
-                    print(
-                        f"  {label.get(m, m):<20} {r['wall_s']:7.1f} s wall {r['cpu_s']:7.1f} s CPU"
-                        f"  {n / r['wall_s'] / 1e6:6.1f} M rows/s  peak RSS "
-                        f"{r['peak_rss_mb']:6.0f} MB  ratio to baseline wall "
-                        f"{r['wall_s'] / base['wall_s']:5.2f} CPU {r['cpu_s'] / base['cpu_s']:5.2f}",
-                        flush=True,
-                    )
-                if "in-memory" in rows:
-                    d = _largest_difference(rows["command"]["json"], rows["in-memory"]["json"])
-                    print(f"  streamed vs in-memory: largest relative difference {d:.2e}")
-                sf = rows["command"]["json"]
-                print(
-                    f"  S = {sf['scale_factor']:.9g} V/(°/s), plateaus used "
-                    f"{len(sf['plateaus'])}, settle {sf['settle_s']} s"
-                )
-            finally:
-                path.unlink(missing_ok=True)
-    finally:
-        shutil.rmtree(work, ignore_errors=True)
+    measure_logs(
+        __doc__ or "", child, write_log, 24, 1e7, _show, __file__, repeat=2, timeout=7200.0
+    )
 
 
 if __name__ == "__main__":

@@ -37,15 +37,27 @@ _PASSES = 7
 _KEYS = ("plateaus", "settle_s", "plateau_window_s", "min_plateau_s")
 
 
+def option_group(name: str, keys: Sequence[str], options: Sequence[Any]) -> Callable[[F], F]:
+    """A decorator adding the click ``options`` whose parameters are ``keys``; the command
+    receives them as one dict, its keyword ``name``."""
+
+    def decorate(func: F) -> F:
+        @functools.wraps(func)
+        def command(*args: Any, **kwargs: Any) -> Any:
+            kwargs[name] = {k: kwargs.pop(k) for k in keys}
+            return func(*args, **kwargs)
+
+        wrapped: Any = command
+        for option in reversed(options):
+            wrapped = option(wrapped)
+        return wrapped
+
+    return decorate
+
+
 def log_options(func: F) -> F:
     """Add ``--plateaus/--no-plateaus``, ``--settle-s``, ``--plateau-window-s`` and
     ``--min-plateau-s``; the command receives them as one dict ``log_opts``."""
-
-    @functools.wraps(func)
-    def command(*args: Any, **kwargs: Any) -> Any:
-        kwargs["log_opts"] = {k: kwargs.pop(k) for k in _KEYS}
-        return func(*args, **kwargs)
-
     options = [
         click.option(
             "--plateaus/--no-plateaus",
@@ -73,10 +85,7 @@ def log_options(func: F) -> F:
             help="Continuous log: shortest plateau used after settling (s) [default: 5 windows].",
         ),
     ]
-    wrapped: Any = command
-    for option in reversed(options):
-        wrapped = option(wrapped)
-    return wrapped
+    return option_group("log_opts", _KEYS, options)(func)
 
 
 def continuous_log(

@@ -9,7 +9,6 @@ before.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
@@ -17,17 +16,14 @@ import click
 
 from rotacal.errors import ConfigError
 
+from ._gyro_log import option_group
+
 F = TypeVar("F", bound=Callable[..., Any])
 
 
 def runs_options(func: F) -> F:
     """Add ``--runs``, ``--settle-s`` and ``--all-rows``; the command receives them as one dict
     ``runs_opts``."""
-
-    @functools.wraps(func)
-    def command(*args: Any, **kwargs: Any) -> Any:
-        kwargs["runs_opts"] = {k: kwargs.pop(k) for k in ("runs", "settle_s", "all_rows")}
-        return func(*args, **kwargs)
 
     options = [
         click.option(
@@ -49,10 +45,7 @@ def runs_options(func: F) -> F:
             "keeps the orientation-dependent terms; for comparison only).",
         ),
     ]
-    wrapped: Any = command
-    for option in reversed(options):
-        wrapped = option(wrapped)
-    return wrapped
+    return option_group("runs_opts", ("runs", "settle_s", "all_rows"), options)(func)
 
 
 def triad_from_log(

@@ -721,5 +721,5 @@ def demo(out: str, overwrite: bool) -> None:
         _wrote(path)
 
 
-from . import simulate_frequency  # noqa: E402,F401  (registers `simulate gyro-sine`)
-from . import simulate_triad_log  # noqa: E402,F401  (registers `simulate gyro-triad-log`)
+# each registers its subcommand on `simulate` as it is imported: gyro-sine, gyro-triad-log
+from . import simulate_frequency, simulate_triad_log  # noqa: E402,F401

@@ -53,6 +53,8 @@ from rotacal.gyro.plateaus import (
     _settling_of,
 )
 from rotacal.gyro.scale_factor_points import DEFAULT_RATE_TOLERANCE_DEG_S
+from rotacal.gyro.scale_factor_stream import _CHANGED
+from rotacal.gyro.scale_factor_stream import _Reader as _Passes
 
 __all__ = ["LogChunks", "find_plateaus_chunked", "log_chunks"]
 
@@ -63,54 +65,6 @@ LogChunks = Callable[[Sequence[str]], Iterator[Mapping[str, np.ndarray]]]
 
 #: Rows kept for the log's figure (evenly strided).
 FIGURE_ROWS = 20_000
-_CHANGED = (
-    "the capture changed between the passes over it (a different number of rows): analyse a file "
-    "that is not being written to"
-)
-
-
-class _Passes:
-    """Fresh passes over a chunk source: (first row, columns as float64) of each chunk, the row
-    count checked against the first pass, progress reported in rows read."""
-
-    def __init__(self, chunks: LogChunks, progress: Callable[[int], None] | None) -> None:
-        if not callable(chunks):
-            raise ConfigError(
-                "chunks must be a callable that starts a fresh pass over the log each time it is "
-                "called with the columns it needs (e.g. log_chunks(time, rate, output)), not a "
-                f"{type(chunks).__name__}"
-            )
-        self.chunks, self.progress = chunks, progress
-        self.rows: int | None = None
-        self.done = 0
-
-    def run(self, names: Sequence[str]) -> Iterator[tuple[int, list[np.ndarray]]]:
-        offset = 0
-        it = iter(self.chunks(tuple(names)))
-        try:
-            for raw in it:
-                cols = [np.asarray(raw[c], dtype=np.float64).reshape(-1) for c in names]
-                sizes = [c.size for c in cols]
-                if len(set(sizes)) > 1:
-                    listed = ", ".join(f"{c} ({s})" for c, s in zip(names, sizes, strict=True))
-                    raise CaptureError(
-                        f"columns {listed} differ in length in the chunk from row {offset}: a "
-                        "continuous log needs one row per sample in each"
-                    )
-                if sizes[0] == 0:
-                    continue
-                yield offset, cols
-                offset += sizes[0]
-                self.done += sizes[0]
-                if self.progress is not None:
-                    self.progress(self.done)
-        finally:
-            close = getattr(it, "close", None)
-            if close is not None:
-                close()
-        if self.rows is not None and offset != self.rows:
-            raise CaptureError(_CHANGED)
-        self.rows = offset
 
 
 def log_chunks(*columns: np.ndarray | None, chunk_rows: int | None = None) -> LogChunks:
@@ -549,7 +503,7 @@ def find_plateaus_chunked(
     ----------
     Basseville & Nikiforov (1993), §2.1; Chan, Golub & LeVeque (1983), eq. (2.1).
     """
-    passes = _Passes(chunks, progress)
+    passes = _Passes(chunks, progress, example="log_chunks(time, rate, output)")
     if rows is None:
         for _ in passes.run(("rate_deg_s",)):
             pass

@@ -539,13 +539,20 @@ def _quantum_samples_again(reader: _Reader, sums: _PointSums) -> list[tuple[np.n
 # the method
 # --------------------------------------------------------------------------------------------
 class _Reader:
-    """Fresh passes over the chunk source, each checked for the same row count."""
+    """Fresh passes over the chunk source, each checked for the same row count (also the
+    continuous log's, :mod:`rotacal.gyro.plateaus_stream`; ``example`` names the function that
+    makes a chunk source, for the message when ``chunks`` is not callable)."""
 
-    def __init__(self, chunks: ScaleFactorChunks, progress: Callable[[int], None] | None) -> None:
+    def __init__(
+        self,
+        chunks: Callable[[Sequence[str]], Iterator[Mapping[str, np.ndarray]]],
+        progress: Callable[[int], None] | None,
+        example: str = "scale_factor_chunks(rate, output)",
+    ) -> None:
         if not callable(chunks):
             raise ConfigError(
                 "chunks must be a callable that starts a fresh pass over the capture each time it "
-                "is called with the columns it needs (e.g. scale_factor_chunks(rate, output)), not "
+                f"is called with the columns it needs (e.g. {example}), not "
                 f"a {type(chunks).__name__}"
             )
         self.chunks, self.progress = chunks, progress
@@ -559,11 +566,12 @@ class _Reader:
         try:
             for raw in it:
                 cols = [np.asarray(raw[c], dtype=np.float64).reshape(-1) for c in columns]
-                if any(c.size != cols[0].size for c in cols):
+                other = next((j for j, c in enumerate(cols) if c.size != cols[0].size), None)
+                if other is not None:
                     raise CaptureError(
-                        f"column rate_deg_s has {cols[0].size} rows but column output has "
-                        f"{cols[-1].size} in the chunk from row {offset}: they must have one row "
-                        "per sample."
+                        f"column {columns[0]} has {cols[0].size} rows but column "
+                        f"{columns[other]} has {cols[other].size} in the chunk from row {offset}: "
+                        "they must have one row per sample."
                     )
                 if cols[0].size == 0:
                     continue

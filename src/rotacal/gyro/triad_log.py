@@ -169,8 +169,8 @@ def split_runs(
     starts = np.flatnonzero(np.r_[True, ~same])
     ends = np.r_[starts[1:], t.size]
     runs = []
-    for a0, b in zip(starts, ends, strict=True):
-        a0, b = int(a0), int(b)
+    for first, stop in zip(starts.tolist(), ends.tolist(), strict=True):
+        a0, b = int(first), int(stop)
         if not moving[a0]:
             continue
         a = int(np.searchsorted(t, t[a0] + settle - 1e-12 * max(abs(t[a0]), 1.0)))
