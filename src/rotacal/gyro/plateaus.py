@@ -25,8 +25,9 @@ errors (of the larger of σ and the runs' own standard deviations) are one plate
 outlier sample cannot split a plateau, nor can a plateau noisier than the rest, which is then
 judged whole). A run shorter than the window is no plateau (the crest of a ramp or a sine).
 
-The DUT's settling (the default ``settle_s``) is read from the output: within each plateau the
-output is averaged in blocks of h/10 samples (short enough to follow a ringing DUT); the band is 5
+The DUT's settling (the default ``settle_s``) is read from the output: within each plateau (its
+first 2·10⁶ blocks at most) the output is averaged in blocks of h/10 samples (short enough to
+follow a ringing DUT); the band is 5
 robust standard deviations (1.4826·MAD) of the block means of the plateau's second half about
 their median; the output enters the band after the last pair of consecutive first-half blocks
 outside it (a transient lasts, an outlier sample does not). Inside the band the transient still

@@ -17,14 +17,15 @@ C. ``rate_deg_s``: each run's edges moved to where the rate enters its band (the
    refined run and the sums of the rows between them (Chan, Golub & LeVeque 1983, eq. 2.1), from
    which the merge of neighbouring runs is decided without the rows.
 D. ``output`` (when it is given): the block means of the DUT's settling (blocks of h/10 rows,
-   the open block carried to the next chunk), a strided copy for the figure.
+   the open block carried to the next chunk, a plateau's settling read and its blocks dropped as
+   soon as they are all in), a strided copy for the figure.
 E. ``time_s``, ``rate_deg_s`` [, ``temperature_c``]: each plateau's span after settling: times of
    its ends, mean, M₂, the means of its first and last thirds (its drift), its mean temperature.
 
 The statistics of a span come from per-chunk two-pass means and M₂ merged pairwise, so a chunk
 boundary moves them by rounding only (≤ 1e-12 relative; over one chunk they are NumPy's own
 ``mean``/``std`` of the span). Memory: the chunk, 2h rows, a few numbers per run, the settling's
-block means (rows/(h/10)) and 2·10⁶ differences.
+block means of one plateau (at most ``SETTLE_BLOCKS``) and 2·10⁶ differences.
 
 References
 ----------
@@ -65,6 +66,9 @@ LogChunks = Callable[[Sequence[str]], Iterator[Mapping[str, np.ndarray]]]
 
 #: Rows kept for the log's figure (evenly strided).
 FIGURE_ROWS = 20_000
+#: Blocks of a plateau's start that its settling is read from (8 bytes each): 2·10⁸ rows at
+#: 1 kHz (55 h), 2·10⁷ at 100 Hz; a DUT settles in seconds, and memory stays bounded.
+SETTLE_BLOCKS = 2_000_000
 
 
 def log_chunks(*columns: np.ndarray | None, chunk_rows: int | None = None) -> LogChunks:
@@ -374,13 +378,19 @@ def merge_runs(runs: np.ndarray, passes: _Passes, z: float, sigma: float, tol: f
 # --------------------------------------------------------------------------------------------
 # pass D: the DUT's settling read from the output
 # --------------------------------------------------------------------------------------------
-def settling_blocks(
+def settling_rows(
     passes: _Passes, runs: np.ndarray, m: int, fig: int
-) -> tuple[list[np.ndarray], np.ndarray]:
-    """The means of consecutive blocks of ``m`` output rows from each run's start (whole blocks
-    inside the run; the open block carried to the next chunk), and every ``fig``-th output row."""
-    blocks: list[list[np.ndarray]] = [[] for _ in runs]
-    carry = [np.empty(0) for _ in runs]
+) -> tuple[list[int], np.ndarray]:
+    """The DUT's settling (rows) in each run, from the means of consecutive blocks of ``m``
+    output rows from the run's start (whole blocks, at most ``SETTLE_BLOCKS`` of them; the open
+    block carried to the next chunk; a run's blocks dropped once its settling is read), and every
+    ``fig``-th output row."""
+    rows = [0] * len(runs)
+    blocks: dict[int, list[np.ndarray]] = {}
+    carry: dict[int, np.ndarray] = {}
+    stops = np.minimum(
+        runs[:, 0] + (runs[:, 1] - runs[:, 0]) // m * m, runs[:, 0] + SETTLE_BLOCKS * m
+    )
     figure: list[np.ndarray] = []
     for offset, (y,) in passes.run(("output",)):
         end = offset + y.size
@@ -388,17 +398,18 @@ def settling_blocks(
         first = int(np.searchsorted(runs[:, 1], offset, side="right"))
         last = int(np.searchsorted(runs[:, 0], end, side="left"))
         for i in range(first, last):
-            a, b = int(runs[i, 0]), int(runs[i, 1])
-            stop = a + (b - a) // m * m  # rows in whole blocks
-            s, t = max(a, offset), min(stop, end)
-            if t <= s:
-                continue
-            x = np.concatenate([carry[i], y[s - offset : t - offset]])
-            whole = x.size // m * m
-            if whole:
-                blocks[i].append(x[:whole].reshape(-1, m).mean(axis=1))
-            carry[i] = x[whole:].copy()
-    return [np.concatenate(b) if b else np.empty(0) for b in blocks], np.concatenate(figure)
+            s, t = max(int(runs[i, 0]), offset), min(int(stops[i]), end)
+            if t > s:
+                x = np.concatenate([carry.pop(i, np.empty(0)), y[s - offset : t - offset]])
+                whole = x.size // m * m
+                if whole:
+                    blocks.setdefault(i, []).append(x[:whole].reshape(-1, m).mean(axis=1))
+                carry[i] = x[whole:].copy()
+            if stops[i] <= end and i in carry:  # the run's blocks are all in: read its settling
+                carry.pop(i)
+                got = blocks.pop(i, [])
+                rows[i] = _settling_of(np.concatenate(got) if got else np.empty(0), m)
+    return rows, np.concatenate(figure)
 
 
 # --------------------------------------------------------------------------------------------
@@ -547,14 +558,14 @@ def find_plateaus_chunked(
         )
     fig_y = np.full(sum(x.size for x in scan.fig_t), math.nan)
     m = max(1, h // 10)  # blocks of a tenth of the window: they follow a ringing DUT
-    blocks: list[np.ndarray] = []
+    settling: list[int] = []
     if output:
-        blocks, fig_y = settling_blocks(passes, runs, m, scan.fig)
+        settling, fig_y = settling_rows(passes, runs, m, scan.fig)
     if settle_s is not None:
         settle, source = _positive("settle_s", settle_s, 0.0), "given"
         settle_rows = math.ceil(settle / dt - 1e-9)
     else:
-        settle_rows = max([h] + [_settling_of(b, m) for b in blocks])
+        settle_rows = max([h, *settling])
         settle, source = round(settle_rows * dt, 9), ("output" if output else "window")
     a2 = np.minimum(runs[:, 0] + settle_rows, runs[:, 1])
     spans = np.column_stack([np.where(runs[:, 1] - a2 >= 1, a2, runs[:, 0]), runs[:, 1]])
