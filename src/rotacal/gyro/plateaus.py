@@ -11,8 +11,9 @@ scale-factor fit takes (each plateau one rate point: its mean table rate on ever
 
 Method (change detection with a filtered derivative, Basseville & Nikiforov 1993, §2.1): at each
 sample boundary k the mean of the h samples after it is compared with the mean of the h samples
-before it, D[k] = mean(r[k:k+h]) − mean(r[k−h:k]), both from one cumulative sum (whole-array,
-O(n)). A boundary is a change when |D[k]| > z·σ·√(2/h) + r_tol, σ being the table rate's white
+before it, D[k] = mean(r[k:k+h]) − mean(r[k−h:k]), both from one cumulative sum (O(n); the
+whole method runs as passes over chunks with carried state, :mod:`rotacal.gyro.plateaus_stream`,
+and :func:`find_plateaus` is those passes over one chunk). A boundary is a change when |D[k]| > z·σ·√(2/h) + r_tol, σ being the table rate's white
 noise estimated robustly from its first differences (σ = 1.4826·MAD(Δr)/√2, a few large steps do
 not move the median) and r_tol the rate tolerance of a rate point (0.001 °/s, as in
 :mod:`rotacal.gyro.scale_factor_points`: a commanded rate is exactly constant, σ = 0). Runs of
