@@ -172,6 +172,20 @@ class _RatePoints:
         self.magnitudes = _Magnitudes(_RATE, "a set rate")
 
     def add(self, rate: np.ndarray) -> None:
+        if (
+            rate.size > 1
+            and not self.bad.count
+            and rate[0] == rate[-1]
+            and np.isfinite(rate[0])
+            and not np.any(rate != rate[0])
+        ):
+            # one set rate (a plateau's slice of a continuous log): its first row makes the same
+            # groups as all of them, the others only add to its group's count
+            n = self.n + rate.size
+            self.add(rate[:1])
+            self.n = n
+            self.rows[np.searchsorted(self.lo, rate[0], side="right") - 1] += rate.size - 1
+            return
         offset, self.n = self.n, self.n + rate.size
         finite = np.isfinite(rate)
         if not finite.all():
@@ -432,6 +446,8 @@ class _PointSums:
         self.kept: list[tuple[np.ndarray, ...]] = []
 
     def group_of(self, rate: np.ndarray) -> np.ndarray:
+        if rate.size > 1 and rate[0] == rate[-1] and not np.any(rate != rate[0]):
+            return np.full(rate.size, np.searchsorted(self.lo, rate[0], side="right") - 1)
         return np.searchsorted(self.lo, rate, side="right") - 1
 
     def add(self, rate: np.ndarray, y: np.ndarray) -> None:
