@@ -30,6 +30,7 @@ import sys
 import tempfile
 import time
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -77,12 +78,13 @@ def child(mode: str, path: str) -> None:
     print(json.dumps({"wall_s": time.perf_counter() - t0, **extra}))
 
 
-def run_child(mode: str, path: Path, timeout: float) -> dict:
-    """The case in a fresh process, reaped with ``os.wait4``: its peak RSS is that process's and
-    its waited-for descendants' largest (Linux), i.e. for the command the CLI process's."""
+def run_child(mode: str, path: Path, timeout: float, script: str = __file__) -> dict:
+    """The case in a fresh process (``script --child MODE PATH``), reaped with ``os.wait4``: its
+    peak RSS is that process's and its waited-for descendants' largest (Linux), i.e. for the
+    command the CLI process's."""
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
         proc = subprocess.Popen(
-            [sys.executable, __file__, "--child", mode, str(path)], stdout=out, stderr=err
+            [sys.executable, script, "--child", mode, str(path)], stdout=out, stderr=err
         )
         end = time.monotonic() + timeout
         while True:
@@ -104,21 +106,37 @@ def run_child(mode: str, path: Path, timeout: float) -> dict:
     return result
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def measure_logs(
+    doc: str,
+    child_case: Callable[[str, str], None],
+    write: Callable[[Path, int], None],
+    bytes_per_row: int,
+    in_memory_max: float,
+    show: Callable[[int, dict], None],
+    script: str,
+    repeat: int = 3,
+    timeout: float = 3600.0,
+) -> None:
+    """The command line of a log benchmark: for each ``--rows`` N, the log written by ``write``
+    (skipped when the disk has no room for ``bytes_per_row``·N), the cases baseline, command and
+    (N ≤ ``in_memory_max``) in-memory run interleaved in fresh processes of ``script``, the best
+    of ``--repeat`` (one at 10⁹) handed to ``show``; the log deleted after its cases."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--rows", type=float, nargs="+", default=[1e7, 1e8, 1e9])
     ap.add_argument("--dir", default="/tmp", help="where the logs are written")
-    ap.add_argument("--timeout", type=float, default=3600.0, help="per case (s)")
-    ap.add_argument("--repeat", type=int, default=3, help="runs per case below 1e9 rows (best)")
+    ap.add_argument("--timeout", type=float, default=timeout, help="per case (s)")
+    ap.add_argument(
+        "--repeat", type=int, default=repeat, help="runs per case below 1e9 rows (best)"
+    )
     ap.add_argument("--child", nargs=2, metavar=("MODE", "PATH"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
-        child(*args.child)
+        child_case(*args.child)
         return
-    work = Path(tempfile.mkdtemp(prefix="bench-gyrosf-", dir=args.dir))
+    work = Path(tempfile.mkdtemp(prefix="bench-gyrolog-", dir=args.dir))
     try:
         for n in (int(x) for x in args.rows):
-            need = 16 * n * 1.02
+            need = bytes_per_row * n * 1.02
             free = shutil.disk_usage(args.dir).free
             if free < need:
                 print(f"N = {n:.0e}: skipped, {free / 1e9:.1f} GB free, {need / 1e9:.1f} GB needed")
@@ -126,39 +144,42 @@ def main() -> None:
             path = work / f"log_{n}.npz"
             try:
                 t0 = time.perf_counter()
-                write_log(path, n)
+                write(path, n)
                 print(
                     f"N = {n:.0e}: wrote {path.stat().st_size / 1e9:.2f} GB in "
                     f"{time.perf_counter() - t0:.0f} s",
                     flush=True,
                 )
-                modes = ["baseline", "command"] + (["in-memory"] if n <= 3e7 else [])
-                repeat = args.repeat if n < 1e9 else 1
-                rows = {}
-                for _ in range(repeat):  # interleaved, so that a busy spell hits every case
-                    for m in modes:
-                        r = run_child(m, path, args.timeout)
+                modes = ["baseline", "command"] + (["in-memory"] if n <= in_memory_max else [])
+                rows: dict = {}
+                for _ in range(args.repeat if n < 1e9 else 1):
+                    for m in modes:  # interleaved, so that a busy spell hits every case
+                        r = run_child(m, path, args.timeout, script=script)
                         if m not in rows or r["wall_s"] < rows[m]["wall_s"]:
                             rows[m] = r
-                base = rows["baseline"]["wall_s"]
-                for m, r in rows.items():
-                    label = {"command": "command (auto)", "in-memory": "command --in-memory"}.get(
-                        m, m
-                    )
-                    print(
-                        f"  {label:<18} {r['wall_s']:8.1f} s  {n / r['wall_s'] / 1e6:7.1f} M rows/s"
-                        f"  peak RSS {r['peak_rss_mb']:7.0f} MB  ratio to baseline "
-                        f"{r['wall_s'] / base:5.2f}",
-                        flush=True,
-                    )
-                    if "scale_factor" in r:
-                        print(
-                            f"  {'':<18} S = {r['scale_factor']:.9g} V/(°/s), NL = {r['nl']:.4g} %FS"
-                        )
+                show(n, rows)
             finally:
                 path.unlink(missing_ok=True)
     finally:
         shutil.rmtree(work, ignore_errors=True)
+
+
+def _show(n: int, rows: dict) -> None:
+    base = rows["baseline"]["wall_s"]
+    for m, r in rows.items():
+        label = {"command": "command (auto)", "in-memory": "command --in-memory"}.get(m, m)
+        print(
+            f"  {label:<18} {r['wall_s']:8.1f} s  {n / r['wall_s'] / 1e6:7.1f} M rows/s"
+            f"  peak RSS {r['peak_rss_mb']:7.0f} MB  ratio to baseline "
+            f"{r['wall_s'] / base:5.2f}",
+            flush=True,
+        )
+        if "scale_factor" in r:
+            print(f"  {'':<18} S = {r['scale_factor']:.9g} V/(°/s), NL = {r['nl']:.4g} %FS")
+
+
+def main() -> None:
+    measure_logs(__doc__ or "", child, write_log, 16, 3e7, _show, __file__)
 
 
 if __name__ == "__main__":

@@ -37,6 +37,7 @@ from ._ferraris import (
     sections_option,
 )
 from ._gyro_log import continuous_log, log_options, log_sections, scale_factor_from_log
+from ._gyro_triad_log import check_runs_options, runs_options, runs_sections, triad_from_log
 from ._help import example
 from ._rate_files import rate_file_options, rate_row_chunks, rate_row_count, read_rate_rows
 from ._reading import current_read_options
@@ -293,6 +294,7 @@ def _print_scale_factor(result: Any, data: dict[str, Any]) -> None:
     default="",
     help="Unit of the outputs ux, uy, uz (e.g. V, LSB, deg/s), for the results and the report.",
 )
+@runs_options
 @_clipping_option
 @_analysis_options
 @_names_capture
@@ -300,6 +302,7 @@ def gyro_triad(
     capture: str,
     reject_k: float | None,
     output_unit: str,
+    runs_opts: dict[str, Any],
     columns: Sequence[str],
     group: str | None,
     **kw: Any,
@@ -309,20 +312,25 @@ def gyro_triad(
     Columns wx_deg_s, wy_deg_s, wz_deg_s (the reference rate in the gyro's nominal axes) and
     ux, uy, uz (its raw outputs): u = K·ω + b by least squares, with outlier rejection (the
     modified six-position method of the robot-manipulator study, IEEE A&E Systems Magazine 2023).
+    With --runs the capture is one log of rotation runs (time_s too): each run is averaged over
+    its whole revolutions and K, b are fitted to the run means.
     """
     from rotacal.gyro import RATE_COLUMNS, TRIAD_OUTPUT_COLUMNS, calibrate_triad_columns
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
-    cap = _read(capture, [*RATE_COLUMNS, *TRIAD_OUTPUT_COLUMNS], columns, group)
-    with _status("fitting"):
-        result = calibrate_triad_columns(
-            cap.columns,
-            reject_k=reject_k,
-            output_unit=output_unit,
-            specs=kw.pop("specs"),
-            allow_clipped=kw.pop("allow_clipped"),
-        )
+    options = {
+        "output_unit": output_unit,
+        "specs": kw.pop("specs"),
+        "allow_clipped": kw.pop("allow_clipped"),
+    }
+    if check_runs_options(runs_opts):
+        options.update({} if reject_k is None else {"reject_k": reject_k})
+        result = triad_from_log(capture, columns, group, runs_opts, options)
+    else:
+        cap = _read(capture, [*RATE_COLUMNS, *TRIAD_OUTPUT_COLUMNS], columns, group)
+        with _status("fitting"):
+            result = calibrate_triad_columns(cap.columns, reject_k=reject_k, **options)
     data = _publish(
         result,
         json_path,
@@ -331,6 +339,7 @@ def gyro_triad(
         "3-axis gyro calibration",
         "Modified six-position method (IEEE A&E Systems Magazine 2023): u = K·ω + b by least squares",
         ("triad", "triad_section"),
+        lambda: runs_sections(result),
     )
     if _summary_wanted():
         _print_triad(result, data)

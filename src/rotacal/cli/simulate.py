@@ -721,5 +721,12 @@ def demo(out: str, overwrite: bool) -> None:
         _wrote(path)
 
 
-# registers `simulate gyro-sine`, `simulate orientation`, `simulate position` and `simulate angle`
-from . import simulate_angle, simulate_frequency, simulate_orientation, simulate_position  # noqa: E402,F401
+# each registers its subcommand on `simulate` as it is imported: gyro-sine, orientation,
+# position, angle, gyro-triad-log
+from . import (  # noqa: E402,F401
+    simulate_angle,
+    simulate_frequency,
+    simulate_orientation,
+    simulate_position,
+    simulate_triad_log,
+)

@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     from rotacal.gyro.noise import GyroNoise, gyro_noise, gyro_noise_from_angle
     from rotacal.gyro.noise_fit import NoiseFit, avar_covariance, fit_noise_terms
     from rotacal.gyro.plateaus import Plateau, PlateauSearch, find_plateaus
+    from rotacal.gyro.plateaus_stream import find_plateaus_chunked, log_chunks
     from rotacal.gyro.rotation_sections import sections_from_labels
     from rotacal.gyro.rotations import (
         RotationCalibration,
@@ -54,7 +55,11 @@ if TYPE_CHECKING:
         evaluate_requirement,
         resolve_requirement,
     )
-    from rotacal.gyro.scale_factor_log import LogScaleFactorResult, calibrate_scale_factor_log
+    from rotacal.gyro.scale_factor_log import (
+        LogScaleFactorResult,
+        calibrate_scale_factor_log,
+        calibrate_scale_factor_log_chunked,
+    )
     from rotacal.gyro.scale_factor_stream import (
         calibrate_scale_factor_chunked,
         scale_factor_chunks,
@@ -74,6 +79,7 @@ if TYPE_CHECKING:
         triad_plan,
         triad_plan_check,
     )
+    from rotacal.gyro.triad_log import TriadLogResult, TriadRun, calibrate_triad_log, split_runs
 
 __all__ = [
     "ACCEL_OUTPUT_COLUMNS",
@@ -96,8 +102,10 @@ __all__ = [
     "ScaleFactorResult",
     "SecondOrderFit",
     "SmallStepResult",
+    "TriadLogResult",
     "TriadPlanCheck",
     "TriadResult",
+    "TriadRun",
     "apply_triad_calibration",
     "avar_covariance",
     "bandwidth_from_model",
@@ -108,8 +116,10 @@ __all__ = [
     "calibrate_scale_factor",
     "calibrate_scale_factor_chunked",
     "calibrate_scale_factor_log",
+    "calibrate_scale_factor_log_chunked",
     "calibrate_triad",
     "calibrate_triad_columns",
+    "calibrate_triad_log",
     "calibrate_triad_rotations",
     "check_multiposition_plan",
     "coefficient_names",
@@ -119,10 +129,12 @@ __all__ = [
     "evaluate_requirement",
     "ferraris_sections",
     "find_plateaus",
+    "find_plateaus_chunked",
     "fit_noise_terms",
     "fit_second_order",
     "gyro_noise",
     "gyro_noise_from_angle",
+    "log_chunks",
     "multiposition_plan",
     "normal_gravity",
     "resolve_requirement",
@@ -133,6 +145,7 @@ __all__ = [
     "sections_from_labels",
     "signed_scale_factors",
     "small_step_test",
+    "split_runs",
     "temperature_coefficients",
     "triad_plan",
     "triad_plan_check",

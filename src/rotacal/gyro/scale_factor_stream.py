@@ -172,6 +172,20 @@ class _RatePoints:
         self.magnitudes = _Magnitudes(_RATE, "a set rate")
 
     def add(self, rate: np.ndarray) -> None:
+        if (
+            rate.size > 1
+            and not self.bad.count
+            and rate[0] == rate[-1]
+            and np.isfinite(rate[0])
+            and not np.any(rate != rate[0])
+        ):
+            # one set rate (a plateau's slice of a continuous log): its first row makes the same
+            # groups as all of them, the others only add to its group's count
+            n = self.n + rate.size
+            self.add(rate[:1])
+            self.n = n
+            self.rows[np.searchsorted(self.lo, rate[0], side="right") - 1] += rate.size - 1
+            return
         offset, self.n = self.n, self.n + rate.size
         finite = np.isfinite(rate)
         if not finite.all():
@@ -228,6 +242,10 @@ def _by_point(
     """A chunk's finite samples sorted by rate point (stable: row order within a point): points,
     samples, segment starts and sizes, and each sample's index among its point's finite samples
     since the start (``seen``: how many each point had before this chunk)."""
+    if gid.size and gid[0] == gid[-1] and np.all(gid == gid[0]):
+        # one rate point (a plateau's slice of a continuous log): already in order, no sort
+        gs, ys, starts = gid, y, np.zeros(1, dtype=np.intp)
+        return gs, ys, starts, np.array([gs.size]), np.arange(gs.size) + seen[gs[0]]
     order = np.argsort(gid, kind="stable")
     gs, ys = gid[order], y[order]
     starts = np.flatnonzero(np.r_[True, gs[1:] != gs[:-1]])
@@ -428,6 +446,8 @@ class _PointSums:
         self.kept: list[tuple[np.ndarray, ...]] = []
 
     def group_of(self, rate: np.ndarray) -> np.ndarray:
+        if rate.size > 1 and rate[0] == rate[-1] and not np.any(rate != rate[0]):
+            return np.full(rate.size, np.searchsorted(self.lo, rate[0], side="right") - 1)
         return np.searchsorted(self.lo, rate, side="right") - 1
 
     def add(self, rate: np.ndarray, y: np.ndarray) -> None:
@@ -535,13 +555,20 @@ def _quantum_samples_again(reader: _Reader, sums: _PointSums) -> list[tuple[np.n
 # the method
 # --------------------------------------------------------------------------------------------
 class _Reader:
-    """Fresh passes over the chunk source, each checked for the same row count."""
+    """Fresh passes over the chunk source, each checked for the same row count (also the
+    continuous log's, :mod:`rotacal.gyro.plateaus_stream`; ``example`` names the function that
+    makes a chunk source, for the message when ``chunks`` is not callable)."""
 
-    def __init__(self, chunks: ScaleFactorChunks, progress: Callable[[int], None] | None) -> None:
+    def __init__(
+        self,
+        chunks: Callable[[Sequence[str]], Iterator[Mapping[str, np.ndarray]]],
+        progress: Callable[[int], None] | None,
+        example: str = "scale_factor_chunks(rate, output)",
+    ) -> None:
         if not callable(chunks):
             raise ConfigError(
                 "chunks must be a callable that starts a fresh pass over the capture each time it "
-                "is called with the columns it needs (e.g. scale_factor_chunks(rate, output)), not "
+                f"is called with the columns it needs (e.g. {example}), not "
                 f"a {type(chunks).__name__}"
             )
         self.chunks, self.progress = chunks, progress
@@ -555,11 +582,12 @@ class _Reader:
         try:
             for raw in it:
                 cols = [np.asarray(raw[c], dtype=np.float64).reshape(-1) for c in columns]
-                if any(c.size != cols[0].size for c in cols):
+                other = next((j for j, c in enumerate(cols) if c.size != cols[0].size), None)
+                if other is not None:
                     raise CaptureError(
-                        f"column rate_deg_s has {cols[0].size} rows but column output has "
-                        f"{cols[-1].size} in the chunk from row {offset}: they must have one row "
-                        "per sample."
+                        f"column {columns[0]} has {cols[0].size} rows but column "
+                        f"{columns[other]} has {cols[other].size} in the chunk from row {offset}: "
+                        "they must have one row per sample."
                     )
                 if cols[0].size == 0:
                     continue

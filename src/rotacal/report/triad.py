@@ -233,7 +233,8 @@ def _rejection_figure(r: TriadResult) -> Figure:
             ax.axhline(-thr, color="#b22222", lw=0.8, ls="--")
         ax.set_ylim(-lim, lim)
         ax.set_ylabel(f"{names[c]} residual")
-        ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, frameon=False)
+        if ax.get_legend_handles_labels()[0]:  # nothing rejected and no threshold: no legend
+            ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, frameon=False)
         _style(ax)
     axes[-1].set_xlabel("row of the capture")
     fig.tight_layout()

@@ -12,6 +12,7 @@ from rotacal.sim.gyro_rates import simulate_gyro_rates
 from rotacal.sim.gyro_sine import simulate_gyro_sine
 from rotacal.sim.gyro_steps import simulate_gyro_steps
 from rotacal.sim.gyro_triad import simulate_gyro_rotations, simulate_gyro_triad
+from rotacal.sim.gyro_triad_log import simulate_gyro_triad_log
 from rotacal.sim.motion import SineMotion
 from rotacal.sim.multiposition import simulate_multiposition
 from rotacal.sim.orientation_errors import simulate_orientation_errors
@@ -53,6 +54,7 @@ __all__ = [
     "simulate_gyro_sine",
     "simulate_gyro_steps",
     "simulate_gyro_triad",
+    "simulate_gyro_triad_log",
     "simulate_lts",
     "simulate_multiposition",
     "simulate_orientation_errors",
