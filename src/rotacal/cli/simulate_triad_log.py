@@ -29,7 +29,7 @@ from .simulate import _sim_common, _sim_write, simulate
 @click.option("--noise-std", type=float, default=None, help="Output noise, rms (deg/s) [0.1].")
 @click.option("--fs-hz", type=float, default=None, help="Sample rate (Hz) [100].")
 def simulate_gyro_triad_log_cmd(out: str, overwrite: bool, **kw: Any) -> None:
-    """Log of rotation runs of a three-axis gyro (seed 003's test).
+    """Log of a three-axis gyro's one-minute rotation runs.
 
     Columns time_s, wx_deg_s, wy_deg_s, wz_deg_s (the set rate, 0 at rest) and ux, uy, uz: runs
     about x, y, z at 6, 18, 30, 60, 90 deg/s in both directions with rests between, the outputs
