@@ -585,15 +585,40 @@ def calibrate_lts_motion(
     clipped = check_clipping({"displacement_mm": d}, allow_clipped=allow_clipped)
     check_reach(float(np.max(np.abs(d))), radius_mm)
     angle = lts_angle(d, radius_mm)
+    result = displacement_motion(
+        t, angle, harmonics=harmonics, periods=periods, drift=drift, what="LTS capture",
+        notes=[f"θ = arctan(D/R), R = {radius_mm:g} mm"],
+        set_values=(set_amplitude_deg, set_frequency_hz), specs=specs, radius_mm=float(radius_mm),
+    )  # fmt: skip
+    return with_warnings(result, clipped)
+
+
+def displacement_motion(
+    t: np.ndarray,
+    angle: np.ndarray,
+    *,
+    harmonics: int,
+    periods: int | None,
+    drift: bool,
+    what: str,
+    notes: list[str],
+    set_values: tuple[float | None, float | None],
+    specs: InstrumentSpecs | None,
+    radius_mm: float | None = None,
+) -> MotionResult:
+    """The calibration of a checked displacement θ (deg) read directly, in memory: reversing
+    moments by extreme values, n whole periods between 2n + 1 reversals, the IEEE 1057 fit and
+    the LTS scheme's budgets (Feng et al. (2023), §5, eqs. (1), (2)). ``what`` names the capture
+    in a refusal; ``set_values`` are the set amplitude (deg) and frequency (Hz); an LTS gives its
+    ``radius_mm``, an angle readout none."""
     trend = prefit_drift(t, angle, harmonics) if drift else 0.0
     rev_times = extreme_reversals(t, angle, drift=trend)
     rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
     net = None if drift else float(angle[-1] - angle[0])
-    first, last, n = _cut(rev_idx, periods, "LTS capture", float(np.ptp(angle)), net)
+    first, last, n = _cut(rev_idx, periods, what, float(np.ptp(angle)), net)
     seg = slice(first, last + 1)
     f0 = n / (rev_times[2 * n] - rev_times[0])
     fit = fit_motion(t[seg], angle[seg], f0, harmonics, drift)
-    plot = _displacement_plot(t, angle, seg, fit)
     detection = ReversalDetection(
         method="parabola",
         fit=fit,
@@ -601,7 +626,7 @@ def calibrate_lts_motion(
         capture_start_s=float(t[0]),
         half_window_s=1.0 / (20.0 * fit.frequency_hz),  # extreme_reversals: ±period/20
     )
-    result = _finish(
+    return _finish(
         scheme="lts",
         fit=fit,
         displacement_amplitudes=fit.amplitudes,
@@ -612,16 +637,15 @@ def calibrate_lts_motion(
         periods=n,
         t_used=t[seg],
         angle_used=angle[seg],
-        set_amplitude_deg=set_amplitude_deg,
-        set_frequency_hz=set_frequency_hz,
-        notes=[f"θ = arctan(D/R), R = {radius_mm:g} mm"],
+        set_amplitude_deg=set_values[0],
+        set_frequency_hz=set_values[1],
+        notes=notes,
         snr=None,
-        plot=plot,
+        plot=_displacement_plot(t, angle, seg, fit),
         detection=detection,
         specs=specs,
-        radius_mm=float(radius_mm),
+        radius_mm=radius_mm,
     )
-    return with_warnings(result, clipped)
 
 
 @one_blas_thread

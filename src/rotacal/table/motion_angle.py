@@ -39,13 +39,8 @@ from rotacal.signal.daq_faults import find_daq_faults
 from rotacal.table.motion import (
     MotionResult,
     _check_settings,
-    _cut,
-    _displacement_plot,
-    _finish,
-    extreme_reversals,
+    displacement_motion,
 )
-from rotacal.table.motion_drift import fit_motion, prefit_drift
-from rotacal.table.motion_uncertainty import ReversalDetection
 from rotacal.uncertainty import Input, InstrumentSpecs, UncertaintyBudget, propagate
 from rotacal.uncertainty.notes import tidy
 
@@ -330,40 +325,10 @@ def calibrate_angle_motion(
             resolution_name = "quantum of the readings"
     elif not (math.isfinite(resolution_deg) and resolution_deg > 0):
         raise ConfigError(f"--resolution-deg must be positive, got {resolution_deg}")
-    trend = prefit_drift(t, angle, harmonics) if drift else 0.0
-    rev_times = extreme_reversals(t, angle, drift=trend)
-    rev_idx = np.searchsorted(t, rev_times).clip(0, t.size - 1)
-    net = None if drift else float(angle[-1] - angle[0])
-    first, last, n = _cut(rev_idx, periods, "angle capture", float(np.ptp(angle)), net)
-    seg = slice(first, last + 1)
-    f0 = n / (rev_times[2 * n] - rev_times[0])
-    fit = fit_motion(t[seg], angle[seg], f0, harmonics, drift)
-    detection = ReversalDetection(
-        method="parabola",
-        fit=fit,
-        sample_interval_s=float(t[last] - t[first]) / max(last - first, 1),
-        capture_start_s=float(t[0]),
-        half_window_s=1.0 / (20.0 * fit.frequency_hz),  # extreme_reversals: ±period/20
-    )
-    result = _finish(
-        scheme="lts",  # the budgets of a displacement read directly: no radius, no arctan
-        fit=fit,
-        displacement_amplitudes=fit.amplitudes,
-        displacement_amplitudes_u=fit.amplitudes_u,
-        offset_deg=fit.offset,
-        residual_rms_deg=fit.residual_rms,
-        reversal_times=rev_times,
-        periods=n,
-        t_used=t[seg],
-        angle_used=angle[seg],
-        set_amplitude_deg=set_amplitude_deg,
-        set_frequency_hz=set_frequency_hz,
-        notes=[READ_DIRECTLY],
-        snr=None,
-        plot=_displacement_plot(t, angle, seg, fit),
-        detection=detection,
-        specs=specs,
-    )
+    result = displacement_motion(
+        t, angle, harmonics=harmonics, periods=periods, drift=drift, what="angle capture",
+        notes=[READ_DIRECTLY], set_values=(set_amplitude_deg, set_frequency_hz), specs=specs,
+    )  # fmt: skip
     result = dataclasses.replace(
         result,
         scheme="angle",

@@ -32,7 +32,7 @@ from rotacal.signal.daq_faults import DaqFaults
 from rotacal.signal.readings import CleanReadings, ReadingChunks, counter_register
 from rotacal.table import _stream_lts as lts
 from rotacal.table._stream_checks import StridedCopy, start_frequency
-from rotacal.table._stream_fit import accumulate, accumulator, block_length, true_time, with_segment
+from rotacal.table._stream_fit import accumulate, accumulator, block_length, true_time
 from rotacal.table.motion import MotionResult, _check_set_values, _check_settings, _cut
 from rotacal.table.motion_angle import (
     _ANGLE_HINT,
@@ -42,8 +42,7 @@ from rotacal.table.motion_angle import (
     with_resolution,
 )
 from rotacal.table.motion_lts_fog import TRIGGER_PERCENTILES, trigger_levels
-from rotacal.table.motion_uncertainty import ReversalDetection
-from rotacal.table.streaming import _finish_angle, _fit_and_error, _sample_interval
+from rotacal.table.streaming import _fit_and_error, displacement_result
 from rotacal.uncertainty import InstrumentSpecs
 
 __all__ = ["calibrate_angle_motion_chunked"]
@@ -192,25 +191,10 @@ def calibrate_angle_motion_chunked(
         segment, first, last, f0, harmonics, drift, set_amplitude_deg, set_frequency_hz,
         true_time(specs, t0), dt,
     )  # fmt: skip
-    plot = {
-        "t": ext.plot_t,
-        "angle_deg": ext.plot_angle,
-        "t_used": seg.t_plot,
-        "residual_deg": seg.residual_plot,
-        "unit": "deg",
-    }
-    detection = ReversalDetection(
-        method="parabola",
-        fit=seg.fit,
-        sample_interval_s=_sample_interval(seg, first, last),
-        capture_start_s=t0,
-        half_window_s=1.0 / (20.0 * seg.fit.frequency_hz),  # extreme_reversals: ±period/20
-    )
-    result = _finish_angle(
-        "lts", seg, detection, rev_times, n_periods, plot, [READ_DIRECTLY],
-        set_amplitude_deg, set_frequency_hz, specs,
+    result = displacement_result(
+        ext, seg, error, (first, last, rev_times, n_periods, t0), [READ_DIRECTLY],
+        (set_amplitude_deg, set_frequency_hz), specs, (),
     )  # fmt: skip
-    result = with_segment(result, seg, error, ())
     result = dataclasses.replace(
         result,
         scheme="angle",

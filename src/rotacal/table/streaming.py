@@ -552,6 +552,35 @@ def lts_result(
 ) -> MotionResult:
     """The LTS calibration's result from its passes: ``cut`` is (first, last, reversal times
     (s), periods, the capture's first time (s))."""
+    return displacement_result(
+        ext,
+        seg,
+        error,
+        cut,
+        [f"θ = arctan(D/R), R = {radius_mm:g} mm"],
+        (set_amplitude_deg, set_frequency_hz),
+        specs,
+        clipped,
+        radius_mm=float(radius_mm),
+    )
+
+
+def displacement_result(
+    ext: lts.Extremes,
+    seg: SegmentFit,
+    error: tuple[float, float, np.ndarray] | None,
+    cut: tuple[int, int, np.ndarray, int, float],
+    notes: list[str],
+    set_values: tuple[float | None, float | None],
+    specs: InstrumentSpecs | None,
+    clipped: tuple[str, ...],
+    *,
+    radius_mm: float | None = None,
+) -> MotionResult:
+    """The result of a streamed calibration whose reading is the displacement θ itself (the LTS
+    scheme's budgets; an LTS also gives ``radius_mm``, an angle readout none): ``cut`` is
+    (first, last, reversal times (s), periods, the capture's first time (s)); ``set_values``
+    the set amplitude (deg) and frequency (Hz)."""
     first, last, rev_times, n_periods, t0 = cut
     plot = {
         "t": ext.plot_t,
@@ -568,17 +597,7 @@ def lts_result(
         half_window_s=1.0 / (20.0 * seg.fit.frequency_hz),  # extreme_reversals: ±period/20
     )
     result = _finish_angle(
-        "lts",
-        seg,
-        detection,
-        rev_times,
-        n_periods,
-        plot,
-        [f"θ = arctan(D/R), R = {radius_mm:g} mm"],
-        set_amplitude_deg,
-        set_frequency_hz,
-        specs,
-        radius_mm=float(radius_mm),
+        "lts", seg, detection, rev_times, n_periods, plot, notes, *set_values, specs, radius_mm
     )
     return with_segment(result, seg, error, clipped)
 
