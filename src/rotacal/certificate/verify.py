@@ -292,9 +292,7 @@ def _check_signature(
             with tempfile.NamedTemporaryFile(suffix=".pem") as store:
                 store.write(b"".join(a.public_bytes(Encoding.PEM) for a in anchors))
                 store.flush()
-                results = XAdESVerifier().verify(
-                    data, ca_pem_file=store.name, expect_config=config
-                )
+                results = XAdESVerifier().verify(data, ca_pem_file=store.name, expect_config=config)
         else:
             results = XAdESVerifier().verify(data, x509_cert=cert, expect_config=config)
     except InvalidDigest as e:
@@ -697,9 +695,7 @@ def verify_certificate(
             f"certificate.xml is not valid against the DCC {SCHEMA_VERSION} schema: {fault}"
         )
     number = (
-        content.findtext(
-            "dcc:administrativeData/dcc:coreData/dcc:uniqueIdentifier", namespaces=_NS
-        )
+        content.findtext("dcc:administrativeData/dcc:coreData/dcc:uniqueIdentifier", namespaces=_NS)
         or ""
     )
     results = folder / "results.json"
