@@ -44,6 +44,7 @@ def issued(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     [plan] = write_twin_plans(folder, 1, commands=("gyro rotations",))
     data = tomllib.loads(plan.read_text(encoding="utf-8"))
     data["certificate"]["number"] = "RC-2026-0042"  # given: issued without a records store
+    data["measurement"][0]["limits"] = {"bias[0]": {"max": -5.0}}  # a unit that fails (≈ 0.5)
     plan.write_text(tomli_w.dumps(data), encoding="utf-8")
     lab_key, mallory_key = (ec.generate_private_key(ec.SECP256R1()) for _ in range(2))
     lab = write_pair(folder, "lab", lab_key, make_cert(lab_key))
@@ -58,6 +59,7 @@ def issued(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     root = etree.fromstring(xml.encode())
     value = root.xpath(f"//dcc:quantity[@id='{ids[0]}']/si:real/si:value/text()", namespaces=NS)[0]
     assert xml.count(f"<si:value>{value}</si:value>") == 1 and FAKE not in xml
+    assert reported["conformity"] == {"bias[0]": "fail"}
     return {
         "certificate": certificate,
         "plan": plan,
@@ -190,6 +192,16 @@ def test_the_xml_and_results_json_changed_together_fail_on_the_signature(
     code, line, doc = _verify(copy)
     assert code == 1 and doc["signature_valid"] is False and doc["consistent"] is True
     assert "the signed content of certificate.xml was changed after signing" in line
+
+
+def test_a_failed_unit_passed_in_results_json_is_caught(copy: Path) -> None:
+    doc = json.loads((copy / "results.json").read_text())
+    doc["measurements"][0]["conformity"]["bias[0]"] = "pass"
+    (copy / "results.json").write_text(json.dumps(doc))
+    code, line, found = _verify(copy)
+    assert code == 1 and found["signature_valid"] is True and found["consistent"] is False
+    qid = quantity_id(1, "bias[0]")
+    assert f"{qid} conformity: fail in certificate.xml, pass in results.json" in line
 
 
 def test_the_signed_content_is_the_document_without_its_signature(

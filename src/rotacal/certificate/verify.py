@@ -455,7 +455,33 @@ def _agreement(root: etree._Element, doc: Mapping[str, Any]) -> list[str]:
     out += [
         f"{qid}: in certificate.xml but not in results.json" for qid in reals if qid not in seen
     ]
-    return out
+    return out + _conformity_agreement(root, doc)
+
+
+def _conformity_agreement(root: etree._Element, doc: Mapping[str, Any]) -> list[str]:
+    """Every statement of conformity results.json and the XML do not share: the verdicts of
+    results.json against the ``dcc:conformity`` of the XML's statements (``refId`` → quantity),
+    ILAC-G8's conditional pass / fail standing for an indeterminate verdict (see
+    :func:`rotacal.certificate.dcc.dcc_conformity`)."""
+    said = {"pass": "pass", "fail": "fail", "conditionalPass": "indeterminate"}
+    said["conditionalFail"] = "indeterminate"
+    xml = {
+        s.get("refId"): said.get(s.findtext("dcc:conformity", namespaces=_NS) or "", "?")
+        for s in root.iterfind(
+            "dcc:administrativeData/dcc:statements/dcc:statement[dcc:conformity]", namespaces=_NS
+        )
+    }
+    json_ = {
+        quantity_id(index, str(key)): verdict
+        for index, m in enumerate(doc.get("measurements", []), start=1)
+        for key, verdict in (m.get("conformity") or {}).items()
+    }
+    return [
+        f"{qid} conformity: {xml.get(qid, 'no statement')} in certificate.xml, "
+        f"{json_.get(qid, 'no verdict')} in results.json"
+        for qid in sorted(set(xml) | set(json_), key=str)
+        if xml.get(qid) != json_.get(qid)
+    ]
 
 
 def _real_agreement(qid: str, real: etree._Element, q: Mapping[str, Any]) -> list[str]:
