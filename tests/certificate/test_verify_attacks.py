@@ -204,6 +204,16 @@ def test_a_failed_unit_passed_in_results_json_is_caught(copy: Path) -> None:
     assert f"{qid} conformity: fail in certificate.xml, pass in results.json" in line
 
 
+def test_another_units_serial_in_results_json_is_caught(copy: Path) -> None:
+    doc = json.loads((copy / "results.json").read_text())
+    doc["item"]["serial"] = "SN-9999"
+    (copy / "results.json").write_text(json.dumps(doc))
+    code, line, found = _verify(copy)
+    assert code == 1 and found["signature_valid"] is True and found["consistent"] is False
+    said = "the item's serial number 'SN-0000' in certificate.xml, item.serial 'SN-9999'"
+    assert said in line
+
+
 def test_the_signed_content_is_the_document_without_its_signature(
     issued: dict[str, Any], copy: Path
 ) -> None:

@@ -9,8 +9,12 @@ this order, everything a customer's incoming inspection can check without callin
    ``xades:SigningTime`` — and, with a trust anchor, that it chains to it (signxml's verifier,
    with cryptography's path validation at the signing time);
 2. the DCC against the DCC v3.1.2 schema with the XML Signature schema;
-3. that ``results.json`` states what the signed XML states: the certificate number, the
-   ``plan_sha256``, and every reported value, unit, U, k and coverage probability (or interval);
+3. that ``results.json`` states what the signed XML states — read from the content the
+   signature covers (signxml's ``signed_xml``), never from the file as parsed, which may hold a
+   second copy inside ``ds:Signature`` or a comment inside a value that no digest covers (both
+   named as problems): the certificate number, the ``plan_sha256``, the item's serial and
+   model, the dates, every reported value, unit, U, k and coverage probability (or interval)
+   and every verdict of conformity;
 4. where the plan and its captures can be reached (beside the certificate folder, or ``plan``):
    the SHA-256 of each against the certificate's, and the signed ``plan_sha256`` recomputed from
    the plan's bytes and the capture hashes;
@@ -434,6 +438,25 @@ def _agreement(root: etree._Element, doc: Mapping[str, Any]) -> list[str]:
             f"plan_sha256 {doc.get('plan_sha256')} of results.json is not the one certificate.xml "
             "states"
         )
+    core, item = (
+        "dcc:administrativeData/dcc:coreData/",
+        "dcc:administrativeData/dcc:items/dcc:item/",
+    )
+    serial = "dcc:identifications/dcc:identification[dcc:issuer='manufacturer']/dcc:value"
+    for path, stated, name in (  # what says which unit, and when it was calibrated
+        (item + serial, doc.get("item", {}).get("serial"), "item.serial"),
+        (item + "dcc:model", doc.get("item", {}).get("model"), "item.model"),
+        (
+            core + "dcc:beginPerformanceDate",
+            doc.get("calibration_start_date"),
+            "calibration_start_date",
+        ),
+        (core + "dcc:endPerformanceDate", doc.get("calibration_end_date"), "calibration_end_date"),
+    ):
+        xml = root.findtext(path, namespaces=_NS)
+        if xml != stated:
+            element = path.rsplit("/", 1)[-1] if "[" not in path else "the item's serial number"
+            out.append(f"{element} {xml!r} in certificate.xml, {name} {stated!r} in results.json")
     reals = {
         q.get("id"): q.find("si:real", namespaces=_NS)
         for q in root.iterfind(
