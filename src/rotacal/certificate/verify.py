@@ -774,6 +774,11 @@ def verify_certificate(
         checked = _check_inputs(doc, stated, found, problems, notes)
         if recompute:
             recomputed = _recompute(doc, found, problems)
+        else:  # what the DCC does not state cannot be checked against the signature
+            notes.append(
+                "the analyses' full results in results.json (measurements[].results) are not in "
+                "the signed XML: --recompute checks them"
+            )
     return Verification(
         path=xml_path,
         number=number,
