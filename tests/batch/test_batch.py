@@ -358,3 +358,53 @@ def test_a_plan_a_lost_worker_issued_counts_as_issued_with_a_note(tmp_path: Path
     assert (outcomes[0].status, outcomes[0].number) == ("issued", "RC-7")
     assert "lost before it reported" in outcomes[0].warnings[0]
     assert (outcomes[1].status, outcomes[1].number) == ("skipped", "RC-3")
+
+
+def test_a_signed_batch_gives_certificates_that_verify(
+    dask_client: Client,
+    plans: Callable[[int], list[Path]],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``--sign-key``/``--sign-cert``: the key (encrypted, its passphrase in
+    ROTACAL_SIGN_PASSPHRASE) read and checked once here, before any cluster is reached; each
+    certificate signed on the workers, by those that keep the records (certify_task) and by
+    those that render for this process (render_task); and each verifies against the signer."""
+    from cryptography.hazmat.primitives.asymmetric import ec
+
+    from rotacal.certificate.sign import load_signer
+
+    from ..certificate.test_signing import make_cert, write_pair
+
+    key = ec.generate_private_key(ec.SECP256R1())
+    key_path, cert_path = write_pair(tmp_path, "lab", key, make_cert(key), b"s3cret")
+    paths, url, out = plans(2), _sqlite(tmp_path), tmp_path / "certs"
+    args = ["batch", str(paths[0]), "--out", str(out), "--db", url]
+    signing = ["--sign-key", str(key_path), "--sign-cert", str(cert_path)]
+    # a wrong passphrase is refused before the (unreachable) scheduler is tried
+    monkeypatch.setenv("ROTACAL_SIGN_PASSPHRASE", "wrong")
+    refused = CliRunner().invoke(cli, [*args, "--scheduler", "tcp://127.0.0.1:1", *signing])
+    assert refused.exit_code == 2 and "passphrase in ROTACAL_SIGN_PASSPHRASE is wrong" in (
+        refused.output
+    )
+    assert not (out / "batch.json").exists()
+
+    monkeypatch.setenv("ROTACAL_SIGN_PASSPHRASE", "s3cret")
+    dask_client.wait_for_workers(2)
+    address = dask_client.scheduler_info()["address"]
+    result = CliRunner().invoke(cli, [*args, "--scheduler", address, *signing])
+    assert result.exit_code == 0 and "signed by B. Manager" in result.stdout, result.output
+    by_client = run_batch(
+        [paths[1]],
+        out=out,
+        db=url,
+        client=dask_client,
+        records_from_workers=False,
+        signer=load_signer(key_path, cert_path),
+    )
+    assert by_client.count("issued") == 1
+    numbers = set(_records(url).values())
+    assert len(numbers) == 2
+    for number in numbers:
+        verified = CliRunner().invoke(cli, ["verify", str(out / number), "--trust", str(cert_path)])
+        assert verified.exit_code == 0 and "VERIFIED — signed by B. Manager" in verified.stdout

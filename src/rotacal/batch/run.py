@@ -33,6 +33,7 @@ from .tasks import Done, Failed, Measured, certify_task, measure_task, render_ta
 if TYPE_CHECKING:
     from distributed import Client, Future
 
+    from rotacal.certificate.sign import Signer
     from rotacal.records import Store
 
 __all__ = ["BatchInterruptedError", "BatchResult", "PlanOutcome", "run_batch"]
@@ -164,10 +165,12 @@ class _Run:
         outcomes: list[PlanOutcome],
         advance: Callable[[str], None],
         direct: bool,
+        signer: Signer | None = None,
     ) -> None:
         self.client, self.store, self.out, self.staging = client, store, out, staging
         self.entries, self.outcomes, self.advance = entries, outcomes, advance
         self.direct = direct  # the workers write the records (else this process does)
+        self.signer = signer
         self.drawn: dict[int, str] = {}  # numbers drawn for plans not yet kept (SQLite)
         self.task_of: dict[Future, int] = {}  # a running task → its plan's index
 
@@ -176,7 +179,13 @@ class _Run:
         future: Future
         if self.direct:
             future = self.client.submit(
-                certify_task, path, str(self.out), str(self.staging), self.store.url, pure=False
+                certify_task,
+                path,
+                str(self.out),
+                str(self.staging),
+                self.store.url,
+                self.signer,
+                pure=False,
             )
         else:
             future = self.client.submit(measure_task, path, str(self.staging), pure=False)
@@ -256,7 +265,7 @@ class _Run:
             shutil.rmtree(measured.staging, ignore_errors=True)
             self._fail(index, Failed(f"{plan.path}: {e}", measured.seconds))
             return None
-        future = self.client.submit(render_task, measured, number, pure=False)
+        future = self.client.submit(render_task, measured, number, self.signer, pure=False)
         self.task_of[future] = index
         return future
 
@@ -286,6 +295,7 @@ def run_batch(
     advance: Callable[[str], None] | None = None,
     on_start: Callable[[int, str | None], None] | None = None,
     records_from_workers: bool | None = None,
+    signer: Signer | None = None,
 ) -> BatchResult:
     """Certify many plans as tasks on Dask distributed (INTERFACE.md "Batches").
 
@@ -315,6 +325,11 @@ def run_batch(
         PostgreSQL; for SQLite when every worker runs on this machine, where SQLite's lock
         serialises them — an SQLite file is not safe to share between machines, so with
         workers elsewhere this process writes it].
+    signer : Signer, optional
+        Sign every certificate.xml as ``rotacal certify --sign-key`` does
+        (:func:`rotacal.certificate.sign.load_signer`, read once here and sent to the workers);
+        a plan whose date of issue the signing certificate does not cover fails alone, before
+        it runs [default: unsigned].
 
     Returns
     -------
@@ -346,7 +361,7 @@ def run_batch(
             staging.mkdir()
             try:
                 cluster = _Cluster(workers, scheduler, client, records_from_workers)
-                result = _run(paths, target, staging, store, cluster, advance, on_start)
+                result = _run(paths, target, staging, store, cluster, advance, on_start, signer)
             finally:
                 shutil.rmtree(staging, ignore_errors=True)
             unfinished = [o for o in result.outcomes if o.status == "pending"]
@@ -405,6 +420,7 @@ def _run(
     cluster: _Cluster,
     advance: Callable[[str], None],
     on_start: Callable[[int, str | None], None] | None,
+    signer: Signer | None = None,
 ) -> BatchResult:
     entries = read_batch_plans(paths)
     outcomes = [PlanOutcome(str(e.path)) for e in entries]
@@ -418,6 +434,8 @@ def _run(
                 earlier = store.issued_with(entry.sha256)
                 if earlier is None:
                     store.check_plan(entry.plan)
+                    if signer is not None:  # as certify: refused before anything is measured
+                        signer.check_valid_on(entry.plan.issue_date)
             except RotacalError as e:
                 entry.error = " ".join(str(e).split())
             else:
@@ -447,7 +465,7 @@ def _run(
         if on_start is not None:
             on_start(len(todo), result.dashboard)
         direct = cluster.direct(dask, store)
-        run = _Run(dask, store, out, staging, entries, outcomes, advance, direct)
+        run = _Run(dask, store, out, staging, entries, outcomes, advance, direct, signer)
         # results come with their futures (fetched in the background, not one round trip each);
         # a lost or cancelled task comes with its exception
         pending = as_completed([run.submit(i) for i in todo], with_results=True, raise_errors=False)

@@ -33,6 +33,7 @@ from rotacal.errors import AlreadyCertifiedError, RotacalError
 
 if TYPE_CHECKING:
     from rotacal.certificate.content import CertificateContent
+    from rotacal.certificate.sign import Signer
     from rotacal.records import Store
 
 __all__ = [
@@ -122,14 +123,14 @@ def measure_task(plan_path: str, staging_root: str) -> Measured | Failed:
         return _failed(e, start)
 
 
-def render_task(measured: Measured, number: str) -> Done | Failed:
-    """Render a measured plan's certificate (results.json, DCC, PDF) under ``number`` into its
-    staging folder (SQLite batches; the client keeps and publishes it)."""
+def render_task(measured: Measured, number: str, signer: Signer | None = None) -> Done | Failed:
+    """Render a measured plan's certificate (results.json, DCC signed with ``signer``, PDF) under
+    ``number`` into its staging folder (SQLite batches; the client keeps and publishes it)."""
     from rotacal.certificate.issue import render_into
 
     start = time.perf_counter()
     try:
-        content = render_into(measured.content, number, Path(measured.staging))
+        content = render_into(measured.content, number, Path(measured.staging), signer)
     except Exception as e:
         return _failed(e, start)
     seconds = measured.seconds + time.perf_counter() - start
@@ -155,15 +156,20 @@ def _store(url: str) -> Store:
     return _STORES[url]
 
 
-def certify_task(plan_path: str, out: str, staging_root: str, db_url: str) -> Done | Failed:
+def certify_task(
+    plan_path: str, out: str, staging_root: str, db_url: str, signer: Signer | None = None
+) -> Done | Failed:
     """Issue a plan's certificate on the worker, keeping it in the records store at ``db_url``
-    (workers that write the records): its folder is ``out``/NUMBER, staged in ``staging_root``."""
+    (workers that write the records): its folder is ``out``/NUMBER, staged in ``staging_root``;
+    its DCC signed with ``signer``."""
     from rotacal.certificate.issue import certify
 
     start = time.perf_counter()
     try:
         with _quiet():
-            issued = certify(plan_path, registry=_store(db_url), into=out, staging_in=staging_root)
+            issued = certify(
+                plan_path, registry=_store(db_url), into=out, staging_in=staging_root, signer=signer
+            )
     except Exception as e:
         return _failed(e, start)
     return Done(issued.number, time.perf_counter() - start, _warnings(issued.content))

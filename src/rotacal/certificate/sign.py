@@ -83,6 +83,22 @@ class Signer:
 
         return self.certificate.fingerprint(hashes.SHA256()).hex()
 
+    def __reduce__(self) -> tuple[Any, tuple[bytes, bytes, str, str]]:
+        """Pickled as the DER of its key and certificate, so that ``rotacal batch --sign-key``
+        reads and checks the key once, in its own process, and its Dask workers sign with it
+        (cryptography's key objects cannot be pickled; the passphrase is not sent). The key
+        travels unencrypted over Dask's connection: on this machine's local cluster that is
+        local; to workers on other machines use a scheduler with TLS (``tls://``)."""
+        from cryptography.hazmat.primitives.serialization import (
+            Encoding,
+            NoEncryption,
+            PrivateFormat,
+        )
+
+        key = self.key.private_bytes(Encoding.DER, PrivateFormat.PKCS8, NoEncryption())
+        cert = self.certificate.public_bytes(Encoding.DER)
+        return (_signer_from_der, (key, cert, str(self.key_path), str(self.cert_path)))
+
     def check_valid_on(self, day: dt.date, now: dt.datetime | None = None) -> None:
         """Refuse a certificate that is not valid on the date of issue ``day`` (at any time of
         that day, UTC) or at ``now`` [default: the clock], when the signature is made.
@@ -111,6 +127,19 @@ class Signer:
                     f"{'expired' if late else 'not yet valid'} on {said}: it is valid from "
                     f"{start:%Y-%m-%d %H:%M} to {end:%Y-%m-%d %H:%M} UTC; nothing was issued"
                 )
+
+
+def _signer_from_der(key: bytes, cert: bytes, key_path: str, cert_path: str) -> Signer:
+    """A :class:`Signer` unpickled (see :meth:`Signer.__reduce__`)."""
+    from cryptography import x509
+    from cryptography.hazmat.primitives.serialization import load_der_private_key
+
+    return Signer(
+        load_der_private_key(key, password=None),
+        x509.load_der_x509_certificate(cert),
+        Path(key_path),
+        Path(cert_path),
+    )
 
 
 @dataclasses.dataclass(frozen=True)

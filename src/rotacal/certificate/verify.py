@@ -9,8 +9,12 @@ this order, everything a customer's incoming inspection can check without callin
    ``xades:SigningTime`` — and, with a trust anchor, that it chains to it (signxml's verifier,
    with cryptography's path validation at the signing time);
 2. the DCC against the DCC v3.1.2 schema with the XML Signature schema;
-3. that ``results.json`` states what the signed XML states: the certificate number, the
-   ``plan_sha256``, and every reported value, unit, U, k and coverage probability (or interval);
+3. that ``results.json`` states what the signed XML states — read from the content the
+   signature covers (signxml's ``signed_xml``), never from the file as parsed, which may hold a
+   second copy inside ``ds:Signature`` or a comment inside a value that no digest covers (both
+   named as problems): the certificate number, the ``plan_sha256``, the item's serial and
+   model, the dates, every reported value, unit, U, k and coverage probability (or interval)
+   and every verdict of conformity;
 4. where the plan and its captures can be reached (beside the certificate folder, or ``plan``):
    the SHA-256 of each against the certificate's, and the signed ``plan_sha256`` recomputed from
    the plan's bytes and the capture hashes;
@@ -87,6 +91,7 @@ class Verification:
             "signed": self.signed,
             "signature_valid": self.signature_valid,
             "signer": self.signer,
+            "trusted": bool(self.signer and self.signer["trusted"]),
             "schema_valid": self.schema_valid,
             "consistent": self.consistent,
             "recomputed": self.recomputed,
@@ -102,7 +107,13 @@ class Verification:
         if self.problems:
             return f"{head}: NOT VERIFIED — " + "; ".join(self.problems)
         assert self.signer is not None
-        trust = "trusted through --trust" if self.signer["trusted"] else "no --trust given"
+        # without a trust anchor anyone's key verifies: the line must not read as trusted
+        trusted = self.signer["trusted"]
+        trust = (
+            "trusted through --trust"
+            if trusted
+            else "UNTRUSTED: not checked against a trust anchor, give --trust"
+        )
         parts = [
             f"signed by {self.signer['name']} (certificate SHA-256 "
             f"{self.signer['fingerprint_sha256'][:16]}…, {trust})",
@@ -116,7 +127,8 @@ class Verification:
             parts.append(f"plan and captures match ({self.inputs_checked} files)")
         if self.recomputed:
             parts.append("recomputed: every number and plan_sha256 the same")
-        return f"{head}: VERIFIED — " + ", ".join(parts)
+        verdict = "VERIFIED" if trusted else "VERIFIED, SIGNER UNTRUSTED"
+        return f"{head}: {verdict} — " + ", ".join(parts)
 
 
 # --- input ------------------------------------------------------------------------------------
@@ -141,10 +153,21 @@ def _read_xml(xml_path: Path) -> tuple[bytes, etree._Element]:
         data = xml_path.read_bytes()
     except OSError as e:
         raise ConfigError(f"{xml_path}: cannot be read ({e.strerror})") from None
+    # a DCC declares no DTD: one that does is refused before any parser expands or fetches its
+    # entities (entity expansion, "billion laughs"; external entities, XXE)
+    refused = (
+        f"{xml_path}: declares a DOCTYPE (a DTD with entities: entity expansion or an external "
+        "entity); a DCC has none, so it is refused unread"
+    )
+    if b"<!DOCTYPE" in data:
+        raise ConfigError(refused)
     try:
         root = etree.fromstring(data, etree.XMLParser(resolve_entities=False, no_network=True))
     except etree.XMLSyntaxError as e:
         raise ConfigError(f"{xml_path}: not well-formed XML ({e})") from None
+    docinfo = root.getroottree().docinfo
+    if docinfo.internalDTD is not None or docinfo.externalDTD is not None or docinfo.doctype:
+        raise ConfigError(refused)  # a DOCTYPE in another encoding than the bytes searched
     if root.tag != f"{{{DCC_NAMESPACE}}}digitalCalibrationCertificate":
         raise ConfigError(f"{xml_path}: not a Digital Calibration Certificate (root {root.tag})")
     return data, root
@@ -222,8 +245,13 @@ def _names_embedded(signature: etree._Element, cert: Any) -> bool:
 
 def _check_signature(
     data: bytes, root: etree._Element, trust: Path | None, problems: list[str], notes: list[str]
-) -> tuple[bool, bool, dict[str, Any] | None]:
-    """(signed, signature_valid, signer) of the DCC; failures appended to ``problems``."""
+) -> tuple[bool, dict[str, Any] | None, etree._Element | None]:
+    """(signed, signer, the signed DCC) of the DCC; failures appended to ``problems``.
+
+    The signed DCC is the content the signature's digest covers, as signxml returns it
+    (``VerifyResult.signed_xml``: parsed again from the canonical bytes that were digested, so it
+    holds neither the ``ds:Signature`` nor comments); None unless the signature is valid.
+    """
     from cryptography.hazmat.primitives.serialization import Encoding
     from signxml.exceptions import InvalidCertificate, InvalidDigest, SignXMLException
     from signxml.xades import XAdESSignatureConfiguration, XAdESVerifier
@@ -232,59 +260,124 @@ def _check_signature(
     signatures = root.findall(".//ds:Signature", namespaces=_NS)
     if not signatures:
         problems.append("certificate.xml carries no signature (no ds:Signature): it is unsigned")
-        return False, False, None
+        return False, None, None
     if len(signatures) > 1:
         problems.append(f"certificate.xml carries {len(signatures)} signatures; one is expected")
-        return True, False, None
+        return True, None, None
     signature = signatures[0]
     cert = _embedded(signature)
     if cert is None:
         problems.append("the signature embeds no readable signer certificate (ds:X509Certificate)")
-        return True, False, None
+        return True, None, None
     when = _signing_time(signature)
     pinned = any(a.public_bytes(Encoding.DER) == cert.public_bytes(Encoding.DER) for a in anchors)
-    trusted = bool(anchors)
-    info = _signer(cert, when, trusted)
+    info = _signer(cert, when, trusted=False)  # trusted once the chain to --trust is checked
     who = (
         f"the embedded certificate (CN={info['name']}, SHA-256 {info['fingerprint_sha256'][:16]}…)"
     )
     if when is None:
         problems.append("the signature has no readable xades:SigningTime")
-        return True, False, info
+        return True, info, None
     if not _names_embedded(signature, cert):
         problems.append(
             f"{who} is not the certificate the signed properties name "
             "(xades:SigningCertificateV2): the embedded certificate was replaced"
         )
-        return True, False, info
+        return True, info, None
     if not cert.not_valid_before_utc <= when <= cert.not_valid_after_utc:
         problems.append(
             f"{who} was not valid at the signing time {when.isoformat()} (valid "
             f"{info['not_valid_before']} to {info['not_valid_after']})"
         )
-        return True, False, info
+        return True, info, None
     config = XAdESSignatureConfiguration(verification_time=when)
     try:
         if anchors and not pinned:
             with tempfile.NamedTemporaryFile(suffix=".pem") as store:
                 store.write(b"".join(a.public_bytes(Encoding.PEM) for a in anchors))
                 store.flush()
-                XAdESVerifier().verify(data, ca_pem_file=store.name, expect_config=config)
+                results = XAdESVerifier().verify(data, ca_pem_file=store.name, expect_config=config)
         else:
-            XAdESVerifier().verify(data, x509_cert=cert, expect_config=config)
+            results = XAdESVerifier().verify(data, x509_cert=cert, expect_config=config)
     except InvalidDigest as e:
         problems.append(_digest_problem(str(e)))
-        return True, False, info
+        return True, info, None
     except InvalidCertificate as e:
         why = " ".join(str(e).split()).split(". Use SignatureConfiguration")[0]
         problems.append(f"{who} does not chain to --trust {trust}: {why}")
-        return True, False, info
+        return True, info, None
     except SignXMLException as e:
         problems.append(f"the signature does not verify with {who}: {' '.join(str(e).split())}")
-        return True, False, info
+        return True, info, None
+    signed = _whole_document(signature, results, root)
+    if signed is None:
+        problems.append(
+            "the signature does not cover the whole certificate: no reference is the document "
+            '(URI="" with the enveloped-signature transform), so what it covers is not what is read'
+        )
+        return True, info, None
+    info["trusted"] = bool(anchors)
     if not anchors:
         notes.append("the signer's certificate was not checked against a trust anchor (--trust)")
-    return True, True, info
+    return True, info, signed
+
+
+def _whole_document(
+    signature: etree._Element, results: list[Any], root: etree._Element
+) -> etree._Element | None:
+    """The signed DCC of a verified signature: the content of its reference with ``URI=""`` and
+    the enveloped-signature transform (W3C XML Signature 1.1 §4.4.3.2, §6.6.4), when that content
+    is the DCC's root; None when no reference is the whole document.
+
+    The numbers are read from this content and not from the parsed file: the file may also hold
+    what the digest does not cover — a copy of the results inside ``ds:Signature`` (which the
+    enveloped transform removes), or a comment that cuts a value's text in two (which the
+    canonicalisation of a same-document reference drops, so ``0.01<!---->25`` is signed as
+    ``0.0125`` while a reader of the element's first text node sees ``0.01``).
+    """
+    references = signature.findall("ds:SignedInfo/ds:Reference", namespaces=_NS)
+    enveloped = "http://www.w3.org/2000/09/xmldsig#enveloped-signature"
+    for reference, result in zip(references, results, strict=False):
+        algorithms = [
+            t.get("Algorithm") for t in reference.findall("ds:Transforms/ds:Transform", _NS)
+        ]
+        content = result.signed_xml
+        if (
+            reference.get("URI") == ""
+            and enveloped in algorithms
+            and content is not None
+            and content.tag == root.tag
+        ):
+            return content
+    return None
+
+
+_SIGNATURE_NAMESPACES = (DS_NAMESPACE, _XADES[1:-1], "http://www.w3.org/2009/xmldsig11#")
+
+
+def _uncovered(root: etree._Element) -> list[str]:
+    """What the file holds that no signature covers and a reader might take for the DCC's: a
+    comment (dropped by the canonicalisation, it can cut a value's text in two) or an element of
+    another namespace inside ``ds:Signature`` (removed by the enveloped transform: a copy of the
+    results placed there is the XML signature wrapping attack). rotacal writes neither."""
+    out = [
+        f"certificate.xml holds a comment on line {c.sourceline}, which the signature does not "
+        "cover (a comment inside a value makes a reader of its text see another number)"
+        for c in root.iter(etree.Comment)
+    ][:1]
+    for signature in root.iterfind(".//ds:Signature", namespaces=_NS):
+        foreign = [
+            e
+            for e in signature.iter()
+            if isinstance(e.tag, str) and etree.QName(e).namespace not in _SIGNATURE_NAMESPACES
+        ]
+        if foreign:
+            out.append(
+                f"certificate.xml holds {etree.QName(foreign[0]).localname} (line "
+                f"{foreign[0].sourceline}) inside ds:Signature, where the signature does not cover "
+                "it: an XML signature wrapping attempt"
+            )
+    return out
 
 
 def _digest_problem(message: str) -> str:
@@ -345,9 +438,32 @@ def _agreement(root: etree._Element, doc: Mapping[str, Any]) -> list[str]:
             f"plan_sha256 {doc.get('plan_sha256')} of results.json is not the one certificate.xml "
             "states"
         )
+    core, item = (
+        "dcc:administrativeData/dcc:coreData/",
+        "dcc:administrativeData/dcc:items/dcc:item/",
+    )
+    serial = "dcc:identifications/dcc:identification[dcc:issuer='manufacturer']/dcc:value"
+    for path, stated, name in (  # what says which unit, and when it was calibrated
+        (item + serial, doc.get("item", {}).get("serial"), "item.serial"),
+        (item + "dcc:model", doc.get("item", {}).get("model"), "item.model"),
+        (
+            core + "dcc:beginPerformanceDate",
+            doc.get("calibration_start_date"),
+            "calibration_start_date",
+        ),
+        (core + "dcc:endPerformanceDate", doc.get("calibration_end_date"), "calibration_end_date"),
+    ):
+        xml = root.findtext(path, namespaces=_NS)
+        if xml != stated:
+            element = path.rsplit("/", 1)[-1] if "[" not in path else "the item's serial number"
+            out.append(f"{element} {xml!r} in certificate.xml, {name} {stated!r} in results.json")
     reals = {
         q.get("id"): q.find("si:real", namespaces=_NS)
-        for q in root.iterfind(".//dcc:result/dcc:data/dcc:quantity", namespaces=_NS)
+        for q in root.iterfind(
+            "dcc:measurementResults/dcc:measurementResult/dcc:results/dcc:result/dcc:data/"
+            "dcc:quantity",
+            namespaces=_NS,
+        )
     }
     seen = set()
     for index, m in enumerate(doc.get("measurements", []), start=1):
@@ -362,7 +478,33 @@ def _agreement(root: etree._Element, doc: Mapping[str, Any]) -> list[str]:
     out += [
         f"{qid}: in certificate.xml but not in results.json" for qid in reals if qid not in seen
     ]
-    return out
+    return out + _conformity_agreement(root, doc)
+
+
+def _conformity_agreement(root: etree._Element, doc: Mapping[str, Any]) -> list[str]:
+    """Every statement of conformity results.json and the XML do not share: the verdicts of
+    results.json against the ``dcc:conformity`` of the XML's statements (``refId`` → quantity),
+    ILAC-G8's conditional pass / fail standing for an indeterminate verdict (see
+    :func:`rotacal.certificate.dcc.dcc_conformity`)."""
+    said = {"pass": "pass", "fail": "fail", "conditionalPass": "indeterminate"}
+    said["conditionalFail"] = "indeterminate"
+    xml = {
+        s.get("refId"): said.get(s.findtext("dcc:conformity", namespaces=_NS) or "", "?")
+        for s in root.iterfind(
+            "dcc:administrativeData/dcc:statements/dcc:statement[dcc:conformity]", namespaces=_NS
+        )
+    }
+    json_ = {
+        quantity_id(index, str(key)): verdict
+        for index, m in enumerate(doc.get("measurements", []), start=1)
+        for key, verdict in (m.get("conformity") or {}).items()
+    }
+    return [
+        f"{qid} conformity: {xml.get(qid, 'no statement')} in certificate.xml, "
+        f"{json_.get(qid, 'no verdict')} in results.json"
+        for qid in sorted(set(xml) | set(json_), key=str)
+        if xml.get(qid) != json_.get(qid)
+    ]
 
 
 def _real_agreement(qid: str, real: etree._Element, q: Mapping[str, Any]) -> list[str]:
@@ -589,9 +731,12 @@ def verify_certificate(
     data, root = _read_xml(xml_path)
     problems: list[str] = []
     notes: list[str] = []
-    signed, signature_valid, signer = _check_signature(
+    signed, signer, signed_root = _check_signature(
         data, root, Path(trust) if trust is not None else None, problems, notes
     )
+    problems += _uncovered(root)
+    # what is compared is what the signature covers; an unsigned or broken one: the file as read
+    content = root if signed_root is None else signed_root
     pdf_matches = _check_pdf(folder, data, problems, notes) if signed else None
     fault = validate_signed_dcc(data)
     if fault is not None:
@@ -599,7 +744,7 @@ def verify_certificate(
             f"certificate.xml is not valid against the DCC {SCHEMA_VERSION} schema: {fault}"
         )
     number = (
-        root.findtext("dcc:administrativeData/dcc:coreData/dcc:uniqueIdentifier", namespaces=_NS)
+        content.findtext("dcc:administrativeData/dcc:coreData/dcc:uniqueIdentifier", namespaces=_NS)
         or ""
     )
     results = folder / "results.json"
@@ -611,7 +756,7 @@ def verify_certificate(
     except (OSError, ValueError) as e:
         problems.append(f"{results}: cannot be read as JSON ({' '.join(str(e).split())})")
     else:
-        disagreements = _agreement(root, doc)
+        disagreements = _agreement(content, doc)
         consistent = not disagreements
         if disagreements:
             more = f" (and {len(disagreements) - 3} more)" if len(disagreements) > 3 else ""
@@ -619,7 +764,7 @@ def verify_certificate(
                 "results.json and certificate.xml disagree: " + "; ".join(disagreements[:3]) + more
             )
         stated = set(
-            root.xpath(
+            content.xpath(
                 "dcc:administrativeData/dcc:coreData/dcc:identifications/dcc:identification/"
                 "dcc:value/text()",
                 namespaces=_NS,
@@ -629,11 +774,16 @@ def verify_certificate(
         checked = _check_inputs(doc, stated, found, problems, notes)
         if recompute:
             recomputed = _recompute(doc, found, problems)
+        else:  # what the DCC does not state cannot be checked against the signature
+            notes.append(
+                "the analyses' full results in results.json (measurements[].results) are not in "
+                "the signed XML: --recompute checks them"
+            )
     return Verification(
         path=xml_path,
         number=number,
         signed=signed,
-        signature_valid=signature_valid,
+        signature_valid=signed_root is not None,
         signer=signer,
         schema_valid=fault is None,
         consistent=consistent,

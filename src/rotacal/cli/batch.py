@@ -10,6 +10,7 @@ import click
 from ._app import cli
 from ._common import _progress, _wrote
 from ._help import example
+from ._sign import load_sign_options, sign_options
 from ._store import db_option
 
 if TYPE_CHECKING:
@@ -22,6 +23,7 @@ if TYPE_CHECKING:
         "rotacal batch plans/ --out certs     # every .toml file of plans/",
         "rotacal batch unit-1.toml unit-2.toml --out certs --workers 2",
         "rotacal batch plans/ --out /shared/certs --scheduler tcp://head:8786",
+        "rotacal batch plans/ --out certs --sign-key lab.key --sign-cert lab.pem",
     ),
 )
 @click.argument("plans", nargs=-1, required=True, metavar="PLAN...")
@@ -45,12 +47,15 @@ if TYPE_CHECKING:
     help="A running Dask scheduler (tcp://host:8786) instead of a local cluster; its workers must "
     "see the plans, captures and --out at the same paths.",
 )
+@sign_options
 @db_option
 def batch_command(
     plans: tuple[str, ...],
     out: str | None,
     workers: int | None,
     scheduler: str | None,
+    sign_key: str | None,
+    sign_cert: str | None,
     db: str | None,
 ) -> None:
     """Certify many plans as tasks on Dask distributed.
@@ -58,13 +63,15 @@ def batch_command(
     PLAN... are plan files or folders of them (their .toml files). A plan whose plan and
     captures were certified already is skipped, so a stopped batch is finished by running it
     again; a plan that fails fails alone, with its reason in DIR/batch.json. Exit code 2 when
-    any plan failed.
+    any plan failed. With --sign-key and --sign-cert every certificate issued is signed as
+    `rotacal certify` signs it (the key read and checked once, here).
     """
     from rotacal.batch import run_batch
     from rotacal.batch.plans import find_plans
 
     if workers is not None and scheduler is not None:
         raise click.UsageError("give --workers (a local cluster) or --scheduler, not both")
+    signer = load_sign_options(sign_key, sign_cert)  # read and checked once, before the cluster
 
     def started(count: int, dashboard: str | None) -> None:
         if dashboard:
@@ -79,9 +86,12 @@ def batch_command(
             scheduler=scheduler,
             advance=advance,
             on_start=started,
+            signer=signer,
         )
     _wrote(result.out / "batch.json")
     _summary(result)
+    if signer is not None and result.count("issued"):
+        click.echo(f"signed by {signer.name} (certificate {signer.cert_path})")
     if result.failed:
         raise SystemExit(2)
 
