@@ -55,7 +55,15 @@ MEASUREMENT_COMMANDS = (
     "gyro rotations",
     "gyro multiposition",
     "allan",
+    "position",
+    "turntable identify",
+    "gyro frequency-response",
+    "gyro resolution",
+    "gyro accelerometer",
 )
+#: Commands INTERFACE.md names that this version does not have yet: a plan naming one is told so.
+#: When one lands, move it into MEASUREMENT_COMMANDS and give it a certificate.methods entry.
+AWAITED_COMMANDS = ("motion angle",)
 
 _TABLES = {
     "certificate": (
@@ -372,6 +380,10 @@ class _Reader:
         for i, entry in enumerate(self.array(data, "measurement"), start=1):
             key = f"measurement[{i}]"
             command = " ".join(self.text(entry, key, "command").split())
+            if command in AWAITED_COMMANDS:
+                raise self.fail(
+                    f"{key}.command", f"{command!r} is not in this version of rotacal yet"
+                )
             if command not in MEASUREMENT_COMMANDS:
                 raise self.fail(
                     f"{key}.command",

@@ -1,0 +1,163 @@
+"""Results a command states as a value and its standard uncertainty, made budgets a certificate
+can report.
+
+Most analyses write GUM budgets (``uncertainty_budgets``); the acceptance commands of a rate table
+(``rate --window-deg``, ``position``, ``turntable identify``) and two gyro tests state their
+results as ``<key>`` and its standard uncertainty u (``<key>_u``), and the coverage factor k
+beside them or by their definition. :func:`stated_budgets` turns each into the budget form
+(value, U = k·u, k, p, unit, a name) that :func:`rotacal.certificate.quantities.reported_quantities`
+rounds and reports, so that these results get the same ILAC-P14 rounding and the same conformity
+decision as every other.
+
+A result keyed by a window or a parameter (``rate_stability_percent`` → {"1": …, "10": …}) gives
+one quantity per entry, keyed ``rate_stability_percent.10``: the key a plan's limit names
+(``limits = { "rate_stability_percent.10" = { max = 0.01 } }``). An entry without a value (a
+geometric error the positions cannot separate: null) is not a result; a separable combination of
+such errors is, keyed by its terms in ASCII (``errors_arcsec.phi_y1+eps_y``).
+
+References
+----------
+JCGM 100:2008 (GUM) §6.2–6.3 (U = k·u), G.3–G.4 (k from Student's t for ν degrees of freedom).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from rotacal.uncertainty.coverage import coverage_factor
+
+__all__ = ["STATED_RESULTS", "StatedResult", "stated_budgets"]
+
+
+@dataclasses.dataclass(frozen=True)
+class StatedResult:
+    """How one key of a command's JSON is reported.
+
+    ``u_key`` names the standard uncertainty (default ``<key>_u``). ``k`` is the coverage factor:
+    a number, ``"json"`` for the JSON's own ``k`` (a number, or a mapping by key), or
+    ``"windows"`` for Student's t of ν = N − 1 over the N windows (``window_count``) of that
+    window size, as the spread of N window rates has. ``name`` is the reader's name; ``{}``
+    takes the entry (the window, the parameter).
+    """
+
+    unit: str
+    name: str
+    k: float | str = "json"
+    u_key: str = ""
+
+
+_WINDOWS = "windows"
+_RATE = {
+    "rate_accuracy_percent": StatedResult("%", "rate accuracy over {}°", _WINDOWS),
+    "rate_stability_percent": StatedResult("%", "rate stability over {}°", _WINDOWS),
+    "rate_stability_peak_percent": StatedResult("%", "rate stability (peak) over {}°", _WINDOWS),
+}
+#: ISO 230-2 values of a rotary axis; position states u and prints U = 2u.
+_POSITION = {
+    f"{name}_{direction}_arcsec": StatedResult("arcsec", f"{label} ({direction}, ISO 230-2)", 2.0)
+    for name, label in (
+        ("positioning_accuracy", "positioning accuracy A"),
+        ("systematic_deviation", "systematic positioning deviation E"),
+        ("repeatability", "repeatability of positioning R"),
+    )
+    for direction in ("bidirectional", "forward", "reverse")
+} | {
+    "reversal_value_arcsec": StatedResult("arcsec", "reversal value B (ISO 230-2)", 2.0),
+    "error_pp_arcsec": StatedResult("arcsec", "position error, peak-to-peak", 2.0),
+}
+
+#: command → key → how it is reported.
+STATED_RESULTS: dict[str, dict[str, StatedResult]] = {
+    "rate": _RATE,
+    "position": _POSITION,
+    "turntable identify": {
+        "errors_arcsec": StatedResult("arcsec", "geometric error {}", "json", "errors_u_arcsec")
+    },
+    "gyro frequency-response": {
+        "natural_frequency_hz": StatedResult("Hz", "natural frequency fn"),
+        "damping_ratio": StatedResult("", "damping ratio ζ"),
+        "bandwidth_hz": StatedResult("Hz", "bandwidth (−3 dB)"),
+    },
+    # rectangular distribution over the bracketing steps: k = 1.65 for p = 95 % (threshold.py)
+    "gyro resolution": {
+        "threshold_deg_s": StatedResult("°/s", "threshold", 1.65),
+        "resolution_deg_s": StatedResult("°/s", "resolution", 1.65),
+    },
+}
+
+
+def _finite(x: Any) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _k(how: StatedResult, key: str, entry: str | None, results: Mapping[str, Any]) -> float:
+    if isinstance(how.k, float):
+        return how.k
+    if how.k == _WINDOWS:
+        count = (results.get("window_count") or {}).get(entry)
+        return coverage_factor(max(int(count) - 1, 1) if _finite(count) else 1.0)
+    k = results.get("k")
+    if isinstance(k, Mapping):
+        k = k.get(key)
+    return float(k) if _finite(k) else 2.0
+
+
+def _budget(value: Any, u: Any, k: float, p: float, how: StatedResult, name: str) -> dict | None:
+    if not (_finite(value) and _finite(u)):
+        return None
+    return {"value": value, "U": k * u, "k": k, "p": p, "unit": how.unit, "quantity": name}
+
+
+def stated_budgets(command: str, results: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
+    """The results ``command`` states as value and u, as budgets keyed as a plan names them.
+
+    Parameters
+    ----------
+    command : str
+        The analysis command ("rate", "position", …).
+    results : mapping
+        The command's JSON.
+
+    Returns
+    -------
+    dict
+        key (``rate_stability_percent.10``) → {value, U, k, p, unit, quantity}; empty for a
+        command not in :data:`STATED_RESULTS` or a JSON without those keys.
+    """
+    p = results.get("coverage_probability")
+    p = float(p) if _finite(p) else 0.95
+    out: dict[str, dict[str, Any]] = {}
+    for key, how in STATED_RESULTS.get(command, {}).items():
+        value, u = results.get(key), results.get(how.u_key or f"{key}_u")
+        if isinstance(value, Mapping) and isinstance(u, Mapping):
+            for entry, v in value.items():
+                k = _k(how, key, entry, results)
+                b = _budget(v, u.get(entry), k, p, how, how.name.format(entry))
+                if b is not None:
+                    out[f"{key}.{entry}"] = b
+        else:
+            b = _budget(value, u, _k(how, key, None, results), p, how, how.name)
+            if b is not None:
+                out[key] = b
+    if command == "turntable identify":
+        out.update(_combinations(results, p))
+    return out
+
+
+def _combinations(results: Mapping[str, Any], p: float) -> dict[str, dict[str, Any]]:
+    """The separable combinations of errors the positions could not separate, as results."""
+    how = STATED_RESULTS["turntable identify"]["errors_arcsec"]
+    k = _k(how, "errors_arcsec", None, results)
+    out: dict[str, dict[str, Any]] = {}
+    for c in results.get("combinations") or ():
+        if len(c.get("coefficients") or ()) < 2:
+            continue  # a single parameter: reported under errors_arcsec already
+        name = str(c.get("name", ""))
+        b = _budget(c.get("value_arcsec"), c.get("u_arcsec"), k, p, how, how.name.format(name))
+        if b is not None:  # a key one can type: "phi_z2 − 0.5·eta" → "phi_z2-0.5*eta"
+            typed = "".join(name.split()).replace("−", "-").replace("·", "*")
+            out["errors_arcsec." + typed] = b
+    return out
