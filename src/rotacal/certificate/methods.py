@@ -44,7 +44,8 @@ METHODS: dict[str, tuple[str, tuple[str, ...]]] = {
         "(--window-deg): the rate-table acceptance figures of consecutive, non-overlapping "
         "windows of W degrees, each window's mean rate Θ/Δt from the elapsed time through a known "
         "angle ({kokuyama2015}, §5): rate accuracy 100·(ω̄ − Ω)/Ω against the set rate Ω, rate "
-        "stability 100·s(ω_i)/ω̄ and its peak 100·max|ω_i − ω̄|/ω̄ per window size; U = 2u.",
+        "stability 100·s(ω_i)/ω̄ and its peak 100·max|ω_i − ω̄|/ω̄ per window size; k from Student's t for the N − 1 degrees of "
+        "freedom of N windows.",
         ("kokuyama2015", "gum"),
     ),
     "position": (

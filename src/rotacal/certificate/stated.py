@@ -24,12 +24,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections.abc import Mapping
 from typing import Any
 
 from rotacal.uncertainty.coverage import coverage_factor
 
-__all__ = ["STATED_RESULTS", "StatedResult", "stated_budgets"]
+__all__ = ["STATED_RESULTS", "StatedResult", "stated_budgets", "window_limit_problem"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -89,20 +90,33 @@ STATED_RESULTS: dict[str, dict[str, StatedResult]] = {
 }
 
 
+#: The Greek letters of seed 001's error names (``alpha_x2`` → ``α_x2``), as the paper prints them.
+_GREEK = {"phi": "φ", "alpha": "α", "eps": "ε", "eta": "η"}
+
+
+def _symbol(name: str) -> str:
+    """A geometric error's name, or a sum of them, in the paper's letters: ``φ_y1 + ε_y``."""
+    return re.sub(r"\b(phi|alpha|eps|eta)(?=_|\b)", lambda m: _GREEK[m.group(1)], name)
+
+
 def _finite(x: Any) -> bool:
     return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _number(x: Any, default: float) -> float:
+    return float(x) if _finite(x) else default
 
 
 def _k(how: StatedResult, key: str, entry: str | None, results: Mapping[str, Any]) -> float:
     if isinstance(how.k, float):
         return how.k
     if how.k == _WINDOWS:
-        count = (results.get("window_count") or {}).get(entry)
-        return coverage_factor(max(int(count) - 1, 1) if _finite(count) else 1.0)
+        count = _number((results.get("window_count") or {}).get(entry), 2.0)
+        return coverage_factor(max(int(count) - 1, 1))
     k = results.get("k")
     if isinstance(k, Mapping):
         k = k.get(key)
-    return float(k) if _finite(k) else 2.0
+    return _number(k, 2.0)
 
 
 def _budget(value: Any, u: Any, k: float, p: float, how: StatedResult, name: str) -> dict | None:
@@ -127,15 +141,14 @@ def stated_budgets(command: str, results: Mapping[str, Any]) -> dict[str, dict[s
         key (``rate_stability_percent.10``) → {value, U, k, p, unit, quantity}; empty for a
         command not in :data:`STATED_RESULTS` or a JSON without those keys.
     """
-    p = results.get("coverage_probability")
-    p = float(p) if _finite(p) else 0.95
+    p = _number(results.get("coverage_probability"), 0.95)
     out: dict[str, dict[str, Any]] = {}
     for key, how in STATED_RESULTS.get(command, {}).items():
         value, u = results.get(key), results.get(how.u_key or f"{key}_u")
         if isinstance(value, Mapping) and isinstance(u, Mapping):
             for entry, v in value.items():
                 k = _k(how, key, entry, results)
-                b = _budget(v, u.get(entry), k, p, how, how.name.format(entry))
+                b = _budget(v, u.get(entry), k, p, how, how.name.format(_symbol(entry)))
                 if b is not None:
                     out[f"{key}.{entry}"] = b
         else:
@@ -156,8 +169,57 @@ def _combinations(results: Mapping[str, Any], p: float) -> dict[str, dict[str, A
         if len(c.get("coefficients") or ()) < 2:
             continue  # a single parameter: reported under errors_arcsec already
         name = str(c.get("name", ""))
-        b = _budget(c.get("value_arcsec"), c.get("u_arcsec"), k, p, how, how.name.format(name))
+        b = _budget(
+            c.get("value_arcsec"), c.get("u_arcsec"), k, p, how, how.name.format(_symbol(name))
+        )
         if b is not None:  # a key one can type: "phi_z2 − 0.5·eta" → "phi_z2-0.5*eta"
             typed = "".join(name.split()).replace("−", "-").replace("·", "*")
             out["errors_arcsec." + typed] = b
     return out
+
+
+def _windows(text: Any) -> list[float]:
+    """The window angles of a plan's ``window-deg`` option (what does not parse is left to the
+    rate command, which refuses it naming the option)."""
+    out = []
+    for part in str(text).split(","):
+        try:
+            out.append(float(part))
+        except ValueError:
+            continue
+    return out
+
+
+def window_limit_problem(command: str, options: Mapping[str, Any], key: str) -> str | None:
+    """Why a plan's limit on ``key`` cannot be judged from the windows ``command`` will measure
+    with ``options`` (the measurement's options, as the plan gives them), or None.
+
+    A limit on a per-window result names its window: ``rate_stability_percent.10`` needs
+    ``window-deg`` to hold 10 (written as the JSON writes it, ``"10"`` not ``"10.0"``), and a
+    rate accuracy needs the set rate. Checked when the plan is read, before anything runs.
+    """
+    group, _, window = key.partition(".")
+    if command != "rate" or group not in _RATE:
+        return None
+    given = options.get("window-deg")
+    if given is None:
+        return (
+            "is a result over angle windows: give the measurement options.window-deg (e.g. "
+            'window-deg = "1,10,360")'
+        )
+    names = [f"{float(w):g}" for w in _windows(given)]  # rate_windows.window_key
+    if not window:
+        return f"name the window: {', '.join(f'{group}.{n}' for n in names)}"
+    if window not in names:
+        try:
+            same = f"{float(window):g}" in names
+        except ValueError:
+            same = False
+        spelled = f"; write it {group}.{float(window):g}" if same else ""
+        return (
+            f"no window of {window}° is measured (options.window-deg = {str(given)!r}){spelled}; "
+            f"the limits it can take: {', '.join(f'{group}.{n}' for n in names)}"
+        )
+    if group == "rate_accuracy_percent" and options.get("set-rate-deg-s") is None:
+        return "a rate accuracy is against the set rate: give options.set-rate-deg-s"
+    return None

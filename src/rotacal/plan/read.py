@@ -18,6 +18,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from rotacal.certificate.stated import window_limit_problem
 from rotacal.errors import ConfigError
 
 from .approval import approval_problem
@@ -395,14 +396,20 @@ class _Reader:
                 raise self.fail(
                     f"{key}.decision_rule", f"must be simple or guarded (ILAC-G8), not {rule!r}"
                 )
+            options = self.options(entry, key)
+            limits = self.limits(entry.get("limits"), f"{key}.limits")
+            for limit in limits:
+                problem = window_limit_problem(command, dict(options), limit.key)
+                if problem is not None:
+                    raise self.fail(f"{key}.limits.{limit.key}", problem)
             measurements.append(
                 Measurement(
                     index=i,
                     name=self.text(entry, key, "name"),
                     command=command,
                     captures=self.captures(entry, key),
-                    options=self.options(entry, key),
-                    limits=self.limits(entry.get("limits"), f"{key}.limits"),
+                    options=options,
+                    limits=limits,
                     decision_rule=rule,
                 )
             )
