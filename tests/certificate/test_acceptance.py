@@ -21,6 +21,7 @@ from rotacal.certificate.content import CertificateContent
 from rotacal.certificate.dcc import dcc_xml
 from rotacal.certificate.issue import build_content
 from rotacal.certificate.stated import stated_budgets
+from rotacal.certificate.units import dsi_unit, printed_unit
 from rotacal.cli import cli
 from rotacal.errors import ConfigError
 from rotacal.plan.read import read_plan
@@ -208,3 +209,12 @@ def test_certify_refuses_a_window_limit_without_window_deg_in_one_line(folder: P
     lines = result.output.strip().splitlines()
     assert len(lines) == 1 and "options.window-deg" in lines[0], result.output
     assert "measurement[1].limits.rate_accuracy_percent.360" in lines[0]
+
+
+def test_an_accelerometer_triads_units_can_be_stated() -> None:
+    """gyro accelerometer: K per m/s² of the output unit, the bias in the output unit."""
+    assert dsi_unit("m/s^2/(m/s²)", "m/s^2") == r"\one"  # outputs in m/s²: a pure number
+    assert dsi_unit("LSB/(m/s²)", "LSB") == r"\second\tothe{2}\per\metre"
+    assert dsi_unit("V/(m/s²)", "V") == r"\volt\second\tothe{2}\per\metre"
+    assert printed_unit("m/s^2", "m/s^2") == "m/s²"
+    assert dsi_unit("m/s^2", "m/s^2") == r"\metre\per\second\tothe{2}"
