@@ -37,6 +37,8 @@ STEADY, UNSTEADY = 0.002, 0.05
 #: A small scale error, so that over 1° the table's own rate is what the windows see.
 PULSES = "pulses --heads 2 --pulses-per-rev 3600 --revolutions 4 --harmonic 1:0.02 "
 PULSES += "--graduation-noise-arcsec 0.001 --rate-fluctuation-percent"
+#: The allocation's bound of every geometric error (arcsec): the twin's errors lie on both sides.
+ALLOCATED_ARCSEC = 6.0
 RATE_OPTIONS = {"pulses-per-rev": 3600, "set-rate-deg-s": 300, "window-deg": "1,10,360"}
 
 
@@ -69,6 +71,11 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     _simulate(folder, f"{PULSES} {UNSTEADY}", "unsteady.npz")
     _simulate(folder, "position", "position.csv")
     _simulate(folder, "orientation", "orientation.csv")
+    bounds = {
+        name: ALLOCATED_ARCSEC / 60.0
+        for name in json.loads((folder / "orientation.csv.truth.json").read_text())["errors_arcsec"]
+    }
+    (folder / "budget.json").write_text(json.dumps({"upper_bounds_arcmin": bounds}))
     return folder
 
 
@@ -93,10 +100,11 @@ def content(folder: Path) -> CertificateContent:
                     "limits": {"positioning_accuracy_bidirectional_arcsec": {"max": 60.0}},
                 },
                 {
-                    "name": "Geometric errors",
+                    "name": "Geometric errors against the allocation",
                     "command": "turntable identify",
                     "capture": "orientation.csv",
-                    "limits": {"errors_arcsec.alpha_x2": {"min": -60.0, "max": 60.0}},
+                    "options": {"budget": "budget.json"},
+                    "limits": {"errors_arcsec": "allocation"},
                 },
             ],
         )
@@ -148,7 +156,7 @@ def test_the_acceptance_results_have_units_and_u_and_the_dcc_validates(
     assert "errors_arcsec.eta" not in identified  # η: no value, not a result
     assert "errors_arcsec.phi_y1+eps_y" in identified  # its separable sum is
     assert identified["errors_arcsec.phi_y1+eps_y"].name == "geometric error φ_y1 + ε_y"
-    assert [c.verdict for m in content.measurements[2:] for c in m.conformity] == ["pass"] * 2
+    assert [c.verdict for c in content.measurements[2].conformity] == ["pass"]
     errors = [str(e) for e in dcc_schema.iter_errors(io.BytesIO(dcc_xml(content)))]
     assert errors == []
 
@@ -218,3 +226,36 @@ def test_an_accelerometer_triads_units_can_be_stated() -> None:
     assert dsi_unit("V/(m/s²)", "V") == r"\volt\second\tothe{2}\per\metre"
     assert printed_unit("m/s^2", "m/s^2") == "m/s²"
     assert dsi_unit("m/s^2", "m/s^2") == r"\metre\per\second\tothe{2}"
+
+
+def test_identified_errors_are_judged_against_the_allocation(
+    folder: Path, content: CertificateContent
+) -> None:
+    """errors_arcsec = "allocation": each separable sum Σaᵢχᵢ within ± Σ|aᵢ|·UBᵢ; the verdicts
+    follow from the twin's true errors (none within 1 arcsec of its bound)."""
+    truth = json.loads((folder / "orientation.csv.truth.json").read_text())["errors_arcsec"]
+    identify = content.measurements[3]
+    judged = {c.key: c for c in identify.conformity}
+    combinations = identify.results["combinations"]
+    assert len(judged) == len(combinations) == 5
+    for combo in combinations:
+        true = sum(a * truth[n] for n, a in combo["coefficients"].items())
+        bound = sum(abs(a) * ALLOCATED_ARCSEC for a in combo["coefficients"].values())
+        assert abs(abs(true) - bound) > 1.0
+        key = "errors_arcsec." + "+".join(combo["coefficients"])
+        assert judged[key].limit_max == f"{bound:g}" and judged[key].limit_min == f"{-bound:g}"
+        assert judged[key].verdict == ("pass" if abs(true) < bound else "fail"), judged[key]
+    assert {c.verdict for c in judged.values()} == {"pass", "fail"}
+
+
+def test_an_allocation_limit_needs_the_allocation(folder: Path) -> None:
+    identify = {"name": "G", "command": "turntable identify", "capture": "orientation.csv"}
+    path = _plan(folder, [{**identify, "limits": {"errors_arcsec": "allocation"}}], "alloc.toml")
+    with pytest.raises(
+        ConfigError,
+        match=r"measurement\[1\]\.limits\.errors_arcsec \(line \d+\): .*options\.config",
+    ):
+        read_plan(path)
+    rate = _rate("Rate", "steady.npz", {"rate_stability_percent": "allocation"})
+    with pytest.raises(ConfigError, match="only a turntable identify measurement"):
+        read_plan(_plan(folder, [rate], "alloc-rate.toml"))

@@ -28,9 +28,17 @@ import re
 from collections.abc import Mapping
 from typing import Any
 
+from rotacal.errors import ConfigError
+from rotacal.plan.model import Limit
 from rotacal.uncertainty.coverage import coverage_factor
 
-__all__ = ["STATED_RESULTS", "StatedResult", "stated_budgets", "window_limit_problem"]
+__all__ = [
+    "STATED_RESULTS",
+    "StatedResult",
+    "allocation_limits",
+    "stated_budgets",
+    "window_limit_problem",
+]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -160,6 +168,46 @@ def stated_budgets(command: str, results: Mapping[str, Any]) -> dict[str, dict[s
     return out
 
 
+def _error_key(name: str, coefficients: Mapping[str, Any]) -> str:
+    """The key of an identified error or sum: ``errors_arcsec.alpha_x2``,
+    ``errors_arcsec.phi_y1+eps_y`` ("phi_z2 − 0.5·eta" typed as "phi_z2-0.5*eta")."""
+    if len(coefficients) < 2:
+        return "errors_arcsec." + next(iter(coefficients), name)
+    return "errors_arcsec." + "".join(name.split()).replace("−", "-").replace("·", "*")
+
+
+def allocation_limits(results: Mapping[str, Any]) -> tuple[Limit, ...]:
+    """The limits ``errors_arcsec = "allocation"`` stands for: each identified error or sum the
+    allocation bounds, within ± its bound B = Σ|aᵢ|·UBᵢ (arcsec, as ``turntable identify``
+    computes it), B cut to 0.01 arcsec toward zero so that the certificate prints it and never
+    passes more than the allocation allows. Guarded acceptance of value ± U within ± B is then
+    the command's own decision |value| + U ≤ B.
+
+    Raises
+    ------
+    ConfigError
+        When the results hold no allocation (the command ran without --config or --budget).
+    """
+    allocation = results.get("allocation")
+    if not isinstance(allocation, Mapping):
+        raise ConfigError(
+            'errors_arcsec = "allocation": the identification has no allocation to compare '
+            "with; give the measurement options.config or options.budget"
+        )
+    coefficients = {
+        c.get("name"): c.get("coefficients") or {} for c in results.get("combinations") or ()
+    }
+    limits = []
+    for entry in allocation.get("combinations") or ():
+        bound = entry.get("bound_arcsec")
+        if not _finite(bound):
+            continue  # "no bound": the allocation says nothing of it
+        cut = math.floor(float(bound) * 100.0) / 100.0
+        key = _error_key(str(entry["name"]), coefficients.get(entry["name"], {}))
+        limits.append(Limit(key, -cut, cut))
+    return tuple(limits)
+
+
 def _combinations(results: Mapping[str, Any], p: float) -> dict[str, dict[str, Any]]:
     """The separable combinations of errors the positions could not separate, as results."""
     how = STATED_RESULTS["turntable identify"]["errors_arcsec"]
@@ -172,9 +220,8 @@ def _combinations(results: Mapping[str, Any], p: float) -> dict[str, dict[str, A
         b = _budget(
             c.get("value_arcsec"), c.get("u_arcsec"), k, p, how, how.name.format(_symbol(name))
         )
-        if b is not None:  # a key one can type: "phi_z2 − 0.5·eta" → "phi_z2-0.5*eta"
-            typed = "".join(name.split()).replace("−", "-").replace("·", "*")
-            out["errors_arcsec." + typed] = b
+        if b is not None:
+            out[_error_key(name, c["coefficients"])] = b
     return out
 
 

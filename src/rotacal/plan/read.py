@@ -95,6 +95,8 @@ _REQUIRED_TABLES = (
     "standard",
     "measurement",
 )
+#: A limit that takes its bounds from the turntable's error allocation (turntable identify).
+ALLOCATION = "allocation"
 #: Options a plan may not give a command: ``certify`` decides where results go.
 _OUTPUT_OPTIONS = ("json", "report", "overwrite")
 _NUMBER = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
@@ -308,7 +310,7 @@ class _Reader:
             values["temperature_c"], values["temperature_u_c"], humidity, tuple(others)
         )
 
-    def limits(self, table: Any, key: str) -> tuple[Limit, ...]:
+    def limits(self, table: Any, key: str, command: str = "") -> tuple[Limit, ...]:
         if table is None:
             return ()
         if not isinstance(table, Mapping):
@@ -319,6 +321,15 @@ class _Reader:
             for name, value in entries.items():
                 full = prefix + name
                 where = f"{key}.{full}"
+                if value == ALLOCATION:
+                    if command != "turntable identify" or full != "errors_arcsec":
+                        raise self.fail(
+                            where,
+                            "only a turntable identify measurement takes errors_arcsec = "
+                            '"allocation" (the bounds of its --config or --budget)',
+                        )
+                    limits.append(Limit(full, allocation=True))
+                    continue
                 if not isinstance(value, Mapping) or not value:
                     raise self.fail(where, "must be a table { min = …, max = … }")
                 if set(value) <= {"min", "max"}:
@@ -397,9 +408,14 @@ class _Reader:
                     f"{key}.decision_rule", f"must be simple or guarded (ILAC-G8), not {rule!r}"
                 )
             options = self.options(entry, key)
-            limits = self.limits(entry.get("limits"), f"{key}.limits")
+            limits = self.limits(entry.get("limits"), f"{key}.limits", command)
             for limit in limits:
                 problem = window_limit_problem(command, dict(options), limit.key)
+                if limit.allocation and not {"config", "budget"} & dict(options).keys():
+                    problem = (
+                        "the allocation's bounds come from the table's allocation: give "
+                        'options.config (e.g. config = "table.toml") or options.budget'
+                    )
                 if problem is not None:
                     raise self.fail(f"{key}.limits.{limit.key}", problem)
             measurements.append(
