@@ -46,9 +46,10 @@ class StatedResult:
     """How one key of a command's JSON is reported.
 
     ``u_key`` names the standard uncertainty (default ``<key>_u``). ``k`` is the coverage factor:
-    a number, ``"json"`` for the JSON's own ``k`` (a number, or a mapping by key), or
-    ``"windows"`` for Student's t of ν = N − 1 over the N windows (``window_count``) of that
-    window size, as the spread of N window rates has. ``name`` is the reader's name; ``{}``
+    a number, ``"json"`` for the JSON's own ``k`` (a number, or a mapping by key; 2 when it
+    has none), ``"windows"`` for Student's t of ν = N − 1 over the N windows (``window_count``)
+    of that window size, as the spread of N window rates has, or ``"rectangular"`` for the k of
+    a rectangular distribution (:data:`rotacal.gyro.threshold.K_RECTANGULAR_95`). ``name`` is the reader's name; ``{}``
     takes the entry (the window, the parameter).
     """
 
@@ -59,6 +60,9 @@ class StatedResult:
 
 
 _WINDOWS = "windows"
+#: A rectangular distribution over the bracketing steps (gyro resolution): the k of
+#: rotacal.gyro.threshold for p = 95 %.
+_RECTANGULAR = "rectangular"
 _RATE = {
     "rate_accuracy_percent": StatedResult("%", "rate accuracy over {}°", _WINDOWS),
     "rate_stability_percent": StatedResult("%", "rate stability over {}°", _WINDOWS),
@@ -90,10 +94,9 @@ STATED_RESULTS: dict[str, dict[str, StatedResult]] = {
         "damping_ratio": StatedResult("", "damping ratio ζ"),
         "bandwidth_hz": StatedResult("Hz", "bandwidth (−3 dB)"),
     },
-    # rectangular distribution over the bracketing steps: k = 1.65 for p = 95 % (threshold.py)
     "gyro resolution": {
-        "threshold_deg_s": StatedResult("°/s", "threshold", 1.65),
-        "resolution_deg_s": StatedResult("°/s", "resolution", 1.65),
+        "threshold_deg_s": StatedResult("°/s", "threshold", _RECTANGULAR),
+        "resolution_deg_s": StatedResult("°/s", "resolution", _RECTANGULAR),
     },
 }
 
@@ -118,6 +121,10 @@ def _number(x: Any, default: float) -> float:
 def _k(how: StatedResult, key: str, entry: str | None, results: Mapping[str, Any]) -> float:
     if isinstance(how.k, float):
         return how.k
+    if how.k == _RECTANGULAR:
+        from rotacal.gyro.threshold import K_RECTANGULAR_95
+
+        return K_RECTANGULAR_95
     if how.k == _WINDOWS:
         count = _number((results.get("window_count") or {}).get(entry), 2.0)
         return coverage_factor(max(int(count) - 1, 1))
