@@ -64,8 +64,14 @@ METHODS: dict[str, tuple[str, tuple[str, ...]]] = {
         "(first-order Jacobian, eq. (26)) and not as values.",
         ("gyrowheel", "gum"),
     ),
-    # "motion angle" (INTERFACE.md: the sinusoidal-motion calibration from angle or counter
-    # readings) goes here, _MOTION + its input, when the command exists on main.
+    # plan.read.AWAITED_COMMANDS: a plan may name it once the CLI has it
+    "motion angle": (
+        _MOTION + " The angle is read as logged (angle_deg) or from a counter's count, its "
+        "register wrap unwrapped and the DAQ's lost or doubled samples found from the time "
+        "stamps; the reversing moments are the angle's extremes ({feng2023}, §3.3, §5), and the "
+        "readout's resolution enters as a Type B input.",
+        ("feng2023", "ieee1057", "gum"),
+    ),
     "gyro scale-factor": (
         "Scale factor and bias by a least-squares line through the gyro's mean outputs at the "
         "set rates of the table; nonlinearity as the largest deviation from that line in percent "

@@ -30,6 +30,7 @@ REPRESENTATIVE_BUDGETS: dict[str, frozenset[str]] = {
     "motion encoder": frozenset({"reversal_times_s"}),
     "motion lts": frozenset({"reversal_times_s"}),
     "motion fog": frozenset({"reversal_times_s"}),
+    "motion angle": frozenset({"reversal_times_s"}),
     "selfcal": frozenset({"deviation_arcsec"}),
 }
 
