@@ -271,6 +271,14 @@ REFERENCES: dict[str, Reference] = {
             "10.1002/0471722162",
         ),
         _r(
+            "ieee528",
+            "",
+            "IEEE Std 528",
+            "2001",
+            "IEEE standard for inertial sensor terminology",
+            "IEEE Std 528-2001",
+        ),
+        _r(
             "iso230_2",
             "",
             "ISO 230-2",

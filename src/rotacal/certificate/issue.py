@@ -30,6 +30,7 @@ from .conformity import judge
 from .content import CaptureRef, CertificateContent, Figure, MeasurementResult
 from .methods import method_of
 from .quantities import reported_quantities
+from .stated import allocation_limits
 
 if TYPE_CHECKING:
     from .sign import Signer
@@ -98,7 +99,13 @@ def _measurement_result(
         raise type(e)(f"{plan.path}: {m.key}: {e}") from None
     by_key = {q.key: q for q in quantities}
     conformity = []
-    for limit in m.limits:
+    try:  # errors_arcsec = "allocation": a limit for each error or sum the allocation bounds
+        limits = [
+            x for lim in m.limits for x in (allocation_limits(results) if lim.allocation else [lim])
+        ]
+    except RotacalError as e:
+        raise type(e)(f"{plan.path}: {m.key}.limits.errors_arcsec: {e}") from None
+    for limit in limits:
         if limit.key not in by_key:
             raise _limit_error(plan, m, limit.key, list(by_key))
         conformity.append(judge(by_key[limit.key], limit, m.decision_rule))

@@ -161,7 +161,8 @@ def _percent(p: str) -> str:
 def _symbolic(name: str) -> dict[str, str]:
     """A quantity name whose symbol has an index (``K_xy``) as name and subscript."""
     base, sep, index = name.rpartition("_")
-    if sep and base and index.isalnum() and " " not in index and base[-1].isalpha():
+    # one index only: "φ_y1 + ε_y" (a sum of symbols) is printed as it is
+    if sep and base and index.isalnum() and base[-1].isalpha() and "_" not in base:
         return {"name": base, "sub": index}
     return {"name": name, "sub": ""}
 

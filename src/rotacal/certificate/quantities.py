@@ -2,9 +2,11 @@
 value, U, k and p rounded as ILAC-P14 asks, in a unit a certificate can state.
 
 Every analysis command's JSON holds ``uncertainty_budgets``: key → a GUM budget (value, U, k, p,
-unit, and for a biased, bounded quantity its coverage interval). Those are the calibration
-results; what a budget stands for only as an example of many (one reversing moment of the table,
-one line of the self-calibrated scale) is not a result of the item and is left out.
+unit, and for a biased, bounded quantity its coverage interval), or states results as a value and
+its u (:mod:`rotacal.certificate.stated`: the rate's windows, position, turntable identify).
+Those are the calibration results; what a budget stands for only as an example of many (one
+reversing moment of the table, one line of the self-calibrated scale) is not a result of the item
+and is left out.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from rotacal.glossary import GLOSSARY
 from rotacal.uncertainty.budget import round_ilac
 
 from .content import ReportedQuantity
+from .stated import stated_budgets
 from .units import CONVERTED_UNITS, dsi_unit, factor_to_printed, printed_unit
 
 __all__ = ["REPRESENTATIVE_BUDGETS", "reported_quantities", "standard_uncertainty"]
@@ -27,6 +30,7 @@ REPRESENTATIVE_BUDGETS: dict[str, frozenset[str]] = {
     "motion encoder": frozenset({"reversal_times_s"}),
     "motion lts": frozenset({"reversal_times_s"}),
     "motion fog": frozenset({"reversal_times_s"}),
+    "motion angle": frozenset({"reversal_times_s"}),
     "selfcal": frozenset({"deviation_arcsec"}),
 }
 
@@ -94,7 +98,8 @@ def reported_quantities(
     """
     skip = REPRESENTATIVE_BUDGETS.get(command, frozenset())
     quantities = []
-    for key, b in _budgets(results.get("uncertainty_budgets") or {}):
+    budgets = {**(results.get("uncertainty_budgets") or {}), **stated_budgets(command, results)}
+    for key, b in _budgets(budgets):
         if key in skip:
             continue
         unit = printed_unit(str(b.get("unit", "")), output_unit)

@@ -38,6 +38,7 @@ RESULT_UNITS: dict[str, str] = {
     "°/√h": r"\degree\per\hour\tothe{0.5}",
     "°/h/√h": r"\degree\per\hour\tothe{1.5}",
     "°/h²": r"\degree\per\hour\tothe{2}",
+    "m/s²": r"\metre\per\second\tothe{2}",
     "°/h/(m/s²)": r"\degree\per\hour\per\metre\second\tothe{2}",
     "°/h/(m/s²)²": r"\degree\per\hour\per\metre\tothe{2}\second\tothe{4}",
 }
@@ -52,7 +53,7 @@ CONVERTED_UNITS: dict[str, tuple[str, float]] = {
 }
 
 #: Units some analyses write with "deg", printed with the degree sign like the rest.
-_DEGREE_SIGN = {"deg": "°", "deg/s": "°/s", "deg/h": "°/h", "deg/s/(°/s)": ""}
+_DEGREE_SIGN = {"deg": "°", "deg/s": "°/s", "deg/h": "°/h", "deg/s/(°/s)": "", "m/s^2": "m/s²"}
 
 #: A gyro's output units (``--output-unit``) that a certificate can state → D-SI. Counts of an
 #: A/D converter or a digital output (LSB) are numbers: ``\\one``.
@@ -70,7 +71,13 @@ OUTPUT_UNITS: dict[str, str] = {
     "°/s": r"\degree\per\second",
     "deg/s": r"\degree\per\second",
     "rad/s": r"\radian\per\second",
+    # an accelerometer's output (gyro accelerometer)
+    "m/s²": r"\metre\per\second\tothe{2}",
+    "m/s^2": r"\metre\per\second\tothe{2}",
 }
+#: A result per unit of input, as the analyses write it → the input's D-SI, for an output unit
+#: divided by it: a gyro's "V/(°/s)", an accelerometer's "LSB/(m/s²)".
+_PER_INPUT = {"(°/s)": r"\second\per\degree", "(m/s²)": r"\second\tothe{2}\per\metre"}
 
 #: How the analyses name a gyro's output unit when the user did not give it.
 UNSTATED_OUTPUT = "output unit"
@@ -85,8 +92,8 @@ def printed_unit(unit: str, output_unit: str = "") -> str:
     """
     if output_unit:
         unit = unit.replace(UNSTATED_OUTPUT, output_unit)
-    if unit in ("°/s/(°/s)", "deg/s/(°/s)"):  # a gyro that reads in °/s: a pure number
-        return ""
+    if unit in ("°/s/(°/s)", "deg/s/(°/s)", "m/s^2/(m/s²)", "m/s²/(m/s²)"):
+        return ""  # a gyro that reads in °/s, an accelerometer in m/s²: a pure number
     if unit in CONVERTED_UNITS:
         return CONVERTED_UNITS[unit][0]
     return _DEGREE_SIGN.get(unit, unit)
@@ -115,9 +122,10 @@ def dsi_unit(unit: str, output_unit: str = "") -> str:
         out = _output_dsi(output_unit)
         if shown == output_unit:
             return out
-        if shown == f"{output_unit}/(°/s)":
-            # V/(°/s) = V·s/°; a count per °/s is s/°
-            return (out if out != r"\one" else "") + r"\second\per\degree"
+        for per, dsi in _PER_INPUT.items():
+            if shown == f"{output_unit}/{per}":
+                # V/(°/s) = V·s/°; a count per °/s is s/°
+                return (out if out != r"\one" else "") + dsi
     raise ConfigError(
         f"the unit {shown!r} cannot be stated in a certificate (D-SI); known: "
         + ", ".join(RESULT_UNITS)

@@ -102,11 +102,14 @@ class Conditions:
 @dataclasses.dataclass(frozen=True)
 class Limit:
     """An acceptance limit on one reported quantity (a JSON key of the command's results), in the
-    quantity's own unit: ``min`` and/or ``max`` (None: no limit on that side)."""
+    quantity's own unit: ``min`` and/or ``max`` (None: no limit on that side). ``allocation``:
+    the limits are the bounds of the turntable's error allocation that ``turntable identify``
+    reports (``errors_arcsec = "allocation"``), one per identified error or sum."""
 
     key: str
     min: float | None = None
     max: float | None = None
+    allocation: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
