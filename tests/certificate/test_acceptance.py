@@ -261,24 +261,10 @@ def test_an_allocation_limit_needs_the_allocation(folder: Path) -> None:
         read_plan(_plan(folder, [rate], "alloc-rate.toml"))
 
 
-def test_motion_angle_is_a_measurement_once_the_cli_has_it(folder: Path) -> None:
-    """The contract's `motion angle` came to main after this list was written: a plan may name
-    it exactly when this rotacal's CLI has it, and it has its method on the certificate."""
+def test_motion_angle_is_a_measurement(folder: Path) -> None:
+    """The contract's `motion angle` is a measurement a plan may name, with its method."""
     from rotacal.certificate.methods import method_of
-    from rotacal.plan.run import command_of
 
-    try:
-        command_of("motion angle")
-        present = True
-    except ConfigError:
-        present = False
     entry = {"name": "Angle", "command": "motion angle", "capture": "position.csv"}
-    path = _plan(folder, [entry], "angle.toml")
-    if present:
-        assert read_plan(path).measurements[0].command == "motion angle"
-    else:
-        with pytest.raises(
-            ConfigError, match=r"measurement\[1\]\.command.*'motion angle' is not in"
-        ):
-            read_plan(path)
+    assert read_plan(_plan(folder, [entry], "angle.toml")).measurements[0].command == "motion angle"
     assert "IEEE Std 1057" in method_of("motion angle")[0]

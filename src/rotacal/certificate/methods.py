@@ -64,7 +64,6 @@ METHODS: dict[str, tuple[str, tuple[str, ...]]] = {
         "(first-order Jacobian, eq. (26)) and not as values.",
         ("gyrowheel", "gum"),
     ),
-    # plan.read.AWAITED_COMMANDS: a plan may name it once the CLI has it
     "motion angle": (
         _MOTION + " The angle is read as logged (angle_deg) or from a counter's count, its "
         "register wrap unwrapped and the DAQ's lost or doubled samples found from the time "

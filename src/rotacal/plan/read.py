@@ -49,6 +49,7 @@ MEASUREMENT_COMMANDS = (
     "motion encoder",
     "motion lts",
     "motion fog",
+    "motion angle",
     "selfcal",
     "rate",
     "gyro scale-factor",
@@ -62,10 +63,6 @@ MEASUREMENT_COMMANDS = (
     "gyro resolution",
     "gyro accelerometer",
 )
-#: Commands INTERFACE.md names that came to the CLI while the plan's list was written (each has
-#: its certificate.methods entry): a plan may name one when this rotacal's CLI has it, and is
-#: told otherwise. Move each into MEASUREMENT_COMMANDS once it is on main for good.
-AWAITED_COMMANDS = ("motion angle",)
 
 _TABLES = {
     "certificate": (
@@ -101,17 +98,6 @@ ALLOCATION = "allocation"
 #: Options a plan may not give a command: ``certify`` decides where results go.
 _OUTPUT_OPTIONS = ("json", "report", "overwrite")
 _NUMBER = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
-
-
-def _in_cli(command: str) -> bool:
-    """Whether this rotacal's CLI has ``command`` (``"motion angle"``)."""
-    from rotacal.plan.run import command_of
-
-    try:
-        command_of(command)
-    except ConfigError:
-        return False
-    return True
 
 
 class _Reader:
@@ -404,11 +390,7 @@ class _Reader:
         for i, entry in enumerate(self.array(data, "measurement"), start=1):
             key = f"measurement[{i}]"
             command = " ".join(self.text(entry, key, "command").split())
-            if command in AWAITED_COMMANDS and not _in_cli(command):
-                raise self.fail(
-                    f"{key}.command", f"{command!r} is not in this version of rotacal yet"
-                )
-            if command not in (*MEASUREMENT_COMMANDS, *AWAITED_COMMANDS):
+            if command not in MEASUREMENT_COMMANDS:
                 raise self.fail(
                     f"{key}.command",
                     f"{command!r} is not a measurement command; use one of "
