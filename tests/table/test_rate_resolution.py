@@ -17,7 +17,12 @@ import pytest
 from rotacal.errors import ConfigError
 from rotacal.sim.angle import constant_rate_angle_deg, simulate_angle
 from rotacal.table.rate import calibrate_rate
-from rotacal.table.rate_angle import _pieces, calibrate_rate_from_marks, mark_times_from_chunks
+from rotacal.table.rate_angle import (
+    _pieces,
+    calibrate_rate_from_marks,
+    mark_times_from_chunks,
+    readout_quantum,
+)
 from rotacal.table.rate_windows import rate_windows
 
 N, M, A, FW = 36_000, 3600, 1e-3, 1.0  # counts/rev (q = 0.01°), marks/rev, fluctuation, Hz
@@ -77,7 +82,11 @@ def _errors(run):
         ("bias_percent", r.rate_bias_percent - rt.rate_bias_percent, d["rate_bias_percent_u"]),
     ]
     for key in WINDOWS:
-        for name in ("rate_accuracy_percent", "rate_stability_percent", "rate_stability_peak_percent"):
+        for name in (
+            "rate_accuracy_percent",
+            "rate_stability_percent",
+            "rate_stability_peak_percent",
+        ):
             m, t = getattr(win, name)[key], getattr(wt, name)[key]
             rows.append((f"{name}[{key}]", m - t, getattr(win, name + "_u")[key]))
     return rows
@@ -124,6 +133,18 @@ def test_pulse_timestamps_have_no_resolution_and_a_bad_one_is_refused(runs):
     assert not any("resolution" in n for n in names)
     with pytest.raises(ConfigError, match="readout_resolution_deg must be ≥ 0"):
         calibrate_rate([np.arange(100) / 10], pulses_per_rev=10, readout_resolution_deg=-0.01)
+
+
+@pytest.mark.parametrize(("rate", "q"), [(131.1, 0.001), (300.0, 0.0025), (131.1, 0.0)])
+def test_the_quantum_of_a_readout_stepping_many_quanta_a_sample(rate, q):
+    """13.1 and 12 quanta a sample: the smallest step is a multiple of q (angle_quantum of
+    motion angle finds none here); a continuous readout has none."""
+    cap = simulate_angle(
+        rate_deg_s=rate, fluctuation=A, reading="angle", resolution_deg=q, fs_hz=10_000,
+        duration_s=0.5,
+    )  # fmt: skip
+    found = readout_quantum(cap.columns["angle_deg"])
+    assert found is None if q == 0 else found == pytest.approx(q, rel=1e-9)
 
 
 def test_the_cli_windows_carry_the_resolution(tmp_path):

@@ -102,9 +102,7 @@ def _rate_of_readings(name: str, own: dict[str, Any], kw: dict[str, Any]) -> Non
         marks = mark_times_from_chunks(chunks, pulses_per_rev=kw["pulses_per_rev"], **reading)
         result = calibrate_rate_from_marks(marks, allow_gaps=own["allow_gaps"], **settings)
         if windows_deg:
-            result = _with_windows(
-                result, marks.times, windows_deg, settings, marks.resolution_deg
-            )
+            result = _with_windows(result, marks.times, windows_deg, settings, marks.resolution_deg)
     _finish_rate(result, capture, json_path, report_path)
 
 

@@ -62,11 +62,36 @@ __all__ = [
     "calibrate_rate_from_marks",
     "crossing_error_bound_s",
     "mark_times_from_chunks",
+    "readout_quantum",
 ]
 
 #: A fall below the running maximum by more than this many mark spacings is a reversal.
 BACKWARD_MARKS = 5
 _BACKWARD_MIN_DEG = 0.1
+#: Readings looked at, and quanta a sample the table may step, to find an angle readout's quantum.
+_QUANTUM_READINGS = 1 << 16
+_MAX_STEP_QUANTA = 256
+
+
+def readout_quantum(angle_deg: np.ndarray) -> float | None:
+    """The quantum q (deg) of a quantised angle readout from its first readings, or None.
+
+    A turning table steps several quanta a sample, so the smallest step between its distinct
+    readings may be a multiple of q (:func:`~rotacal.table.motion_angle.angle_quantum` then finds
+    none, or that multiple). q is the largest ``smallest step / k`` (k = 1 … 256) of which every
+    reading's offset from the least is a whole multiple, to 10⁻³·q; None when no k fits (a
+    continuous readout, or one stepping more than 256 quanta a sample).
+    """
+    a = np.unique(np.asarray(angle_deg[:_QUANTUM_READINGS], dtype=np.float64))
+    if a.size < 3:
+        return None
+    smallest = float(np.min(np.diff(a)))
+    offset = a - a[0]
+    for k in range(1, _MAX_STEP_QUANTA + 1):
+        n = offset * (k / smallest)
+        if float(np.max(np.abs(n - np.rint(n)))) <= 1e-3:
+            return smallest / k
+    return None
 
 
 def crossing_error_bound_s(
@@ -125,7 +150,7 @@ class MarkTimes:
     notes : list of str — for the rate result.
     faults : DaqFaults — the DAQ's gaps, duplicated times and repeated rows.
     resolution_deg : float or None — the readout's quantum (a count: 360/N; an angle readout:
-        :func:`~rotacal.table.motion_angle.angle_quantum` of the first chunk; None: continuous).
+        :func:`readout_quantum` of the first chunk; None: continuous).
     """
 
     times: np.ndarray
@@ -201,8 +226,6 @@ def mark_times_from_chunks(
     -------
     MarkTimes
     """
-    from rotacal.table.motion_angle import angle_quantum
-
     if counts_per_rev is not None:
         if not (math.isfinite(counts_per_rev) and counts_per_rev > 0):
             raise ConfigError(f"--counts-per-rev must be positive, got {counts_per_rev}")
@@ -212,7 +235,7 @@ def mark_times_from_chunks(
     quantum: float | None = None if counts_per_rev is None else 360.0 / counts_per_rev
     for off, t, x in clean():
         if off == 0 and counts_per_rev is None:
-            quantum = angle_quantum(x)
+            quantum = readout_quantum(x)
         marks.feed(t, x)
     assert clean.faults is not None
     times, direction = marks.result()
