@@ -291,7 +291,7 @@ def _resolution_note(q: float, times: np.ndarray, rate_kw: Mapping[str, Any]) ->
         f"{200.0 * q / window:.3g} % and the mean rate within "
         f"{200.0 * q / (omega * float(times[-1] - times[0])):.3g} % (bounds); in the budgets as "
         "the Type B input 'readout resolution', each rate's angle within ±q, rectangular "
-        "(JCGM 100 F.2.2.1, §4.3.7)"
+        "(JCGM 100 F.2.2.1, §4.3.7); s(φ) holds it too, of the order of q/φ, not in its u"
     )
 
 
