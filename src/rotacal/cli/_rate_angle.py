@@ -102,13 +102,20 @@ def _rate_of_readings(name: str, own: dict[str, Any], kw: dict[str, Any]) -> Non
         marks = mark_times_from_chunks(chunks, pulses_per_rev=kw["pulses_per_rev"], **reading)
         result = calibrate_rate_from_marks(marks, allow_gaps=own["allow_gaps"], **settings)
         if windows_deg:
-            result = _with_windows(result, marks.times, windows_deg, settings)
+            result = _with_windows(result, marks.times, windows_deg, settings, marks.resolution_deg)
     _finish_rate(result, capture, json_path, report_path)
 
 
-def _with_windows(result: Any, times: Any, windows_deg: Any, settings: dict[str, Any]) -> Any:
+def _with_windows(
+    result: Any,
+    times: Any,
+    windows_deg: Any,
+    settings: dict[str, Any],
+    resolution_deg: float | None,
+) -> Any:
     """The rate over angle windows (``--window-deg``) of the marks' crossing times, joined to
-    ``result`` as the pulse-timestamp path joins them (one virtual head, uncompensated)."""
+    ``result`` as the pulse-timestamp path joins them (one virtual head, uncompensated; the
+    readout's resolution, deg, at each window's ends)."""
     from rotacal.table.rate_windows import rate_windows_stream
     from rotacal.table.rate_windows_result import with_windows
 
@@ -121,6 +128,7 @@ def _with_windows(result: Any, times: Any, windows_deg: Any, settings: dict[str,
         timebase_correction=result.timebase_correction,
         specs=settings.get("specs"),
         check=False,  # the rate's analysis checked the same times
+        readout_resolution_deg=resolution_deg,
     )
     return with_windows(result, windows)
 

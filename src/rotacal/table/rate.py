@@ -281,6 +281,7 @@ def calibrate_rate(
     allan_angles_deg: ArrayLike | None = None,
     compensate: bool = True,
     specs: InstrumentSpecs | None = None,
+    readout_resolution_deg: float | None = None,
 ) -> RateResult:
     """Angular velocity of a table from pulse timing: mean, bias, stability and s(φ).
 
@@ -313,6 +314,14 @@ def calibrate_rate(
         ``encoder.graduation_error_arcsec`` (an uncompensated rate; its mean is a common offset
         that cancels in every rate). None: Type A only. A specification is never subtracted from
         the rate deviation: it widens its interval only.
+    readout_resolution_deg : float, deg, optional
+        Given when the pulse times are the crossings of virtual marks interpolated from angle or
+        counter readings (:mod:`rotacal.table.rate_angle`): the readout's quantum q (360/N for a
+        counter; 0 for a continuous readout). Every pulse then sits within a width q of its
+        mark, a Type B input of the mean rate, the bias and the rate deviation (JCGM 100
+        F.2.2.1; :func:`rotacal.table.rate_budgets._resolution_input`), and the period check of
+        a single head is skipped (virtual marks have no graduation pattern; a quantisation
+        pattern would be taken for one). None: the times of a real encoder's pulses.
 
     Returns
     -------
@@ -336,6 +345,12 @@ def calibrate_rate(
     """
     m = check_pulses_per_rev(pulses_per_rev)
     _check_settings(specs, set_rate_deg_s)
+    if readout_resolution_deg is not None:
+        check_setting("readout_resolution_deg", readout_resolution_deg, positive=False, unit="deg")
+        if readout_resolution_deg < 0:
+            raise ConfigError(
+                f"readout_resolution_deg must be ≥ 0 deg, got {readout_resolution_deg:g}."
+            )
     if isinstance(heads, Mapping):
         trains = head_columns(heads)
     else:
@@ -438,6 +453,8 @@ def calibrate_rate(
         specs=specs,
         notes=notes,
         keep_series=True,
+        resolution_deg=readout_resolution_deg or None,
+        virtual_marks=readout_resolution_deg is not None,
     )
 
 
@@ -464,10 +481,13 @@ def _rate_result(
     keep_series: bool,
     progress: Callable[[int], None] | None = None,
     run_passes: Callable[..., RatePasses] = rate_passes,
+    resolution_deg: float | None = None,
+    virtual_marks: bool = False,
 ) -> RateResult:
     """The analysis of one train of ``pulses`` times given chunk by chunk (both passes of
     :func:`rotacal.table.rate_stream.rate_passes`, or ``run_passes`` with its arguments), its
-    budgets and the result."""
+    budgets and the result (``resolution_deg``, ``virtual_marks``: see ``calibrate_rate``'s
+    ``readout_resolution_deg``)."""
     n = heads
 
     def sources_for(omega: float, jitter: tuple[float, float, bool]) -> list[ErrorProcess]:
@@ -482,6 +502,7 @@ def _rate_result(
             omega=omega,
             jitter=jitter,
             own=own,
+            resolution_deg=resolution_deg,
         )
         source_notes[:] = more
         return found
@@ -500,7 +521,7 @@ def _rate_result(
         keep_series=keep_series,
         progress=progress,
     )
-    if n == 1 and pulses > m:
+    if n == 1 and pulses > m and not virtual_marks:
         # one head: nothing else checks m; its angle error must repeat once per revolution.
         # Judged on the first PERIOD_CHECK_PULSES pulses (8 revolutions at least; 29 of 18,000
         # pulses): as much evidence as any record of that length, and the whole-record FFT of a
@@ -547,7 +568,9 @@ def _rate_result(
             f"multiplied by 1 + δ̂ = {1 + correction:.10g}."
         )
     raw_rate = mean_rate  # in the DAQ's seconds, as the rate points
-    budgets = _mean_rate_budgets(passes.rev_times, passes.short, m, revs, set_rate, specs, jitter)
+    budgets = _mean_rate_budgets(
+        passes.rev_times, passes.short, m, revs, set_rate, specs, jitter, resolution_deg
+    )
     mean_rate = budgets["mean_rate_deg_s"].value  # one truth: the field is the budget's value
     bias = bias_pct = None
     if set_rate is not None:

@@ -14,11 +14,19 @@ that bracket each mark (first passage). Marks are counted from the first reading
 Error bound of the interpolation. Between two samples Δt apart, linear interpolation of a θ
 with |θ''| ≤ α misses θ by at most α·Δt²/8, so a crossing time is off by at most
 ``δt ≤ α·Δt²/(8·ω)`` at the local rate ω (a noise-free, unquantised angle). A readout quantised
-to q (a counter: q = 360/N) adds at most ``q/ω`` (truncation; q/(2ω) rounding) — an offset
-common to every mark when the rate is steady, so the rate over L marks (Δφ = L·360/M) is off by
-at most ``2·(α·Δt²/8 + q)/Δφ`` relative, and much less on average. Noise σ on θ moves a first
-passage by about σ/ω. :func:`crossing_error_bound_s` states the first bound; the test checks the
-crossings of a twin against the true angle's.
+to q (a counter: q = 360/N) places each crossing where the true angle is the mark plus an error
+within a width of q (truncation: [0, q); rounding: [−q/2, q/2)), a time error within a width
+``q/ω``; the rate over L marks (Δφ = L·360/M) is then off by at most ``2·(α·Δt²/8 + q)/Δφ``
+relative. Where those errors fall depends on the sampling's phase against the marks: when the
+sampling is commensurate with the rotation they repeat every revolution, and no Type A estimate
+from the crossing times (the timing jitter, the spread of the revolutions) sees them. So the
+resolution enters every uncertainty of the result as a Type B input (JCGM 100:2008 F.2.2.1
+and §4.3.7: each end of a rate's window within a width q, so its angle within ±q, rectangular,
+u = q/√3; see :func:`rotacal.table.rate_budgets._resolution_input`), named "readout
+resolution" in the budgets.
+Noise σ on θ moves a first passage by about σ/ω (in the Type A jitter).
+:func:`crossing_error_bound_s` states the interpolation bound; the test checks the crossings of
+a twin against the true angle's.
 
 The table must turn one way: a fall of θ below its running maximum by more than
 :data:`BACKWARD_MARKS` mark spacings (and 0.1°) is refused (the table turned back; a rate over
@@ -54,11 +62,36 @@ __all__ = [
     "calibrate_rate_from_marks",
     "crossing_error_bound_s",
     "mark_times_from_chunks",
+    "readout_quantum",
 ]
 
 #: A fall below the running maximum by more than this many mark spacings is a reversal.
 BACKWARD_MARKS = 5
 _BACKWARD_MIN_DEG = 0.1
+#: Readings looked at, and quanta a sample the table may step, to find an angle readout's quantum.
+_QUANTUM_READINGS = 1 << 16
+_MAX_STEP_QUANTA = 256
+
+
+def readout_quantum(angle_deg: np.ndarray) -> float | None:
+    """The quantum q (deg) of a quantised angle readout from its first readings, or None.
+
+    A turning table steps several quanta a sample, so the smallest step between its distinct
+    readings may be a multiple of q (:func:`~rotacal.table.motion_angle.angle_quantum` then finds
+    none, or that multiple). q is the largest ``smallest step / k`` (k = 1 … 256) of which every
+    reading's offset from the least is a whole multiple, to 10⁻³·q; None when no k fits (a
+    continuous readout, or one stepping more than 256 quanta a sample).
+    """
+    a = np.unique(np.asarray(angle_deg[:_QUANTUM_READINGS], dtype=np.float64))
+    if a.size < 3:
+        return None
+    smallest = float(np.min(np.diff(a)))
+    offset = a - a[0]
+    for k in range(1, _MAX_STEP_QUANTA + 1):
+        n = offset * (k / smallest)
+        if float(np.max(np.abs(n - np.rint(n)))) <= 1e-3:
+            return smallest / k
+    return None
 
 
 def crossing_error_bound_s(
@@ -117,7 +150,7 @@ class MarkTimes:
     notes : list of str — for the rate result.
     faults : DaqFaults — the DAQ's gaps, duplicated times and repeated rows.
     resolution_deg : float or None — the readout's quantum (a count: 360/N; an angle readout:
-        :func:`~rotacal.table.motion_angle.angle_quantum` of the first chunk; None: continuous).
+        :func:`readout_quantum` of the first chunk; None: continuous).
     """
 
     times: np.ndarray
@@ -193,8 +226,6 @@ def mark_times_from_chunks(
     -------
     MarkTimes
     """
-    from rotacal.table.motion_angle import angle_quantum
-
     if counts_per_rev is not None:
         if not (math.isfinite(counts_per_rev) and counts_per_rev > 0):
             raise ConfigError(f"--counts-per-rev must be positive, got {counts_per_rev}")
@@ -204,7 +235,7 @@ def mark_times_from_chunks(
     quantum: float | None = None if counts_per_rev is None else 360.0 / counts_per_rev
     for off, t, x in clean():
         if off == 0 and counts_per_rev is None:
-            quantum = angle_quantum(x)
+            quantum = readout_quantum(x)
         marks.feed(t, x)
     assert clean.faults is not None
     times, direction = marks.result()
@@ -241,7 +272,8 @@ def calibrate_rate_from_marks(marks: MarkTimes, *, allow_gaps: bool = False, **r
             "revolution: record longer, or raise --pulses-per-rev"
         )
     rate_kw.setdefault("compensate", False)
-    result = calibrate_rate([times], **rate_kw)
+    # a continuous readout: 0 (virtual marks, no quantum)
+    result = calibrate_rate([times], readout_resolution_deg=marks.resolution_deg or 0.0, **rate_kw)
     if marks.resolution_deg is not None:
         notes.append(_resolution_note(marks.resolution_deg, times, rate_kw))
     result = dataclasses.replace(result, notes=[*result.notes, *notes])
@@ -256,8 +288,10 @@ def _resolution_note(q: float, times: np.ndarray, rate_kw: Mapping[str, Any]) ->
     return (
         f"readout resolution {q:.6g}°: each crossing time within {q / omega:.3g} s "
         f"(q/ω at {omega:.6g} °/s), a rate point over {window:.6g}° within "
-        f"{200.0 * q / window:.3g} % and the mean rate within {200.0 * q / (omega * float(times[-1] - times[0])):.3g} % "
-        "(not in the Type A uncertainties above)"
+        f"{200.0 * q / window:.3g} % and the mean rate within "
+        f"{200.0 * q / (omega * float(times[-1] - times[0])):.3g} % (bounds); in the budgets as "
+        "the Type B input 'readout resolution', each rate's angle within ±q, rectangular "
+        "(JCGM 100 F.2.2.1, §4.3.7); s(φ) holds it too, of the order of q/φ, not in its u"
     )
 
 

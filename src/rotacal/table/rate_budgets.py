@@ -31,7 +31,7 @@ from rotacal.uncertainty import (
     propagate,
     validate_gum,
 )
-from rotacal.uncertainty.distributions import Distribution, Normal, StudentT
+from rotacal.uncertainty.distributions import Distribution, Normal, Rectangular, StudentT
 from rotacal.uncertainty.specs import (
     TYPE_A_ONLY_NOTE,
     corrected_note,
@@ -123,6 +123,36 @@ def _validated(
     return out
 
 
+def _resolution_input(q: float) -> tuple[Input, Distribution]:
+    """The readout's resolution q (deg) at the two ends of a rate's window, a Type B input.
+
+    A crossing time interpolated between readings of quantum q is where the true angle is the
+    mark plus an error within a width of q (truncating counter: [0, q); rounding readout:
+    [−q/2, q/2)) — JCGM 100:2008 F.2.2.1, whether or not repeated readings vary: when the
+    sampling is commensurate with the rotation the errors repeat every revolution and no Type A
+    estimate sees them. How the two ends' errors are related depends on the sampling's phase at
+    each (commensurate sampling makes them deterministic, not independent), so only the bounds
+    of their difference are known, ±q: a rectangular distribution on them (JCGM 100 §4.3.7;
+    JCGM 101 §6.4.2), u = q/√3 — wider than two independent rectangles (q/√6), which a
+    commensurate twin exceeds.
+    """
+    return (
+        Input(
+            name="readout resolution at the window's two ends",
+            value=0.0,
+            u=q / math.sqrt(3.0),
+            distribution="rectangular",
+            unit="deg",
+            source=(
+                f"Type B, JCGM 100 F.2.2.1 and §4.3.7: each end's crossing is within the "
+                f"readout's quantum q = {q:.6g}°, so the window's angle within ±q"
+            ),
+            description="rectangular ±q, q/√3",
+        ),
+        Rectangular(-q, q),
+    )
+
+
 def _mean_rate_budgets(
     rev_times: FloatArray,
     short: tuple[FloatArray, FloatArray] | None,
@@ -131,6 +161,7 @@ def _mean_rate_budgets(
     set_rate: float | None,
     specs: InstrumentSpecs | None,
     jitter: tuple[float, float, bool],
+    resolution_deg: float | None = None,
 ) -> dict[str, UncertaintyBudget]:
     """GUM budgets of the mean rate and of the bias against the set rate, both validated by a
     Monte Carlo of their own model (JCGM 101 §8) — the same inputs give the same U.
@@ -141,7 +172,9 @@ def _mean_rate_budgets(
     eq. (10), G.4 (Welch–Satterthwaite); JCGM 101:2008 §6.4.9 (a Type A input with ν degrees of
     freedom as a scaled t), §8 (validation of the GUM uncertainty framework); Kokuyama et al.
     (2015) §3, §5. ``rev_times`` are the times of pulses 0, m, …, R·m; ``short`` the times and
-    angles of a record of less than one revolution.
+    angles of a record of less than one revolution. ``resolution_deg``: the quantum q (deg) of
+    the readout the pulse times were interpolated from (:mod:`rotacal.table.rate_angle`), a Type
+    B input (:func:`_resolution_input`).
     """
     sigma_t, sigma_dof, graduation_free = jitter
     tb = spec_input(specs, _TIMEBASE, name="timebase relative error", unit="")
@@ -185,13 +218,19 @@ def _mean_rate_budgets(
         )
         turns = 360.0 * revs
 
-        def rate(*x: Any) -> Any:  # x = (end-pulse timing error e, graduation g[, δ])
-            return (turns + x[1] / 3600.0) / (span - x[0]) * (1.0 + (x[2] if len(x) > 2 else 0.0))
+        # x = the inputs in the order of ``dists``: end-pulse timing error e (s), graduation g
+        # (arcsec)[, readout resolution r (deg)][, timebase δ]
+        def rate(*x: Any) -> Any:
+            v = dict(zip(dists, x, strict=True))
+            f = 1.0 + v.get("d", 0.0)
+            return (turns + v["g"] / 3600.0 + v.get("r", 0.0)) / (span - v["e"]) * f
 
-        def grad(*x: float) -> list[float]:  # exact ∂ω/∂(e, g[, δ])
-            f = 1.0 + (x[2] if len(x) > 2 else 0.0)
-            a, t = turns + x[1] / 3600.0, span - x[0]
-            return [a / t**2 * f, f / (3600.0 * t), *([a / t] if len(x) > 2 else [])]
+        def grad(*x: float) -> list[float]:  # exact ∂ω/∂x
+            v = dict(zip(dists, x, strict=True))
+            f = 1.0 + v.get("d", 0.0)
+            a, t = turns + v["g"] / 3600.0 + v.get("r", 0.0), span - v["e"]
+            parts = {"e": a / t**2 * f, "g": f / (3600.0 * t), "r": f / t, "d": a / t}
+            return [parts[k] for k in dists]
 
         dists["e"] = Normal(0.0, math.sqrt(2.0) * sigma_t)
         dists["g"] = Constant(0.0)
@@ -215,13 +254,23 @@ def _mean_rate_budgets(
             "averaged out, and its correlated residuals make the fit's u a lower bound."
         )
 
-        def rate(*x: Any) -> Any:  # x = (fitted slope[, δ])
-            return x[0] * (1.0 + (x[1] if len(x) > 1 else 0.0))
+        span = float(times[-1] - times[0])
 
-        def grad(*x: float) -> list[float]:  # exact ∂ω/∂(slope[, δ])
-            return [1.0 + (x[1] if len(x) > 1 else 0.0), *([x[0]] if len(x) > 1 else [])]
+        # x = (fitted slope e (deg/s)[, readout resolution r at the two ends (deg)][, δ])
+        def rate(*x: Any) -> Any:
+            v = dict(zip(dists, x, strict=True))
+            return (v["e"] + v.get("r", 0.0) / span) * (1.0 + v.get("d", 0.0))
+
+        def grad(*x: float) -> list[float]:  # exact ∂ω/∂x
+            v = dict(zip(dists, x, strict=True))
+            f = 1.0 + v.get("d", 0.0)
+            parts = {"e": f, "r": f / span, "d": v["e"] + v.get("r", 0.0) / span}
+            return [parts[k] for k in dists]
 
         dists["e"] = Normal(fit.slope, fit.u_slope)
+    if resolution_deg is not None:
+        res_input, dists["r"] = _resolution_input(resolution_deg)
+        inputs.append(res_input)
     dist_tb = spec_distribution(specs, _TIMEBASE)
     if tb is not None and dist_tb is not None:
         inputs.append(tb)
@@ -342,6 +391,7 @@ def _deviation_sources(
     omega: float,
     jitter: tuple[float, float, bool],
     own: tuple[list[int], int, int, float] | None = None,
+    resolution_deg: float | None = None,
 ) -> tuple[list[ErrorProcess], list[str]]:
     """The errors of the rate points (% of rate): the timing jitter at each point's two ends,
     and the scale-curve errors the angle still holds (the self-calibration's noise, the orders
@@ -351,11 +401,16 @@ def _deviation_sources(
     rate's pulses inside them) when the curve was self-calibrated from this capture: the rate
     head's timing noise is then also in the curve (:func:`rotacal.encoder.selfcal.noise_gain`),
     and the two partly cancel — a covariance correction of −2·Cov(curve error, the head's angle
-    noise) per line."""
+    noise) per line. ``resolution_deg``: the quantum q of the readout the pulse times were
+    interpolated from — each rate point's angle within ±q (:func:`_resolution_input`; drawn
+    as normal of the same u), a bound: it widens the intervals and is never subtracted."""
     sigma_t, sigma_dof, graduation_free = jitter
     scale = 100.0 / (average * 360.0 / m)  # % of rate per degree of boundary angle error
     out: list[ErrorProcess] = []
     notes: list[str] = []
+    # crossings of a quantised readout: a jitter within a quantum may be the quantisation's
+    # pattern (not white, not of a level the train gives), so it is only a bound
+    quantised = resolution_deg is not None and sigma_t * abs(omega) <= resolution_deg
     out.append(
         FilteredWhite(
             Input(
@@ -366,14 +421,32 @@ def _deviation_sources(
                 distribution="normal",
                 unit="s",
                 source="Type A, from the pulse times (see timing_jitter)"
-                + ("" if graduation_free else "; an upper bound that holds the graduation too"),
+                + ("" if graduation_free else "; an upper bound that holds the graduation too")
+                + (
+                    "; within one quantum of the readout (σ_t·ω ≤ q), it may be the "
+                    "quantisation's pattern: a bound"
+                    if quantised
+                    else ""
+                ),
             ),
-            "noise" if graduation_free else "bound",
+            "noise" if graduation_free and not quantised else "bound",
             level="timing jitter",
             taps=np.array([-1.0, 1.0]) * scale * abs(omega),
             sigma=sigma_t,
         )
     )
+
+    if resolution_deg is not None:
+        res, _ = _resolution_input(resolution_deg)
+        out.append(
+            FilteredWhite(
+                dataclasses.replace(res, name="readout resolution"),
+                "bound",
+                # q/√6 at each boundary: a point's two ends differ by ±q, rectangular (q/√3)
+                taps=np.array([-1.0, 1.0]) * scale,
+                sigma=resolution_deg / math.sqrt(6.0),
+            )
+        )
 
     def curve(inp: Input, autocov: FloatArray, role: Any) -> CirculantError:
         return CirculantError(inp, role, autocov=_point_errors(autocov, m, average, scale))

@@ -23,12 +23,16 @@ Uncertainty (GUM, JCGM 100), per window, relative to the rate: the timing noise 
 pulses, √2·σ_t/T (σ_t from the pulse times, T = W/ω̄); the angle error of its two end lines,
 √2·u_line/(3600·W) (u_line the self-calibration's point uncertainty and the undetectable orders
 when compensated, the stated ``encoder.graduation_error_arcsec`` when not; zero at multiples of
-360°). Together σ_w. Then
+360°); for times interpolated from an angle readout or counter of quantum q, its resolution:
+each end within a width q (JCGM 100 F.2.2.1), the window's angle within ±q, rectangular
+(§4.3.7), q/(√3·W) at every W, 360° included. Together σ_w. Then
 
 - ω̄: the end-point terms of a mean of consecutive windows telescope (√2·σ_t/(N·T)), the stated
   timebase error ``timebase.relative_error`` and the statistics of N windows, s/√N;
-- the stability s: the statistics of N windows, s/√(2(N − 1)), and what the measurement noise
-  σ_w may add to it, s − √(s² − σ_w²) (the plain value is not corrected for it);
+- the stability s: the statistics of N windows, s/√(2(N − 1)), what the measurement noise
+  (σ_w without the resolution) may add to it, s − √(s² − σ_w²) (the plain value is not
+  corrected for it), and the resolution's q/(√3·W): its errors need not be random, and they
+  move s either way by at most their own standard deviation (a norm's triangle inequality);
 - the peak: u(ω̄) and the largest shift noise gives one of N windows, σ_w·max(1, √(2·ln N)).
 
 Every figure comes from one pass over the pulse times in chunks with carried state
@@ -344,12 +348,15 @@ class RateWindows(Result):
 class _Noise:
     """The inputs of the windows' uncertainty: σ_t (s), the line error u_line (arcsec) that a
     window's two ends carry (0 when not known), the timebase's relative u, the timebase
-    correction δ̂ the rates are multiplied by (1 + δ̂)."""
+    correction δ̂ the rates are multiplied by (1 + δ̂), the readout's resolution u_q = q/√6
+    (deg) per end, so that a window's two ends differ by √2·u_q = q/√3, the rectangular ±q
+    (0: exact marks)."""
 
     jitter_s: float
     line_arcsec: float
     timebase_u: float
     timebase_correction: float
+    resolution_deg: float = 0.0
 
 
 def _finish(
@@ -384,18 +391,25 @@ def _finish(
         angle = ws.k * 360.0 / ws.m
         duration = angle / abs(mean)
         line = 0.0 if ws.k % ws.m == 0 else noise.line_arcsec
-        sigma_w = math.hypot(
+        # the end angle errors: the line's (none over whole revolutions) and the readout's
+        # resolution (at any window: the sampling need not repeat every revolution)
+        end_deg = math.hypot(line / 3600.0, noise.resolution_deg)
+        sigma_noise = math.hypot(
             math.sqrt(2.0) * noise.jitter_s / duration, math.sqrt(2.0) * line / 3600.0 / angle
         )
+        res_w = math.sqrt(2.0) * noise.resolution_deg / angle
+        sigma_w = math.hypot(sigma_noise, res_w)
         rel_s = std / abs(mean)
         u_mean_rel = math.sqrt(
             (math.sqrt(2.0) * noise.jitter_s / (n * duration)) ** 2
-            + (math.sqrt(2.0) * line / 3600.0 / (n * angle)) ** 2
+            + (math.sqrt(2.0) * end_deg / (n * angle)) ** 2
             + noise.timebase_u**2
             + rel_s**2 / n
         )
-        inflation = rel_s - math.sqrt(max(rel_s**2 - sigma_w**2, 0.0))
-        u_stab = math.hypot(rel_s / math.sqrt(2.0 * (n - 1)), inflation)
+        inflation = rel_s - math.sqrt(max(rel_s**2 - sigma_noise**2, 0.0))
+        # the resolution's errors ε need not be random (commensurate sampling): they may lower s
+        # as well as raise it, by at most s(ε) (the standard deviation is a norm), ≈ res_w
+        u_stab = math.hypot(rel_s / math.sqrt(2.0 * (n - 1)), inflation, res_w)
         peak = max(hi - mean, mean - lo) / abs(mean)
         u_peak = math.hypot(u_mean_rel, sigma_w * max(1.0, math.sqrt(2.0 * math.log(n))))
         out["rate_stability_percent"][key] = 100.0 * rel_s
@@ -519,6 +533,7 @@ def rate_windows_stream(
     specs: Any = None,
     check: bool = True,
     progress: Callable[[int], None] | None = None,
+    readout_resolution_deg: float | None = None,
 ) -> RateWindows:
     """Rate accuracy and stability over angle windows from one head's pulse times in chunks.
 
@@ -557,6 +572,11 @@ def rate_windows_stream(
         False when they were checked already (the rate command's analysis of the same train).
     progress : callable, optional
         Called with the pulses of each chunk handled.
+    readout_resolution_deg : float, deg, optional
+        The quantum q of the angle readout or counter the pulse times were interpolated from
+        (:mod:`rotacal.table.rate_angle`): each window end within a width q of its mark (JCGM
+        100 F.2.2.1), so each window's angle within ±q, rectangular (§4.3.7), at every window,
+        360° ones included. None: exact marks.
 
     Returns
     -------
@@ -623,6 +643,10 @@ def rate_windows_stream(
         timebase_correction=timebase_correction,
         notes=notes,
     )
+    if readout_resolution_deg is not None:
+        noise = dataclasses.replace(
+            noise, resolution_deg=float(readout_resolution_deg) / math.sqrt(6.0)
+        )
     return _finish(sums, set_rate_deg_s, noise, dev is not None, notes)
 
 
