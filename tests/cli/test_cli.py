@@ -70,7 +70,10 @@ def test_simulate_writes_capture_and_truth(encoder_capture):
         assert {"time_s", "a", "b"} <= set(z.files)
 
 
-def test_motion_encoder_json_has_the_interface_keys_and_matches_truth(encoder_capture, tmp_path):
+def test_motion_encoder_json_has_the_interface_keys_and_matches_truth(
+    encoder_capture, tmp_path, unrendered_figures
+):
+    # one-pixel figures: this test never looks at them (tests/report draws and looks at them)
     out = tmp_path / "r.json"
     rep = tmp_path / "r.html"
     r = run(

@@ -1,7 +1,10 @@
 """docs/real-data.md runs as written: every ``$ rotacal …`` line, and every ``expect`` holds.
 
-The commands run in bash (their globs and ``$(…)`` as a reader's shell runs them) in a fresh
-folder, with ``ROTACAL_SHARED_DATA`` pointing at the real recordings and ``rotacal`` this checkout.
+Each command is expanded by bash (its globs and ``$(…)`` as a reader's shell expands them, with
+``ROTACAL_SHARED_DATA`` pointing at the real recordings), and the ``rotacal`` it calls runs in this
+process through the CLI's own entry (click's CliRunner) in a fresh folder: a Python start per
+command would cost more than most of the analyses (the installed command's own start is tested in
+tests/cli/test_cli.py).
 Each ``<!-- expect FILE: KEY = VALUE ± TOL; … -->`` line names a JSON file a command wrote and
 the reference values the document states next to it (from the data's README or the program that
 made the data). A section whose recordings are absent is skipped by the ``shared_data`` fixture.
@@ -13,12 +16,12 @@ import json
 import os
 import re
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner
 
-import rotacal
+from rotacal.cli import cli
 
 from ..conftest import SHARED_DATA
 
@@ -69,21 +72,26 @@ def test_every_set_of_the_shared_folder_has_a_section():
 @pytest.mark.parametrize(
     ("title", "text"), [s for s in SECTIONS if _commands(s[1])], ids=lambda v: v.split()[0]
 )
-def test_section_commands_run_and_match_the_references(title, text, tmp_path, shared_data):
+def test_section_commands_run_and_match_the_references(
+    title, text, tmp_path, shared_data, monkeypatch
+):
     shared_data(title.split()[0])  # skips, saying why, when the recordings are absent
-    src = str(Path(rotacal.__file__).resolve().parents[1])
-    env = {**os.environ, "PYTHONPATH": src, "ROTACAL_SHARED_DATA": str(SHARED_DATA)}
-    prelude = f'rotacal() {{ "{sys.executable}" -m rotacal "$@"; }}\n'
+    env = {**os.environ, "ROTACAL_SHARED_DATA": str(SHARED_DATA)}
+    # bash expands the line and hands the words to a `rotacal` that only prints them
+    prelude = "rotacal() { printf '%s\\0' \"$@\"; }\n"
+    monkeypatch.chdir(tmp_path)
+    runner = CliRunner()
     for command in _commands(text):
-        done = subprocess.run(
-            ["bash", "-c", prelude + command],
-            cwd=tmp_path,
-            env=env,
-            capture_output=True,
-            text=True,
-            check=False,
+        expanded = subprocess.run(
+            ["bash", "-c", prelude + command], env=env, capture_output=True, check=False
         )
-        assert done.returncode == 0, f"{command}\n{done.stderr}"
+        assert expanded.returncode == 0, f"{command}\n{expanded.stderr.decode()}"
+        argv = expanded.stdout.decode().split("\0")[:-1]
+        assert argv, f"{command!r} calls no rotacal"
+        result = runner.invoke(cli, argv, prog_name="rotacal")
+        assert result.exit_code == 0, (
+            f"{command}\n(exit {result.exit_code}) {result.stderr[-2000:]}"
+        )
     check_expects(text, tmp_path)
 
 

@@ -177,10 +177,15 @@ def test_point_statistics_keep_their_digits_on_a_large_offset():
     r = calibrate_scale_factor_chunked(
         scale_factor_chunks(rate, output, chunk_rows=1000), mc_trials=_TRIALS
     )
+    # every output lies in one binade, [2²⁶, 2²⁷): each is an integer multiple of its ulp 2⁻²⁶,
+    # so Python's integers hold the values, their sum and their squares exactly (as Fractions
+    # would, 20× faster)
+    assert np.all((output >= 2.0**26) & (output < 2.0**27))
     for point, sel in zip(r.points, (rate < 0, rate > 0), strict=True):
-        xs = [Fraction(float(v)) for v in output[sel]]
-        mean = sum(xs) / len(xs)
-        var = sum((x - mean) ** 2 for x in xs) / (len(xs) - 1)
+        ints = [int(v) for v in (output[sel] * 2.0**26).tolist()]
+        n, total = len(ints), sum(ints)
+        mean = Fraction(total, n * 2**26)
+        var = Fraction(n * sum(i * i for i in ints) - total * total, n * (n - 1) * 2**52)
         assert point.mean == pytest.approx(float(mean), rel=1e-15)
         assert point.std == pytest.approx(math.sqrt(var), rel=1e-9)
 
