@@ -242,7 +242,6 @@ class ChunkedAdev:
             sums, ms, notes, n_phase=n_phase, fs_hz=fs_hz, confidence=conf, noise_alpha=noise_alpha
         )
 
-
     def cluster_sums(self, ms: np.ndarray) -> np.ndarray:
         """S(m) = Σ_{i=0}^{N−2m−1} (x_{i+2m} − 2x_{i+m} + x_i)² of everything fed, for the
         cluster sizes ``ms`` of the τ grid (in (rate × sample interval)²: divide by fs²)."""
