@@ -33,6 +33,7 @@ if TYPE_CHECKING:
         longest_cluster,
         stability_deviation,
     )
+    from rotacal.signal.deviations_stream import ChunkedDeviation
     from rotacal.signal.sinefit import (
         DriftCheck,
         HarmonicFitAccumulator,
@@ -50,6 +51,7 @@ if TYPE_CHECKING:
 __all__ = [
     "DEVIATIONS",
     "AllanDeviation",
+    "ChunkedDeviation",
     "ClippedSignalError",
     "Clipping",
     "DriftCheck",

@@ -29,7 +29,6 @@ temporaries, and the readers' blocks (~50 MB); not the record.
 
 from __future__ import annotations
 
-import math
 from typing import Any, BinaryIO
 
 import numpy as np
@@ -38,11 +37,9 @@ from rotacal.errors import ConfigError
 from rotacal.signal._deviation_sums import combination_sums, modified_sums
 from rotacal.signal.allan import (
     ONE_SIGMA,
-    _check_alpha,
     _check_confidence,
     _check_fs,
     _cluster_sizes,
-    adev_confidence_interval,
 )
 from rotacal.signal.allan_stream import (
     DEFAULT_HISTORY,
@@ -51,12 +48,13 @@ from rotacal.signal.allan_stream import (
     _candidate_sizes,
     _PhaseCarry,
     check_streamed_record,
+    deviation_of_streamed_sums,
 )
 from rotacal.signal.deviations import (
     DEVIATIONS,
     StabilityDeviation,
-    _n_terms,
-    edf_deviation,
+    _from_adev,
+    deviation_from_sums,
     longest_cluster,
 )
 
@@ -286,31 +284,26 @@ class ChunkedDeviation:
         top, listed = longest_cluster(kind, n_phase)
         ms, notes = _cluster_sizes(self._acc.taus, n_phase, fs_hz, top, listed)
         # n_phase ≥ 10 (checked above) leaves m = 1 and 2 for every kind: ms is never empty
-        alphas = _check_alpha(noise_alpha, ms.size)
-        tau = ms / fs_hz
-        n_terms = _n_terms(kind, n_phase, ms)
-        sums = self._acc.family_sums(ms) / (fs_hz * fs_hz)
-        mf = ms.astype(np.float64)
-        divisor = {"mdev": 2.0 * mf**2, "tdev": 2.0 * mf**2, "hdev": 6.0}.get(kind, 2.0)
-        dev = np.sqrt(sums / (divisor * n_terms)) / tau
-        if kind == "tdev":
-            dev = dev * tau / math.sqrt(3.0)
-        edf = edf_deviation(kind, n_phase, ms, alphas)
-        lo, hi = adev_confidence_interval(dev, edf, conf)
-        return StabilityDeviation(
-            kind=kind,
-            tau_s=tau,
-            deviation=dev,
-            low=lo,
-            high=hi,
-            edf=edf,
-            n_terms=n_terms,
-            cluster_sizes=ms,
-            fs_hz=fs_hz,
-            n_samples=n_phase - 1,
+        if kind == "adev":
+            adev = deviation_of_streamed_sums(
+                self._acc.cluster_sums(ms),
+                ms,
+                notes,
+                n_phase=n_phase,
+                fs_hz=fs_hz,
+                confidence=conf,
+                noise_alpha=noise_alpha,
+            )
+            return _from_adev(adev)
+        return deviation_from_sums(
+            kind,
+            self._acc.family_sums(ms) / (fs_hz * fs_hz),
+            ms,
             n_phase=int(n_phase),
+            n_samples=n_phase - 1,
+            fs_hz=fs_hz,
             data_type="rate",
             confidence=conf,
-            noise_alpha=int(alphas[0]) if np.all(alphas == alphas[0]) else alphas,
+            noise_alpha=noise_alpha,
             notes=tuple(notes),
         )
