@@ -17,6 +17,8 @@ TDEV, with the equivalent degrees of freedom of Greenhall & Riley (2003) (the to
 NIST SP 1065 Table 8) and the χ² confidence interval (:func:`rotacal.signal.allan.
 adev_confidence_interval`). The sums are whole-array NumPy, O(N) per τ
 (:mod:`rotacal.signal._deviation_sums`); the all-τ O(N log² N) method exists for the ADEV only.
+A record read in chunks: :class:`rotacal.signal.deviations_stream.ChunkedDeviation` (octave or
+decade τ, the same numbers to rounding).
 """
 
 from __future__ import annotations
