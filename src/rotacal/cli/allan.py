@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -65,8 +66,8 @@ from ._reading import current_read_options
     default="adev",
     show_default=True,
     help="Deviation to report beside the noise terms: overlapping Allan, modified Allan, "
-    "overlapping Hadamard, time (in deg) or total; with its edf and 68 % interval. Other than "
-    "adev: in memory only.",
+    "overlapping Hadamard, time (in deg) or total; with its edf and 68 % interval. Read in "
+    "chunks with the noise (octave or decade τ); not split over Dask workers.",
 )
 @click.option(
     "--chunked/--in-memory",
@@ -143,8 +144,8 @@ def allan_cmd(
         )
         chunked = n > _IN_MEMORY_MAX_SAMPLES
     if chunked:
-        result = _chunked_noise(stream, n, wanted)
-        _finish(result, capture, json_path, report_path)
+        result, family = _chunked_noise(stream, n, wanted)
+        _finish(result, capture, json_path, report_path, family)
         return
     with _status(f"reading {capture}"):
         cap = read_capture(
@@ -218,11 +219,6 @@ class _Stream:
 
     def check(self, how: str) -> None:
         """Refuse what needs the whole record in memory."""
-        if self.deviation != "adev":
-            raise ConfigError(
-                f"--deviation {self.deviation} is computed in memory only (the streamed paths sum "
-                f"the adev); this capture is {how}: give --in-memory, or --deviation adev"
-            )
         if self.taus in ("all", "log"):
             raise ConfigError(
                 f"--taus {self.taus} needs the whole record in memory; this capture is {how}: "
@@ -246,20 +242,47 @@ class _Stream:
         return result
 
 
-def _chunked_noise(stream: _Stream, n: int | None, wanted: list[str]) -> Any:
-    """The noise of a capture read in chunks (:func:`rotacal.gyro.noise_stream.gyro_noise_chunks`)."""
+def _chunked_noise(stream: _Stream, n: int | None, wanted: list[str]) -> tuple[Any, Any]:
+    """The noise of a capture read in chunks (:func:`rotacal.gyro.noise_stream.gyro_noise_chunks`)
+    and the ``--deviation`` other than the ADEV, summed in the same reading pass
+    (:class:`rotacal.signal.deviations_stream.ChunkedDeviation`; None for the ADEV)."""
     from rotacal.gyro.noise_stream import gyro_noise_chunks
     from rotacal.io import capture_length, iter_capture_chunks
+    from rotacal.signal.deviations_stream import ChunkedDeviation
 
     stream.check("read in chunks")
     if n is None:
         n = capture_length(stream.capture, stream.column, **stream.reading)
     chunks = iter_capture_chunks(stream.capture, wanted, chunk_rows=_CHUNK_ROWS, **stream.reading)
-    with _sample_progress(2 * n, "Allan deviation (chunked)") as progress:
-        result = gyro_noise_chunks(
-            chunks, **stream.analysis(), history=_CHUNK_HISTORY, progress=progress
-        )
-    return stream.noted(result, f"read in chunks ({n} samples)")
+    kind = stream.deviation
+    deviation = None
+    with contextlib.ExitStack() as stack:
+        family = None
+        if kind != "adev":
+            family = stack.enter_context(
+                ChunkedDeviation(
+                    kind,
+                    taus=stream.analysis()["taus"],
+                    history=_CHUNK_HISTORY,
+                    column=stream.column,
+                )
+            )
+            chunks = _feeding(chunks, family, stream.column)
+        with _sample_progress(2 * n, "Allan deviation (chunked)") as progress:
+            result = gyro_noise_chunks(
+                chunks, **stream.analysis(), history=_CHUNK_HISTORY, progress=progress
+            )
+        if family is not None:
+            with _status(f"computing the {kind}"):
+                deviation = family.result(fs=result.fs_hz)
+    return stream.noted(result, f"read in chunks ({n} samples)"), deviation
+
+
+def _feeding(chunks: Iterable[Any], family: Any, column: str) -> Iterator[Any]:
+    """The chunks, each fed to ``family`` once the noise analysis has taken (and checked) it."""
+    for chunk in chunks:
+        yield chunk
+        family.add(chunk[column])
 
 
 def _dask_noise(stream: _Stream, workers: int | None, scheduler: str | None) -> Any:
@@ -268,6 +291,12 @@ def _dask_noise(stream: _Stream, workers: int | None, scheduler: str | None) -> 
     from rotacal.batch.capture_noise import CHUNK_ROWS, gyro_noise_on_dask
     from rotacal.io import capture_length
 
+    if stream.deviation != "adev":
+        raise ConfigError(
+            f"--deviation {stream.deviation} is not computed on Dask workers (they sum the "
+            "adev): drop --workers/--scheduler (the capture is then read in chunks in this "
+            "process), or give --deviation adev"
+        )
     stream.check("split over workers")
     n = capture_length(stream.capture, stream.column, **stream.reading)
     result = run_on_dask(

@@ -41,6 +41,7 @@ if TYPE_CHECKING:
         longest_cluster,
         stability_deviation,
     )
+    from rotacal.signal.deviations_stream import ChunkedDeviation
     from rotacal.signal.readings import CleanReadings, counter_register
     from rotacal.signal.sinefit import (
         DriftCheck,
@@ -59,6 +60,7 @@ if TYPE_CHECKING:
 __all__ = [
     "DEVIATIONS",
     "AllanDeviation",
+    "ChunkedDeviation",
     "CleanReadings",
     "ClippedSignalError",
     "Clipping",

@@ -104,16 +104,20 @@ class _PhaseCarry:
         np.cumsum(phase, out=phase)  # in rate × sample interval: fs comes at the end
         phase += self.tail[-1]
         phase.tofile(self.file)
-        first = self.count  # global index of phase[0]; ext[0] has index first − tail.size
-        # the second differences whose last point x_{i+2m} is in this chunk (i ≥ 0): from ext
-        # index max(back − 2m, back − first) on; all sizes in one pass over the chunk
+        self.sum_terms(ext, back, self.count)
+        self.count += phase.size
+        self.tail = ext[-self.history :].copy()
+
+    def sum_terms(self, ext: np.ndarray, back: int, first: int) -> None:
+        """Add to ``sums`` the terms whose last point lies in the chunk: ``ext`` is the carried
+        tail (``back`` values) and the chunk's phase, whose first value has global index
+        ``first``. Here the second differences x_{i+2m} − 2x_{i+m} + x_i (i ≥ 0): from ext
+        index max(back − 2m, back − first) on; all sizes in one pass over the chunk."""
         ms = self.short_ms
         firsts = np.maximum(back - 2 * ms, back - first)
         live = firsts + 2 * ms < ext.size
         if live.any():
             self.sums[live] += direct_sums(ext, ms[live], firsts=firsts[live])
-        self.count += phase.size
-        self.tail = ext[-self.history :].copy()
 
 
 def _long_sums(
@@ -182,7 +186,11 @@ class ChunkedAdev:
         self.column = column
         self.progress = progress
         self._file = tempfile.TemporaryFile(prefix="rotacal-phase-")
-        self._carry = _PhaseCarry(_candidate_sizes(taus, history // 2), history, self._file)
+        self._carry = self._make_carry()
+
+    def _make_carry(self) -> _PhaseCarry:
+        """The carried state: cluster sizes with 2m ≤ history are summed as the chunks arrive."""
+        return _PhaseCarry(_candidate_sizes(self.taus, self.history // 2), self.history, self._file)
 
     def __enter__(self) -> ChunkedAdev:
         return self
@@ -226,23 +234,29 @@ class ChunkedAdev:
         """
         fs_hz = _check_fs(fs)
         conf = _check_confidence(confidence)
-        carry = self._carry
-        n_phase = carry.count
-        check_streamed_record(n_phase, carry.low, carry.high)
+        n_phase = self._carry.count
+        check_streamed_record(n_phase, self._carry.low, self._carry.high)
         ms, notes = _cluster_sizes(self.taus, n_phase, fs_hz)
+        sums = self.cluster_sums(ms)
+        return deviation_of_streamed_sums(
+            sums, ms, notes, n_phase=n_phase, fs_hz=fs_hz, confidence=conf, noise_alpha=noise_alpha
+        )
+
+    def cluster_sums(self, ms: np.ndarray) -> np.ndarray:
+        """S(m) = Σ_{i=0}^{N−2m−1} (x_{i+2m} − 2x_{i+m} + x_i)² of everything fed, for the
+        cluster sizes ``ms`` of the τ grid (in (rate × sample interval)²: divide by fs²)."""
+        carry = self._carry
         sums = np.empty(ms.size)
         self._file.flush()
-        short = 2 * ms <= self.history
+        short = ms <= carry.short_ms[-1]
         index = {m: k for k, m in enumerate(carry.short_ms.tolist())}
         sums[short] = carry.sums[[index[m] for m in ms[short].tolist()]]
         if not short.all():
             done = self.progress
-            n_samples = n_phase - 1
+            n_samples = carry.count - 1
             report = None if done is None else (lambda i: done(n_samples + i))
-            sums[~short] = _long_sums(self._file, n_phase, ms[~short].tolist(), report)
-        return deviation_of_streamed_sums(
-            sums, ms, notes, n_phase=n_phase, fs_hz=fs_hz, confidence=conf, noise_alpha=noise_alpha
-        )
+            sums[~short] = _long_sums(self._file, carry.count, ms[~short].tolist(), report)
+        return sums
 
 
 def check_streamed_record(n_phase: int, low: float, high: float) -> None:

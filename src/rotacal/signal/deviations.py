@@ -17,6 +17,8 @@ TDEV, with the equivalent degrees of freedom of Greenhall & Riley (2003) (the to
 NIST SP 1065 Table 8) and the χ² confidence interval (:func:`rotacal.signal.allan.
 adev_confidence_interval`). The sums are whole-array NumPy, O(N) per τ
 (:mod:`rotacal.signal._deviation_sums`); the all-τ O(N log² N) method exists for the ADEV only.
+A record read in chunks: :class:`rotacal.signal.deviations_stream.ChunkedDeviation` (octave or
+decade τ, the same numbers to rounding).
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ __all__ = [
     "DEVIATIONS",
     "DEVIATION_NAMES",
     "StabilityDeviation",
+    "deviation_from_sums",
     "deviation_keys",
     "edf_deviation",
     "longest_cluster",
@@ -291,19 +294,52 @@ def stability_deviation(
             f"({ms.size * float(n_phase):.2g} terms, beyond {ALL_TAUS_BUDGET:.0e}): use log, "
             "octave or decade τ (every τ is fast for the adev only)."
         )
+    kernel = {"hdev": hadamard_sums, "totdev": total_sums}.get(kind, modified_sums)
+    return deviation_from_sums(
+        kind,
+        kernel(x, ms),
+        ms,
+        n_phase=int(n_phase),
+        n_samples=n_samples,
+        fs_hz=fs_hz,
+        data_type=data_type,
+        confidence=conf,
+        noise_alpha=noise_alpha,
+        notes=tuple(notes),
+        warnings=clipped,
+    )
+
+
+def deviation_from_sums(
+    kind: str,
+    sums: np.ndarray,
+    ms: np.ndarray,
+    *,
+    n_phase: int,
+    n_samples: int,
+    fs_hz: float,
+    data_type: str,
+    confidence: float,
+    noise_alpha: Any,
+    notes: tuple[str, ...] = (),
+    warnings: tuple[str, ...] = (),
+) -> StabilityDeviation:
+    """The deviation ``kind`` (not the ADEV) from its sums of squares at the cluster sizes ``ms``
+    (:mod:`rotacal.signal._deviation_sums`, in the phase unit squared: (° )² for a rate in °/s),
+    with edf and χ² interval; the formulas of :func:`stability_deviation`."""
     alphas = _check_alpha(noise_alpha, ms.size)
     tau = ms / fs_hz
     n_terms = _n_terms(kind, n_phase, ms)
     if kind in ("mdev", "tdev"):
-        dev = np.sqrt(modified_sums(x, ms) / (2.0 * ms.astype(np.float64) ** 2 * n_terms)) / tau
+        dev = np.sqrt(sums / (2.0 * ms.astype(np.float64) ** 2 * n_terms)) / tau
         if kind == "tdev":
             dev = dev * tau / math.sqrt(3.0)
     elif kind == "hdev":
-        dev = np.sqrt(hadamard_sums(x, ms) / (6.0 * n_terms)) / tau
+        dev = np.sqrt(sums / (6.0 * n_terms)) / tau
     else:
-        dev = np.sqrt(total_sums(x, ms) / (2.0 * n_terms)) / tau
+        dev = np.sqrt(sums / (2.0 * n_terms)) / tau
     edf = edf_deviation(kind, n_phase, ms, alphas)
-    lo, hi = adev_confidence_interval(dev, edf, conf)
+    lo, hi = adev_confidence_interval(dev, edf, confidence)
     return StabilityDeviation(
         kind=kind,
         tau_s=tau,
@@ -315,12 +351,12 @@ def stability_deviation(
         cluster_sizes=ms,
         fs_hz=fs_hz,
         n_samples=n_samples,
-        n_phase=int(n_phase),
+        n_phase=n_phase,
         data_type=data_type,
-        confidence=conf,
+        confidence=confidence,
         noise_alpha=int(alphas[0]) if np.all(alphas == alphas[0]) else alphas,
-        notes=tuple(notes),
-        warnings=clipped,
+        notes=notes,
+        warnings=warnings,
     )
 
 
