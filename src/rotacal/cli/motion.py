@@ -202,7 +202,6 @@ def motion_encoder(
     the angle comes from their subintervals and the reversing moments (Feng et al. 2023, eqs. 3–8).
     """
     from rotacal.io import capture_length, parse_column_mapping
-    from rotacal.uncertainty.coverage import prefetch_quantiles
 
     json_path, report_path = kw.pop("json_path"), kw.pop("report_path")
     _check_outputs(json_path, report_path, kw.pop("overwrite"))
@@ -242,7 +241,6 @@ def motion_encoder(
     elif chunked:  # the streaming modules are imported only here (start-up of the in-memory path)
         from rotacal.table import calibrate_encoder_motion_chunked, encoder_chunks_from_file
 
-        prefetch_quantiles()  # the budgets' coverage factors need SciPy: imported beside the work
         source = encoder_chunks_from_file(capture, mapping=mapping, group=group)
         # the chunked calibration reads the capture in up to six passes
         with _sample_progress(6 * n, "calibrating (chunked)") as progress:
@@ -251,7 +249,6 @@ def motion_encoder(
         from rotacal._jit import ENCODER_CALL_SAMPLES, single_call
         from rotacal.table import calibrate_encoder_motion
 
-        prefetch_quantiles()  # the budgets' coverage factors need SciPy: imported beside the work
         cap, checks = _read(capture, list(MOTION_ENCODER.required), columns, group, True)
         # one calibration, then the process ends: Numba only where this call repays its load;
         # the capture's values and CRC-32s are checked on a second thread meanwhile, and a fault
