@@ -54,7 +54,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.fft as sfft
 
 from rotacal._jit import use_numba
 
@@ -143,6 +142,8 @@ def _lagged_products(z: np.ndarray, lag_max: int) -> np.ndarray:
     block takes its power spectrum instead (one forward, one inverse transform); lags longer
     than ``_LONG_ABOVE`` go by :func:`_lagged_products_long` (blocks shorter than the lags).
     """
+    import scipy.fft as sfft  # imported where used: the rate analysis never is (0.1 s)
+
     n = z.size
     if lag_max > _LONG_ABOVE and n > _WHOLE_BLOCKS * _LONG_BLOCK:
         return _lagged_products_long(z, lag_max, _LONG_BLOCK)
@@ -199,6 +200,8 @@ def _lagged_products_long(z: np.ndarray, lag_max: int, p: int) -> np.ndarray:
     result, with cache-sized temporaries, where a whole-record transform holds several
     record-sized buffers (and streams through each of them ~24 times).
     """
+    import scipy.fft as sfft
+
     n = z.size
     nb = -(-n // p)
     nd = -(-lag_max // p)
@@ -240,6 +243,8 @@ def _correlate_rows(u: np.ndarray, v: np.ndarray, n: int, nout: int) -> np.ndarr
 
     ``u`` and ``v`` have shape (signals, rows, ·); the signals' spectra are summed.
     """
+    import scipy.fft as sfft
+
     ns, nr = u.shape[0], u.shape[1]
     out = np.empty((nr, nout))
     step = max(1, _FFT_BATCH // (ns * (n // 2 + 1)))
@@ -303,6 +308,8 @@ def _head_block_products(zs: np.ndarray, p: int, nq: int, chunk: int = 2048) -> 
     O(nq·N/2) complex products against O(N log N) per level it replaces. ``zs`` has at least
     ``2·nq·p`` columns (any unit u; result u²).
     """
+    import scipy.fft as sfft
+
     ns = zs.shape[0]
     bins = p + 1
     sign = np.ones(bins)
