@@ -43,6 +43,18 @@ def issued(tmp_path_factory: pytest.TempPathFactory, make_plan) -> Path:
     return folder / "RC-2026-0042"
 
 
+def _pdf_text(folder: Path) -> list[str]:
+    from pypdf import PdfReader
+
+    return [p.extract_text() for p in PdfReader(folder / "certificate.pdf").pages]
+
+
+@pytest.fixture(scope="module")
+def issued_text(issued: Path) -> list[str]:
+    """The text of each page of the issued PDF (pypdf's extraction is slow: once per module)."""
+    return _pdf_text(issued)
+
+
 def test_the_folder_holds_the_certificate_and_its_figures_only(issued: Path) -> None:
     names = {p.name for p in issued.iterdir()}
     assert FILES <= names
@@ -132,19 +144,16 @@ def test_the_dcc_is_valid(issued: Path, dcc_schema) -> None:
     dcc_schema.validate(str(issued / "certificate.xml"))
 
 
-def test_the_same_plan_gives_the_same_certificate(issued: Path, tmp_path: Path) -> None:
+def test_the_same_plan_gives_the_same_certificate(
+    issued: Path, issued_text: list[str], tmp_path: Path
+) -> None:
     again = tmp_path / "again"
     # not recorded: the records refuse a second certificate of the same plan (test below)
     result = _certify(str(issued.parent / "plan.toml"), "--out", str(again), "--no-record")
     assert result.exit_code == 0, result.output
     for name in ("results.json", "certificate.xml"):
         assert (again / name).read_bytes() == (issued / name).read_bytes(), name
-    from pypdf import PdfReader
-
-    def text(folder: Path) -> list[str]:
-        return [p.extract_text() for p in PdfReader(folder / "certificate.pdf").pages]
-
-    assert text(again) == text(issued)
+    assert _pdf_text(again) == issued_text
 
 
 def test_an_existing_certificate_is_not_replaced_without_overwrite(issued: Path) -> None:
@@ -250,10 +259,8 @@ def test_the_example_plan_works_as_it_is_on_simulated_captures(tmp_path: Path) -
     shutil.rmtree(tmp_path / "RC-2026-0001")
 
 
-def test_the_end_marker_closes_the_last_page_and_never_stands_alone(issued: Path) -> None:
-    from pypdf import PdfReader
-
-    pages = [p.extract_text() for p in PdfReader(issued / "certificate.pdf").pages]
+def test_the_end_marker_closes_the_last_page_and_never_stands_alone(issued_text: list[str]) -> None:
+    pages = issued_text
     assert all("End of certificate" not in page for page in pages[:-1])
     last = pages[-1]
     assert "End of certificate" in last

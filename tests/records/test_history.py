@@ -410,6 +410,9 @@ def test_an_unknown_serial_says_where_to_look(store_url, issue) -> None:
 # -- the report ------------------------------------------------------------------------------------
 
 
+# the history it draws is read alike from each engine (test_a_drift_sets_next_due_where_…): the
+# figures are drawn once, from SQLite
+@pytest.mark.parametrize("store_url", ["sqlite"], indirect=True)
 def test_the_report_has_one_figure_per_quantity(store_url, issue, tmp_path: Path) -> None:
     store = open_store(store_url)
     _drifting(store, issue, "rising", "19.2")

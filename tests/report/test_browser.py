@@ -7,6 +7,7 @@ its figures are data URIs), every image must decode, the page must not scroll si
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -19,29 +20,49 @@ DEMO_PAGES = [name for name in demo_files() if name.endswith(".html")]
 PHONE = {"width": 420, "height": 900}
 
 
-def look_at(browser: Any, path: Path) -> dict[str, Any]:
-    """What a reader's browser finds on the page ``path``: console errors, requests beyond the
-    file itself, the page's width at 420 px, images that did not load, folded sections left
-    closed in print, the count of printed pages."""
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout  # the browser fixture has it
+class Reader:
+    """One page of the session's browser, at a phone's width, that every report is opened in (a
+    context per page cost ~0.3 s each; the document, its console and its requests are new with
+    each visit, and what one page leaves behind could only fail the next, never pass it)."""
 
-    url = path.resolve().as_uri()
-    context = browser.new_context(viewport=PHONE, java_script_enabled=True)
-    page = context.new_page()
-    requests: list[str] = []
-    errors: list[str] = []
+    def __init__(self, browser: Any) -> None:
+        self.context = browser.new_context(viewport=PHONE, java_script_enabled=True)
+        self.page = self.context.new_page()
+        self.url = ""
+        self.requests: list[str] = []
+        self.errors: list[str] = []
+        self.page.route("**/*", self._route)
+        self.page.on("console", lambda m: self.errors.append(m.text) if m.type == "error" else None)
+        self.page.on("pageerror", lambda e: self.errors.append(str(e)))
 
-    def route(r: Any) -> None:
-        if r.request.url == url or r.request.url.startswith("data:"):
+    def _route(self, r: Any) -> None:
+        if r.request.url == self.url or r.request.url.startswith("data:"):
             r.continue_()
         else:
-            requests.append(r.request.url)
+            self.requests.append(r.request.url)
             r.abort()
 
-    page.route("**/*", route)
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.goto(url, wait_until="load")
+
+@pytest.fixture(scope="module")
+def reader(browser: Any) -> Iterator[Reader]:
+    r = Reader(browser)
+    yield r
+    r.context.close()
+
+
+def look_at(reader: Reader, path: Path) -> dict[str, Any]:
+    """What a reader's browser finds on the page ``path``: console errors, requests beyond the
+    file itself, the page's width at 420 px, images that did not load, folded sections left
+    closed in print."""
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout  # the browser fixture has it
+
+    page = reader.page
+    page.goto("about:blank")  # the last page's document (and its events) gone before counting
+    reader.url = path.resolve().as_uri()
+    reader.errors.clear()
+    reader.requests.clear()
+    page.emulate_media(media="screen")
+    page.goto(reader.url, wait_until="load")
     found = {
         "scroll_width": page.evaluate("document.documentElement.scrollWidth"),
         "broken_images": page.evaluate(
@@ -57,12 +78,9 @@ def look_at(browser: Any, path: Path) -> dict[str, Any]:
         page.wait_for_function(f"{closed} === 0", timeout=3000)
     except PlaywrightTimeout:
         pass  # the count below reports what stayed closed
-    found["closed_in_print"] = page.evaluate(
-        "Array.from(document.querySelectorAll('details')).filter(d => !d.open).length"
-    )
-    found["errors"] = errors
-    found["requests"] = requests
-    context.close()
+    found["closed_in_print"] = page.evaluate(closed)
+    found["errors"] = list(reader.errors)
+    found["requests"] = list(reader.requests)
     return found
 
 
@@ -76,8 +94,8 @@ def assert_readable(found: dict[str, Any]) -> None:
 
 @pytest.mark.xdist_group("demo")
 @pytest.mark.parametrize("name", DEMO_PAGES)
-def test_every_demo_page_reads_in_a_browser(browser, demo_folder, name) -> None:
-    found = look_at(browser, demo_folder / name)
+def test_every_demo_page_reads_in_a_browser(reader, demo_folder, name) -> None:
+    found = look_at(reader, demo_folder / name)
     assert_readable(found)
     if name != "report.html":  # an analysis shows its figures; the index only links
         assert found["images"] > 0 or "comparison" in name
@@ -97,11 +115,11 @@ def test_the_index_links_every_report_and_only_those(demo_folder) -> None:
 @pytest.mark.xdist_group(
     "demo"
 )  # the browser and the example table's allocations: tests/conftest.py
-def test_every_commands_report_reads_in_a_browser(browser, cli_reports) -> None:
+def test_every_commands_report_reads_in_a_browser(reader, cli_reports) -> None:
     # motion ×3, selfcal, rate, inspect, gyro ×5, allan, turntable ×2, position
     assert len(cli_reports) == 15
     for command, path in cli_reports.items():
-        found = look_at(browser, path)
+        found = look_at(reader, path)
         try:
             assert_readable(found)
         except AssertionError as exc:
@@ -109,7 +127,7 @@ def test_every_commands_report_reads_in_a_browser(browser, cli_reports) -> None:
 
 
 @pytest.mark.xdist_group("demo")  # the demo worker's browser: one chromium per session
-def test_the_checks_catch_a_page_that_breaks_them(browser, tmp_path) -> None:
+def test_the_checks_catch_a_page_that_breaks_them(reader, tmp_path) -> None:
     """The browser checks can fail: a wide table outside a scroller, a missing image, a fetch."""
     from rotacal.report.html import Report, Section, Table, render_html
 
@@ -121,7 +139,7 @@ def test_the_checks_catch_a_page_that_breaks_them(browser, tmp_path) -> None:
     )
     path = tmp_path / "broken.html"
     path.write_text(broken)
-    found = look_at(browser, path)
+    found = look_at(reader, path)
     assert found["scroll_width"] > PHONE["width"]
     assert found["broken_images"] == ["gone"]
     assert any("boom" in e for e in found["errors"])
