@@ -224,16 +224,21 @@ def _check_set_values(set_amplitude_deg: float | None, set_frequency_hz: float |
     check_setting("--set-frequency-hz", set_frequency_hz, unit="Hz")
 
 
-def _check_samples(t: np.ndarray, name: str, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Shapes, NaN, time order and gaps of a one-signal capture; a constant signal is refused."""
-    t = np.asarray(t, dtype=float)
-    y = np.asarray(y, dtype=float)
+def check_pair_shapes(t: np.ndarray, name: str, y: np.ndarray) -> None:
+    """``time_s`` and the signal ``name``: 1-D, equally long, enough samples for a sine fit."""
     if t.ndim != 1 or y.ndim != 1:
         raise CaptureError(f"time_s and {name} must be 1-D arrays")
     if t.size != y.size:
         raise CaptureError(f"time_s has {t.size} samples but {name} has {y.size}")
     if t.size < 16:
         raise CaptureError(f"the capture has only {t.size} samples: too few for a sine fit")
+
+
+def _check_samples(t: np.ndarray, name: str, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Shapes, NaN, time order and gaps of a one-signal capture; a constant signal is refused."""
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    check_pair_shapes(t, name, y)
     bad = np.flatnonzero(~np.isfinite(y))
     if bad.size:
         raise CaptureError(f"column {name} has a non-finite value (NaN or inf) at sample {bad[0]}")

@@ -39,6 +39,7 @@ from rotacal.signal.daq_faults import find_daq_faults
 from rotacal.table.motion import (
     MotionResult,
     _check_settings,
+    check_pair_shapes,
     displacement_motion,
 )
 from rotacal.uncertainty import Input, InstrumentSpecs, UncertaintyBudget, propagate
@@ -246,12 +247,7 @@ def _add_resolution(
 def _check_arrays(t: Any, y: Any, name: str) -> tuple[np.ndarray, np.ndarray]:
     t = np.asarray(t, dtype=np.float64)
     y = np.asarray(y)
-    if t.ndim != 1 or y.ndim != 1:
-        raise CaptureError(f"time_s and {name} must be 1-D arrays")
-    if t.size != y.size:
-        raise CaptureError(f"time_s has {t.size} samples but {name} has {y.size}")
-    if t.size < 16:
-        raise CaptureError(f"the capture has only {t.size} samples: too few for a sine fit")
+    check_pair_shapes(t, name, y)
     bad = np.flatnonzero(~np.isfinite(t))
     if bad.size:
         raise CaptureError(f"column 'time_s' has a NaN or inf at sample {int(bad[0])}")
