@@ -16,10 +16,8 @@ run. No asserts. Run: ``python benchmarks/bench_allan_stream.py [--quick] [--big
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import subprocess
-import sys
+
+from _child import child_json
 
 FS_HZ = 100.0
 CHUNK = 1 << 22
@@ -59,16 +57,7 @@ print(json.dumps({"seconds": seconds, "peak": peak}))
 
 
 def run(n: int, mode: str) -> dict[str, float]:
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
-    out = subprocess.run(
-        [sys.executable, "-c", _CHILD, str(n), mode, str(CHUNK)],
-        check=True,
-        capture_output=True,
-        text=True,
-        env=env,
-    )
-    result: dict[str, float] = json.loads(out.stdout.strip().splitlines()[-1])
-    return result
+    return child_json(_CHILD, str(n), mode, str(CHUNK))
 
 
 def main() -> None:

@@ -18,14 +18,12 @@ difference printed). No asserts. Run:
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
+
+from _child import child_json
 
 FS_HZ = 100.0
 CHUNK = 1 << 22
@@ -85,16 +83,7 @@ def write_record(path: Path, n: int) -> None:
 
 
 def run(path: Path, mode: str, check: bool) -> dict[str, float]:
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
-    out = subprocess.run(
-        [sys.executable, "-c", _CHILD, str(path), mode, str(CHUNK), "1" if check else "0"],
-        check=True,
-        capture_output=True,
-        text=True,
-        env=env,
-    )
-    result: dict[str, float] = json.loads(out.stdout.strip().splitlines()[-1])
-    return result
+    return child_json(_CHILD, str(path), mode, str(CHUNK), "1" if check else "0")
 
 
 def main() -> None:
