@@ -88,9 +88,9 @@ def literal_check(y: np.ndarray, res: Any, count: int = 40) -> float:
     """Largest relative difference of σ at ``count`` cluster sizes (the first and last ten, and
     twenty log-spaced between) from the literal sum of squared second differences."""
     from rotacal.signal._allan_fast import direct_sums
-    from rotacal.signal.allan import _phase
+    from rotacal.signal._phase import phase_record
 
-    x = _phase(y, FS_HZ, "rate")
+    x = phase_record(y, FS_HZ, "rate")
     ms = np.asarray(res.cluster_sizes)
     pick = np.unique(
         np.concatenate(

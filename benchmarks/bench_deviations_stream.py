@@ -10,9 +10,11 @@ wall seconds, peak RSS from ``resource.getrusage``) and reads that file in chunk
    :class:`~rotacal.signal.deviations_stream.ChunkedDeviation` at octave τ (TDEV is MDEV's sums).
 
 Ratio: the case's CPU seconds over reading's at the same N. With ``--check-up-to 1e7`` each
-deviation (at sizes up to that) is compared with the in-memory ``stability_deviation`` of the whole record (max relative
-difference printed). No asserts. Run:
-``python benchmarks/bench_deviations_stream.py [--sizes 1e7,1e8,1e9] [--check-up-to 1e7]``
+deviation (at sizes up to that) is compared with the in-memory ``stability_deviation`` of the
+whole record (max relative difference printed); with ``--exact-up-to`` too, the ADEV and HDEV of
+both paths with the literal sum over the phase integrated in long double. No asserts. Run:
+``python benchmarks/bench_deviations_stream.py [--sizes 1e7,1e8,1e9] [--check-up-to 1e8]
+[--exact-up-to 1e8]``
 """
 
 from __future__ import annotations
@@ -33,7 +35,10 @@ KINDS = ("adev", "mdev", "hdev", "totdev")
 _CHILD = r"""
 import json, resource, sys, time
 import numpy as np
-path, mode, chunk, check = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4] == "1"
+path, mode, chunk = sys.argv[1], sys.argv[2], int(sys.argv[3])
+check, exact = sys.argv[4] == "1", sys.argv[5] == "1"
+# second and third differences of the phase, and their σ² normalisation (NIST SP 1065 (11), (18))
+EXACT = {"adev": ((1.0, -2.0, 1.0), 2.0), "hdev": ((-1.0, 3.0, -3.0, 1.0), 6.0)}
 wall, cpu = time.perf_counter(), time.process_time()
 
 def chunks():
@@ -63,6 +68,20 @@ if check and mode != "read":
     from rotacal.signal.deviations import stability_deviation
     ref = stability_deviation(np.fromfile(path), fs=100.0, kind=mode, taus="octave")
     out["max_rel"] = float(np.max(np.abs(res.deviation / ref.deviation - 1.0)))
+    if exact and mode in EXACT:
+        # the literal sum over the phase integrated in long double (64-bit mantissa)
+        y = np.fromfile(path).astype(np.longdouble)
+        y -= y.mean()
+        x = np.concatenate([np.zeros(1, dtype=np.longdouble), np.cumsum(y)])
+        del y
+        weights, norm = EXACT[mode]
+        truth = []
+        for m in np.rint(res.tau_s * 100.0).astype(np.int64).tolist():
+            n = x.size - (len(weights) - 1) * m
+            d = sum(w * x[j * m : j * m + n] for j, w in enumerate(weights))
+            truth.append(np.sqrt(float(np.dot(d, d)) / (norm * float(m) ** 2 * n)))
+        out["exact_mem"] = float(np.max(np.abs(ref.deviation / truth - 1.0)))
+        out["exact_stream"] = float(np.max(np.abs(res.deviation / truth - 1.0)))
 print(json.dumps(out))
 """
 
@@ -82,8 +101,9 @@ def write_record(path: Path, n: int) -> None:
             w.tofile(out)
 
 
-def run(path: Path, mode: str, check: bool) -> dict[str, float]:
-    return child_json(_CHILD, str(path), mode, str(CHUNK), "1" if check else "0")
+def run(path: Path, mode: str, check: bool, exact: bool = False) -> dict[str, float]:
+    flags = ("1" if check else "0", "1" if exact else "0")
+    return child_json(_CHILD, str(path), mode, str(CHUNK), *flags)
 
 
 def main() -> None:
@@ -95,6 +115,12 @@ def main() -> None:
         type=float,
         default=0,
         help="compare with the in-memory deviation at sizes up to this (10⁸: ~3 GB more)",
+    )
+    ap.add_argument(
+        "--exact-up-to",
+        type=float,
+        default=0,
+        help="and both with the exact ADEV/HDEV (long double) at sizes up to this (10⁸: ~6 GB)",
     )
     args = ap.parse_args()
     sizes = [int(float(s)) for s in args.sizes.split(",")]
@@ -112,8 +138,11 @@ def main() -> None:
                 f"{read['peak'] / 2**20:7.0f}MB {1.0:9.2f}"
             )
             for kind in kinds:
-                r = run(path, kind, n <= args.check_up_to)
+                r = run(path, kind, n <= args.check_up_to, n <= args.exact_up_to)
                 rel = f"max rel. diff. to in memory {r['max_rel']:.1e}" if "max_rel" in r else ""
+                if "exact_mem" in r:
+                    rel += f"; to exact: in memory {r['exact_mem']:.1e}, "
+                    rel += f"streamed {r['exact_stream']:.1e}"
                 case = f"{kind}, N={n:,} ({r['taus']:.0f} τ)"
                 print(
                     f"{case:28s} {r['cpu']:8.2f}s "

@@ -303,13 +303,13 @@ def test_fast_sums_with_a_rate_ramp_equal_the_exact_sum(kind):
     evaluated in long double on the same phase, to 1e-12: the parabola is removed exactly
     (its coefficient rounded so that every a·T_k is exact) and added back in closed form."""
     from rotacal.signal._allan_fast import DIRECT_BELOW, DIRECT_TAIL, second_difference_sums
-    from rotacal.signal.allan import _phase
+    from rotacal.signal._phase import phase_record
 
     n = 40_000
     if kind == "gyro_ramp":
-        z = _phase(gyro_ramp_rate(n - 1, 1e-4), 100.0, "rate")
+        z = phase_record(gyro_ramp_rate(n - 1, 1e-4), 100.0, "rate")
     else:
-        z = _phase(noise_phase(kind, n, seed=13), 1.0, "phase")
+        z = phase_record(noise_phase(kind, n, seed=13), 1.0, "phase")
     ms = np.arange(1, (n - 1) // 2 + 1)
     sums, n_direct = second_difference_sums(z, ms)
     assert n_direct == np.count_nonzero((ms < DIRECT_BELOW) | (n - 2 * ms < DIRECT_TAIL))

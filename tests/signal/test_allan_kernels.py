@@ -12,7 +12,7 @@ import pytest
 from rotacal import _jit
 from rotacal.signal import _allan_fast
 from rotacal.signal._allan_fast import direct_sums, second_difference_sums
-from rotacal.signal.allan import _phase
+from rotacal.signal._phase import phase_record
 
 
 def exact_sums(x: np.ndarray, ms: np.ndarray) -> np.ndarray:
@@ -73,7 +73,7 @@ def test_all_sums_with_the_numba_direct_path_equal_the_long_double_sum(jit):
     """With the Numba direct sum more cluster sizes go direct; every value still equals the
     literal sum to 1e-12 on a red-noise record with a rate ramp (all m checked near the ends
     and between groups)."""
-    z = _phase(red_phase(60_000, seed=4), 1.0, "phase")
+    z = phase_record(red_phase(60_000, seed=4), 1.0, "phase")
     ms = np.arange(1, (z.size - 1) // 2 + 1)
     sums, n_direct = second_difference_sums(z, ms, jit=jit)
     if not jit:  # (with the cheaper Numba direct sum, the planner sends most m of so short a

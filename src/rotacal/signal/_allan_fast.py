@@ -56,6 +56,7 @@ import math
 import numpy as np
 
 from rotacal._jit import use_numba
+from rotacal.signal._phase import RUNNING_SUM_BLOCK, running_sum
 
 #: Cluster sizes below this are computed directly (O(N) each).
 DIRECT_BELOW = 8
@@ -558,34 +559,27 @@ def _without_parabola(z: np.ndarray) -> tuple[np.ndarray, float]:
     return t, 2.0 * a
 
 
-#: Block of :func:`_prefix_sums` (samples).
-_PREFIX_BLOCK = 4096
-
-
 def _prefix_sums(v: np.ndarray, *, square: bool = False) -> tuple[np.ndarray, float]:
     """Prefix sums ``P[i] = Σ_{j<i} v_j`` (or of ``v_j²``; ``P[0] = 0``, ``N + 1`` values) and
-    the largest block sum of ``|v|`` (of ``v²``), built in blocks of ``b`` samples: a running sum
-    within each block, the blocks' (pairwise) totals added in long double. Each ``P[i]`` is then
+    the largest block sum of ``|v|`` (of ``v²``), built in blocks of ``b`` samples
+    (:func:`~rotacal.signal._phase.running_sum`: a running sum within each block, the blocks'
+    (pairwise) totals added in long double). Each ``P[i]`` is then
     off by at most ``u·(b·max_block Σ|v| + |P[i]|)`` (u = ε/2), where one running sum over the
     record drifts by up to ``u·i·max|P|``: for the squares of a 10⁷-sample phase that drift
     alone cost S(m) ~1e-10 relative (their differences are much smaller than their sums).
     """
     n = v.size
-    b = _PREFIX_BLOCK
-    nb = -(-n // b)
-    flat = np.zeros(nb * b + 1)
+    prefix = np.empty(n + 1)
+    prefix[0] = 0.0
+    body = prefix[1:]
     if square:
-        np.square(v, out=flat[1 : n + 1])
+        np.square(v, out=body)
     else:
-        flat[1 : n + 1] = v
-    blocks = flat[1:].reshape(nb, b)
-    totals = blocks.sum(axis=1)
-    block_abs = float(np.max(totals)) if square else float(np.max(np.abs(blocks).sum(axis=1)))
-    offsets = np.zeros(nb, dtype=np.longdouble)
-    np.cumsum(totals[:-1].astype(np.longdouble), out=offsets[1:])
-    np.cumsum(blocks, axis=1, out=blocks)
-    blocks += offsets.astype(np.float64)[:, None]
-    return flat[: n + 1], block_abs
+        body[:] = v
+    magnitudes = body if square else np.abs(body)
+    block_abs = float(np.max(np.add.reduceat(magnitudes, np.arange(0, n, RUNNING_SUM_BLOCK))))
+    running_sum(body)
+    return prefix, block_abs
 
 
 class _RampTerms:
@@ -602,7 +596,7 @@ class _RampTerms:
 
     def __init__(self, w: np.ndarray, curvature: float, nlog: float) -> None:
         self.curvature = curvature
-        b = _PREFIX_BLOCK
+        b = RUNNING_SUM_BLOCK
         self.prefix, block_abs = _prefix_sums(w)
         u = 0.5 * _EPS
         # D_w is 8 prefix sums with ± signs; the bound in units of the guard's magnitude

@@ -35,6 +35,7 @@ from rotacal.results import Result
 from rotacal.signal._allan_edf import edf_oadev
 from rotacal.signal._allan_fast import direct_sums, second_difference_sums
 from rotacal.signal._checks import as_samples, check_finite
+from rotacal.signal._phase import phase_record
 from rotacal.signal._values import check_magnitudes
 from rotacal.signal.clipping import check_clipping
 
@@ -311,29 +312,6 @@ def _cluster_sizes(
 
 
 # ====================================================================================== ADEV
-def _phase(y: np.ndarray, fs: float, data_type: str) -> np.ndarray:
-    """Phase (the integral of the rate, starting at 0) with its best straight line removed.
-
-    The second difference annihilates any straight line, so removing it changes no deviation but
-    keeps the numbers small (the rate's mean is removed before integrating, for the same reason).
-    """
-    if data_type == "rate":
-        x = np.empty(y.size + 1)
-        x[0] = 0.0
-        np.cumsum(y - float(np.mean(y)), out=x[1:])
-        x /= fs
-    else:
-        x = y - float(np.mean(y))
-    n = x.size
-    k = np.arange(n, dtype=np.float64)
-    k -= 0.5 * (n - 1)
-    slope = float(np.einsum("i,i->", k, x)) / float(np.einsum("i,i->", k, k))
-    mean = float(np.mean(x))
-    x -= mean
-    x -= slope * k
-    return x
-
-
 def edf_overlapping_adev(n_phase: int, cluster_sizes: Any, noise_alpha: int = 0) -> np.ndarray:
     """Equivalent degrees of freedom of the overlapping Allan variance.
 
@@ -425,12 +403,21 @@ def _chi2_ppf(q: float, nu: np.ndarray) -> np.ndarray:
 
 
 def prepared_phase(
-    data: Any, fs: Any, data_type: str, confidence: Any, allow_clipped: bool, what: str
+    data: Any,
+    fs: Any,
+    data_type: str,
+    confidence: Any,
+    allow_clipped: bool,
+    what: str,
+    *,
+    ramp_blind: bool = False,
 ) -> tuple[float, float, np.ndarray, int, tuple[str, ...]]:
     """The checks every deviation makes of its input, and the phase it is computed from.
 
-    Returns (fs in Hz, confidence, phase with its best line removed, samples given, clipping
-    warnings); raises what :func:`overlapping_adev` documents (``what`` names the deviation).
+    Returns (fs in Hz, confidence, phase with its best line removed — and a rate's best line,
+    a phase's best parabola, if ``ramp_blind``: :func:`~rotacal.signal._phase.phase_record` —,
+    samples given, clipping warnings); raises what :func:`overlapping_adev` documents (``what``
+    names the deviation).
     """
     fs_hz = _check_fs(fs)
     if data_type not in ("rate", "phase"):
@@ -446,11 +433,12 @@ def prepared_phase(
     check_finite("data", y)
     check_magnitudes("data", y, what=f"{data_type} data")
     clipped = _check_variation(y, data_type, allow_clipped)
-    x = _phase(y, fs_hz, data_type)
+    x = phase_record(y, fs_hz, data_type, ramp_blind=ramp_blind)
     if not float(np.max(np.abs(x))) > 1e-12 * float(np.max(np.abs(y))):
+        shape = "a parabola (a rate ramp)" if ramp_blind else "a straight line (constant rate)"
         raise CaptureError(
-            f"the phase record is a straight line (constant rate) to the last bit: {what} is "
-            "zero at every τ; check that the column holds the sensor output."
+            f"the phase record is {shape} to the last bit: {what} is zero at every τ; check "
+            "that the column holds the sensor output."
         )
     return fs_hz, conf, x, int(y.size), clipped
 

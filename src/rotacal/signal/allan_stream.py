@@ -9,8 +9,9 @@ known once the whole column has been read), and ``taus="decade"`` too:
 
 * The phase (the rate's running integral, x_0 = 0) is carried from chunk to chunk: each chunk's
   rate, less the first chunk's mean (an offset the second difference annihilates; it keeps the
-  phase small), is summed onto the last phase value, in units of rate × sample interval (the
-  sums are divided by fs² at the end: the sampling rate need not be known while reading).
+  phase small), is summed onto the last phase value (in blocks, as the in-memory phase:
+  :func:`~rotacal.signal._phase.running_sum`), in units of rate × sample interval (the sums
+  are divided by fs² at the end: the sampling rate need not be known while reading).
 * Cluster sizes with 2m ≤ ``history`` are summed as the chunks arrive: the last ``history``
   phase values are carried, and each chunk adds the second differences x_{i+2m} − 2x_{i+m} + x_i
   whose last point x_{i+2m} lies in it.
@@ -35,6 +36,7 @@ import numpy as np
 
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.signal._allan_fast import direct_sums
+from rotacal.signal._phase import running_sum
 from rotacal.signal._values import check_magnitudes
 from rotacal.signal.allan import (
     MIN_SAMPLES,
@@ -101,8 +103,7 @@ class _PhaseCarry:
         ext[:back] = self.tail
         phase = ext[back:]
         np.subtract(rate, self.offset, out=phase)
-        np.cumsum(phase, out=phase)  # in rate × sample interval: fs comes at the end
-        phase += self.tail[-1]
+        running_sum(phase, float(self.tail[-1]))  # in rate × sample interval: fs comes at the end
         phase.tofile(self.file)
         self.sum_terms(ext, back, self.count)
         self.count += phase.size
