@@ -53,7 +53,8 @@ METHODS: dict[str, tuple[str, tuple[str, ...]]] = {
         "autocollimator and polygon): the deviations at each target position, runs in both "
         "directions, give the systematic deviation E, repeatability R, reversal value B and "
         "accuracy A of {iso230_2} (clauses 2–3); the error curve's harmonics by least squares; "
-        "U = 2u.",
+        "U = k·u with k = t₉₅(ν_eff), the readings' scatter at each position counted with n − 1 "
+        "degrees of freedom (Welch–Satterthwaite).",
         ("iso230_2", "gum"),
     ),
     "turntable identify": (

@@ -30,7 +30,7 @@ from typing import Any
 
 from rotacal.errors import ConfigError
 from rotacal.plan.model import Limit
-from rotacal.uncertainty.coverage import coverage_factor
+from rotacal.table.rate_windows import window_coverage_factor
 
 __all__ = [
     "STATED_RESULTS",
@@ -68,9 +68,9 @@ _RATE = {
     "rate_stability_percent": StatedResult("%", "rate stability over {}°", _WINDOWS),
     "rate_stability_peak_percent": StatedResult("%", "rate stability (peak) over {}°", _WINDOWS),
 }
-#: ISO 230-2 values of a rotary axis; position states u and prints U = 2u.
+#: ISO 230-2 values of a rotary axis; position states u, and k = t₉₅(ν_eff) of each in ``k``.
 _POSITION = {
-    f"{name}_{direction}_arcsec": StatedResult("arcsec", f"{label} ({direction}, ISO 230-2)", 2.0)
+    f"{name}_{direction}_arcsec": StatedResult("arcsec", f"{label} ({direction}, ISO 230-2)")
     for name, label in (
         ("positioning_accuracy", "positioning accuracy A"),
         ("systematic_deviation", "systematic positioning deviation E"),
@@ -78,8 +78,8 @@ _POSITION = {
     )
     for direction in ("bidirectional", "forward", "reverse")
 } | {
-    "reversal_value_arcsec": StatedResult("arcsec", "reversal value B (ISO 230-2)", 2.0),
-    "error_pp_arcsec": StatedResult("arcsec", "position error, peak-to-peak", 2.0),
+    "reversal_value_arcsec": StatedResult("arcsec", "reversal value B (ISO 230-2)"),
+    "error_pp_arcsec": StatedResult("arcsec", "position error, peak-to-peak"),
 }
 
 #: command → key → how it is reported.
@@ -127,7 +127,7 @@ def _k(how: StatedResult, key: str, entry: str | None, results: Mapping[str, Any
         return K_RECTANGULAR_95
     if how.k == _WINDOWS:
         count = _number((results.get("window_count") or {}).get(entry), 2.0)
-        return coverage_factor(max(int(count) - 1, 1))
+        return window_coverage_factor(int(count))
     k = results.get("k")
     if isinstance(k, Mapping):
         k = k.get(key)

@@ -33,11 +33,18 @@ from numpy.typing import ArrayLike, NDArray
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.position.arrange import Approaches, arrange_approaches
 from rotacal.position.harmonics import HarmonicFit, fit_harmonics
-from rotacal.position.iso230 import AXIS_VALUES, ISO_RUNS, AxisStatistics, axis_statistics
+from rotacal.position.iso230 import (
+    AXIS_VALUES,
+    ISO_RUNS,
+    AxisStatistics,
+    axis_statistics,
+    scatter_dof,
+)
 from rotacal.position.polygon import PolygonSeparation, separate_polygon
 from rotacal.position.reference import selfcal_correction
 from rotacal.results import Result
 from rotacal.signal._values import check_magnitudes
+from rotacal.uncertainty.coverage import coverage_factor
 
 __all__ = ["DEFAULT_HARMONICS", "PositionAccuracy", "position_accuracy"]
 
@@ -61,8 +68,11 @@ class PositionAccuracy(Result):
     ``error_reverse_arcsec`` and ``std_forward_arcsec`` / ``std_reverse_arcsec`` are x̄_i and
     s_i of each direction (None when absent); ``iso230_2`` maps each ISO 230-2 value (see
     :data:`rotacal.position.iso230.AXIS_VALUES`) to its value; the JSON flattens it as
-    ``<name>_arcsec`` and ``<name>_arcsec_u``. ``polygon`` holds the cross-calibration (None
-    without a polygon), ``harmonics`` the fit (None with ``harmonics=0``).
+    ``<name>_arcsec`` and ``<name>_arcsec_u``, with each one's effective degrees of freedom and
+    coverage factor for p = 95 % in ``dof`` and ``k`` (keyed ``<name>_arcsec``, and
+    ``error_pp_arcsec``; a ``dof`` of null beside a k is infinite: the u holds no scatter).
+    ``polygon`` holds the cross-calibration (None without a polygon), ``harmonics`` the fit
+    (None with ``harmonics=0``).
     """
 
     reference: str
@@ -93,8 +103,27 @@ class PositionAccuracy(Result):
         table = getattr(self._stats, what)
         return None if table is None else table[self.directions.index(sign)]
 
+    def degrees_of_freedom(self) -> dict[str, float | None]:
+        """ν_eff of each stated value's u (:func:`rotacal.position.iso230.scatter_dof`), keyed
+        as in the JSON; None where the u is undefined."""
+        st = self._stats
+        out = {f"{name}_arcsec": st.values_dof[name] for name in AXIS_VALUES}
+        hi, lo = int(np.argmax(st.curve)), int(np.argmin(st.curve))
+        scatter = [*st.curve_scatter[:, hi].tolist(), *st.curve_scatter[:, lo].tolist()]
+        out["error_pp_arcsec"] = scatter_dof(self.error_pp_arcsec_u, scatter, st.dof_scatter)
+        return out
+
+    def coverage_factors(self) -> dict[str, float | None]:
+        """k = t₉₅(ν_eff) (GUM G.4) of each stated value, keyed as in the JSON."""
+        return {
+            key: None if dof is None else coverage_factor(dof)
+            for key, dof in self.degrees_of_freedom().items()
+        }
+
     def to_dict(self) -> dict[str, Any]:
         out = super().to_dict()
+        out["dof"] = self.degrees_of_freedom()
+        out["k"] = self.coverage_factors()
         for sign, word in ((1, "forward"), (-1, "reverse")):
             out[f"error_{word}_arcsec"] = _list(self.by_direction(sign, "mean"))
             out[f"error_{word}_arcsec_u"] = _list(self.by_direction(sign, "mean_u"))
@@ -135,17 +164,22 @@ class PositionAccuracy(Result):
         return out
 
     def summary_lines(self) -> list[str]:
-        """The headline numbers for the CLI, each ± U (k = 2, p = 95 %)."""
+        """The headline numbers for the CLI, each ± U (p = 95 %; k = t₉₅(ν_eff) for the ISO 230-2
+        values and the peak-to-peak, 2 for the harmonics)."""
         from rotacal.numbers import format_quantity
 
-        def q(value: float, u: float | None) -> str:
-            return format_quantity(value, "arcsec", U=None if u is None else 2 * u, k=2, p=0.95)
+        ks = self.coverage_factors()
+
+        def q(value: float, u: float | None, key: str = "") -> str:
+            k = ks.get(key) or 2.0
+            return format_quantity(value, "arcsec", U=None if u is None else k * u, k=k, p=0.95)
 
         dirs = "both directions" if len(self.directions) == 2 else "one direction"
         lines = [
             f"reference {self.reference}: {self.positions_deg.size} positions, {self.runs} "
             f"run(s), {dirs}",
-            f"{'error curve peak-to-peak':<34} {q(self.error_pp_arcsec, self.error_pp_arcsec_u)}",
+            f"{'error curve peak-to-peak':<34} "
+            f"{q(self.error_pp_arcsec, self.error_pp_arcsec_u, 'error_pp_arcsec')}",
         ]
         v, vu = self._stats.values, self._stats.values_u
         for name, label in (
@@ -158,7 +192,7 @@ class PositionAccuracy(Result):
         ):
             value = v[name]
             if value is not None:
-                lines.append(f"{label + ' (ISO 230-2)':<34} {q(value, vu[name])}")
+                lines.append(f"{label + ' (ISO 230-2)':<34} {q(value, vu[name], name + '_arcsec')}")
         poly = self._polygon
         if poly is not None:
             how = {

@@ -26,6 +26,11 @@ first order): u²(x̄_i↑) = s_i↑²/n + u_ref,i² with u_ref,i the reference'
 the position (the same for both directions, so it cancels in B_i); u(s) = s/√(2(n − 1)) (normal
 readings); a maximum or a range takes the u of the positions that decide it. With one run (or no
 residual left) the scatter is unknown and the u are NaN (``null`` in the JSON).
+
+Each value's effective degrees of freedom (GUM G.4.1, Welch–Satterthwaite) count the readings'
+scatter at each deciding position as a component with ν_s = n − 1 (fewer when a polygon's face
+errors were estimated from the same readings) and the reference's u as exactly known: with the
+standard's five runs ν_s = 4 and, where the scatter dominates, k = t₉₅(4) = 2.78, not 2.
 """
 
 from __future__ import annotations
@@ -36,7 +41,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["AXIS_VALUES", "ISO_RUNS", "AxisStatistics", "axis_statistics"]
+__all__ = ["AXIS_VALUES", "ISO_RUNS", "AxisStatistics", "axis_statistics", "scatter_dof"]
 
 #: Approaches per position and direction in ISO 230-2's standard test cycle.
 ISO_RUNS = 5
@@ -61,14 +66,40 @@ class AxisStatistics:
     curve_u: FloatArray
     values: dict[str, float | None]
     values_u: dict[str, float | None]
+    values_dof: dict[str, float | None]  # effective ν of each u (inf: no scatter in it)
+    curve_scatter: FloatArray  # the readings' scatter's share of curve_u², (D, P): by direction
+    dof_scatter: float  # ν of that scatter at one position
+
+
+def scatter_dof(u: float, scatter: list[float], nu: float) -> float | None:
+    """Effective degrees of freedom of a standard uncertainty ``u`` (arcsec) whose variance
+    holds the readings' scatter ``scatter`` (variances in arcsec², one per deciding position,
+    each with ``nu`` degrees of freedom) and otherwise exactly known Type B parts (ν = ∞);
+    None for an undefined u.
+
+    References
+    ----------
+    JCGM 100:2008 (GUM), G.4.1, eq. (G.2b) (Welch–Satterthwaite).
+    """
+    if not math.isfinite(u):
+        return None
+    denominator = sum(v * v for v in scatter) / nu
+    return math.inf if not denominator > 0 else u**4 / denominator
 
 
 def _range(
-    hi: FloatArray, hi_u: FloatArray, lo: FloatArray, lo_u: FloatArray
-) -> tuple[float, float]:
-    """max(hi) − min(lo) and its u from the two elements that decide it."""
+    hi: FloatArray,
+    hi_u: FloatArray,
+    lo: FloatArray,
+    lo_u: FloatArray,
+    hi_scatter: FloatArray,
+    lo_scatter: FloatArray,
+) -> tuple[float, float, list[float]]:
+    """max(hi) − min(lo), its u and the independent scatter variances in it (``*_scatter``:
+    components × elements), from the two elements that decide it."""
     a, b = int(np.argmax(hi)), int(np.argmin(lo))
-    return float(hi[a] - lo[b]), float(math.hypot(hi_u[a], lo_u[b]))
+    scatter = [*hi_scatter[:, a].tolist(), *lo_scatter[:, b].tolist()]
+    return float(hi[a] - lo[b]), float(math.hypot(hi_u[a], lo_u[b])), scatter
 
 
 #: The axis values :func:`axis_statistics` gives (names of the JSON keys, less ``_arcsec``).
@@ -115,54 +146,100 @@ def axis_statistics(
     std = std_u = None
     # without repeated approaches the readings' scatter is unknown, and so is every u below
     var_of_mean = np.full_like(mean, np.nan)
+    nu = math.nan
     if n_runs > 1 and std_scale is not None:
         std = x.std(axis=1, ddof=1) * std_scale
         std_u = std / math.sqrt(2.0 * (n_runs - 1))
         var_of_mean = std**2 / n_runs
+        nu = (n_runs - 1) / std_scale**2  # a model fitted to the same readings took some
     mean_u = np.sqrt(var_of_mean + u_ref[None, :] ** 2)
     values: dict[str, float | None] = dict.fromkeys(AXIS_VALUES)
     values_u: dict[str, float | None] = dict.fromkeys(AXIS_VALUES)
+    values_dof: dict[str, float | None] = dict.fromkeys(AXIS_VALUES)
 
-    def put(name: str, value: float | None, u: float | None) -> None:
+    def put(name: str, value: float, u: float, scatter: list[float]) -> None:
         values[name], values_u[name] = value, u
+        values_dof[name] = scatter_dof(u, scatter, nu)
 
     for d, sign in enumerate(directions):
         word = "forward" if sign > 0 else "reverse"
-        put(f"systematic_deviation_{word}", *_range(mean[d], mean_u[d], mean[d], mean_u[d]))
+        put(
+            f"systematic_deviation_{word}",
+            *_range(
+                mean[d],
+                mean_u[d],
+                mean[d],
+                mean_u[d],
+                var_of_mean[d : d + 1],
+                var_of_mean[d : d + 1],
+            ),
+        )
         if std is not None and std_u is not None:
             k = int(np.argmax(std[d]))
-            put(f"repeatability_{word}", 4.0 * float(std[d, k]), 4.0 * float(std_u[d, k]))
+            u = 4.0 * float(std_u[d, k])
+            put(f"repeatability_{word}", 4.0 * float(std[d, k]), u, [u * u])
             hi_u = np.hypot(mean_u[d], 2.0 * std_u[d])
+            # x̄ and s of one position and direction: one estimate of σ², one component
+            hi_scatter = (var_of_mean[d] + 4.0 * std_u[d] ** 2)[None, :]
             put(
                 f"positioning_accuracy_{word}",
-                *_range(mean[d] + 2 * std[d], hi_u, mean[d] - 2 * std[d], hi_u),
+                *_range(
+                    mean[d] + 2 * std[d], hi_u, mean[d] - 2 * std[d], hi_u, hi_scatter, hi_scatter
+                ),
             )
+
+    def finish(curve: FloatArray, curve_u: FloatArray, curve_scatter: FloatArray) -> AxisStatistics:
+        return AxisStatistics(
+            mean, mean_u, std, std_u, curve, curve_u, values, values_u, values_dof,
+            curve_scatter, nu,
+        )  # fmt: skip
+
     if n_dir == 1:
-        curve, curve_u = mean[0], mean_u[0]
-        return AxisStatistics(mean, mean_u, std, std_u, curve, curve_u, values, values_u)
+        return finish(mean[0], mean_u[0], var_of_mean)
     # bidirectional: the reference's own error is common to ↑ and ↓ and cancels in B_i
     b_i = mean[0] - mean[1]
     b_u = np.sqrt(var_of_mean[0] + var_of_mean[1])
     k = int(np.argmax(np.abs(b_i)))
-    put("reversal_value", float(abs(b_i[k])), float(b_u[k]))
-    put("reversal_value_mean", float(b_i.mean()), float(np.sqrt(np.sum(b_u**2))) / b_i.size)
+    put("reversal_value", float(abs(b_i[k])), float(b_u[k]), var_of_mean[:, k].tolist())
+    b_mean_scatter = (var_of_mean / b_i.size**2).ravel().tolist()
+    put("reversal_value_mean", float(b_i.mean()), math.sqrt(sum(b_mean_scatter)), b_mean_scatter)
     curve = 0.5 * (mean[0] + mean[1])
-    curve_u = np.sqrt(0.25 * (var_of_mean[0] + var_of_mean[1]) + u_ref**2)
-    put("mean_deviation_range", *_range(curve, curve_u, curve, curve_u))
+    curve_scatter = 0.25 * var_of_mean
+    curve_u = np.sqrt(curve_scatter.sum(axis=0) + u_ref**2)
+    put(
+        "mean_deviation_range",
+        *_range(curve, curve_u, curve, curve_u, curve_scatter, curve_scatter),
+    )
+    flat_mean, flat_u, flat_scatter = mean.ravel(), mean_u.ravel(), var_of_mean.reshape(1, -1)
     put(
         "systematic_deviation_bidirectional",
-        *_range(mean.ravel(), mean_u.ravel(), mean.ravel(), mean_u.ravel()),
+        *_range(flat_mean, flat_u, flat_mean, flat_u, flat_scatter, flat_scatter),
     )
     if std is not None and std_u is not None:
         both = 2 * std[0] + 2 * std[1] + np.abs(b_i)
         both_u = np.sqrt(4 * std_u[0] ** 2 + 4 * std_u[1] ** 2 + b_u**2)
         cands = np.stack([both, 4 * std[0], 4 * std[1]])
         cands_u = np.stack([both_u, 4 * std_u[0], 4 * std_u[1]])
-        flat = int(np.argmax(cands))
-        put("repeatability_bidirectional", float(cands.flat[flat]), float(cands_u.flat[flat]))
+        # each direction's x̄ and s at a position are one estimate of σ²: one component each
+        by_direction = var_of_mean + 4.0 * std_u**2
+        which, at = divmod(int(np.argmax(cands)), cands.shape[1])
+        if which == 0:
+            scatter = by_direction[:, at].tolist()
+        else:
+            scatter = [float(cands_u[which, at]) ** 2]
+        value, u = float(cands[which, at]), float(cands_u[which, at])
+        put("repeatability_bidirectional", value, u, scatter)
         hi_u = np.hypot(mean_u, 2.0 * std_u).ravel()
+        hi_scatter = by_direction.reshape(1, -1)
         put(
             "positioning_accuracy_bidirectional",
-            *_range((mean + 2 * std).ravel(), hi_u, (mean - 2 * std).ravel(), hi_u),
+            *_range(
+                (mean + 2 * std).ravel(),
+                hi_u,
+                (mean - 2 * std).ravel(),
+                hi_u,
+                hi_scatter,
+                hi_scatter,
+            ),
         )
-    return AxisStatistics(mean, mean_u, std, std_u, curve, curve_u, values, values_u)
+    return finish(curve, curve_u, curve_scatter)

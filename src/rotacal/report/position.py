@@ -115,11 +115,28 @@ def position_figure(r: PositionAccuracy) -> Figure:
     )
 
 
+def _reference_phrase(reference: str) -> str:
+    """The reference (``PositionAccuracy.reference``) as the report's sentence names it."""
+    if reference == "polygon":
+        return "an autocollimator on a polygon"
+    if reference == "deviation":
+        return "the instrument whose deviations the capture holds (column error_arcsec)"
+    return ("an " if reference[:1] in "aeiou" else "a ") + reference
+
+
 def position_section(r: PositionAccuracy, title: str | None = None) -> Section:
-    """Results with U (k = 2), the ISO 230-2 table, the harmonics table and the figure."""
+    """Results with U (k = t₉₅(ν_eff)), the ISO 230-2 table (with ν_eff), the harmonics table and
+    the figure."""
     d = r.to_dict()
+    ks = d["k"]
     results = [
-        standard_u_row("error curve peak-to-peak", r.error_pp_arcsec, r.error_pp_arcsec_u, "″")
+        standard_u_row(
+            "error curve peak-to-peak",
+            r.error_pp_arcsec,
+            r.error_pp_arcsec_u,
+            "″",
+            k=ks["error_pp_arcsec"] or 2.0,
+        )
     ]
     iso_rows = []
     for key, label in (
@@ -139,11 +156,26 @@ def position_section(r: PositionAccuracy, title: str | None = None) -> Section:
         v, u = d[f"{key}_arcsec"], d[f"{key}_arcsec_u"]
         if v is None:
             continue
-        iso_rows.append([label, f"{v:.3f}", "—" if u is None else f"{u:.3f}"])
+        dof, k = d["dof"][f"{key}_arcsec"], ks[f"{key}_arcsec"]
+        iso_rows.append(
+            [
+                label,
+                f"{v:.3f}",
+                "—" if u is None else f"{u:.3f}",
+                "—" if u is None else ("∞" if dof is None else f"{dof:.1f}"),
+                "—" if k is None else f"{k:.2f}",
+            ]
+        )
         if key in ("positioning_accuracy_bidirectional", "repeatability_bidirectional"):
-            results.append(standard_u_row(label, v, u, "″", note="ISO 230-2"))
+            k = ks[f"{key}_arcsec"] or 2.0
+            results.append(standard_u_row(label, v, u, "″", note="ISO 230-2", k=k))
     tables = [
-        Table(["ISO 230-2 value", "arcsec", "u (arcsec)"], iso_rows, caption="ISO 230-2 values")
+        Table(
+            ["ISO 230-2 value", "arcsec", "u (arcsec)", "ν_eff", "k (95 %)"],
+            iso_rows,
+            caption="ISO 230-2 values, with the effective degrees of freedom of each u "
+            "(Welch–Satterthwaite: the readings' scatter has n − 1) and its coverage factor",
+        )
     ]
     fit = r._harmonics
     if fit is not None:
@@ -168,7 +200,7 @@ def position_section(r: PositionAccuracy, title: str | None = None) -> Section:
     paragraphs: list[Any] = [
         f"The table was sent to {r.positions_deg.size} target positions in {r.runs} run(s), "
         + ("in both directions of approach" if len(r.directions) == 2 else "in one direction")
-        + f"; the reference was {'an autocollimator on a polygon' if r.reference == 'polygon' else 'a ' + r.reference}. "
+        + f"; the reference was {_reference_phrase(r.reference)}. "
         "The positional deviation is actual minus target position; the values of the axis follow "
         "ISO 230-2:2014 (repeatability 4s, accuracy from the ±2s bands).",
         *(paragraph(n) for n in r.notes),

@@ -15,7 +15,7 @@ from rotacal.numbers import coverage, fixed, format_quantity
 from rotacal.references import cite
 from rotacal.report.html import Figure, ResultRow, Section, Table, figure_from_matplotlib
 from rotacal.report.motion import _style
-from rotacal.table.rate_windows import RateWindows
+from rotacal.table.rate_windows import RateWindows, window_coverage_factor
 
 __all__ = ["rate_windows_figure", "rate_windows_section"]
 
@@ -106,13 +106,14 @@ def rate_windows_section(w: RateWindows, title: str = "Rate over angle windows")
         ):
             if value is None or u is None:
                 continue
-            # U = 2u: the summary's column is an expanded uncertainty (normal, p ≈ 95 %)
-            text = format_quantity(value, "%", U=2.0 * u, k=2.0, p=0.95)
+            # U = t₉₅(N − 1)·u over the N windows, as the certificate states it
+            k = window_coverage_factor(w.window_count[key])
+            text = format_quantity(value, "%", U=k * u, k=k, p=0.95)
             results.append(
                 ResultRow(
                     f"rate {name} over {key}°",
                     text.split(" (k", 1)[0],
-                    coverage=coverage(2.0, 0.95).strip("()"),
+                    coverage=coverage(k, 0.95).strip("()"),
                 )
             )
     return Section(

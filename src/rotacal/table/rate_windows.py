@@ -61,12 +61,14 @@ from numpy.typing import ArrayLike, NDArray
 from rotacal.encoder.pulses import check_pulse_times
 from rotacal.errors import CaptureError, ConfigError
 from rotacal.results import Result
+from rotacal.uncertainty.coverage import coverage_factor
 
 __all__ = [
     "RateWindows",
     "WindowSums",
     "rate_windows",
     "rate_windows_stream",
+    "window_coverage_factor",
     "window_key",
     "window_pitches",
     "window_rates",
@@ -289,6 +291,17 @@ class WindowTrace:
     hi: FloatArray
     block: int
     window_deg: float
+
+
+def window_coverage_factor(count: int, p: float = 0.95) -> float:
+    """k = t_p(N − 1) of a window result: the spread of N window rates has N − 1 degrees of
+    freedom (``count`` = N; at least 1). The report and the certificate both state U = k·u.
+
+    References
+    ----------
+    JCGM 100:2008 (GUM), G.3–G.4 (Student's t for ν degrees of freedom).
+    """
+    return coverage_factor(max(int(count) - 1, 1), p)
 
 
 @dataclasses.dataclass(frozen=True)
