@@ -294,6 +294,21 @@ def test_harmonic_fit_is_exact_on_a_noise_free_curve():
     assert fit.mean_arcsec == pytest.approx(2.0) and fit.residual_rms_arcsec < 1e-12
 
 
+def test_harmonic_effective_dof_is_welch_satterthwaite():
+    """The fit's residual variance s² has P − 2H − 1 degrees of freedom; a reference u equal to
+    s at every position makes each u² half residual, so ν_eff = 4·(P − 2H − 1) (GUM G.2b)."""
+    th = np.arange(16) * 22.5
+    y = harmonic_curve_arcsec(th, [(1, 3.0, 40.0)]) + np.random.default_rng(2).normal(0, 0.4, 16)
+    alone = fit_harmonics(th, y, 2)
+    assert alone.dof == 11 and alone.effective_dof == pytest.approx(11.0)
+    assert alone.coverage_k == pytest.approx(coverage_factor(11))
+    s = alone.residual_rms_arcsec * math.sqrt(16 / 11)  # residual rms is over P, s² over P − 2H − 1
+    with_ref = fit_harmonics(th, y, 2, u_ref_arcsec=np.full(16, s))
+    assert with_ref.effective_dof == pytest.approx(44.0)
+    curve = harmonic_curve_arcsec(th, [(1, 3.0, 40.0)])  # no residual: the reference's u alone
+    assert fit_harmonics(th, curve, 2, u_ref_arcsec=np.full(16, 0.1)).effective_dof > 1e6
+
+
 # ------------------------------------------------------------------------------------ refusals
 def test_too_few_positions_for_the_harmonics_asked():
     cap = simulate_position(seed=1, positions=8, runs=2)

@@ -148,6 +148,8 @@ class PositionAccuracy(Result):
             out[key] = [] if fit is None else _list(getattr(fit, attr))
         out["harmonic_residual_rms_arcsec"] = None if fit is None else fit.residual_rms_arcsec
         out["harmonic_dof"] = None if fit is None else fit.dof
+        out["harmonic_effective_dof"] = None if fit is None else fit.effective_dof
+        out["harmonic_k"] = None if fit is None else fit.coverage_k
         poly = self._polygon
         if poly is not None:
             out["polygon_faces"] = poly.face_errors_arcsec.size
@@ -164,14 +166,13 @@ class PositionAccuracy(Result):
         return out
 
     def summary_lines(self) -> list[str]:
-        """The headline numbers for the CLI, each ± U (p = 95 %; k = t₉₅(ν_eff) for the ISO 230-2
-        values and the peak-to-peak, 2 for the harmonics)."""
+        """The headline numbers for the CLI, each ± U (p = 95 %, k = t₉₅(ν_eff) of each)."""
         from rotacal.numbers import format_quantity
 
         ks = self.coverage_factors()
 
-        def q(value: float, u: float | None, key: str = "") -> str:
-            k = ks.get(key) or 2.0
+        def q(value: float, u: float | None, key: str = "", k: float | None = None) -> str:
+            k = k or ks.get(key) or 2.0
             return format_quantity(value, "arcsec", U=None if u is None else k * u, k=k, p=0.95)
 
         dirs = "both directions" if len(self.directions) == 2 else "one direction"
@@ -213,7 +214,10 @@ class PositionAccuracy(Result):
                 fit.phases_deg,
                 strict=True,
             ):
-                lines.append(f"{f'harmonic {h} (phase {phi:.1f}°)':<34} {q(float(a), float(u))}")
+                lines.append(
+                    f"{f'harmonic {h} (phase {phi:.1f}°)':<34} "
+                    f"{q(float(a), float(u), k=fit.coverage_k)}"
+                )
         return lines
 
 

@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rotacal.errors import ConfigError
+from rotacal.uncertainty.coverage import coverage_factor
 
 __all__ = ["MAX_CONDITION", "HarmonicFit", "fit_harmonics"]
 
@@ -37,7 +38,11 @@ FloatArray = NDArray[np.float64]
 
 @dataclasses.dataclass(frozen=True)
 class HarmonicFit:
-    """Orders 1 … H: amplitude c_h and phase φ_h (cos hθ − φ_h) with u; residual rms and dof."""
+    """Orders 1 … H: amplitude c_h and phase φ_h (cos hθ − φ_h) with u; residual rms and dof.
+
+    ``effective_dof`` is ν_eff of every u (GUM G.4.1, Welch–Satterthwaite): the residual's
+    variance with ``dof`` degrees of freedom, the reference's as exactly known; ``coverage_k``
+    is t₉₅(ν_eff)."""
 
     orders: tuple[int, ...]
     cos_arcsec: FloatArray
@@ -50,6 +55,8 @@ class HarmonicFit:
     residual_rms_arcsec: float
     dof: int
     fitted_arcsec: FloatArray  # the model at the positions
+    effective_dof: float
+    coverage_k: float
 
 
 def fit_harmonics(
@@ -115,6 +122,8 @@ def fit_harmonics(
         amp_u = np.sqrt((a * a * va + b * b * vb + 2 * a * b * cab) / (amp * amp))
         phase_u = np.sqrt(b * b * va + a * a * vb - 2 * a * b * cab) / (amp * amp)
     amp_u = np.where(amp > 0, amp_u, np.sqrt(0.5 * (va + vb)))
+    # every u² is (s² + u_ref²) times a factor of the design alone: one ν_eff for all
+    nu_eff = dof * ((s2 + ref2) / s2) ** 2 if s2 > 0 else math.inf
     return HarmonicFit(
         orders=tuple(int(h) for h in orders),
         cos_arcsec=a,
@@ -127,4 +136,6 @@ def fit_harmonics(
         residual_rms_arcsec=math.sqrt(float(resid @ resid) / theta.size),
         dof=dof,
         fitted_arcsec=fitted,
+        effective_dof=nu_eff,
+        coverage_k=coverage_factor(nu_eff),
     )

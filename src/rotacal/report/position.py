@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import matplotlib
@@ -194,7 +195,9 @@ def position_section(r: PositionAccuracy, title: str | None = None) -> Section:
                     )
                 ],
                 caption=f"Harmonics c·cos(hθ − φ) (residual rms {fit.residual_rms_arcsec:.3f}″, "
-                f"{fit.dof} dof)",
+                f"{fit.dof} dof; the u's effective dof "
+                + ("∞" if math.isinf(fit.effective_dof) else f"{fit.effective_dof:.1f}")
+                + f", k = {fit.coverage_k:.2f} for 95 %)",
             )
         )
     paragraphs: list[Any] = [
